@@ -1,0 +1,3 @@
+from ecattool.cli import main
+
+main()

@@ -1,0 +1,96 @@
+"""Helpers shared by the CLI command modules: options, JSON output, rich rendering, number parsing."""
+
+from __future__ import annotations
+
+import json
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import click
+
+from ecattool.errors import InputError
+
+
+def json_option(f: Callable[..., Any]) -> Callable[..., Any]:
+    return click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON instead of tables.")(f)
+
+
+def output_option(required: bool = False, help: str = "Write to FILE (atomically; never over an input). '-' = stdout.") -> Callable[..., Any]:
+    return click.option("-o", "--output", "output", type=click.Path(dir_okay=False, allow_dash=True), required=required, help=help)
+
+
+def _default(o: Any) -> Any:
+    if isinstance(o, (bytes, bytearray)):
+        return o.hex()
+    if isinstance(o, Path):
+        return str(o)
+    if hasattr(o, "to_json"):
+        return o.to_json()
+    if hasattr(o, "model_dump"):
+        return o.model_dump(mode="json")
+    if hasattr(o, "__dataclass_fields__"):
+        import dataclasses
+
+        return dataclasses.asdict(o)
+    if hasattr(o, "value"):
+        return o.value
+    if hasattr(o, "numerator") and hasattr(o, "denominator"):
+        return f"{o.numerator}/{o.denominator}"
+    return str(o)
+
+
+def dump_json(data: Any) -> str:
+    return json.dumps(data, indent=2, default=_default, ensure_ascii=False)
+
+
+def print_json(data: Any) -> None:
+    click.echo(dump_json(data))
+
+
+def console(stderr: bool = False) -> Any:
+    """A rich console; plain (no colour, no decoration) when not writing to a terminal."""
+    from rich.console import Console
+
+    stream = sys.stderr if stderr else sys.stdout
+    is_tty = stream.isatty()
+    return Console(file=stream, highlight=False, color_system="auto" if is_tty else None, soft_wrap=not is_tty,
+                   width=None if is_tty else 200)
+
+
+def table(title: str | None, columns: list[str]) -> Any:
+    from rich import box
+    from rich.table import Table
+
+    t = Table(title=title, box=box.SIMPLE_HEAD if sys.stdout.isatty() else box.ASCII2, title_justify="left")
+    for c in columns:
+        t.add_column(c)
+    return t
+
+
+def write_output(output: str | None, data: bytes | str, inputs: tuple[str, ...] | list[str] = ()) -> None:
+    """Write to ``-o FILE`` atomically, or to stdout when output is None or '-'."""
+    if output in (None, "-"):
+        if isinstance(data, bytes):
+            sys.stdout.buffer.write(data)
+            sys.stdout.buffer.flush()
+        else:
+            click.echo(data, nl=not data.endswith("\n"))
+        return
+    from ecattool.fileio import write_atomic
+
+    write_atomic(output, data, inputs)
+
+
+def parse_int_arg(text: str, what: str = "number") -> int:
+    from ecattool.od.numbers import parse_int
+
+    try:
+        return parse_int(text, what=what)
+    except InputError as exc:
+        raise click.BadParameter(exc.message) from None
+
+
+def hex32(v: int | None) -> str:
+    return "" if v is None else f"0x{v:08X}"

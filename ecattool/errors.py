@@ -1,0 +1,101 @@
+"""The one exception hierarchy of ecattool.
+
+Every error a user can cause by giving bad input is an :class:`EcatToolError` that carries a
+:class:`Location` (file, line, column where known). The CLI prints ``str(error)`` as a single line and exits
+with status 1; library users catch :class:`EcatToolError`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True)
+class Location:
+    """Where something came from: a file and, where known, a 1-based line and column."""
+
+    file: str | None = None
+    line: int | None = None
+    column: int | None = None
+
+    def __str__(self) -> str:
+        parts = [self.file or "<input>"]
+        if self.line is not None:
+            parts.append(str(self.line))
+            if self.column is not None:
+                parts.append(str(self.column))
+        return ":".join(parts)
+
+    def with_line(self, line: int | None, column: int | None = None) -> "Location":
+        return Location(self.file, line, column)
+
+
+class EcatToolError(Exception):
+    """Base class of every error ecattool raises on purpose."""
+
+    def __init__(self, message: str, location: Location | None = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.location = location
+
+    def __str__(self) -> str:
+        if self.location is None:
+            return self.message
+        return f"{self.location}: {self.message}"
+
+
+class InputError(EcatToolError):
+    """A file or value given by the user is malformed or inconsistent."""
+
+
+class XmlSecurityError(InputError):
+    """An XML document uses a feature ecattool refuses (DTD entities, external references, excess size)."""
+
+
+class SelectionError(EcatToolError):
+    """A device, profile or object selector matched nothing (or was ambiguous)."""
+
+
+class EncodeError(InputError):
+    """A value cannot be encoded as the requested CoE data type (range, type)."""
+
+
+class TargetError(EcatToolError):
+    """A target (simulator or real master) refused or failed a request."""
+
+
+class SdoAbort(TargetError):
+    """An SDO transfer ended with a CiA-301 abort code."""
+
+    def __init__(self, index: int, subindex: int, code: int, message: str | None = None) -> None:
+        self.index = index
+        self.subindex = subindex
+        self.code = code
+        from ecattool.od.abort import abort_text
+
+        text = message or abort_text(code)
+        super().__init__(f"SDO abort 0x{code:08X} on 0x{index:04X}:{subindex:02X}: {text}")
+
+
+class SdoTimeout(TargetError):
+    """An SDO request got no reply in time."""
+
+    def __init__(self, index: int, subindex: int) -> None:
+        self.index = index
+        self.subindex = subindex
+        super().__init__(f"SDO timeout on 0x{index:04X}:{subindex:02X}: no reply")
+
+
+class StateChangeError(TargetError):
+    """An EtherCAT state change was refused; ``al_status`` holds the AL status code."""
+
+    def __init__(self, requested: str, current: str, al_status: int, message: str | None = None) -> None:
+        self.requested = requested
+        self.current = current
+        self.al_status = al_status
+        from ecattool.od.abort import al_status_text
+
+        text = message or al_status_text(al_status)
+        super().__init__(
+            f"state change {current} -> {requested} refused with AL status 0x{al_status:04X}: {text}"
+        )

@@ -1,0 +1,253 @@
+"""The object dictionary model shared by the ESI reader, the drive profiles, the validators and the simulator."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+from ecattool.errors import Location
+from ecattool.od.types import DataType, Kind
+
+
+class EcState(str, Enum):
+    """EtherCAT application-layer states (the AL control/status values are the ``code``)."""
+
+    INIT = "INIT"
+    PREOP = "PREOP"
+    BOOT = "BOOT"
+    SAFEOP = "SAFEOP"
+    OP = "OP"
+
+    @property
+    def code(self) -> int:
+        return {"INIT": 1, "PREOP": 2, "BOOT": 3, "SAFEOP": 4, "OP": 8}[self.value]
+
+    @classmethod
+    def parse(cls, text: str) -> "EcState":
+        key = text.strip().upper().replace("-", "").replace("_", "")
+        aliases = {"I": "INIT", "P": "PREOP", "PRE": "PREOP", "S": "SAFEOP", "SAFE": "SAFEOP", "O": "OP", "B": "BOOT"}
+        return cls(aliases.get(key, key))
+
+
+MAILBOX_STATES = frozenset({EcState.PREOP, EcState.SAFEOP, EcState.OP})
+
+_RESTRICTION_STATES = {
+    "PREOP": {EcState.PREOP},
+    "SAFEOP": {EcState.SAFEOP},
+    "OP": {EcState.OP},
+    "PREOP_SAFEOP": {EcState.PREOP, EcState.SAFEOP},
+    "PREOP_OP": {EcState.PREOP, EcState.OP},
+    "SAFEOP_OP": {EcState.SAFEOP, EcState.OP},
+}
+
+
+def _restriction(text: str | None) -> frozenset[EcState]:
+    if not text:
+        return MAILBOX_STATES
+    return frozenset(_RESTRICTION_STATES.get(text.strip().upper(), MAILBOX_STATES))
+
+
+@dataclass(frozen=True, slots=True)
+class Access:
+    """Which EtherCAT states an entry can be read and written in (via SDO).
+
+    Built from an ESI ``Flags/Access`` text (``ro``/``rw``/``wo``/``const``) and its optional
+    ``ReadRestrictions``/``WriteRestrictions`` attributes (``PreOp``, ``PreOP_SafeOP``, ``SafeOP_OP`` …).
+    """
+
+    read: frozenset[EcState] = MAILBOX_STATES
+    write: frozenset[EcState] = MAILBOX_STATES
+    text: str = "rw"
+
+    @classmethod
+    def parse(cls, text: str | None, read_restrictions: str | None = None, write_restrictions: str | None = None) -> "Access":
+        t = (text or "ro").strip().lower()
+        readable = t in ("ro", "rw", "const", "r", "rwr", "rww")
+        writable = t in ("rw", "wo", "w", "rwr", "rww")
+        return cls(
+            read=_restriction(read_restrictions) if readable else frozenset(),
+            write=_restriction(write_restrictions) if writable else frozenset(),
+            text=t,
+        )
+
+    def readable(self, state: EcState | None = None) -> bool:
+        return bool(self.read) if state is None else state in self.read
+
+    def writable(self, state: EcState | None = None) -> bool:
+        return bool(self.write) if state is None else state in self.write
+
+
+RO = Access.parse("ro")
+RW = Access.parse("rw")
+WO = Access.parse("wo")
+
+
+class ObjectCode(str, Enum):
+    VAR = "VAR"
+    ARRAY = "ARRAY"
+    RECORD = "RECORD"
+
+
+def _norm_mapping(text: str | None) -> str:
+    t = (text or "").strip().upper()
+    r = "R" if "R" in t else ""
+    x = "T" if "T" in t else ""
+    return r + x
+
+
+@dataclass(slots=True)
+class Entry:
+    """One sub-index of an object. ``default`` is the encoded little-endian value, if the source gives one."""
+
+    subindex: int
+    name: str
+    datatype: DataType | None
+    bit_size: int
+    type_name: str = ""
+    bit_offset: int = 0
+    access: Access = RO
+    pdo_mapping: str = ""  # "", "R", "T" or "RT"
+    default: bytes | None = None
+    minimum: int | float | None = None
+    maximum: int | float | None = None
+    enum: dict[int, str] = field(default_factory=dict)
+    backup: bool = False
+    setting: bool = False
+    category: str = ""
+    unit: str = ""
+    comment: str = ""
+    location: Location | None = None
+
+    def __post_init__(self) -> None:
+        self.pdo_mapping = _norm_mapping(self.pdo_mapping)
+        if not self.type_name and self.datatype is not None:
+            self.type_name = self.datatype.name
+
+    @property
+    def rx_mappable(self) -> bool:
+        return "R" in self.pdo_mapping
+
+    @property
+    def tx_mappable(self) -> bool:
+        return "T" in self.pdo_mapping
+
+    @property
+    def byte_size(self) -> int:
+        return (self.bit_size + 7) // 8
+
+    @property
+    def default_value(self) -> Any:
+        if self.default is None or self.datatype is None:
+            return None
+        try:
+            return self.datatype.decode(self.default, self.bit_size)
+        except Exception:  # a malformed default in a vendor file is reported by checks, not here
+            return None
+
+    def encode(self, value: Any) -> bytes:
+        """Encode ``value`` with this entry's exact size; raises EncodeError on type/range problems."""
+        if self.datatype is None:
+            from ecattool.errors import EncodeError
+
+            raise EncodeError(f"entry {self.name!r} has an unknown data type {self.type_name!r}")
+        if self.datatype.bits is None or self.datatype.kind in (Kind.BITS, Kind.BOOL):
+            return self.datatype.encode(value, self.bit_size)
+        return self.datatype.encode(value)
+
+    def decode(self, data: bytes) -> Any:
+        assert self.datatype is not None
+        return self.datatype.decode(data, self.bit_size)
+
+
+@dataclass(slots=True)
+class OdObject:
+    index: int
+    name: str
+    object_code: ObjectCode
+    entries: dict[int, Entry] = field(default_factory=dict)
+    type_name: str = ""
+    category: str = ""
+    location: Location | None = None
+
+    def entry(self, subindex: int) -> Entry | None:
+        return self.entries.get(subindex)
+
+    @property
+    def max_subindex(self) -> int:
+        return max(self.entries) if self.entries else 0
+
+    @property
+    def bit_size(self) -> int:
+        return sum(e.bit_size for e in self.entries.values())
+
+    def __iter__(self) -> Iterator[Entry]:
+        return iter(sorted(self.entries.values(), key=lambda e: e.subindex))
+
+
+def normalize_name(name: str) -> str:
+    """``Control word``, ``controlword``, ``CONTROL_WORD`` → ``controlword`` (for lookups by name)."""
+    return re.sub(r"[^0-9a-z]", "", name.lower())
+
+
+class ObjectDictionary:
+    """Objects by index, with lookups by address and by (normalised) name."""
+
+    __slots__ = ("_objects", "_names")
+
+    def __init__(self, objects: dict[int, OdObject] | None = None) -> None:
+        self._objects: dict[int, OdObject] = dict(objects or {})
+        self._names: dict[str, tuple[int, int]] | None = None
+
+    def add(self, obj: OdObject) -> None:
+        self._objects[obj.index] = obj
+        self._names = None
+
+    def get(self, index: int) -> OdObject | None:
+        return self._objects.get(index)
+
+    def entry(self, index: int, subindex: int) -> Entry | None:
+        obj = self._objects.get(index)
+        return obj.entries.get(subindex) if obj is not None else None
+
+    def find(self, name: str) -> tuple[int, int] | None:
+        """Find an object or entry by name: ``controlword``, ``Modes of operation``, ``1C12 …``.
+
+        A VAR object's name gives (index, 0); ``object name/entry name`` or ``object.entry`` addresses a
+        sub-entry. Returns None when nothing matches.
+        """
+        if self._names is None:
+            names: dict[str, tuple[int, int]] = {}
+            for obj in self._objects.values():
+                key = normalize_name(obj.name)
+                if obj.object_code is ObjectCode.VAR or len(obj.entries) == 1:
+                    names.setdefault(key, (obj.index, min(obj.entries) if obj.entries else 0))
+                for e in obj.entries.values():
+                    names.setdefault(key + "/" + normalize_name(e.name), (obj.index, e.subindex))
+            self._names = names
+        n = name.replace(".", "/")
+        if "/" in n:
+            a, _, b = n.partition("/")
+            return self._names.get(normalize_name(a) + "/" + normalize_name(b))
+        return self._names.get(normalize_name(n))
+
+    def __contains__(self, index: object) -> bool:
+        return index in self._objects
+
+    def __iter__(self) -> Iterator[OdObject]:
+        return iter(sorted(self._objects.values(), key=lambda o: o.index))
+
+    def __len__(self) -> int:
+        return len(self._objects)
+
+    def indices(self) -> list[int]:
+        return sorted(self._objects)
+
+    def merged(self, other: "ObjectDictionary") -> "ObjectDictionary":
+        """A new dictionary with ``other``'s objects added (``other`` wins on conflicts)."""
+        out = ObjectDictionary(self._objects)
+        for obj in other._objects.values():
+            out.add(obj)
+        return out

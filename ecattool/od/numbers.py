@@ -1,0 +1,52 @@
+"""Parsing the numbers and object addresses engineers type: ``0x1C12``, ``#x1C12``, ``7186``, ``6060:00``."""
+
+from __future__ import annotations
+
+import re
+
+from ecattool.errors import InputError, Location
+
+_ADDR = re.compile(r"^\s*(?:0x|#x)?([0-9A-Fa-f]{1,4})(?:h)?\s*[:.]\s*(?:0x|#x)?([0-9A-Fa-f]{1,2})(?:h)?\s*$")
+
+
+def parse_int(text: str | int, location: Location | None = None, what: str = "number") -> int:
+    """``0x1C12``, ``#x1C12``, ``1C12h``, ``-5``, ``7186`` → int. Raises :class:`InputError`."""
+    if isinstance(text, bool):
+        return int(text)
+    if isinstance(text, int):
+        return text
+    s = str(text).strip().replace("_", "")
+    neg = s.startswith("-")
+    body = s[1:] if neg else s
+    try:
+        if body[:2].lower() in ("0x", "#x"):
+            v = int(body[2:], 16)
+        elif body[-1:].lower() == "h" and len(body) > 1:
+            v = int(body[:-1], 16)
+        elif body[:2].lower() == "0b":
+            v = int(body[2:], 2)
+        else:
+            v = int(body, 10)
+    except (ValueError, IndexError):
+        raise InputError(f"{text!r} is not a valid {what} (use 0x1C12, #x1C12 or decimal)", location) from None
+    return -v if neg else v
+
+
+def parse_address(text: str, location: Location | None = None) -> tuple[int, int]:
+    """``6060:00``, ``0x6060:0``, ``#x6060:0``, ``6060h:00h`` → (index, subindex), both hexadecimal.
+
+    A bare index (``0x6060``) means sub-index 0.
+    """
+    m = _ADDR.match(str(text))
+    if m:
+        return int(m.group(1), 16), int(m.group(2), 16)
+    s = str(text).strip()
+    if ":" not in s:
+        idx = parse_int(s if s[:2].lower() in ("0x", "#x") or s.endswith(("h", "H")) else "0x" + s, location, "object index")
+        if 0 <= idx <= 0xFFFF:
+            return idx, 0
+    raise InputError(f"{text!r} is not an object address (write 6060:00 or 0x6060:0)", location)
+
+
+def format_address(index: int, subindex: int) -> str:
+    return f"0x{index:04X}:{subindex:02X}"

@@ -1,0 +1,61 @@
+"""The startup-list model: the ordered SDO downloads a master sends on state transitions.
+
+PDO programming (``pdo``), scaling (``scaling``), ``.sw`` download plans (``sw``) and project parameters
+(``project``) all produce :class:`StartupCommand` lists; exporters turn them into ENI, TwinCAT, IgH, pysoem,
+ros2, ecmc, JSON and CSV; the commissioning run sends them to a target.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from ecattool.errors import Location
+
+#: EtherCAT transitions in which a startup command may be sent (ETG.2100 names).
+TRANSITIONS = ("IP", "PS", "SP", "SO", "OS", "OP", "PI", "SI", "OI", "IB", "BI", "II", "PP", "SS")
+
+
+@dataclass(slots=True)
+class StartupCommand:
+    transition: str  # "PS" (PRE-OP → SAFE-OP) is the usual one
+    index: int
+    subindex: int
+    data: bytes  # little-endian, exactly the object's size
+    comment: str = ""
+    complete_access: bool = False
+    timeout_ms: int = 0  # 0 = the master's default
+    type_name: str | None = None  # data type of the value, e.g. "UDINT"
+    value: Any = None  # the value in engineering form, for people (e.g. 0x60400010, "FOESW_x", 2.5)
+    expect_reply: bool = True  # False for writes a drive answers by resetting (Technosoft 2080h)
+    verify: bool = True  # False where a read-back cannot return what was written (2065h data streams)
+    source: Location | None = None
+
+    @property
+    def address(self) -> str:
+        return f"0x{self.index:04X}:{self.subindex:02X}"
+
+    @property
+    def int_value(self) -> int:
+        """The data as an unsigned little-endian integer (what TwinCAT prints as the value)."""
+        return int.from_bytes(self.data, "little") if self.data else 0
+
+
+@dataclass(slots=True)
+class StartupList:
+    """Ordered startup commands for one slave."""
+
+    commands: list[StartupCommand] = field(default_factory=list)
+    name: str = ""
+    vendor_id: int | None = None
+    product_code: int | None = None
+    revision: int | None = None
+
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        return iter(self.commands)
+
+    def __len__(self) -> int:
+        return len(self.commands)
+
+    def extend(self, commands: "list[StartupCommand] | StartupList") -> None:
+        self.commands.extend(commands)

@@ -1,0 +1,56 @@
+#!/usr/bin/env python3
+"""One-step set-up and run for a fresh machine with only Python and pip.
+
+    python3 scripts/dev.py demo   # create .venv, install ecattool, run the main job on the bundled samples
+    python3 scripts/dev.py test   # create .venv, install ecattool with test extras, run the whole test suite
+
+Extra arguments after the command are passed on (to ``ecattool`` for demo, to ``pytest`` for test).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+VENV = Path(os.environ.get("ECATTOOL_VENV", ROOT / ".venv"))
+BIN = VENV / ("Scripts" if os.name == "nt" else "bin")
+STAMP = VENV / ".ecattool-installed"
+
+
+def ensure_venv(extras: str) -> None:
+    if not (BIN / "python").exists():
+        print(f"creating virtual environment in {VENV}", flush=True)
+        venv.EnvBuilder(with_pip=True).create(VENV)
+    pyproject = ROOT / "pyproject.toml"
+    wanted = f"{extras}:{pyproject.stat().st_mtime_ns}"
+    if STAMP.exists() and STAMP.read_text() in (wanted, f"test:{pyproject.stat().st_mtime_ns}"):
+        return
+    print(f"installing ecattool[{extras}] into {VENV}", flush=True)
+    subprocess.check_call(
+        [str(BIN / "python"), "-m", "pip", "install", "-q", "--disable-pip-version-check", "-e", f"{ROOT}[{extras}]"]
+    )
+    STAMP.write_text(wanted)
+
+
+def main() -> int:
+    if len(sys.argv) < 2 or sys.argv[1] not in ("demo", "test"):
+        print(__doc__)
+        return 2
+    cmd, rest = sys.argv[1], sys.argv[2:]
+    if cmd == "demo":
+        ensure_venv("test")
+        args = rest or ["commission", *sorted(str(p) for p in (ROOT / "samples").glob("*/project.yaml"))]
+        if not rest and len(args) == 1:
+            args = ["esi", "show", str(ROOT / "samples" / "esi" / "etg2001_cia402.xml"), "--pdos"]
+        return subprocess.call([str(BIN / "ecattool"), *args])
+    ensure_venv("test")
+    workers = ["-n", "2"] if "-n" not in rest else []
+    return subprocess.call([str(BIN / "python"), "-m", "pytest", *workers, *rest], cwd=ROOT)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,72 @@
+import subprocess
+import sys
+
+import pytest
+
+from ecattool.errors import InputError, Location, XmlSecurityError
+from ecattool.fileio import write_atomic
+from ecattool.od import Access, EcState, Entry, ObjectCode, ObjectDictionary, OdObject, lookup
+from ecattool.xmlsafe import parse_xml
+
+
+def test_location_format():
+    assert str(Location("a.xml", 3, 7)) == "a.xml:3:7"
+    assert str(InputError("bad", Location("a.xml", 3))) == "a.xml:3: bad"
+
+
+def test_access_restrictions():
+    a = Access.parse("rw", write_restrictions="PreOP")
+    assert a.writable(EcState.PREOP) and not a.writable(EcState.OP) and a.readable(EcState.OP)
+    assert not Access.parse("ro").writable()
+    assert not Access.parse("wo").readable()
+
+
+def test_dictionary_lookup_by_name():
+    od = ObjectDictionary()
+    od.add(OdObject(0x6040, "Controlword", ObjectCode.VAR, {0: Entry(0, "Controlword", lookup("UINT"), 16)}))
+    od.add(OdObject(0x1C12, "Sync manager 2 PDO assignment", ObjectCode.ARRAY,
+                    {0: Entry(0, "Number of entries", lookup("USINT"), 8), 1: Entry(1, "PDO 1", lookup("UINT"), 16)}))
+    assert od.find("controlword") == (0x6040, 0)
+    assert od.find("Control word") == (0x6040, 0)
+    assert od.find("sync manager 2 pdo assignment/pdo 1") == (0x1C12, 1)
+    assert od.find("nothing") is None
+
+
+def test_xml_rejects_entities_and_doctype():
+    bomb = b'<?xml version="1.0"?><!DOCTYPE lolz [<!ENTITY lol "lol"><!ENTITY lol2 "&lol;&lol;">]><a>&lol2;</a>'
+    with pytest.raises(XmlSecurityError, match="entities"):
+        parse_xml(bomb, "bomb.xml")
+    ext = b'<?xml version="1.0"?><!DOCTYPE a [<!ENTITY x SYSTEM "file:///etc/passwd">]><a>&x;</a>'
+    with pytest.raises(XmlSecurityError):
+        parse_xml(ext, "ext.xml")
+    with pytest.raises(InputError, match=r"x.xml:1"):
+        parse_xml(b"<a><b></a>", "x.xml")
+
+
+def test_write_atomic_refuses_input(tmp_path):
+    src = tmp_path / "in.txt"
+    src.write_text("keep")
+    with pytest.raises(InputError):
+        write_atomic(src, "new", inputs=[src])
+    assert src.read_text() == "keep"
+    write_atomic(tmp_path / "out.txt", "data")
+    assert (tmp_path / "out.txt").read_text() == "data"
+    assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
+
+
+def test_cli_version_is_fast_import():
+    out = subprocess.run([sys.executable, "-X", "importtime", "-m", "ecattool", "--version"], capture_output=True, text=True)
+    assert out.returncode == 0 and "0.1.0" in out.stdout
+    imported = out.stderr
+    for heavy in ("lxml", "rich", "pydantic", "yaml"):
+        assert f" {heavy}" not in imported.replace("|", " ").split("\n")[-1]
+        assert not any(line.rstrip().endswith(f" {heavy}") for line in imported.splitlines()), heavy
+
+
+def test_cli_unknown_error_is_one_line(tmp_path):
+    bad = tmp_path / "bad.xml"
+    bad.write_text("<a>")
+    out = subprocess.run([sys.executable, "-m", "ecattool", "esi", "devices", str(bad)], capture_output=True, text=True)
+    assert out.returncode == 1
+    assert "Traceback" not in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1
