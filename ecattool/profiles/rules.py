@@ -1,0 +1,48 @@
+"""Family rules: the data that describes what a drive family accepts (limits and conventions).
+
+These are *data*, shared by the static checker (``ecattool.pdo``) and the simulator (``ecattool.sim``);
+each of them makes its own decisions from this data. ``ecattool.profiles.rules_for(device)`` returns the
+rules of a device's family (by vendor id / product) or rules synthesised from its ESI for generic devices.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True, slots=True)
+class FamilyRules:
+    family: str  # "technosoft-ipos", "hdt", "controltechniques", "generic"
+    vendor_id: int | None = None
+    #: mapping objects that exist, per direction (e.g. Technosoft Rx 0x1600-0x1603, Tx 0x1A00-0x1A03)
+    rx_mapping_indices: tuple[int, ...] = ()
+    tx_mapping_indices: tuple[int, ...] = ()
+    #: bit limit of one PDO (Technosoft: 64), None = no family limit (sync manager size still applies)
+    max_pdo_bits: int | None = None
+    #: entries per PDO (Technosoft and HDT: 8; Control Techniques: the ESI's "CF" limit)
+    max_pdo_entries: int | None = None
+    #: PDOs that may be assigned at once per direction (Control Techniques: 2)
+    max_assigned_rx: int | None = None
+    max_assigned_tx: int | None = None
+    #: whether the PDO assignment (1C12h/1C13h) and the mapping objects can be written at all
+    assign_writable: bool = True
+    mapping_writable: bool = True
+    #: gap/dummy entries: which "object" indices count as dummies (Technosoft: data-type indices 1-7 and 0x207D)
+    dummy_indices: frozenset[int] = frozenset()
+    dummies_in_rx: bool = True
+    dummies_in_tx: bool = False
+    #: index 0 gap entries allowed in mapping objects
+    gaps_allowed: bool = True
+    #: mapping entries may only be written while the mapping's sub-index 0 is 0 (CiA-301 / ETG.1000.6)
+    mapping_write_needs_sub0_zero: bool = True
+    #: assignment entries may only be written while the assignment's sub-index 0 is 0
+    assign_write_needs_sub0_zero: bool = True
+    #: Control Techniques' priority rule: slow (non-cyclic-capable) parameters only in the first PDO
+    priority_rule: bool = False
+    #: modes of operation (6060h values) the device supports, () = unknown
+    supported_modes: tuple[int, ...] = ()
+    #: modes that need distributed clocks (Control Techniques: CSP/CSV/CST …)
+    dc_required_modes: tuple[int, ...] = ()
+    #: positions / velocities: internal counts per motor revolution where fixed (HDT: 65536)
+    counts_per_rev: int | None = None
+    notes: tuple[str, ...] = field(default_factory=tuple)
