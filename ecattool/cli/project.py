@@ -1,0 +1,72 @@
+"""ecattool project: the project file's JSON Schema and a skeleton for new projects."""
+
+from __future__ import annotations
+
+import click
+
+from ecattool.cli.common import dump_json, output_option, write_output
+
+
+@click.group("project")
+def project() -> None:
+    """Project files: JSON Schema for editors, new project skeletons."""
+
+
+@project.command(
+    "schema",
+    epilog="""\b
+Examples:
+  ecattool project schema -o schemas/project.schema.json
+  ecattool project schema --check schemas/project.schema.json   # CI drift check""",
+)
+@output_option()
+@click.option("--check", "check", type=click.Path(exists=True, dir_okay=False),
+              help="Compare with a checked-in schema file; exit 1 if it differs.")
+def schema(output: str | None, check: str | None) -> None:
+    """Print the JSON Schema of the project file (for editor completion and validation)."""
+    from ecattool.project.model import json_schema
+
+    text = dump_json(json_schema()) + "\n"
+    if check:
+        from pathlib import Path
+
+        if Path(check).read_text(encoding="utf-8") != text:
+            raise SystemExit(click.echo(f"ecattool: error: {check}: out of date; regenerate with "
+                                        f"'ecattool project schema -o {check}'", err=True) or 1)
+        click.echo(f"{check}: up to date")
+        return
+    write_output(output, text)
+
+
+@project.command(
+    "new",
+    epilog="""\b
+Examples:
+  ecattool project new --profile technosoft-ipos -o machine.yaml
+  ecattool project new --esi drives/elmo.xml --select 0x00030924:1 -o machine.yaml""",
+)
+@click.option("--profile", help="Built-in drive family (technosoft-ipos, hdt, controltechniques).")
+@click.option("--product", help="Product of the family.")
+@click.option("--esi", "esi_path", help="ESI file of the drive (relative to where the project will be).")
+@click.option("--select", help="Device selector in the ESI.")
+@click.option("--name", default="axis1", show_default=True, help="Name of the first drive.")
+@output_option()
+def new(profile: str | None, product: str | None, esi_path: str | None, select: str | None, name: str, output: str | None) -> None:
+    """Write a minimal, valid project file to start from."""
+    if (profile is None) == (esi_path is None):
+        raise click.UsageError("give --profile or --esi")
+    if profile:
+        device = f"    device:\n      profile: {profile}\n" + (f"      product: {product}\n" if product else "")
+    else:
+        device = f"    device:\n      esi: {esi_path}\n" + (f"      select: \"{select}\"\n" if select else "")
+    text = (
+        "# ecattool project file (format 1). Docs: docs/project.md\n"
+        "ecattool: 1\n"
+        "name: my-machine\n"
+        "drives:\n"
+        f"  - name: {name}\n{device}"
+        "    parameters:\n"
+        "      - {object: \"6060:00\", value: 1, comment: profile position mode}\n"
+        "    move: {distance: 1}\n"
+    )
+    write_output(output, text)

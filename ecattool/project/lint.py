@@ -1,0 +1,129 @@
+"""Lint orchestration: run every check ecattool has over a project and collect located findings."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ecattool.errors import EcatToolError, Location
+from ecattool.fileio import read_bytes
+from ecattool.findings import Finding, Severity, has_errors
+from ecattool.project.loader import LoadedProject, parse_project
+from ecattool.project.model import RuleOff
+from ecattool.project.resolve import ResolvedDrive, resolve_device, resolve_parameters
+from ecattool.startup.model import StartupList
+
+_RULE_ID = re.compile(r"^[A-Z]{2,5}\d{3}$")
+
+#: project-level rule catalogue (other packages document their own rules)
+PROJECT_RULES: dict[str, str] = {
+    "PRJ001": "the project file does not match the project schema",
+    "PRJ002": "a file named in the project does not exist",
+    "PRJ003": "a disabled rule id is not a known rule id form",
+    "PRJ004": "a rule is disabled without a reason",
+    "PRJ005": "the device of a drive cannot be resolved (ESI error, selector or profile unknown)",
+    "PRJ010": "a parameter names an object that does not exist",
+    "PRJ011": "a parameter names a sub-index that does not exist",
+    "PRJ012": "a parameter is not writable in the state of its transition",
+    "PRJ013": "a parameter value does not fit the object's data type",
+    "PRJ014": "a parameter value is outside the object's minimum/maximum",
+    "PRJ015": "a parameter value is not one of the object's documented values",
+    "PRJ016": "the same object is written twice in the same transition",
+    "PRJ020": "two drives share a bus position",
+    "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
+    "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
+    "PRJ040": "the DC OpMode named does not exist in the ESI",
+    "PRJ050": "the scaling section cannot be computed",
+    "PRJ051": "a scaling factor is not exact (rounded to the best 32-bit ratio)",
+}
+
+
+@dataclass(slots=True)
+class ProjectResult:
+    path: str
+    drives: list[ResolvedDrive] = field(default_factory=list)
+    findings: list[Finding] = field(default_factory=list)  # project-level and all drives', after disabling
+    loaded: LoadedProject | None = None
+
+
+def _disable(findings: list[Finding], offs: list[RuleOff], lp: LoadedProject, path: tuple[str | int, ...]) -> list[Finding]:
+    out: list[Finding] = []
+    disabled = set()
+    for k, off in enumerate(offs):
+        loc = lp.yaml.locate((*path, k, "rule"))
+        if not _RULE_ID.match(off.rule):
+            out.append(Finding("PRJ003", Severity.WARNING, f"{off.rule!r} is not a rule id (like PDO011)", loc))
+        if not off.reason.strip():
+            out.append(Finding("PRJ004", Severity.ERROR, f"rule {off.rule} is disabled without a reason",
+                               lp.yaml.locate((*path, k, "reason"))))
+            continue
+        disabled.add(off.rule)
+    return out + [f for f in findings if f.rule not in disabled]
+
+
+def build_drive(lp: LoadedProject, i: int) -> ResolvedDrive:
+    """Resolve one drive: device, rules, startup list (PDO, scaling, parameters), .sw image, with findings."""
+    from ecattool.project import steps
+
+    drive = lp.project.drives[i]
+    rd = ResolvedDrive(i, drive)
+    resolve_device(lp, i, rd)
+    if rd.device is None:
+        return rd
+    startup = StartupList(name=drive.name, vendor_id=rd.device.vendor_id,
+                          product_code=rd.device.product_code, revision=rd.device.revision)
+    params = resolve_parameters(lp, i, rd)
+    startup.extend(steps.pdo_commands(lp, i, rd, params))
+    startup.extend(steps.scaling_commands(lp, i, rd))
+    startup.extend(params)
+    rd.startup = startup
+    steps.check_sw(lp, i, rd)
+    steps.check_dc(lp, i, rd)
+    if rd.device.source and not rd.device.source.startswith("profile:"):
+        steps.check_esi(lp, i, rd)
+    rd.findings = _disable(rd.findings, drive.disable_rules, lp, ("drives", i, "disable_rules"))
+    return rd
+
+
+def lint_project(path: str | Path) -> ProjectResult:
+    p = Path(path)
+    result = ProjectResult(str(p))
+    try:
+        project, doc, schema_findings = parse_project(read_bytes(p, 16 * 1024 * 1024), str(p))
+    except EcatToolError as exc:
+        result.findings.append(Finding("PRJ001", Severity.ERROR, exc.message, exc.location or Location(str(p))))
+        return result
+    if project is None:
+        result.findings.extend(schema_findings)
+        return result
+    lp = LoadedProject(project, p, doc)
+    result.loaded = lp
+    positions: dict[int, str] = {}
+    for i in range(len(project.drives)):
+        rd = build_drive(lp, i)
+        result.drives.append(rd)
+        if rd.position in positions:
+            rd.findings.append(Finding("PRJ020", Severity.ERROR,
+                                       f"drive {rd.drive.name!r} has bus position {rd.position}, like {positions[rd.position]!r}",
+                                       lp.drive_location(i, "position")))
+        positions.setdefault(rd.position, rd.drive.name)
+        result.findings.extend(rd.findings)
+    result.findings = _disable(result.findings, project.disable_rules, lp, ("disable_rules",))
+    # de-duplicate (ESI findings of a file shared by several drives)
+    seen = set()
+    unique = []
+    for f in result.findings:
+        key = (f.rule, f.message, str(f.location))
+        if key not in seen:
+            seen.add(key)
+            unique.append(f)
+    result.findings = unique
+    return result
+
+
+def lint(paths: list[str | Path], strict: bool = False) -> tuple[list[ProjectResult], bool]:
+    """Lint several project files. Returns the results and whether the lint failed."""
+    results = [lint_project(p) for p in paths]
+    failed = any(has_errors(r.findings, strict) for r in results)
+    return results, failed

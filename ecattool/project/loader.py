@@ -1,0 +1,90 @@
+"""Load a project file: YAML with locations → pydantic models, every problem located at file:line:column."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from ecattool.errors import InputError, Location
+from ecattool.fileio import read_bytes
+from ecattool.findings import Finding, Severity
+from ecattool.project.model import Project
+from ecattool.project.yamlloc import LocatedYaml, load_yaml
+
+
+@dataclass(slots=True)
+class LoadedProject:
+    project: Project
+    path: Path
+    yaml: LocatedYaml
+
+    @property
+    def base(self) -> Path:
+        return self.path.parent
+
+    def resolve(self, relative: str) -> Path:
+        p = Path(relative)
+        return p if p.is_absolute() else self.base / p
+
+    def locate(self, *path: str | int) -> Location:
+        return self.yaml.locate(tuple(path))
+
+    def drive_location(self, i: int, *path: str | int) -> Location:
+        return self.yaml.locate(("drives", i, *path))
+
+
+def _message(err: dict[str, Any]) -> str:
+    loc = ".".join(str(p) for p in err.get("loc", ()))
+    msg = err.get("msg", "invalid value")
+    if err.get("type") == "extra_forbidden":
+        msg = f"unknown field {str(err['loc'][-1])!r}"
+    elif msg.startswith("Value error, "):
+        msg = msg[len("Value error, "):]
+    return f"{loc}: {msg}" if loc else msg
+
+
+def validation_findings(exc: ValidationError, doc: LocatedYaml) -> list[Finding]:
+    out = []
+    for err in exc.errors():
+        path = tuple(p for p in err.get("loc", ()) if not (isinstance(p, str) and "[" in p))
+        # pydantic adds union member names ("int", "str") to the path; drop the ones that are not keys
+        clean: list[str | int] = []
+        node: Any = doc.data
+        for p in path:
+            if isinstance(node, dict) and p in node:
+                clean.append(p)
+                node = node[p]
+            elif isinstance(node, list) and isinstance(p, int) and p < len(node):
+                clean.append(p)
+                node = node[p]
+        out.append(Finding("PRJ001", Severity.ERROR, _message(err), doc.locate(tuple(clean))))
+    return out
+
+
+def parse_project(text: bytes | str, source: str) -> tuple[Project | None, LocatedYaml, list[Finding]]:
+    """Parse project text. Returns (project or None, located YAML, findings of schema problems)."""
+    doc = load_yaml(text, source)
+    if not isinstance(doc.data, dict):
+        raise InputError("a project file must be a YAML mapping with 'ecattool: 1' and 'drives'", Location(source, 1, 1))
+    if "ecattool" not in doc.data:
+        raise InputError("not an ecattool project: missing 'ecattool: 1' (format version)", Location(source, 1, 1))
+    if doc.data.get("ecattool") != 1:
+        raise InputError(f"unsupported project format version {doc.data.get('ecattool')!r}; this ecattool reads 1",
+                         doc.locate(("ecattool",)))
+    try:
+        return Project.model_validate(doc.data), doc, []
+    except ValidationError as exc:
+        return None, doc, validation_findings(exc, doc)
+
+
+def load_project(path: str | Path) -> LoadedProject:
+    """Load and validate a project file; raises InputError (located) on the first problem."""
+    p = Path(path)
+    project, doc, findings = parse_project(read_bytes(p, 16 * 1024 * 1024), str(p))
+    if project is None:
+        first = findings[0]
+        raise InputError(first.message, first.location)
+    return LoadedProject(project, p, doc)

@@ -1,0 +1,167 @@
+"""The project file: one reviewable YAML file per machine (pydantic models, format version 1).
+
+See docs/project.md for the format with examples. Paths inside the file are relative to the file.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+#: The project file format version this ecattool writes and reads.
+FORMAT_VERSION = 1
+
+IntLike = Annotated[int | str, Field(description="An integer: 8, 0x1C12 or #x1C12")]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+
+class DeviceRef(_Strict):
+    """Which device a drive is: a vendor ESI file plus a selector, or a built-in family profile."""
+
+    esi: str | None = Field(None, description="ESI file, relative to the project file")
+    select: str | int | None = Field(
+        None, description="Device in the ESI: type name, product_code[:revision] or list index"
+    )
+    policy: Literal["exact", "newest-not-newer", "newest"] = Field(
+        "exact", description="Revision selection policy when the selector names a revision"
+    )
+    profile: str | None = Field(None, description="Built-in family: technosoft-ipos, hdt, controltechniques")
+    product: str | None = Field(None, description="Model/product of the built-in family")
+    revision: str | int | None = Field(None, description="Firmware revision of the built-in family (e.g. F515K)")
+
+    @model_validator(mode="after")
+    def _one_source(self) -> "DeviceRef":
+        if (self.esi is None) == (self.profile is None):
+            raise ValueError("give exactly one of 'esi' (with 'select') or 'profile'")
+        if self.profile is None and (self.product is not None or self.revision is not None):
+            raise ValueError("'product' and 'revision' belong to a 'profile'; use 'select' with an ESI")
+        return self
+
+
+class IdentityCheck(_Strict):
+    """What to check against the identity (1018h) the drive reports when commissioning."""
+
+    vendor: bool = Field(True, description="Check the vendor id")
+    product: bool = Field(True, description="Check the product code")
+    revision: Literal["exact", "at-least", "ignore"] = Field("exact", description="How to check the revision")
+
+
+class PdoDef(_Strict):
+    """One PDO of an assignment: its mapping object index and entries (`0x6040:00/16`, `controlword`…)."""
+
+    index: IntLike = Field(description="Mapping object index, e.g. 0x1600")
+    entries: list[str | IntLike] | None = Field(
+        None, description="Entries; omit to keep the PDO's default (or fixed) mapping"
+    )
+
+
+class PdoConfig(_Strict):
+    """PDO assignment and mapping per direction (rx = outputs/SM2/1C12h, tx = inputs/SM3/1C13h)."""
+
+    rx: list[PdoDef] | None = Field(None, description="RxPDOs assigned to SM2, in order; omit for the default")
+    tx: list[PdoDef] | None = Field(None, description="TxPDOs assigned to SM3, in order; omit for the default")
+    complete_access: bool = Field(False, description="Program the mapping with SDO complete access")
+
+
+class Parameter(_Strict):
+    """One SDO parameter written at a state transition."""
+
+    object: str | int = Field(description="Object as 6060:00, 0x6060:0, or by name (modes of operation)")
+    value: int | float | str | bool | list[int] = Field(
+        description="Value in engineering form (8, 0x10, -5, 2.5, 'text', enum name) or 'hex:0a0b' raw bytes"
+    )
+    transition: str = Field("PS", description="Transition it is written in: IP, PS, SO, …")
+    comment: str = ""
+
+    @field_validator("transition")
+    @classmethod
+    def _transition(cls, v: str) -> str:
+        from ecattool.startup.model import TRANSITIONS
+
+        t = v.strip().upper()
+        if t not in TRANSITIONS:
+            raise ValueError(f"unknown transition {v!r} (use one of {', '.join(TRANSITIONS)})")
+        return t
+
+
+class DcConfig(_Strict):
+    """Distributed clocks: an OpMode of the ESI by name, or explicit values."""
+
+    opmode: str | None = Field(None, description="Name of an ESI Dc/OpMode (e.g. DC, DC-Synchron)")
+    assign_activate: IntLike | None = Field(None, description="AssignActivate word, e.g. 0x0300")
+    cycle_ns: int | None = Field(None, description="SYNC0 cycle time in ns")
+    shift_ns: int | None = Field(None, description="SYNC0 shift time in ns")
+
+
+class SwConfig(_Strict):
+    """A Technosoft .sw setup image to verify (and download where it differs)."""
+
+    file: str = Field(description=".sw file, relative to the project file")
+    mode: Literal[16, 32] = Field(16, description="EEPROM write width for downloads")
+    download: bool = Field(True, description="Download blocks that differ (else only verify)")
+
+
+class RuleOff(_Strict):
+    rule: str = Field(description="Rule id to disable for this drive or project, e.g. PDO011")
+    reason: str = Field(description="Why: lint refuses a disabled rule without a reason")
+
+
+class MoveTest(_Strict):
+    """The short move of the commissioning run, in user units."""
+
+    distance: float = Field(1.0, description="Relative move in position user units")
+    mode: Literal["pp", "csp"] = Field("pp", description="Profile position or cyclic synchronous position")
+
+
+class Drive(_Strict):
+    name: str = Field(description="Axis/drive name, unique in the project")
+    position: int | None = Field(None, ge=0, description="Position on the bus (default: order in the file)")
+    device: DeviceRef
+    identity: IdentityCheck = Field(default_factory=IdentityCheck)
+    pdo: PdoConfig | None = None
+    scaling: dict[str, Any] | None = Field(
+        None, description="Mechanics and units for the factor group (see docs/scaling.md)"
+    )
+    parameters: list[Parameter] = Field(default_factory=list)
+    sw: SwConfig | str | None = Field(None, description="Technosoft .sw image (file name or settings)")
+    dc: DcConfig | None = None
+    move: MoveTest | None = Field(None, description="Commissioning move; omit to skip the move")
+    enable: bool = Field(True, description="Enable the drive through the CiA-402 state machine when commissioning")
+    disable_rules: list[RuleOff] = Field(default_factory=list)
+
+    @property
+    def sw_config(self) -> SwConfig | None:
+        if isinstance(self.sw, str):
+            return SwConfig(file=self.sw)
+        return self.sw
+
+
+class Project(_Strict):
+    """An ecattool project: the drives of one machine and how to configure them."""
+
+    ecattool: Literal[1] = Field(description="Project file format version (1)")
+    name: str = ""
+    description: str = ""
+    target: str = Field("sim", description="Default target of commission: 'sim' or 'pysoem:<ifname>'")
+    drives: list[Drive] = Field(min_length=1)
+    disable_rules: list[RuleOff] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _unique(self) -> "Project":
+        names = [d.name for d in self.drives]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise ValueError(f"drive names must be unique: {', '.join(sorted(dup))}")
+        return self
+
+
+def json_schema() -> dict[str, Any]:
+    schema = Project.model_json_schema()
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["$id"] = "https://ecattool.dev/schemas/project.schema.json"
+    schema["title"] = "ecattool project file"
+    return schema

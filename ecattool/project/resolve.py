@@ -1,0 +1,198 @@
+"""From a project drive to what it means for the device: the Device, its rules, and its startup list.
+
+Each function returns findings instead of stopping at the first problem, so that ``lint`` can report all of
+them; ``commission`` refuses to run when any of them is an error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from ecattool.errors import EcatToolError, EncodeError, InputError, Location
+from ecattool.esi.model import Device
+from ecattool.findings import Finding, Severity
+from ecattool.od.model import EcState, Entry
+from ecattool.od.numbers import parse_address, parse_int
+from ecattool.od.types import Kind
+from ecattool.project.loader import LoadedProject
+from ecattool.project.model import Drive, Parameter
+from ecattool.startup.model import StartupCommand, StartupList
+
+#: the state a slave is in while the commands of a transition are sent
+TRANSITION_STATE = {
+    "IP": EcState.PREOP, "PS": EcState.PREOP, "PP": EcState.PREOP, "PI": EcState.PREOP,
+    "SP": EcState.SAFEOP, "SO": EcState.SAFEOP, "SS": EcState.SAFEOP, "SI": EcState.SAFEOP,
+    "OS": EcState.OP, "OP": EcState.OP, "OI": EcState.OP,
+    "IB": EcState.INIT, "BI": EcState.BOOT, "II": EcState.INIT,
+}
+
+
+@dataclass(slots=True)
+class ResolvedDrive:
+    """Everything lint and commission need about one drive."""
+
+    index: int
+    drive: Drive
+    device: Device | None = None
+    rules: Any = None
+    startup: StartupList = field(default_factory=StartupList)
+    findings: list[Finding] = field(default_factory=list)
+    mapping: Any = None  # ecattool.pdo mapping (when the pdo section resolved)
+    factor_group: Any = None  # ecattool.scaling result (when the scaling section resolved)
+    sw_image: Any = None  # ecattool.sw image (when an image is configured and readable)
+
+    @property
+    def position(self) -> int:
+        return self.drive.position if self.drive.position is not None else self.index
+
+    def error(self, rule: str, message: str, location: Location | None) -> None:
+        self.findings.append(Finding(rule, Severity.ERROR, message, location))
+
+    def warning(self, rule: str, message: str, location: Location | None) -> None:
+        self.findings.append(Finding(rule, Severity.WARNING, message, location))
+
+
+def resolve_device(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    ref = rd.drive.device
+    try:
+        if ref.profile is not None:
+            from ecattool import profiles
+
+            rd.device = profiles.load(ref.profile, product=ref.product, revision=ref.revision)
+        else:
+            from ecattool import esi
+            from ecattool.project.cache import load_esi_cached
+
+            assert ref.esi is not None
+            path = lp.resolve(ref.esi)
+            if not path.exists():
+                rd.error("PRJ002", f"ESI file {ref.esi!r} not found (looked in {path})", lp.drive_location(i, "device", "esi"))
+                return
+            esi_file = load_esi_cached(path)
+            rd.device = esi.select(esi_file, None if ref.select is None else str(ref.select), policy=ref.policy)
+    except EcatToolError as exc:
+        loc = exc.location if exc.location and exc.location.line else lp.drive_location(i, "device")
+        rd.error("PRJ005", exc.message, loc)
+        return
+    try:
+        from ecattool import profiles
+
+        rd.rules = profiles.rules_for(rd.device)
+    except EcatToolError as exc:  # pragma: no cover - rules_for only raises for broken data
+        rd.error("PRJ005", exc.message, lp.drive_location(i, "device"))
+
+
+def resolve_address(device: Device, text: str | int, location: Location) -> tuple[int, int]:
+    """``6060:00``, ``0x6060``, or an object name (``modes of operation``) → (index, sub)."""
+    if isinstance(text, int):
+        return text, 0
+    try:
+        return parse_address(text, location)
+    except InputError:
+        pass
+    found = device.dictionary.find(text)
+    if found is None:
+        raise InputError(f"no object named {text!r} in the device dictionary (write it as 6060:00)", location)
+    return found
+
+
+def _coerce(entry: Entry, value: Any, location: Location) -> Any:
+    """Turn an engineering-form value into what the entry's data type encodes."""
+    dt = entry.datatype
+    if isinstance(value, str):
+        v = value.strip()
+        if v.lower().startswith("hex:"):
+            try:
+                return bytes.fromhex(v[4:].replace(" ", ""))
+            except ValueError:
+                raise InputError(f"{value!r} is not hex bytes", location) from None
+        if dt is not None and dt.kind in (Kind.STRING, Kind.UNICODE, Kind.OCTETS):
+            return value
+        if entry.enum:
+            from ecattool.od.model import normalize_name
+
+            for k, name in entry.enum.items():
+                if normalize_name(name) == normalize_name(v):
+                    return k
+        if dt is not None and dt.kind is Kind.REAL:
+            try:
+                return float(v)
+            except ValueError:
+                raise InputError(f"{value!r} is not a number", location) from None
+        return parse_int(v, location, "value")
+    if isinstance(value, list):
+        return bytes(value)
+    return value
+
+
+def encode_parameter(device: Device, p: Parameter, location: Location, value_location: Location) -> tuple[StartupCommand | None, list[Finding]]:
+    out: list[Finding] = []
+
+    def err(rule: str, msg: str, loc: Location = location) -> tuple[None, list[Finding]]:
+        out.append(Finding(rule, Severity.ERROR, msg, loc))
+        return None, out
+
+    try:
+        index, sub = resolve_address(device, p.object, location)
+    except InputError as exc:
+        return err("PRJ010", exc.message)
+    obj = device.dictionary.get(index)
+    if obj is None:
+        return err("PRJ010", f"object 0x{index:04X} does not exist in {device.type_name}'s dictionary")
+    entry = obj.entry(sub)
+    if entry is None:
+        return err("PRJ011", f"0x{index:04X} ({obj.name}) has no sub-index {sub}")
+    state = TRANSITION_STATE.get(p.transition, EcState.PREOP)
+    if not entry.access.writable(state):
+        if entry.access.writable():
+            states = ", ".join(s.value for s in sorted(entry.access.write, key=lambda s: s.code))
+            return err("PRJ012", f"0x{index:04X}:{sub:02X} ({entry.name}) is not writable in {state.value} "
+                                 f"(transition {p.transition}); writable in {states}")
+        return err("PRJ012", f"0x{index:04X}:{sub:02X} ({entry.name}) is read-only")
+    try:
+        value = _coerce(entry, p.value, value_location)
+        if isinstance(value, bytes):
+            data = value
+            if entry.datatype is not None and entry.datatype.bits is not None and len(data) != entry.byte_size:
+                return err("PRJ013", f"{len(data)} bytes given, 0x{index:04X}:{sub:02X} ({entry.name}) takes "
+                                     f"{entry.byte_size}", value_location)
+        else:
+            data = entry.encode(value)
+    except (EncodeError, InputError) as exc:
+        return err("PRJ013", f"0x{index:04X}:{sub:02X} ({entry.name}, {entry.type_name}): {exc.message}", value_location)
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if entry.minimum is not None and value < entry.minimum:
+            return err("PRJ014", f"{value} is below the minimum {entry.minimum} of 0x{index:04X}:{sub:02X} ({entry.name})", value_location)
+        if entry.maximum is not None and value > entry.maximum:
+            return err("PRJ014", f"{value} is above the maximum {entry.maximum} of 0x{index:04X}:{sub:02X} ({entry.name})", value_location)
+        if entry.enum and isinstance(value, int) and value not in entry.enum:
+            out.append(Finding("PRJ015", Severity.WARNING,
+                               f"{value} is not one of the documented values of {entry.name}: "
+                               + ", ".join(f"{k}={v}" for k, v in sorted(entry.enum.items())), value_location))
+    cmd = StartupCommand(
+        transition=p.transition, index=index, subindex=sub, data=data,
+        comment=p.comment or entry.name, type_name=entry.type_name,
+        value=value if not isinstance(value, bytes) else value.hex(), source=value_location,
+    )
+    return cmd, out
+
+
+def resolve_parameters(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[StartupCommand]:
+    assert rd.device is not None
+    cmds: list[StartupCommand] = []
+    seen: dict[tuple[int, int, str], int] = {}
+    for j, p in enumerate(rd.drive.parameters):
+        loc = lp.drive_location(i, "parameters", j, "object")
+        vloc = lp.drive_location(i, "parameters", j, "value")
+        cmd, findings = encode_parameter(rd.device, p, loc, vloc)
+        rd.findings.extend(findings)
+        if cmd is None:
+            continue
+        key = (cmd.index, cmd.subindex, cmd.transition)
+        if key in seen:
+            rd.warning("PRJ016", f"{cmd.address} is written twice in {cmd.transition} (also parameter {seen[key] + 1}); "
+                                 "the last write wins", loc)
+        seen[key] = j
+        cmds.append(cmd)
+    return cmds

@@ -1,0 +1,132 @@
+"""The per-drive steps of lint/commission that call the other packages (pdo, scaling, sw, esi).
+
+Each step adds located findings to the ResolvedDrive and returns the startup commands it contributes.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ecattool.errors import EcatToolError
+from ecattool.findings import Finding, Severity
+from ecattool.project.loader import LoadedProject
+from ecattool.project.resolve import ResolvedDrive
+from ecattool.startup.model import StartupCommand
+
+
+def _relocate(f: Finding, fallback: Any) -> Finding:
+    if f.location is None or f.location.line is None:
+        return Finding(f.rule, f.severity, f.message, fallback, f.data)
+    return f
+
+
+def pdo_commands(lp: LoadedProject, i: int, rd: ResolvedDrive, params: list[StartupCommand]) -> list[StartupCommand]:
+    """Check the drive's PDO configuration (or its default) and program it."""
+    from ecattool import pdo
+
+    assert rd.device is not None
+    cfg = rd.drive.pdo
+    loc = lp.drive_location(i, "pdo")
+    try:
+        if cfg is None or (cfg.rx is None and cfg.tx is None):
+            mapping = pdo.default_mapping(rd.device)
+        else:
+            data = cfg.model_dump(mode="python", exclude_none=True)
+            locations = {path[3:]: l for path, l in lp.yaml.locations.items()
+                         if len(path) > 3 and path[:3] == ("drives", i, "pdo")}
+            mapping = pdo.Mapping.from_data(data, device=rd.device, locations=locations, default=pdo.default_mapping(rd.device))
+    except EcatToolError as exc:
+        rd.error("PDO000", exc.message, exc.location or loc)
+        return []
+    rd.mapping = mapping
+    findings = pdo.check(rd.device, mapping, rules=rd.rules, startup=params)
+    rd.findings.extend(_relocate(f, loc) for f in findings)
+    if cfg is None:
+        return []  # the drive keeps its power-on mapping: nothing to program
+    complete = bool(cfg.complete_access)
+    return list(pdo.program(rd.device, mapping, complete_access=complete))
+
+
+def scaling_commands(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[StartupCommand]:
+    if rd.drive.scaling is None:
+        return []
+    from ecattool import scaling
+
+    assert rd.device is not None
+    loc = lp.drive_location(i, "scaling")
+    try:
+        group = scaling.from_project(rd.drive.scaling, device=rd.device, rules=rd.rules)
+    except EcatToolError as exc:
+        rd.error("PRJ050", exc.message, exc.location if exc.location and exc.location.line else loc)
+        return []
+    rd.factor_group = group
+    for note in scaling.findings(group):
+        rd.findings.append(_relocate(note, loc))
+    return list(group.startup())
+
+
+def check_sw(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    cfg = rd.drive.sw_config
+    if cfg is None:
+        return
+    loc = lp.drive_location(i, "sw")
+    assert rd.device is not None
+    if rd.device.vendor_id != 0x1A3:
+        rd.warning("PRJ031", f".sw images are Technosoft setups; {rd.device.type_name} is vendor 0x{rd.device.vendor_id:X}", loc)
+    path = lp.resolve(cfg.file)
+    if not path.exists():
+        rd.error("PRJ002", f".sw file {cfg.file!r} not found (looked in {path})", loc)
+        return
+    from ecattool import sw
+
+    try:
+        rd.sw_image = sw.read(path)
+    except EcatToolError as exc:
+        rd.error("PRJ030", exc.message, exc.location or loc)
+        return
+    for f in sw.check(rd.sw_image):
+        rd.findings.append(Finding("PRJ030", f.severity, f"{cfg.file}: {f.message} [{f.rule}]", f.location or loc))
+
+
+def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    dc = rd.drive.dc
+    if dc is None or dc.opmode is None:
+        return
+    assert rd.device is not None
+    names = [m.name for m in rd.device.dc_opmodes]
+    if dc.opmode not in names:
+        rd.error("PRJ040", f"DC OpMode {dc.opmode!r} is not in the device's ESI (has: {', '.join(names) or 'none'})",
+                 lp.drive_location(i, "dc", "opmode"))
+
+
+def dc_assign_activate(rd: ResolvedDrive) -> int | None:
+    dc = rd.drive.dc
+    if dc is None or rd.device is None:
+        return None
+    if dc.assign_activate is not None:
+        from ecattool.od.numbers import parse_int
+
+        return parse_int(dc.assign_activate)
+    for m in rd.device.dc_opmodes:
+        if m.name == dc.opmode:
+            return m.assign_activate
+    return None
+
+
+def check_esi(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """The ESI's own structural findings (file-level; de-duplicated across drives by lint)."""
+    from ecattool import esi
+    from ecattool.project.cache import load_esi_cached
+
+    ref = rd.drive.device
+    if ref.esi is None:
+        return
+    try:
+        f = load_esi_cached(lp.resolve(ref.esi))
+        findings = esi.check_structure(f)
+    except EcatToolError as exc:
+        rd.error("PRJ005", exc.message, exc.location)
+        return
+    for fd in findings:
+        # keep only findings about this device or the file as a whole
+        rd.findings.append(fd if fd.severity is not Severity.ERROR else fd)

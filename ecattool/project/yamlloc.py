@@ -1,0 +1,94 @@
+"""YAML loading that remembers where every value came from (file, line, column).
+
+PyYAML's YAML 1.1 resolver would turn ``6060:00`` into a base-60 integer and ``on:`` into ``True``; ecattool
+keeps such scalars as strings (object addresses are common in project files) and mapping keys always as the
+text that was written.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import yaml
+
+from ecattool.errors import InputError, Location
+
+Path_ = tuple[str | int, ...]
+
+_MAX_YAML_BYTES = 16 * 1024 * 1024
+
+
+class LocatedYaml:
+    """A loaded YAML document plus a map from value paths to locations."""
+
+    def __init__(self, data: Any, locations: dict[Path_, Location], source: str) -> None:
+        self.data = data
+        self.locations = locations
+        self.source = source
+
+    def locate(self, path: Path_) -> Location:
+        """The location of the value at ``path`` (or of its closest located parent)."""
+        p = tuple(path)
+        while p:
+            if p in self.locations:
+                return self.locations[p]
+            p = p[:-1]
+        return self.locations.get((), Location(self.source, 1, 1))
+
+
+def load_yaml(text: str | bytes, source: str) -> LocatedYaml:
+    if len(text) > _MAX_YAML_BYTES:
+        raise InputError(f"YAML file is larger than {_MAX_YAML_BYTES} bytes", Location(source))
+    loader = yaml.SafeLoader(text)
+    try:
+        node = loader.get_single_node()
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line = mark.line + 1 if mark else None
+        col = mark.column + 1 if mark else None
+        raise InputError(f"invalid YAML: {exc.problem or exc.context}", Location(source, line, col)) from None
+    except yaml.YAMLError as exc:
+        raise InputError(f"invalid YAML: {exc}", Location(source)) from None
+    finally:
+        loader.dispose()
+    locations: dict[Path_, Location] = {}
+    if node is None:
+        return LocatedYaml(None, {(): Location(source, 1, 1)}, source)
+    data = _convert(node, (), locations, source, loader, depth=0)
+    return LocatedYaml(data, locations, source)
+
+
+def _loc(node: yaml.Node, source: str) -> Location:
+    return Location(source, node.start_mark.line + 1, node.start_mark.column + 1)
+
+
+def _convert(node: yaml.Node, path: Path_, locs: dict[Path_, Location], source: str, loader: yaml.SafeLoader, depth: int) -> Any:
+    if depth > 64:
+        raise InputError("YAML nesting is deeper than 64 levels", _loc(node, source))
+    locs[path] = _loc(node, source)
+    if isinstance(node, yaml.MappingNode):
+        out: dict[str, Any] = {}
+        for key_node, value_node in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":
+                raise InputError("YAML merge keys (<<) are not supported in ecattool files", _loc(key_node, source))
+            if not isinstance(key_node, yaml.ScalarNode):
+                raise InputError("mapping keys must be plain scalars", _loc(key_node, source))
+            key = str(key_node.value)
+            if key in out:
+                raise InputError(f"duplicate key {key!r}", _loc(key_node, source))
+            out[key] = _convert(value_node, (*path, key), locs, source, loader, depth + 1)
+        return out
+    if isinstance(node, yaml.SequenceNode):
+        return [_convert(v, (*path, i), locs, source, loader, depth + 1) for i, v in enumerate(node.value)]
+    assert isinstance(node, yaml.ScalarNode)
+    tag = node.tag
+    if tag.endswith((":int", ":float")) and ":" in node.value:
+        return node.value  # 6060:00 is an object address, not a base-60 number
+    if tag.endswith(":bool") and node.value.lower() not in ("true", "false"):
+        return node.value  # yes/no/on/off stay words
+    if tag.endswith(":timestamp") or tag.endswith(":binary"):
+        return node.value
+    try:
+        return loader.construct_object(node)
+    except yaml.YAMLError as exc:
+        raise InputError(f"invalid YAML value: {exc}", _loc(node, source)) from None
