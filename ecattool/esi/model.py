@@ -9,8 +9,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import Enum
 
+from typing import TYPE_CHECKING
+
 from ecattool.errors import Location
 from ecattool.od.model import ObjectDictionary
+
+if TYPE_CHECKING:
+    from ecattool.findings import Finding
 
 
 @dataclass(frozen=True, slots=True)
@@ -72,6 +77,7 @@ class PdoEntry:
     name: str = ""
     data_type: str = ""  # type name as written in the source ("UINT", "DT0800", "BOOL" …)
     location: Location | None = None
+    depend_on_slot: bool = False  # module PDO entry whose index moves with the slot (SlotIndexIncrement)
 
     @property
     def is_gap(self) -> bool:
@@ -127,6 +133,7 @@ class InitCmd:
     complete_access: bool = False
     overwritten_by_module: bool = False
     location: Location | None = None
+    depend_on_slot: bool = False  # index moves with the slot (module InitCmds)
 
 
 @dataclass(slots=True)
@@ -205,6 +212,15 @@ class Slot:
 
 
 @dataclass(slots=True)
+class AlternativeSmMapping:
+    """A vendor-specific alternative PDO assignment (``VendorSpecific/TwinCAT/AlternativeSmMapping``)."""
+
+    name: str
+    default: bool = False
+    sms: dict[int, list[int]] = field(default_factory=dict)  # SM number -> PDO indices
+
+
+@dataclass(slots=True)
 class Device:
     identity: Identity
     type_name: str
@@ -230,6 +246,7 @@ class Device:
     location: Location | None = None
     #: free-form facts the reader could keep but the model has no field for (never silently dropped)
     extra: dict[str, str] = field(default_factory=dict)
+    alternative_sm_mappings: list[AlternativeSmMapping] = field(default_factory=list)
 
     @property
     def vendor_id(self) -> int:
@@ -283,3 +300,7 @@ class EsiFile:
     modules: list[Module] = field(default_factory=list)
     info_references: list[str] = field(default_factory=list)
     version: str = ""
+    #: reader warnings (tolerated deviations such as ``0x`` numbers or unresolvable data types)
+    warnings: list["Finding"] = field(default_factory=list)
+    #: the dictionary of an ``EtherCATDict`` root (external dictionary files); None otherwise
+    dictionary: ObjectDictionary | None = None
