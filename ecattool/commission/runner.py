@@ -1,0 +1,396 @@
+"""The commissioning run over a SlaveTarget (simulator or real master)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+from ecattool.commission import cia402
+from ecattool.errors import EcatToolError, InputError, SdoAbort, StateChangeError, TargetError
+from ecattool.findings import has_errors
+from ecattool.od.model import EcState
+from ecattool.project.resolve import TRANSITION_STATE, ResolvedDrive
+from ecattool.startup.model import StartupCommand
+from ecattool.target.base import SlaveTarget, Target
+
+#: transitions whose commands are sent while the slave is in PRE-OP on the way up
+_PREOP_TRANSITIONS = ("IP", "PS")
+_SAFEOP_TRANSITIONS = ("SO",)
+
+
+@dataclass(slots=True)
+class Step:
+    name: str
+    ok: bool
+    detail: str = ""
+    abort_code: int | None = None
+    al_status: int | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"name": self.name, "ok": self.ok, "detail": self.detail}
+        if self.abort_code is not None:
+            d["abort_code"] = f"0x{self.abort_code:08X}"
+        if self.al_status is not None:
+            d["al_status"] = f"0x{self.al_status:04X}"
+        return d
+
+
+@dataclass(slots=True)
+class DriveReport:
+    name: str
+    position: int
+    ok: bool = False
+    steps: list[Step] = field(default_factory=list)
+    error: str | None = None
+    final_state: str = ""
+
+    def to_json(self) -> dict[str, Any]:
+        return {"name": self.name, "position": self.position, "ok": self.ok, "error": self.error,
+                "final_state": self.final_state, "steps": [s.to_json() for s in self.steps]}
+
+
+@dataclass(slots=True)
+class CommissionReport:
+    project: str
+    target: str
+    drives: list[DriveReport] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return bool(self.drives) and all(d.ok for d in self.drives)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"project": self.project, "target": self.target, "ok": self.ok,
+                "drives": [d.to_json() for d in self.drives]}
+
+
+class _Failed(Exception):
+    def __init__(self, step: Step) -> None:
+        super().__init__(step.detail)
+        self.step = step
+
+
+# --------------------------------------------------------------------------------------------
+# process data access
+# --------------------------------------------------------------------------------------------
+
+
+class ProcessIo:
+    """Objects in the process image by (index, sub); SDO for objects that are not mapped."""
+
+    def __init__(self, slave: SlaveTarget, rd: ResolvedDrive) -> None:
+        from ecattool import pdo
+
+        self.slave = slave
+        self.rd = rd
+        assert rd.device is not None and rd.mapping is not None
+        self.layout = pdo.layout(rd.device, rd.mapping)
+        self.out_pos = {(v.index, v.subindex): v for v in self.layout.rx if not v.is_gap}
+        self.in_pos = {(v.index, v.subindex): v for v in self.layout.tx if not v.is_gap}
+        self.outputs = bytearray(self.layout.rx_bytes)
+        self.inputs = bytes(self.layout.tx_bytes)
+
+    def _entry(self, index: int, sub: int) -> Any:
+        assert self.rd.device is not None
+        e = self.rd.device.dictionary.entry(index, sub)
+        if e is None:
+            raise TargetError(f"0x{index:04X}:{sub:02X} is not in the device dictionary")
+        return e
+
+    def cycle(self) -> None:
+        self.inputs = self.slave.exchange(bytes(self.outputs))
+
+    def write(self, index: int, sub: int, value: int) -> None:
+        entry = self._entry(index, sub)
+        raw = entry.encode(value)
+        pos = self.out_pos.get((index, sub))
+        if pos is None:
+            self.slave.sdo_download(index, sub, raw)
+            return
+        _put_bits(self.outputs, pos.bit_offset, pos.bit_len, int.from_bytes(raw, "little"))
+
+    def read(self, index: int, sub: int) -> int:
+        entry = self._entry(index, sub)
+        pos = self.in_pos.get((index, sub))
+        if pos is None:
+            return entry.decode(self.slave.sdo_upload(index, sub))
+        raw = _get_bits(self.inputs, pos.bit_offset, pos.bit_len)
+        return entry.decode(raw.to_bytes(entry.byte_size, "little"))
+
+    def has(self, index: int, sub: int = 0) -> bool:
+        assert self.rd.device is not None
+        return self.rd.device.dictionary.entry(index, sub) is not None
+
+
+def _put_bits(buf: bytearray, bit_offset: int, bit_len: int, value: int) -> None:
+    whole = int.from_bytes(buf, "little")
+    mask = ((1 << bit_len) - 1) << bit_offset
+    whole = (whole & ~mask) | ((value << bit_offset) & mask)
+    buf[:] = whole.to_bytes(len(buf), "little")
+
+
+def _get_bits(buf: bytes, bit_offset: int, bit_len: int) -> int:
+    return (int.from_bytes(buf, "little") >> bit_offset) & ((1 << bit_len) - 1)
+
+
+# --------------------------------------------------------------------------------------------
+# one drive
+# --------------------------------------------------------------------------------------------
+
+
+def _sdo_step(name: str, fn: Callable[[], Any]) -> Any:
+    try:
+        return fn()
+    except SdoAbort as exc:
+        raise _Failed(Step(name, False, str(exc), abort_code=exc.code)) from None
+    except StateChangeError as exc:
+        raise _Failed(Step(name, False, str(exc), al_status=exc.al_status)) from None
+    except EcatToolError as exc:
+        raise _Failed(Step(name, False, exc.message)) from None
+
+
+def _goto(slave: SlaveTarget, state: EcState, report: DriveReport) -> None:
+    _sdo_step(f"state {state.value}", lambda: slave.request_state(state))
+    report.steps.append(Step(f"state {state.value}", True, f"reached {state.value}"))
+
+
+def _check_identity(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+    assert rd.device is not None
+    want = rd.device.identity
+    policy = rd.drive.identity
+    try:
+        vendor = int.from_bytes(slave.sdo_upload(0x1018, 1), "little")
+        product = int.from_bytes(slave.sdo_upload(0x1018, 2), "little")
+        revision = int.from_bytes(slave.sdo_upload(0x1018, 3), "little")
+        how = "1018h"
+    except EcatToolError:
+        ident = slave.identity()
+        vendor, product, revision, how = ident.vendor_id, ident.product_code, ident.revision, "EEPROM"
+    problems = []
+    if policy.vendor and vendor != want.vendor_id:
+        problems.append(f"vendor 0x{vendor:08X} (expected 0x{want.vendor_id:08X})")
+    if policy.product and product != want.product_code:
+        problems.append(f"product 0x{product:08X} (expected 0x{want.product_code:08X})")
+    if policy.revision == "exact" and revision != want.revision:
+        problems.append(f"revision 0x{revision:08X} (expected exactly 0x{want.revision:08X})")
+    if policy.revision == "at-least" and revision < want.revision:
+        problems.append(f"revision 0x{revision:08X} (expected at least 0x{want.revision:08X})")
+    if problems:
+        raise _Failed(Step("identity", False, "wrong device: " + ", ".join(problems)))
+    report.steps.append(Step("identity", True, f"vendor 0x{vendor:08X} product 0x{product:08X} "
+                                                f"revision 0x{revision:08X} ({how})"))
+
+
+def _send(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand) -> None:
+    assert rd.device is not None
+
+    def write() -> None:
+        slave.sdo_download(cmd.index, cmd.subindex, cmd.data, cmd.complete_access, cmd.expect_reply)
+
+    _sdo_step(f"write {cmd.address}", write)
+    if not (cmd.verify and cmd.expect_reply):
+        return
+    entry = rd.device.dictionary.entry(cmd.index, cmd.subindex)
+    state = TRANSITION_STATE.get(cmd.transition, EcState.PREOP)
+    if entry is None or not entry.access.readable(state) or cmd.complete_access:
+        return
+    back = _sdo_step(f"read back {cmd.address}", lambda: slave.sdo_upload(cmd.index, cmd.subindex))
+    if bytes(back) != cmd.data:
+        raise _Failed(Step(f"verify {cmd.address}", False,
+                           f"read back {bytes(back).hex()} after writing {cmd.data.hex()} ({cmd.comment})"))
+
+
+def _startup(slave: SlaveTarget, rd: ResolvedDrive, transitions: tuple[str, ...], report: DriveReport) -> None:
+    cmds = [c for c in rd.startup if c.transition in transitions]
+    for c in cmds:
+        _send(slave, rd, c)
+    if cmds:
+        report.steps.append(Step(f"startup {'/'.join(transitions)}", True, f"{len(cmds)} write(s) verified"))
+
+
+def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+    from ecattool import sw
+
+    cfg = rd.drive.sw_config
+    if rd.sw_image is None or cfg is None:
+        return
+    diff = _sdo_step("sw verify", lambda: sw.verify(rd.sw_image, slave))
+    bad = [b for b in diff if not b.ok]
+    if not bad:
+        report.steps.append(Step("sw verify", True, f"{len(diff)} block(s) match {cfg.file}"))
+        return
+    if not cfg.download:
+        raise _Failed(Step("sw verify", False, f"{len(bad)} block(s) differ from {cfg.file}: "
+                           + ", ".join(f"0x{b.start:04X}" for b in bad) + " (download disabled)"))
+    _sdo_step("sw download", lambda: sw.download(rd.sw_image, slave, mode=cfg.mode))
+    # the drive resets after the download; bring it back to PRE-OP and check again
+    _sdo_step("sw reset", lambda: slave.request_state(EcState.INIT))
+    _sdo_step("sw reset", lambda: slave.request_state(EcState.PREOP))
+    again = _sdo_step("sw verify", lambda: sw.verify(rd.sw_image, slave))
+    still = [b for b in again if not b.ok]
+    if still:
+        raise _Failed(Step("sw verify", False, "after download, block(s) still differ: "
+                           + ", ".join(f"0x{b.start:04X}" for b in still)))
+    report.steps.append(Step("sw download", True, f"{len(bad)} block(s) written and verified from {cfg.file}"))
+
+
+def _counts_per_unit(rd: ResolvedDrive) -> Fraction | None:
+    """Internal position counts per position user unit, from the drive's factor group, if known."""
+    group = rd.factor_group
+    if group is None:
+        return None
+    value = getattr(group, "counts_per_position_unit", None)
+    return Fraction(value) if value is not None else None
+
+
+def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
+    move = rd.drive.move
+    if move is None:
+        return
+    dist = Fraction(move.distance).limit_denominator(1)
+    modes = tuple(getattr(rd.rules, "supported_modes", ()) or ())
+    mode = move.mode
+    if mode == "pp" and modes and 1 not in modes and 8 in modes:
+        mode = "csp"
+    internal = io.has(0x6063)
+    p0 = io.read(0x6064, 0)
+    i0 = io.read(0x6063, 0) if internal else None
+    target = int(p0 + dist)
+    if mode == "pp":
+        io.write(0x6060, 0, 1)
+        io.write(0x607A, 0, target)
+        io.write(0x6040, 0, cia402.ENABLE_OPERATION | cia402.NEW_SETPOINT)
+        reached = False
+        for n in range(200_000):
+            io.cycle()
+            sw = io.read(0x6041, 0)
+            if sw & 0x1000:  # set-point acknowledged: release the new-set-point bit
+                io.write(0x6040, 0, cia402.ENABLE_OPERATION)
+            if n > 2 and sw & 0x0400 and not sw & 0x1000:
+                reached = True
+                break
+        if not reached:
+            raise _Failed(Step("move", False, f"profile position move to {target} did not reach its target"))
+    else:
+        io.write(0x6060, 0, 8)
+        steps = 100
+        for k in range(1, steps + 1):
+            io.write(0x607A, 0, int(p0 + dist * k / steps))
+            io.cycle()
+        for _ in range(50):
+            io.cycle()
+    p1 = io.read(0x6064, 0)
+    if p1 - p0 != dist:
+        raise _Failed(Step("move", False, f"position moved {p1 - p0} user units, commanded {dist}"))
+    detail = f"{mode.upper()} move of {dist} user units: position {p0} -> {p1}"
+    if internal and i0 is not None:
+        i1 = io.read(0x6063, 0)
+        cpu = _counts_per_unit(rd)
+        if cpu is not None:
+            want = dist * cpu
+            if abs(Fraction(i1 - i0) - want) > 1:
+                raise _Failed(Step("move", False, f"internal position moved {i1 - i0} counts, the factor group "
+                                                  f"says {float(want):g} counts for {dist} user units"))
+            detail += f"; internal {i0} -> {i1} = {i1 - i0} counts (expected {want})"
+        else:
+            detail += f"; internal {i0} -> {i1} counts"
+    report.steps.append(Step("move", True, detail))
+
+
+def _safe_stop(slave: SlaveTarget, io: ProcessIo | None, report: DriveReport) -> None:
+    """Leave the drive with its power stage off, in PRE-OP, whatever state it reached."""
+    try:
+        if io is not None:
+            io.write(0x6040, 0, cia402.DISABLE_VOLTAGE)
+            io.cycle()
+    except EcatToolError:
+        pass
+    try:
+        if slave.state() in (EcState.OP, EcState.SAFEOP):
+            slave.request_state(EcState.PREOP)
+    except EcatToolError:
+        pass
+    try:
+        report.final_state = slave.state().value
+    except EcatToolError:
+        report.final_state = "unknown"
+
+
+def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
+    report = DriveReport(rd.drive.name, rd.position)
+    io: ProcessIo | None = None
+    try:
+        if has_errors(rd.findings):
+            first = next(f for f in rd.findings if f.severity.value == "error")
+            raise _Failed(Step("lint", False, f"the project has errors for this drive, first: {first}"))
+        current = _sdo_step("state", slave.state)
+        if current is not EcState.INIT:
+            _sdo_step("state INIT", lambda: slave.request_state(EcState.INIT))
+        _goto(slave, EcState.PREOP, report)
+        _check_identity(slave, rd, report)
+        _sw(slave, rd, report)
+        _startup(slave, rd, _PREOP_TRANSITIONS, report)
+        _goto(slave, EcState.SAFEOP, report)
+        io = ProcessIo(slave, rd)
+        io.cycle()
+        _startup(slave, rd, _SAFEOP_TRANSITIONS, report)
+        _goto(slave, EcState.OP, report)
+        if rd.drive.enable:
+            passed = _sdo_step("enable", lambda: cia402.enable(lambda: io.read(0x6041, 0),
+                                                               lambda v: io.write(0x6040, 0, v), io.cycle))
+            report.steps.append(Step("enable", True, " -> ".join(passed)))
+            _sdo_step("move", lambda: _move(io, rd, report))
+        report.ok = True
+        report.final_state = slave.state().value
+    except _Failed as exc:
+        report.steps.append(exc.step)
+        report.error = f"{exc.step.name}: {exc.step.detail}"
+        _safe_stop(slave, io, report)
+    return report
+
+
+def open_target(spec: str, drives: list[ResolvedDrive]) -> tuple[Target, str]:
+    """``sim`` → one simulated drive per project entry; ``pysoem:<ifname>`` → a real master."""
+    if spec == "sim":
+        from ecattool.target.sim import SimTarget
+
+        devices = [rd.device for rd in sorted(drives, key=lambda r: r.position)]
+        if any(d is None for d in devices):
+            raise InputError("cannot simulate a drive whose device did not resolve (see lint)")
+        return SimTarget.from_devices(devices), "sim"  # type: ignore[arg-type]
+    if spec.startswith("pysoem:"):
+        from ecattool.target.pysoem import PysoemTarget
+
+        return PysoemTarget(spec.split(":", 1)[1]), spec
+    raise InputError(f"unknown target {spec!r} (use 'sim' or 'pysoem:<interface>')")
+
+
+def commission(path: str | Path, target: str | None = None, on_drive: Callable[[DriveReport], None] | None = None) -> CommissionReport:
+    """Commission every drive of the project at ``path`` on ``target`` (default: the project's, i.e. 'sim')."""
+    from ecattool.project.lint import lint_project
+
+    result = lint_project(path)
+    if result.loaded is None:
+        first = result.findings[0]
+        raise InputError(first.message, first.location)
+    spec = target or result.loaded.project.target
+    tgt, name = open_target(spec, result.drives)
+    report = CommissionReport(str(path), name)
+    try:
+        slaves = tgt.slaves()
+        ordered = sorted(result.drives, key=lambda r: r.position)
+        for rd in ordered:
+            if rd.position >= len(slaves):
+                dr = DriveReport(rd.drive.name, rd.position, error=f"no slave at bus position {rd.position}")
+                dr.steps.append(Step("bus", False, dr.error or ""))
+            else:
+                dr = commission_drive(slaves[rd.position], rd)
+            report.drives.append(dr)
+            if on_drive:
+                on_drive(dr)
+    finally:
+        tgt.close()
+    return report
