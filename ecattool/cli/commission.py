@@ -1,0 +1,55 @@
+"""ecattool commission: the main job."""
+
+from __future__ import annotations
+
+import click
+
+from ecattool.cli.common import console, dump_json, output_option, write_output
+
+
+@click.command(
+    "commission",
+    epilog="""\b
+Examples:
+  ecattool commission samples/technosoft_ipos/project.yaml          # on the embedded simulator
+  ecattool commission --json machine.yaml > report.json
+  ecattool commission --target pysoem:eth0 machine.yaml             # a real bus (pip install 'ecattool[pysoem]')
+\b
+Exit codes: 0 every drive commissioned, 1 a drive failed or the project is invalid, 2 usage error.""",
+)
+@click.argument("projects", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option("--target", default=None, help="'sim' (default: the project's target) or 'pysoem:<interface>'.")
+@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+@output_option(help="Also write the JSON report to FILE.")
+def commission(projects: tuple[str, ...], target: str | None, as_json: bool, output: str | None) -> None:
+    """Commission the drives of project files.
+
+    For each drive: INIT -> PRE-OP, identity check, .sw verify/download, the startup list with every write
+    read back, SAFE-OP, OP, enable through the CiA-402 state machine, and a short move in user units checked
+    in internal units. A failing drive is stopped safely and the failing command and abort code are named.
+    """
+    from ecattool.commission import commission as run
+
+    reports = []
+    con = None if as_json else console()
+    for path in projects:
+        def show(dr, path=path):  # type: ignore[no-untyped-def]
+            if con is None:
+                return
+            mark = "[green]OK[/green]" if dr.ok else "[red]FAILED[/red]"
+            con.print(f"{path}: drive {dr.name!s} (position {dr.position}): {mark}")
+            for s in dr.steps:
+                con.print(f"    {'ok ' if s.ok else 'ERR'} {s.name}: {s.detail}", markup=False,
+                          style=None if s.ok else "red")
+        reports.append(run(path, target=target, on_drive=show))
+    data = {"ok": all(r.ok for r in reports), "projects": [r.to_json() for r in reports]}
+    if as_json:
+        click.echo(dump_json(data))
+    elif con is not None:
+        n = sum(len(r.drives) for r in reports)
+        bad = sum(1 for r in reports for d in r.drives if not d.ok)
+        con.print(f"{n - bad} of {n} drive(s) commissioned" + (f", {bad} failed" if bad else ""),
+                  style="green" if not bad else "red")
+    if output:
+        write_output(output, dump_json(data) + "\n", list(projects))
+    raise SystemExit(0 if data["ok"] else 1)
