@@ -60,7 +60,8 @@ def validation_findings(exc: ValidationError, doc: LocatedYaml) -> list[Finding]
             elif isinstance(node, list) and isinstance(p, int) and p < len(node):
                 clean.append(p)
                 node = node[p]
-        out.append(Finding("PRJ001", Severity.ERROR, _message(err), doc.locate(tuple(clean))))
+        where = doc.locate_key(tuple(clean)) if err.get("type") == "extra_forbidden" else doc.locate(tuple(clean))
+        out.append(Finding("PRJ001", Severity.ERROR, _message(err), where))
     return out
 
 

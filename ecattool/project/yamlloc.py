@@ -21,10 +21,16 @@ _MAX_YAML_BYTES = 16 * 1024 * 1024
 class LocatedYaml:
     """A loaded YAML document plus a map from value paths to locations."""
 
-    def __init__(self, data: Any, locations: dict[Path_, Location], source: str) -> None:
+    def __init__(self, data: Any, locations: dict[Path_, Location], source: str,
+                 key_locations: dict[Path_, Location] | None = None) -> None:
         self.data = data
         self.locations = locations
+        self.key_locations = key_locations or {}
         self.source = source
+
+    def locate_key(self, path: Path_) -> Location:
+        """The location of the mapping key that ends ``path`` (falls back to the value's)."""
+        return self.key_locations.get(tuple(path)) or self.locate(path)
 
     def locate(self, path: Path_) -> Location:
         """The location of the value at ``path`` (or of its closest located parent)."""
@@ -52,17 +58,19 @@ def load_yaml(text: str | bytes, source: str) -> LocatedYaml:
     finally:
         loader.dispose()
     locations: dict[Path_, Location] = {}
+    keys: dict[Path_, Location] = {}
     if node is None:
         return LocatedYaml(None, {(): Location(source, 1, 1)}, source)
-    data = _convert(node, (), locations, source, loader, depth=0)
-    return LocatedYaml(data, locations, source)
+    data = _convert(node, (), locations, keys, source, loader, depth=0)
+    return LocatedYaml(data, locations, source, keys)
 
 
 def _loc(node: yaml.Node, source: str) -> Location:
     return Location(source, node.start_mark.line + 1, node.start_mark.column + 1)
 
 
-def _convert(node: yaml.Node, path: Path_, locs: dict[Path_, Location], source: str, loader: yaml.SafeLoader, depth: int) -> Any:
+def _convert(node: yaml.Node, path: Path_, locs: dict[Path_, Location], keys: dict[Path_, Location], source: str,
+             loader: yaml.SafeLoader, depth: int) -> Any:
     if depth > 64:
         raise InputError("YAML nesting is deeper than 64 levels", _loc(node, source))
     locs[path] = _loc(node, source)
@@ -76,10 +84,11 @@ def _convert(node: yaml.Node, path: Path_, locs: dict[Path_, Location], source: 
             key = str(key_node.value)
             if key in out:
                 raise InputError(f"duplicate key {key!r}", _loc(key_node, source))
-            out[key] = _convert(value_node, (*path, key), locs, source, loader, depth + 1)
+            keys[(*path, key)] = _loc(key_node, source)
+            out[key] = _convert(value_node, (*path, key), locs, keys, source, loader, depth + 1)
         return out
     if isinstance(node, yaml.SequenceNode):
-        return [_convert(v, (*path, i), locs, source, loader, depth + 1) for i, v in enumerate(node.value)]
+        return [_convert(v, (*path, i), locs, keys, source, loader, depth + 1) for i, v in enumerate(node.value)]
     assert isinstance(node, yaml.ScalarNode)
     tag = node.tag
     if tag.endswith((":int", ":float")) and ":" in node.value:

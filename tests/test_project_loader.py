@@ -1,0 +1,113 @@
+import json
+from pathlib import Path
+
+import pytest
+
+from ecattool.errors import InputError
+from ecattool.findings import Finding, Severity
+from ecattool.errors import Location
+from ecattool.project import report
+from ecattool.project.loader import load_project, parse_project
+from ecattool.project.model import json_schema
+
+ROOT = Path(__file__).resolve().parent.parent
+
+GOOD = """\
+ecattool: 1
+name: test
+drives:
+  - name: x
+    device: {profile: technosoft-ipos}
+    parameters:
+      - {object: 6060:00, value: 1}
+"""
+
+
+def test_valid_project_loads(tmp_path):
+    p = tmp_path / "p.yaml"
+    p.write_text(GOOD)
+    lp = load_project(p)
+    assert lp.project.drives[0].device.profile == "technosoft-ipos"
+    # YAML 1.1 would read 6060:00 as the base-60 number 363600; ecattool keeps the address
+    assert lp.project.drives[0].parameters[0].object == "6060:00"
+    assert lp.drive_location(0, "parameters", 0, "value").line == 7
+
+
+def test_unknown_field_is_located():
+    text = GOOD.replace("    parameters:", "    paramters:")
+    project, doc, findings = parse_project(text, "p.yaml")
+    assert project is None
+    assert findings[0].rule == "PRJ001"
+    assert "unknown field 'paramters'" in findings[0].message
+    assert (findings[0].location.line, findings[0].location.column) == (6, 5)
+
+
+def test_wrong_value_is_located_at_the_value():
+    text = GOOD.replace("  - name: x\n", "  - name: x\n    position: -3\n")
+    _, _, findings = parse_project(text, "p.yaml")
+    assert findings and findings[0].location.line == 5 and findings[0].location.column == 15
+
+
+def test_device_needs_exactly_one_source():
+    text = GOOD.replace("{profile: technosoft-ipos}", "{profile: hdt, esi: x.xml}")
+    _, _, findings = parse_project(text, "p.yaml")
+    assert "exactly one of" in findings[0].message and findings[0].location.line == 5
+
+
+def test_yaml_syntax_error_is_one_located_error(tmp_path):
+    p = tmp_path / "bad.yaml"
+    p.write_text("ecattool: 1\ndrives: [\n")
+    with pytest.raises(InputError) as ei:
+        load_project(p)
+    assert str(ei.value).startswith(f"{p}:")
+
+
+@pytest.mark.parametrize("text,msg", [("drives: []\n", "missing 'ecattool: 1'"), ("ecattool: 7\ndrives: []\n", "unsupported")])
+def test_version_checks(tmp_path, text, msg):
+    p = tmp_path / "v.yaml"
+    p.write_text(text)
+    with pytest.raises(InputError, match=msg):
+        load_project(p)
+
+
+def test_duplicate_keys_refused(tmp_path):
+    p = tmp_path / "d.yaml"
+    p.write_text("ecattool: 1\nname: a\nname: b\ndrives: []\n")
+    with pytest.raises(InputError, match="duplicate key 'name'") as ei:
+        load_project(p)
+    assert ei.value.location.line == 3
+
+
+def test_checked_in_schema_has_not_drifted():
+    checked_in = json.loads((ROOT / "schemas" / "project.schema.json").read_text())
+    assert checked_in == json.loads(json.dumps(json_schema()))
+
+
+def _findings():
+    return [
+        Finding("PRJ010", Severity.ERROR, "object 0x1234 does not exist", Location("a/p.yaml", 7, 9)),
+        Finding("PDO011", Severity.WARNING, "mapped twice, 50% of it", Location("a/p.yaml", 9)),
+        Finding("PRJ005", Severity.INFO, "note without line", None),
+    ]
+
+
+def test_sarif_is_valid_2_1_0_shape():
+    s = report.to_sarif(_findings())
+    assert s["version"] == "2.1.0"
+    run = s["runs"][0]
+    ids = [r["id"] for r in run["tool"]["driver"]["rules"]]
+    assert ids == sorted(set(ids))
+    res = run["results"]
+    assert [r["level"] for r in res] == ["error", "warning", "note"]
+    loc = res[0]["locations"][0]["physicalLocation"]
+    assert loc["artifactLocation"]["uri"] == "a/p.yaml" and loc["region"] == {"startLine": 7, "startColumn": 9}
+    assert "locations" not in res[2]
+    for r in res:
+        assert ids[r["ruleIndex"]] == r["ruleId"]
+
+
+def test_github_annotations_escape():
+    out = report.to_github(_findings()).splitlines()
+    assert out[0] == "::error file=a/p.yaml,line=7,col=9,title=PRJ010::object 0x1234 does not exist"
+    assert out[1].startswith("::warning file=a/p.yaml,line=9,title=PDO011::mapped twice, 50%25 of it")
+    assert out[2] == "::notice title=PRJ005::note without line"
