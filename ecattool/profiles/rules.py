@@ -46,3 +46,27 @@ class FamilyRules:
     #: positions / velocities: internal counts per motor revolution where fixed (HDT: 65536)
     counts_per_rev: int | None = None
     notes: tuple[str, ...] = field(default_factory=tuple)
+    # --- added for the built-in families (all optional; generic devices keep the defaults) ---------------
+    #: entries the sync manager assignment objects (1C12h/1C13h) have, i.e. PDOs assignable at most
+    max_assign_entries: int | None = None
+    #: size limits of one mapping entry in bits (Control Techniques: 8..32, i.e. 1-4 bytes)
+    min_entry_bits: int | None = None
+    max_entry_bits: int | None = None
+    #: Control Techniques' priority rule: object indices of "slow" parameters (SM-Applications / Inter-Option
+    #: menus). Such entries also carry ``Entry.category == "slow"`` in the profile's dictionary.
+    slow_indices: frozenset[int] = frozenset()
+    #: objects that can only be accessed by SDO (never PDO-mapped), e.g. Control Techniques 6091h/6092h
+    sdo_only_indices: frozenset[int] = frozenset()
+    #: objects that can only be accessed cyclically (SDO access refused), e.g. Control Techniques 2830h/2831h
+    pdo_only_indices: frozenset[int] = frozenset()
+    #: objects that are read-only although CiA-402 makes them writable (Control Techniques 608Fh)
+    read_only_indices: frozenset[int] = frozenset()
+    #: bits of 60FDh that carry the (negative, positive) limit switches; HDT swaps them (CW = bit 0 = positive)
+    limit_switch_bits: tuple[int, int] = (0, 1)
+    #: option-code behaviours where a family departs from CiA-402: (object index, value, end state name)
+    option_code_end_states: tuple[tuple[int, int, str], ...] = ()
+    #: factor group flavour: "cia402-2" (608Fh/6091h/6092h…), "cia402-obsolete" (6093h/6094h/6097h as
+    #: numerator/divisor, Technosoft before F515K), "" = unknown/ESI
+    factor_group: str = ""
+    #: device type (1000h) the family documents, for cross-checks; None = unknown
+    device_type: int | None = None

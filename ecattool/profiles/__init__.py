@@ -1,0 +1,104 @@
+"""Built-in drive families and the rules of every drive family.
+
+Public API (others code against it):
+
+- :func:`list_profiles` — the built-in families, their models, product codes and revisions;
+- :func:`load` — a complete :class:`~ecattool.esi.model.Device` for ``"technosoft-ipos"``, ``"hdt"`` or
+  ``"controltechniques"`` (optionally a product and a revision);
+- :func:`rules_for` — the :class:`FamilyRules` of any device (built-in family by vendor id, else derived
+  from its ESI); :func:`family_of` — the family name;
+- :func:`complete_generic` — an ESI device with the communication objects its ESI leaves out.
+
+Example::
+
+    from ecattool import profiles
+    dev = profiles.load("technosoft-ipos", product="ipos4808-my-cat-sto", revision="F515K")
+    rules = profiles.rules_for(dev)          # 64-bit PDOs, 8 entries, dummies only in RxPDOs …
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from types import ModuleType
+
+from ecattool.errors import SelectionError
+from ecattool.esi.model import Device
+from ecattool.profiles._common import ProductInfo, ProfileInfo
+from ecattool.profiles.generic import complete_generic, generic_rules
+from ecattool.profiles.rules import FamilyRules
+
+__all__ = [
+    "FamilyRules", "ProductInfo", "ProfileInfo", "complete_generic", "family_of", "list_profiles", "load",
+    "rules_for", "PROFILE_NAMES",
+]
+
+#: profile name → module name (imported lazily: each family reads its data file on first use)
+_MODULES = {
+    "technosoft-ipos": "technosoft",
+    "hdt": "hdt",
+    "controltechniques": "controltechniques",
+}
+PROFILE_NAMES = tuple(_MODULES)
+_ALIASES = {
+    "technosoft": "technosoft-ipos", "ipos": "technosoft-ipos", "tml": "technosoft-ipos",
+    "hdt-tomcat": "hdt", "tomcat": "hdt", "dgfox": "hdt", "ntt": "hdt",
+    "ct": "controltechniques", "control-techniques": "controltechniques", "sm-ethercat": "controltechniques",
+    "nidec": "controltechniques",
+}
+
+
+def _module(name: str) -> ModuleType:
+    import importlib
+
+    return importlib.import_module(f"ecattool.profiles.{_MODULES[name]}")
+
+
+def _resolve(name: str) -> str:
+    key = name.strip().lower()
+    key = _ALIASES.get(key, key)
+    if key not in _MODULES:
+        raise SelectionError(f"unknown drive profile {name!r}; choose one of: {', '.join(PROFILE_NAMES)}")
+    return key
+
+
+def list_profiles() -> list[ProfileInfo]:
+    """The built-in families with their models (product codes, known revisions)."""
+    return [_module(n).INFO for n in PROFILE_NAMES]
+
+
+def load(name: str, product: str | None = None, revision: str | int | None = None) -> Device:
+    """A complete device of a built-in family.
+
+    ``name``: ``technosoft-ipos`` / ``hdt`` / ``controltechniques`` (a few aliases such as ``technosoft``,
+    ``ct`` are accepted). ``product``: one of the family's model keys (see :func:`list_profiles`; default
+    the first). ``revision``: Technosoft firmware (``F515K``, ``F515I``, ``0x3531354B``…), Control Techniques
+    SM-EtherCAT firmware (``01.02.00``); HDT has none. Raises :class:`SelectionError` for unknown names.
+
+    HDT's product names (``tomcat``, ``dgfox``, ``ntt``) are accepted as profile names too.
+    """
+    key = _resolve(name)
+    low = name.strip().lower()
+    if key == "hdt" and product is None and low in ("tomcat", "dgfox", "ntt"):
+        product = low
+    loader: Callable[..., Device] = _module(key).load
+    return loader(product, revision)
+
+
+_BY_VENDOR = {0x000001A3: "technosoft-ipos", 0x00000289: "hdt", 0x000000F9: "controltechniques"}
+
+
+def family_of(device: Device) -> str:
+    """``technosoft-ipos``, ``hdt``, ``controltechniques`` (by vendor id) or ``generic``."""
+    prof = device.extra.get("profile") if device.extra else None
+    if prof in _MODULES:
+        return str(prof)
+    return _BY_VENDOR.get(device.vendor_id, "generic")
+
+
+def rules_for(device: Device) -> FamilyRules:
+    """The family rules of ``device``: built-in family by vendor id (and product), else derived from its ESI."""
+    fam = family_of(device)
+    if fam == "generic":
+        return generic_rules(device)
+    rules: Callable[[Device], FamilyRules] = _module(fam).rules
+    return rules(device)

@@ -1,0 +1,167 @@
+"""Any CoE device from its ESI: family rules derived from the ESI, and a dictionary completed from its PDOs.
+
+ESI files often leave the communication objects out of their ``Dictionary`` (or have no dictionary at all):
+:func:`complete_generic` synthesises 1000h, 1018h, 1C00h, the mapping objects 16xxh/1Axxh and the
+assignment objects 1C12h/1C13h from the device's identity, sync managers and PDO list, so that the
+simulator can serve any ESI drive the same way as a built-in family.
+"""
+
+from __future__ import annotations
+
+import copy
+
+from ecattool.errors import Location
+from ecattool.esi.model import Device, Direction, Pdo
+from ecattool.od.model import RO, Access, Entry, ObjectCode, ObjectDictionary, OdObject
+from ecattool.od.types import STRING, UDINT, UINT, USINT
+from ecattool.profiles.rules import FamilyRules
+
+#: SM kinds → 1C00h communication type values (ETG.1000.6: 1 mailbox out, 2 mailbox in, 3 outputs, 4 inputs)
+SM_TYPE = {"MBoxOut": 1, "MBoxIn": 2, "Outputs": 3, "Inputs": 4}
+
+_PREOP_RW = Access.parse("rw", None, "PreOP")
+
+
+def _u(sub: int, name: str, dt: type | object, value: int, access: Access = RO, where: str = "") -> Entry:
+    bits = dt.bits  # type: ignore[attr-defined]
+    return Entry(sub, name, dt, bits, access=access, default=dt.encode(value), location=Location(where or None))  # type: ignore[arg-type, attr-defined]
+
+
+def _all_pdos(device: Device, direction: Direction) -> list[Pdo]:
+    seen: dict[int, Pdo] = {}
+    for p in device.pdos(direction):
+        seen.setdefault(p.index, p)
+    for m in device.modules:
+        for p in (m.rx_pdos if direction is Direction.RX else m.tx_pdos):
+            seen.setdefault(p.index, p)
+    return [seen[k] for k in sorted(seen)]
+
+
+def _mapping_object(pdo: Pdo, writable: bool, where: str) -> OdObject:
+    acc = _PREOP_RW if writable else RO
+    obj = OdObject(pdo.index, pdo.name or f"{'Rx' if pdo.direction is Direction.RX else 'Tx'}PDO 0x{pdo.index:04X}",
+                   ObjectCode.RECORD, location=Location(where))
+    n = len(pdo.entries)
+    obj.entries[0] = _u(0, "Number of mapped objects", USINT, n, acc, where)
+    obj.entries[0].maximum = max(n, 1)
+    for i, e in enumerate(pdo.entries, start=1):
+        obj.entries[i] = _u(i, f"Mapping entry {i}", UDINT, e.mapping_value, acc, where)
+    return obj
+
+
+def _assign_object(device: Device, direction: Direction, pdos: list[Pdo], writable: bool, where: str) -> OdObject:
+    sm = device.process_sm(direction)
+    sm_no = sm.number if sm is not None else (2 if direction is Direction.RX else 3)
+    assigned = [p.index for p in pdos if p.sm == sm_no or (p.sm is None and p.mandatory)]
+    acc = _PREOP_RW if writable else RO
+    label = "RxPDO" if direction is Direction.RX else "TxPDO"
+    obj = OdObject(direction.assign_index, f"{label} assign", ObjectCode.ARRAY, location=Location(where))
+    slots = max(len(pdos), 1)
+    obj.entries[0] = _u(0, "Number of assigned PDOs", USINT, len(assigned), acc, where)
+    obj.entries[0].maximum = slots
+    for s in range(1, slots + 1):
+        value = assigned[s - 1] if s <= len(assigned) else 0
+        obj.entries[s] = _u(s, f"Assigned {label} {s}", UINT, value, acc, where)
+    return obj
+
+
+def complete_generic(device: Device) -> Device:
+    """A copy of ``device`` whose dictionary has 1000h, 1018h, 1C00h, 16xxh/1Axxh and 1C12h/1C13h.
+
+    Objects the ESI already defines are kept as they are; only missing ones are synthesised (from the
+    identity, the sync managers and the PDO list, with each PDO's default SM deciding its assignment).
+    Mapping objects of Fixed PDOs, and the assignment when the ESI does not declare PdoAssign, are read-only.
+    """
+    out = copy.deepcopy(device)
+    od = ObjectDictionary({o.index: o for o in out.dictionary})
+    where = f"synthesised from {device.source or device.type_name}"
+    coe = out.mailbox.coe if out.mailbox is not None else None
+    if 0x1000 not in od:
+        value = (out.profile_no or 0) & 0xFFFF
+        od.add(OdObject(0x1000, "Device type", ObjectCode.VAR, {0: _u(0, "Device type", UDINT, value, RO, where)},
+                        location=Location(where)))
+    if 0x1008 not in od and (out.name or out.type_name):
+        text = (out.name or out.type_name).encode("latin-1", "replace")
+        od.add(OdObject(0x1008, "Device name", ObjectCode.VAR,
+                        {0: Entry(0, "Device name", STRING, 8 * len(text), access=Access.parse("const"), default=text,
+                                  location=Location(where))}, location=Location(where)))
+    if 0x1018 not in od:
+        ident = out.identity
+        obj = OdObject(0x1018, "Identity", ObjectCode.RECORD, location=Location(where))
+        for sub, name, value in ((0, "Number of entries", 4), (1, "Vendor ID", ident.vendor_id),
+                                 (2, "Product code", ident.product_code), (3, "Revision", ident.revision),
+                                 (4, "Serial number", ident.serial)):
+            obj.entries[sub] = _u(sub, name, USINT if sub == 0 else UDINT, value, RO, where)
+        od.add(obj)
+    if 0x1C00 not in od and out.sync_managers:
+        sms = sorted(out.sync_managers, key=lambda s: s.number)
+        obj = OdObject(0x1C00, "Sync manager type", ObjectCode.ARRAY, location=Location(where))
+        obj.entries[0] = _u(0, "Number of sync managers", USINT, len(sms), RO, where)
+        for sm in sms:
+            obj.entries[sm.number + 1] = _u(sm.number + 1, f"SM{sm.number} type", USINT, SM_TYPE.get(sm.kind, 0), RO, where)
+        od.add(obj)
+    config = bool(coe and coe.pdo_config)
+    assign = bool(coe and coe.pdo_assign)
+    for direction in (Direction.RX, Direction.TX):
+        pdos = _all_pdos(out, direction)
+        for p in pdos:
+            if p.index not in od:
+                od.add(_mapping_object(p, config and not p.fixed, where))
+        if direction.assign_index not in od and pdos:
+            od.add(_assign_object(out, direction, pdos, assign, where))
+    out.dictionary = od
+    return out
+
+
+#: 6502h bit → 6060h value (CiA-402: pp, vl, pv, tq, reserved, hm, ip, csp, csv, cst)
+MODE_BITS = {0: 1, 1: 2, 2: 3, 3: 4, 5: 6, 6: 7, 7: 8, 8: 9, 9: 10}
+
+
+def supported_modes_of(od: ObjectDictionary) -> tuple[int, ...]:
+    """Modes from the 6502h default (CiA-402 bits), else from a 6060h enumeration, else ()."""
+    e = od.entry(0x6502, 0)
+    value = e.default_value if e is not None else None
+    if isinstance(value, int) and value:
+        return tuple(mode for bit, mode in MODE_BITS.items() if value >> bit & 1)
+    mode_entry = od.entry(0x6060, 0)
+    if mode_entry is not None and mode_entry.enum:
+        return tuple(sorted(k for k in mode_entry.enum if k != 0))
+    return ()
+
+
+def generic_rules(device: Device) -> FamilyRules:
+    """Rules derived from an ESI: the mapping objects present, Fixed PDOs, CoE PdoAssign/PdoConfig flags."""
+    coe = device.mailbox.coe if device.mailbox is not None else None
+    rx = _all_pdos(device, Direction.RX)
+    tx = _all_pdos(device, Direction.TX)
+    od = device.dictionary
+    rx_idx = sorted({p.index for p in rx} | {i for i in od.indices() if 0x1600 <= i <= 0x17FF})
+    tx_idx = sorted({p.index for p in tx} | {i for i in od.indices() if 0x1A00 <= i <= 0x1BFF})
+    any_fixed = any(p.fixed for p in (*rx, *tx))
+    all_fixed = bool(rx or tx) and all(p.fixed for p in (*rx, *tx))
+    entries = [o.max_subindex for o in od if 0x1600 <= o.index <= 0x1BFF and o.entries]
+    sm_rx = device.process_sm(Direction.RX)
+    sm_tx = device.process_sm(Direction.TX)
+    modes = supported_modes_of(od)
+    notes = [f"derived from the ESI {device.source or device.type_name}"]
+    if any_fixed:
+        notes.append("some PDOs are Fixed: their mapping cannot be changed")
+    if sm_rx is not None and sm_rx.max_size:
+        notes.append(f"SM{sm_rx.number} holds at most {sm_rx.max_size} bytes of outputs")
+    if sm_tx is not None and sm_tx.max_size:
+        notes.append(f"SM{sm_tx.number} holds at most {sm_tx.max_size} bytes of inputs")
+    return FamilyRules(
+        family="generic",
+        vendor_id=device.vendor_id,
+        rx_mapping_indices=tuple(rx_idx),
+        tx_mapping_indices=tuple(tx_idx),
+        max_pdo_entries=max(entries) if entries else None,
+        assign_writable=bool(coe and coe.pdo_assign),
+        mapping_writable=bool(coe and coe.pdo_config) and not all_fixed,
+        dummy_indices=frozenset(range(1, 8)),
+        supported_modes=modes,
+        notes=tuple(notes),
+    )
+
+
+__all__ = ["MODE_BITS", "SM_TYPE", "complete_generic", "generic_rules", "supported_modes_of"]
