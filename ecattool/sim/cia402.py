@@ -1,0 +1,230 @@
+"""The CiA-402 drive state machine and a simple motion model (PP, PV, CSP, CSV).
+
+The state machine follows the transition table of CiA-402 as the three manuals print it (Technosoft
+Table 4.1.1, HDT §4.03.1, Control Techniques Table 7.2); the family differences are parameters of
+:class:`Cia402`:
+* Control Techniques: in PRE-OP/SAFE-OP, Shutdown must not leave SWITCH ON DISABLED (7.3.1); modes of
+  operation cannot change in OPERATION ENABLED or QUICK STOP ACTIVE.
+* quick stop option code 605Ah: 0..4 end in SWITCH ON DISABLED, 5..8 stay in QUICK STOP ACTIVE (and allow
+  transition 16 back to OPERATION ENABLED).
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+from fractions import Fraction
+
+
+class State(str, Enum):
+    NOT_READY = "NOT_READY_TO_SWITCH_ON"
+    SWITCH_ON_DISABLED = "SWITCH_ON_DISABLED"
+    READY = "READY_TO_SWITCH_ON"
+    SWITCHED_ON = "SWITCHED_ON"
+    OPERATION_ENABLED = "OPERATION_ENABLED"
+    QUICK_STOP = "QUICK_STOP_ACTIVE"
+    FAULT_REACTION = "FAULT_REACTION_ACTIVE"
+    FAULT = "FAULT"
+
+
+#: statusword low bits per state (bits 0,1,2,3,5,6)
+STATUS_BITS = {
+    State.NOT_READY: 0x0000,
+    State.SWITCH_ON_DISABLED: 0x0040,
+    State.READY: 0x0021,
+    State.SWITCHED_ON: 0x0023,
+    State.OPERATION_ENABLED: 0x0027,
+    State.QUICK_STOP: 0x0007,
+    State.FAULT_REACTION: 0x000F,
+    State.FAULT: 0x0008,
+}
+
+PP, PV, HOMING, CSP, CSV = 1, 3, 6, 8, 9
+
+
+def decode_statusword(sw: int) -> State:
+    """The state a statusword shows (CiA-402 masks 0x004F / 0x006F)."""
+    for state in (State.READY, State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP):
+        if sw & 0x006F == STATUS_BITS[state]:
+            return state
+    for state in (State.NOT_READY, State.SWITCH_ON_DISABLED, State.FAULT_REACTION, State.FAULT):
+        if sw & 0x004F == STATUS_BITS[state]:
+            return state
+    return State.NOT_READY
+
+
+class Cia402:
+    """State, controlword handling and the motion model of one axis (internal units as Fractions)."""
+
+    def __init__(self, *, enable_needs_op: bool = False) -> None:
+        self.enable_needs_op = enable_needs_op
+        self.state = State.SWITCH_ON_DISABLED
+        self.controlword = 0
+        self.fault_code = 0
+        self.position = Fraction(0)  # internal units
+        self.velocity = Fraction(0)  # internal velocity units
+        self.acceleration = Fraction(0)
+        self.target: Fraction | None = None
+        self.target_reached = True
+        self.setpoint_ack = False
+        self.following_error = Fraction(0)
+        self.voltage = True
+
+    # --- state machine ----------------------------------------------------------------------------
+    def controlword_written(self, cw: int, *, ecat_op: bool, quick_stop_option: int) -> list[tuple[State, State]]:
+        """Apply a controlword; returns the transitions made (from, to)."""
+        prev = self.controlword
+        self.controlword = cw
+        moves: list[tuple[State, State]] = []
+
+        def go(new: State) -> None:
+            moves.append((self.state, new))
+            self.state = new
+
+        s = self.state
+        fault_reset = bool(cw & 0x80) and not prev & 0x80
+        if s is State.FAULT:
+            if fault_reset:
+                self.fault_code = 0
+                go(State.SWITCH_ON_DISABLED)
+            return moves
+        if s is State.FAULT_REACTION or cw & 0x80:
+            return moves
+        shutdown = cw & 0x07 == 0x06
+        switch_on = cw & 0x0F == 0x07
+        enable = cw & 0x0F == 0x0F
+        disable_voltage = not cw & 0x02
+        quick_stop = cw & 0x06 == 0x02
+        if s is State.SWITCH_ON_DISABLED:
+            if shutdown and (ecat_op or not self.enable_needs_op):
+                go(State.READY)
+        elif s is State.READY:
+            if disable_voltage or quick_stop:
+                go(State.SWITCH_ON_DISABLED)
+            elif switch_on:
+                go(State.SWITCHED_ON)
+            elif enable:
+                go(State.SWITCHED_ON)
+                go(State.OPERATION_ENABLED)
+        elif s is State.SWITCHED_ON:
+            if disable_voltage or quick_stop:
+                go(State.SWITCH_ON_DISABLED)
+            elif shutdown:
+                go(State.READY)
+            elif enable:
+                go(State.OPERATION_ENABLED)
+        elif s is State.OPERATION_ENABLED:
+            if disable_voltage:
+                go(State.SWITCH_ON_DISABLED)
+            elif quick_stop:
+                go(State.QUICK_STOP)
+                self.velocity = Fraction(0)
+                self.target = None
+                if quick_stop_option in (0, 1, 2, 3, 4):
+                    go(State.SWITCH_ON_DISABLED)
+            elif shutdown:
+                go(State.READY)
+            elif switch_on:
+                go(State.SWITCHED_ON)
+        elif s is State.QUICK_STOP:
+            if disable_voltage:
+                go(State.SWITCH_ON_DISABLED)
+            elif enable and quick_stop_option in (5, 6, 7, 8):
+                go(State.OPERATION_ENABLED)
+        if self.state is not State.OPERATION_ENABLED:
+            self.velocity = Fraction(0)
+            self.target = None
+        return moves
+
+    def fault(self, code: int) -> list[tuple[State, State]]:
+        moves = []
+        if self.state is not State.FAULT:
+            moves.append((self.state, State.FAULT_REACTION))
+            moves.append((State.FAULT_REACTION, State.FAULT))
+            self.state = State.FAULT
+        self.fault_code = code
+        self.velocity = Fraction(0)
+        self.target = None
+        return moves
+
+    def communication_lost(self) -> list[tuple[State, State]]:
+        """Leaving OP with the power stage on: the drive falls back to SWITCH ON DISABLED."""
+        if self.state in (State.READY, State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP):
+            old = self.state
+            self.state = State.SWITCH_ON_DISABLED
+            self.velocity = Fraction(0)
+            self.target = None
+            return [(old, self.state)]
+        return []
+
+    def statusword(self, *, mode: int) -> int:
+        sw = STATUS_BITS[self.state] | 0x0200  # bit 9 remote
+        if self.voltage and self.state not in (State.NOT_READY, State.SWITCH_ON_DISABLED):
+            sw |= 0x0010
+        if self.state is State.FAULT_REACTION or self.state is State.FAULT:
+            sw |= 0x0008
+        if self.target_reached:
+            sw |= 0x0400
+        if mode == PP and self.setpoint_ack:
+            sw |= 0x1000
+        if mode in (CSP, CSV) and self.state is State.OPERATION_ENABLED:
+            sw |= 0x1000  # target value ignored = 0 / drive follows the command value
+        return sw
+
+    # --- motion -------------------------------------------------------------------------------------
+    def new_setpoint(self, target: Fraction, *, relative: bool) -> None:
+        self.target = self.position + target if relative else target
+        self.target_reached = False
+        self.setpoint_ack = True
+
+    def step(self, mode: int, dt: Fraction, *, target_position: Fraction, target_velocity: Fraction,
+             profile_velocity: Fraction, acceleration: Fraction, inc_per_s, vel_from_inc_per_s,
+             inc_per_s2) -> None:
+        """Advance the motion by ``dt`` seconds. Velocity/acceleration are internal units; the callables
+        convert them to increments per second (per second²) and back."""
+        if self.state is not State.OPERATION_ENABLED:
+            self.velocity = Fraction(0)
+            return
+        if mode == CSP:
+            delta = target_position - self.position
+            self.velocity = vel_from_inc_per_s(delta / dt) if dt else Fraction(0)
+            self.position = target_position
+            self.target_reached = True
+        elif mode == CSV:
+            self.velocity = target_velocity
+            self.position += inc_per_s(target_velocity) * dt
+        elif mode == PV:
+            self._ramp_to(target_velocity, acceleration, dt, inc_per_s, vel_from_inc_per_s, inc_per_s2)
+            self.position += inc_per_s(self.velocity) * dt
+            self.target_reached = self.velocity == target_velocity
+        elif mode == PP:
+            if self.target is None:
+                self.velocity = Fraction(0)
+                return
+            remaining = self.target - self.position
+            speed = abs(inc_per_s(profile_velocity))
+            if speed == 0:
+                return
+            stepped = speed * dt
+            if abs(remaining) <= stepped:
+                self.position = self.target
+                self.velocity = Fraction(0)
+                self.target = None
+                self.target_reached = True
+            else:
+                sign = 1 if remaining > 0 else -1
+                self.position += sign * stepped
+                self.velocity = vel_from_inc_per_s(sign * speed)
+
+    def _ramp_to(self, target: Fraction, acceleration: Fraction, dt: Fraction, inc_per_s, vel_from_inc_per_s,
+                 inc_per_s2) -> None:
+        acc = abs(inc_per_s2(acceleration))
+        if acc == 0:
+            self.velocity = target
+            return
+        now = inc_per_s(self.velocity)
+        goal = inc_per_s(target)
+        max_change = acc * dt
+        if abs(goal - now) <= max_change:
+            self.velocity = target
+        else:
+            self.velocity = vel_from_inc_per_s(now + (max_change if goal > now else -max_change))

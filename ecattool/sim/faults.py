@@ -1,0 +1,51 @@
+"""Fault injection for tests: abort the Nth SDO, drop a reply, lose power during an EEPROM write, refuse
+a state change. Counting is relative to the moment a fault is scheduled: ``nth=1`` is the next request."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ecattool.od.model import EcState
+
+
+@dataclass
+class Faults:
+    sdo_count: int = 0
+    _sdo: dict[int, tuple[str, int]] = field(default_factory=dict)
+    _states: dict[EcState, list[int]] = field(default_factory=dict)
+    #: EEPROM words that may still be written before the power fails (None = no power loss planned)
+    eeprom_power_loss_after: int | None = None
+
+    def abort_sdo(self, nth: int, code: int) -> None:
+        """The ``nth`` SDO request from now (1 = the next) is answered with abort ``code``, not executed."""
+        self._sdo[self.sdo_count + max(1, nth)] = ("abort", code)
+
+    def drop_reply(self, nth: int = 1, *, execute: bool = True) -> None:
+        """The ``nth`` SDO request from now gets no reply (SdoTimeout); ``execute`` = the drive still did it."""
+        self._sdo[self.sdo_count + max(1, nth)] = ("drop", int(execute))
+
+    def refuse_state(self, state: EcState, al_status: int = 0x0011, times: int = 1) -> None:
+        """The next ``times`` requests for ``state`` are refused with ``al_status``."""
+        self._states.setdefault(state, []).extend([al_status] * times)
+
+    def power_loss_during_eeprom_write(self, after_words: int = 0) -> None:
+        """The power fails while writing EEPROM word number ``after_words + 1`` from now."""
+        self.eeprom_power_loss_after = after_words
+
+    # --- used by the drive -----------------------------------------------------------------------
+    def next_sdo(self) -> tuple[str, int] | None:
+        self.sdo_count += 1
+        if not self._sdo:
+            return None
+        return self._sdo.pop(self.sdo_count, None)
+
+    def state_refusal(self, state: EcState) -> int | None:
+        pending = self._states.get(state)
+        if pending:
+            return pending.pop(0)
+        return None
+
+    def clear(self) -> None:
+        self._sdo.clear()
+        self._states.clear()
+        self.eeprom_power_loss_after = None
