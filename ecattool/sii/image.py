@@ -155,7 +155,7 @@ def _parse_strings(body: bytes) -> Category:
     return StringsCategory(strings, _split_pad(pos, body))
 
 
-def _strings_content(c: StringsCategory) -> bytes:
+def strings_content(c: StringsCategory) -> bytes:
     if len(c.strings) > 255:
         raise InputError(f"{len(c.strings)} strings; the STRINGS category holds at most 255")
     out = bytearray([len(c.strings)])
@@ -193,6 +193,14 @@ _PDO = struct.Struct("<HBBBBH")
 _ENTRY = struct.Struct("<HBBBBH")
 _DC = struct.Struct("<IIIhHhBB4s")
 assert _SM.size == _PDO.size == _ENTRY.size == 8 and _DC.size == 24
+
+
+def _parse_fmmu(body: bytes) -> Category:
+    """One byte per FMMU; a final 0x00 after an odd count is the word padding (0x00 = unused anyway)."""
+    usages = list(body)
+    if len(usages) % 2 == 0 and usages and usages[-1] == 0:
+        usages.pop()
+    return FmmuCategory(usages)
 
 
 def _parse_syncm(body: bytes) -> Category:
@@ -237,7 +245,7 @@ def _parse_dc(body: bytes) -> Category:
 _PARSERS: dict[int, Callable[[bytes], Category]] = {
     CategoryType.STRINGS: _parse_strings,
     CategoryType.GENERAL: _parse_general,
-    CategoryType.FMMU: lambda body: FmmuCategory(list(body)),
+    CategoryType.FMMU: _parse_fmmu,
     CategoryType.SYNCM: _parse_syncm,
     CategoryType.TXPDO: _parse_pdos(CategoryType.TXPDO),
     CategoryType.RXPDO: _parse_pdos(CategoryType.RXPDO),
@@ -261,7 +269,7 @@ def category_body(c: Category) -> bytes:
     if isinstance(c, RawCategory):
         body = c.data
     elif isinstance(c, StringsCategory):
-        body = _strings_content(c) + c.extra
+        body = strings_content(c) + c.extra
     elif isinstance(c, GeneralCategory):
         body = _general_content(c) + c.extra
     elif isinstance(c, FmmuCategory):
