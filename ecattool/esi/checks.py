@@ -1,0 +1,94 @@
+"""Structural checks of an ESI model that need no schema (rule ids ``esi-…``).
+
+* ``esi-pdo-duplicate`` — two PDOs of one device share an index;
+* ``esi-pdo-object-missing`` — a PDO entry names an object/sub-index the device's dictionary lacks;
+* ``esi-pdo-bitlen`` — an entry's BitLen differs from the dictionary entry's bit size;
+* ``esi-pdo-sm-missing`` / ``esi-pdo-sm-direction`` — a PDO's default Sm does not exist or carries the
+  other direction;
+* ``esi-sm-size`` — the default process image of a sync manager is larger than its MaxSize;
+* ``esi-exclude-missing`` — an Exclude names a PDO the device does not define.
+"""
+
+from __future__ import annotations
+
+from ecattool.esi.model import Device, Direction, EsiFile, Pdo
+from ecattool.findings import Finding, Severity
+
+
+def _f(rule: str, sev: Severity, msg: str, loc: object, **data: object) -> Finding:
+    return Finding(rule, sev, msg, loc, dict(data))  # type: ignore[arg-type]
+
+
+def default_image(dev: Device, sm_number: int) -> list[Pdo]:
+    """PDOs assigned to ``sm_number`` by default (their @Sm), skipping those excluded by one taken before."""
+    taken: list[Pdo] = []
+    excluded: set[int] = set()
+    for pdo in (*dev.rx_pdos, *dev.tx_pdos):
+        if pdo.sm != sm_number or pdo.index in excluded:
+            continue
+        taken.append(pdo)
+        excluded.update(pdo.excludes)
+    return taken
+
+
+def check_device(dev: Device) -> list[Finding]:
+    out: list[Finding] = []
+    name = dev.type_name or f"0x{dev.product_code:08X}"
+    pdos = [*dev.rx_pdos, *dev.tx_pdos]
+    seen: dict[int, Pdo] = {}
+    for pdo in pdos:
+        if pdo.index in seen:
+            out.append(_f("esi-pdo-duplicate", Severity.ERROR,
+                          f"{name}: PDO 0x{pdo.index:04X} is defined twice", pdo.location, pdo=pdo.index))
+        seen.setdefault(pdo.index, pdo)
+    od = dev.dictionary
+    check_od = len(od) > 0
+    for pdo in pdos:
+        if check_od and not pdo.depend_on_slot:
+            for e in pdo.entries:
+                if e.is_gap or e.depend_on_slot:
+                    continue
+                entry = od.entry(e.index, e.subindex)
+                if entry is None:
+                    what = "object" if e.index not in od else "sub-index"
+                    out.append(_f("esi-pdo-object-missing", Severity.ERROR,
+                                  f"{name}: PDO 0x{pdo.index:04X} maps 0x{e.index:04X}:{e.subindex:02X} ({e.name or '?'}), "
+                                  f"but the dictionary has no such {what}", e.location, pdo=pdo.index))
+                elif entry.bit_size and entry.bit_size != e.bit_len:
+                    out.append(_f("esi-pdo-bitlen", Severity.ERROR,
+                                  f"{name}: PDO 0x{pdo.index:04X} maps 0x{e.index:04X}:{e.subindex:02X} with BitLen {e.bit_len}, "
+                                  f"but the dictionary entry has {entry.bit_size} bits", e.location, pdo=pdo.index))
+        if pdo.sm is not None:
+            sm = dev.sm(pdo.sm)
+            tag = "RxPdo" if pdo.direction is Direction.RX else "TxPdo"
+            if sm is None:
+                out.append(_f("esi-pdo-sm-missing", Severity.ERROR,
+                              f"{name}: {tag} 0x{pdo.index:04X} is assigned to Sm {pdo.sm}, which the device does not define",
+                              pdo.location, pdo=pdo.index))
+            elif sm.direction is not None and sm.direction is not pdo.direction:
+                out.append(_f("esi-pdo-sm-direction", Severity.ERROR,
+                              f"{name}: {tag} 0x{pdo.index:04X} is assigned to Sm {pdo.sm} ({sm.kind}); "
+                              f"a {tag} belongs in a {pdo.direction.sm_kind} sync manager", pdo.location, pdo=pdo.index))
+        for ex in pdo.excludes:
+            if ex not in seen:
+                out.append(_f("esi-exclude-missing", Severity.WARNING,
+                              f"{name}: PDO 0x{pdo.index:04X} excludes 0x{ex:04X}, which the device does not define",
+                              pdo.location, pdo=pdo.index))
+    for sm in dev.sync_managers:
+        if sm.max_size is None or sm.direction is None:
+            continue
+        image = default_image(dev, sm.number)
+        size = (sum(p.bit_size for p in image) + 7) // 8
+        if size > sm.max_size:
+            out.append(_f("esi-sm-size", Severity.ERROR,
+                          f"{name}: default process image of Sm {sm.number} is {size} bytes, more than its MaxSize {sm.max_size}",
+                          sm.location, sm=sm.number, size=size))
+    return out
+
+
+def check_structure(esi: EsiFile) -> list[Finding]:
+    """Schema-free structural checks of every device in ``esi`` (see the module docstring for the rules)."""
+    out: list[Finding] = []
+    for dev in esi.devices:
+        out.extend(check_device(dev))
+    return out

@@ -1,0 +1,389 @@
+"""ESI ``Dictionary`` → :class:`ObjectDictionary`: DataTypes resolved recursively, Objects flattened to entries.
+
+Resolution of a type name, in order:
+1. a file ``DataType`` with ``SubItem`` children is a record (or an ARRAY object's layout);
+2. one with ``ArrayInfo`` is an array of its ``BaseType``;
+3. one with a ``BaseType`` takes the base's CoE type (plus ``EnumInfo`` when present);
+4. a standard CoE name (``UINT``, ``DINT32``, ``STRING(6)``, ``BIT2``) resolves through ``od.types``;
+5. a vendor name with only a ``BitSize`` (``DT0800``) becomes the unsigned type / BITn of that size;
+6. anything else gets ``datatype=None`` and a warning — never an exception.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from ecattool.errors import EcatToolError
+from ecattool.esi.values import Context, child_text, lc_text
+from ecattool.findings import Finding, Severity
+from ecattool.od.model import Access, Entry, ObjectCode, ObjectDictionary, OdObject
+from ecattool.od.types import BY_CODE, DataType, Kind, lookup, parse_array_name
+
+_USINT = BY_CODE[0x05]
+_UINT_BY_BITS = {8: BY_CODE[0x05], 16: BY_CODE[0x06], 24: BY_CODE[0x16], 32: BY_CODE[0x07], 40: BY_CODE[0x18],
+                 48: BY_CODE[0x19], 56: BY_CODE[0x1A], 64: BY_CODE[0x1B]}
+_BITS = {i: BY_CODE[0x30 + i - 1] for i in range(1, 9)}
+_DEFAULT_ACCESS = Access.parse("ro")
+
+
+@dataclass(slots=True)
+class ResolvedType:
+    """A type name resolved against the file's DataTypes."""
+
+    name: str
+    kind: str  # "base", "array", "record", "unknown"
+    datatype: DataType | None = None
+    bits: int | None = None
+    enum: dict[int, str] = field(default_factory=dict)
+    element: Any = None  # the DataType element (records: SubItems; arrays: ArrayInfo)
+    lbound: int = 0
+    elements: int = 0
+    element_type: str = ""
+
+
+def _blob(name: str, bits: int | None) -> DataType:
+    """A record used as a value (nested struct, array of records): an octet string of its size."""
+    return DataType(0x000A, name, Kind.OCTETS, bits)
+
+
+class TypeResolver:
+    """Memoised resolution of type names for one ``Dictionary`` (or one ``Module``'s dictionary)."""
+
+    def __init__(self, datatypes_el: Any, ctx: Context) -> None:
+        self.ctx = ctx
+        self.raw: dict[str, Any] = {}
+        self.memo: dict[str, ResolvedType] = {}
+        if datatypes_el is not None:
+            for dt in datatypes_el.iterchildren("DataType"):
+                n = dt.findtext("Name")
+                if n is not None:
+                    self.raw.setdefault(n.strip(), dt)
+
+    def resolve(self, name: str, where: Any = None, _depth: int = 0) -> ResolvedType:
+        name = (name or "").strip()
+        r = self.memo.get(name)
+        if r is not None:
+            return r
+        if _depth > 32:
+            self.ctx.warn("esi-type-cycle", f"data type {name!r} refers to itself (cycle or nesting deeper than 32)", where)
+            return ResolvedType(name, "unknown")
+        r = self._resolve(name, where, _depth)
+        self.memo[name] = r
+        return r
+
+    def _bitsize(self, el: Any, what: str) -> int | None:
+        t = el.findtext("BitSize")
+        return self.ctx.opt_number(t, el, what) if t is not None else None
+
+    def _resolve(self, name: str, where: Any, depth: int) -> ResolvedType:
+        ctx = self.ctx
+        el = self.raw.get(name)
+        if el is not None:
+            bits = self._bitsize(el, f"BitSize of data type {name!r}")
+            if el.find("SubItem") is not None:
+                return ResolvedType(name, "record", None, bits, element=el)
+            arr = el.find("ArrayInfo")
+            if arr is not None:
+                lb = ctx.number(arr.findtext("LBound", "0"), arr, "ArrayInfo/LBound")
+                n = ctx.number(arr.findtext("Elements"), arr, "ArrayInfo/Elements")
+                base = (el.findtext("BaseType") or "").strip()
+                if not base:
+                    parsed = parse_array_name(name)
+                    base = parsed[2] if parsed else ""
+                return ResolvedType(name, "array", None, bits, element=el, lbound=lb, elements=n, element_type=base)
+            enum: dict[int, str] = {}
+            for e in el.iterchildren("EnumInfo"):
+                enum[ctx.number(e.findtext("Enum"), e, "EnumInfo/Enum")] = lc_text(e, "Text")
+            base_name = el.findtext("BaseType")
+            if base_name is not None and base_name.strip() and base_name.strip() != name:
+                base = self.resolve(base_name, el, depth + 1)
+                return ResolvedType(name, base.kind if base.kind != "unknown" else "unknown", base.datatype,
+                                    bits if bits is not None else base.bits, enum or base.enum, base.element,
+                                    base.lbound, base.elements, base.element_type)
+            std = lookup(name)
+            if std is not None:
+                return ResolvedType(name, "base", std, bits if bits is not None else std.bits, enum)
+            if bits is not None:
+                dt = _BITS.get(bits) if bits < 8 else _UINT_BY_BITS.get(bits)
+                if dt is None and 0 < bits <= 64:
+                    dt = DataType(0x0000, name, Kind.BITS, bits)  # e.g. UINT14: an unsigned bit field
+                if dt is not None:
+                    return ResolvedType(name, "base", dt, bits, enum)
+            ctx.warn("esi-type-unknown", f"data type {name!r} has no base type and no standard size; kept untyped", el,
+                     type=name)
+            return ResolvedType(name, "unknown", None, bits, enum)
+        std = lookup(name)
+        if std is not None:
+            return ResolvedType(name, "base", std, std.bits)
+        parsed = parse_array_name(name)
+        if parsed is not None:
+            lo, hi, base = parsed
+            elem = self.resolve(base, where, depth + 1)
+            bits = elem.bits * (hi - lo + 1) if elem.bits is not None else None
+            return ResolvedType(name, "array", None, bits, lbound=lo, elements=hi - lo + 1, element_type=base)
+        ctx.warn("esi-type-unknown", f"data type {name!r} is not defined in the file's DataTypes nor a CoE type",
+                 where, type=name)
+        return ResolvedType(name, "unknown")
+
+
+def _flags(flags_el: Any, ctx: Context) -> tuple[Access, str, bool, bool, str]:
+    if flags_el is None:
+        return _DEFAULT_ACCESS, "", False, False, ""
+    acc_el = flags_el.find("Access")
+    if acc_el is not None:
+        access = Access.parse(acc_el.text, acc_el.get("ReadRestrictions"), acc_el.get("WriteRestrictions"))
+    else:
+        access = _DEFAULT_ACCESS
+    mapping = flags_el.findtext("PdoMapping") or ""
+    b = flags_el.find("Backup")
+    s = flags_el.find("Setting")
+    backup = ctx.number(b.text, b, "Flags/Backup") != 0 if b is not None and (b.text or "").strip() else False
+    setting = ctx.number(s.text, s, "Flags/Setting") != 0 if s is not None and (s.text or "").strip() else False
+    return access, mapping, backup, setting, (flags_el.findtext("Category") or "").strip()
+
+
+_ENTRY_SLOTS = tuple(Entry.__slots__)  # type: ignore[attr-defined]
+
+
+def _clone(e: Entry) -> Entry:
+    """A shallow copy of a template entry (objects of one record type share the template)."""
+    c = object.__new__(Entry)
+    for name in _ENTRY_SLOTS:
+        object.__setattr__(c, name, getattr(e, name))
+    return c
+
+
+def _signed_fix(value: int, dt: DataType | None, bits: int) -> int:
+    """Signed sentinels: ``#xFFFFFFFF`` for a DINT minimum means -1 (two's complement of the entry size)."""
+    if dt is not None and dt.kind is Kind.SIGNED and bits and (1 << (bits - 1)) <= value < (1 << bits):
+        return value - (1 << bits)
+    return value
+
+
+def _apply_info(entry: Entry, info: Any, ctx: Context) -> None:
+    """Fill default/minimum/maximum from an ``Info`` element (DefaultData, DefaultValue, DefaultString, …)."""
+    if info is None:
+        return
+    dt = entry.datatype
+    for child in info.iterchildren():
+        tag = child.tag
+        if not isinstance(tag, str):
+            continue
+        text = child.text
+        if tag == "DefaultData":
+            entry.default = ctx.hexbin(text, child, "DefaultData")
+        elif tag == "DefaultValue":
+            entry.default = _encode_value(entry, text, child, ctx)
+        elif tag == "DefaultString":
+            entry.default = (text or "").encode("latin-1", errors="replace")
+        elif tag in ("MinValue", "MaxValue"):
+            v: int | float | None = _number_or_float(text, child, ctx, tag)
+            if isinstance(v, int):
+                v = _signed_fix(v, dt, entry.bit_size)
+            if tag == "MinValue":
+                entry.minimum = v
+            else:
+                entry.maximum = v
+        elif tag in ("MinData", "MaxData"):
+            raw = ctx.hexbin(text, child, tag)
+            val = None
+            if dt is not None and dt.is_numeric:
+                try:
+                    val = dt.decode(raw, entry.bit_size)
+                except EcatToolError:
+                    ctx.warn("esi-info-size", f"{tag} has {len(raw)} bytes, not the size of {entry.type_name}", child)
+            if tag == "MinData":
+                entry.minimum = val
+            else:
+                entry.maximum = val
+
+
+def _number_or_float(text: str | None, el: Any, ctx: Context, what: str) -> int | float | None:
+    if text is None or not text.strip():
+        return None
+    s = text.strip()
+    if s[:2] not in ("#x", "0x") and any(c in s for c in ".eE") and not s.lstrip("+-").isdigit():
+        try:
+            return float(s)
+        except ValueError:
+            pass
+    return ctx.number(s, el, what)
+
+
+def _encode_value(entry: Entry, text: str | None, el: Any, ctx: Context) -> bytes | None:
+    dt = entry.datatype
+    if dt is None:
+        return None
+    try:
+        if dt.kind in (Kind.STRING, Kind.UNICODE):
+            return dt.encode(text or "", entry.bit_size or None)
+        v = _number_or_float(text, el, ctx, "DefaultValue")
+        if v is None:
+            return None
+        if isinstance(v, int):
+            v = _signed_fix(v, dt, entry.bit_size)
+            if dt.kind is Kind.OCTETS:
+                return v.to_bytes(max(1, (entry.bit_size + 7) // 8), "little", signed=v < 0)
+        return entry.encode(v)
+    except (EcatToolError, OverflowError) as exc:
+        ctx.warn("esi-default-range", f"DefaultValue {(text or '').strip()!r} does not fit {entry.type_name}: {exc}", el)
+        return None
+
+
+class DictionaryBuilder:
+    """Builds one :class:`ObjectDictionary` from a ``Dictionary`` element."""
+
+    def __init__(self, dict_el: Any, ctx: Context) -> None:
+        self.el = dict_el
+        self.ctx = ctx
+        self.types = TypeResolver(dict_el.find("DataTypes"), ctx)
+        self._templates: dict[tuple[str, tuple[Access, str, bool, bool, str]], tuple[list[Entry], bool]] = {}
+
+    def build(self) -> ObjectDictionary:
+        od = ObjectDictionary()
+        objects = self.el.find("Objects")
+        if objects is None:
+            return od
+        for obj_el in objects.iterchildren("Object"):
+            try:
+                obj = self.object(obj_el)
+            except EcatToolError as exc:
+                self.ctx.warnings.append(Finding("esi-object-skipped", Severity.WARNING,
+                                                 f"object skipped: {exc.message}", exc.location or self.ctx.loc(obj_el)))
+                continue
+            od.add(obj)
+        return od
+
+    def object(self, el: Any) -> OdObject:
+        ctx = self.ctx
+        loc = ctx.loc(el)
+        index_t = type_name = bits_t = None
+        name = ""
+        name_lc = False
+        flags_el = info = None
+        idx_el = el
+        for c in el:
+            tag = c.tag
+            if tag == "Index":
+                index_t, idx_el = c.text, c
+            elif tag == "Name":
+                if not name_lc:
+                    name = (c.text or "").strip()
+                    lcid = c.get("LcId")
+                    name_lc = lcid is None or lcid.strip() == "1033"
+            elif tag == "Type":
+                type_name = (c.text or "").strip()
+            elif tag == "BitSize":
+                bits_t = c.text
+            elif tag == "Flags":
+                flags_el = c
+            elif tag == "Info":
+                info = c
+        index = ctx.number(index_t, idx_el, "Object/Index")
+        type_name = type_name or ""
+        bits = ctx.opt_number(bits_t, el, "Object/BitSize")
+        flags = _flags(flags_el, ctx)
+        t = self.types.resolve(type_name, el)
+        if t.kind == "record":
+            key = (t.name, flags)
+            cached = self._templates.get(key)
+            if cached is None:
+                cached = self._templates[key] = self._flatten(t, flags)
+            entries, is_array = [_clone(e) for e in cached[0]], cached[1]
+            code = ObjectCode.ARRAY if is_array else ObjectCode.RECORD
+            self._apply_subitem_infos(entries, info, index)
+        else:
+            dt = t.datatype
+            if t.kind == "array":
+                dt = _blob(type_name, bits if bits is not None else t.bits)
+            size = bits if bits is not None else (t.bits or 0)
+            access, mapping, backup, setting, category = flags
+            e = Entry(0, name, dt, size, type_name=type_name, access=access, pdo_mapping=mapping, enum=dict(t.enum),
+                      backup=backup, setting=setting, category=category, location=loc)
+            _apply_info(e, info, ctx)
+            entries = [e]
+            code = ObjectCode.VAR
+        for e in entries:
+            e.location = loc
+        return OdObject(index, name, code, {e.subindex: e for e in entries}, type_name=type_name,
+                        category=flags[4], location=loc)
+
+    def _flatten(self, t: ResolvedType, obj_flags: tuple[Access, str, bool, bool, str]) -> tuple[list[Entry], bool]:
+        ctx = self.ctx
+        out: list[Entry] = []
+        next_sub = 0
+        array_like = True
+        expanded = False
+        sub_items = list(t.element.iterchildren("SubItem"))
+        for si in sub_items:
+            si_name = lc_text(si, "Name")
+            si_type = (si.findtext("Type") or "").strip()
+            st = self.types.resolve(si_type, si)
+            sidx_t = si.findtext("SubIdx")
+            sidx = ctx.number(sidx_t, si, "SubItem/SubIdx") if sidx_t is not None and sidx_t.strip() else None
+            bits = ctx.opt_number(si.findtext("BitSize"), si, "SubItem/BitSize")
+            offs = ctx.opt_number(si.findtext("BitOffs"), si, "SubItem/BitOffs") or 0
+            flags_el = si.find("Flags")
+            access, mapping, backup, setting, category = _flags(flags_el, ctx) if flags_el is not None else obj_flags
+            if st.kind == "array" and sidx is None:
+                elem = self.types.resolve(st.element_type, si)
+                n = st.elements
+                total = bits if bits is not None else st.bits
+                ebits = elem.bits if elem.bits is not None else ((total // n) if total and n else 0)
+                edt = elem.datatype if elem.kind == "base" else (_blob(elem.name, ebits) if elem.kind != "unknown" else None)
+                start = max(st.lbound, next_sub)
+                for k in range(n):
+                    sub = start + k
+                    e = Entry(sub, f"SubIndex {sub:03d}", edt, ebits or 0, type_name=elem.name, bit_offset=offs + k * (ebits or 0),
+                              access=access, pdo_mapping=mapping, enum=dict(elem.enum), backup=backup, setting=setting,
+                              category=category)
+                    out.append(e)
+                next_sub = start + n
+                expanded = True
+                continue
+            if sidx is None:
+                sidx = next_sub
+            if sidx != 0:
+                array_like = False
+            if st.kind == "base":
+                dt = st.datatype
+            elif st.kind in ("record", "array"):
+                dt = _blob(si_type, bits if bits is not None else st.bits)
+            else:
+                dt = None
+            size = bits if bits is not None else (st.bits or 0)
+            e = Entry(sidx, si_name, dt, size, type_name=si_type, bit_offset=offs, access=access, pdo_mapping=mapping,
+                      enum=dict(st.enum), backup=backup, setting=setting, category=category)
+            for tag in ("DefaultValue", "MinValue", "MaxValue"):
+                if si.find(tag) is not None:
+                    _apply_info(e, si, ctx)
+                    break
+            out.append(e)
+            next_sub = sidx + 1
+        return out, expanded and array_like
+
+    def _apply_subitem_infos(self, entries: list[Entry], info: Any, index: int) -> None:
+        if info is None:
+            return
+        by_name: dict[str, Entry] = {}
+        for e in entries:
+            by_name.setdefault(e.name, e)
+        for pos, si in enumerate(info.iterchildren("SubItem")):
+            n = lc_text(si, "Name")
+            e = by_name.get(n)
+            if e is None and pos < len(entries):
+                e = entries[pos]
+            if e is None:
+                self.ctx.warn("esi-info-subitem", f"object 0x{index:04X}: Info/SubItem {n!r} matches no sub-index", si)
+                continue
+            if n and e.name.startswith("SubIndex ") and not n.startswith("SubIndex "):
+                e.name = n
+            _apply_info(e, si.find("Info"), self.ctx)
+
+
+def build_dictionary(dict_el: Any, ctx: Context) -> ObjectDictionary:
+    return DictionaryBuilder(dict_el, ctx).build()
+
+
+__all__ = ["TypeResolver", "ResolvedType", "DictionaryBuilder", "build_dictionary", "child_text"]

@@ -1,0 +1,568 @@
+"""ESI XML → :class:`EsiFile` / :class:`Device` (roots ``EtherCATInfo``, ``EtherCATModule``, ``EtherCATDict``).
+
+Reads bytes (BOM, ISO-8859-1, UTF-8, CRLF), parses through :mod:`ecattool.xmlsafe`, and fills every field of
+the device model the file provides. Object dictionaries are built on first use (:class:`LazyDictionary`),
+which keeps loading a 141-device file close to the cost of the XML parse; the content is the same.
+Tolerated deviations become warnings on ``EsiFile.warnings``; malformed required values raise
+:class:`InputError` with file and line.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from ecattool.errors import EcatToolError, InputError, Location
+from ecattool.esi.dictionary import build_dictionary
+from ecattool.esi.model import (
+    AlternativeSmMapping,
+    CoeDetails,
+    DcOpMode,
+    Device,
+    Direction,
+    Eeprom,
+    EepromCategory,
+    EsiFile,
+    Fmmu,
+    Identity,
+    InitCmd,
+    Mailbox,
+    Module,
+    Pdo,
+    PdoEntry,
+    Slot,
+    SyncManager,
+)
+from ecattool.esi.values import Context, lc_text
+from ecattool.od.model import ObjectDictionary, OdObject
+from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
+
+ROOTS = ("EtherCATInfo", "EtherCATModule", "EtherCATDict")
+_PROTOCOLS = ("AoE", "EoE", "CoE", "FoE", "SoE", "VoE")
+
+
+class LazyDictionary(ObjectDictionary):
+    """An :class:`ObjectDictionary` whose objects are read from the ESI element on first access."""
+
+    __slots__ = ("_build",)
+
+    def __init__(self, build: Any) -> None:
+        super().__init__()
+        self._build = build
+
+    def _load(self) -> None:
+        build = self._build
+        if build is not None:
+            self._build = None
+            built = build()
+            self._objects.update(built._objects)
+            self._names = None
+
+    def add(self, obj: OdObject) -> None:
+        self._load()
+        super().add(obj)
+
+    def get(self, index: int) -> OdObject | None:
+        self._load()
+        return super().get(index)
+
+    def entry(self, index: int, subindex: int) -> Any:
+        self._load()
+        return super().entry(index, subindex)
+
+    def find(self, name: str) -> tuple[int, int] | None:
+        self._load()
+        return super().find(name)
+
+    def __contains__(self, index: object) -> bool:
+        self._load()
+        return super().__contains__(index)
+
+    def __iter__(self) -> Any:
+        self._load()
+        return super().__iter__()
+
+    def __len__(self) -> int:
+        self._load()
+        return super().__len__()
+
+    def indices(self) -> list[int]:
+        self._load()
+        return super().indices()
+
+    def merged(self, other: ObjectDictionary) -> ObjectDictionary:
+        self._load()
+        if isinstance(other, LazyDictionary):
+            other._load()
+        return super().merged(other)
+
+
+def _decode_fallback(data: bytes, source: str, ctx: Context) -> bytes | None:
+    """Undeclared ISO-8859-1: bytes that are not UTF-8 and no encoding declaration → re-encode as UTF-8."""
+    head = data[:200].lstrip(b"\xef\xbb\xbf")
+    if head.startswith(b"<?xml") and b"encoding" in head.split(b"?>", 1)[0]:
+        return None
+    try:
+        data.decode("utf-8")
+        return None
+    except UnicodeDecodeError:
+        pass
+    ctx.warn("esi-encoding", "file is not UTF-8 and declares no encoding; read as ISO-8859-1")
+    text = data.decode("latin-1")
+    if text.startswith("<?xml"):
+        end = text.find("?>")
+        text = text[end + 2:] if end >= 0 else text
+    return text.encode("utf-8")
+
+
+class Reader:
+    def __init__(self, source: str, base_dir: Path | None, follow_references: bool = True) -> None:
+        self.source = source
+        self.base_dir = base_dir
+        self.follow_references = follow_references
+        self.ctx = Context(source)
+
+    # --- entry points ---------------------------------------------------------------------------
+    def read(self, data: bytes) -> EsiFile:
+        try:
+            tree = parse_xml(data, self.source)
+        except InputError:
+            fixed = _decode_fallback(data, self.source, self.ctx)
+            if fixed is None:
+                raise
+            tree = parse_xml(fixed, self.source)
+        root = tree.getroot()
+        tag = root.tag if isinstance(root.tag, str) else ""
+        if "}" in tag:
+            tag = tag.split("}", 1)[1]
+        if tag not in ROOTS:
+            raise InputError(f"root element is <{tag}>, not an ESI file (expected one of {', '.join(ROOTS)})",
+                             self.ctx.loc(root))
+        esi = EsiFile(self.source, tag, version=root.get("Version", ""), warnings=self.ctx.warnings)
+        if tag == "EtherCATDict":
+            d = root.find("Dictionary")
+            esi.dictionary = build_dictionary(d, self.ctx) if d is not None else ObjectDictionary()
+            return esi
+        self._vendor(root, esi)
+        if tag == "EtherCATModule":
+            mods = root.find("Modules")
+            esi.modules = [self.module(m) for m in (mods.iterchildren("Module") if mods is not None else ())]
+            return esi
+        for ref in root.iterchildren("InfoReference"):
+            esi.info_references.append((ref.text or "").strip())
+        desc = root.find("Descriptions")
+        if desc is None:
+            raise InputError("EtherCATInfo has no Descriptions element", self.ctx.loc(root))
+        groups = desc.find("Groups")
+        if groups is not None:
+            for g in groups.iterchildren("Group"):
+                esi.groups[(g.findtext("Type") or "").strip()] = lc_text(g, "Name")
+        mods = desc.find("Modules")
+        if mods is not None:
+            esi.modules = [self.module(m) for m in mods.iterchildren("Module")]
+        if self.follow_references:
+            for ref_el in root.iterchildren("InfoReference"):
+                esi.modules.extend(self._referenced_modules(ref_el))
+        devices = desc.find("Devices")
+        if devices is not None:
+            for dev in devices.iterchildren("Device"):
+                esi.devices.append(self.device(dev, esi))
+        return esi
+
+    # --- parts ------------------------------------------------------------------------------------
+    def _vendor(self, root: Any, esi: EsiFile) -> None:
+        ctx = self.ctx
+        vendor = root.find("Vendor")
+        if vendor is None:
+            ctx.warn("esi-vendor-missing", "file has no Vendor element; vendor id taken as 0", root)
+            esi.vendor_id = 0
+            return
+        id_el = vendor.find("Id")
+        if id_el is None:
+            ctx.warn("esi-vendor-missing", "Vendor has no Id; vendor id taken as 0", vendor)
+            esi.vendor_id = 0
+        else:
+            esi.vendor_id = ctx.number(id_el.text, id_el, "Vendor/Id")
+        if vendor.find("Name") is None:
+            ctx.warn("esi-vendor-name", "Vendor has no Name", vendor)
+        esi.vendor_name = lc_text(vendor, "Name")
+
+    def _resolve_path(self, text: str) -> Path | None:
+        """A file named in the ESI (Windows separators allowed), relative to this file's directory."""
+        if self.base_dir is None or not text:
+            return None
+        rel = text.replace("\\", "/")
+        cand = self.base_dir / rel
+        if cand.is_file():
+            return cand
+        base = rel.rsplit("/", 1)[-1]
+        cand = self.base_dir / base
+        if cand.is_file():
+            return cand
+        low = base.lower()
+        try:
+            for p in sorted(self.base_dir.iterdir()):
+                if p.is_file() and (p.name.lower() == low or p.name.lower().endswith("_" + low)):
+                    return p
+        except OSError:
+            return None
+        return None
+
+    def _referenced_modules(self, ref_el: Any) -> list[Module]:
+        text = (ref_el.text or "").strip()
+        path = self._resolve_path(text)
+        if path is None:
+            self.ctx.warn("esi-inforeference-missing", f"InfoReference {text!r} not found beside the file; its modules are not loaded", ref_el)
+            return []
+        sub = Reader(str(path), path.parent, follow_references=False)
+        data = _read(path)
+        esi = sub.read(data)
+        self.ctx.warnings.extend(sub.ctx.warnings)
+        return esi.modules
+
+    def _dictionary(self, profile: Any) -> ObjectDictionary:
+        if profile is None:
+            return ObjectDictionary()
+        d = profile.find("Dictionary")
+        if d is not None:
+            ctx = self.ctx
+            return LazyDictionary(lambda: build_dictionary(d, ctx))
+        f = profile.find("DictionaryFile")
+        if f is not None:
+            text = (f.text or "").strip()
+            path = self._resolve_path(text)
+            if path is None:
+                self.ctx.warn("esi-dictionaryfile-missing", f"DictionaryFile {text!r} not found beside the file; dictionary left empty", f)
+                return ObjectDictionary()
+            src = str(path)
+
+            def build() -> ObjectDictionary:
+                sub = Reader(src, path.parent, follow_references=False)
+                esi = sub.read(_read(path))
+                self.ctx.warnings.extend(sub.ctx.warnings)
+                return esi.dictionary or ObjectDictionary()
+
+            return LazyDictionary(build)
+        return ObjectDictionary()
+
+    def pdo(self, el: Any, direction: Direction) -> Pdo:
+        ctx = self.ctx
+        get = el.get
+        pdo = Pdo(direction, -1, location=Location(self.source, el.sourceline))
+        name_set = False
+        entries = pdo.entries
+        for child in el:
+            tag = child.tag
+            if tag == "Entry":
+                entries.append(self.entry(child))
+            elif tag == "Index":
+                pdo.index = ctx.number(child.text, child, f"{el.tag}/Index")
+                if child.get("DependOnSlot") is not None:
+                    pdo.depend_on_slot = ctx.boolean(child.get("DependOnSlot"), child, "DependOnSlot")
+            elif tag == "Name":
+                lcid = child.get("LcId")
+                if not name_set or (lcid is not None and lcid.strip() == "1033"):
+                    pdo.name = (child.text or "").strip()
+                    name_set = lcid is None or lcid.strip() == "1033"
+            elif tag == "Exclude":
+                pdo.excludes.append(ctx.number(child.text, child, "Exclude"))
+        if pdo.index < 0:
+            raise InputError(f"{el.tag} has no Index", ctx.loc(el))
+        if len(el.attrib):
+            if get("Fixed") is not None:
+                pdo.fixed = ctx.boolean(get("Fixed"), el, "Fixed")
+            if get("Mandatory") is not None:
+                pdo.mandatory = ctx.boolean(get("Mandatory"), el, "Mandatory")
+            if get("Virtual") is not None:
+                pdo.virtual = ctx.boolean(get("Virtual"), el, "Virtual")
+            if get("OverwrittenByModule") is not None:
+                pdo.overwritten_by_module = ctx.boolean(get("OverwrittenByModule"), el, "OverwrittenByModule")
+            for attr, name in (("Sm", "sm"), ("Su", "su"), ("PdoOrder", "pdo_order"), ("OSFac", "os_fac"),
+                               ("OSMin", "os_min"), ("OSMax", "os_max"), ("OSIndexInc", "os_index_inc")):
+                v = get(attr)
+                if v is not None:
+                    setattr(pdo, name, ctx.opt_number(v, el, attr))
+        return pdo
+
+    def entry(self, en: Any) -> PdoEntry:
+        number = self.ctx.number
+        index = sub = bits = None
+        name = dtype = ""
+        name_lc = False
+        dep = None
+        for c in en:
+            tag = c.tag
+            if tag == "Index":
+                index = number(c.text, c, "Entry/Index")
+                dep = c.get("DependOnSlot")
+            elif tag == "SubIndex":
+                t = c.text
+                sub = number(t, c, "Entry/SubIndex") if t is not None and t.strip() else 0
+            elif tag == "BitLen":
+                bits = number(c.text, c, "Entry/BitLen")
+            elif tag == "Name":
+                lcid = c.get("LcId")
+                if not name_lc:
+                    name = (c.text or "").strip()
+                    name_lc = lcid is None or lcid.strip() == "1033"
+            elif tag == "DataType":
+                dtype = (c.text or "").strip()
+        loc = Location(self.source, en.sourceline)
+        if index is None:
+            raise InputError("PDO Entry has no Index", loc)
+        if bits is None:
+            raise InputError(f"PDO Entry 0x{index:04X}:{sub or 0:02X} has no BitLen", loc)
+        e = PdoEntry(index, sub or 0, bits, name, dtype, loc)
+        if dep is not None:
+            e.depend_on_slot = self.ctx.boolean(dep, en, "DependOnSlot")
+        return e
+
+    def init_cmd(self, el: Any, protocol: str) -> InitCmd:
+        ctx = self.ctx
+        transitions = [(t.text or "").strip() for t in el.iterchildren("Transition")]
+        if protocol == "SoE":
+            idx_el = el.find("IDN")
+            index = ctx.number(idx_el.text if idx_el is not None else None, idx_el if idx_el is not None else el, "InitCmd/IDN")
+            sub = 0
+        else:
+            idx_el = el.find("Index")
+            index = ctx.number(idx_el.text if idx_el is not None else None, idx_el if idx_el is not None else el, "InitCmd/Index")
+            sub = ctx.opt_number(el.findtext("SubIndex"), el, "InitCmd/SubIndex") or 0
+        data_el = el.find("Data")
+        cmd = InitCmd(protocol, transitions, index, sub,
+                      ctx.hexbin(data_el.text, data_el, "InitCmd/Data") if data_el is not None else b"",
+                      (el.findtext("Comment") or "").strip(),
+                      fixed=ctx.boolean(el.get("Fixed"), el, "Fixed"),
+                      complete_access=ctx.boolean(el.get("CompleteAccess"), el, "CompleteAccess"),
+                      overwritten_by_module=ctx.boolean(el.get("OverwrittenByModule"), el, "OverwrittenByModule"),
+                      location=ctx.loc(el))
+        if idx_el is not None and idx_el.get("DependOnSlot") is not None:
+            cmd.depend_on_slot = ctx.boolean(idx_el.get("DependOnSlot"), idx_el, "DependOnSlot")
+        return cmd
+
+    def mailbox(self, el: Any) -> Mailbox:
+        ctx = self.ctx
+        mb = Mailbox(data_link_layer=ctx.boolean(el.get("DataLinkLayer"), el, "DataLinkLayer"))
+        for child in el.iterchildren():
+            tag = child.tag
+            if tag not in _PROTOCOLS:
+                continue
+            mb.protocols.append(tag)
+            if tag == "CoE":
+                g = child.get
+                mb.coe = CoeDetails(
+                    sdo_info=ctx.boolean(g("SdoInfo"), child, "SdoInfo"),
+                    pdo_assign=ctx.boolean(g("PdoAssign"), child, "PdoAssign"),
+                    pdo_config=ctx.boolean(g("PdoConfig"), child, "PdoConfig"),
+                    pdo_upload=ctx.boolean(g("PdoUpload"), child, "PdoUpload"),
+                    complete_access=ctx.boolean(g("CompleteAccess"), child, "CompleteAccess"),
+                    segmented_sdo=ctx.boolean(g("SegmentedSdo"), child, "SegmentedSdo"),
+                    eds_file=g("EdsFile", "") or "",
+                )
+            if tag in ("CoE", "SoE"):
+                for ic in child.iterchildren("InitCmd"):
+                    mb.init_cmds.append(self.init_cmd(ic, tag))
+        return mb
+
+    def sync_manager(self, el: Any, number: int) -> SyncManager:
+        ctx = self.ctx
+        g = el.get
+        return SyncManager(
+            number, (el.text or "").strip(),
+            start_address=ctx.opt_number(g("StartAddress"), el, "Sm StartAddress") or 0,
+            default_size=ctx.opt_number(g("DefaultSize"), el, "Sm DefaultSize"),
+            min_size=ctx.opt_number(g("MinSize"), el, "Sm MinSize"),
+            max_size=ctx.opt_number(g("MaxSize"), el, "Sm MaxSize"),
+            control_byte=ctx.opt_number(g("ControlByte"), el, "Sm ControlByte") or 0,
+            enable=ctx.boolean(g("Enable"), el, "Sm Enable", default=True),
+            virtual=ctx.boolean(g("Virtual"), el, "Sm Virtual"),
+            location=ctx.loc(el),
+        )
+
+    def dc(self, el: Any) -> list[DcOpMode]:
+        ctx = self.ctx
+        out = []
+        for om in el.iterchildren("OpMode"):
+            m = DcOpMode((om.findtext("Name") or "").strip(), lc_text(om, "Desc"))
+            aa = om.find("AssignActivate")
+            m.assign_activate = ctx.number(aa.text, aa, "AssignActivate") if aa is not None else 0
+            for tag, attr in (("CycleTimeSync0", "cycle_time_sync0"), ("ShiftTimeSync0", "shift_time_sync0"),
+                              ("CycleTimeSync1", "cycle_time_sync1"), ("ShiftTimeSync1", "shift_time_sync1")):
+                t = om.find(tag)
+                if t is not None:
+                    setattr(m, attr, ctx.opt_number(t.text, t, tag))
+                    if t.get("Factor") is not None:
+                        setattr(m, attr + "_factor", ctx.number(t.get("Factor"), t, f"{tag} Factor"))
+            out.append(m)
+        return out
+
+    def eeprom(self, el: Any) -> Eeprom:
+        ctx = self.ctx
+        ee = Eeprom(assign_to_pdi=ctx.boolean(el.get("AssignToPdi"), el, "AssignToPdi"))
+        for child in el.iterchildren():
+            tag = child.tag
+            if tag == "ByteSize":
+                ee.byte_size = ctx.number(child.text, child, "Eeprom/ByteSize")
+            elif tag == "ConfigData":
+                ee.config_data = ctx.hexbin(child.text, child, "Eeprom/ConfigData")
+            elif tag == "BootStrap":
+                ee.bootstrap = ctx.hexbin(child.text, child, "Eeprom/BootStrap")
+            elif tag == "Data":
+                ee.data = ctx.hexbin(child.text, child, "Eeprom/Data")
+            elif tag == "Category":
+                cat = ctx.number(child.findtext("CatNo"), child, "Category/CatNo")
+                payload = b""
+                for d in child.iterchildren():
+                    if d.tag == "Data":
+                        payload = ctx.hexbin(d.text, d, "Category/Data")
+                    elif d.tag == "DataString":
+                        payload = (d.text or "").encode("latin-1", errors="replace")
+                    elif d.tag == "DataUINT":
+                        payload = (ctx.number(d.text, d, "DataUINT") & 0xFFFF).to_bytes(2, "little")
+                    elif d.tag == "DataUDINT":
+                        payload = (ctx.number(d.text, d, "DataUDINT") & 0xFFFFFFFF).to_bytes(4, "little")
+                ee.categories.append(EepromCategory(cat, payload))
+        return ee
+
+    def slots(self, el: Any) -> list[Slot]:
+        ctx = self.ctx
+        inc_i = ctx.opt_number(el.get("SlotIndexIncrement"), el, "SlotIndexIncrement")
+        inc_p = ctx.opt_number(el.get("SlotPdoIncrement"), el, "SlotPdoIncrement")
+        out = []
+        for s in el.iterchildren("Slot"):
+            slot = Slot(lc_text(s, "Name"),
+                        min_instances=ctx.opt_number(s.get("MinInstances"), s, "MinInstances") or 0,
+                        max_instances=ctx.opt_number(s.get("MaxInstances"), s, "MaxInstances") or 1,
+                        slot_index_increment=ctx.opt_number(s.get("SlotIndexIncrement"), s, "SlotIndexIncrement") or inc_i,
+                        slot_pdo_increment=ctx.opt_number(s.get("SlotPdoIncrement"), s, "SlotPdoIncrement") or inc_p)
+            for mi in s.iterchildren("ModuleIdent"):
+                v = ctx.number(mi.text, mi, "ModuleIdent")
+                slot.module_idents.append(v)
+                if mi.get("Default") is not None and ctx.boolean(mi.get("Default"), mi, "Default"):
+                    slot.default_module = v
+            for mc in s.iterchildren("ModuleClass"):
+                slot.module_classes.append((mc.text or "").strip())
+            out.append(slot)
+        return out
+
+    def module(self, el: Any) -> Module:
+        ctx = self.ctx
+        t = el.find("Type")
+        if t is None:
+            raise InputError("Module has no Type", ctx.loc(el))
+        mod = Module((t.text or "").strip(), lc_text(el, "Name"),
+                     ident=ctx.opt_number(t.get("ModuleIdent"), t, "ModuleIdent"),
+                     module_class=t.get("ModuleClass", "") or "", location=ctx.loc(el))
+        for child in el.iterchildren():
+            tag = child.tag
+            if tag == "RxPdo":
+                mod.rx_pdos.append(self.pdo(child, Direction.RX))
+            elif tag == "TxPdo":
+                mod.tx_pdos.append(self.pdo(child, Direction.TX))
+            elif tag == "Mailbox":
+                for proto in ("CoE", "SoE"):
+                    p = child.find(proto)
+                    if p is not None:
+                        mod.init_cmds.extend(self.init_cmd(ic, proto) for ic in p.iterchildren("InitCmd"))
+            elif tag == "Profile":
+                mod.dictionary = self._dictionary(child)
+        return mod
+
+    def device(self, el: Any, esi: EsiFile) -> Device:
+        ctx = self.ctx
+        t = el.find("Type")
+        if t is None:
+            raise InputError("Device has no Type element", ctx.loc(el))
+        pc = t.get("ProductCode")
+        if pc is None:
+            ctx.warn("esi-productcode-missing", "Device Type has no ProductCode; taken as 0", t)
+        ident = Identity(esi.vendor_id or 0, ctx.opt_number(pc, t, "ProductCode") or 0,
+                         ctx.opt_number(t.get("RevisionNo"), t, "RevisionNo") or 0)
+        dev = Device(ident, (t.text or "").strip(), lc_text(el, "Name"), physics=el.get("Physics", "") or "",
+                     source=self.source, location=ctx.loc(el))
+        sm_no = 0
+        profile_seen = False
+        for child in el.iterchildren():
+            tag = child.tag
+            if tag == "TxPdo":
+                dev.tx_pdos.append(self.pdo(child, Direction.TX))
+            elif tag == "RxPdo":
+                dev.rx_pdos.append(self.pdo(child, Direction.RX))
+            elif tag == "Sm":
+                dev.sync_managers.append(self.sync_manager(child, sm_no))
+                sm_no += 1
+            elif tag == "Fmmu":
+                dev.fmmus.append(Fmmu((child.text or "").strip(), ctx.opt_number(child.get("Sm"), child, "Fmmu Sm"),
+                                      ctx.opt_number(child.get("Su"), child, "Fmmu Su")))
+            elif tag == "GroupType":
+                dev.group_type = (child.text or "").strip()
+            elif tag == "Profile" and not profile_seen:
+                profile_seen = True
+                pn = child.findtext("ProfileNo")
+                if pn is not None and pn.strip():
+                    dev.profile_no = ctx.number(pn, child, "ProfileNo")
+                dev.dictionary = self._dictionary(child)
+            elif tag == "Mailbox":
+                dev.mailbox = self.mailbox(child)
+            elif tag == "Dc":
+                dev.dc_opmodes = self.dc(child)
+            elif tag == "Eeprom":
+                dev.eeprom = self.eeprom(child)
+            elif tag == "Slots":
+                dev.slots = self.slots(child)
+            elif tag == "URL":
+                if not dev.url or child.get("LcId") == "1033":
+                    dev.url = (child.text or "").strip()
+            elif tag in ("ImageData16x14", "Image16x14"):
+                dev.image = (child.text or "").strip()
+            elif tag == "Info":
+                cur = child.find("Electrical/EBusCurrent")
+                if cur is not None:
+                    dev.ebus_current_ma = ctx.opt_number(cur.text, cur, "EBusCurrent")
+            elif tag == "VendorSpecific":
+                for alt in child.iterfind("TwinCAT/AlternativeSmMapping"):
+                    m = AlternativeSmMapping(lc_text(alt, "Name"), ctx.boolean(alt.get("Default"), alt, "Default"))
+                    for sm in alt.iterchildren("Sm"):
+                        no = ctx.number(sm.get("No"), sm, "AlternativeSmMapping/Sm No")
+                        m.sms[no] = [ctx.number(p.text, p, "AlternativeSmMapping Pdo") for p in sm.iterchildren("Pdo")]
+                    dev.alternative_sm_mappings.append(m)
+            elif tag == "HideType":
+                hidden = dev.extra.get("HideType", "")
+                dev.extra["HideType"] = (hidden + " " if hidden else "") + (child.get("RevisionNo") or child.get("ProductRevision") or "")
+            elif tag == "Comment":
+                dev.extra.setdefault("Comment", lc_text(el, "Comment"))
+        dev.group_name = esi.groups.get(dev.group_type, "")
+        if dev.slots and esi.modules:
+            idents = {i for s in dev.slots for i in s.module_idents}
+            classes = {c for s in dev.slots for c in s.module_classes if c}
+            dev.modules = [m for m in esi.modules if m.ident in idents or (m.module_class and m.module_class in classes)]
+        return dev
+
+
+def _read(path: Path) -> bytes:
+    try:
+        size = path.stat().st_size
+        if size > MAX_XML_BYTES:
+            from ecattool.errors import XmlSecurityError
+
+            raise XmlSecurityError(f"file is {size} bytes, larger than the {MAX_XML_BYTES} byte limit", Location(str(path)))
+        return path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"cannot read file: {exc.strerror or exc}", Location(str(path))) from None
+
+
+def load_bytes(data: bytes, source: str = "<bytes>", base_dir: str | Path | None = None) -> EsiFile:
+    """Read an ESI document from bytes. ``base_dir`` resolves DictionaryFile/InfoReference paths."""
+    reader = Reader(source, Path(base_dir) if base_dir is not None else None)
+    try:
+        return reader.read(data)
+    except EcatToolError:
+        raise
+    except RecursionError:
+        raise InputError("ESI document is nested too deeply", Location(source)) from None
+
+
+def load(path: str | Path) -> EsiFile:
+    """Read an ESI file (EtherCATInfo, EtherCATModule or EtherCATDict root)."""
+    p = Path(path)
+    return load_bytes(_read(p), str(p), p.parent)

@@ -1,0 +1,103 @@
+"""Scalar values as ESI files write them: HexDecValue numbers, booleans, hex binary, LcId-tagged names.
+
+Every function takes the element the text came from, so that errors and warnings carry file and line.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from lxml import etree
+
+from ecattool.errors import InputError, Location
+from ecattool.findings import Finding, Severity
+
+_TRUE = frozenset({"1", "true"})
+_FALSE = frozenset({"0", "false"})
+
+
+@dataclass(slots=True)
+class Context:
+    """Per-file reading state: the source name (for locations) and the collected warnings."""
+
+    source: str
+    warnings: list[Finding] = field(default_factory=list)
+
+    def loc(self, el: Any) -> Location:
+        return Location(self.source, getattr(el, "sourceline", None))
+
+    def warn(self, rule: str, message: str, el: Any = None, **data: Any) -> None:
+        self.warnings.append(Finding(rule, Severity.WARNING, message, self.loc(el) if el is not None else Location(self.source), data))
+
+    # --- numbers -----------------------------------------------------------------------------
+    def number(self, text: str | None, el: Any, what: str) -> int:
+        """HexDecValue: ``#x1A00`` or decimal (``-5`` allowed); ``0x1A00`` is tolerated with a warning."""
+        if text is None:
+            raise InputError(f"{what} is missing (expected #x… hex or decimal)", self.loc(el))
+        s = text.strip()
+        try:
+            head = s[:2]
+            if head == "#x" or head == "#X":
+                return int(s[2:], 16)
+            if head == "0x" or head == "0X":
+                self.warn("esi-number-0x", f"{what} {s!r} uses 0x; ESI HexDecValue is #x… (read as hex)", el)
+                return int(s[2:], 16)
+            if s.isdigit():
+                return int(s)
+            return int(s, 10)
+        except ValueError:
+            raise InputError(f"{what} {s!r} is not a number (expected #x… hex or decimal)", self.loc(el)) from None
+
+    def opt_number(self, text: str | None, el: Any, what: str) -> int | None:
+        if text is None or not text.strip():
+            return None
+        return self.number(text, el, what)
+
+    def boolean(self, text: str | None, el: Any, what: str, default: bool = False) -> bool:
+        if text is None:
+            return default
+        t = text.strip().lower()
+        if t in _TRUE:
+            return True
+        if t in _FALSE:
+            return False
+        raise InputError(f"{what} {text.strip()!r} is not a boolean (expected 0, 1, true or false)", self.loc(el))
+
+    def hexbin(self, text: str | None, el: Any, what: str) -> bytes:
+        """xs:hexBinary; an odd number of digits is read with a leading 0 and a warning."""
+        s = "".join((text or "").split())
+        if s[:2] in ("#x", "0x"):
+            s = s[2:]
+        if len(s) % 2:
+            self.warn("esi-hex-odd", f"{what} {s!r} has an odd number of hex digits; read as '0{s}'", el)
+            s = "0" + s
+        try:
+            return bytes.fromhex(s)
+        except ValueError:
+            raise InputError(f"{what} {s[:40]!r} is not hex binary data", self.loc(el)) from None
+
+
+def lc_text(parent: Any, tag: str) -> str:
+    """Text of the ``tag`` child with LcId 1033 (English), else the first one; '' when absent."""
+    first = None
+    for el in parent.iterchildren(tag):
+        if first is None:
+            first = el
+        if (el.get("LcId") or "").strip() == "1033":
+            return (el.text or "").strip()
+    return (first.text or "").strip() if first is not None else ""
+
+
+def child_text(parent: Any, tag: str) -> str | None:
+    el = parent.find(tag)
+    if el is None:
+        return None
+    return el.text if el.text is not None else ""
+
+
+def is_element(el: Any) -> bool:
+    return isinstance(el.tag, str)
+
+
+__all__ = ["Context", "lc_text", "child_text", "is_element", "etree"]
