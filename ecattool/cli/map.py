@@ -1,0 +1,185 @@
+"""``ecattool map``: check, lay out and program PDO mappings."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import click
+
+from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+
+_EXAMPLES = """\b
+Examples:
+  ecattool map {cmd} --profile technosoft-ipos --rx "0x1600=controlword,0x607A:00/32"
+  ecattool map {cmd} --esi synapticon_Somanet_CiA402-single.xml --tx "0x1A00=statusword,0x6064:00/32"
+  ecattool map {cmd} --profile technosoft-ipos --rx "0x1600;0x1601;0x1602=controlword,modes of operation"
+  ecattool map {cmd} --esi drive.xml --device EL7211 --mapping mapping.yaml --json
+
+\b
+Mapping syntax: PDOs separated by ';', entries by ','; an entry is 0x6040:00/16, 6040:0/16, an object
+name (controlword, "modes of operation"), a raw value 0x60400010, or gap/8. A PDO index alone
+(0x1601) assigns that PDO with its device contents. Directions not given keep the device default.
+--mapping FILE.yaml holds {{rx: [{{index: 0x1600, entries: [controlword, ...]}}], tx: [...]}}."""
+
+
+def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
+    opts = [
+        click.option("--esi", type=click.Path(exists=True, dir_okay=False), help="ESI file of the device."),
+        click.option("--device", "selector", help="Device in the ESI (type, product[:revision]); "
+                     "without --esi: a built-in profile name."),
+        click.option("--profile", help="Built-in drive family (technosoft-ipos, hdt, controltechniques)."),
+        click.option("--product", help="Model of the built-in family."),
+        click.option("--revision", help="Revision/firmware of the built-in family or ESI device."),
+        click.option("--rx", multiple=True, help="RxPDO assignment and mapping (outputs, SM2, 1C12h)."),
+        click.option("--tx", multiple=True, help="TxPDO assignment and mapping (inputs, SM3, 1C13h)."),
+        click.option("--mapping", "mapping_file", type=click.Path(exists=True, dir_okay=False, allow_dash=True),
+                     help="YAML/JSON file with rx/tx PDO lists (or a 'pdo:' section)."),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def _load_device(esi: str | None, selector: str | None, profile: str | None, product: str | None,
+                 revision: str | None) -> Any:
+    if esi:
+        if profile:
+            raise click.UsageError("give either --esi or --profile, not both")
+        from ecattool.esi import load_device
+
+        sel = selector if not revision else f"{selector}:{revision}" if selector else None
+        return load_device(esi, sel)
+    name = profile or selector
+    if not name:
+        raise click.UsageError("name the device: --esi FILE [--device SEL] or --profile NAME")
+    from ecattool.profiles import load  # type: ignore[attr-defined]
+
+    return load(name, product=product, revision=revision)
+
+
+def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None) -> Any:
+    from ecattool import pdo
+
+    if mapping_file:
+        if rx or tx:
+            raise click.UsageError("give the mapping either with --rx/--tx or with --mapping, not both")
+        from ecattool.fileio import read_bytes
+        from ecattool.project.yamlloc import load_yaml
+
+        raw = click.get_binary_stream("stdin").read() if mapping_file == "-" else read_bytes(mapping_file)
+        source = "<stdin>" if mapping_file == "-" else mapping_file
+        doc = load_yaml(raw, source)
+        data, prefix = doc.data, ()
+        if isinstance(data, dict) and "pdo" in data and "rx" not in data and "tx" not in data:
+            data, prefix = data["pdo"], ("pdo",)
+        locations = {path[len(prefix):]: loc for path, loc in doc.locations.items() if path[:len(prefix)] == prefix}
+        return pdo.Mapping.from_data(data, device=device, locations=locations, source=source)
+    return pdo.Mapping.from_text(rx=list(rx) if rx else None, tx=list(tx) if tx else None, device=device)
+
+
+def _setup(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
+           rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None) -> tuple[Any, Any]:
+    device = _load_device(esi, selector, profile, product, revision)
+    return device, _load_mapping(device, rx, tx, mapping_file)
+
+
+@click.group(name="map")
+def map_() -> None:
+    """Check, lay out and program PDO mappings (rule ids PDO0nn, see docs/pdo-mapping.md)."""
+
+
+@map_.command(epilog=_EXAMPLES.format(cmd="check"))
+@_device_options
+@click.option("--strict", is_flag=True, help="Exit 1 on warnings too.")
+@json_option
+def check(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
+          rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, strict: bool, as_json: bool) -> None:
+    """Check a PDO mapping statically; exit 1 when an error-level finding exists."""
+    from ecattool import pdo
+    from ecattool.findings import has_errors
+
+    device, mapping = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file)
+    findings = pdo.check(device, mapping)
+    lay = pdo.layout(device, mapping)
+    failed = has_errors(findings, strict=strict)
+    if as_json:
+        print_json({"device": device.type_name, "ok": not failed, "findings": [f.to_json() for f in findings],
+                    "outputs_bytes": lay.outputs.byte_size, "inputs_bytes": lay.inputs.byte_size,
+                    "mapping": mapping.to_json()})
+    else:
+        for f in findings:
+            click.echo(str(f))
+        verdict = "FAILED" if failed else "OK"
+        click.echo(f"{verdict}: {device.type_name}: outputs {lay.outputs.byte_size} bytes "
+                   f"({len(mapping.rx)} RxPDOs), inputs {lay.inputs.byte_size} bytes ({len(mapping.tx)} TxPDOs), "
+                   f"{len(findings)} finding(s)")
+    if failed:
+        raise click.exceptions.Exit(1)
+
+
+@map_.command(epilog=_EXAMPLES.format(cmd="layout"))
+@_device_options
+@json_option
+@output_option()
+def layout(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
+           rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, as_json: bool,
+           output: str | None) -> None:
+    """Show the process image per sync manager: byte.bit offsets, sizes, names and types."""
+    from ecattool import pdo
+    from ecattool.cli.common import dump_json
+
+    device, mapping = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file)
+    lay = pdo.layout(device, mapping)
+    inputs = tuple(p for p in (esi, mapping_file) if p and p != "-")
+    if as_json or output not in (None, "-"):
+        write_output(output, dump_json(lay.to_json()) + "\n", inputs)
+        return
+    con = console()
+    for img in (lay.outputs, lay.inputs):
+        title = (f"{'Outputs' if img.direction.value == 'rx' else 'Inputs'} SM{img.sm if img.sm is not None else '?'}"
+                 f" ({img.byte_size} bytes, {img.bit_size} bits)")
+        t = table(title, ["offset", "bits", "PDO", "object", "name", "type"])
+        for e in img.entries:
+            t.add_row(e.offset, str(e.bit_len), f"0x{e.pdo:04X}", "gap" if e.is_gap else f"0x{e.index:04X}:{e.subindex:02X}",
+                      e.name, e.type_name)
+        con.print(t)
+
+
+@map_.command(epilog=_EXAMPLES.format(cmd="sdo"))
+@_device_options
+@click.option("--complete-access", is_flag=True, help="Write each object in one complete-access transfer "
+              "(only when the device advertises CoE CompleteAccess).")
+@click.option("--order", type=click.Choice(["standard", "count-first"]), default="standard", show_default=True,
+              help="standard: sub-index 0 = 0, entries, count; count-first: the Control Techniques quick start order.")
+@click.option("--transition", default="PS", show_default=True, help="Transition the writes belong to.")
+@click.option("--force", is_flag=True, help="Print the sequence even when the mapping has errors.")
+@json_option
+@output_option()
+def sdo(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
+        rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, complete_access: bool, order: str,
+        transition: str, force: bool, as_json: bool, output: str | None) -> None:
+    """Print the SDO writes that program the mapping, in the order drives require, with exact sizes."""
+    from ecattool import pdo
+    from ecattool.cli.common import dump_json
+    from ecattool.findings import has_errors
+
+    device, mapping = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file)
+    findings = pdo.check(device, mapping)
+    if has_errors(findings) and not force:
+        for f in findings:
+            click.echo(str(f), err=True)
+        raise click.exceptions.Exit(1)
+    seq = pdo.program(device, mapping, complete_access=complete_access, transition=transition.upper(), order=order)
+    rows = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
+             "size": len(c.data), "data": c.data.hex(), "value": f"0x{c.int_value:X}" if not c.complete_access else None,
+             "complete_access": c.complete_access, "comment": c.comment} for c in seq]
+    inputs = tuple(p for p in (esi, mapping_file) if p and p != "-")
+    if as_json or output not in (None, "-"):
+        write_output(output, dump_json(rows) + "\n", inputs)
+        return
+    t = table(f"{device.type_name}: {len(rows)} SDO writes", ["tr", "object", "size", "value", "comment"])
+    for c in seq:
+        value = c.data.hex(" ") if c.complete_access else f"0x{c.int_value:0{2 * len(c.data)}X}"
+        t.add_row(c.transition, c.address + (" CA" if c.complete_access else ""), str(len(c.data)), value, c.comment)
+    console().print(t)

@@ -1,0 +1,152 @@
+"""The SDO sequence that installs a mapping, as a startup list.
+
+Standard order (ETG.1000.6 / CiA-301, Technosoft §2.4, field-notes §4.7), in three phases over both
+directions:
+
+1. ``1C12:00 = 0`` / ``1C13:00 = 0`` (UNSIGNED8): the assignments are disabled;
+2. per rewritten mapping object: ``16xx:00 = 0`` (UNSIGNED8), ``16xx:k = index<<16|sub<<8|bits``
+   (UNSIGNED32), ``16xx:00 = n`` (UNSIGNED8);
+3. ``1C12:k = 0x16xx`` (UNSIGNED16) for k = 1..n, then ``1C12:00 = n`` (UNSIGNED8); the same for 1C13.
+
+With complete access, phase 2 and 3 write each object in one transfer at sub-index 0 with the data
+``n, 0x00 (pad), entry…`` (sub-index 0 padded to 16 bits). ``order="count-first"`` reproduces the Control
+Techniques quick start literally (count first, then entries, no disabling writes).
+
+Fixed PDOs are assigned but never rewritten; PDOs whose entries were not given keep their contents.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from ecattool.errors import InputError, Location
+from ecattool.esi.model import Device, Direction
+from ecattool.pdo.model import MappedPdo, Mapping
+from ecattool.profiles.rules import FamilyRules
+from ecattool.startup.model import StartupCommand, StartupList
+
+ORDERS = ("standard", "count-first")
+
+
+def _u8(n: int) -> bytes:
+    return n.to_bytes(1, "little")
+
+
+def _cmd(transition: str, index: int, sub: int, value: int, size: int, comment: str,
+         source: Location | None, complete_access: bool = False, data: bytes | None = None) -> StartupCommand:
+    type_name = {1: "USINT", 2: "UINT", 4: "UDINT"}[size] if data is None else "OCTET_STRING"
+    return StartupCommand(
+        transition=transition, index=index, subindex=sub,
+        data=data if data is not None else value.to_bytes(size, "little"),
+        comment=comment, complete_access=complete_access, type_name=type_name, value=value, source=source,
+    )
+
+
+def resolve_rules(device: Device, rules: FamilyRules | None) -> FamilyRules:
+    """The family rules to use: the given ones, the device family's (``ecattool.profiles``), or generic."""
+    if rules is not None:
+        return rules
+    try:
+        from ecattool.profiles import rules_for  # type: ignore[attr-defined]
+    except ImportError:
+        return FamilyRules("generic")
+    return rules_for(device)
+
+
+def _key(pdo: MappedPdo) -> list[tuple[int, int, int]]:
+    return [(e.index, e.subindex, e.bit_len) for e in pdo.entries]
+
+
+def program(
+    device: Device,
+    mapping: Mapping,
+    complete_access: bool = False,
+    transition: str = "PS",
+    baseline: Mapping | None = None,
+    order: str = "standard",
+    rules: FamilyRules | None = None,
+    directions: Iterable[Direction] | None = None,
+) -> StartupList:
+    """The startup list that installs ``mapping`` on ``device``.
+
+    ``directions`` defaults to the directions the mapping was given for (both when none is marked).
+    ``baseline`` (the mapping the drive holds now, e.g. :func:`default_mapping`) leaves out mapping objects
+    whose entries already match and assignment sub-indices that already hold the right PDO; the
+    assignment is still disabled and re-enabled. ``complete_access`` is used only when the device
+    advertises it (``CoE@CompleteAccess``).
+    """
+    if order not in ORDERS:
+        raise InputError(f"unknown programming order {order!r} (use {' or '.join(ORDERS)})")
+    rules = resolve_rules(device, rules)
+    dirs = [d for d in Direction if d in set(directions if directions is not None else (mapping.given or Direction))]
+    coe = device.mailbox.coe if device.mailbox is not None else None
+    ca = bool(complete_access and coe is not None and coe.complete_access)
+    count_first = order == "count-first"
+    out = StartupList(name=device.name or device.type_name, vendor_id=device.vendor_id,
+                      product_code=device.product_code, revision=device.revision)
+
+    def assignable(d: Direction) -> bool:
+        return rules.assign_writable and (not device.dictionary or d.assign_index in device.dictionary)
+
+    # phase 1: disable the assignments
+    if not count_first:
+        for d in dirs:
+            if assignable(d):
+                out.commands.append(_cmd(transition, d.assign_index, 0, 0, 1,
+                                         f"clear sm pdos (0x{d.assign_index:04X})",
+                                         Location(mapping.source) if mapping.source else None))
+    # phase 2: rewrite the mapping objects
+    done: set[int] = set()
+    base_pdos = {p.index: p for p in (*(baseline.rx if baseline else ()), *(baseline.tx if baseline else ()))}
+    for d in dirs:
+        for pdo in mapping.pdos(d):
+            dev_pdo = device.pdo(pdo.index)
+            if not pdo.explicit or pdo.index in done or (dev_pdo is not None and dev_pdo.fixed):
+                continue
+            if not rules.mapping_writable:
+                continue
+            base = base_pdos.get(pdo.index)
+            if base is not None and _key(base) == _key(pdo):
+                continue
+            done.add(pdo.index)
+            out.commands.extend(_mapping_commands(pdo, transition, ca, count_first))
+    # phase 3: the assignments
+    for d in dirs:
+        if not assignable(d):
+            continue
+        pdos = mapping.pdos(d)
+        n = len(pdos)
+        idx = d.assign_index
+        src = pdos[0].location if pdos else None
+        if ca:
+            data = _u8(n) + b"\x00" + b"".join(p.index.to_bytes(2, "little") for p in pdos)
+            out.commands.append(_cmd(transition, idx, 0, n, 1, f"download pdo 0x{idx:04X} (complete access)", src,
+                                     True, data))
+            continue
+        old = [p.index for p in baseline.pdos(d)] if baseline is not None else []
+        entries = [
+            _cmd(transition, idx, k, p.index, 2, f"download pdo 0x{idx:04X}:{k:02X} index", p.location)
+            for k, p in enumerate(pdos, start=1)
+            if not (k <= len(old) and old[k - 1] == p.index)
+        ]
+        count = _cmd(transition, idx, 0, n, 1, f"download pdo 0x{idx:04X} count", src)
+        out.commands.extend([count, *entries] if count_first else [*entries, count])
+    return out
+
+
+def _mapping_commands(pdo: MappedPdo, transition: str, ca: bool, count_first: bool) -> list[StartupCommand]:
+    n = len(pdo.entries)
+    idx = pdo.index
+    if ca:
+        data = _u8(n) + b"\x00" + b"".join(e.mapping_value.to_bytes(4, "little") for e in pdo.entries)
+        return [_cmd(transition, idx, 0, n, 1, f"download pdo 0x{idx:04X} entries (complete access)", pdo.location,
+                     True, data)]
+    entries = [
+        _cmd(transition, idx, k, e.mapping_value, 4, f"download pdo 0x{idx:04X}:{k:02X} entry", e.location or pdo.location)
+        for k, e in enumerate(pdo.entries, start=1)
+    ]
+    count = _cmd(transition, idx, 0, n, 1, f"download pdo 0x{idx:04X} entry count", pdo.location)
+    if count_first:
+        return [count, *entries]
+    clear = _cmd(transition, idx, 0, 0, 1, f"clear pdo 0x{idx:04X} entries", pdo.location)
+    return [clear, *entries, count]
