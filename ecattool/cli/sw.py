@@ -1,0 +1,348 @@
+"""``ecattool sw``: Technosoft .sw EEPROM setup images."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.errors import InputError, Location
+
+
+@click.group(epilog="""\b
+Examples:
+  ecattool sw info axis1.sw
+  ecattool sw verify axis1.sw --target sim
+  ecattool sw download axis1.sw --dry-run --mode 32
+  ecattool sw foe axis1.sw -o FOESW_AXIS1.bin""")
+def sw() -> None:
+    """Technosoft .sw EEPROM setup images: inspect, check, convert, patch, build and download."""
+
+
+def _image(path: str) -> Any:
+    from ecattool.sw.build import load_image
+
+    return load_image(Path(path))
+
+
+def _params(path: str | None) -> Any:
+    if path is None:
+        return None
+    from ecattool.sw.params import read_parameters
+
+    return read_parameters(path)
+
+
+_params_option = click.option("--parameters", "-p", "parameters", type=click.Path(dir_okay=False),
+                              help="EasyMotion parameters.cfg that names and types the setup variables.")
+
+
+# ------------------------------------------------------------------------------------------------ info
+@sw.command(epilog="""\b
+Examples:
+  ecattool sw info axis1.sw
+  ecattool sw info FOESW_AXIS1.bin --json""")
+@click.argument("file", type=click.Path(dir_okay=False))
+@json_option
+def info(file: str, as_json: bool) -> None:
+    """Blocks of a .sw (or FoE .bin) image: range, word count, checksum, 2069h value and what each block is.
+
+    Exit status 1 when an integrity word (setup-table checksum, identification sums, setup pointer) is wrong.
+    """
+    from ecattool.sw.layout import describe, integrity_findings
+
+    image = _image(file)
+    findings = integrity_findings(image)
+    if as_json:
+        print_json({"blocks": [{"start": b.start, "end": b.end, "count": b.count, "checksum": b.checksum}
+                               for b in image.blocks]})
+    else:
+        t = table(f"{file}: {len(image)} blocks, {image.total_words} words",
+                  ["start", "end", "words", "checksum", "2069h", "block"])
+        for i in describe(image):
+            b = i.block
+            t.add_row(f"0x{b.start:04X}", f"0x{b.end:04X}", str(b.count), f"0x{b.checksum:04X}",
+                      f"0x{b.checksum_request:08X}", i.description)
+        c = console()
+        c.print(t)
+        for f in findings:
+            c.print(str(f))
+    if findings:
+        sys.exit(1)
+
+
+# ------------------------------------------------------------------------------------------------- FoE
+@sw.command(epilog="""\b
+Examples:
+  ecattool sw foe axis1.sw -o FOESW_AXIS1.bin
+  ecattool sw foe axis1.sw -o FOESW_AXIS1.efw""")
+@click.argument("file", type=click.Path(dir_okay=False))
+@output_option(required=True, help="FoE file: FOESW_ prefix, at most 14 characters without .bin/.efw.")
+def foe(file: str, output: str) -> None:
+    """Convert a .sw image to a FoE setup file (the drive's rules for the file name are enforced)."""
+    from ecattool.sw.foe import check_foe_name, to_foe
+
+    if output == "-":
+        raise InputError("a FoE setup file needs a file name the drive accepts; give -o FOESW_NAME.bin")
+    check_foe_name(output)
+    write_output(output, to_foe(_image(file)), (file,))
+
+
+@sw.command("from-foe", epilog="""\b
+Examples:
+  ecattool sw from-foe FOESW_AXIS1.bin -o axis1.sw
+  ecattool sw from-foe FOESW_AXIS1.bin | head""")
+@click.argument("file", type=click.Path(dir_okay=False))
+@output_option()
+def from_foe_cmd(file: str, output: str | None) -> None:
+    """Convert a FoE setup file back to .sw text (CRLF, as the vendor tools write it)."""
+    from ecattool.sw.foe import read_foe
+    from ecattool.sw.image import write
+
+    write_output(output, write(read_foe(file)), (file,))
+
+
+# ---------------------------------------------------------------------------------------------- targets
+def _open_target(spec: str, slave: int) -> Any:
+    if spec == "sim":
+        from ecattool.sim import Drive
+
+        return Drive.from_profile("technosoft-ipos")
+    if spec.startswith("pysoem:"):
+        from ecattool.target.pysoem import PysoemTarget
+
+        master = PysoemTarget(spec.split(":", 1)[1])
+        slaves = master.slaves()
+        if not 0 <= slave < len(slaves):
+            raise InputError(f"--slave {slave}: the bus has {len(slaves)} slaves")
+        return slaves[slave]
+    raise InputError(f"unknown target {spec!r} (use 'sim' or 'pysoem:<interface>')")
+
+
+_target_option = click.option("--target", default="sim", show_default=True,
+                              help="'sim' (a simulated Technosoft iPOS) or 'pysoem:<interface>'.")
+_slave_option = click.option("--slave", default=0, show_default=True, help="Slave position on a real bus.")
+_preload_option = click.option("--preload", type=click.Path(dir_okay=False),
+                               help="Simulator only: program this .sw into the simulated EEPROM first.")
+
+
+def _target_for(spec: str, slave: int, preload: str | None) -> Any:
+    target = _open_target(spec, slave)
+    if preload:
+        if spec != "sim":
+            raise InputError("--preload is for the simulator only")
+        from ecattool.sw.apply import download
+
+        report = download(_image(preload), target, reset=True)
+        if not report.ok:
+            raise InputError(f"could not preload {preload} into the simulator", Location(preload))
+    return target
+
+
+def _checks_table(title: str, checks: list[Any]) -> Any:
+    t = table(title, ["start", "end", "words", "file", "drive", "result"])
+    for c in checks:
+        b = c.block
+        t.add_row(f"0x{b.start:04X}", f"0x{b.end:04X}", str(b.count), f"0x{c.expected:04X}",
+                  "-" if c.actual is None else f"0x{c.actual:04X}",
+                  "ok" if c.ok else (c.error or "DIFFERENT"))
+    return t
+
+
+@sw.command(epilog="""\b
+Examples:
+  ecattool sw verify axis1.sw --target sim
+  ecattool sw verify axis1.sw --target pysoem:eth0 --slave 2 --json""")
+@click.argument("file", type=click.Path(dir_okay=False))
+@_target_option
+@_slave_option
+@_preload_option
+@json_option
+def verify(file: str, target: str, slave: int, preload: str | None, as_json: bool) -> None:
+    """Compare the drive's EEPROM checksums (2069h/206Ah) with the file, block by block.
+
+    Exit status 1 when any block differs: reload it with 'ecattool sw download'.
+    """
+    from ecattool.sw.apply import verify as verify_image
+
+    image = _image(file)
+    checks = verify_image(image, _target_for(target, slave, preload))
+    if as_json:
+        print_json({"ok": all(c.ok for c in checks), "blocks": [c.to_json() for c in checks]})
+    else:
+        console().print(_checks_table(f"{file} on {target}", checks))
+    if not all(c.ok for c in checks):
+        sys.exit(1)
+
+
+@sw.command(epilog="""\b
+Examples:
+  ecattool sw download axis1.sw --dry-run
+  ecattool sw download axis1.sw --dry-run --mode 32 --json
+  ecattool sw download axis1.sw --target sim
+  ecattool sw download axis1.sw --target pysoem:eth0 --slave 1""")
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--dry-run", is_flag=True, help="Only list the SDO writes (a startup list); touch no drive.")
+@click.option("--mode", type=click.Choice(["16", "32"]), default="16", show_default=True,
+              help="2065h data width: one word per write, or two (low word at the lower address).")
+@click.option("--force", is_flag=True, help="Write every block, not only those whose checksum differs.")
+@click.option("--no-reset", is_flag=True, help="Do not reset the drive (2080h) after a successful download.")
+@_target_option
+@_slave_option
+@_preload_option
+@json_option
+def download(file: str, dry_run: bool, mode: str, force: bool, no_reset: bool, target: str, slave: int,
+             preload: str | None, as_json: bool) -> None:
+    """Program the image into the drive EEPROM over CoE (2064h/2065h), verify, then reset.
+
+    Without --dry-run only the blocks whose drive checksum differs are written; each is verified after
+    writing; the drive is reset (2080h, no SDO reply) only when every block checks out. A failed block is
+    reported and the command exits 1; running it again repairs the drive.
+    """
+    image = _image(file)
+    if dry_run:
+        from ecattool.sw.plan import download_plan
+
+        plan = download_plan(image, int(mode), reset=not no_reset, name=file)
+        if as_json:
+            print_json({"mode": int(mode), "commands": [
+                {"index": c.index, "subindex": c.subindex, "value": c.int_value, "size": len(c.data),
+                 "expect_reply": c.expect_reply, "comment": c.comment} for c in plan]})
+            return
+        t = table(f"{file}: {len(plan)} SDO writes ({mode}-bit)", ["#", "object", "value", "comment"])
+        for n, c in enumerate(plan, 1):
+            t.add_row(str(n), c.address, f"0x{c.int_value:0{2 * len(c.data)}X}", c.comment)
+        console().print(t)
+        return
+    tgt = _target_for(target, slave, preload)
+    report = _run_download(image, tgt, int(mode), not no_reset, force, show_progress=not as_json)
+    if as_json:
+        print_json(report.to_json())
+    else:
+        c = console()
+        if not report.written:
+            c.print(f"{file}: every block already matches the drive; nothing written")
+        else:
+            c.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
+            for start, err in report.write_errors.items():
+                c.print(f"block 0x{start:04X}: write failed: {err}")
+            c.print("drive reset to load the new setup" if report.reset else
+                    "drive NOT reset: some blocks are still different; run the download again")
+    if not report.ok:
+        sys.exit(1)
+
+
+def _run_download(image: Any, target: Any, mode: int, reset: bool, force: bool, show_progress: bool) -> Any:
+    from ecattool.sw.apply import download as download_image
+
+    if not (show_progress and sys.stderr.isatty()):
+        return download_image(image, target, None, mode, reset, force)
+    from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn
+
+    with Progress(TextColumn("{task.description}"), BarColumn(), TaskProgressColumn(),
+                  console=console(stderr=True), transient=True) as bar:
+        task = bar.add_task("EEPROM", total=None)
+
+        def progress(done: int, total: int, block: Any) -> None:
+            bar.update(task, completed=done, total=total, description=f"block 0x{block.start:04X}")
+
+        return download_image(image, target, progress, mode, reset, force)
+
+
+# ----------------------------------------------------------------------------------- setup table views
+@sw.command(epilog="""\b
+Examples:
+  ecattool sw show axis1.sw
+  ecattool sw show axis1.sw --parameters parameters.cfg --json""")
+@click.argument("file", type=click.Path(dir_okay=False))
+@_params_option
+@json_option
+def show(file: str, parameters: str | None, as_json: bool) -> None:
+    """List the setup table as variables and values (named and typed with --parameters)."""
+    from ecattool.sw.setup import format_value, setup_values
+
+    table_, values = setup_values(_image(file), _params(parameters))
+    if as_json:
+        print_json({"start": table_.block.start, "config_id": table_.config_id, "sections": list(table_.sizes),
+                    "checksum": table_.stored_checksum, "values": [v.to_json() for v in values],
+                    "section3_decoded": parameters is not None})
+        return
+    t = table(f"{file}: setup table at 0x{table_.block.start:04X}, configuration id 0x{table_.config_id:04X}",
+              ["sect", "address", "name", "type", "raw", "value", "unit"])
+    for v in values:
+        width = 4 * len(v.entry.words)
+        t.add_row(str(v.entry.section), f"0x{v.entry.address:04X}", v.name or "", v.type,
+                  f"0x{v.entry.raw:0{width}X}", format_value(v.type, v.value), v.unit)
+    c = console()
+    c.print(t)
+    if parameters is None and table_.section3:
+        c.print(f"section 3 ({len(table_.section3)} words) needs --parameters parameters.cfg to be decoded")
+
+
+@sw.command(epilog="""\b
+Examples:
+  ecattool sw patch axis1.sw -p parameters.cfg --set PWMPER=2250 --set CACC=3.18311 -o axis1_new.sw
+  ecattool sw patch axis1.sw --set 0x0250=2 -o axis1_new.sw""")
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("--set", "sets", multiple=True, required=True, metavar="NAME=VALUE",
+              help="Variable (name from --parameters, or address 0xADDR) and new value; repeatable.")
+@_params_option
+@output_option(required=True)
+def patch(file: str, sets: tuple[str, ...], parameters: str | None, output: str) -> None:
+    """Change setup-table values; every checksum, sum and pointer word is recomputed."""
+    from ecattool.sw.image import write
+    from ecattool.sw.setup import patch as patch_image
+
+    assignments = []
+    for s in sets:
+        if "=" not in s:
+            raise click.BadParameter(f"{s!r}: write NAME=VALUE", param_hint="--set")
+        k, v = s.split("=", 1)
+        assignments.append((k, v))
+    image = _image(file)
+    new = patch_image(image, assignments, _params(parameters))
+    write_output(output, write(new), (file,))
+
+
+@sw.command(epilog="""\b
+Examples:
+  ecattool sw diff old.sw new.sw
+  ecattool sw diff old.sw new.sw --parameters parameters.cfg --json""")
+@click.argument("a", type=click.Path(dir_okay=False))
+@click.argument("b", type=click.Path(dir_okay=False))
+@_params_option
+@json_option
+def diff(a: str, b: str, parameters: str | None, as_json: bool) -> None:
+    """Compare two images by address and, in the setup table, by variable. Exit 1 when they differ."""
+    from ecattool.sw.setup import diff as diff_images
+
+    diffs = diff_images(_image(a), _image(b), _params(parameters))
+    if as_json:
+        print_json({"same": not diffs, "differences": [d.to_json() for d in diffs]})
+    else:
+        t = table(f"{a} vs {b}: {len(diffs)} difference(s)", ["address", "name", "a", "b"])
+
+        def fmt(v: int | None) -> str:
+            return "-" if v is None else f"0x{v:X} ({v})"
+
+        for d in diffs:
+            t.add_row(f"0x{d.address:04X}", d.name or "", fmt(d.a), fmt(d.b))
+        console().print(t)
+    if diffs:
+        sys.exit(1)
+
+
+@sw.command(epilog="""\b
+Examples:
+  ecattool sw build samples/sw/build.yaml -o axis1.sw""")
+@click.argument("spec", type=click.Path(dir_okay=False))
+@output_option(required=True)
+def build(spec: str, output: str) -> None:
+    """Assemble an image from a YAML spec (base image, extra blocks, setup values) with correct integrity words."""
+    from ecattool.sw.build import build as build_image
+    from ecattool.sw.image import write
+
+    write_output(output, write(build_image(spec)), (spec,))

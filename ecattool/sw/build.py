@@ -1,0 +1,149 @@
+"""``sw build``: assemble a ``.sw`` image from a YAML spec, with every integrity word correct.
+
+Spec (paths relative to the spec file; numbers as 0x7ABD, #x7ABD or decimal)::
+
+    base: ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw   # optional: start from this image (.sw or FoE .bin)
+    blocks:                                       # optional, added in this order
+      - from: ecmc_TMLCode.sw                     # every block of another image ...
+        start: 0x4000                             # ... or only the block starting here
+      - start: 0x5638                             # raw words
+        words: [0x4009, 0, 0, 0, 0, 1, 0]
+        replace: true                             # replace a base block with the same start
+    setup:                                        # values over the base image's setup table
+      parameters: ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.ems_parameters.cfg
+      values: {PWMPER: 2250, CLPER: 2, 0x0250: 2}
+    identification: P027314E221F515K              # optional: new identification text
+    final_blank_line: true
+
+Nothing is invented: a setup table, an identification block (its word 32 has unknown meaning) and the
+pointer at 0x7FFF come from the base image or from other images; the spec only changes values in them.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from ecattool.errors import InputError, Location
+from ecattool.od.numbers import parse_int
+from ecattool.sw.image import Block, SwImage, check_overlaps
+from ecattool.sw.layout import IDENT_START, IDENT_TEXT_WORDS, fix_integrity, identification_text_words, identification_words
+
+_TOP_KEYS = {"base", "blocks", "setup", "identification", "final_blank_line"}
+
+
+def load_image(path: Path) -> SwImage:
+    """A ``.sw`` text image, or a FoE binary image (``.bin``/``.efw``)."""
+    from ecattool.sw.foe import read_foe
+    from ecattool.sw.image import read
+
+    return read_foe(path) if path.suffix.lower() in (".bin", ".efw") else read(path)
+
+
+def build(spec_path: str | Path) -> SwImage:
+    from ecattool.fileio import read_bytes
+    from ecattool.project.yamlloc import load_yaml
+
+    spec_path = Path(spec_path)
+    doc = load_yaml(read_bytes(spec_path, 4 * 1024 * 1024), str(spec_path))
+    return build_from(doc.data, doc.locate, spec_path.parent, str(spec_path))
+
+
+def build_from(data: Any, locate: Any, base_dir: Path, source: str) -> SwImage:
+    if not isinstance(data, dict):
+        raise InputError("a build spec is a mapping with base/blocks/setup keys", Location(source, 1))
+    for key in data:
+        if key not in _TOP_KEYS:
+            raise InputError(f"unknown key {key!r} (known: {', '.join(sorted(_TOP_KEYS))})", locate((key,)))
+
+    def path_of(value: Any, where: tuple[Any, ...]) -> Path:
+        if not isinstance(value, str) or not value:
+            raise InputError("expected a file path", locate(where))
+        p = base_dir / value
+        if not p.exists():
+            raise InputError(f"file not found: {p}", locate(where))
+        return p
+
+    def number(value: Any, where: tuple[Any, ...], what: str) -> int:
+        try:
+            n = parse_int(value, locate(where), what)
+        except InputError:
+            raise
+        except Exception:  # noqa: BLE001 - a YAML list or mapping where a number belongs
+            raise InputError(f"expected a {what}", locate(where)) from None
+        return n
+
+    blocks: list[Block] = []
+    if "base" in data:
+        blocks = list(load_image(path_of(data["base"], ("base",))).blocks)
+    for i, spec in enumerate(data.get("blocks") or []):
+        where = ("blocks", i)
+        if not isinstance(spec, dict):
+            raise InputError("each block is a mapping with 'from' or 'start' + 'words'", locate(where))
+        new: list[Block]
+        if "from" in spec:
+            other = load_image(path_of(spec["from"], where + ("from",)))
+            new = list(other.blocks)
+            if "start" in spec:
+                start = number(spec["start"], where + ("start",), "block start")
+                new = [b for b in new if b.start == start]
+                if not new:
+                    raise InputError(f"{spec['from']} has no block starting at 0x{start:04X}", locate(where + ("start",)))
+        elif "start" in spec and "words" in spec:
+            start = number(spec["start"], where + ("start",), "block start")
+            raw = spec["words"]
+            if not isinstance(raw, list) or not raw:
+                raise InputError("words must be a non-empty list of 16-bit values", locate(where + ("words",)))
+            words = []
+            for k, w in enumerate(raw):
+                v = number(w, where + ("words", k), "16-bit word")
+                if not 0 <= v <= 0xFFFF:
+                    raise InputError(f"{w!r} is not a 16-bit word", locate(where + ("words", k)))
+                words.append(v)
+            if not 0 <= start <= 0xFFFF or start + len(words) - 1 > 0xFFFF:
+                raise InputError(f"block 0x{start:X} with {len(words)} words does not fit 0x0000..0xFFFF", locate(where))
+            new = [Block(start, tuple(words))]
+        else:
+            raise InputError("a block needs 'from: FILE' (optionally with 'start') or 'start' and 'words'", locate(where))
+        if spec.get("replace"):
+            starts = {b.start for b in new}
+            blocks = [b for b in blocks if b.start not in starts]
+        line = locate(where).line
+        blocks.extend(Block(b.start, b.words, line) for b in new)
+    if not blocks:
+        raise InputError("the spec builds no blocks: give 'base' or 'blocks'", Location(source, 1))
+    try:
+        check_overlaps(blocks, source)
+    except InputError as exc:
+        raise InputError(exc.message + " (use 'replace: true' to replace a base block)", exc.location) from None
+    image = SwImage(tuple(Block(b.start, b.words) for b in blocks), bool(data.get("final_blank_line", True)), source)
+
+    if "identification" in data:
+        text = data["identification"]
+        ident = image.block_at(IDENT_START)
+        if ident is None or ident.start != IDENT_START:
+            raise InputError("identification needs an identification block at 0x7FBF from the base image",
+                             locate(("identification",)))
+        try:
+            words = identification_words(identification_text_words(str(text)), ident.words[IDENT_TEXT_WORDS + 1])
+        except InputError as exc:
+            raise InputError(exc.message, locate(("identification",))) from None
+        image = image.with_words({IDENT_START + i: w for i, w in enumerate(words)})
+
+    setup = data.get("setup")
+    if setup is not None:
+        image = _apply_setup(image, setup, locate, path_of)
+    return fix_integrity(image)
+
+
+def _apply_setup(image: SwImage, setup: Any, locate: Any, path_of: Any) -> SwImage:
+    from ecattool.sw.params import read_parameters
+    from ecattool.sw.setup import patch
+
+    if not isinstance(setup, dict) or not isinstance(setup.get("values", {}), dict):
+        raise InputError("setup is a mapping with 'parameters' (file) and 'values' (NAME: value)", locate(("setup",)))
+    params = read_parameters(path_of(setup["parameters"], ("setup", "parameters"))) if "parameters" in setup else None
+    values = setup.get("values") or {}
+    assignments = [(str(k), str(v)) for k, v in values.items()]
+    locations = [locate(("setup", "values", k)) for k in values]
+    return patch(image, assignments, params, locations)
