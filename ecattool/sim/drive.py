@@ -125,6 +125,53 @@ def _complete(device: Device) -> Device:
     return complete_generic(device)
 
 
+def _decode_int(e: Entry | None, raw: bytes) -> int:
+    """An integer entry's value from its bytes (the entry's bit size wins over a disagreeing type name)."""
+    v = int.from_bytes(raw, "little")
+    if e is None or e.datatype is None:
+        return v
+    bits = e.bit_size or 8 * len(raw)
+    v &= (1 << bits) - 1
+    if e.datatype.kind is Kind.SIGNED and v >= 1 << (bits - 1):
+        v -= 1 << bits
+    return v
+
+
+def expand_default_modules(device: Device) -> Device:
+    """A modular device (ETG.2001 slots) with each slot's default module plugged in: the module PDOs are
+    added with the slot's PDO increment, their entries (and the module dictionaries) with the slot's index
+    increment, as an ESI-configured master does before it starts the slave."""
+    if not device.slots or device.rx_pdos or device.tx_pdos:
+        return device
+    import copy
+
+    out = copy.deepcopy(device)
+    by_ident = {m.ident: m for m in out.modules if m.ident is not None}
+    for k, slot in enumerate(out.slots):
+        module = by_ident.get(slot.default_module)
+        if module is None:
+            continue
+        for _ in range(max(1, slot.min_instances)):
+            idx_inc = (slot.slot_index_increment or 0) * k
+            pdo_inc = (slot.slot_pdo_increment or 0) * k
+            for obj in module.dictionary:
+                moved = copy.deepcopy(obj)
+                if 0x6000 <= obj.index <= 0x9FFF:
+                    moved.index += idx_inc
+                out.dictionary.add(moved)
+            for src, dst in ((module.rx_pdos, out.rx_pdos), (module.tx_pdos, out.tx_pdos)):
+                for pdo in src:
+                    p = copy.deepcopy(pdo)
+                    if p.depend_on_slot:
+                        p.index += pdo_inc
+                        for e in p.entries:
+                            if e.index >= 0x2000:
+                                e.index += idx_inc
+                    dst.append(p)
+            break
+    return out
+
+
 def _abort(index: int, sub: int, code: int) -> SdoAbort:
     return SdoAbort(index, sub, code)
 
@@ -195,8 +242,8 @@ class Drive:
     def from_esi(cls, path: str | Path, selector: str | None = None, **kw: Any) -> "Drive":
         from ecattool import esi
 
-        device = esi.load_device(path, selector)  # type: ignore[attr-defined]
-        return cls(_complete(device), **kw)
+        device = esi.load_device(path, selector)
+        return cls(_complete(expand_default_modules(device)), **kw)
 
     # ------------------------------------------------------------------------------------------
     # power on / reset
@@ -290,11 +337,7 @@ class Drive:
         raw = self._store.get((index, sub))
         if raw is None:
             return None
-        if e is None or e.datatype is None:
-            return int.from_bytes(raw, "little")
-        if e.datatype.kind in (Kind.SIGNED, Kind.UNSIGNED, Kind.BITS, Kind.BOOL):
-            return e.datatype.decode(raw, e.bit_size)
-        return int.from_bytes(raw, "little")
+        return _decode_int(e, raw)
 
     def _put(self, index: int, sub: int, value: int) -> None:
         e = self._entries.get((index, sub))
@@ -459,7 +502,7 @@ class Drive:
             raise _abort(index, sub, A.LENGTH_TOO_HIGH if len(data) > size else A.LENGTH_TOO_LOW)
         value: int | None = None
         if dt is not None and dt.kind in (Kind.SIGNED, Kind.UNSIGNED, Kind.BITS, Kind.BOOL):
-            value = dt.decode(data, e.bit_size)
+            value = _decode_int(e, data)
             if e.minimum is not None and value < e.minimum:
                 raise _abort(index, sub, A.VALUE_TOO_LOW)
             if e.maximum is not None and value > e.maximum:
@@ -666,6 +709,8 @@ class Drive:
             assert entries is not None
             bits = 0
             for e in entries:
+                if e.index == 0 and e.bit_len == 0:
+                    continue  # an empty gap some ESI PDO lists carry
                 try:
                     self._mapping_entry_bits(d, pdo, 0, e.mapping_value)
                 except SdoAbort:

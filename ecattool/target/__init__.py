@@ -2,4 +2,13 @@
 
 from ecattool.target.base import SlaveTarget, Target
 
-__all__ = ["SlaveTarget", "Target"]
+__all__ = ["SlaveTarget", "Target", "SimTarget", "open_target"]
+
+
+def __getattr__(name: str):  # type: ignore[no-untyped-def]
+    # the simulator is imported only when asked for
+    if name in ("SimTarget", "open_target"):
+        from ecattool.target import sim
+
+        return getattr(sim, name)
+    raise AttributeError(name)

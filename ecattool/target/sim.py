@@ -1,0 +1,48 @@
+"""The simulator target: a master with simulated drives (the default target of every "apply" command)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from ecattool.errors import SelectionError
+from ecattool.esi.model import Device
+from ecattool.target.base import SlaveTarget
+
+
+class SimTarget:
+    """A :class:`~ecattool.target.base.Target` whose slaves are :class:`ecattool.sim.Drive` objects."""
+
+    def __init__(self, drives: Iterable[SlaveTarget]) -> None:
+        self._drives = list(drives)
+        for i, d in enumerate(self._drives):
+            d.position = i
+
+    @classmethod
+    def from_devices(cls, devices: Iterable[Device]) -> "SimTarget":
+        """One simulated drive per device (built-in profile devices or ESI devices), in bus order."""
+        from ecattool.sim import Drive
+
+        return cls([Drive.from_device(d) for d in devices])
+
+    def slaves(self) -> list[SlaveTarget]:
+        return list(self._drives)
+
+    def slave(self, position: int) -> SlaveTarget:
+        try:
+            return self._drives[position]
+        except IndexError:
+            raise SelectionError(f"no slave at position {position} (the bus has {len(self._drives)})") from None
+
+    def close(self) -> None:
+        self._drives = []
+
+
+def open_target(spec: str, devices: Iterable[Device] = ()) -> SimTarget:
+    """A target from a spec string. ``"sim"``: the embedded simulator with one drive per device.
+
+    Real masters (``"pysoem:eth0"``) are an optional extra and not available yet.
+    """
+    kind = spec.split(":", 1)[0].strip().lower()
+    if kind == "sim":
+        return SimTarget.from_devices(devices)
+    raise SelectionError(f"unknown target {spec!r}; available: sim")
