@@ -106,7 +106,7 @@ def build(device: Device, *, pdo_categories: bool = True, size: int | None = Non
     """Build the image ``device`` describes, filled with 0xFF to the EEPROM size.
 
     ``size`` (bytes) overrides ``Eeprom/ByteSize``; without either the image is 2048 bytes, or the next
-    power of two that holds it.
+    power of two that holds it. A raw ``Eeprom/Data`` image is returned as it is.
     """
     where = device.location or Location(device.source or None)
     eeprom = device.eeprom
@@ -114,6 +114,24 @@ def build(device: Device, *, pdo_categories: bool = True, size: int | None = Non
         image = parse(eeprom.data, device.source or None)
         image.source = device.source
         return image
+    image = assemble(device, pdo_categories=pdo_categories)
+    used = len(image.to_bytes())
+    byte_size = size or (eeprom.byte_size if eeprom and eeprom.byte_size else None)
+    if byte_size is None:
+        byte_size = DEFAULT_EEPROM_BYTES
+        while byte_size < used:
+            byte_size *= 2
+    image.header.size_word = size_word_for(byte_size, where)
+    if used > byte_size:
+        raise InputError(f"the image needs {used} bytes but the EEPROM holds {byte_size}; use --size or "
+                         "--no-pdo-categories", where)
+    image.tail = b"\xff" * (byte_size - used)
+    return fix_crc(image)
+
+
+def assemble(device: Device, *, pdo_categories: bool = True) -> SiiImage:
+    """The fixed area and categories of ``device`` (no fill, size word from ByteSize, CRC not set)."""
+    eeprom = device.eeprom
 
     h = SiiHeader()
     cfg = (eeprom.config_data if eeprom and eeprom.config_data else b"")[:14].ljust(14, b"\x00")
@@ -186,16 +204,6 @@ def build(device: Device, *, pdo_categories: bool = True, size: int | None = Non
     if dc_ops:
         cats.append(DcCategory(dc_ops))
 
-    image = SiiImage(h, cats, True, b"", device.source)
-    used = len(image.to_bytes())
-    byte_size = size or (eeprom.byte_size if eeprom and eeprom.byte_size else None)
-    if byte_size is None:
-        byte_size = DEFAULT_EEPROM_BYTES
-        while byte_size < used:
-            byte_size *= 2
-    h.size_word = size_word_for(byte_size, where)
-    if used > byte_size:
-        raise InputError(f"the image needs {used} bytes but the EEPROM holds {byte_size}; use --size or "
-                         "--no-pdo-categories", where)
-    image.tail = b"\xff" * (byte_size - used)
-    return fix_crc(image)
+    if eeprom and eeprom.byte_size and eeprom.byte_size >= 128:
+        h.size_word = eeprom.byte_size // 128 - 1
+    return SiiImage(h, cats, True, b"", device.source)

@@ -9,7 +9,7 @@ Rule ids: ``sii.parse``, ``sii.blank``, ``sii.crc``, ``sii.length``, ``sii.size`
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import InputError, Location
 from ecattool.findings import Finding, Severity
@@ -27,6 +27,9 @@ from ecattool.sii.model import (
     StringsCategory,
     category_name,
 )
+
+if TYPE_CHECKING:
+    from ecattool.esi.model import Device
 
 E, W, I = Severity.ERROR, Severity.WARNING, Severity.INFO
 
@@ -189,3 +192,56 @@ def _check_sms(image: SiiImage, r: _Report) -> None:
             elif sms[p.sm].type not in (want, 0):
                 r.add("sii.pdo", E, f"{category_name(cat_type)} 0x{p.index:04X} is assigned to SM{p.sm} of type "
                       f"'{sms[p.sm].kind}', '{SM_TYPES[want]}' expected")
+
+
+_AGAINST: list[tuple[str, str, Severity, str]] = [
+    # (regex on the flattened field name, rule, severity, what)
+    (r"header\.(vendor_id|product_code|revision)$", "sii.esi.identity", E, "identity"),
+    (r"header\.(std_|bootstrap_|mailbox_protocols)", "sii.esi.mailbox", E, "mailbox"),
+    (r"general\.(coe_details|foe_details|eoe_details)$", "sii.esi.mailbox", W, "mailbox details"),
+    (r"header\.(pdi_control|pdi_config|sync_impulse_len|pdi_config2|reserved_05|reserved_06)$", "sii.esi.config", W,
+     "ConfigData"),
+    (r"header\.size_word$", "sii.esi.size", W, "EEPROM size"),
+    (r"sm\[\d+\]\.(start|length|control|enable|type)$", "sii.esi.sm", E, "sync manager"),
+    (r"fmmu\[\d+\]$", "sii.esi.fmmu", W, "FMMU"),
+    (r"(tx|rx)pdo\[[^]]+\](\.sm|\.entries|\.entry\[\d+\]\.(index|subindex|bit_len))?$", "sii.esi.pdo", E, "PDO"),
+    (r"dc\[\d+\]\.(assign_activate|cycle_time0|shift_time0)$", "sii.esi.dc", W, "DC"),
+]
+
+
+def check_against(device: "Device", image: SiiImage) -> list[Finding]:
+    """Where ``image`` and the ESI ``device`` disagree: identity, mailbox, ConfigData, SMs, FMMUs, PDOs, DC.
+
+    PDOs are compared only when the image has PDO categories, DC modes only when it has a DC category
+    (both are optional in an SII)."""
+    import re
+
+    from ecattool.sii.build import assemble
+    from ecattool.sii.diff import flatten
+
+    expected = assemble(device)
+    got, want = flatten(image), flatten(expected)
+    has_pdos = bool(image.tx_pdos or image.rx_pdos)
+    has_dc = bool(image.dc_opmodes)
+    r = _Report(image.source)
+    dev = f"{device.type_name} ({device.identity})"
+    for key in list(want) + [k for k in got if k not in want]:
+        a, b = got.get(key), want.get(key)
+        if a == b or (key.startswith(("txpdo", "rxpdo")) and not has_pdos) or (key.startswith("dc") and not has_dc):
+            continue
+        for pattern, rule, sev, what in _AGAINST:
+            if re.match(pattern, key):
+                r.add(rule, sev, f"{what}: {key} is {_fmt(a)} in the image but {_fmt(b)} in the ESI device {dev}",
+                      field=key)
+                break
+    if not has_pdos and (device.tx_pdos or device.rx_pdos):
+        r.add("sii.esi.pdo", I, "the image has no PDO categories; masters read the PDOs over CoE or from the ESI")
+    return r.findings
+
+
+def _fmt(v: Any) -> str:
+    if v is None:
+        return "absent"
+    if isinstance(v, int) and not isinstance(v, bool):
+        return f"0x{v:X}"
+    return repr(v)

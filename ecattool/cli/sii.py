@@ -1,0 +1,231 @@
+"""ecattool sii: SII EEPROM images — inspect, check, repair, build from an ESI, compare."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import click
+
+from ecattool.cli.common import console, dump_json, json_option, output_option, parse_int_arg, table, write_output
+
+
+@click.group("sii", epilog="""\b
+Examples:
+  ecattool sii build slave.xml --device MySlave -o slave.bin
+  ecattool sii check slave.bin
+  ecattool sii check slave.xml slave.bin
+  ecattool sii info slave.bin --json
+  ecattool sii set-alias slave.bin 7 -o slave-alias7.bin
+  ecattool sii diff old.bin new.bin""")
+def sii() -> None:
+    """SII EEPROM images: inspect, check, fix the CRC, set the alias, build from ESI, diff.
+
+    Images are read as binary or Intel HEX (detected by the leading ':'); outputs ending in .hex are
+    written as Intel HEX, everything else as binary.
+    """
+
+
+def _load(path: str) -> Any:
+    from ecattool.sii import load
+
+    return load(path)
+
+
+def _write_image(output: str, image: Any, inputs: tuple[str, ...]) -> None:
+    data = image.to_bytes()
+    if output.lower().endswith((".hex", ".ihex")):
+        from ecattool.sii import write_intel_hex
+
+        write_output(output, write_intel_hex(data), inputs)
+    else:
+        write_output(output, data, inputs)
+
+
+def _findings_out(findings: list[Any], as_json: bool, extra: dict[str, Any] | None = None) -> None:
+    from ecattool.findings import has_errors
+
+    if as_json:
+        click.echo(dump_json({**(extra or {}), "ok": not has_errors(findings),
+                              "findings": [f.to_json() for f in findings]}))
+    else:
+        for f in findings:
+            click.echo(str(f))
+        n_err = sum(1 for f in findings if f.severity.value == "error")
+        n_warn = sum(1 for f in findings if f.severity.value == "warning")
+        click.echo(f"{'FAILED' if n_err else 'OK'}: {n_err} error(s), {n_warn} warning(s)")
+
+
+@sii.command("info", epilog="""\b
+Examples:
+  ecattool sii info slave.bin
+  ecattool sii info eeprom.hex --json | jq .categories""")
+@click.argument("image", type=click.Path(dir_okay=False))
+@json_option
+def info(image: str, as_json: bool) -> None:
+    """Show the fixed area, every category, strings, SMs, PDOs and DC modes of IMAGE."""
+    from ecattool.sii.info import describe
+
+    d = describe(_load(image))
+    if as_json:
+        click.echo(dump_json(d))
+        return
+    c = console()
+    t = table(f"SII image {image}", ["field", "value"])
+    for key, fmt in (("vendor_id", "0x{:08X}"), ("product_code", "0x{:08X}"), ("revision", "0x{:08X}"),
+                     ("serial", "0x{:08X}"), ("station_alias", "{}"), ("config_data", "{}"),
+                     ("checksum", "0x{:02X}"), ("crc_ok", "{}"), ("protocols", "{}"), ("mailbox", "{}"),
+                     ("bootstrap", "{}"), ("eeprom_bytes", "{}"), ("image_bytes", "{}"), ("version", "{}")):
+        v = d[key]
+        t.add_row(key, ", ".join(v) if isinstance(v, list) else fmt.format(v))
+    c.print(t)
+    ct = table("Categories", ["offset", "type", "name", "words"])
+    for cat in d["categories"]:
+        ct.add_row(f"0x{cat['offset']:04X}", str(cat["type"]), cat["name"] + (" (!)" if cat.get("problem") else ""),
+                   str(cat["words"]))
+    c.print(ct)
+    if d["strings"]:
+        st = table("Strings", ["#", "text"])
+        for i, s in enumerate(d["strings"], 1):
+            st.add_row(str(i), s)
+        c.print(st)
+    if d["general"]:
+        gt = table("General", ["field", "value"])
+        for k, v in d["general"].items():
+            gt.add_row(k, ", ".join(v) if isinstance(v, list) else str(v))
+        c.print(gt)
+    if d["sync_managers"]:
+        smt = table("Sync managers", ["SM", "start", "length", "control", "enable", "type"])
+        for i, s in enumerate(d["sync_managers"]):
+            smt.add_row(str(i), f"0x{s['start']:04X}", str(s["length"]), f"0x{s['control']:02X}", str(s["enable"]),
+                        s["kind"] or "unused")
+        c.print(smt)
+    for key, title in (("tx_pdos", "TxPDOs (inputs)"), ("rx_pdos", "RxPDOs (outputs)")):
+        if d[key]:
+            pt = table(title, ["PDO", "SM", "entry", "bits", "type", "name"])
+            for p in d[key]:
+                pt.add_row(f"0x{p['index']:04X}", str(p["sm"]), "", str(p["bit_size"]), "", p["name"] or "")
+                for e in p["entries"]:
+                    pt.add_row("", "", f"0x{e['index']:04X}:{e['subindex']:02X}", str(e["bit_len"]),
+                               f"0x{e['data_type']:02X}", e["name"] or "")
+            c.print(pt)
+    if d["dc_opmodes"]:
+        dt = table("DC op modes", ["name", "assign activate", "cycle0", "shift0", "sync0 factor", "sync1 factor"])
+        for o in d["dc_opmodes"]:
+            dt.add_row(o["name"] or "", f"0x{o['assign_activate']:04X}", str(o["cycle_time0"]), str(o["shift_time0"]),
+                       str(o["sync0_cycle_factor"]), str(o["sync1_cycle_factor"]))
+        c.print(dt)
+
+
+def _select(esi_path: str, selector: str | None, image: Any = None) -> Any:
+    from ecattool.esi import load, select
+
+    esi = load(esi_path)
+    if selector is None and image is not None and len(esi.devices) > 1:
+        h = image.header
+        matching = [d for d in esi.devices if (d.product_code, d.revision) == (h.product_code, h.revision)]
+        if matching:
+            return matching[0]
+    return select(esi, selector)
+
+
+@sii.command("check", epilog="""\b
+Examples:
+  ecattool sii check slave.bin                # CRC, size, category chain, strings, SMs, PDOs
+  ecattool sii check slave.xml slave.bin      # also: does the image match the ESI device?
+  ecattool sii check Beckhoff_EL1xxx.xml el1008.bin --device EL1008 --json
+\b
+Exit codes: 0 no errors (no warnings either with --strict), 1 findings or invalid input.""")
+@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option("--device", "selector", help="ESI device: type name, product[:revision] or list index "
+              "(default: the device whose product code and revision match the image).")
+@click.option("--strict", is_flag=True, help="Warnings fail the check too.")
+@json_option
+def check_cmd(files: tuple[str, ...], selector: str | None, strict: bool, as_json: bool) -> None:
+    """Check IMAGE, or check IMAGE against an ESI device: `sii check [ESI] IMAGE`."""
+    from ecattool.findings import has_errors
+    from ecattool.sii.check import check_against, check_file
+
+    if len(files) > 2:
+        raise click.UsageError("give IMAGE, or ESI IMAGE")
+    image_path = files[-1]
+    image, findings = check_file(image_path)
+    if len(files) == 2 and image is not None:
+        device = _select(files[0], selector, image)
+        findings += check_against(device, image)
+    _findings_out(findings, as_json, {"image": image_path})
+    raise SystemExit(1 if has_errors(findings, strict) else 0)
+
+
+@sii.command("fix-crc", epilog="""\b
+Example:
+  ecattool sii fix-crc edited.bin -o fixed.bin""")
+@click.argument("image", type=click.Path(dir_okay=False))
+@output_option(required=True)
+def fix_crc_cmd(image: str, output: str) -> None:
+    """Recompute the checksum (word 7) over bytes 0-13 and write the repaired image."""
+    from ecattool.sii.check import fix_crc
+
+    img = _load(image)
+    old = img.header.checksum & 0xFF
+    fix_crc(img)
+    _write_image(output, img, (image,))
+    click.echo(f"checksum 0x{old:02X} -> 0x{img.header.checksum & 0xFF:02X}", err=True)
+
+
+@sii.command("set-alias", epilog="""\b
+Example:
+  ecattool sii set-alias slave.bin 0x1001 -o slave-alias.bin""")
+@click.argument("image", type=click.Path(dir_okay=False))
+@click.argument("alias")
+@output_option(required=True)
+def set_alias_cmd(image: str, alias: str, output: str) -> None:
+    """Set the configured station alias (word 4) to ALIAS and update the checksum."""
+    from ecattool.sii.check import set_alias
+
+    img = _load(image)
+    set_alias(img, parse_int_arg(alias, "station alias"))
+    _write_image(output, img, (image,))
+
+
+@sii.command("build", epilog="""\b
+Examples:
+  ecattool sii build slave.xml -o slave.bin
+  ecattool sii build Beckhoff_EL1xxx.xml --device EL1008 -o el1008.bin
+  ecattool sii build slave.xml --no-pdo-categories --size 256 -o slave.hex""")
+@click.argument("esi", type=click.Path(dir_okay=False))
+@click.option("--device", "selector", help="Device: type name, product[:revision] or list index (needed when "
+              "the ESI describes several).")
+@click.option("--no-pdo-categories", is_flag=True, help="Leave out TXPDO/RXPDO (PDOs come from CoE only).")
+@click.option("--size", "size", help="EEPROM size in bytes (default: Eeprom/ByteSize, else 2048 or what fits).")
+@output_option(required=True)
+def build_cmd(esi: str, selector: str | None, no_pdo_categories: bool, size: str | None, output: str) -> None:
+    """Build an SII EEPROM image from an ESI device; unused space is filled with 0xFF."""
+    from ecattool.sii.build import build
+
+    device = _select(esi, selector)
+    img = build(device, pdo_categories=not no_pdo_categories,
+                size=parse_int_arg(size, "EEPROM size") if size else None)
+    _write_image(output, img, (esi,))
+
+
+@sii.command("diff", epilog="""\b
+Examples:
+  ecattool sii diff factory.bin rebuilt.bin
+  ecattool sii diff a.bin b.hex --json
+\b
+Exit codes: 0 identical fields, 1 differences.""")
+@click.argument("a", type=click.Path(dir_okay=False))
+@click.argument("b", type=click.Path(dir_okay=False))
+@json_option
+def diff_cmd(a: str, b: str, as_json: bool) -> None:
+    """Compare two images field by field and category by category (strings resolved)."""
+    from ecattool.sii.diff import diff
+
+    diffs = diff(_load(a), _load(b))
+    if as_json:
+        click.echo(dump_json({"a": a, "b": b, "identical": not diffs, "differences": [d.to_json() for d in diffs]}))
+    else:
+        for d in diffs:
+            click.echo(str(d))
+        click.echo(f"{len(diffs)} difference(s)" if diffs else "no differences")
+    raise SystemExit(1 if diffs else 0)
