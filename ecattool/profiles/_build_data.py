@@ -169,6 +169,16 @@ def finish(family: str, source: str, objects: dict[int, dict[str, Any]], csv_row
     objs = []
     for idx in sorted(objects):
         o = objects[idx]
+        subs = o["entries"]
+        if o["object_code"] != "VAR" and subs:
+            # every ARRAY/RECORD gets a sub-index 0 "number of entries" whose default is its highest
+            # sub-index when the manual prints none (decision "Profiles: sub-index 0")
+            top = max(subs)
+            if 0 not in subs:
+                subs[0] = entry(0, "Number of entries", "USINT", 8, "ro", default=top,
+                                comment="not printed; highest sub-index (decision Profiles-1)")
+            elif subs[0].get("default") is None:
+                subs[0]["default"] = top
         o["entries"] = [o["entries"][s] for s in sorted(o["entries"])]
         objs.append(o)
     out["objects"] = objs
@@ -361,6 +371,11 @@ HDT_FIX: dict[tuple[int, int], dict[str, Any]] = {
     (0x1001, 0): {"pdo": "T", "comment": "Map No as printed but mapped by default in 1A00h (decision HDT-3)"},
     (0x6093, 0): {"access": "ro"},
     (0x1C00, 0): {"default": 4},
+    (0x1005, 0): {"default": 0x80, "comment": "type/default not printed; Caliper screenshot 00000080h (ambiguity 7)"},
+    # dimension indices printed INT8 holding ACh/A4h/A3h: kept as the raw byte, typed UNSIGNED8 as in
+    # CiA-402 (decision HDT-8)
+    (0x608A, 0): {"type": "USINT", "default": 0xAC}, (0x608C, 0): {"type": "USINT", "default": 0xA4},
+    (0x608E, 0): {"type": "USINT", "default": 0xA3},
     (0x1C00, 1): {"default": 1}, (0x1C00, 2): {"default": 2}, (0x1C00, 3): {"default": 3}, (0x1C00, 4): {"default": 4},
     # all four PDOs of each direction assigned by default, as all four are valid on CANopen (decision HDT-7)
     (0x1C12, 0): {"default": 4, "min": 0, "max": 4}, (0x1C13, 0): {"default": 4, "min": 0, "max": 4},
@@ -423,6 +438,8 @@ def build_hdt(ref: Path) -> dict[str, Any]:
                 e[k] = v
         if not e.get("pdo"):
             e.pop("pdo", None)
+        if (index, sub) == (0x1010, 4):
+            continue  # "only in 2.08 table": sub0 = 3 with the three named sub-indices (ambiguity 1)
         obj["entries"][sub] = e
     for idx in (0x1C12, 0x1C13):
         for sub in range(1, 5):
@@ -491,7 +508,7 @@ def build_controltechniques(ref: Path) -> dict[str, Any]:
             lo, hi = 0, 35
         lo, hi = clean_range(typ, bits, lo, hi)
         for sub in subs:
-            nm = ename if len(subs) == 1 else re.sub(r"1st to 255th mapped objects|assigned [RT]xPDO n",
+            nm = ename if not m else re.sub(r"1st to 255th mapped objects|assigned [RT]xPDO n",
                                                      f"mapped object {sub}" if "PDO mapping" in oname else f"assigned PDO {sub}",
                                                      ename)
             e = entry(sub, nm, typ, bits, acc, pdo_dirs(mappable, acc), default, lo, hi,
@@ -528,33 +545,61 @@ def build_controltechniques(ref: Path) -> dict[str, Any]:
     objects[0x6060]["entries"][0]["enum"] = {"0": "No mode change", "2": "vl velocity", "4": "Profile torque",
                                               "6": "Homing", "7": "Interpolated position",
                                               "8": "Cyclic synchronous position"}
-    params = build_ct_parameters(ref)
+    # named in the support lists without a table (605Dh, 6065h, 6067h): CiA-402 types (decision CT-6)
+    for idx, nm, typ, bits in ((0x605D, "halt_option_code", "INT", 16), (0x6065, "following_error_window", "UDINT", 32),
+                               (0x6067, "position_window", "UDINT", 32)):
+        o = objects[idx] = new_object(idx, nm, "VAR", "7.3.1/7.3.14")
+        o["entries"][0] = entry(0, nm, typ, bits, "rw", comment="listed as supported only; type from CiA-402 (decision CT-6)")
+    n_params = add_ct_parameters(ref, objects)
     return finish("controltechniques", "Control Techniques SM-EtherCAT User Guide issue 5", objects, len(rows),
-                  {"parameters": params, "parameter_rows": sum(1 for _ in csv.DictReader((ref / "controltechniques" / "parameters.csv").open(encoding="utf-8")))})
+                  {"parameter_rows": n_params})
 
 
-def build_ct_parameters(ref: Path) -> list[dict[str, Any]]:
-    """Drive/module parameters as (menu, parameter) records; ``MM`` = the module's slot menu."""
-    out = []
-    for r in csv.DictReader((ref / "controltechniques" / "parameters.csv").open(encoding="utf-8")):
+CT_SLOT_MENU = 15  # the SM-EtherCAT module is taken to sit in slot 1 (decision CT-7)
+CT_SLOW_MENUS = (70, 71)  # SM-Applications PLC registers, reached through Inter-Option communication (decision CT-8)
+
+
+def _ct_param_object(objects: dict[int, dict[str, Any]], menu: int, section: str) -> dict[str, Any]:
+    index = 0x2000 + menu
+    if index not in objects:
+        objects[index] = new_object(index, f"Menu {menu} parameters", "ARRAY" if menu >= 60 else "RECORD", section)
+    return objects[index]
+
+
+def add_ct_parameters(ref: Path, objects: dict[int, dict[str, Any]]) -> int:
+    """Drive/module parameters as objects 0x2000+menu, sub-index = parameter (§6.2); returns the CSV rows."""
+    rows = list(csv.DictReader((ref / "controltechniques" / "parameters.csv").open(encoding="utf-8")))
+    for r in rows:
         menu_txt, _, par_txt = r["menu.param"].partition(".")
         par = int(par_txt)
-        lo, hi = parse_range(r["range"].replace("OFF - ON", "0 to 1"))
-        if r["range"].strip().upper().startswith("OFF"):
+        if par == 0:
+            continue  # Pr MM.00 is reached only as Pr 61.01 (0x203D:01), §6.2
+        lo, hi = parse_range(r["range"])
+        if r["range"].strip().upper().startswith("OFF") or "(OFF)" in r["range"]:
             lo, hi = 0, 1
         dm = re.match(r"\s*(-?\d+)", r["default"])
         default = int(dm.group(1)) if dm else (0 if r["default"].strip().upper().startswith("OFF") else None)
         acc = r["access"].strip().lower() or "rw"
-        size = 16 if "16-bit" in r["name"] else 32
-        rec = OrderedDict(menu=menu_txt, parameter=par, name=r["name"], type="INT" if size == 16 else "DINT",
-                          bits=size, access=acc)
-        if default is not None:
-            rec["default"] = default
-        if lo is not None and hi is not None:
-            rec["min"], rec["max"] = lo, hi
-        rec["comment"] = f"§{r['section']}; {r['meaning'][:200]}"
-        out.append(rec)
-    return out
+        typ, bits = ("INT", 16) if "16-bit" in r["name"] else ("DINT", 32)  # size of a parameter: decision CT-9
+        menus = (CT_SLOT_MENU, 60) if menu_txt == "MM" else (int(menu_txt),)
+        for menu in menus:
+            obj = _ct_param_object(objects, menu, r["section"])
+            obj["entries"][par] = entry(par, f"Pr {menu_txt}.{par:02d} {r['name']}", typ, bits, acc,
+                                        pdo_dirs(True, acc), default, *clean_range(typ, bits, lo, hi),
+                                        comment=f"§{r['section']}; {r['meaning'][:160]}")
+    for menu in CT_SLOW_MENUS:
+        obj = _ct_param_object(objects, menu, "6.1.1")
+        obj["requires"] = "applications-slot"
+        obj["name"] = f"Menu {menu} SM-Applications PLC registers"
+        for par in range(1, 100):
+            obj["entries"][par] = entry(par, f"Pr {menu}.{par:02d}", "DINT", 32, "rw", "RT", 0, category="slow",
+                                        comment="slow parameter: only in the 2nd PDO of an SM (§6.1.1, decision CT-8)")
+    for o in objects.values():
+        if 0x2000 <= o["index"] <= 0x2063:
+            top = max(o["entries"])
+            o["entries"][0] = entry(0, "Highest parameter number", "USINT", 8, "ro", default=top,
+                                    comment="§6.2: sub-index 0 of a menu returns its highest parameter number")
+    return len(rows)
 
 
 def main(argv: list[str]) -> int:
