@@ -25,8 +25,10 @@ def describe(dev: Device, index: int | None = None) -> str:
     return f"{pre}{dev.type_name} (product 0x{dev.product_code:08X} revision 0x{dev.revision:08X})"
 
 
-def candidates_text(devices: list[Device]) -> str:
-    shown = [describe(d, i) for i, d in enumerate(devices[:_MAX_LISTED])]
+def candidates_text(devices: list[Device], all_devices: list[Device] | None = None) -> str:
+    """``[i] TYPE (product … revision …)`` for each candidate; ``i`` is the position in the whole file."""
+    pos = {id(d): i for i, d in enumerate(all_devices if all_devices is not None else devices)}
+    shown = [describe(d, pos.get(id(d))) for d in devices[:_MAX_LISTED]]
     more = len(devices) - _MAX_LISTED
     return "; ".join(shown) + (f"; … and {more} more" if more > 0 else "")
 
@@ -57,17 +59,17 @@ def _by_revision(pool: list[Device], revision: int | None, policy: str, what: st
         older = [d for d in pool if d.revision <= revision]  # type: ignore[operator]
         if not older:
             raise SelectionError(
-                f"no revision of {what} is 0x{revision:08X} or older; candidates: {candidates_text(pool)}")
+                f"no revision of {what} is 0x{revision:08X} or older; candidates: {candidates_text(pool, all_devices)}")
         return max(older, key=lambda d: d.revision)
     if revision is None:
         if len(pool) == 1:
             return pool[0]
         raise SelectionError(
             f"{what} matches {len(pool)} devices; give a revision (product:revision) or --policy newest; "
-            f"candidates: {candidates_text(pool)}")
+            f"candidates: {candidates_text(pool, all_devices)}")
     exact = [d for d in pool if d.revision == revision]
     if not exact:
-        raise SelectionError(f"no device matches {what} with revision 0x{revision:08X} exactly; candidates: {candidates_text(pool)}")
+        raise SelectionError(f"no device matches {what} with revision 0x{revision:08X} exactly; candidates: {candidates_text(pool, all_devices)}")
     return exact[0]
 
 

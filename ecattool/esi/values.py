@@ -39,6 +39,8 @@ class Context:
         try:
             head = s[:2]
             if head == "#x" or head == "#X":
+                if s[2:4] in ("0x", "0X"):
+                    self.warn("esi-number-0x", f"{what} {s!r} has both #x and 0x prefixes (read as hex)", el)
                 return int(s[2:], 16)
             if head == "0x" or head == "0X":
                 self.warn("esi-number-0x", f"{what} {s!r} uses 0x; ESI HexDecValue is #x… (read as hex)", el)

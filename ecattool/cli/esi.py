@@ -1,0 +1,302 @@
+"""``ecattool esi``: list, show and validate ESI device description files."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import click
+
+from ecattool.cli.common import console, json_option, print_json, table
+
+_FILE = click.argument("file", type=click.Path(dir_okay=False))
+
+
+def _hex(v: int | None, width: int = 8) -> str:
+    return "" if v is None else f"0x{v:0{width}X}"
+
+
+@click.group("esi")
+def esi() -> None:
+    """Read, show and validate ESI (EtherCAT Slave Information) XML files.
+
+    Reads EtherCATInfo, EtherCATModule and EtherCATDict files as vendors ship them (UTF-8 or
+    ISO-8859-1, BOM, #x/decimal numbers, many devices and revisions in one file).
+    """
+
+
+# --------------------------------------------------------------------------------------------
+# devices
+# --------------------------------------------------------------------------------------------
+def device_summary(dev: Any, index: int) -> dict[str, Any]:
+    return {
+        "index": index,
+        "type": dev.type_name,
+        "name": dev.name,
+        "vendor_id": dev.vendor_id,
+        "product_code": dev.product_code,
+        "revision": dev.revision,
+        "group": dev.group_type,
+        "rx_pdo_count": len(dev.rx_pdos),
+        "tx_pdo_count": len(dev.tx_pdos),
+        "object_count": len(dev.dictionary),
+        "sm_count": len(dev.sync_managers),
+        "protocols": list(dev.mailbox.protocols) if dev.mailbox else [],
+        "modules": len(dev.modules),
+        "slots": len(dev.slots),
+        "line": dev.location.line if dev.location else None,
+    }
+
+
+@esi.command("devices", epilog="""\b
+Examples:
+  ecattool esi devices samples/esi/etg2001_cia402.xml
+  ecattool esi devices beckhoff_EL1xxx.xml --json""")
+@_FILE
+@json_option
+def devices_cmd(file: str, as_json: bool) -> None:
+    """List the devices of FILE: type, product code, revision, PDO and object counts."""
+    from ecattool.esi import load
+
+    doc = load(file)
+    rows = [device_summary(d, i) for i, d in enumerate(doc.devices)]
+    if as_json:
+        print_json(rows)
+        return
+    con = console()
+    title = f"{file}: {len(rows)} device(s), vendor {_hex(doc.vendor_id)} {doc.vendor_name}".rstrip()
+    if doc.root != "EtherCATInfo":
+        title += f" [{doc.root}: {len(doc.modules)} module(s)"
+        title += f", {len(doc.dictionary)} object(s)]" if doc.dictionary is not None else "]"
+    t = table(title, ["#", "type", "product", "revision", "RxPDO", "TxPDO", "objects", "mailbox", "name"])
+    for r in rows:
+        t.add_row(str(r["index"]), r["type"], _hex(r["product_code"]), _hex(r["revision"]), str(r["rx_pdo_count"]),
+                  str(r["tx_pdo_count"]), str(r["object_count"]), ",".join(r["protocols"]), r["name"])
+    con.print(t)
+    for w in doc.warnings[:20]:
+        click.echo(str(w), err=True)
+    if len(doc.warnings) > 20:
+        click.echo(f"… and {len(doc.warnings) - 20} more warnings (ecattool esi validate lists all)", err=True)
+
+
+# --------------------------------------------------------------------------------------------
+# show
+# --------------------------------------------------------------------------------------------
+def _pdo_json(p: Any) -> dict[str, Any]:
+    return {
+        "direction": p.direction.value, "index": p.index, "name": p.name, "sm": p.sm, "fixed": p.fixed,
+        "mandatory": p.mandatory, "virtual": p.virtual, "excludes": p.excludes, "bit_size": p.bit_size,
+        "entries": [{"index": e.index, "subindex": e.subindex, "bit_len": e.bit_len, "name": e.name,
+                     "data_type": e.data_type} for e in p.entries],
+        "line": p.location.line if p.location else None,
+    }
+
+
+def _objects_json(od: Any) -> list[dict[str, Any]]:
+    out = []
+    for o in od:
+        out.append({
+            "index": o.index, "name": o.name, "object_code": o.object_code.value, "type": o.type_name,
+            "entries": [{"subindex": e.subindex, "name": e.name, "type": e.type_name,
+                         "datatype": e.datatype.name if e.datatype else None, "bit_size": e.bit_size,
+                         "bit_offset": e.bit_offset, "access": e.access.text, "pdo_mapping": e.pdo_mapping,
+                         "default": e.default.hex() if e.default is not None else None, "minimum": e.minimum,
+                         "maximum": e.maximum, "enum": {str(k): v for k, v in e.enum.items()},
+                         "backup": e.backup, "setting": e.setting} for e in o],
+        })
+    return out
+
+
+def _sm_json(dev: Any) -> list[dict[str, Any]]:
+    return [{"number": s.number, "kind": s.kind, "start_address": s.start_address, "default_size": s.default_size,
+             "min_size": s.min_size, "max_size": s.max_size, "control_byte": s.control_byte, "enable": s.enable}
+            for s in dev.sync_managers]
+
+
+def _dc_json(dev: Any) -> list[dict[str, Any]]:
+    keys = ("name", "desc", "assign_activate", "cycle_time_sync0", "cycle_time_sync0_factor", "shift_time_sync0",
+            "shift_time_sync0_factor", "cycle_time_sync1", "cycle_time_sync1_factor", "shift_time_sync1",
+            "shift_time_sync1_factor")
+    return [{k: getattr(m, k) for k in keys} for m in dev.dc_opmodes]
+
+
+def _init_cmds(dev: Any) -> list[Any]:
+    return list(dev.mailbox.init_cmds) if dev.mailbox else []
+
+
+def _init_json(dev: Any) -> list[dict[str, Any]]:
+    return [{"protocol": c.protocol, "transitions": c.transitions, "index": c.index, "subindex": c.subindex,
+             "data": c.data.hex(), "comment": c.comment, "fixed": c.fixed, "complete_access": c.complete_access}
+            for c in _init_cmds(dev)]
+
+
+def _render_pdos(con: Any, dev: Any) -> None:
+    groups = [("RxPDOs (outputs)", dev.rx_pdos), ("TxPDOs (inputs)", dev.tx_pdos)]
+    if not dev.rx_pdos and not dev.tx_pdos and dev.modules:
+        groups = []
+    for m in dev.modules:
+        ident = _hex(m.ident) if m.ident is not None else "-"
+        groups.append((f"Module {m.type_name} (ident {ident}): RxPDOs", m.rx_pdos))
+        groups.append((f"Module {m.type_name} (ident {ident}): TxPDOs", m.tx_pdos))
+    for label, pdos in groups:
+        t = table(f"{label}: {len(pdos)}", ["PDO", "entry", "bits", "type", "name", "flags"])
+        for p in pdos:
+            flags = " ".join(f for f, on in (("fixed", p.fixed), ("mandatory", p.mandatory), ("virtual", p.virtual)) if on)
+            sm = f"Sm{p.sm}" if p.sm is not None else "unassigned"
+            excl = (" excludes " + ",".join(_hex(x, 4) for x in p.excludes)) if p.excludes else ""
+            t.add_row(_hex(p.index, 4), "", str(p.bit_size), "", p.name, f"{sm} {flags}{excl}".strip())
+            for e in p.entries:
+                where = "gap" if e.is_gap else f"{e.index:04X}:{e.subindex:02X}"
+                t.add_row("", where, str(e.bit_len), e.data_type, e.name, "")
+        con.print(t)
+
+
+def _render_objects(con: Any, dev: Any) -> None:
+    od = dev.dictionary
+    t = table(f"Objects: {len(od)}", ["index", "sub", "name", "type", "bits", "access", "map", "default"])
+    for o in od:
+        t.add_row(_hex(o.index, 4), "", o.name, f"{o.object_code.value} {o.type_name}".strip(), str(o.bit_size), "", "", "")
+        if o.object_code.value == "VAR" and len(o.entries) == 1:
+            e = next(iter(o))
+            t.add_row("", "00", "", e.type_name, str(e.bit_size), e.access.text, e.pdo_mapping,
+                      e.default.hex() if e.default is not None else "")
+            continue
+        for e in o:
+            t.add_row("", f"{e.subindex:02X}", e.name, e.type_name, str(e.bit_size), e.access.text, e.pdo_mapping,
+                      e.default.hex() if e.default is not None else "")
+    con.print(t)
+
+
+def _render_sm(con: Any, dev: Any) -> None:
+    t = table("Sync managers", ["SM", "kind", "start", "default", "min", "max", "control", "enable"])
+    for s in dev.sync_managers:
+        t.add_row(str(s.number), s.kind or "(unused)", _hex(s.start_address, 4), str(s.default_size or ""),
+                  str(s.min_size or ""), str(s.max_size or ""), _hex(s.control_byte, 2), "yes" if s.enable else "no")
+    con.print(t)
+    if dev.fmmus:
+        con.print("FMMUs: " + ", ".join(f.kind or "(unused)" for f in dev.fmmus))
+
+
+def _render_dc(con: Any, dev: Any) -> None:
+    t = table("DC op modes", ["name", "AssignActivate", "CycleTimeSync0", "ShiftTimeSync0", "CycleTimeSync1", "description"])
+    for m in dev.dc_opmodes:
+        def fmt(v: int | None, f: int | None) -> str:
+            return "" if v is None else (f"{v} (factor {f})" if f is not None else str(v))
+        t.add_row(m.name, _hex(m.assign_activate, 4), fmt(m.cycle_time_sync0, m.cycle_time_sync0_factor),
+                  fmt(m.shift_time_sync0, m.shift_time_sync0_factor), fmt(m.cycle_time_sync1, m.cycle_time_sync1_factor),
+                  m.desc)
+    con.print(t)
+
+
+def _render_init(con: Any, dev: Any) -> None:
+    t = table("Init commands", ["transition", "protocol", "address", "data", "CA", "comment"])
+    for c in _init_cmds(dev):
+        addr = f"IDN {c.index}" if c.protocol == "SoE" else f"{c.index:04X}:{c.subindex:02X}"
+        t.add_row(",".join(c.transitions), c.protocol, addr, c.data.hex(), "yes" if c.complete_access else "",
+                  c.comment)
+    con.print(t)
+
+
+@esi.command("show", epilog="""\b
+Examples:
+  ecattool esi show samples/esi/etg2001_cia402.xml --pdos
+  ecattool esi show beckhoff_EL1xxx.xml --device EL1008 --policy newest --objects
+  ecattool esi show elmo.xml --device 0x00030924:0x00010420 --sm --dc --init-cmds
+  ecattool esi show beckhoff_EL1xxx.xml --device 3 --json""")
+@_FILE
+@click.option("--device", "selector", help="Type name, product[:revision] (any notation) or list index.")
+@click.option("--policy", type=click.Choice(["exact", "newest-not-newer", "newest"]), default="exact",
+              show_default=True, help="Which revision to take when several match.")
+@click.option("--pdos", is_flag=True, help="Show the PDOs and their entries.")
+@click.option("--objects", is_flag=True, help="Show the object dictionary.")
+@click.option("--sm", is_flag=True, help="Show sync managers and FMMUs.")
+@click.option("--dc", is_flag=True, help="Show distributed-clock op modes.")
+@click.option("--init-cmds", "init_cmds", is_flag=True, help="Show mailbox init commands.")
+@json_option
+def show_cmd(file: str, selector: str | None, policy: str, pdos: bool, objects: bool, sm: bool, dc: bool,
+             init_cmds: bool, as_json: bool) -> None:
+    """Show one device of FILE: identity and summary, or the chosen tables."""
+    from ecattool.esi import load, select
+
+    doc = load(file)
+    dev = select(doc, selector, policy)
+    index = doc.devices.index(dev)
+    any_section = pdos or objects or sm or dc or init_cmds
+    if as_json:
+        data: dict[str, Any] = device_summary(dev, index)
+        data.update({"physics": dev.physics, "profile_no": dev.profile_no, "group_name": dev.group_name,
+                     "url": dev.url, "ebus_current_ma": dev.ebus_current_ma, "source": dev.source})
+        if pdos or not any_section:
+            data["pdos"] = [_pdo_json(p) for p in (*dev.rx_pdos, *dev.tx_pdos)]
+            data["module_pdos"] = [{"type": m.type_name, "ident": m.ident, "name": m.name,
+                                    "pdos": [_pdo_json(p) for p in (*m.rx_pdos, *m.tx_pdos)]} for m in dev.modules]
+            data["slots"] = [{"name": s.name, "min_instances": s.min_instances, "max_instances": s.max_instances,
+                              "module_idents": s.module_idents, "default_module": s.default_module} for s in dev.slots]
+        if objects:
+            data["objects"] = _objects_json(dev.dictionary)
+        if sm or not any_section:
+            data["sync_managers"] = _sm_json(dev)
+        if dc:
+            data["dc_opmodes"] = _dc_json(dev)
+        if init_cmds:
+            data["init_cmds"] = _init_json(dev)
+        print_json(data)
+        return
+    con = console()
+    con.print(f"{dev.type_name}  {dev.name}")
+    con.print(f"  {dev.identity}   group {dev.group_type or '-'}   profile {dev.profile_no or '-'}")
+    proto = ",".join(dev.mailbox.protocols) if dev.mailbox else "none"
+    con.print(f"  mailbox {proto}   RxPDOs {len(dev.rx_pdos)}   TxPDOs {len(dev.tx_pdos)}   objects {len(dev.dictionary)}"
+              f"   DC op modes {len(dev.dc_opmodes)}   slots {len(dev.slots)}   modules {len(dev.modules)}")
+    if dev.location:
+        con.print(f"  defined at {dev.location}")
+    if not any_section:
+        _render_sm(con, dev)
+        _render_pdos(con, dev)
+        return
+    if sm:
+        _render_sm(con, dev)
+    if pdos:
+        _render_pdos(con, dev)
+    if objects:
+        _render_objects(con, dev)
+    if dc:
+        _render_dc(con, dev)
+    if init_cmds:
+        _render_init(con, dev)
+
+
+# --------------------------------------------------------------------------------------------
+# validate
+# --------------------------------------------------------------------------------------------
+@esi.command("validate", epilog="""\b
+Examples:
+  ecattool esi validate samples/esi/etg2001_cia402.xml
+  ecattool esi validate drive.xml --schema-dir ETG/EtherCATInfo_v1.17 --json
+
+\b
+ecattool does not ship ETG's schema files; point --schema-dir at a directory with EtherCATInfo.xsd
+(EtherCATModule.xsd / EtherCATDict.xsd for those roots) and EtherCATBase.xsd. Exit status 1 on errors.""")
+@_FILE
+@click.option("--schema-dir", type=click.Path(file_okay=False, exists=True),
+              help="Directory with the ETG XSD files (chosen by the root element).")
+@click.option("--strict", is_flag=True, help="Fail on warnings too.")
+@json_option
+def validate_cmd(file: str, schema_dir: str | None, strict: bool, as_json: bool) -> None:
+    """Validate FILE against the ETG schemas (optional) and ecattool's structural checks."""
+    from ecattool.esi import validate
+    from ecattool.findings import has_errors
+
+    findings = validate(file, schema_dir)
+    failed = has_errors(findings, strict)
+    if as_json:
+        print_json({"file": file, "schema_dir": schema_dir, "ok": not failed,
+                    "findings": [f.to_json() for f in findings]})
+    else:
+        for f in findings:
+            click.echo(str(f))
+        n_err = sum(1 for f in findings if f.severity.value == "error")
+        n_warn = sum(1 for f in findings if f.severity.value == "warning")
+        checked = "schema and structure" if schema_dir else "structure (no --schema-dir: XSD not checked)"
+        click.echo(f"{file}: {checked}: {n_err} error(s), {n_warn} warning(s)")
+    if failed:
+        raise click.exceptions.Exit(1)
