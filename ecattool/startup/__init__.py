@@ -1,5 +1,15 @@
-"""Startup lists: the model, and exporters/importers for the masters people use."""
+"""Startup lists: the model, and exporters/importers for the masters people use.
 
+>>> from ecattool.startup import StartupCommand, StartupList, export
+>>> sl = StartupList([StartupCommand("PS", 0x1C12, 0, b"\\x00", comment="clear sm pdos")])
+>>> print(export(sl, "twincat"), end="")
+<PS>,CoE,0x1C12:00,0x00 (0),clear sm pdos
+"""
+
+from ecattool.startup.api import as_configs, detect_format, export, import_bytes, import_file
+from ecattool.startup.config import SlaveConfig, SoeCommand
+from ecattool.startup.formats import FORMATS, Format
 from ecattool.startup.model import TRANSITIONS, StartupCommand, StartupList
 
-__all__ = ["TRANSITIONS", "StartupCommand", "StartupList"]
+__all__ = ["FORMATS", "Format", "SlaveConfig", "SoeCommand", "StartupCommand", "StartupList", "TRANSITIONS",
+           "as_configs", "detect_format", "export", "import_bytes", "import_file"]

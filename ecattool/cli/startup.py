@@ -1,0 +1,117 @@
+"""``ecattool startup``: export, import and convert startup lists between master formats."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import click
+
+from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+
+_FORMAT_NAMES = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv", "lcec")
+
+
+def _format_help() -> str:
+    from ecattool.startup import FORMATS
+
+    return "; ".join(f"{n}: {'read/write' if f.can_export and f.can_import else 'write' if f.can_export else 'read'}"
+                     for n, f in FORMATS.items())
+
+
+@click.group("startup", epilog="""\b
+Examples:
+  ecattool startup import ros2_technosoft_ipos3604.yaml
+  ecattool startup export --from drive.json --format igh -o drive_config.c
+  ecattool startup convert ecmciPOSXXXX.cmd --format eni -o ipos.eni.xml""")
+def startup() -> None:
+    """Export and import startup lists (SDO init commands) for EtherCAT masters.
+
+    Formats: ENI InitCmds, TwinCAT startup lines, IgH C, pysoem, ethercat_driver_ros2 YAML, ecmc scripts,
+    JSON and CSV; LinuxCNC lcec configurations can be read.
+    """
+
+
+def _read(path: str, fmt: str | None) -> list[Any]:
+    from ecattool.startup import import_file
+
+    return import_file(path, fmt)
+
+
+def _write(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, ...]) -> None:
+    from ecattool.startup import export
+
+    write_output(output, export(configs, fmt), inputs)
+
+
+@startup.command("export", epilog="""\b
+Examples:
+  ecattool startup export --from drive.json --format twincat
+  ecattool startup export --from ecmciPOSXXXX.cmd --format igh -o ipos.c
+  ecattool startup export --from test_eni.xml --format pysoem -o startup_pysoem.py""")
+@click.option("--from", "source", required=True, type=click.Path(exists=True, dir_okay=False),
+              help="Startup configuration to read (ecattool JSON or any importable format, detected from content).")
+@click.option("--from-format", type=click.Choice(_FORMAT_NAMES), help="Format of --from (default: detect).")
+@click.option("--format", "fmt", required=True, type=click.Choice(_FORMAT_NAMES[:-1]), help="Format to write.")
+@output_option()
+def export_cmd(source: str, from_format: str | None, fmt: str, output: str | None) -> None:
+    """Write the startup list of FILE in another master's format (stdout unless -o)."""
+    _write(_read(source, from_format), fmt, output, (source,))
+
+
+@startup.command("convert", epilog="""\b
+Examples:
+  ecattool startup convert ros2_elmo_gold.yaml --format eni -o elmo.eni.xml
+  ecattool startup convert AX5206-AM8032-async.xml --format json -o ax5206.json""")
+@click.argument("input_file", type=click.Path(exists=True, dir_okay=False))
+@click.option("--format", "fmt", required=True, type=click.Choice(_FORMAT_NAMES[:-1]), help="Format to write.")
+@click.option("--from-format", type=click.Choice(_FORMAT_NAMES), help="Format of INPUT_FILE (default: detect).")
+@output_option(required=True)
+def convert_cmd(input_file: str, fmt: str, from_format: str | None, output: str) -> None:
+    """Convert INPUT_FILE into another startup format, written to -o OUT."""
+    _write(_read(input_file, from_format), fmt, output, (input_file,))
+
+
+@startup.command("import", epilog="""\b
+Examples:
+  ecattool startup import ros2_technosoft_ipos3604.yaml
+  ecattool startup import test_eni.xml --json""")
+@click.argument("input_file", type=click.Path(exists=True, dir_okay=False))
+@click.option("--from-format", type=click.Choice(_FORMAT_NAMES), help="Format of INPUT_FILE (default: detect).")
+@json_option
+def import_cmd(input_file: str, from_format: str | None, as_json: bool) -> None:
+    """Read a startup configuration and show what was read: slaves, commands, PDOs, notes."""
+    from ecattool.startup import detect_format
+    from ecattool.startup.formats.jsonfmt import slave_to_json
+
+    configs = _read(input_file, from_format)
+    if as_json:
+        from ecattool.fileio import read_bytes
+
+        fmt = from_format or detect_format(read_bytes(input_file), input_file)
+        print_json({"file": input_file, "format": fmt, "slaves": [
+            {**slave_to_json(c), "commands": [{**d, "source": str(cmd.source) if cmd.source else None}
+                                              for d, cmd in zip(slave_to_json(c)["commands"], c.commands)]}
+            for c in configs]})
+        return
+    out = console()
+    for c in configs:
+        ident = f"  {c.identity}" if c.identity else ""
+        pos = f" at position {c.position}" if c.position is not None else ""
+        out.print(f"[bold]{c.label}[/bold]{pos}{ident}")
+        if c.dc_assign_activate:
+            out.print(f"  DC assign activate 0x{c.dc_assign_activate:04X}"
+                      + (f", cycle {c.dc_cycle_ns} ns" if c.dc_cycle_ns else ""))
+        if c.commands:
+            t = table(f"{len(c.commands)} startup command(s)", ["line", "tr", "object", "data", "CA", "comment"])
+            for cmd in c.commands:
+                t.add_row(str(cmd.source.line if cmd.source and cmd.source.line else ""), cmd.transition,
+                          cmd.address, cmd.data.hex(), "CA" if cmd.complete_access else "", cmd.comment)
+            out.print(t)
+        for direction, pdos in (("RxPDO", c.rx_pdos), ("TxPDO", c.tx_pdos)):
+            for p in pdos:
+                entries = ", ".join(f"{e.index:04X}:{e.subindex:02X}/{e.bit_len}" for e in p.entries)
+                out.print(f"  {direction} 0x{p.index:04X} ({p.bit_size} bits): {entries}")
+        if c.soe_commands:
+            out.print(f"  {len(c.soe_commands)} SoE init command(s) (kept; shown with --json)")
+        for n in c.notes:
+            out.print(f"  {n}", markup=False)

@@ -1,0 +1,92 @@
+"""The public entry points: :func:`export`, :func:`import_file`, :func:`import_bytes`, :func:`detect_format`."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from ecattool.errors import InputError, Location
+from ecattool.startup.config import SlaveConfig
+from ecattool.startup.formats import FORMATS, Format
+from ecattool.startup.model import StartupList
+
+
+def _format(fmt: str, direction: str) -> Format:
+    f = FORMATS.get(fmt.strip().lower())
+    if f is None:
+        raise InputError(f"unknown startup format {fmt!r} (one of {', '.join(FORMATS)})")
+    if direction == "export" and not f.can_export:
+        raise InputError(f"format {f.name!r} can only be read, not written "
+                         f"(writable: {', '.join(n for n, x in FORMATS.items() if x.can_export)})")
+    if direction == "import" and not f.can_import:
+        raise InputError(f"format {f.name!r} can only be written, not read "
+                         f"(readable: {', '.join(n for n, x in FORMATS.items() if x.can_import)})")
+    return f
+
+
+def as_configs(config_or_list: SlaveConfig | StartupList | Sequence[SlaveConfig | StartupList]) -> list[SlaveConfig]:
+    if isinstance(config_or_list, SlaveConfig):
+        return [config_or_list]
+    if isinstance(config_or_list, StartupList):
+        return [SlaveConfig.from_list(config_or_list)]
+    return [c if isinstance(c, SlaveConfig) else SlaveConfig.from_list(c) for c in config_or_list]
+
+
+def export(config_or_list: SlaveConfig | StartupList | Sequence[SlaveConfig | StartupList], fmt: str) -> str:
+    """Write slave configurations (or a bare startup list) in format ``fmt`` (see :data:`FORMATS`)."""
+    return str(_format(fmt, "export").module.export(as_configs(config_or_list)))
+
+
+_HWDEVMGR_KEYS = ("param_values", "sync_manager", "test_category")
+
+
+def _yaml_format(data: bytes, source: str) -> str:
+    from ecattool.project.yamlloc import load_yaml
+    from ecattool.startup.formats import ros2
+
+    doc = load_yaml(data.decode("utf-8-sig", errors="replace"), source)
+    top = doc.data
+    if isinstance(top, list) and top and all(isinstance(x, dict) for x in top) and \
+            any(k in top[0] for k in _HWDEVMGR_KEYS):
+        raise InputError(
+            "this is a hw_device_mgr device configuration: its PDO entries and param_values carry no data types "
+            "or sizes, and its values are lists per test drive, so it cannot become startup commands without the "
+            "drives' ESI files; describe the drives in an ecattool project instead", doc.locate((0,)))
+    if ros2.detect_yaml(top):
+        return "ros2"
+    raise InputError("YAML file is not an ethercat_driver_ros2 slave configuration (no vendor_id/product_id/"
+                     "rpdo/tpdo/sdo keys)", doc.locate(()))
+
+
+def detect_format(data: bytes, source: str = "<input>") -> str:
+    """The format of ``data``, from its content (never from the file name alone)."""
+    head = data[:4096].lstrip(b"\xef\xbb\xbf").lstrip()
+    if head.startswith(b"<"):
+        for name in ("eni", "lcec"):
+            if FORMATS[name].module.detect(data):
+                return name
+        if FORMATS["twincat"].module.detect(data):
+            return "twincat"
+        raise InputError("XML file is neither an ENI (<EtherCATConfig>), a TwinCAT <EtherCATMailbox> export nor "
+                         "an lcec <masters> configuration", Location(source, 1))
+    for name in ("json", "csv", "twincat", "ecmc"):
+        if FORMATS[name].module.detect(data):
+            return name
+    if head.startswith(b"{") or head.startswith(b"["):
+        raise InputError("JSON file is not an ecattool startup file (\"format\": \"ecattool-startup\")",
+                         Location(source, 1))
+    return _yaml_format(data, source)
+
+
+def import_bytes(data: bytes, source: str = "<input>", fmt: str | None = None) -> list[SlaveConfig]:
+    name = fmt or detect_format(data, source)
+    if name == "ros2":
+        _yaml_format(data, source)  # refuses hw_device_mgr files with a clear message
+    return list(_format(name, "import").module.load(data, source))
+
+
+def import_file(path: str | Path, fmt: str | None = None) -> list[SlaveConfig]:
+    """Read a startup configuration file; the format is detected from the content unless ``fmt`` is given."""
+    from ecattool.fileio import read_bytes
+
+    return import_bytes(read_bytes(path), str(path), fmt)

@@ -1,0 +1,96 @@
+"""Small helpers the format modules share: hex data, comments, type names by size, C/Python names."""
+
+from __future__ import annotations
+
+import re
+
+from ecattool.errors import InputError, Location
+from ecattool.od import types as dt
+from ecattool.startup.config import SlaveConfig
+from ecattool.startup.model import TRANSITIONS, StartupCommand
+
+#: unsigned type names by byte size, for commands that carry no type
+_UNSIGNED_BY_SIZE = {1: "USINT", 2: "UINT", 4: "UDINT", 8: "ULINT"}
+
+
+def unsigned_type(size: int) -> str | None:
+    return _UNSIGNED_BY_SIZE.get(size)
+
+
+def hex_bytes(data: bytes) -> str:
+    """``b'\\x01\\x16'`` → ``0116`` (ENI ``Data`` style: little-endian bytes in order, lower case)."""
+    return data.hex()
+
+
+def parse_hex(text: str, location: Location | None, what: str = "data") -> bytes:
+    """Hex bytes as written by TwinCAT/lcec/ecattool: ``0116``, ``01 16``, ``0x01 0x16``."""
+    s = re.sub(r"0x", "", (text or "").strip(), flags=re.IGNORECASE).replace(" ", "").replace(",", "")
+    try:
+        return bytes.fromhex(s)
+    except ValueError:
+        raise InputError(f"{what} {text!r} is not hex bytes (write e.g. 0116 or '01 16')", location) from None
+
+
+def one_line(text: str) -> str:
+    """Comments in line-based formats: no line breaks, trimmed."""
+    return " ".join((text or "").split())
+
+
+def check_transition(text: str, location: Location | None) -> str:
+    t = (text or "").strip().upper()
+    if t not in TRANSITIONS:
+        raise InputError(f"unknown transition {text!r} (expected one of {', '.join(TRANSITIONS)})", location)
+    return t
+
+
+def int_in_range(value: int, bits: int, location: Location | None, what: str) -> int:
+    if not 0 <= value < (1 << bits):
+        raise InputError(f"{what} {value} is out of range (0..0x{(1 << bits) - 1:X})", location)
+    return value
+
+
+def encode_sized(value: int, size: int, location: Location | None, what: str = "value") -> bytes:
+    """An integer written with an explicit byte size (ecmc, TwinCAT): negative values in two's complement."""
+    if size <= 0 or size > 8:
+        raise InputError(f"byte size {size} is not 1..8", location)
+    if -(1 << (8 * size - 1)) <= value < 0:
+        value += 1 << (8 * size)
+    if not 0 <= value < (1 << (8 * size)):
+        raise InputError(f"{what} {value} does not fit in {size} byte(s)", location)
+    return value.to_bytes(size, "little")
+
+
+def identifier(text: str, default: str = "slave") -> str:
+    """A C/Python identifier made from a slave name."""
+    s = re.sub(r"[^0-9A-Za-z_]+", "_", text or "").strip("_").lower()
+    if not s:
+        s = default
+    if s[0].isdigit():
+        s = f"{default}_{s}"
+    return s
+
+
+def unique_identifiers(configs: list[SlaveConfig]) -> list[str]:
+    seen: dict[str, int] = {}
+    out = []
+    for i, c in enumerate(configs):
+        base = identifier(c.name or (f"slave{c.position}" if c.position is not None else f"slave{i}"))
+        n = seen.get(base, 0)
+        seen[base] = n + 1
+        out.append(base if n == 0 else f"{base}_{n + 1}")
+    return out
+
+
+def typed_value(cmd: StartupCommand) -> object:
+    """The command's value decoded through its type when it has one, else its unsigned integer."""
+    t = dt.lookup(cmd.type_name) if cmd.type_name else None
+    if t is not None and t.bits is not None and t.is_numeric and (t.bits + 7) // 8 == len(cmd.data):
+        try:
+            return t.decode(cmd.data)
+        except InputError:
+            pass
+    return cmd.int_value
+
+
+def source_of(cmd: StartupCommand) -> str:
+    return f" ({cmd.source})" if cmd.source else ""

@@ -1,0 +1,78 @@
+"""CSV: one startup command per row, for spreadsheets and reviews.
+
+Columns: ``slave, position, transition, index, subindex, data, complete_access, timeout_ms, type, value,
+comment``. Index and sub-index as hex (``0x1C12``, ``0x00``), data as little-endian hex bytes, value as JSON
+(so ``-3``, ``2.5`` and ``"FOESW_x"`` come back as they were). Identity, PDO information and SoE commands
+are not part of the CSV form (use JSON or ENI for those).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+from ecattool.errors import InputError, Location
+from ecattool.od.numbers import parse_int
+from ecattool.startup.config import SlaveConfig
+from ecattool.startup.formats._common import check_transition, parse_hex
+from ecattool.startup.model import StartupCommand, StartupList
+
+NAME = "csv"
+EXTENSIONS = (".csv",)
+DESCRIPTION = "CSV, one command per row (slave, position, transition, index, subindex, data, …)"
+COLUMNS = ("slave", "position", "transition", "index", "subindex", "data", "complete_access", "timeout_ms", "type",
+           "value", "comment")
+
+
+def export(configs: list[SlaveConfig]) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(COLUMNS)
+    for c in configs:
+        for cmd in c.commands:
+            value = "" if cmd.value is None else json.dumps(cmd.value if isinstance(cmd.value, (int, float, str, bool))
+                                                            else str(cmd.value))
+            w.writerow([c.name, "" if c.position is None else c.position, cmd.transition, f"0x{cmd.index:04X}",
+                        f"0x{cmd.subindex:02X}", cmd.data.hex(), "1" if cmd.complete_access else "0", cmd.timeout_ms,
+                        cmd.type_name or "", value, cmd.comment])
+    return buf.getvalue()
+
+
+def load(data: bytes, source: str) -> list[SlaveConfig]:
+    text = data.decode("utf-8-sig")
+    reader = csv.reader(io.StringIO(text))
+    header = next(reader, None)
+    if header is None or [h.strip().lower() for h in header[:len(COLUMNS)]] != list(COLUMNS):
+        raise InputError(f"CSV header must be: {','.join(COLUMNS)}", Location(source, 1))
+    slaves: dict[tuple[str, str], SlaveConfig] = {}
+    for row in reader:
+        loc = Location(source, reader.line_num)
+        if not any(cell.strip() for cell in row):
+            continue
+        if len(row) < len(COLUMNS):
+            raise InputError(f"row has {len(row)} columns, expected {len(COLUMNS)}", loc)
+        rec = dict(zip(COLUMNS, row))
+        key = (rec["slave"], rec["position"].strip())
+        cfg = slaves.get(key)
+        if cfg is None:
+            pos = parse_int(key[1], loc, "position") if key[1] else None
+            cfg = SlaveConfig(startup=StartupList(name=rec["slave"]), name=rec["slave"], position=pos, source=loc)
+            slaves[key] = cfg
+        value = None
+        if rec["value"].strip():
+            try:
+                value = json.loads(rec["value"])
+            except json.JSONDecodeError:
+                value = rec["value"]
+        cfg.startup.commands.append(StartupCommand(
+            check_transition(rec["transition"], loc), parse_int(rec["index"], loc, "index"),
+            parse_int(rec["subindex"], loc, "subindex"), parse_hex(rec["data"], loc),
+            comment=rec["comment"], complete_access=rec["complete_access"].strip().lower() in ("1", "true", "yes"),
+            timeout_ms=parse_int(rec["timeout_ms"] or "0", loc, "timeout_ms"), type_name=rec["type"] or None,
+            value=value, source=loc))
+    return list(slaves.values())
+
+
+def detect(data: bytes) -> bool:
+    return data.lstrip(b"\xef\xbb\xbf").lower().startswith(b"slave,position,transition")

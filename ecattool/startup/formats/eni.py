@@ -1,0 +1,355 @@
+"""ENI (EtherCAT Network Information, ETG.2100) slave init commands, and TwinCAT's ``EtherCATMailbox`` export.
+
+Writing: ``EtherCATConfig/Config/Slave`` per slave with ``Info`` (identity and addresses), ``ProcessData``
+(when PDO information is given), ``Mailbox`` with ``CoE/InitCmds/InitCmd`` (and ``SoE/InitCmds`` for SoE
+commands), an ECAT ``InitCmds`` entry that sets the DC activation register, and ``DC``. CoE InitCmds carry
+``Ccs`` 1 for downloads as TwinCAT writes it, Index and SubIndex in decimal, Data as little-endian hex.
+
+Reading: ENI files and TwinCAT-exported ``EtherCATMailbox`` files (``<EtherCATMailbox><CoE|SoE><InitCmds>``).
+A CoE InitCmd with data is a download whatever its Ccs says (SOEM 2.0 writes Ccs 2 for writes); a
+disagreement is reported as a note. InitCmds without data (uploads) are reported and skipped. An InitCmd
+with several Transition elements becomes one command per transition.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from lxml import etree
+
+from ecattool.errors import InputError, Location
+from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
+from ecattool.findings import Severity
+from ecattool.od.numbers import parse_int
+from ecattool.startup.config import SlaveConfig, SoeCommand
+from ecattool.startup.formats._common import check_transition, parse_hex, unsigned_type
+from ecattool.startup.model import StartupCommand, StartupList
+
+NAME = "eni"
+EXTENSIONS = (".xml",)
+DESCRIPTION = "ENI EtherCATConfig slave Mailbox/CoE/InitCmds (reads TwinCAT EtherCATMailbox exports too)"
+
+#: element order written for each part (ETG.2100 sequence order, as TwinCAT writes it)
+SLAVE_ORDER = ("Info", "ProcessData", "Mailbox", "InitCmds", "DC")
+INFO_ORDER = ("Name", "PhysAddr", "AutoIncAddr", "VendorId", "ProductCode", "RevisionNo", "SerialNo")
+MAILBOX_ORDER = ("Send", "Recv", "Protocol", "CoE", "SoE")
+COE_INITCMD_ORDER = ("Transition", "Comment", "Timeout", "Ccs", "Index", "SubIndex", "Data")
+SOE_INITCMD_ORDER = ("Transition", "Comment", "Timeout", "OpCode", "DriveNo", "IDN", "Elements", "Attribute", "Data")
+ECAT_INITCMD_ORDER = ("Transition", "Comment", "Requires", "Cmd", "Adp", "Ado", "Data", "Retries")
+PDO_ORDER = ("Index", "Name", "Entry")
+ENTRY_ORDER = ("Index", "SubIndex", "BitLen", "Name", "DataType")
+
+#: ESC register of the DC cyclic unit activation (AssignActivate)
+DC_ACTIVATION_REGISTER = 0x0980
+_FPWR = 5  # configured-address physical write
+_FIRST_PHYS_ADDR = 1001
+
+
+def _sub(parent: Any, tag: str, text: object | None = None, cdata: bool = False) -> Any:
+    el = etree.SubElement(parent, tag)
+    if text is not None:
+        el.text = etree.CDATA(str(text)) if cdata else str(text)
+    return el
+
+
+def _pdo_element(parent: Any, tag: str, pdo: Pdo, sm: int) -> None:
+    el = _sub(parent, tag)
+    el.set("Sm", str(sm))
+    _sub(el, "Index", f"#x{pdo.index:04x}")
+    _sub(el, "Name", pdo.name or f"0x{pdo.index:04X}", cdata=True)
+    for e in pdo.entries:
+        en = _sub(el, "Entry")
+        _sub(en, "Index", f"#x{e.index:04x}")
+        if e.index:
+            _sub(en, "SubIndex", e.subindex)
+        _sub(en, "BitLen", e.bit_len)
+        if e.index:
+            if e.name:
+                _sub(en, "Name", e.name, cdata=True)
+            if e.data_type:
+                _sub(en, "DataType", e.data_type)
+
+
+def _process_data(slave: Any, c: SlaveConfig) -> None:
+    pd = _sub(slave, "ProcessData")
+    sms = {s.number: s for s in c.sync_managers}
+    for number, direction, pdos in ((2, Direction.RX, c.rx_pdos), (3, Direction.TX, c.tx_pdos)):
+        if not pdos:
+            continue
+        sm = _sub(pd, f"Sm{number}")
+        _sub(sm, "Type", direction.sm_kind)
+        known = sms.get(number)
+        if known is not None and known.start_address:
+            _sub(sm, "StartAddress", known.start_address)
+            _sub(sm, "ControlByte", known.control_byte)
+        _sub(sm, "Enable", 1)
+        for p in pdos:
+            _sub(sm, "Pdo", p.index)
+    for p in c.tx_pdos:
+        _pdo_element(pd, "TxPdo", p, 3)
+    for p in c.rx_pdos:
+        _pdo_element(pd, "RxPdo", p, 2)
+
+
+def _mailbox(slave: Any, c: SlaveConfig) -> None:
+    mb = _sub(slave, "Mailbox")
+    for kind, tag in (("MBoxOut", "Send"), ("MBoxIn", "Recv")):
+        sm = next((s for s in c.sync_managers if s.kind == kind), None)
+        if sm is not None and sm.start_address and sm.default_size:
+            box = _sub(mb, tag)
+            _sub(box, "Start", sm.start_address)
+            _sub(box, "Length", sm.default_size)
+    _sub(mb, "Protocol", "CoE")
+    if c.soe_commands:
+        _sub(mb, "Protocol", "SoE")
+    cmds = _sub(_sub(mb, "CoE"), "InitCmds")
+    for cmd in c.commands:
+        ic = _sub(cmds, "InitCmd")
+        if cmd.complete_access:
+            ic.set("CompleteAccess", "true")
+        _sub(ic, "Transition", cmd.transition)
+        _sub(ic, "Comment", cmd.comment, cdata=True)
+        _sub(ic, "Timeout", cmd.timeout_ms)
+        _sub(ic, "Ccs", 1)
+        _sub(ic, "Index", cmd.index)
+        _sub(ic, "SubIndex", cmd.subindex)
+        _sub(ic, "Data", cmd.data.hex())
+    if c.soe_commands:
+        soe = _sub(_sub(mb, "SoE"), "InitCmds")
+        for s in c.soe_commands:
+            ic = _sub(soe, "InitCmd")
+            if s.fixed:
+                ic.set("Fixed", "1")
+            _sub(ic, "Transition", s.transition)
+            _sub(ic, "Comment", s.comment, cdata=True)
+            for tag, value in (("Timeout", s.timeout_ms), ("OpCode", s.op_code), ("DriveNo", s.drive_no),
+                               ("IDN", s.idn), ("Elements", s.elements), ("Attribute", s.attribute)):
+                _sub(ic, tag, value)
+            _sub(ic, "Data", s.data.hex())
+
+
+def _dc(slave: Any, c: SlaveConfig, phys_addr: int) -> None:
+    if c.dc_assign_activate:
+        cmds = _sub(slave, "InitCmds")
+        for transition, value, comment in (("PS", c.dc_assign_activate, "set DC activation"),
+                                           ("IP", 0, "clear DC activation")):
+            ic = _sub(cmds, "InitCmd")
+            _sub(ic, "Transition", transition)
+            _sub(ic, "Comment", comment, cdata=True)
+            _sub(ic, "Requires", "cycle")
+            _sub(ic, "Cmd", _FPWR)
+            _sub(ic, "Adp", phys_addr)
+            _sub(ic, "Ado", DC_ACTIVATION_REGISTER)
+            _sub(ic, "Data", value.to_bytes(2, "little").hex())
+            _sub(ic, "Retries", 3)
+    if c.dc_assign_activate or c.dc_cycle_ns:
+        dc = _sub(slave, "DC")
+        _sub(dc, "CycleTime0", c.dc_cycle_ns or 0)
+        _sub(dc, "ShiftTime", c.dc_shift_ns or 0)
+
+
+def export(configs: list[SlaveConfig]) -> str:
+    root = etree.Element("EtherCATConfig", Version="1.3")
+    config = _sub(root, "Config")
+    for i, c in enumerate(configs):
+        pos = c.position if c.position is not None else i
+        phys = _FIRST_PHYS_ADDR + pos
+        slave = _sub(config, "Slave")
+        info = _sub(slave, "Info")
+        _sub(info, "Name", c.name or f"Slave {pos}", cdata=True)
+        _sub(info, "PhysAddr", phys)
+        _sub(info, "AutoIncAddr", (-pos) & 0xFFFF)
+        ident = c.identity
+        if ident is not None:
+            _sub(info, "VendorId", ident.vendor_id)
+            _sub(info, "ProductCode", ident.product_code)
+            _sub(info, "RevisionNo", ident.revision)
+            _sub(info, "SerialNo", ident.serial)
+        if c.has_pdo_info:
+            _process_data(slave, c)
+        _mailbox(slave, c)
+        _dc(slave, c, phys)
+    body = etree.tostring(root, pretty_print=True, encoding="unicode")
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + body
+
+
+# --- reading -----------------------------------------------------------------------------------------
+
+def _loc(source: str, el: Any) -> Location:
+    return Location(source, el.sourceline)
+
+
+def _text(el: Any, tag: str) -> str | None:
+    child = el.find(tag)
+    if child is None or child.text is None:
+        return None
+    return child.text.strip()
+
+
+def _int(el: Any, tag: str, source: str, default: int | None = None) -> int | None:
+    t = _text(el, tag)
+    if t is None or t == "":
+        return default
+    child = el.find(tag)
+    return parse_int(t, _loc(source, child), tag)
+
+
+def _bool_attr(el: Any, name: str) -> bool:
+    return (el.get(name) or "").strip().lower() in ("1", "true")
+
+
+def _coe_initcmds(parent: Any, cfg: SlaveConfig, source: str) -> None:
+    for ic in parent.findall("InitCmds/InitCmd"):
+        loc = _loc(source, ic)
+        if (_text(ic, "Disabled") or "").lower() in ("1", "true"):
+            cfg.note("startup.eni.disabled", "disabled InitCmd skipped", loc, Severity.INFO)
+            continue
+        index = _int(ic, "Index", source)
+        sub = _int(ic, "SubIndex", source, 0)
+        if index is None:
+            raise InputError("CoE InitCmd without Index", loc)
+        raw = _text(ic, "Data")
+        ccs = _int(ic, "Ccs", source)
+        if not raw:
+            cfg.note("startup.eni.upload", f"InitCmd 0x{index:04X}:{sub:02X} carries no data (an upload/check, "
+                     f"Ccs {ccs}); not a startup write, skipped", loc)
+            continue
+        if ccs not in (None, 1):
+            cfg.note("startup.eni.ccs", f"InitCmd 0x{index:04X}:{sub:02X} has Ccs {ccs} but carries data; read as "
+                     "a download (TwinCAT and ETG samples use Ccs 1, SOEM 2.0 uses 2)", loc, Severity.INFO)
+        data = parse_hex(raw, loc)
+        transitions = [check_transition(t.text or "", _loc(source, t)) for t in ic.findall("Transition")]
+        if not transitions:
+            raise InputError("InitCmd without Transition", loc)
+        for t in transitions:
+            cfg.startup.commands.append(StartupCommand(
+                t, int(index), int(sub or 0), data, comment=(_text(ic, "Comment") or ""),
+                complete_access=_bool_attr(ic, "CompleteAccess"), timeout_ms=_int(ic, "Timeout", source, 0) or 0,
+                type_name=unsigned_type(len(data)), value=int.from_bytes(data, "little"), source=loc))
+
+
+def _soe_initcmds(parent: Any, cfg: SlaveConfig, source: str) -> None:
+    found = parent.findall("InitCmds/InitCmd")
+    for ic in found:
+        loc = _loc(source, ic)
+        idn = _int(ic, "IDN", source)
+        if idn is None:
+            raise InputError("SoE InitCmd without IDN", loc)
+        data = parse_hex(_text(ic, "Data") or "", loc)
+        for t in ic.findall("Transition"):
+            cfg.soe_commands.append(SoeCommand(
+                check_transition(t.text or "", loc), idn, data, drive_no=_int(ic, "DriveNo", source, 0) or 0,
+                op_code=_int(ic, "OpCode", source, 3) or 0, elements=_int(ic, "Elements", source, 64) or 0,
+                attribute=_int(ic, "Attribute", source, 0) or 0, comment=_text(ic, "Comment") or "",
+                timeout_ms=_int(ic, "Timeout", source, 0) or 0, fixed=_bool_attr(ic, "Fixed"), source=loc))
+    if found:
+        cfg.note("startup.soe", f"{len(found)} SoE init command(s) kept as SoE entries; they are not CoE SDO "
+                 "downloads and only the ENI, TwinCAT, JSON and CSV formats carry them", _loc(source, parent),
+                 Severity.INFO)
+
+
+def _pdo(el: Any, direction: Direction, source: str) -> Pdo:
+    index = _int(el, "Index", source)
+    if index is None:
+        raise InputError(f"{el.tag} without Index", _loc(source, el))
+    pdo = Pdo(direction, index, name=_text(el, "Name") or "", location=_loc(source, el))
+    for e in el.findall("Entry"):
+        pdo.entries.append(PdoEntry(_int(e, "Index", source, 0) or 0, _int(e, "SubIndex", source, 0) or 0,
+                                    _int(e, "BitLen", source, 0) or 0, name=_text(e, "Name") or "",
+                                    data_type=_text(e, "DataType") or "", location=_loc(source, e)))
+    return pdo
+
+
+def _read_process_data(pd: Any, cfg: SlaveConfig, source: str) -> None:
+    defined = {Direction.RX: {}, Direction.TX: {}}  # type: dict[Direction, dict[int, Pdo]]
+    for tag, direction in (("RxPdo", Direction.RX), ("TxPdo", Direction.TX)):
+        for el in pd.findall(tag):
+            p = _pdo(el, direction, source)
+            defined[direction][p.index] = p
+    for number, direction in ((2, Direction.RX), (3, Direction.TX)):
+        sm = pd.find(f"Sm{number}")
+        target = cfg.pdos(direction)
+        if sm is None:
+            continue
+        for ref in sm.findall("Pdo"):
+            idx = parse_int((ref.text or "").strip(), _loc(source, ref), "Pdo")
+            p = defined[direction].get(idx)
+            if p is None:
+                cfg.note("startup.eni.pdo", f"Sm{number} assigns PDO 0x{idx:04X} that ProcessData does not define",
+                         _loc(source, ref))
+                p = Pdo(direction, idx)
+            target.append(p)
+
+
+def _read_slave(slave: Any, source: str, i: int) -> SlaveConfig:
+    info = slave.find("Info")
+    cfg = SlaveConfig(startup=StartupList(), source=_loc(source, slave))
+    if info is not None:
+        cfg.name = _text(info, "Name") or ""
+        vendor, product = _int(info, "VendorId", source), _int(info, "ProductCode", source)
+        if vendor is not None and product is not None:
+            cfg.identity = Identity(vendor, product, _int(info, "RevisionNo", source, 0) or 0,
+                                    _int(info, "SerialNo", source, 0) or 0)
+        auto = _int(info, "AutoIncAddr", source)
+        cfg.position = ((-auto) & 0xFFFF) if auto is not None else i
+        phys = _int(info, "PhysAddr", source)
+        if phys is not None:
+            cfg.extra["phys_addr"] = phys
+    cfg.startup.name = cfg.name
+    if cfg.identity is not None:
+        cfg.startup.vendor_id, cfg.startup.product_code = cfg.identity.vendor_id, cfg.identity.product_code
+        cfg.startup.revision = cfg.identity.revision
+    pd = slave.find("ProcessData")
+    if pd is not None:
+        _read_process_data(pd, cfg, source)
+    mb = slave.find("Mailbox")
+    if mb is not None:
+        for child in mb.findall("CoE"):
+            _coe_initcmds(child, cfg, source)
+        for child in mb.findall("SoE"):
+            _soe_initcmds(child, cfg, source)
+    for ic in slave.findall("InitCmds/InitCmd"):
+        if _int(ic, "Ado", source) == DC_ACTIVATION_REGISTER and "PS" in [t.text for t in ic.findall("Transition")]:
+            raw = _text(ic, "Data")
+            if raw:
+                value = int.from_bytes(parse_hex(raw, _loc(source, ic)), "little")
+                if value:
+                    cfg.dc_assign_activate = value
+    dc = slave.find("DC")
+    if dc is not None:
+        cfg.dc_cycle_ns = _int(dc, "CycleTime0", source) or None
+        cfg.dc_shift_ns = _int(dc, "ShiftTime", source)
+    return cfg
+
+
+def load_tree(tree: Any, source: str, name: str = "") -> list[SlaveConfig]:
+    root = tree.getroot()
+    if root.tag == "EtherCATMailbox":
+        cfg = SlaveConfig(startup=StartupList(name=name), name=name, source=_loc(source, root))
+        for child in root:
+            if child.tag == "CoE":
+                _coe_initcmds(child, cfg, source)
+            elif child.tag == "SoE":
+                _soe_initcmds(child, cfg, source)
+            else:
+                cfg.note("startup.eni.protocol", f"{child.tag} init commands are not supported; skipped",
+                         _loc(source, child))
+        return [cfg]
+    if root.tag != "EtherCATConfig":
+        raise InputError(f"root element is <{root.tag}>, expected <EtherCATConfig> (ENI) or <EtherCATMailbox>",
+                         _loc(source, root))
+    slaves = root.findall("Config/Slave")
+    return [_read_slave(s, source, i) for i, s in enumerate(slaves)]
+
+
+def load(data: bytes, source: str) -> list[SlaveConfig]:
+    from pathlib import Path
+
+    from ecattool.xmlsafe import parse_xml
+
+    return load_tree(parse_xml(data, source), source, Path(source).stem)
+
+
+def detect(data: bytes) -> bool:
+    head = data[:4096]
+    return b"<EtherCATConfig" in head or b"<EtherCATMailbox" in head

@@ -1,0 +1,118 @@
+"""IgH EtherCAT master (etherlab) C source: ``ecrt_slave_config_sdo*`` calls and the PDO tables.
+
+Per slave: ``ec_pdo_entry_info_t``, ``ec_pdo_info_t`` and ``ec_sync_info_t`` tables from the assigned PDOs
+(SM0/SM1 mailboxes, SM2 outputs, SM3 inputs), and a function ``int <name>_configure(ec_master_t *master)``
+that creates the slave configuration, registers the PDOs, adds every startup SDO with
+``ecrt_slave_config_sdo8/16/32`` by size (``ecrt_slave_config_sdo`` for other sizes,
+``ecrt_slave_config_complete_sdo`` for complete access) and sets DC. IgH sends all SDO configurations in
+PRE-OP before SAFE-OP; a command of another transition gets a comment saying so. Export only.
+"""
+
+from __future__ import annotations
+
+from ecattool.errors import EncodeError
+from ecattool.startup.config import SlaveConfig
+from ecattool.startup.formats._common import unique_identifiers
+from ecattool.startup.model import StartupCommand
+
+NAME = "igh"
+EXTENSIONS = (".c",)
+DESCRIPTION = "IgH EtherCAT master C (ecrt_slave_config_sdo8/16/32, ec_pdo_entry_info_t/ec_pdo_info_t/ec_sync_info_t)"
+
+_SIZED = {1: "ecrt_slave_config_sdo8", 2: "ecrt_slave_config_sdo16", 4: "ecrt_slave_config_sdo32"}
+
+
+def _c_comment(text: str) -> str:
+    t = " ".join(text.split()).replace("*/", "* /")
+    return f" /* {t} */" if t else ""
+
+
+def _c_bytes(data: bytes) -> str:
+    return ", ".join(f"0x{b:02x}" for b in data)
+
+
+def _sdo_call(ident: str, n: int, cmd: StartupCommand, body: list[str]) -> None:
+    where = f"0x{cmd.index:04X}:{cmd.subindex:02X}"
+    note = cmd.comment
+    if cmd.transition != "PS":
+        note = f"{note} (transition {cmd.transition}; IgH sends every SDO in PRE-OP)".strip()
+    if cmd.complete_access:
+        if cmd.subindex != 0:
+            raise EncodeError(f"{where}: IgH complete-access SDO configuration always starts at sub-index 0")
+        body.append(f"    static const uint8_t {ident}_sdo{n}[] = {{{_c_bytes(cmd.data)}}};")
+        call = f"ecrt_slave_config_complete_sdo(sc, 0x{cmd.index:04x}, {ident}_sdo{n}, sizeof({ident}_sdo{n}))"
+    elif len(cmd.data) in _SIZED:
+        width = 2 * len(cmd.data)
+        call = f"{_SIZED[len(cmd.data)]}(sc, 0x{cmd.index:04x}, 0x{cmd.subindex:02x}, 0x{cmd.int_value:0{width}x}U)"
+    else:
+        if not cmd.data:
+            raise EncodeError(f"{where}: an SDO download needs at least one byte")
+        body.append(f"    static const uint8_t {ident}_sdo{n}[] = {{{_c_bytes(cmd.data)}}};")
+        call = (f"ecrt_slave_config_sdo(sc, 0x{cmd.index:04x}, 0x{cmd.subindex:02x}, {ident}_sdo{n}, "
+                f"sizeof({ident}_sdo{n}))")
+    body.append(f"    if ({call}) return -1;{_c_comment(note)}")
+
+
+def _tables(ident: str, c: SlaveConfig) -> list[str]:
+    out = [f"static ec_pdo_entry_info_t {ident}_pdo_entries[] = {{"]
+    offsets: list[tuple[int, int, int, str]] = []
+    k = 0
+    for p in (*c.rx_pdos, *c.tx_pdos):
+        offsets.append((p.index, len(p.entries), k, p.name))
+        for e in p.entries:
+            out.append(f"    {{0x{e.index:04x}, 0x{e.subindex:02x}, {e.bit_len}}},{_c_comment(e.name)}")
+            k += 1
+    if k == 0:
+        out.append("    {0x0000, 0x00, 0}, /* no entries */")
+    out.append("};")
+    out.append(f"static ec_pdo_info_t {ident}_pdos[] = {{")
+    for index, count, start, name in offsets:
+        out.append(f"    {{0x{index:04x}, {count}, {ident}_pdo_entries + {start}}},{_c_comment(name)}")
+    if not offsets:
+        out.append("    {0x0000, 0, NULL},")
+    out.append("};")
+    n_rx = len(c.rx_pdos)
+    out.append(f"static ec_sync_info_t {ident}_syncs[] = {{")
+    out.append("    {0, EC_DIR_OUTPUT, 0, NULL, EC_WD_DISABLE},")
+    out.append("    {1, EC_DIR_INPUT, 0, NULL, EC_WD_DISABLE},")
+    out.append(f"    {{2, EC_DIR_OUTPUT, {n_rx}, {f'{ident}_pdos + 0' if n_rx else 'NULL'}, EC_WD_ENABLE}},")
+    n_tx = len(c.tx_pdos)
+    out.append(f"    {{3, EC_DIR_INPUT, {n_tx}, {f'{ident}_pdos + {n_rx}' if n_tx else 'NULL'}, EC_WD_DISABLE}},")
+    out.append("    {0xff}")
+    out.append("};")
+    return out
+
+
+def export(configs: list[SlaveConfig]) -> str:
+    out = ["/* IgH EtherCAT master slave configuration, written by ecattool. */", "#include <stddef.h>",
+           "#include <stdint.h>", "#include <ecrt.h>", ""]
+    for i, (ident, c) in enumerate(zip(unique_identifiers(configs), configs)):
+        pos = c.position if c.position is not None else i
+        vendor = c.identity.vendor_id if c.identity else 0
+        product = c.identity.product_code if c.identity else 0
+        out.append(f"/* {c.label}: position {pos}, vendor 0x{vendor:08x}, product 0x{product:08x} */")
+        out.append(f"#define {ident.upper()}_POS 0, {pos}")
+        out.append(f"#define {ident.upper()}_ID 0x{vendor:08x}, 0x{product:08x}")
+        if c.has_pdo_info:
+            out += _tables(ident, c)
+        out.append("")
+        out.append(f"int {ident}_configure(ec_master_t *master)")
+        out.append("{")
+        out.append(f"    ec_slave_config_t *sc = ecrt_master_slave_config(master, {ident.upper()}_POS, {ident.upper()}_ID);")
+        out.append("    if (!sc) return -1;")
+        body: list[str] = []
+        if c.has_pdo_info:
+            body.append(f"    if (ecrt_slave_config_pdos(sc, EC_END, {ident}_syncs)) return -1;")
+        for n, cmd in enumerate(c.commands):
+            _sdo_call(ident, n, cmd, body)
+        if c.dc_assign_activate:
+            body.append(f"    ecrt_slave_config_dc(sc, 0x{c.dc_assign_activate:04x}, {c.dc_cycle_ns or 0}U, "
+                        f"{c.dc_shift_ns or 0}, 0U, 0);")
+        for s in c.soe_commands:
+            body.append(f"    /* SoE IDN {s.idn} drive {s.drive_no} ({s.transition}): {s.data.hex()} -- "
+                        "use ecrt_slave_config_idn() */")
+        out += body
+        out.append("    return 0;")
+        out.append("}")
+        out.append("")
+    return "\n".join(out)

@@ -1,0 +1,196 @@
+"""ecattool's own JSON form of slave configurations: lossless for everything :class:`SlaveConfig` holds.
+
+``{"format": "ecattool-startup", "version": 1, "slaves": [...]}``; data as hex strings, numbers as numbers.
+Reading keeps the line of every command (the file is located with the YAML loader, JSON being YAML).
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from ecattool.errors import InputError, Location
+from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
+from ecattool.startup.config import SlaveConfig, SoeCommand
+from ecattool.startup.formats._common import check_transition, parse_hex
+from ecattool.startup.model import StartupCommand, StartupList
+
+NAME = "json"
+EXTENSIONS = (".json",)
+DESCRIPTION = "ecattool JSON (lossless: commands, PDOs, identity, DC, SoE)"
+FORMAT_TAG = "ecattool-startup"
+VERSION = 1
+
+
+def _value(v: Any) -> Any:
+    if v is None or isinstance(v, (bool, int, float, str)):
+        return v
+    if isinstance(v, (bytes, bytearray)):
+        return bytes(v).hex()
+    return str(v)
+
+
+def _cmd(cmd: StartupCommand) -> dict[str, Any]:
+    d: dict[str, Any] = {"transition": cmd.transition, "index": cmd.index, "subindex": cmd.subindex,
+                         "data": cmd.data.hex()}
+    if cmd.comment:
+        d["comment"] = cmd.comment
+    if cmd.complete_access:
+        d["complete_access"] = True
+    if cmd.timeout_ms:
+        d["timeout_ms"] = cmd.timeout_ms
+    if cmd.type_name:
+        d["type"] = cmd.type_name
+    if cmd.value is not None:
+        d["value"] = _value(cmd.value)
+    if not cmd.expect_reply:
+        d["expect_reply"] = False
+    if not cmd.verify:
+        d["verify"] = False
+    return d
+
+
+def _pdo(p: Pdo) -> dict[str, Any]:
+    d: dict[str, Any] = {"index": p.index, "name": p.name,
+                         "entries": [{"index": e.index, "subindex": e.subindex, "bit_len": e.bit_len,
+                                      **({"name": e.name} if e.name else {}),
+                                      **({"data_type": e.data_type} if e.data_type else {})} for e in p.entries]}
+    if p.sm is not None:
+        d["sm"] = p.sm
+    return d
+
+
+def _soe(s: SoeCommand) -> dict[str, Any]:
+    return {"transition": s.transition, "idn": s.idn, "drive_no": s.drive_no, "data": s.data.hex(),
+            "op_code": s.op_code, "elements": s.elements, "attribute": s.attribute, "comment": s.comment,
+            "timeout_ms": s.timeout_ms, "fixed": s.fixed}
+
+
+def slave_to_json(c: SlaveConfig) -> dict[str, Any]:
+    d: dict[str, Any] = {"name": c.name, "position": c.position}
+    if c.identity is not None:
+        d["identity"] = {"vendor_id": c.identity.vendor_id, "product_code": c.identity.product_code,
+                         "revision": c.identity.revision, "serial": c.identity.serial}
+    dc = {k: v for k, v in (("assign_activate", c.dc_assign_activate), ("cycle_ns", c.dc_cycle_ns),
+                            ("shift_ns", c.dc_shift_ns)) if v is not None}
+    if dc:
+        d["dc"] = dc
+    d["commands"] = [_cmd(x) for x in c.commands]
+    if c.rx_pdos:
+        d["rx_pdos"] = [_pdo(p) for p in c.rx_pdos]
+    if c.tx_pdos:
+        d["tx_pdos"] = [_pdo(p) for p in c.tx_pdos]
+    if c.soe_commands:
+        d["soe_commands"] = [_soe(s) for s in c.soe_commands]
+    if c.channel_info:
+        d["channel_info"] = [{"pdo": k[0], "entry": k[1], **v} for k, v in c.channel_info.items()]
+    if c.extra:
+        d["extra"] = c.extra
+    if c.notes:
+        d["notes"] = [f.to_json() for f in c.notes]
+    return d
+
+
+def export(configs: list[SlaveConfig]) -> str:
+    doc = {"format": FORMAT_TAG, "version": VERSION, "slaves": [slave_to_json(c) for c in configs]}
+    return json.dumps(doc, indent=2, ensure_ascii=False, default=_value) + "\n"
+
+
+# --- reading -----------------------------------------------------------------------------------------
+
+class _Doc:
+    def __init__(self, text: str, source: str) -> None:
+        self.source = source
+        self.located: Any = None
+        try:
+            from ecattool.project.yamlloc import load_yaml
+
+            self.located = load_yaml(text, source)
+        except InputError:
+            self.located = None
+
+    def loc(self, *path: str | int) -> Location:
+        return self.located.locate(path) if self.located is not None else Location(self.source)
+
+
+def _need(d: Any, key: str, loc: Location) -> Any:
+    if not isinstance(d, dict) or key not in d:
+        raise InputError(f"missing {key!r}", loc)
+    return d[key]
+
+
+def _int(v: Any, loc: Location, what: str) -> int:
+    if isinstance(v, bool) or not isinstance(v, int):
+        raise InputError(f"{what} must be an integer, got {v!r}", loc)
+    return v
+
+
+def _read_slave(s: Any, doc: _Doc, i: int) -> SlaveConfig:
+    base = ("slaves", i)
+    sloc = doc.loc(*base)
+    if not isinstance(s, dict):
+        raise InputError("a slave must be an object", sloc)
+    cfg = SlaveConfig(startup=StartupList(), name=str(s.get("name") or ""), position=s.get("position"), source=sloc)
+    ident = s.get("identity")
+    if ident:
+        iloc = doc.loc(*base, "identity")
+        cfg.identity = Identity(_int(_need(ident, "vendor_id", iloc), iloc, "vendor_id"),
+                                _int(_need(ident, "product_code", iloc), iloc, "product_code"),
+                                int(ident.get("revision", 0)), int(ident.get("serial", 0)))
+        cfg.startup.vendor_id, cfg.startup.product_code = cfg.identity.vendor_id, cfg.identity.product_code
+        cfg.startup.revision = cfg.identity.revision
+    cfg.startup.name = cfg.name
+    dc = s.get("dc") or {}
+    cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns = dc.get("assign_activate"), dc.get("cycle_ns"), dc.get("shift_ns")
+    for j, c in enumerate(s.get("commands") or []):
+        loc = doc.loc(*base, "commands", j)
+        cfg.startup.commands.append(StartupCommand(
+            check_transition(str(_need(c, "transition", loc)), loc), _int(_need(c, "index", loc), loc, "index"),
+            _int(_need(c, "subindex", loc), loc, "subindex"), parse_hex(str(_need(c, "data", loc)), loc),
+            comment=str(c.get("comment", "")), complete_access=bool(c.get("complete_access", False)),
+            timeout_ms=int(c.get("timeout_ms", 0)), type_name=c.get("type"), value=c.get("value"),
+            expect_reply=bool(c.get("expect_reply", True)), verify=bool(c.get("verify", True)), source=loc))
+    for key, direction in (("rx_pdos", Direction.RX), ("tx_pdos", Direction.TX)):
+        for j, p in enumerate(s.get(key) or []):
+            ploc = doc.loc(*base, key, j)
+            pdo = Pdo(direction, _int(_need(p, "index", ploc), ploc, "index"), name=str(p.get("name", "")),
+                      sm=p.get("sm"), location=ploc)
+            for k, e in enumerate(p.get("entries") or []):
+                eloc = doc.loc(*base, key, j, "entries", k)
+                pdo.entries.append(PdoEntry(_int(_need(e, "index", eloc), eloc, "index"),
+                                            _int(e.get("subindex", 0), eloc, "subindex"),
+                                            _int(_need(e, "bit_len", eloc), eloc, "bit_len"),
+                                            name=str(e.get("name", "")), data_type=str(e.get("data_type", "")),
+                                            location=eloc))
+            cfg.pdos(direction).append(pdo)
+    for j, x in enumerate(s.get("soe_commands") or []):
+        loc = doc.loc(*base, "soe_commands", j)
+        cfg.soe_commands.append(SoeCommand(
+            check_transition(str(_need(x, "transition", loc)), loc), _int(_need(x, "idn", loc), loc, "idn"),
+            parse_hex(str(x.get("data", "")), loc), drive_no=int(x.get("drive_no", 0)), op_code=int(x.get("op_code", 3)),
+            elements=int(x.get("elements", 64)), attribute=int(x.get("attribute", 0)), comment=str(x.get("comment", "")),
+            timeout_ms=int(x.get("timeout_ms", 0)), fixed=bool(x.get("fixed", False)), source=loc))
+    for ch in s.get("channel_info") or []:
+        rest = {k: v for k, v in ch.items() if k not in ("pdo", "entry")}
+        cfg.channel_info[(int(ch["pdo"]), int(ch["entry"]))] = rest
+    cfg.extra = dict(s.get("extra") or {})
+    return cfg
+
+
+def load(data: bytes, source: str) -> list[SlaveConfig]:
+    text = data.decode("utf-8-sig")
+    try:
+        top = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"invalid JSON: {exc.msg}", Location(source, exc.lineno, exc.colno)) from None
+    if not isinstance(top, dict) or top.get("format") != FORMAT_TAG:
+        raise InputError(f"not an ecattool startup JSON file (expected \"format\": \"{FORMAT_TAG}\")", Location(source, 1))
+    if top.get("version") != VERSION:
+        raise InputError(f"unsupported ecattool startup JSON version {top.get('version')!r} (this is {VERSION})",
+                         Location(source, 1))
+    doc = _Doc(text, source)
+    return [_read_slave(s, doc, i) for i, s in enumerate(top.get("slaves") or [])]
+
+
+def detect(data: bytes) -> bool:
+    return data.lstrip()[:1] == b"{" and FORMAT_TAG.encode() in data[:4096]

@@ -1,0 +1,146 @@
+"""LinuxCNC-EtherCAT (lcec) ``ethercat-conf.xml``: slaves, ``sdoConfig``, ``syncManager``/``pdo``, ``dcConf``,
+and ``initCmds`` files (TwinCAT ``EtherCATMailbox`` exports, read with the ENI reader). Import only.
+
+``sdoConfig subIdx="complete"`` is a complete-access write of sub-index 0 with all ``sdoDataRaw`` bytes
+concatenated; lcec writes its SDO configuration in PRE-OP, so commands get transition PS. Numbers in lcec
+attributes are hexadecimal without prefix (``idx="1c12"``, ``vid="00000002"``). ``halPin``/``halType`` of
+PDO entries are kept in ``channel_info``; ``assignActivate`` is hex, ``sync0Cycle="*1"`` (a multiple of the
+application period) is kept in ``extra``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from ecattool.errors import InputError, Location
+from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
+from ecattool.findings import Severity
+from ecattool.startup.config import SlaveConfig
+from ecattool.startup.formats._common import parse_hex, unsigned_type
+from ecattool.startup.model import StartupCommand, StartupList
+
+NAME = "lcec"
+EXTENSIONS = (".xml",)
+DESCRIPTION = "LinuxCNC-EtherCAT ethercat-conf.xml (sdoConfig, syncManager/pdo, dcConf, initCmds files); import only"
+
+
+def _hex(el: Any, attr: str, source: str, default: int | None = None) -> int | None:
+    text = el.get(attr)
+    if text is None or not text.strip():
+        return default
+    try:
+        return int(text.strip().removeprefix("0x").removeprefix("0X"), 16)
+    except ValueError:
+        raise InputError(f"{attr}={text!r} is not a hex number (lcec writes hex without prefix)",
+                         Location(source, el.sourceline)) from None
+
+
+def _sdo_configs(slave: Any, cfg: SlaveConfig, source: str) -> None:
+    for sc in slave.findall("sdoConfig"):
+        loc = Location(source, sc.sourceline)
+        index = _hex(sc, "idx", source)
+        if index is None:
+            raise InputError("sdoConfig without idx", loc)
+        sub_text = (sc.get("subIdx") or "").strip().lower()
+        complete = sub_text == "complete"
+        sub = 0 if complete else (_hex(sc, "subIdx", source) or 0)
+        raw = b"".join(parse_hex(r.get("data") or "", Location(source, r.sourceline)) for r in sc.findall("sdoDataRaw"))
+        if not raw:
+            raise InputError("sdoConfig without sdoDataRaw data (only raw data is supported)", loc)
+        cfg.startup.commands.append(StartupCommand("PS", index, sub, raw, complete_access=complete,
+                                                   type_name=None if complete else unsigned_type(len(raw)),
+                                                   value=int.from_bytes(raw, "little"), source=loc))
+
+
+def _pdos(slave: Any, cfg: SlaveConfig, source: str) -> None:
+    for sm in slave.findall("syncManager"):
+        direction = Direction.RX if (sm.get("dir") or "").lower() == "out" else Direction.TX
+        number = _hex(sm, "idx", source)
+        for p in sm.findall("pdo"):
+            pdo = Pdo(direction, _hex(p, "idx", source) or 0, sm=number, location=Location(source, p.sourceline))
+            for k, e in enumerate(p.findall("pdoEntry")):
+                pdo.entries.append(PdoEntry(_hex(e, "idx", source) or 0, _hex(e, "subIdx", source, 0) or 0,
+                                            int(e.get("bitLen") or 0), name=e.get("halPin") or "",
+                                            location=Location(source, e.sourceline)))
+                info = {a: e.get(a) for a in ("halPin", "halType") if e.get(a)}
+                complex_entries = [dict(c.attrib) for c in e.findall("complexEntry")]
+                if complex_entries:
+                    info["complexEntry"] = complex_entries
+                if info:
+                    cfg.channel_info[(pdo.index, k)] = info
+            cfg.pdos(direction).append(pdo)
+
+
+def _find_beside(folder: Path, name: str) -> Path | None:
+    """The initCmds file: ``name`` beside the configuration, else the one sibling ending in ``_<name>``
+    (collections such as ecattool's corpus prefix copied files with their origin)."""
+    exact = folder / name
+    if exact.is_file():
+        return exact
+    if not name or "/" in name or "\\" in name:
+        return None
+    matches = sorted(p for p in folder.glob(f"*_{name}") if p.is_file())
+    return matches[0] if len(matches) == 1 else None
+
+
+def _init_cmds(slave: Any, cfg: SlaveConfig, source: str) -> None:
+    from ecattool.startup.formats import eni
+    from ecattool.xmlsafe import read_xml_file
+
+    for ic in slave.findall("initCmds"):
+        loc = Location(source, ic.sourceline)
+        name = ic.get("filename") or ""
+        path = _find_beside(Path(source).parent, name)
+        if path is None:
+            cfg.note("startup.lcec.initcmds", f"initCmds file {name!r} not found beside the configuration; its "
+                     "commands are missing from this import", loc)
+            continue
+        for sub in eni.load_tree(read_xml_file(path), str(path), path.stem):
+            cfg.startup.commands.extend(sub.startup.commands)
+            cfg.soe_commands.extend(sub.soe_commands)
+            cfg.notes.extend(sub.notes)
+
+
+def load(data: bytes, source: str) -> list[SlaveConfig]:
+    from ecattool.xmlsafe import parse_xml
+
+    root = parse_xml(data, source).getroot()
+    if root.tag != "masters":
+        raise InputError(f"root element is <{root.tag}>, expected <masters> (lcec ethercat-conf.xml)",
+                         Location(source, root.sourceline))
+    out = []
+    for master in root.findall("master"):
+        for slave in master.findall("slave"):
+            loc = Location(source, slave.sourceline)
+            idx = slave.get("idx")
+            cfg = SlaveConfig(startup=StartupList(), name=slave.get("name") or slave.get("type") or "",
+                              position=int(idx) if idx and idx.isdigit() else None, source=loc)
+            cfg.extra["lcec_type"] = slave.get("type") or ""
+            if master.get("idx") not in (None, "0"):
+                cfg.extra["master"] = master.get("idx")
+            vid, pid = _hex(slave, "vid", source), _hex(slave, "pid", source)
+            if vid is not None and pid is not None:
+                cfg.identity = Identity(vid, pid)
+                cfg.startup.vendor_id, cfg.startup.product_code = vid, pid
+            elif cfg.extra["lcec_type"] not in ("generic", ""):
+                cfg.note("startup.lcec.identity", f"slave type {cfg.extra['lcec_type']!r} is identified by lcec's "
+                         "built-in driver; no vendor/product code in the file", loc, Severity.INFO)
+            _sdo_configs(slave, cfg, source)
+            _pdos(slave, cfg, source)
+            dc = slave.find("dcConf")
+            if dc is not None:
+                cfg.dc_assign_activate = _hex(dc, "assignActivate", source)
+                for attr in ("sync0Cycle", "sync0Shift", "sync1Cycle", "sync1Shift"):
+                    if dc.get(attr) is not None:
+                        cfg.extra[attr] = dc.get(attr)
+                cyc, shift = dc.get("sync0Cycle") or "", dc.get("sync0Shift") or ""
+                cfg.dc_cycle_ns = int(cyc) if cyc.lstrip("-").isdigit() else None
+                cfg.dc_shift_ns = int(shift) if shift.lstrip("-").isdigit() else None
+            _init_cmds(slave, cfg, source)
+            out.append(cfg)
+    return out
+
+
+def detect(data: bytes) -> bool:
+    return b"<masters" in data[:4096]

@@ -1,0 +1,235 @@
+"""ethercat_driver_ros2 slave configuration YAML (ICube-Robotics): identity, DC, ``sdo``, ``rpdo``/``tpdo``.
+
+The driver sends every ``sdo`` entry in PRE-OP before SAFE-OP, so imported commands get transition PS and
+commands of other transitions are written with a YAML comment saying so. The ``sdo`` entries need a type;
+commands without one are written as ``uint8/16/32/64`` by size. Complete-access writes and data of other
+sizes have no ros2 form and are refused with the command named. Per-channel attributes
+(``command_interface``, ``state_interface``, ``default``, ``factor``, ``mask``) and other top-level keys
+(``period``, ``auto_fault_reset``, ``sm``) survive a read/write round trip; YAML comments become command
+comments and PDO entry names.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from ecattool.errors import EncodeError, InputError, Location
+from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
+from ecattool.od import types as dt
+from ecattool.startup.config import SlaveConfig
+from ecattool.startup.formats._common import one_line
+from ecattool.startup.model import StartupCommand, StartupList
+
+NAME = "ros2"
+EXTENSIONS = (".yaml", ".yml")
+DESCRIPTION = "ethercat_driver_ros2 slave YAML (vendor_id, product_id, assign_activate, sdo, rpdo/tpdo)"
+
+#: ros2 type name -> CoE type name
+ROS_TO_COE = {"bool": "BOOL", "int8": "SINT", "int16": "INT", "int32": "DINT", "int64": "LINT",
+              "uint8": "USINT", "uint16": "UINT", "uint32": "UDINT", "uint64": "ULINT",
+              "float": "REAL", "double": "LREAL"}
+COE_TO_ROS = {v: k for k, v in ROS_TO_COE.items()}
+COE_TO_ROS.update({"BYTE": "uint8", "WORD": "uint16", "DWORD": "uint32", "INTEGER8": "int8",
+                   "INTEGER16": "int16", "INTEGER32": "int32", "UNSIGNED8": "uint8", "UNSIGNED16": "uint16",
+                   "UNSIGNED32": "uint32", "REAL32": "float", "REAL64": "double"})
+_BY_SIZE = {1: "uint8", 2: "uint16", 4: "uint32", 8: "uint64"}
+_KNOWN_KEYS = ("vendor_id", "product_id", "assign_activate", "sdo", "rpdo", "tpdo")
+
+
+def _scalar(value: Any) -> str:
+    import yaml
+
+    if isinstance(value, float) and math.isnan(value):
+        return ".nan"
+    text = yaml.safe_dump(value, default_flow_style=True, width=1 << 16).strip()
+    return text[:-4].strip() if text.endswith("\n...") else text.removesuffix("...").strip()
+
+
+class _Raw(str):
+    """Text written into the YAML as is (hex numbers)."""
+
+
+def _flow(items: list[tuple[str, Any]]) -> str:
+    return "{" + ", ".join(f"{k}: {v if isinstance(v, _Raw) else _scalar(v)}" for k, v in items) + "}"
+
+
+def _ros_type_of_entry(e: PdoEntry) -> str:
+    name = (e.data_type or "").upper()
+    if name in COE_TO_ROS:
+        return COE_TO_ROS[name]
+    if name.startswith("BIT") and name[3:].isdigit():
+        return f"bit{name[3:]}"
+    if e.bit_len == 1:
+        return "bool"
+    if e.bit_len < 8 or e.index == 0:
+        return f"bit{e.bit_len}"
+    return _BY_SIZE.get(e.bit_len // 8, f"bit{e.bit_len}")
+
+
+def _sdo_line(cmd: StartupCommand) -> str:
+    where = f"0x{cmd.index:04X}:{cmd.subindex:02X}{f' ({cmd.source})' if cmd.source else ''}"
+    if cmd.complete_access:
+        raise EncodeError(f"{where}: ethercat_driver_ros2 has no complete-access SDO writes")
+    coe = (cmd.type_name or "").upper()
+    ros = COE_TO_ROS.get(coe) if coe else None
+    t = dt.lookup(ROS_TO_COE[ros]) if ros else None
+    if ros is None or t is None or t.bits is None or t.bits // 8 != len(cmd.data):
+        ros = _BY_SIZE.get(len(cmd.data))
+        if ros is None:
+            raise EncodeError(f"{where}: {len(cmd.data)} data bytes have no ethercat_driver_ros2 sdo type")
+        t = dt.require(ROS_TO_COE[ros])
+    value = t.decode(cmd.data)
+    line = "  - " + _flow([("index", _Raw(f"0x{cmd.index:04X}")), ("sub_index", cmd.subindex), ("type", ros),
+                           ("value", value)])
+    notes = [one_line(cmd.comment)] if cmd.comment else []
+    if cmd.transition != "PS":
+        notes.append(f"transition {cmd.transition} (ros2 sends every sdo in PRE-OP)")
+    return line + (f"  # {'; '.join(notes)}" if notes else "")
+
+
+def _pdo_lines(c: SlaveConfig, pdos: list[Pdo]) -> list[str]:
+    out = []
+    for p in pdos:
+        out.append(f"  - index: 0x{p.index:04x}" + (f"  # {one_line(p.name)}" if p.name else ""))
+        out.append("    channels:")
+        for pos, e in enumerate(p.entries):
+            items: list[tuple[str, Any]] = [("index", _Raw(f"0x{e.index:04x}")),
+                                            ("sub_index", _Raw(f"0x{e.subindex:02x}")), ("type", _ros_type_of_entry(e))]
+            items += list(c.channel_info.get((p.index, pos), {}).items())
+            out.append("      - " + _flow(items) + (f"  # {one_line(e.name)}" if e.name else ""))
+    return out
+
+
+def export(configs: list[SlaveConfig]) -> str:
+    import yaml
+
+    if len(configs) != 1:
+        raise EncodeError(f"an ethercat_driver_ros2 slave file describes one slave; got {len(configs)}")
+    c = configs[0]
+    lines = [f"# ethercat_driver_ros2 slave configuration written by ecattool{': ' + one_line(c.name) if c.name else ''}"]
+    if c.identity is not None:
+        lines += [f"vendor_id: 0x{c.identity.vendor_id:08x}", f"product_id: 0x{c.identity.product_code:08x}"]
+    if c.dc_assign_activate is not None:
+        lines.append(f"assign_activate: 0x{c.dc_assign_activate:04x}  # DC Synch register")
+    for key, value in c.extra.items():
+        if key not in _KNOWN_KEYS and key != "sm":
+            if isinstance(value, (dict, list)):
+                lines.append(yaml.safe_dump({key: value}, default_flow_style=None, sort_keys=False).strip())
+            else:
+                lines.append(f"{key}: {_scalar(value)}")
+    if c.commands:
+        lines.append("sdo:  # sdo data to be transferred at drive startup")
+        lines += [_sdo_line(cmd) for cmd in c.commands]
+    for key, pdos in (("rpdo", c.rx_pdos), ("tpdo", c.tx_pdos)):
+        if pdos:
+            lines.append(f"{key}:")
+            lines += _pdo_lines(c, pdos)
+    if "sm" in c.extra:
+        lines.append("sm:")
+        lines += ["  - " + _flow(list(s.items())) for s in c.extra["sm"]]
+    return "\n".join(lines) + "\n"
+
+
+# --- reading -----------------------------------------------------------------------------------------
+
+def _comment_at(lines: list[str], loc: Location) -> str:
+    """The YAML comment that belongs to a flow mapping starting at ``loc`` (on its closing line)."""
+    if loc.line is None:
+        return ""
+    depth = 0
+    for n in range(loc.line - 1, min(len(lines), loc.line + 40)):
+        text = lines[n] if n != loc.line - 1 else lines[n][(loc.column or 1) - 1:]
+        code, _, comment = text.partition("#")
+        depth += code.count("{") - code.count("}")
+        if depth <= 0:
+            return comment.strip()
+    return ""
+
+
+def _int(value: Any, loc: Location, what: str) -> int:
+    from ecattool.od.numbers import parse_int
+
+    if isinstance(value, bool) or value is None:
+        raise InputError(f"{what} must be a number, got {value!r}", loc)
+    return parse_int(value if isinstance(value, int) else str(value), loc, what)
+
+
+def _ros_type(name: Any, loc: Location) -> tuple[str, int]:
+    key = str(name).strip().lower()
+    if key in ROS_TO_COE:
+        t = dt.require(ROS_TO_COE[key])
+        return t.name, t.bits or 0
+    if key.startswith("bit") and key[3:].isdigit():
+        return f"BIT{key[3:]}", int(key[3:])
+    raise InputError(f"unknown ethercat_driver_ros2 type {name!r} (bool, int8..int64, uint8..uint64, float, "
+                     "double, bitN)", loc)
+
+
+def _sdo(item: Any, loc: Location, comment: str) -> StartupCommand:
+    if not isinstance(item, dict):
+        raise InputError("an sdo entry must be a mapping {index, sub_index, type, value}", loc)
+    for key in ("index", "sub_index", "type", "value"):
+        if key not in item:
+            raise InputError(f"sdo entry has no {key!r}", loc)
+    coe, _bits = _ros_type(item["type"], loc)
+    t = dt.require(coe)
+    value = item["value"]
+    try:
+        data = t.encode(value)
+    except EncodeError as exc:
+        raise EncodeError(exc.message, loc) from None
+    return StartupCommand("PS", _int(item["index"], loc, "index"), _int(item["sub_index"], loc, "sub_index"), data,
+                          comment=comment, type_name=t.name, value=value, source=loc)
+
+
+def load(data: bytes, source: str) -> list[SlaveConfig]:
+    from ecattool.project.yamlloc import load_yaml
+
+    text = data.decode("utf-8-sig", errors="replace")
+    doc = load_yaml(text, source)
+    lines = text.splitlines()
+    top = doc.data
+    if not isinstance(top, dict):
+        raise InputError("an ethercat_driver_ros2 slave file is a mapping (vendor_id, product_id, rpdo, …)",
+                         doc.locate(()))
+    from pathlib import Path
+
+    cfg = SlaveConfig(startup=StartupList(name=Path(source).stem), name=Path(source).stem, source=doc.locate(()))
+    if "vendor_id" in top and "product_id" in top:
+        cfg.identity = Identity(_int(top["vendor_id"], doc.locate(("vendor_id",)), "vendor_id"),
+                                _int(top["product_id"], doc.locate(("product_id",)), "product_id"))
+        cfg.startup.vendor_id, cfg.startup.product_code = cfg.identity.vendor_id, cfg.identity.product_code
+    if "assign_activate" in top:
+        cfg.dc_assign_activate = _int(top["assign_activate"], doc.locate(("assign_activate",)), "assign_activate")
+    for i, item in enumerate(top.get("sdo") or []):
+        loc = doc.locate(("sdo", i))
+        cfg.startup.commands.append(_sdo(item, loc, _comment_at(lines, loc)))
+    for key, direction in (("rpdo", Direction.RX), ("tpdo", Direction.TX)):
+        for i, p in enumerate(top.get(key) or []):
+            ploc = doc.locate((key, i))
+            if not isinstance(p, dict) or "index" not in p:
+                raise InputError(f"a {key} entry needs an index and channels", ploc)
+            pdo = Pdo(direction, _int(p["index"], doc.locate((key, i, "index")), "PDO index"),
+                      name=_comment_at(lines, doc.locate((key, i, "index"))), location=ploc)
+            for j, ch in enumerate(p.get("channels") or []):
+                cloc = doc.locate((key, i, "channels", j))
+                if not isinstance(ch, dict) or "type" not in ch:
+                    raise InputError("a channel needs index, sub_index and type", cloc)
+                coe, bits = _ros_type(ch["type"], cloc)
+                pdo.entries.append(PdoEntry(_int(ch.get("index", 0), cloc, "index"),
+                                            _int(ch.get("sub_index", 0), cloc, "sub_index"), bits,
+                                            name=_comment_at(lines, cloc), data_type=coe, location=cloc))
+                rest = {k: v for k, v in ch.items() if k not in ("index", "sub_index", "type")}
+                if rest:
+                    cfg.channel_info[(pdo.index, j)] = rest
+            cfg.pdos(direction).append(pdo)
+    for key, value in top.items():
+        if key not in _KNOWN_KEYS:
+            cfg.extra[key] = value
+    return [cfg]
+
+
+def detect_yaml(top: Any) -> bool:
+    return isinstance(top, dict) and any(k in top for k in ("rpdo", "tpdo", "sdo", "product_id"))
+
