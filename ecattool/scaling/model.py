@@ -1,0 +1,369 @@
+"""The mechanics input model: feedback, gearbox, transmission, units, slow-loop period — exact Fractions.
+
+Everything the factor group needs reduces to three exact numbers:
+
+* ``travel_per_motor_rev`` — how far the load moves for one motor revolution (metres, load revolutions,
+  or label units), symbolic in pi where a diameter is involved;
+* ``counts_per_motor_rev`` — feedback increments per motor revolution (a load-side encoder or linear scale
+  is referred to the motor through the gear and transmission);
+* the user units.
+
+A linear motor is modelled as a "motor revolution" of one pole pitch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from fractions import Fraction
+from typing import Any
+
+from ecattool.errors import InputError, Location
+from ecattool.scaling.exact import Exact
+from ecattool.scaling.units import Unit, parse_unit, quantity, time_seconds
+
+TRANSMISSIONS = ("rotary", "belt", "ballscrew", "rack", "linear_motor", "hollow_shaft", "label")
+
+
+def _frac(value: Any, what: str, location: Location | None, positive: bool = True) -> Fraction:
+    try:
+        f = Fraction(str(value).strip()) if not isinstance(value, (int, Fraction)) else Fraction(value)
+    except (ValueError, ZeroDivisionError):
+        raise InputError(f"{what} {value!r} is not a number", location) from None
+    if positive and f <= 0:
+        raise InputError(f"{what} must be positive, got {value!r}", location)
+    return f
+
+
+@dataclass(frozen=True, slots=True)
+class Feedback:
+    """Position feedback: increments per feedback revolution (or a linear scale's increment length).
+
+    ``on`` is ``motor`` or ``load``. For a linear scale, ``resolution`` is the length of one increment
+    (metres) and the scale is on the load.
+    """
+
+    counts_per_rev: Fraction | None = None
+    on: str = "motor"
+    resolution: Exact | None = None  # linear scale: metres per increment
+    description: str = ""
+
+    @staticmethod
+    def encoder(counts_per_rev: int | Fraction, on: str = "motor") -> "Feedback":
+        return Feedback(Fraction(counts_per_rev), on, None, f"{counts_per_rev} increments/rev on {on}")
+
+    @staticmethod
+    def lines(lines: int, on: str = "motor") -> "Feedback":
+        return Feedback(Fraction(4 * lines), on, None, f"{lines}-line quadrature encoder = {4 * lines} counts/rev on {on}")
+
+    @staticmethod
+    def stepper(steps: int, microsteps: int) -> "Feedback":
+        return Feedback(Fraction(steps * microsteps), "motor", None, f"{steps} steps x {microsteps} microsteps = {steps * microsteps}/rev")
+
+    @staticmethod
+    def linear_scale(resolution: Exact) -> "Feedback":
+        return Feedback(None, "load", resolution, f"linear scale, {float(resolution.rational) * 1e6:g} µm per increment")
+
+
+@dataclass(frozen=True, slots=True)
+class Gear:
+    """Gearbox ratio as motor revolutions : load (driving shaft) revolutions, e.g. 3:1."""
+
+    motor: Fraction = Fraction(1)
+    load: Fraction = Fraction(1)
+
+    @property
+    def ratio(self) -> Fraction:
+        return self.motor / self.load
+
+    def __str__(self) -> str:
+        return f"{self.motor}:{self.load}"
+
+
+@dataclass(frozen=True, slots=True)
+class Transmission:
+    """What one revolution of the driving (load) shaft does: ``travel`` in metres, revolutions or labels."""
+
+    kind: str
+    travel: Exact  # per driving-shaft revolution (linear motor: per pole pitch)
+    output: str  # "length" | "angle" | "label"
+    description: str
+    label: str | None = None
+
+    @staticmethod
+    def rotary(driving: Fraction | int = 1, driven: Fraction | int = 1) -> "Transmission":
+        """A rotary table or disk; optional belt/gear stage by teeth or diameters (driving : driven)."""
+        r = Fraction(driving) / Fraction(driven)
+        desc = "rotary load" + ("" if r == 1 else f", pulley stage {driving}:{driven} (driving:driven)")
+        return Transmission("rotary", Exact(r), "angle", desc)
+
+    @staticmethod
+    def ballscrew(pitch: Exact) -> "Transmission":
+        return Transmission("ballscrew", pitch, "length", f"ball screw, lead {_mm(pitch)} per rev")
+
+    @staticmethod
+    def hollow_shaft(pitch: Exact) -> "Transmission":
+        return Transmission("hollow_shaft", pitch, "length", f"hollow-shaft motor on a screw, lead {_mm(pitch)} per rev")
+
+    @staticmethod
+    def belt_diameter(diameter: Exact) -> "Transmission":
+        return Transmission("belt", diameter * Exact(Fraction(1), 1), "length", f"belt/pulley, pulley diameter {_mm(diameter)} (travel pi*D)")
+
+    @staticmethod
+    def belt_teeth(teeth: int, tooth_pitch: Exact) -> "Transmission":
+        return Transmission("belt", tooth_pitch * teeth, "length", f"toothed belt, {teeth} teeth x {_mm(tooth_pitch)} pitch")
+
+    @staticmethod
+    def rack_diameter(pitch_diameter: Exact) -> "Transmission":
+        return Transmission("rack", pitch_diameter * Exact(Fraction(1), 1), "length", f"rack and pinion, pitch diameter {_mm(pitch_diameter)}")
+
+    @staticmethod
+    def rack_teeth(teeth: int, tooth_pitch: Exact) -> "Transmission":
+        return Transmission("rack", tooth_pitch * teeth, "length", f"rack and pinion, {teeth} teeth x {_mm(tooth_pitch)} pitch")
+
+    @staticmethod
+    def linear_motor(pole_pitch: Exact) -> "Transmission":
+        return Transmission("linear_motor", pole_pitch, "length", f"linear motor, pole pitch {_mm(pole_pitch)}")
+
+    @staticmethod
+    def custom_label(name: str, units: Fraction | int, motor_revs: Fraction | int = 1) -> "Transmission":
+        """HDT "custom label": ``units`` label units correspond to ``motor_revs`` motor revolutions."""
+        return Transmission("label", Exact(Fraction(units) / Fraction(motor_revs)), "label",
+                            f"custom unit {name!r}: {units} per {motor_revs} motor rev", label=name)
+
+
+def _mm(length: Exact) -> str:
+    v = length * 1000
+    return f"{v} mm" if v.is_rational else f"{float(v.rational):.6g} mm"
+
+
+@dataclass(frozen=True, slots=True)
+class Axis:
+    """One axis: mechanics plus the user units the engineer wants the drive to speak."""
+
+    feedback: Feedback
+    transmission: Transmission = field(default_factory=Transmission.rotary)
+    gear: Gear = field(default_factory=Gear)
+    position: str = "rev"
+    velocity: str | None = None  # default: position unit per second
+    acceleration: str | None = None  # default: velocity unit per second
+    jerk: str | None = None  # default: acceleration unit per second
+    time: str = "ms"  # time unit of the obsolete 2071h time factor
+    slow_loop: Fraction = Fraction(1, 1000)  # seconds (Technosoft T)
+    reverse: bool = False  # polarity 607Eh (positions and velocities x -1)
+    name: str = ""
+    source: Location | None = None
+
+    # --- units -------------------------------------------------------------------------------------
+    @property
+    def labels(self) -> tuple[str, ...]:
+        return (self.transmission.label,) if self.transmission.label else ()
+
+    def unit(self, order: int) -> Unit:
+        texts = [self.position, self.velocity, self.acceleration, self.jerk]
+        text = texts[order]
+        if text is None:
+            base = self.unit(order - 1).text
+            text = f"{base}/s" if order == 1 or "/" not in base else (
+                base + "^2" if order == 2 and base.endswith("/s") else base + "/s")
+            if order == 3 and base.endswith("/s^2"):
+                text = base[:-1] + "3"
+        return parse_unit(text, order, self.labels, self.source)
+
+    @property
+    def units(self) -> tuple[Unit, Unit, Unit, Unit]:
+        return self.unit(0), self.unit(1), self.unit(2), self.unit(3)
+
+    # --- mechanics -----------------------------------------------------------------------------------
+    @property
+    def travel_per_motor_rev(self) -> Exact:
+        """Load travel per motor revolution (metres, load revolutions or label units)."""
+        if self.transmission.kind == "label":
+            return self.transmission.travel
+        return self.transmission.travel / self.gear.ratio
+
+    @property
+    def counts_per_motor_rev(self) -> Exact:
+        """Feedback increments per motor revolution (exact; symbolic in pi for a scale on a pulley axis)."""
+        fb = self.feedback
+        if fb.resolution is not None:
+            if self.transmission.output != "length":
+                raise InputError("a linear scale needs a linear transmission", self.source)
+            return self.travel_per_motor_rev / fb.resolution
+        assert fb.counts_per_rev is not None
+        if fb.on == "load" and self.transmission.kind not in ("linear_motor", "label"):
+            return Exact(fb.counts_per_rev) / self.gear.ratio
+        return Exact(fb.counts_per_rev)
+
+    def internal_per_unit(self, unit: Unit, internal_per_motor_rev: Exact) -> Exact:
+        """Internal position units per one ``unit`` of position (the velocity/acceleration time part excluded)."""
+        pos = unit.position
+        if pos.kind == "counts":
+            return Exact(Fraction(1)) * pos.size
+        out = self.transmission.output
+        if pos.kind == "angle" and (out != "angle"):
+            # an angle on a linear axis is an angle of the motor shaft (e.g. motor rpm)
+            return internal_per_motor_rev * pos.size
+        if pos.kind != out:
+            raise InputError(
+                f"unit {unit.text!r} is a {pos.kind} but the {self.transmission.kind} axis moves its load as a "
+                f"{out}; choose a {out} unit", self.source)
+        return internal_per_motor_rev * pos.size / self.travel_per_motor_rev
+
+    def with_(self, **changes: Any) -> "Axis":
+        return replace(self, **changes)
+
+
+# --- loading from a mapping (YAML spec files, CLI options) ---------------------------------------------
+
+
+def _loc(locate: Any, *path: Any) -> Location | None:
+    return locate(path) if locate else None
+
+
+def feedback_from(data: Any, locate: Any = None) -> Feedback:
+    loc = _loc(locate, "feedback")
+    if isinstance(data, (int, str)) and not isinstance(data, bool):
+        return Feedback.encoder(_frac(data, "feedback counts_per_rev", loc))
+    if not isinstance(data, dict):
+        raise InputError("feedback must be a mapping (counts_per_rev, lines, steps/microsteps or resolution)", loc)
+    on = str(data.get("on", "motor"))
+    if on not in ("motor", "load"):
+        raise InputError(f"feedback 'on' must be motor or load, got {on!r}", _loc(locate, "feedback", "on"))
+    if "counts_per_rev" in data:
+        return Feedback.encoder(_frac(data["counts_per_rev"], "counts_per_rev", _loc(locate, "feedback", "counts_per_rev")), on)
+    if "lines" in data:
+        lines = _frac(data["lines"], "lines", _loc(locate, "feedback", "lines"))
+        if lines.denominator != 1:
+            raise InputError("encoder lines must be an integer", _loc(locate, "feedback", "lines"))
+        return Feedback.lines(int(lines), on)
+    if "steps" in data:
+        steps = _frac(data["steps"], "steps", _loc(locate, "feedback", "steps"))
+        micro = _frac(data.get("microsteps", 1), "microsteps", _loc(locate, "feedback", "microsteps"))
+        return Feedback.stepper(int(steps), int(micro))
+    if "resolution" in data:
+        res, _ = quantity(data["resolution"], ("length",), _loc(locate, "feedback", "resolution"))
+        return Feedback.linear_scale(res)
+    raise InputError("feedback needs counts_per_rev, lines, steps (+ microsteps) or resolution (linear scale)", loc)
+
+
+def gear_from(data: Any, locate: Any = None) -> Gear:
+    loc = _loc(locate, "gear")
+    if data is None:
+        return Gear()
+    if isinstance(data, str) and ":" in data:
+        a, b = data.split(":", 1)
+        return Gear(_frac(a, "gear motor revolutions", loc), _frac(b, "gear load revolutions", loc))
+    if isinstance(data, dict):
+        return Gear(_frac(data.get("motor", 1), "gear motor", _loc(locate, "gear", "motor")),
+                    _frac(data.get("load", 1), "gear load", _loc(locate, "gear", "load")))
+    return Gear(_frac(data, "gear ratio", loc))
+
+
+def transmission_from(data: Any, locate: Any = None) -> Transmission:
+    loc = _loc(locate, "transmission")
+    if data is None:
+        return Transmission.rotary()
+    if isinstance(data, str):
+        data = parse_kv(data, loc)
+    if not isinstance(data, dict):
+        raise InputError("transmission must be a mapping with a 'type'", loc)
+    kind = str(data.get("type", "rotary")).replace("-", "_").replace(" ", "_").lower()
+    kind = {"ball_screw": "ballscrew", "screw": "ballscrew", "leadscrew": "ballscrew", "lead_screw": "ballscrew",
+            "pulley": "belt", "conveyor": "belt", "rack_and_pinion": "rack", "rotary_table": "rotary", "disk": "rotary",
+            "linear": "linear_motor", "hollow": "hollow_shaft", "custom_label": "label"}.get(kind, kind)
+
+    def q(key: str) -> Exact:
+        return quantity(data[key], ("length",), _loc(locate, "transmission", key))[0]
+
+    def n(key: str, default: Any = None) -> Fraction:
+        return _frac(data.get(key, default), key, _loc(locate, "transmission", key))
+
+    if kind == "rotary":
+        if "driving_teeth" in data or "driven_teeth" in data:
+            return Transmission.rotary(n("driving_teeth", 1), n("driven_teeth", 1))
+        if "driving_diameter" in data or "driven_diameter" in data:
+            return Transmission.rotary(q("driving_diameter").coef, q("driven_diameter").coef)
+        return Transmission.rotary()
+    if kind in ("ballscrew", "hollow_shaft"):
+        if "pitch" not in data and "lead" not in data:
+            raise InputError(f"{kind} needs pitch (e.g. pitch: 5 mm)", loc)
+        pitch = q("pitch" if "pitch" in data else "lead")
+        return Transmission.ballscrew(pitch) if kind == "ballscrew" else Transmission.hollow_shaft(pitch)
+    if kind in ("belt", "rack"):
+        if "teeth" in data and ("tooth_pitch" in data or "module" in data):
+            teeth = n("teeth")
+            if teeth.denominator != 1:
+                raise InputError("teeth must be an integer", _loc(locate, "transmission", "teeth"))
+            pitch = q("tooth_pitch") if "tooth_pitch" in data else q("module") * Exact(Fraction(1), 1)
+            return (Transmission.belt_teeth if kind == "belt" else Transmission.rack_teeth)(int(teeth), pitch)
+        key = next((k for k in ("diameter", "pitch_diameter", "pulley_diameter") if k in data), None)
+        if key is None:
+            raise InputError(f"{kind} needs teeth + tooth_pitch (or module), or diameter", loc)
+        d = q(key)
+        return Transmission.belt_diameter(d) if kind == "belt" else Transmission.rack_diameter(d)
+    if kind == "linear_motor":
+        if "pole_pitch" not in data:
+            raise InputError("linear_motor needs pole_pitch (e.g. pole_pitch: 32 mm)", loc)
+        return Transmission.linear_motor(q("pole_pitch"))
+    if kind == "label":
+        name = str(data.get("name", "unit"))
+        return Transmission.custom_label(name, n("units"), n("motor_revs", 1))
+    raise InputError(f"unknown transmission type {kind!r} (one of {', '.join(TRANSMISSIONS)})", _loc(locate, "transmission", "type"))
+
+
+def parse_kv(text: str, location: Location | None = None) -> dict[str, str]:
+    """``ballscrew pitch=5mm`` / ``belt teeth=20 tooth_pitch=5mm`` → {'type': ..., key: value}."""
+    parts = text.replace(",", " ").split()
+    if not parts:
+        raise InputError("empty transmission", location)
+    out: dict[str, str] = {}
+    start = 0
+    if "=" not in parts[0]:
+        out["type"] = parts[0]
+        start = 1
+    for p in parts[start:]:
+        if "=" not in p:
+            raise InputError(f"{p!r}: write key=value (e.g. pitch=5mm)", location)
+        k, v = p.split("=", 1)
+        out[k.strip()] = v.strip()
+    return out
+
+
+def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None) -> Axis:
+    """Build an :class:`Axis` from a spec mapping (see docs/scaling.md); ``locate(path)`` gives locations."""
+    if not isinstance(data, dict):
+        raise InputError("a scaling spec must be a mapping", source)
+    known = {"family", "feedback", "gear", "transmission", "units", "slow_loop", "polarity", "reverse", "name",
+             "firmware", "approximation", "device", "vl_setpoint"}
+    for key in data:
+        if key not in known:
+            raise InputError(f"unknown key {key!r} (expected one of {', '.join(sorted(known))})", _loc(locate, key) or source)
+    if "feedback" not in data:
+        raise InputError("spec needs 'feedback' (e.g. feedback: {lines: 500})", source)
+    units = data.get("units") or {}
+    if not isinstance(units, dict):
+        raise InputError("units must be a mapping (position, velocity, acceleration, jerk, time)", _loc(locate, "units"))
+    slow = data.get("slow_loop", "1ms")
+    polarity = str(data.get("polarity", "normal")).lower()
+    if polarity not in ("normal", "reversed", "reverse", "inverted"):
+        raise InputError(f"polarity must be normal or reversed, got {polarity!r}", _loc(locate, "polarity"))
+    axis = Axis(
+        feedback=feedback_from(data["feedback"], locate),
+        transmission=transmission_from(data.get("transmission"), locate),
+        gear=gear_from(data.get("gear"), locate),
+        position=str(units.get("position", "rev")),
+        velocity=None if units.get("velocity") is None else str(units["velocity"]),
+        acceleration=None if units.get("acceleration") is None else str(units["acceleration"]),
+        jerk=None if units.get("jerk") is None else str(units["jerk"]),
+        time=str(units.get("time", "ms")),
+        slow_loop=time_seconds(slow, _loc(locate, "slow_loop")),
+        reverse=polarity != "normal" or bool(data.get("reverse", False)),
+        name=str(data.get("name", "")),
+        source=source,
+    )
+    for order, key in enumerate(("position", "velocity", "acceleration", "jerk")):
+        try:
+            axis.unit(order)
+        except InputError as exc:
+            raise InputError(exc.message, _loc(locate, "units", key) or source) from None
+    return axis

@@ -1,0 +1,49 @@
+"""Scaling spec files (YAML): one axis plus the family options, with located errors."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+from ecattool.errors import InputError, Location
+from ecattool.scaling.model import Axis, axis_from_dict
+
+
+@dataclass(frozen=True, slots=True)
+class Spec:
+    axis: Axis
+    family: str | None = None
+    firmware: str | None = None
+    approximation: str | None = None
+    vl_setpoint: tuple[int, int] = (1, 1)
+
+
+def spec_from_dict(data: Any, locate: Any = None, source: Location | None = None) -> Spec:
+    axis = axis_from_dict(data, locate, source)
+    approx = data.get("approximation")
+    if approx is not None and approx not in ("best", "max-scale"):
+        raise InputError(f"approximation must be best or max-scale, got {approx!r}",
+                         locate(("approximation",)) if locate else source)
+    sp = data.get("vl_setpoint", "1/1")
+    try:
+        f = Fraction(str(sp))
+    except (ValueError, ZeroDivisionError):
+        raise InputError(f"vl_setpoint {sp!r} is not a ratio (e.g. 1/10)", locate(("vl_setpoint",)) if locate else source) from None
+    return Spec(axis, None if data.get("family") is None else str(data["family"]),
+                None if data.get("firmware") is None else str(data["firmware"]), approx, (f.numerator, f.denominator))
+
+
+def load_spec(path: str | Path, text: str | bytes | None = None) -> Spec:
+    """Read a scaling spec YAML file (see docs/scaling.md)."""
+    from ecattool.project.yamlloc import load_yaml
+
+    src = str(path)
+    if text is None:
+        try:
+            text = Path(path).read_bytes() if src != "-" else __import__("sys").stdin.read()
+        except OSError as exc:
+            raise InputError(f"cannot read spec: {exc.strerror}", Location(src)) from None
+    doc = load_yaml(text, src)
+    return spec_from_dict(doc.data, doc.locate, Location(src, 1, 1))
