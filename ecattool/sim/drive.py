@@ -575,7 +575,8 @@ class Drive:
         if (assign, 0) not in self._entries:
             return [p.index for p in self.device.pdos(d) if p.sm is not None]
         n = self._read_int(assign, 0) or 0
-        return [self._read_int(assign, s) or 0 for s in range(1, n + 1)]
+        chosen = (self._read_int(assign, s) or 0 for s in range(1, n + 1) if (assign, s) in self._entries)
+        return [p for p in chosen if p]  # a 0 entry assigns nothing (Technosoft §2.5 leaves sub 2 at 0)
 
     def _mapping_write(self, d: Direction, index: int, sub: int, value: int) -> None:
         if not self.rules.mapping_writable or index in self._fixed:
@@ -652,6 +653,7 @@ class Drive:
             chosen = [self._read_int(index, s) or 0 for s in range(1, value + 1) if (index, s) in self._entries]
             if len(chosen) != value:
                 raise _abort(index, 0, A.VALUE_TOO_HIGH)
+            chosen = [p for p in chosen if p]
             if any(not self._valid_pdo_index(d, p) for p in chosen) or len(set(chosen)) != len(chosen):
                 raise _abort(index, 0, A.INVALID_VALUE)
             return
