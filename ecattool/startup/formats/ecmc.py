@@ -47,8 +47,8 @@ def _slave_ref(c: SlaveConfig) -> str:
 def _command_line(slave: str, cmd: StartupCommand) -> str:
     size = len(cmd.data)
     if cmd.complete_access:
-        if cmd.subindex not in (0, 1):
-            raise EncodeError(f"0x{cmd.index:04X}:{cmd.subindex:02X}: ecmc complete access starts at sub-index 0 or 1")
+        if cmd.subindex != 0:
+            raise EncodeError(f"0x{cmd.index:04X}:{cmd.subindex:02X}: ecmc complete access starts at sub-index 0")
         return f'ecmcConfigOrDie "Cfg.EcAddSdoComplete({slave},0x{cmd.index:04X},{cmd.data.hex(" ")},{size})"'
     if size in (1, 2, 4):
         return f'ecmcConfigOrDie "Cfg.EcAddSdo({slave},0x{cmd.index:04X},0x{cmd.subindex:X},0x{cmd.int_value:X},{size})"'

@@ -48,7 +48,8 @@ _FIRST_PHYS_ADDR = 1001
 def _sub(parent: Any, tag: str, text: object | None = None, cdata: bool = False) -> Any:
     el = etree.SubElement(parent, tag)
     if text is not None:
-        el.text = etree.CDATA(str(text)) if cdata else str(text)
+        value = str(text)
+        el.text = etree.CDATA(value) if cdata and value and "]]>" not in value else value
     return el
 
 
