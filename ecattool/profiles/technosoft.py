@@ -121,6 +121,29 @@ class Firmware:
         return out
 
 
+def product_code_from_label(product_id: str) -> int:
+    """Drive label product ID → 1018h sub 2 (§4.8.6): ``P027.214.E121`` → 27214121 (the digits, decimal)."""
+    m = re.fullmatch(r"\s*P?(\d{3})\.(\d{3})\.[A-Z]?(\d{3})\s*", product_id.upper())
+    if not m:
+        raise SelectionError(f"{product_id!r} is not a Technosoft product ID (write e.g. P027.214.E121)")
+    return int("".join(m.groups()))
+
+
+def ascii_msb_first(value: int) -> str:
+    """Revision / serial convention (1018h sub 3, §4.8.6): first character in the most significant byte."""
+    return value.to_bytes(4, "big").decode("latin-1")
+
+
+def ascii_lsb_first(value: int) -> str:
+    """2060h convention (§4.8.5): first character in the least significant byte (0x322E3156 → "V1.2")."""
+    return value.to_bytes(4, "little").decode("latin-1")
+
+
+def serial_text(value: int) -> str:
+    """1018h sub 4 (§4.8.6): two ASCII letters then a 16-bit hex number (0x4C451158 → "LE1158")."""
+    return ascii_msb_first(value)[:2] + f"{value & 0xFFFF:04X}"
+
+
 INFO = ProfileInfo(
     name=NAME,
     family=NAME,
