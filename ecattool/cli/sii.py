@@ -116,7 +116,11 @@ def info(image: str, as_json: bool) -> None:
         c.print(dt)
 
 
-def _select(esi_path: str, selector: str | None, image: Any = None) -> Any:
+_POLICY = click.option("--policy", type=click.Choice(["exact", "newest-not-newer", "newest"]), default="exact",
+                       show_default=True, help="How --device picks a revision when several match.")
+
+
+def _select(esi_path: str, selector: str | None, image: Any = None, policy: str = "exact") -> Any:
     from ecattool.esi import load, select
 
     esi = load(esi_path)
@@ -125,7 +129,7 @@ def _select(esi_path: str, selector: str | None, image: Any = None) -> Any:
         matching = [d for d in esi.devices if (d.product_code, d.revision) == (h.product_code, h.revision)]
         if matching:
             return matching[0]
-    return select(esi, selector)
+    return select(esi, selector, policy)
 
 
 @sii.command("check", epilog="""\b
@@ -138,9 +142,10 @@ Exit codes: 0 no errors (no warnings either with --strict), 1 findings or invali
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option("--device", "selector", help="ESI device: type name, product[:revision] or list index "
               "(default: the device whose product code and revision match the image).")
+@_POLICY
 @click.option("--strict", is_flag=True, help="Warnings fail the check too.")
 @json_option
-def check_cmd(files: tuple[str, ...], selector: str | None, strict: bool, as_json: bool) -> None:
+def check_cmd(files: tuple[str, ...], selector: str | None, policy: str, strict: bool, as_json: bool) -> None:
     """Check IMAGE, or check IMAGE against an ESI device: `sii check [ESI] IMAGE`."""
     from ecattool.findings import has_errors
     from ecattool.sii.check import check_against, check_file
@@ -150,7 +155,7 @@ def check_cmd(files: tuple[str, ...], selector: str | None, strict: bool, as_jso
     image_path = files[-1]
     image, findings = check_file(image_path)
     if len(files) == 2 and image is not None:
-        device = _select(files[0], selector, image)
+        device = _select(files[0], selector, image, policy)
         findings += check_against(device, image)
     _findings_out(findings, as_json, {"image": image_path})
     raise SystemExit(1 if has_errors(findings, strict) else 0)
@@ -190,19 +195,21 @@ def set_alias_cmd(image: str, alias: str, output: str) -> None:
 @sii.command("build", epilog="""\b
 Examples:
   ecattool sii build slave.xml -o slave.bin
-  ecattool sii build Beckhoff_EL1xxx.xml --device EL1008 -o el1008.bin
+  ecattool sii build beckhoff_EL1xxx.xml --device EL1008 --policy newest -o el1008.bin
   ecattool sii build slave.xml --no-pdo-categories --size 256 -o slave.hex""")
 @click.argument("esi", type=click.Path(dir_okay=False))
 @click.option("--device", "selector", help="Device: type name, product[:revision] or list index (needed when "
               "the ESI describes several).")
 @click.option("--no-pdo-categories", is_flag=True, help="Leave out TXPDO/RXPDO (PDOs come from CoE only).")
 @click.option("--size", "size", help="EEPROM size in bytes (default: Eeprom/ByteSize, else 2048 or what fits).")
+@_POLICY
 @output_option(required=True)
-def build_cmd(esi: str, selector: str | None, no_pdo_categories: bool, size: str | None, output: str) -> None:
+def build_cmd(esi: str, selector: str | None, no_pdo_categories: bool, size: str | None, policy: str,
+              output: str) -> None:
     """Build an SII EEPROM image from an ESI device; unused space is filled with 0xFF."""
     from ecattool.sii.build import build
 
-    device = _select(esi, selector)
+    device = _select(esi, selector, policy=policy)
     img = build(device, pdo_categories=not no_pdo_categories,
                 size=parse_int_arg(size, "EEPROM size") if size else None)
     _write_image(output, img, (esi,))

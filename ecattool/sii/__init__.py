@@ -1,6 +1,9 @@
 """SII EEPROM images: parse (binary or Intel HEX), serialize, CRC, check, diff, build from an ESI device."""
 
+from ecattool.sii.build import assemble, build
+from ecattool.sii.check import check, check_against, check_file, fix_crc, set_alias
 from ecattool.sii.crc import crc8, preamble_crc
+from ecattool.sii.diff import Difference, diff, flatten
 from ecattool.sii.image import load, parse, serialize, write_intel_hex
 from ecattool.sii.model import (
     Category,
@@ -22,6 +25,8 @@ from ecattool.sii.model import (
 )
 
 __all__ = [
+    "assemble", "build", "check", "check_against", "check_file", "fix_crc", "set_alias", "Difference", "diff",
+    "flatten",
     "Category", "CategoryType", "DcCategory", "FmmuCategory", "GeneralCategory", "PdoCategory", "RawCategory",
     "SiiDcOpMode", "SiiHeader", "SiiImage", "SiiPdo", "SiiPdoEntry", "SiiSyncManager", "StringsCategory",
     "SyncMCategory", "category_name", "crc8", "load", "parse", "preamble_crc", "serialize", "write_intel_hex",
