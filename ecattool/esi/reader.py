@@ -441,7 +441,8 @@ class Reader:
                 if mi.get("Default") is not None and ctx.boolean(mi.get("Default"), mi, "Default"):
                     slot.default_module = v
             for mc in s.iterchildren("ModuleClass"):
-                slot.module_classes.append((mc.text or "").strip())
+                cls = mc.findtext("Class")  # <ModuleClass><Class>Di</Class><Name>…</Name></ModuleClass>
+                slot.module_classes.append((cls if cls is not None else (mc.text or "")).strip())
             out.append(slot)
         return out
 
@@ -467,6 +468,15 @@ class Reader:
             elif tag == "Profile":
                 mod.dictionary = self._dictionary(child)
         return mod
+
+    def _vendor_specific(self, el: Any, dev: Device) -> None:
+        ctx = self.ctx
+        for alt in el.iterfind("TwinCAT/AlternativeSmMapping"):
+            m = AlternativeSmMapping(lc_text(alt, "Name"), ctx.boolean(alt.get("Default"), alt, "Default"))
+            for sm in alt.iterchildren("Sm"):
+                no = ctx.number(sm.get("No"), sm, "AlternativeSmMapping/Sm No")
+                m.sms[no] = [ctx.number(p.text, p, "AlternativeSmMapping Pdo") for p in sm.iterchildren("Pdo")]
+            dev.alternative_sm_mappings.append(m)
 
     def device(self, el: Any, esi: EsiFile) -> Device:
         ctx = self.ctx
@@ -519,13 +529,10 @@ class Reader:
                 cur = child.find("Electrical/EBusCurrent")
                 if cur is not None:
                     dev.ebus_current_ma = ctx.opt_number(cur.text, cur, "EBusCurrent")
+                for vs in child.iterchildren("VendorSpecific"):
+                    self._vendor_specific(vs, dev)
             elif tag == "VendorSpecific":
-                for alt in child.iterfind("TwinCAT/AlternativeSmMapping"):
-                    m = AlternativeSmMapping(lc_text(alt, "Name"), ctx.boolean(alt.get("Default"), alt, "Default"))
-                    for sm in alt.iterchildren("Sm"):
-                        no = ctx.number(sm.get("No"), sm, "AlternativeSmMapping/Sm No")
-                        m.sms[no] = [ctx.number(p.text, p, "AlternativeSmMapping Pdo") for p in sm.iterchildren("Pdo")]
-                    dev.alternative_sm_mappings.append(m)
+                self._vendor_specific(child, dev)
             elif tag == "HideType":
                 hidden = dev.extra.get("HideType", "")
                 dev.extra["HideType"] = (hidden + " " if hidden else "") + (child.get("RevisionNo") or child.get("ProductRevision") or "")

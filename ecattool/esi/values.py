@@ -64,6 +64,9 @@ class Context:
             return True
         if t in _FALSE:
             return False
+        if not t:
+            self.warn("esi-boolean-empty", f"{what} is empty; read as {str(default).lower()}", el)
+            return default
         raise InputError(f"{what} {text.strip()!r} is not a boolean (expected 0, 1, true or false)", self.loc(el))
 
     def hexbin(self, text: str | None, el: Any, what: str) -> bytes:
