@@ -7,8 +7,10 @@ Spec (paths relative to the spec file; numbers as 0x7ABD, #x7ABD or decimal)::
       - from: ecmc_TMLCode.sw                     # every block of another image ...
         start: 0x4000                             # ... or only the block starting here
       - start: 0x5638                             # raw words
-        words: [0x4009, 0, 0, 0, 0, 1, 0]
+        words: [0x1234, 0x5678]
         replace: true                             # replace a base block with the same start
+      - start: 0x5700                             # a CAM table (§18.4.1), checksum word computed
+        cam: {step: 64, master_start: 0, points: [0, 1000, 4000]}
     setup:                                        # values over the base image's setup table
       parameters: ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.ems_parameters.cfg
       values: {PWMPER: 2250, CLPER: 2, 0x0250: 2}
@@ -103,8 +105,12 @@ def build_from(data: Any, locate: Any, base_dir: Path, source: str) -> SwImage:
             if not 0 <= start <= 0xFFFF or start + len(words) - 1 > 0xFFFF:
                 raise InputError(f"block 0x{start:X} with {len(words)} words does not fit 0x0000..0xFFFF", locate(where))
             new = [Block(start, tuple(words))]
+        elif "start" in spec and "cam" in spec:
+            start = number(spec["start"], where + ("start",), "block start")
+            new = [Block(start, _cam_words(spec["cam"], where + ("cam",), locate, number))]
         else:
-            raise InputError("a block needs 'from: FILE' (optionally with 'start') or 'start' and 'words'", locate(where))
+            raise InputError("a block needs 'from: FILE' (optionally with 'start'), or 'start' with 'words' or 'cam'",
+                             locate(where))
         if spec.get("replace"):
             starts = {b.start for b in new}
             blocks = [b for b in blocks if b.start not in starts]
@@ -136,12 +142,33 @@ def build_from(data: Any, locate: Any, base_dir: Path, source: str) -> SwImage:
     return fix_integrity(image)
 
 
+def _cam_words(cam: Any, where: tuple[Any, ...], locate: Any, number: Any) -> tuple[int, ...]:
+    from ecattool.sw.layout import cam_table_words
+
+    if not isinstance(cam, dict) or not isinstance(cam.get("points"), list):
+        raise InputError("cam is a mapping with 'step' (1..128), 'points' (Y list) and optional 'master_start'",
+                         locate(where))
+    step = number(cam.get("step", 1), where + ("step",), "interpolation step")
+    points = [number(y, where + ("points", k), "CAM point") for k, y in enumerate(cam["points"])]
+    master = number(cam.get("master_start", 0), where + ("master_start",), "master start")
+    try:
+        return cam_table_words(step, points, master)
+    except InputError as exc:
+        raise InputError(exc.message, locate(where)) from None
+
+
 def _apply_setup(image: SwImage, setup: Any, locate: Any, path_of: Any) -> SwImage:
     from ecattool.sw.params import read_parameters
     from ecattool.sw.setup import patch
 
     if not isinstance(setup, dict) or not isinstance(setup.get("values", {}), dict):
         raise InputError("setup is a mapping with 'parameters' (file) and 'values' (NAME: value)", locate(("setup",)))
+    from ecattool.sw.layout import setup_table
+
+    try:
+        setup_table(image)
+    except InputError as exc:
+        raise InputError(exc.message, locate(("setup",))) from None
     params = read_parameters(path_of(setup["parameters"], ("setup", "parameters"))) if "parameters" in setup else None
     values = setup.get("values") or {}
     assignments = [(str(k), str(v)) for k, v in values.items()]

@@ -176,6 +176,30 @@ def identification_words(text_words: tuple[int, ...], unknown: int) -> tuple[int
 
 
 # ------------------------------------------------------------------------------------------------ CAM tables
+CAM_STEPS = {1 << k: k for k in range(8)}
+CAM_MAX_POINTS = 8192
+
+
+def cam_table_words(step: int, points: list[int], master_start: int = 0) -> tuple[int, ...]:
+    """A CAM table in the drive's EEPROM format (§18.4.1), checksum word included.
+
+    ``step`` is the distance of the X points (1, 2, 4 ... 128), ``points`` the Y values (INTEGER32).
+    """
+    if step not in CAM_STEPS:
+        raise InputError(f"CAM interpolation step {step} must be a power of 2 from 1 to 128")
+    if not 1 <= len(points) <= CAM_MAX_POINTS:
+        raise InputError(f"a CAM table has 1 to {CAM_MAX_POINTS} points, not {len(points)}")
+    if not 0 <= master_start <= 0x7FFF_FFFF:
+        raise InputError(f"CAM master start {master_start} must be a non-negative INTEGER32")
+    words = [(CAM_STEPS[step] << 13) | (len(points) - 1), master_start & 0xFFFF, master_start >> 16, 0, 0]
+    for y in points:
+        if not -0x8000_0000 <= y <= 0x7FFF_FFFF:
+            raise InputError(f"CAM point {y} does not fit an INTEGER32")
+        y &= 0xFFFF_FFFF
+        words += [y & 0xFFFF, y >> 16]
+    return tuple(words) + (checksum(words),)
+
+
 def cam_tables(block: Block) -> list[tuple[int, int]] | None:
     """``[(offset, points)]`` when the block is made of complete CAM tables (§18.4.1), else None."""
     w = block.words

@@ -9,6 +9,7 @@ not patched: the table stores them in base SI units while ``parameters.cfg`` pri
 
 from __future__ import annotations
 
+import re
 import struct
 from dataclasses import dataclass
 from fractions import Fraction
@@ -136,7 +137,7 @@ def _resolve(key: str, params: ParameterTable | None, location: Location | None)
         p = params.by_name(k)
         if p is not None:
             return p.address, p
-    if k[:2].lower() in ("0x", "#x") or k[-1:].lower() == "h":
+    if k[:2].lower() in ("0x", "#x") or re.fullmatch(r"[0-9A-Fa-f]+[hH]", k):
         address = parse_int(k, location, "address")
         return address, params.by_address(address) if params else None
     if params is None:
