@@ -488,7 +488,7 @@ class Drive:
     def _download(self, index: int, sub: int, data: bytes) -> bool:
         """Check and apply one download; returns True when the drive sends no reply (2080h reset)."""
         e = self._entry(index, sub)
-        if not e.access.write:
+        if not e.access.write or (sub and index in getattr(self.rules, "read_only_indices", ())):
             raise _abort(index, sub, A.READ_ONLY)
         if self.esm not in e.access.write:
             raise _abort(index, sub, A.DATA_CANNOT_BE_STORED_STATE)
@@ -629,6 +629,8 @@ class Drive:
             raise _abort(index, 0, A.VALUE_TOO_HIGH)
         if self.rules.max_pdo_entries is not None and n > self.rules.max_pdo_entries:
             raise _abort(index, 0, A.PDO_LENGTH_EXCEEDED)
+        if not self.rules.mapping_write_needs_sub0_zero:
+            return  # entries may follow sub-index 0 (Control Techniques 5.1.3); SAFE-OP checks the result
         total = 0
         for s in subs:
             v = self._read_int(index, s) or 0

@@ -1,0 +1,262 @@
+"""The simulator against the HDT and Control Techniques oracles, and the generic CoE behaviour."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from ecattool.errors import EcatToolError, SdoAbort, SdoTimeout, StateChangeError
+from ecattool.od.model import EcState
+from ecattool.sim import Drive
+from ecattool.target import SimTarget, SlaveTarget, open_target
+
+PRE, SAFE, OP = EcState.PREOP, EcState.SAFEOP, EcState.OP
+
+
+def w(d: Drive, index: int, sub: int, value: int, size: int) -> None:
+    d.sdo_download(index, sub, value.to_bytes(size, "little", signed=value < 0))
+
+
+def r(d: Drive, index: int, sub: int = 0) -> int:
+    return int.from_bytes(d.sdo_upload(index, sub), "little")
+
+
+def code_of(fn, *args) -> int:
+    with pytest.raises(SdoAbort) as exc:
+        fn(*args)
+    return exc.value.code
+
+
+def at(name: str, state: EcState = PRE, **kw) -> Drive:
+    d = Drive.from_profile(name, **kw)
+    for s in (PRE, SAFE, OP):
+        d.request_state(s)
+        if s is state:
+            break
+    return d
+
+
+# --- HDT ------------------------------------------------------------------------------------------
+def test_hdt_oracle_10_11_13_default_mappings_reach_op():
+    d = at("hdt")
+    assert [r(d, 0x1600, s) for s in range(4)] == [3, 0x60400010, 0x60420010, 0x607C0020]
+    assert [r(d, 0x1603, s) for s in range(2)] == [1, 0x60C10120]
+    assert [r(d, 0x1A00, s) for s in range(4)] == [3, 0x60410010, 0x60610008, 0x10010008]
+    d.request_state(SAFE)
+    d.request_state(OP)
+    assert d.process_image_sizes() == (8 + 8 + 8 + 4, 4 + 8 + 4 + 4)
+
+
+def test_hdt_oracle_14_at_most_8_entries():
+    d = at("hdt")
+    w(d, 0x1C12, 0, 0, 1)
+    assert code_of(w, d, 0x1600, 0, 9, 1) in (0x06090031, 0x06040042)
+
+
+def test_hdt_oracle_26_modes_and_display():
+    d = at("hdt")
+    assert r(d, 0x6060) == 2
+    w(d, 0x6060, 0, 0xFE, 1)  # -2
+    assert code_of(w, d, 0x6060, 0, 5, 1) == 0x06090030
+
+
+def test_hdt_oracle_27_quick_stop_option_codes():
+    for option, end in ((0, 0x40), (2, 0x40), (5, 0x07), (6, 0x07)):
+        d = at("hdt", OP)
+        w(d, 0x605A, 0, option, 2)
+        for cw in (0x06, 0x07, 0x0F, 0x02):
+            w(d, 0x6040, 0, cw, 2)
+        sw = r(d, 0x6041)
+        assert (sw & 0x4F if end == 0x40 else sw & 0x6F) == end
+
+
+def test_hdt_oracle_d1_degrees_to_65536_counts():
+    d = at("hdt")
+    w(d, 0x6093, 1, 65536, 4)
+    w(d, 0x6093, 2, 360, 4)
+    assert d.units.position_to_internal(90) == 16384
+    assert d.units.velocity_to_internal(1000) == Fraction(65536 * 1000, 60)  # oracle 40
+
+
+def test_hdt_alarm_emcy_layout():
+    d = at("hdt", OP)
+    d.inject_hdt_alarm(13, 0x8611)
+    assert d.emergencies[-1].to_bytes()[3:7] == bytes.fromhex("00100000")
+    assert r(d, 0x603F) == 0x8611
+
+
+# --- Control Techniques ---------------------------------------------------------------------------
+def test_ct_oracle_10_11_quick_start_sequence():
+    """Table 5.3 with TxPDO6 sub 2 as Table 5.2 names it (Pr 20.21; the printed 0x20141620 is Pr 20.22, A1)."""
+    d = at("controltechniques")
+    for idx, sub, val, size in [
+        (0x1600, 0, 3, 1), (0x1600, 1, 0x60400010, 4), (0x1600, 2, 0x60420010, 4), (0x1600, 3, 0x20141520, 4),
+        (0x1A00, 0, 2, 1), (0x1A00, 1, 0x60410010, 4), (0x1A00, 2, 0x60640020, 4),
+        (0x1C12, 0, 0, 1), (0x1C13, 0, 0, 1), (0x1A05, 0, 2, 1), (0x1A05, 1, 0x20121610, 4),
+        (0x1A05, 2, 0x20141520, 4), (0x1C12, 1, 0x1600, 2), (0x1C12, 0, 1, 1),
+        (0x1C13, 1, 0x1A00, 2), (0x1C13, 2, 0x1A05, 2), (0x1C13, 0, 2, 1),
+    ]:
+        w(d, idx, sub, val, size)
+    d.request_state(SAFE)
+    assert d.process_image_sizes() == (8, 12)
+
+
+def test_ct_oracle_12_default_configuration():
+    d = at("controltechniques", OP)
+    assert d.process_image_sizes() == (4, 4)
+
+
+def test_ct_oracle_14_six_mappings_and_third_pdo_refused():
+    d = at("controltechniques")
+    w(d, 0x1C12, 0, 0, 1)
+    assert code_of(w, d, 0x1600, 0, 6, 1) in (0x06040042, 0x06090031)
+    w(d, 0x1C12, 1, 0x1600, 2)
+    w(d, 0x1C12, 2, 0x1601, 2)
+    assert code_of(w, d, 0x1C12, 0, 3, 1) == 0x06090031
+
+
+def test_ct_oracle_54_natural_abort_codes():
+    d = at("controltechniques")
+    assert code_of(w, d, 0x608F, 1, 1, 4) == 0x06010002
+    assert code_of(d.sdo_upload, 0x1602, 0) == 0x06020000
+    assert code_of(d.sdo_upload, 0x1018, 5) == 0x06090011
+    w(d, 0x1C12, 0, 0, 1)
+    w(d, 0x1600, 0, 0, 1)
+    assert code_of(w, d, 0x1600, 1, 0x60910120, 4) == 0x06040041
+
+
+def test_ct_oracle_26_shutdown_needs_op():
+    d = at("controltechniques", SAFE)
+    w(d, 0x6040, 0, 0x06, 2)
+    assert r(d, 0x6041) & 0x4F == 0x40
+    d.request_state(OP)
+    w(d, 0x6040, 0, 0x06, 2)
+    assert r(d, 0x6041) & 0x6F == 0x21
+    d.request_state(SAFE)  # dropping from OP -> switch on disabled
+    assert r(d, 0x6041) & 0x4F == 0x40
+
+
+def test_ct_oracle_28_mode_locked_when_enabled():
+    d = at("controltechniques", OP)
+    for cw in (0x06, 0x07, 0x0F):
+        w(d, 0x6040, 0, cw, 2)
+    assert code_of(w, d, 0x6060, 0, 8, 1) == 0x08000022
+    assert code_of(w, d, 0x6060, 0, 1, 1) in (0x06090030, 0x08000022)
+
+
+def test_ct_oracle_30_position_factor():
+    d = at("controltechniques")
+    d._put(0x608F, 1, 4096)  # 608Fh is read-only over SDO: the encoder sets it
+    w(d, 0x6091, 1, 3, 4)
+    w(d, 0x6092, 1, 10, 4)
+    assert d.units.position_factor() == Fraction(12288, 10)
+
+
+def test_ct_oracle_52_trip_codes():
+    d = at("controltechniques", OP)
+    for trip, code in ((3, 0x2300), (31, 0x5530), (7, 0x1000)):
+        d.inject_trip(trip)
+        assert r(d, 0x603F) == code
+        w(d, 0x6040, 0, 0x00, 2)
+        w(d, 0x6040, 0, 0x80, 2)
+
+
+# --- ESM, SDO rules, faults, target ---------------------------------------------------------------
+def test_esm_transitions_and_no_mailbox_in_init():
+    d = Drive.from_profile("hdt")
+    with pytest.raises(SdoTimeout):
+        d.sdo_upload(0x1000, 0)
+    with pytest.raises(StateChangeError) as exc:
+        d.request_state(SAFE)
+    assert exc.value.al_status == 0x0011
+    d.request_state(PRE)
+    assert r(d, 0x1000) == 0x00020192
+
+
+def test_sdo_length_and_range_codes():
+    d = at("hdt")
+    assert code_of(d.sdo_download, 0x6040, 0, b"\x06") == 0x06070013
+    assert code_of(d.sdo_download, 0x6040, 0, b"\x06\x00\x00") == 0x06070012
+    assert code_of(d.sdo_download, 0x6041, 0, b"\x06\x00") == 0x06010002
+    assert code_of(w, d, 0x6046, 1, 2**31, 4) == 0x06090031
+
+
+def test_fault_injection_abort_drop_and_refuse():
+    d = at("hdt")
+    d.faults.abort_sdo(2, 0x08000000)
+    r(d, 0x1000)
+    assert code_of(d.sdo_upload, 0x1000, 0) == 0x08000000
+    d.faults.drop_reply(1)
+    with pytest.raises(SdoTimeout):
+        w(d, 0x6060, 0, 8, 1)
+    assert r(d, 0x6060) == 8  # executed, only the reply was lost
+    d.faults.refuse_state(SAFE, 0x001A)
+    with pytest.raises(StateChangeError) as exc:
+        d.request_state(SAFE)
+    assert exc.value.al_status == 0x001A
+    d.request_state(SAFE)
+    assert [e.kind for e in d.events].count("state_refused") == 1
+
+
+def test_complete_access_upload_and_download():
+    d = at("controltechniques")
+    d.device.mailbox.coe.complete_access = True
+    data = d.sdo_upload(0x1C13, 0, complete_access=True)
+    assert data[:2] == b"\x01\x00" and data[2:4] == (0x1A05).to_bytes(2, "little")
+    d.sdo_download(0x1C13, 0, b"\x02\x00" + (0x1A00).to_bytes(2, "little") + (0x1A05).to_bytes(2, "little"),
+                   complete_access=True)
+    assert [r(d, 0x1C13, s) for s in range(3)] == [2, 0x1A00, 0x1A05]
+    assert code_of(d.sdo_download, 0x1C13, 0, b"\x03\x00\x00\x1A\x01\x1A\x05\x1A", True) == 0x06070010
+    assert code_of(d.sdo_download, 0x1C13, 0, b"\x03\x00\x01\x1A\x05\x1A", True) == 0x06090031
+    assert [r(d, 0x1C13, s) for s in range(3)] == [2, 0x1A00, 0x1A05]  # all or nothing
+
+
+def test_complete_access_refused_when_unsupported():
+    d = at("technosoft-ipos")
+    assert code_of(d.sdo_upload, 0x1C12, 0, True) == 0x06010004
+
+
+def test_sim_target():
+    from ecattool import profiles
+
+    t = SimTarget.from_devices([profiles.load("hdt"), profiles.load("controltechniques")])
+    assert [s.position for s in t.slaves()] == [0, 1]
+    assert all(isinstance(s, SlaveTarget) for s in t.slaves())
+    assert open_target("sim", [profiles.load("hdt")]).slave(0).identity().vendor_id == 0x289
+    with pytest.raises(EcatToolError):
+        open_target("pysoem:eth0")
+
+
+@given(st.lists(st.tuples(st.sampled_from([0x1600, 0x1601, 0x1A00, 0x1C12, 0x1C13, 0x6040, 0x6060, 0x6093, 0x1018,
+                                           0x1000, 0x5000, 0x2000]),
+                          st.integers(0, 9), st.binary(max_size=6)), max_size=25),
+       st.sampled_from(["hdt", "controltechniques", "technosoft-ipos"]))
+def test_random_writes_only_raise_ecattool_errors(writes, family):
+    d = _fresh(family)
+    for index, sub, data in writes:
+        try:
+            d.sdo_download(index, sub, data)
+        except SdoAbort:
+            pass
+    try:
+        d.request_state(SAFE)
+        d.request_state(OP)
+        d.exchange(bytes(d.process_image_sizes()[0]))
+    except StateChangeError as exc:
+        assert exc.al_status in (0x001D, 0x001E)
+
+
+_CACHE: dict[str, object] = {}
+
+
+def _fresh(family: str) -> Drive:
+    from ecattool import profiles
+
+    if family not in _CACHE:
+        _CACHE[family] = profiles.load(family)
+    d = Drive.from_device(_CACHE[family])  # type: ignore[arg-type]
+    d.request_state(PRE)
+    return d
