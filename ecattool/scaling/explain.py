@@ -155,6 +155,14 @@ def explain(values: Values, family: str = "technosoft-ipos", *, slow_loop: Fract
         assert dim is not None and sp is not None
         e.data["rpm per 6042h unit"] = dim * sp
         e.lines.append(("vl velocity", f"6042h: 1 unit = {_g(dim * sp)} rpm (604B x 604C, multiplicative reading)"))
+    if fam == "technosoft-ipos":
+        used = (0x6093, 0x6094, 0x6097, 0x2071) if fs == "obsolete" else (0x6093, 0x6094, 0x210F, 0x2110)
+        for index in used:
+            if (index, 1) in values and max(values[(index, 1)], values.get((index, 2), 1)) < 0x10000:
+                e.findings.append(Finding("scaling.small-pair", Severity.WARNING,
+                                          f"0x{index:04X} = {values[(index, 1)]}/{values.get((index, 2), 1)}: Technosoft "
+                                          "computes small pairs with round-off (§5.1.10.1); write e.g. "
+                                          f"{values[(index, 1)] << 16}/{values.get((index, 2), 1) << 16}", location))
     if ((0x607E, 0) in values):
         pol = values[(0x607E, 0)]
         e.lines.append(("polarity", f"607Eh = 0x{pol:02X}: positions {'inverted' if pol & 0x80 else 'normal'}, "

@@ -47,7 +47,7 @@ _PREFIX = {"k": 3, "c": -2, "d": -1, "m": -3, "u": -6, "µ": -6, "μ": -6, "n": 
 _PREFIX_NAME = {3: "k", 0: "", -1: "d", -2: "c", -3: "m", -6: "µ", -9: "n", 6: "M", 9: "G", 2: "h", 1: "da", -12: "p"}
 #: time units in seconds
 _TIME = {"s": Fraction(1), "sec": Fraction(1), "ms": Fraction(1, 1000), "us": Fraction(1, 10**6),
-         "µs": Fraction(1, 10**6), "min": Fraction(60), "h": Fraction(3600)}
+         "µs": Fraction(1, 10**6), "min": Fraction(60), "h": Fraction(3600), "d": Fraction(86400)}
 #: SI denominator notation indices (Technosoft Table 5.5): s, min, s², s³
 _SI_DEN = {("s", 1): 0x03, ("min", 1): 0x47, ("s", 2): 0x57, ("s", 3): 0xA0}
 _SI_NUM_NAME = {0x00: "", 0x01: "m", 0x10: "rad", 0x41: "deg", 0xB4: "rot", 0xB5: "inc", 0xAC: "step"}
@@ -199,7 +199,7 @@ _APPENDIX_B: dict[tuple[str, int, str], tuple[int, int]] = {
     ("length", 1, "m/h"): (13, 83), ("length", 1, "km/h"): (13, 84),
     ("angle", 1, "rev/s"): (11, 0), ("angle", 1, "rev/min"): (11, 73), ("angle", 1, "rev/h"): (11, 74),
     ("time", 0, "s"): (4, 0), ("time", 0, "min"): (4, 70), ("time", 0, "h"): (4, 74), ("time", 0, "ms"): (4, -3),
-    ("time", 0, "us"): (4, -6), ("time", 0, "µs"): (4, -6),
+    ("time", 0, "us"): (4, -6), ("time", 0, "µs"): (4, -6), ("time", 0, "d"): (4, 77),
 }
 #: what ecattool writes for a custom unit: the manual says "set it to 1 instead of 0" (docs/decisions.md)
 CUSTOM_INDEX = (1, 1)
@@ -218,18 +218,23 @@ def dimension_notation(unit: Unit | str) -> tuple[int, int, bool]:
     return CUSTOM_INDEX[0], CUSTOM_INDEX[1], False
 
 
+_NICE = {"d": "day", "h": "hour", "min": "minute", "arcmin": "minute (angle)", "arcsec": "second (angle)",
+         "deg": "degree", "gon": "newdegree (gon)", "rev/min": "rpm", "rev/s": "rev/s"}
+
+
 def describe_dimension(dimension: int, notation: int) -> str:
     """Text of an Appendix B dimension/notation pair (e.g. 1, -6 → 'µm')."""
     for (kind, order, canon), (d, n) in _APPENDIX_B.items():
         if d == dimension and n == notation:
-            return canon
+            return _NICE.get(canon, canon)
     names = {0: "dimensionless", 1: "m", 2: "m²", 3: "m³", 4: "s", 9: "W", 10: "VA", 11: "rev/s", 12: "rad", 13: "m/s",
              16: "Nm", 17: "K", 21: "V", 22: "A", 24: "%", 28: "Hz", 32: "steps", 33: "steps/rev"}
     base = names.get(dimension, f"dimension {dimension}")
     if notation == 0:
         return base
     if notation < 64:
-        return f"10^{notation} {base}"
+        pre = _PREFIX_NAME.get(notation)
+        return f"{pre}{base}" if pre is not None and " " not in base else f"10^{notation} {base}"
     return f"{base} (notation {notation})"
 
 
