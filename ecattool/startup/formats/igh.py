@@ -4,14 +4,14 @@ Per slave: ``ec_pdo_entry_info_t``, ``ec_pdo_info_t`` and ``ec_sync_info_t`` tab
 (SM0/SM1 mailboxes, SM2 outputs, SM3 inputs), and a function ``int <name>_configure(ec_master_t *master)``
 that creates the slave configuration, registers the PDOs, adds every startup SDO with
 ``ecrt_slave_config_sdo8/16/32`` by size (``ecrt_slave_config_sdo`` for other sizes,
-``ecrt_slave_config_complete_sdo`` for complete access) and sets DC. IgH sends all SDO configurations in
+``ecrt_slave_config_complete_sdo`` for complete access), SoE IDNs with ``ecrt_slave_config_idn`` and sets DC. IgH sends all SDO configurations in
 PRE-OP before SAFE-OP; a command of another transition gets a comment saying so. Export only.
 """
 
 from __future__ import annotations
 
 from ecattool.errors import EncodeError
-from ecattool.startup.config import SlaveConfig
+from ecattool.startup.config import SlaveConfig, SoeCommand
 from ecattool.startup.formats._common import unique_identifiers
 from ecattool.startup.model import StartupCommand
 
@@ -51,6 +51,21 @@ def _sdo_call(ident: str, n: int, cmd: StartupCommand, body: list[str]) -> None:
         call = (f"ecrt_slave_config_sdo(sc, 0x{cmd.index:04x}, 0x{cmd.subindex:02x}, {ident}_sdo{n}, "
                 f"sizeof({ident}_sdo{n}))")
     body.append(f"    if ({call}) return -1;{_c_comment(note)}")
+
+
+#: IgH applies IDN configurations when entering these states
+_IDN_STATE = {"PS": "EC_AL_STATE_PREOP", "SO": "EC_AL_STATE_SAFEOP"}
+
+
+def _idn_call(ident: str, n: int, s: SoeCommand, body: list[str]) -> None:
+    state = _IDN_STATE.get(s.transition)
+    if state is None or not s.data:
+        body.append(f"    /* SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()}: IgH configures IDNs "
+                    f"only in PRE-OP/SAFE-OP; not written */")
+        return
+    body.append(f"    static const uint8_t {ident}_idn{n}[] = {{{_c_bytes(s.data)}}};")
+    body.append(f"    if (ecrt_slave_config_idn(sc, {s.drive_no}, {s.idn}, {state}, {ident}_idn{n}, "
+                f"sizeof({ident}_idn{n}))) return -1;{_c_comment(s.comment)}")
 
 
 def _tables(ident: str, c: SlaveConfig) -> list[str]:
@@ -108,9 +123,8 @@ def export(configs: list[SlaveConfig]) -> str:
         if c.dc_assign_activate:
             body.append(f"    ecrt_slave_config_dc(sc, 0x{c.dc_assign_activate:04x}, {c.dc_cycle_ns or 0}U, "
                         f"{c.dc_shift_ns or 0}, 0U, 0);")
-        for s in c.soe_commands:
-            body.append(f"    /* SoE IDN {s.idn} drive {s.drive_no} ({s.transition}): {s.data.hex()} -- "
-                        "use ecrt_slave_config_idn() */")
+        for n, s in enumerate(c.soe_commands):
+            _idn_call(ident, n, s, body)
         out += body
         out.append("    return 0;")
         out.append("}")

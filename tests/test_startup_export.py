@@ -1,0 +1,433 @@
+"""Exporters, each checked structurally: ENI element order, IgH C through gcc, pysoem executed against a fake
+master, ros2/JSON/CSV/TwinCAT/ecmc read back by their importers."""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+from lxml import etree
+
+from ecattool.errors import EncodeError, InputError
+from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
+from ecattool.startup import FORMATS, SlaveConfig, SoeCommand, StartupCommand, StartupList, export, import_bytes, import_file
+from ecattool.startup.formats import eni
+from tests.conftest import corpus_path
+
+
+def _u(size: int, value: int) -> bytes:
+    return value.to_bytes(size, "little")
+
+
+def technosoft_rxpdo3_list() -> StartupList:
+    """Technosoft oracle 15 (RxPDO3 example, §2.5), as a startup list."""
+    seq = [(0x1C12, 0, 1, 0), (0x1602, 0, 1, 0), (0x1602, 1, 4, 0x60400010), (0x1602, 2, 4, 0x60600008),
+           (0x1602, 0, 1, 2), (0x1C12, 3, 2, 0x1602), (0x1C12, 0, 1, 3)]
+    return StartupList([StartupCommand("PS", i, s, _u(n, v), comment=f"step {k}") for k, (i, s, n, v) in enumerate(seq)],
+                       name="iPOS", vendor_id=0x1A3, product_code=0x019F418D)
+
+
+def technosoft_csv_list() -> StartupList:
+    """Technosoft oracle 18 (CSV mapping, §14.2)."""
+    seq = [(0x1C12, 0, 1, 0), (0x1603, 0, 1, 0), (0x1603, 1, 4, 0x60FF0020), (0x1603, 0, 1, 1),
+           (0x1C12, 3, 2, 0x1603), (0x1C12, 0, 1, 3)]
+    return StartupList([StartupCommand("PS", i, s, _u(n, v)) for i, s, n, v in seq])
+
+
+def sample_config() -> SlaveConfig:
+    rx = [Pdo(Direction.RX, 0x1600, "RxPDO1", [PdoEntry(0x6040, 0, 16, "Controlword", "UINT"),
+                                               PdoEntry(0x607A, 0, 32, "Target position", "DINT")]),
+          Pdo(Direction.RX, 0x1602, "RxPDO3", [PdoEntry(0x6060, 0, 8, "Modes of operation", "SINT"),
+                                               PdoEntry(0, 0, 8)])]
+    tx = [Pdo(Direction.TX, 0x1A00, "TxPDO1", [PdoEntry(0x6041, 0, 16, "Statusword", "UINT"),
+                                               PdoEntry(0x6064, 0, 32, "Position actual value", "DINT")])]
+    cmds = [StartupCommand("PS", 0x1C12, 0, b"\x00", comment="clear sm pdos (0x1C12)", type_name="USINT", value=0),
+            StartupCommand("PS", 0x1600, 1, _u(4, 0x60400010), comment="download pdo 0x1600 entry"),
+            StartupCommand("PS", 0x1C12, 0, bytes.fromhex("020000160216"), complete_access=True,
+                           comment="assign (complete access)"),
+            StartupCommand("PS", 0x6060, 0, b"\x08", type_name="SINT", value=8, comment="CSP"),
+            StartupCommand("PS", 0x60C2, 2, b"\xfd", type_name="SINT", value=-3),
+            StartupCommand("SO", 0x2010, 0, bytes(range(10)), comment="a 10-byte domain", timeout_ms=500),
+            StartupCommand("IP", 0x6098, 0, b"\x23", comment="homing method 35")]
+    return SlaveConfig(StartupList(cmds, name="Axis 1"), name="Axis 1", position=2,
+                       identity=Identity(0x1A3, 0x019F418D, 0x10), rx_pdos=rx, tx_pdos=tx,
+                       dc_assign_activate=0x0300, dc_cycle_ns=1_000_000, dc_shift_ns=0)
+
+
+def _key(cmd: StartupCommand) -> tuple:
+    return (cmd.transition, cmd.index, cmd.subindex, cmd.data, cmd.complete_access)
+
+
+# --- ENI -----------------------------------------------------------------------------------------------
+
+def _children(el, tag_filter=None) -> list[str]:
+    return [c.tag for c in el if isinstance(c.tag, str)]
+
+
+def _in_order(tags: list[str], order: tuple[str, ...]) -> bool:
+    """Every tag is in ``order`` and tags appear in that order (repeats allowed)."""
+    positions = [order.index(t) for t in tags]
+    return positions == sorted(positions)
+
+
+def test_eni_structure_follows_the_written_down_order():
+    root = etree.fromstring(export(sample_config(), "eni").encode())
+    assert root.tag == "EtherCATConfig"
+    (slave,) = root.findall("Config/Slave")
+    assert _children(slave) == ["Info", "ProcessData", "Mailbox", "InitCmds", "DC"]
+    assert _children(slave.find("Info")) == list(eni.INFO_ORDER)
+    assert slave.findtext("Info/AutoIncAddr") == str((-2) & 0xFFFF) and slave.findtext("Info/PhysAddr") == "1003"
+    assert _in_order(_children(slave.find("Mailbox")), eni.MAILBOX_ORDER)
+    cmds = slave.findall("Mailbox/CoE/InitCmds/InitCmd")
+    assert len(cmds) == 7
+    for ic in cmds:
+        assert _children(ic) == list(eni.COE_INITCMD_ORDER)
+        assert ic.findtext("Ccs") == "1"
+    first = cmds[0]
+    assert (first.findtext("Index"), first.findtext("SubIndex"), first.findtext("Data")) == ("7186", "0", "00")
+    assert cmds[1].findtext("Data") == "10004060"  # 0x60400010 little-endian
+    assert cmds[2].get("CompleteAccess") == "true" and cmds[0].get("CompleteAccess") is None
+    assert cmds[5].findtext("Timeout") == "500" and cmds[5].findtext("Transition") == "SO"
+    pd = slave.find("ProcessData")
+    assert _children(pd) == ["Sm2", "Sm3", "TxPdo", "RxPdo", "RxPdo"]
+    assert [p.text for p in pd.findall("Sm2/Pdo")] == ["5632", "5634"]
+    for pdo in pd.findall("RxPdo") + pd.findall("TxPdo"):
+        assert _in_order(_children(pdo), eni.PDO_ORDER)
+        for entry in pdo.findall("Entry"):
+            assert _in_order(_children(entry), eni.ENTRY_ORDER)
+    dc_cmd = slave.find("InitCmds/InitCmd")
+    assert _children(dc_cmd) == list(eni.ECAT_INITCMD_ORDER)
+    assert (dc_cmd.findtext("Ado"), dc_cmd.findtext("Data"), dc_cmd.findtext("Adp")) == ("2432", "0003", "1003")
+
+
+def test_eni_round_trip_keeps_commands_pdos_identity_dc():
+    cfg = sample_config()
+    (back,) = import_bytes(export(cfg, "eni").encode(), "x.xml")
+    assert [_key(c) for c in back.commands] == [_key(c) for c in cfg.commands]
+    assert [c.comment for c in back.commands] == [c.comment for c in cfg.commands]
+    assert [c.timeout_ms for c in back.commands] == [c.timeout_ms for c in cfg.commands]
+    assert back.identity == cfg.identity and back.position == 2 and back.name == "Axis 1"
+    assert back.dc_assign_activate == 0x0300 and back.dc_cycle_ns == 1_000_000
+    assert [(p.index, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in back.rx_pdos] == \
+        [(p.index, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in cfg.rx_pdos]
+
+
+def test_eni_corpus_round_trip():
+    path = corpus_path("configs", "eni_kpierczy_test_eni.xml")
+    configs = import_file(path)
+    back = import_bytes(export(configs, "eni").encode(), "again.xml")
+    assert [[_key(c) for c in s.commands] for s in back] == [[_key(c) for c in s.commands] for s in configs]
+    assert [s.identity for s in back] == [s.identity for s in configs]
+    assert [s.dc_assign_activate for s in back] == [s.dc_assign_activate for s in configs]
+
+
+def test_eni_carries_soe_commands():
+    (c,) = import_file(corpus_path("configs", "lcec_initcmds_AX5206-AM8032-async.xml"))
+    text = export(c, "eni")
+    root = etree.fromstring(text.encode())
+    soe = root.findall("Config/Slave/Mailbox/SoE/InitCmds/InitCmd")
+    assert len(soe) == 87 and _children(soe[0]) == list(eni.SOE_INITCMD_ORDER)
+    (back,) = import_bytes(text.encode(), "x.xml")
+    assert [(s.transition, s.idn, s.drive_no, s.data) for s in back.soe_commands] == \
+        [(s.transition, s.idn, s.drive_no, s.data) for s in c.soe_commands]
+
+
+# --- IgH C ---------------------------------------------------------------------------------------------
+
+ECRT_H = """
+#include <stdint.h>
+#include <stddef.h>
+typedef struct ec_master ec_master_t;
+typedef struct ec_slave_config ec_slave_config_t;
+typedef enum { EC_DIR_INVALID, EC_DIR_OUTPUT, EC_DIR_INPUT, EC_DIR_COUNT } ec_direction_t;
+typedef enum { EC_WD_DEFAULT, EC_WD_ENABLE, EC_WD_DISABLE } ec_watchdog_mode_t;
+typedef enum { EC_AL_STATE_INIT = 1, EC_AL_STATE_PREOP = 2, EC_AL_STATE_SAFEOP = 4, EC_AL_STATE_OP = 8 } ec_al_state_t;
+typedef struct { uint16_t index; uint8_t subindex; uint8_t bit_length; } ec_pdo_entry_info_t;
+typedef struct { uint16_t index; unsigned int n_entries; ec_pdo_entry_info_t const *entries; } ec_pdo_info_t;
+typedef struct { uint8_t index; ec_direction_t dir; unsigned int n_pdos; ec_pdo_info_t const *pdos;
+                 ec_watchdog_mode_t watchdog_mode; } ec_sync_info_t;
+#define EC_END ~0U
+ec_slave_config_t *ecrt_master_slave_config(ec_master_t *master, uint16_t alias, uint16_t position,
+                                            uint32_t vendor_id, uint32_t product_code);
+int ecrt_slave_config_pdos(ec_slave_config_t *sc, unsigned int n_syncs, const ec_sync_info_t syncs[]);
+int ecrt_slave_config_sdo(ec_slave_config_t *sc, uint16_t index, uint8_t subindex, const uint8_t *data, size_t size);
+int ecrt_slave_config_sdo8(ec_slave_config_t *sc, uint16_t sdo_index, uint8_t sdo_subindex, uint8_t value);
+int ecrt_slave_config_sdo16(ec_slave_config_t *sc, uint16_t sdo_index, uint8_t sdo_subindex, uint16_t value);
+int ecrt_slave_config_sdo32(ec_slave_config_t *sc, uint16_t sdo_index, uint8_t sdo_subindex, uint32_t value);
+int ecrt_slave_config_complete_sdo(ec_slave_config_t *sc, uint16_t index, const uint8_t *data, size_t size);
+int ecrt_slave_config_idn(ec_slave_config_t *sc, uint8_t drive_no, uint16_t idn, ec_al_state_t state,
+                          const uint8_t *data, size_t size);
+void ecrt_slave_config_dc(ec_slave_config_t *sc, uint16_t assign_activate, uint32_t sync0_cycle, int32_t sync0_shift,
+                          uint32_t sync1_cycle, int32_t sync1_shift);
+"""
+
+
+def _gcc(source: str, tmp_path: Path) -> subprocess.CompletedProcess:
+    gcc = shutil.which("gcc")
+    assert gcc, "gcc is needed for the IgH C exporter test"
+    (tmp_path / "ecrt.h").write_text(ECRT_H)
+    c = tmp_path / "config.c"
+    c.write_text(source)
+    return subprocess.run([gcc, "-std=c99", "-Wall", "-Wextra", "-Werror", "-Wno-missing-field-initializers",
+                           "-fsyntax-only", "-I", str(tmp_path), str(c)], capture_output=True, text=True)
+
+
+def test_igh_c_compiles(tmp_path):
+    text = export(sample_config(), "igh")
+    result = _gcc(text, tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "ecrt_slave_config_sdo8(sc, 0x1c12, 0x00, 0x00U)" in text
+    assert "ecrt_slave_config_sdo32(sc, 0x1600, 0x01, 0x60400010U)" in text
+    assert "ecrt_slave_config_complete_sdo(sc, 0x1c12," in text
+    assert "ecrt_slave_config_sdo(sc, 0x2010, 0x00," in text
+    assert "{2, EC_DIR_OUTPUT, 2, axis_1_pdos + 0, EC_WD_ENABLE}" in text
+    assert "{3, EC_DIR_INPUT, 1, axis_1_pdos + 2, EC_WD_DISABLE}" in text
+    assert "ecrt_slave_config_dc(sc, 0x0300, 1000000U, 0, 0U, 0);" in text
+
+
+def test_igh_c_of_every_corpus_config_compiles(tmp_path):
+    sources = []
+    for name in ("eni_kpierczy_test_eni.xml", "ros2_technosoft_ipos3604.yaml", "ecmc_ecmciPOSXXXX.cmd",
+                 "lcec_generic-complex_ethercat-conf.xml", "lcec_initcmds_ethercat-conf.xml"):
+        sources.append(export(import_file(corpus_path("configs", name)), "igh"))
+    for i, src in enumerate(sources):
+        sub = tmp_path / str(i)
+        sub.mkdir()
+        result = _gcc(src, sub)
+        assert result.returncode == 0, result.stderr
+
+
+def test_igh_c_compiler_catches_a_broken_table(tmp_path):
+    # the check can fail: a wrong type name in the generated text is reported by gcc
+    text = export(sample_config(), "igh").replace("ec_pdo_info_t", "ec_pdo_inf_t", 1)
+    assert _gcc(text, tmp_path).returncode != 0
+
+
+def test_igh_uses_exact_sizes_for_technosoft_rxpdo3_oracle():
+    text = export(technosoft_rxpdo3_list(), "igh")
+    calls = [line.strip() for line in text.splitlines() if "ecrt_slave_config_sdo" in line]
+    sizes = [c.split("ecrt_slave_config_sdo")[1].split("(")[0] for c in calls]
+    assert sizes == ["8", "8", "32", "32", "8", "16", "8"]
+
+
+def test_igh_soe_commands_become_idn_configs(tmp_path):
+    (c,) = import_file(corpus_path("configs", "lcec_initcmds_AX5206-AM8032-async.xml"))
+    text = export(c, "igh")
+    assert _gcc(text, tmp_path).returncode == 0
+    assert "ecrt_slave_config_idn(sc, 0, 15, EC_AL_STATE_PREOP," in text
+    assert text.count("ecrt_slave_config_idn(") == sum(1 for s in c.soe_commands if s.transition in ("PS", "SO"))
+
+
+def test_igh_refuses_complete_access_from_sub_one():
+    cfg = SlaveConfig(StartupList([StartupCommand("PS", 0x1C12, 1, b"\x01\x16", complete_access=True)]))
+    with pytest.raises(EncodeError):
+        export(cfg, "igh")
+
+
+# --- pysoem --------------------------------------------------------------------------------------------
+
+class FakeSlave:
+    def __init__(self, man: int, ident: int) -> None:
+        self.man, self.id = man, ident
+        self.writes: list[tuple] = []
+        self.config_func = None
+
+    def sdo_write(self, index, subindex, data, ca=False):
+        self.writes.append((index, subindex, bytes(data), ca))
+
+
+class FakeMaster:
+    def __init__(self, slaves):
+        self.slaves = slaves
+
+
+def test_pysoem_module_writes_every_command():
+    cfg = sample_config()
+    code = export(cfg, "pysoem")
+    namespace: dict = {}
+    exec(compile(code, "startup_pysoem.py", "exec"), namespace)
+    slaves = [FakeSlave(0, 0), FakeSlave(0, 0), FakeSlave(0x1A3, 0x019F418D)]
+    namespace["install"](FakeMaster(slaves))
+    assert slaves[0].config_func is None
+    slaves[2].config_func(2)
+    assert slaves[2].writes == [(c.index, c.subindex, c.data, c.complete_access) for c in cfg.commands]
+
+
+def test_pysoem_install_checks_identity():
+    namespace: dict = {}
+    exec(compile(export(sample_config(), "pysoem"), "m.py", "exec"), namespace)
+    with pytest.raises(RuntimeError, match="expected 0x000001A3"):
+        namespace["install"](FakeMaster([FakeSlave(0, 0)] * 3))
+
+
+# --- ros2 ----------------------------------------------------------------------------------------------
+
+ROS2 = ["ros2_beckhoff_el3104.yaml", "ros2_beckhoff_el5101.yaml", "ros2_elmo_gold.yaml",
+        "ros2_epos4_config_with_gear_box.yaml", "ros2_maxon_epos3.yaml", "ros2_maxon_epos4_50_5_config.yaml",
+        "ros2_schneider_atv320.yaml", "ros2_technosoft_ipos3604.yaml"]
+
+
+def _same_channel_info(a: dict, b: dict) -> bool:
+    if a.keys() != b.keys():
+        return False
+    for k in a:
+        x, y = a[k], b[k]
+        for key in x.keys() | y.keys():
+            u, v = x.get(key), y.get(key)
+            if isinstance(u, float) and math.isnan(u):
+                if not (isinstance(v, float) and math.isnan(v)):
+                    return False
+            elif u != v:
+                return False
+    return True
+
+
+@pytest.mark.parametrize("name", ROS2)
+def test_ros2_corpus_reimports_equal(name):
+    (c,) = import_file(corpus_path("configs", name))
+    (back,) = import_bytes(export(c, "ros2").encode(), name)
+    assert back.identity == c.identity and back.dc_assign_activate == c.dc_assign_activate
+    assert [(x.index, x.subindex, x.data, x.type_name, x.value, x.comment) for x in back.commands] == \
+        [(x.index, x.subindex, x.data, x.type_name, x.value, x.comment) for x in c.commands]
+    for mine, theirs in ((back.rx_pdos, c.rx_pdos), (back.tx_pdos, c.tx_pdos)):
+        assert [(p.index, p.name, [(e.index, e.subindex, e.bit_len, e.name, e.data_type) for e in p.entries]) for p in mine] == \
+            [(p.index, p.name, [(e.index, e.subindex, e.bit_len, e.name, e.data_type) for e in p.entries]) for p in theirs]
+    assert _same_channel_info(back.channel_info, c.channel_info)
+    assert back.extra == c.extra
+
+
+def test_ros2_from_eni_types_by_size_and_marks_transitions():
+    cfg = sample_config()
+    cfg.commands[:] = [c for c in cfg.commands if not c.complete_access and len(c.data) in (1, 2, 4, 8)]
+    text = export(cfg, "ros2")
+    assert "{index: 0x1600, sub_index: 1, type: uint32, value: 1614807056}" in text
+    assert "{index: 0x60C2, sub_index: 2, type: int8, value: -3}" in text
+    assert "transition IP" in text
+    (back,) = import_bytes(text.encode(), "r.yaml")
+    assert [(c.index, c.subindex, c.data) for c in back.commands] == [(c.index, c.subindex, c.data) for c in cfg.commands]
+
+
+def test_ros2_refuses_complete_access_and_odd_sizes():
+    with pytest.raises(EncodeError, match="complete-access"):
+        export(SlaveConfig(StartupList([StartupCommand("PS", 0x1C12, 0, b"\x01\x00\x16", complete_access=True)])), "ros2")
+    with pytest.raises(EncodeError, match="3 data bytes"):
+        export(SlaveConfig(StartupList([StartupCommand("PS", 0x2000, 1, b"\x01\x02\x03")])), "ros2")
+
+
+def test_ros2_bad_type_is_located():
+    with pytest.raises(InputError) as err:
+        import_bytes(b"vendor_id: 1\nproduct_id: 2\nsdo:\n  - {index: 0x6060, sub_index: 0, type: int9, value: 1}\n", "r.yaml")
+    assert err.value.location.line == 4 and "int9" in str(err.value)
+
+
+# --- JSON, CSV, TwinCAT, ecmc ----------------------------------------------------------------------------
+
+def test_json_round_trip_is_lossless():
+    cfg = sample_config()
+    cfg.soe_commands.append(SoeCommand("PS", 15, b"\x07\x00", drive_no=1, comment="Telegram type", fixed=True))
+    cfg.channel_info[(0x1600, 1)] = {"command_interface": "position", "factor": 2.5}
+    cfg.extra["period"] = 100
+    (back,) = import_bytes(export(cfg, "json").encode(), "x.json")
+    for a, b in zip(back.commands, cfg.commands):
+        assert (a.transition, a.index, a.subindex, a.data, a.comment, a.complete_access, a.timeout_ms, a.type_name,
+                a.value, a.expect_reply, a.verify) == (b.transition, b.index, b.subindex, b.data, b.comment,
+                                                       b.complete_access, b.timeout_ms, b.type_name, b.value,
+                                                       b.expect_reply, b.verify)
+    assert len(back.commands) == len(cfg.commands)
+    assert back.commands[3].source.line > 1
+    assert back.identity == cfg.identity and back.position == 2 and back.name == "Axis 1"
+    assert (back.dc_assign_activate, back.dc_cycle_ns, back.dc_shift_ns) == (0x300, 1_000_000, 0)
+    assert [(p.index, p.name, [(e.index, e.subindex, e.bit_len, e.name, e.data_type) for e in p.entries]) for p in back.rx_pdos] == \
+        [(p.index, p.name, [(e.index, e.subindex, e.bit_len, e.name, e.data_type) for e in p.entries]) for p in cfg.rx_pdos]
+    assert [(s.idn, s.drive_no, s.data, s.fixed) for s in back.soe_commands] == [(15, 1, b"\x07\x00", True)]
+    assert back.channel_info == cfg.channel_info and back.extra == {"period": 100}
+
+
+def test_json_wrong_version_and_tag_are_errors():
+    with pytest.raises(InputError, match="version"):
+        import_bytes(b'{"format": "ecattool-startup", "version": 9, "slaves": []}', "x.json", "json")
+    with pytest.raises(InputError, match="ecattool startup"):
+        import_bytes(b'{"slaves": []}', "x.json")
+
+
+def test_csv_round_trip():
+    cfg = sample_config()
+    cfg.commands[0].comment = 'with, comma and "quotes"'
+    text = export(cfg, "csv")
+    (back,) = import_bytes(text.encode(), "x.csv")
+    assert [(c.transition, c.index, c.subindex, c.data, c.complete_access, c.timeout_ms, c.type_name, c.value, c.comment)
+            for c in back.commands] == \
+        [(c.transition, c.index, c.subindex, c.data, c.complete_access, c.timeout_ms, c.type_name, c.value, c.comment)
+         for c in cfg.commands]
+    assert back.name == "Axis 1" and back.position == 2
+    assert back.commands[1].source.line == 3
+
+
+def test_twincat_lines_reparse():
+    text = export(sample_config(), "twincat")
+    lines = text.splitlines()
+    assert lines[0] == "<PS>,CoE,0x1C12:00,0x00 (0),clear sm pdos (0x1C12)"
+    assert lines[1] == "<PS>,CoE,0x1600:01,0x60400010 (1614807056),download pdo 0x1600 entry"
+    assert lines[2].startswith("<PS>,CoE,0x1C12:00 CA,")
+    assert lines[5] == "<SO>,CoE,0x2010:00,00 01 02 03 04 05 06 07 08 09,a 10-byte domain"
+    (back,) = import_bytes(text.encode(), "x.txt")
+    assert [_key(c) for c in back.commands] == [_key(c) for c in sample_config().commands]
+    assert [c.comment for c in back.commands] == [c.comment for c in sample_config().commands]
+
+
+def test_twincat_oracle_rxpdo3_lines():
+    lines = export(technosoft_rxpdo3_list(), "twincat").splitlines()
+    assert lines[2] == "<PS>,CoE,0x1602:01,0x60400010 (1614807056),step 2"
+    assert lines[5] == "<PS>,CoE,0x1C12:03,0x1602 (5634),step 5"
+    assert lines[6] == "<PS>,CoE,0x1C12:00,0x03 (3),step 6"
+
+
+def test_twincat_oracle_csv_mapping_lines_reparse():
+    sl = technosoft_csv_list()
+    (back,) = import_bytes(export(sl, "twincat").encode(), "t.txt")
+    assert [(c.index, c.subindex, c.data) for c in back.commands] == [(c.index, c.subindex, c.data) for c in sl]
+    assert back.commands[2].data == (0x60FF0020).to_bytes(4, "little")
+
+
+def test_twincat_reads_ecmc_style_spaced_values():
+    (c,) = import_bytes(b"<PS>,CoE,0x1600:02,0x60FF 0020 (1627324448),download pdo 0x1600 entry\n", "t.txt")
+    assert c.commands[0].data == (0x60FF0020).to_bytes(4, "little")
+
+
+def test_twincat_bad_line_is_located():
+    with pytest.raises(InputError) as err:
+        import_bytes(b"<PS>,CoE,0x1C12:00,0x00 (0),ok\n<XX>,CoE,0x1C12:00,0x00 (0),bad\n", "t.txt", "twincat")
+    assert err.value.location.line == 2
+
+
+def test_ecmc_round_trip():
+    cfg = sample_config()
+    cfg.commands[:] = [c for c in cfg.commands if c.transition == "PS"]
+    text = export(cfg, "ecmc")
+    assert 'ecmcConfigOrDie "Cfg.EcAddSdo(2,0x1C12,0x0,0x0,1)"' in text
+    assert 'Cfg.EcAddSdoComplete(2,0x1C12,02 00 00 16 02 16,6)' in text
+    (back,) = import_bytes(text.encode(), "x.cmd")
+    assert [_key(c) for c in back.commands] == [_key(c) for c in cfg.commands]
+    assert [c.comment for c in back.commands] == [c.comment for c in cfg.commands]
+    assert back.position == 2 and back.identity.vendor_id == 0x1A3
+    assert [(p.index, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in back.rx_pdos] == \
+        [(p.index, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in cfg.rx_pdos]
+
+
+def test_single_slave_formats_refuse_several_slaves():
+    two = [sample_config(), sample_config()]
+    for fmt in ("twincat", "ros2"):
+        with pytest.raises(EncodeError, match="one"):
+            export(two, fmt)
+
+
+def test_every_format_is_registered_with_its_directions():
+    assert {n for n, f in FORMATS.items() if f.can_export} == {"eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv"}
+    assert {n for n, f in FORMATS.items() if f.can_import} == {"eni", "twincat", "ros2", "ecmc", "json", "csv", "lcec"}
+    with pytest.raises(InputError, match="only be read"):
+        export(sample_config(), "lcec")
+    with pytest.raises(InputError, match="unknown startup format"):
+        export(sample_config(), "xls")
