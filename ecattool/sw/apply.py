@@ -62,8 +62,17 @@ def check_block(block: Block, target: SlaveTarget) -> BlockCheck:
     return BlockCheck(block, block.checksum, int.from_bytes(data[:2], "little"))
 
 
+def ensure_mailbox(target: SlaveTarget) -> None:
+    """SDOs need the mailbox: bring a slave that is in INIT (just powered on or reset) to PRE-OP."""
+    from ecattool.od.model import EcState
+
+    if target.state() is EcState.INIT:
+        target.request_state(EcState.PREOP)
+
+
 def verify(image: SwImage, target: SlaveTarget, blocks: Sequence[Block] | None = None) -> list[BlockCheck]:
     """Compare the drive's checksum of every block range with the image, block by block."""
+    ensure_mailbox(target)
     return [check_block(b, target) for b in (image.blocks if blocks is None else blocks)]
 
 
@@ -131,6 +140,7 @@ def download(image: SwImage, target: SlaveTarget, progress: Progress | None = No
 
         start_done = done
         try:
+            ensure_mailbox(target)
             write_block(b, target, mode, advance)
         except TargetError as exc:
             report.write_errors[b.start] = str(exc)
