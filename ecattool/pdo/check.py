@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
+from ecattool.errors import EcatToolError
 from ecattool.esi.model import Device, Direction, Pdo, PdoEntry
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Entry
@@ -51,6 +52,7 @@ RULES: dict[str, tuple[Severity, str]] = {
     "PDO024": (W, "an empty PDO is assigned"),
     "PDO025": (W, "an entry cannot be verified: the device has no object dictionary"),
     "PDO026": (E, "the entry's length is outside the family's entry size range"),
+    "PDO027": (E, "the process image of a sync manager is not a whole number of bytes"),
 }
 
 #: CiA-301 data-type indices usable as dummy entries, with their bit sizes
@@ -61,8 +63,17 @@ def rule_ids() -> list[str]:
     return sorted(RULES)
 
 
+def input_finding(exc: EcatToolError) -> Finding:
+    """A mapping that cannot be read, as a finding (rule PDO000) for reports that collect findings."""
+    return _finding("PDO000", exc.message, exc.location)
+
+
 def _finding(rule: str, message: str, location: Any, **data: Any) -> Finding:
     return Finding(rule, RULES[rule][0], message, location, data)
+
+
+def _kind(d: Direction) -> str:
+    return "RxPDO" if d is Direction.RX else "TxPDO"
 
 
 def _a(index: int, sub: int | None = None) -> str:
@@ -79,14 +90,17 @@ class _Checker:
         self.od = device.dictionary
         self.default = default_mapping(device)
         self.out: list[Finding] = []
-        #: whether the dictionary carries PdoMapping flags at all (otherwise R/T cannot be judged)
-        self.has_flags = any(e.pdo_mapping for o in self.od for e in o.entries.values())
-        #: entries the device itself maps by default, per direction (mappable by evidence)
-        self.default_entries: dict[Direction, set[tuple[int, int]]] = {
-            d: {(e.index, e.subindex) for p in device.pdos(d) for e in p.entries} for d in Direction
+        #: assigned PDO indices already reported as unknown or of the wrong direction
+        self.bad: set[int] = set()
+        #: entries the device's own PDOs map, per direction (index, sub, bits): legal by evidence
+        self.known_entries: dict[Direction, set[tuple[int, int, int]]] = {
+            d: {(e.index, e.subindex, e.bit_len) for p in device.pdos(d) for e in p.entries if e.index}
+            for d in Direction
         }
 
     def add(self, rule: str, message: str, location: Any, **data: Any) -> None:
+        if location is None:
+            location = self.mapping_location()
         self.out.append(_finding(rule, message, location, **data))
 
     # --- PDO level --------------------------------------------------------------------------------
@@ -110,15 +124,16 @@ class _Checker:
                          pdo=p.index)
             seen.add(p.index)
             if p.index not in known:
+                self.bad.add(p.index)
                 if p.index in known_other or pdo_direction(p.index) is other:
                     self.add("PDO002", f"{_a(p.index)} is a{'n Rx' if other is Direction.RX else ' Tx'}PDO; it cannot be "
                              f"assigned to 0x{d.assign_index:04X} ({d.value.upper()})", p.location, pdo=p.index)
                 else:
                     choices = ", ".join(_a(i) for i in sorted(known)) or "none"
-                    self.add("PDO001", f"{_a(p.index)} is not a {d.value.upper()}PDO mapping object of "
+                    self.add("PDO001", f"{_a(p.index)} is not a {_kind(d)} mapping object of "
                              f"{self.device.type_name} (known: {choices})", p.location, pdo=p.index)
             dev_pdo = self.device.pdo(p.index)
-            if dev_pdo is not None:
+            if dev_pdo is not None and p.index not in self.bad:
                 self.check_device_pdo(d, p, dev_pdo)
         # assignment size
         limit = self.rules.max_assigned_rx if d is Direction.RX else self.rules.max_assigned_tx
@@ -157,34 +172,33 @@ class _Checker:
     def mapping_location(self) -> Any:
         from ecattool.errors import Location
 
-        return Location(self.mapping.source) if self.mapping.source else None
+        source = self.mapping.source or self.device.source
+        return self.device.location or (Location(source) if source else None)
 
     def assign_not_writable(self, d: Direction) -> str:
         if not self.rules.assign_writable:
-            return f"the {self.rules.family} family does not allow changing 0x{d.assign_index:04X}"
-        if len(self.od) and self.device.has_coe:
-            obj = self.od.get(d.assign_index)
-            if obj is None:
-                return f"the device has no object 0x{d.assign_index:04X}"
-            if not any(e.access.writable() for e in obj.entries.values()):
-                return f"0x{d.assign_index:04X} is read-only"
-        elif not self.device.has_coe:
-            return "the device has no CoE mailbox to write 0x{:04X}".format(d.assign_index)
+            return f"{self.family_text()} does not allow changing 0x{d.assign_index:04X}"
+        if not self.device.has_coe:
+            return f"the device has no CoE mailbox to write 0x{d.assign_index:04X}"
+        obj = self.od.get(d.assign_index)
+        if obj is not None and not any(e.access.writable() for e in obj.entries.values()):
+            return f"0x{d.assign_index:04X} is read-only"
         return ""
 
     def mapping_not_writable(self, index: int) -> str:
         if not self.rules.mapping_writable:
-            return f"the {self.rules.family} family does not allow rewriting mapping objects"
+            return f"{self.family_text()} does not allow rewriting mapping objects"
         if not self.device.has_coe:
             return "the device has no CoE mailbox"
-        if len(self.od):
-            obj = self.od.get(index)
-            if obj is None:
-                return f"the dictionary has no object {_a(index)}"
-            sub0 = obj.entry(0)
-            if sub0 is not None and not sub0.access.writable():
-                return f"{_a(index, 0)} is read-only"
+        sub0 = self.od.entry(index, 0)
+        if sub0 is not None and not sub0.access.writable():
+            return f"{_a(index, 0)} is read-only"
         return ""
+
+    def family_text(self) -> str:
+        if self.rules.family == "generic":
+            return f"{self.device.type_name} (its ESI: CoE PdoAssign/PdoConfig, Fixed PDOs)"
+        return f"the {self.rules.family} family"
 
     def check_device_pdo(self, d: Direction, p: MappedPdo, dev_pdo: Pdo) -> None:
         sm = self.device.process_sm(d)
@@ -212,7 +226,7 @@ class _Checker:
                          p.entries[lim].location or p.location, pdo=p.index, entries=len(p.entries), limit=lim)
                 break
         dev_pdo = self.device.pdo(p.index)
-        if p.explicit and not (dev_pdo is not None and dev_pdo.fixed):
+        if p.explicit and p.index not in self.bad and not (dev_pdo is not None and dev_pdo.fixed):
             current = next((q for q in self.default.pdos(d) if q.index == p.index), None)
             reference = current.entries if current is not None else (dev_pdo.entries if dev_pdo is not None else None)
             if reference is None or _key(reference) != _key(p.entries):
@@ -235,7 +249,7 @@ class _Checker:
         if self.is_dummy(e.index):
             allowed = self.rules.dummies_in_rx if rx else self.rules.dummies_in_tx
             if not allowed:
-                self.add("PDO013", f"dummy entry {_a(e.index, e.subindex)} in {d.value.upper()}PDO {_a(p.index)}: "
+                self.add("PDO013", f"dummy entry {_a(e.index, e.subindex)} in {_kind(d)} {_a(p.index)}: "
                          f"dummies are allowed only in {'TxPDOs' if rx else 'RxPDOs'}", loc, pdo=p.index)
                 return
             size = self.dummy_bits(e.index)
@@ -243,10 +257,11 @@ class _Checker:
                 self.add("PDO007", f"dummy {_a(e.index, e.subindex)} is {size} bits, mapped with {e.bit_len}", loc,
                          pdo=p.index, expected=size, given=e.bit_len)
             return
+        if (e.index, e.subindex, e.bit_len) in self.known_entries[d]:
+            return  # the device maps exactly this entry in one of its own PDOs of this direction
         if not len(self.od):
-            if (e.index, e.subindex) not in self.default_entries[d]:
-                self.add("PDO025", f"{_a(e.index, e.subindex)} cannot be verified: {self.device.type_name} has "
-                         "no object dictionary", loc, pdo=p.index)
+            self.add("PDO025", f"{_a(e.index, e.subindex)} cannot be verified: {self.device.type_name} has "
+                     "no object dictionary", loc, pdo=p.index)
             return
         obj = self.od.get(e.index)
         if obj is None:
@@ -270,28 +285,23 @@ class _Checker:
                      expected=entry.bit_size, given=e.bit_len)
         self.check_direction(d, label, entry, e, loc)
         if first_of_two and self.rules.priority_rule and self.is_slow(e.index, entry):
-            self.add("PDO012", f"{label} is a slow parameter; with two {d.value.upper()}PDOs it must be in the "
+            self.add("PDO012", f"{label} is a slow parameter; with two {_kind(d)}s it must be in the "
                      f"second PDO, not in {_a(p.index)}", loc, index=e.index, subindex=e.subindex)
 
     def check_direction(self, d: Direction, label: str, entry: Entry, e: PdoEntry, loc: Any) -> None:
         rx = d is Direction.RX
-        if (e.index, e.subindex) in self.default_entries[d]:
-            return  # the device maps it this way itself
         flag = entry.pdo_mapping
         if e.index in getattr(self.rules, "sdo_only_indices", frozenset()):
             self.add("PDO006", f"{label} can only be accessed by SDO on {self.rules.family} drives", loc,
                      index=e.index, subindex=e.subindex, pdo_mapping="")
             return
-        if self.has_flags:
-            wanted = "R" if rx else "T"
-            if wanted not in flag:
-                where = {"": "not mappable", "R": "mappable in RxPDOs only", "T": "mappable in TxPDOs only"}.get(
-                    flag, "not mappable")
-                self.add("PDO006", f"{label} is {where}; it cannot be mapped in a {d.value.upper()}PDO", loc,
-                         index=e.index, subindex=e.subindex, pdo_mapping=flag)
-                return
-            if flag != "RT":
-                return  # a one-direction flag is the vendor's word: trust it over the access column
+        if ("R" if rx else "T") not in flag:
+            where = {"R": "mappable in RxPDOs only", "T": "mappable in TxPDOs only"}.get(flag, "not mappable")
+            self.add("PDO006", f"{label} is {where} (PdoMapping {flag or 'none'}); it cannot be mapped in a "
+                     f"{_kind(d)}", loc, index=e.index, subindex=e.subindex, pdo_mapping=flag)
+            return
+        if flag != "RT":
+            return  # a one-direction flag is the vendor's word: trust it over the access column
         if rx and not entry.access.writable():
             self.add("PDO008", f"{label} is {entry.access.text} and cannot be written by an RxPDO", loc,
                      index=e.index, subindex=e.subindex)
@@ -332,6 +342,10 @@ class _Checker:
             elif sm is not None and sm.max_size is not None and img.byte_size > sm.max_size:
                 self.add("PDO018", f"{d.value.upper()} image is {img.byte_size} bytes; SM{sm.number} holds at most "
                          f"{sm.max_size} bytes", loc, bytes=img.byte_size, max=sm.max_size)
+            if img.bit_size % 8:
+                self.add("PDO027", f"the {d.value.upper()} image is {img.bit_size} bits, not a whole number of bytes; "
+                         f"add a gap of {8 - img.bit_size % 8} bits (gap/{8 - img.bit_size % 8})", loc,
+                         bits=img.bit_size)
             by_pdo = {p.index: p for p in pdos}
             seen: dict[tuple[int, int], int] = {}
             for ie, src in zip(img.entries, (e for p in pdos for e in p.entries)):
