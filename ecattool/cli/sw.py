@@ -54,6 +54,8 @@ def info(file: str, as_json: bool) -> None:
     """
     from ecattool.sw.layout import describe, integrity_findings
 
+    from rich.text import Text
+
     image = _image(file)
     findings = integrity_findings(image)
     if as_json:
@@ -65,11 +67,11 @@ def info(file: str, as_json: bool) -> None:
         for i in describe(image):
             b = i.block
             t.add_row(f"0x{b.start:04X}", f"0x{b.end:04X}", str(b.count), f"0x{b.checksum:04X}",
-                      f"0x{b.checksum_request:08X}", i.description)
+                      f"0x{b.checksum_request:08X}", Text(i.description))
         c = console()
         c.print(t)
         for f in findings:
-            c.print(str(f))
+            click.echo(str(f))
     if findings:
         sys.exit(1)
 
@@ -143,12 +145,14 @@ def _target_for(spec: str, slave: int, preload: str | None) -> Any:
 
 
 def _checks_table(title: str, checks: list[Any]) -> Any:
+    from rich.text import Text
+
     t = table(title, ["start", "end", "words", "file", "drive", "result"])
     for c in checks:
         b = c.block
         t.add_row(f"0x{b.start:04X}", f"0x{b.end:04X}", str(b.count), f"0x{c.expected:04X}",
                   "-" if c.actual is None else f"0x{c.actual:04X}",
-                  "ok" if c.ok else (c.error or "DIFFERENT"))
+                  Text("ok" if c.ok else (c.error or "DIFFERENT")))
     return t
 
 
@@ -224,11 +228,11 @@ def download(file: str, dry_run: bool, mode: str, force: bool, no_reset: bool, t
     else:
         c = console()
         if not report.written:
-            c.print(f"{file}: every block already matches the drive; nothing written")
+            c.print(f"{file}: every block already matches the drive; nothing written", markup=False)
         else:
             c.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
             for start, err in report.write_errors.items():
-                c.print(f"block 0x{start:04X}: write failed: {err}")
+                c.print(f"block 0x{start:04X}: write failed: {err}", markup=False)
             c.print("drive reset to load the new setup" if report.reset else
                     "drive NOT reset: some blocks are still different; run the download again")
     if not report.ok:
@@ -279,7 +283,7 @@ def show(file: str, parameters: str | None, as_json: bool) -> None:
     c = console()
     c.print(t)
     if parameters is None and table_.section3:
-        c.print(f"section 3 ({len(table_.section3)} words) needs --parameters parameters.cfg to be decoded")
+        c.print(f"section 3 ({len(table_.section3)} words) needs --parameters parameters.cfg to be decoded", markup=False)
 
 
 @sw.command(epilog="""\b
