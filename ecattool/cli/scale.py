@@ -1,0 +1,316 @@
+"""``ecattool scale``: CiA-402 factor groups from mechanics and units (thin: the logic is in ecattool.scaling)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import click
+
+from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+
+_FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
+_STARTUP_FORMATS = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv")
+
+
+def _mechanics_options(f: Any) -> Any:
+    opts = [
+        click.argument("spec", required=False, type=click.Path(dir_okay=False, allow_dash=True)),
+        click.option("--family", type=click.Choice(_FAMILIES), help="Drive family (default: the spec's, else technosoft-ipos)."),
+        click.option("--firmware", help="Technosoft firmware, e.g. F515I (obsolete factors) or F515K (CiA-402-2)."),
+        click.option("--counts", help="Feedback increments per revolution (e.g. 2000)."),
+        click.option("--lines", help="Quadrature encoder lines (x4 = counts), e.g. 500."),
+        click.option("--steps", help="Stepper: STEPSxMICROSTEPS, e.g. 200x256."),
+        click.option("--feedback-on", type=click.Choice(["motor", "load"]), help="Where the feedback sits (default motor)."),
+        click.option("--gear", help="Gearbox motor:load revolutions, e.g. 3:1."),
+        click.option("--transmission", help="e.g. 'ballscrew pitch=5mm', 'belt teeth=20 tooth_pitch=5mm', "
+                                            "'belt diameter=30mm', 'rack teeth=20 module=2mm', 'linear_motor pole_pitch=32mm'."),
+        click.option("--position", "pos_unit", help="Position unit (mm, um, deg, rad, rev, inch, counts …)."),
+        click.option("--velocity", "vel_unit", help="Velocity unit (mm/s, rpm, deg/s …; default position/s)."),
+        click.option("--acceleration", "acc_unit", help="Acceleration unit (mm/s^2, rpm/s …)."),
+        click.option("--jerk", "jerk_unit", help="Jerk unit (mm/s^3 …)."),
+        click.option("--slow-loop", help="Technosoft slow-loop period (default 1ms)."),
+        click.option("--reverse", is_flag=True, default=None, help="Invert positions and velocities (607Eh)."),
+        click.option("--approximation", type=click.Choice(["best", "max-scale"]),
+                     help="How to approximate non-representable ratios (Technosoft default max-scale, others best)."),
+        click.option("--vl/--no-vl", default=None, help="Add the vl velocity factors 604Bh/604Ch (default: Control Techniques only)."),
+    ]
+    for o in reversed(opts):
+        f = o(f)
+    return f
+
+
+def _spec(spec: str | None, family: str | None, firmware: str | None, counts: str | None, lines: str | None,
+          steps: str | None, feedback_on: str | None, gear: str | None, transmission: str | None, pos_unit: str | None,
+          vel_unit: str | None, acc_unit: str | None, jerk_unit: str | None, slow_loop: str | None,
+          reverse: bool | None, approximation: str | None) -> Any:
+    from ecattool.errors import InputError
+    from ecattool.scaling.spec import load_spec, spec_from_dict
+
+    data: dict[str, Any] = {}
+    base = None
+    if spec:
+        base = load_spec(spec)
+    fb: dict[str, Any] = {}
+    if counts:
+        fb["counts_per_rev"] = counts
+    if lines:
+        fb["lines"] = lines
+    if steps:
+        if "x" not in steps.lower():
+            raise click.BadParameter("write STEPSxMICROSTEPS, e.g. 200x256", param_hint="--steps")
+        s, m = steps.lower().split("x", 1)
+        fb.update(steps=s, microsteps=m)
+    if feedback_on:
+        fb["on"] = feedback_on
+    if base is None:
+        if not fb or not any(k in fb for k in ("counts_per_rev", "lines", "steps")):
+            raise InputError("give a SPEC file or the feedback (--counts, --lines or --steps)")
+        data["feedback"] = fb
+        data["gear"] = gear
+        data["transmission"] = transmission
+        data["units"] = {k: v for k, v in (("position", pos_unit), ("velocity", vel_unit), ("acceleration", acc_unit),
+                                           ("jerk", jerk_unit)) if v}
+        if slow_loop:
+            data["slow_loop"] = slow_loop
+        data["reverse"] = bool(reverse)
+        parsed = spec_from_dict(data)
+    else:
+        from dataclasses import replace
+
+        from ecattool.scaling.model import feedback_from, gear_from, transmission_from
+        from ecattool.scaling.units import time_seconds
+
+        ax = base.axis
+        changes: dict[str, Any] = {}
+        if fb:
+            changes["feedback"] = feedback_from(fb) if any(k in fb for k in ("counts_per_rev", "lines", "steps")) else \
+                replace(ax.feedback, on=fb["on"])
+        if gear:
+            changes["gear"] = gear_from(gear)
+        if transmission:
+            changes["transmission"] = transmission_from(transmission)
+        for key, val in (("position", pos_unit), ("velocity", vel_unit), ("acceleration", acc_unit), ("jerk", jerk_unit)):
+            if val:
+                changes[key] = val
+        if slow_loop:
+            changes["slow_loop"] = time_seconds(slow_loop)
+        if reverse is not None:
+            changes["reverse"] = reverse
+        parsed = replace(base, axis=replace(ax, **changes))
+        for order in range(4):
+            parsed.axis.unit(order)
+    fam = family or parsed.family or "technosoft-ipos"
+    return parsed, fam, firmware or parsed.firmware, approximation or parsed.approximation
+
+
+def _compute(kwargs: dict[str, Any]) -> Any:
+    from ecattool.scaling import compute
+
+    vl = kwargs.pop("vl")
+    spec, family, firmware, approximation = _spec(**kwargs)
+    return compute(spec.axis, family, firmware=firmware, strategy=approximation, vl=vl, vl_setpoint=spec.vl_setpoint)
+
+
+def _render(group: Any) -> None:
+    con = console()
+    t = table(f"Factor group — {group.family} ({group.factor_set})", ["object", "name", "part", "value", "hex", "exact", "meaning"])
+    for o in group.objects:
+        hexv = f"0x{o.value & 0xFFFFFFFF:08X}" if o.type_name in ("UDINT", "DINT") else f"0x{o.value & 0xFFFF:04X}" \
+            if o.type_name in ("UINT", "INT") else f"0x{o.value & 0xFF:02X}"
+        a = o.approximation
+        exact = "yes" if o.exact else f"≈ {float(a.ppm):+.3g} ppm" if a else "no"
+        meaning = o.meaning + ("" if o.write else " [not written]")
+        t.add_row(o.address, o.name, o.part, str(o.value), hexv, exact, meaning)
+    con.print(t)
+    s = table("Axis", ["quantity", "value"])
+    for k, v in group.summary.items():
+        s.add_row(k, str(v))
+    con.print(s)
+    for n in group.notes:
+        con.print(f"note: {n}")
+    for f in group.findings:
+        a = f.data
+        con.print(f"{f.severity.value}: {f.message}" + (f" [{f.rule}]" if not a else ""))
+
+
+@click.group("scale", epilog="""\b
+Examples:
+  ecattool scale compute samples/scaling/ballscrew.yaml
+  ecattool scale compute --lines 500 --position rad --firmware F515I
+  ecattool scale startup samples/scaling/belt.yaml --format twincat
+  ecattool scale explain --family technosoft-ipos 6093:01=4294967295 6093:02=13493038
+  ecattool scale si mm rpm 0x03105700""")
+def scale() -> None:
+    """Compute CiA-402 factor groups from mechanics and units, exactly.
+
+    From feedback, gearbox, transmission and the units you want, computes every scaling object of a
+    drive family (Technosoft iPOS CiA-402-2 or obsolete set, HDT, Control Techniques SM-EtherCAT, generic
+    CiA-402-2), says which values are exact and how far approximated ones drift, writes the startup list,
+    and explains values read back from a drive.
+    """
+
+
+@scale.command("compute", epilog="""\b
+Examples:
+  ecattool scale compute samples/scaling/ballscrew.yaml
+  ecattool scale compute samples/scaling/belt.yaml --family hdt --json
+  ecattool scale compute --lines 500 --position rev --velocity rpm --acceleration rev/s^2
+  ecattool scale compute --counts 4096 --gear 3:1 --transmission 'ballscrew pitch=10mm' \\
+      --position mm --family controltechniques
+  ecattool scale compute --lines 500 --position rad --firmware F515I   # 4294967295 / 13493038""")
+@_mechanics_options
+@click.option("--startup", "with_startup", is_flag=True, help="Also print the startup list (transition PS).")
+@json_option
+@output_option()
+def compute_cmd(with_startup: bool, as_json: bool, output: str | None, **kwargs: Any) -> None:
+    """Table of scaling objects: value (decimal, hex), meaning, exactness; approximations with ppm error."""
+    from ecattool.cli.common import dump_json
+
+    group = _compute(kwargs)
+    inputs = (kwargs["spec"],) if kwargs.get("spec") else ()
+    if as_json or output:
+        data = group.to_json()
+        if with_startup:
+            data["startup"] = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
+                                "data": c.data.hex(), "type": c.type_name, "value": c.value, "comment": c.comment}
+                               for c in group.startup()]
+        if output:
+            write_output(output, dump_json(data) + "\n", inputs)
+        else:
+            print_json(data)
+        return
+    _render(group)
+    if with_startup:
+        from ecattool.startup import export
+
+        click.echo(export(group.startup(), "twincat"), nl=False)
+
+
+@scale.command("startup", epilog="""\b
+Examples:
+  ecattool scale startup samples/scaling/ballscrew.yaml
+  ecattool scale startup samples/scaling/rotary_table.yaml --format igh -o scaling.c
+  ecattool scale startup --lines 500 --position deg --format json""")
+@_mechanics_options
+@click.option("--format", "fmt", type=click.Choice(_STARTUP_FORMATS), default="twincat", show_default=True,
+              help="Startup-list format (the master's).")
+@click.option("--transition", default="PS", show_default=True, help="EtherCAT transition of the writes.")
+@output_option()
+def startup_cmd(fmt: str, transition: str, output: str | None, **kwargs: Any) -> None:
+    """The SDO writes that set the factor group, in a master's startup-list format."""
+    from ecattool.startup import TRANSITIONS, export
+
+    if transition.upper() not in TRANSITIONS:
+        raise click.BadParameter(f"one of {', '.join(TRANSITIONS)}", param_hint="--transition")
+    group = _compute(kwargs)
+    inputs = (kwargs["spec"],) if kwargs.get("spec") else ()
+    write_output(output, export(group.startup(transition.upper()), fmt), inputs)
+
+
+def _values_from_file(path: str) -> dict[tuple[int, int], int]:
+    """Values from a startup file of any format, an ecattool `scale compute --json` file, or a YAML/JSON mapping."""
+    import json
+
+    from ecattool.errors import InputError, Location
+    from ecattool.fileio import read_bytes
+    from ecattool.od.numbers import parse_address, parse_int
+
+    raw = read_bytes(path)
+    try:
+        doc = json.loads(raw)
+    except (ValueError, UnicodeDecodeError):
+        doc = None
+    if isinstance(doc, dict) and "objects" in doc and "factor_set" in doc:
+        return {(parse_int(o["index"]), int(o["subindex"])): int(o["value"]) for o in doc["objects"]}
+    if doc is None and raw.lstrip()[:1] not in (b"<",):
+        from ecattool.project.yamlloc import load_yaml
+
+        try:
+            y = load_yaml(raw.decode("utf-8-sig"), path)
+            doc = y.data
+        except InputError:
+            doc = None
+    if isinstance(doc, dict) and doc and all(":" in str(k) for k in doc):
+        return {parse_address(str(k), Location(path)): parse_int(v, Location(path)) for k, v in doc.items()}
+    from ecattool.startup import import_file
+
+    values: dict[tuple[int, int], int] = {}
+    for cfg in import_file(path):
+        for c in cfg.commands:
+            values[(c.index, c.subindex)] = c.int_value
+    if not values:
+        raise InputError("no object values found", Location(path))
+    return values
+
+
+@scale.command("explain", epilog="""\b
+Examples:
+  ecattool scale explain --family technosoft-ipos 6093:01=4294967295 6093:02=13493038
+  ecattool scale explain --family hdt 6093:01=65536 6093:02=360 6094:01=65536 6094:02=60
+  ecattool scale explain --family controltechniques 608F:01=4096 6091:01=3 6092:01=10 604C:01=60
+  ecattool scale explain --family technosoft-ipos --from drive_startup.xml --json""")
+@click.argument("assignments", nargs=-1)
+@click.option("--family", type=click.Choice(_FAMILIES), default="technosoft-ipos", show_default=True)
+@click.option("--from", "source", type=click.Path(exists=True, dir_okay=False),
+              help="Read values from a startup file (any format), a `scale compute --json` file or a YAML mapping.")
+@click.option("--firmware", help="Technosoft firmware (F515I → obsolete factor set).")
+@click.option("--slow-loop", default="1ms", show_default=True, help="Technosoft slow-loop period.")
+@click.option("--counts-per-rev", help="Increments per motor revolution, to express velocities in rpm.")
+@json_option
+def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, firmware: str | None, slow_loop: str,
+                counts_per_rev: str | None, as_json: bool) -> None:
+    """What one user unit is in counts, and what velocity and acceleration units mean, from object values."""
+    from fractions import Fraction
+
+    from ecattool.errors import InputError
+    from ecattool.od.numbers import parse_address, parse_int
+    from ecattool.scaling import explain
+    from ecattool.scaling.units import time_seconds
+
+    values = _values_from_file(source) if source else {}
+    for a in assignments:
+        if "=" not in a:
+            raise click.BadParameter(f"{a!r}: write INDEX:SUB=VALUE, e.g. 6093:01=2000", param_hint="ASSIGNMENTS")
+        addr, val = a.split("=", 1)
+        values[parse_address(addr)] = parse_int(val)
+    if not values:
+        raise InputError("give object values (6093:01=… 6093:02=…) or --from FILE")
+    cpr = Fraction(parse_int(counts_per_rev)) if counts_per_rev else None
+    e = explain(values, family, slow_loop=time_seconds(slow_loop), counts_per_rev=cpr, firmware=firmware)
+    if as_json:
+        print_json(e.to_json())
+        return
+    con = console()
+    t = table(f"{e.family} ({e.factor_set})", ["quantity", "meaning"])
+    for q, m in e.lines:
+        t.add_row(q, m)
+    con.print(t)
+    for f in e.findings:
+        con.print(f"{f.severity.value}: {f.message} [{f.rule}]")
+
+
+@scale.command("si", epilog="""\b
+Examples:
+  ecattool scale si mm rpm deg/s^2
+  ecattool scale si 0xFD010100 0x00B44700 --json""")
+@click.argument("items", nargs=-1, required=True)
+@json_option
+def si_cmd(items: tuple[str, ...], as_json: bool) -> None:
+    """Encode units as CiA-303-2 SI unit words (60A8h–60ABh), or decode words back to units."""
+    from ecattool.od.numbers import parse_int
+    from ecattool.scaling import decode_si_unit, encode_si_unit
+
+    rows = []
+    for item in items:
+        if item[:2].lower() in ("0x", "#x") or item.isdigit():
+            word = parse_int(item)
+            rows.append({"word": f"0x{word:08X}", "unit": decode_si_unit(word)})
+        else:
+            rows.append({"word": f"0x{encode_si_unit(item):08X}", "unit": item})
+    if as_json:
+        print_json(rows)
+        return
+    t = table(None, ["unit", "SI word"])
+    for r in rows:
+        t.add_row(r["unit"], r["word"])
+    console().print(t)
