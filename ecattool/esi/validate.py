@@ -58,22 +58,32 @@ def validate(path: str | Path, schema_dir: str | Path | None = None) -> list[Fin
     from ecattool.esi.reader import _read, load_bytes
     from ecattool.xmlsafe import parse_xml
 
+    from ecattool.errors import XmlSecurityError
+
     p = Path(path)
     data = _read(p)
     findings: list[Finding] = []
-    if schema_dir is not None:
-        findings.extend(schema_findings(parse_xml(data, str(p)), str(p), schema_dir))
+    esi = None
     try:
         esi = load_bytes(data, str(p), p.parent)
         structural = check_structure(esi)
         materialize(esi)
+    except XmlSecurityError:
+        raise
     except EcatToolError as exc:
-        if schema_dir is None and "not well-formed" in exc.message:
+        if "not well-formed" in exc.message:
             raise
         findings.append(Finding("esi-load", Severity.ERROR, exc.message, exc.location))
-        return findings
-    findings.extend(esi.warnings)
-    findings.extend(structural)
+    if schema_dir is not None:
+        try:
+            tree = parse_xml(data, str(p))
+        except InputError as exc:
+            findings.append(Finding("esi-xsd", Severity.ERROR, f"not checked against the schema: {exc.message}", exc.location))
+        else:
+            findings[:0] = schema_findings(tree, str(p), schema_dir)
+    if esi is not None:
+        findings.extend(esi.warnings)
+        findings.extend(structural)
     return findings
 
 
