@@ -1,0 +1,172 @@
+"""``ecattool sim``: built-in drive profiles and the embedded drive simulator."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import click
+
+from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+
+
+@click.group("sim")
+def sim() -> None:
+    """Built-in drive profiles and the embedded drive simulator.
+
+    The simulator answers SDOs byte for byte as the drive would (abort codes included), runs the
+    EtherCAT and CiA-402 state machines and exchanges process data through the current PDO mapping.
+    """
+
+
+@sim.command("profiles", epilog="""\b
+Examples:
+  ecattool sim profiles
+  ecattool sim profiles --json""")
+@json_option
+def profiles_cmd(as_json: bool) -> None:
+    """List the built-in drive families with their models, product codes and firmware revisions."""
+    from ecattool import profiles
+
+    rows = []
+    for p in profiles.list_profiles():
+        for prod in p.products:
+            rows.append({"profile": p.name, "vendor_id": p.vendor_id, "vendor": p.vendor_name, "product": prod.name,
+                         "title": prod.title, "product_code": prod.product_code, "revisions": list(prod.revisions),
+                         "default_revision": prod.default_revision})
+    if as_json:
+        print_json(rows)
+        return
+    t = table(None, ["profile", "product", "title", "product code", "revisions"])
+    for r in rows:
+        t.add_row(r["profile"], r["product"], r["title"], f"0x{r['product_code']:08X}", " ".join(r["revisions"]))
+    console().print(t)
+
+
+def _pdo_rows(drive: Any) -> list[dict[str, Any]]:
+    from ecattool.esi.model import Direction
+
+    out = []
+    for d in (Direction.RX, Direction.TX):
+        assigned = drive._assigned(d)
+        for pdo in drive.device.pdos(d):
+            entries = drive._pdo_entries(d, pdo.index) or []
+            out.append({"direction": d.value, "index": pdo.index, "name": pdo.name, "assigned": pdo.index in assigned,
+                        "bits": sum(e.bit_len for e in entries),
+                        "entries": [f"0x{e.mapping_value:08X}" for e in entries]})
+    return out
+
+
+@sim.command("show", epilog="""\b
+Examples:
+  ecattool sim show technosoft-ipos --revision F515I
+  ecattool sim show controltechniques --product digitax-st --json
+  ecattool sim show hdt --objects""")
+@click.argument("profile")
+@click.option("--product", help="Model of the family (see 'ecattool sim profiles').")
+@click.option("--revision", help="Firmware revision (Technosoft F515K, Control Techniques 01.02.00).")
+@click.option("--objects/--no-objects", default=False, help="Also list the dictionary.")
+@json_option
+def show_cmd(profile: str, product: str | None, revision: str | None, objects: bool, as_json: bool) -> None:
+    """Show PROFILE: identity, family limits, default PDO mappings and assignment (and its dictionary)."""
+    from ecattool.sim import Drive
+
+    drive = Drive.from_profile(profile, product=product, revision=revision)
+    dev, rules = drive.device, drive.rules
+    info: dict[str, Any] = {
+        "profile": rules.family, "type": dev.type_name, "name": dev.name,
+        "vendor_id": dev.vendor_id, "product_code": dev.product_code, "revision": dev.revision,
+        "rules": {"max_pdo_bits": rules.max_pdo_bits, "max_pdo_entries": rules.max_pdo_entries,
+                  "max_assigned_rx": rules.max_assigned_rx, "max_assigned_tx": rules.max_assigned_tx,
+                  "supported_modes": list(rules.supported_modes)},
+        "pdos": _pdo_rows(drive),
+    }
+    if objects:
+        info["objects"] = [{"index": o.index, "name": o.name, "object_code": o.object_code.value,
+                            "entries": [{"subindex": e.subindex, "name": e.name, "type": e.type_name,
+                                         "access": e.access.text, "pdo_mapping": e.pdo_mapping,
+                                         "default": e.default.hex() if e.default is not None else None}
+                                        for e in o]} for o in dev.dictionary]
+    if as_json:
+        print_json(info)
+        return
+    c = console()
+    c.print(f"{info['profile']}: {dev.name or dev.type_name}  vendor 0x{dev.vendor_id:08X}  "
+            f"product 0x{dev.product_code:08X}  revision 0x{dev.revision:08X}")
+    c.print("limits: " + ", ".join(f"{k}={v}" for k, v in info["rules"].items() if v not in (None, [])))
+    t = table("PDOs after reset", ["dir", "index", "name", "assigned", "bits", "entries"])
+    for p in info["pdos"]:
+        t.add_row(p["direction"], f"0x{p['index']:04X}", p["name"], "yes" if p["assigned"] else "", str(p["bits"]),
+                  " ".join(p["entries"]))
+    c.print(t)
+    if objects:
+        t = table("Dictionary", ["index", "sub", "name", "type", "access", "map", "default"])
+        for o in info["objects"]:
+            for e in o["entries"]:
+                t.add_row(f"0x{o['index']:04X}", str(e["subindex"]), e["name"] or o["name"], e["type"], e["access"],
+                          e["pdo_mapping"], e["default"] or "")
+        c.print(t)
+
+
+@sim.command("run", epilog="""\b
+Examples:
+  ecattool sim run technosoft-ipos rxpdo3.yaml
+  ecattool sim run elmo.xml steps.json --device 2 --json
+  ecattool sim run hdt steps.yaml -o transcript.json --json
+\b
+Script (YAML or JSON list):
+  - state: PREOP
+  - write: "1C12:00"
+    value: 0
+  - read: "6041:00"
+  - write: "6041:00"
+    value: 1
+    expect_abort: 0x06010002
+  - state: OP
+    expect_al_status: 0x0011""")
+@click.argument("target")
+@click.argument("script", type=click.Path(dir_okay=False, exists=True))
+@click.option("--product", help="Model of a built-in family.")
+@click.option("--revision", help="Firmware revision of a built-in family.")
+@click.option("--device", "selector", help="Device selector when TARGET is an ESI file with several devices.")
+@output_option()
+@json_option
+def run_cmd(target: str, script: str, product: str | None, revision: str | None, selector: str | None,
+            output: str | None, as_json: bool) -> None:
+    """Run SCRIPT (SDO reads/writes, state requests, cycles) on a simulated drive and print the transcript.
+
+    TARGET is a built-in profile name or an ESI file. Exits 1 at the first unexpected abort, timeout or
+    refused state change.
+    """
+    from ecattool.sim import Drive
+    from ecattool.sim.script import load_script, run_script
+
+    if Path(target).is_file():
+        drive = Drive.from_esi(target, selector)
+    else:
+        drive = Drive.from_profile(target, product=product, revision=revision)
+    steps, locations = load_script(script)
+    tr = run_script(drive, steps, locations, script, Path(script).parent)
+    if as_json:
+        from ecattool.cli.common import dump_json
+
+        write_output(output, dump_json(tr.to_json()) + "\n", [script, target])
+    else:
+        lines = []
+        for ln in tr.lines:
+            mark = "ok " if ln.expected else "ERR"
+            code = f" 0x{ln.code:08X}" if ln.code is not None and ln.code > 0xFFFF else (
+                f" 0x{ln.code:04X}" if ln.code is not None else "")
+            val = f" = {ln.value!r}" if ln.value is not None else ""
+            data = f" [{ln.data}]" if ln.data else ""
+            lines.append(f"{mark} {ln.step:3d} {ln.op:8s} {ln.target:10s} {ln.result}{code}{val}{data}"
+                         + (f"  {ln.detail}" if ln.detail else ""))
+        text = "\n".join(lines) + "\n"
+        write_output(output, text, [script, target])
+    failure = tr.failure
+    if failure is not None:
+        from ecattool.errors import Location, TargetError
+
+        code = f" 0x{failure.code:08X}" if failure.code is not None else ""
+        raise TargetError(f"step {failure.step} ({failure.op} {failure.target}) ended with {failure.result}{code}"
+                          + (f": {failure.detail}" if failure.detail else ""), Location(script, failure.line))

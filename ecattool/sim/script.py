@@ -1,0 +1,214 @@
+"""Scripts for the simulator: a JSON/YAML list of SDO reads/writes, state requests and process-data cycles.
+
+Steps (one mapping each)::
+
+    - state: PREOP                          # INIT, PREOP, SAFEOP, OP, BOOT
+    - read: "6041:00"                       # optional expect: 0x0250 (value) or expect_data: "5002"
+    - write: "6060:00"                      # value: 8 (encoded with the entry's type) or data: "08" (hex bytes)
+      value: 8
+    - write: "1C12:00"
+      data: "0200001601"                    # complete_access: true for a complete-access download
+      complete_access: true
+    - write: "6041:00"
+      value: 1
+      expect_abort: 0x06010002              # this abort is expected: the step passes
+    - state: OP
+      expect_al_status: 0x0011
+    - exchange: "0f00"                      # one process-data cycle with this output image (hex)
+    - cycles: 100                           # advance the motion model
+    - foe: FOESW_AXIS01.bin                 # data: hex, or file: path relative to the script
+      file: setup.bin
+
+:func:`run_script` runs the steps and returns the transcript; it stops at the first unexpected result.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ecattool.errors import EcatToolError, InputError, Location, SdoAbort, SdoTimeout, StateChangeError
+from ecattool.od.model import EcState
+from ecattool.od.numbers import format_address, parse_address, parse_int
+from ecattool.sim.drive import Drive, FoeError
+
+_KINDS = ("state", "read", "write", "exchange", "cycles", "foe")
+
+
+@dataclass
+class Line:
+    step: int
+    line: int | None
+    op: str
+    target: str
+    result: str  # "ok", "abort", "timeout", "refused", "foe-error", "mismatch"
+    detail: str = ""
+    code: int | None = None
+    expected: bool = True
+    data: str | None = None
+    value: Any = None
+
+    def to_json(self) -> dict[str, Any]:
+        return {k: v for k, v in self.__dict__.items() if v is not None}
+
+
+@dataclass
+class Transcript:
+    source: str
+    lines: list[Line] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return all(ln.expected for ln in self.lines)
+
+    @property
+    def failure(self) -> Line | None:
+        return next((ln for ln in self.lines if not ln.expected), None)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"source": self.source, "ok": self.ok, "steps": [ln.to_json() for ln in self.lines]}
+
+
+def load_script(path: str | Path) -> tuple[list[dict[str, Any]], list[Location]]:
+    """The steps of a JSON/YAML script file and the location of each step."""
+    from ecattool.fileio import read_bytes
+    from ecattool.project.yamlloc import load_yaml
+
+    doc = load_yaml(read_bytes(path), str(path))
+    return parse_steps(doc.data, [doc.locate((i,)) for i in range(len(doc.data or []))], str(path))
+
+
+def parse_steps(data: Any, locations: list[Location], source: str = "<script>") -> tuple[list[dict[str, Any]], list[Location]]:
+    if not isinstance(data, list):
+        raise InputError("a simulator script is a list of steps (- read: \"6041:00\", - state: OP …)", Location(source, 1))
+    for i, step in enumerate(data):
+        loc = locations[i] if i < len(locations) else Location(source)
+        if not isinstance(step, dict) or not any(k in step for k in _KINDS):
+            raise InputError(f"step {i + 1} needs one of {', '.join(_KINDS)}", loc)
+    return data, locations
+
+
+def _int(v: Any, loc: Location, what: str) -> int:
+    return parse_int(v if isinstance(v, (int, str)) else str(v), loc, what)
+
+
+def run_script(drive: Drive, steps: list[dict[str, Any]], locations: list[Location], source: str = "<script>",
+               base_dir: Path | None = None) -> Transcript:
+    """Run ``steps`` against ``drive``; stops after the first unexpected result (see :class:`Transcript`)."""
+    tr = Transcript(source)
+    for i, step in enumerate(steps):
+        loc = locations[i] if i < len(locations) else Location(source)
+        line = _run_step(drive, step, i + 1, loc, base_dir)
+        tr.lines.append(line)
+        if not line.expected:
+            break
+    return tr
+
+
+def _run_step(drive: Drive, step: dict[str, Any], n: int, loc: Location, base_dir: Path | None) -> Line:
+    want_abort = _int(step["expect_abort"], loc, "abort code") if "expect_abort" in step else None
+    want_al = _int(step["expect_al_status"], loc, "AL status") if "expect_al_status" in step else None
+    ln = loc.line
+    if "state" in step:
+        try:
+            state = EcState.parse(str(step["state"]))
+        except ValueError:
+            raise InputError(f"unknown state {step['state']!r} (INIT, PREOP, SAFEOP, OP, BOOT)", loc) from None
+        try:
+            drive.request_state(state)
+        except StateChangeError as exc:
+            return Line(n, ln, "state", state.value, "refused", str(exc), exc.al_status, want_al == exc.al_status)
+        return Line(n, ln, "state", state.value, "ok", expected=want_al is None)
+    if "cycles" in step:
+        drive.step(_int(step["cycles"], loc, "cycle count"))
+        return Line(n, ln, "cycles", str(step["cycles"]), "ok")
+    if "exchange" in step:
+        try:
+            outputs = bytes.fromhex(str(step["exchange"]).replace(" ", ""))
+        except ValueError:
+            raise InputError(f"exchange needs the output image as hex bytes, not {step['exchange']!r}", loc) from None
+        try:
+            inputs = drive.exchange(outputs)
+        except EcatToolError as exc:
+            return Line(n, ln, "exchange", outputs.hex(), "refused", str(exc), expected=False)
+        return Line(n, ln, "exchange", outputs.hex(), "ok", data=inputs.hex())
+    if "foe" in step:
+        name = str(step["foe"])
+        if "file" in step:
+            from ecattool.fileio import read_bytes
+
+            data = read_bytes((base_dir or Path(".")) / str(step["file"]))
+        else:
+            data = bytes.fromhex(str(step.get("data", "")))
+        try:
+            drive.foe_write(name, data, _int(step.get("password", 0), loc, "password"))
+        except FoeError as exc:
+            return Line(n, ln, "foe", name, "foe-error", str(exc), exc.code, want_abort == exc.code)
+        return Line(n, ln, "foe", name, "ok", expected=want_abort is None)
+    op = "read" if "read" in step else "write"
+    index, sub = parse_address(str(step[op]), loc)
+    addr = format_address(index, sub)
+    ca = bool(step.get("complete_access", False))
+    try:
+        if op == "read":
+            raw = drive.sdo_upload(index, sub, complete_access=ca)
+            value = _decode(drive, index, sub, raw, ca)
+            line = Line(n, ln, "read", addr, "ok", data=raw.hex(), value=value, expected=want_abort is None)
+            if "expect" in step and value != _expected_value(step["expect"], loc):
+                line.result, line.expected = "mismatch", False
+                line.detail = f"read {value!r}, expected {step['expect']!r}"
+            if "expect_data" in step and raw.hex() != str(step["expect_data"]).replace(" ", "").lower():
+                line.result, line.expected = "mismatch", False
+                line.detail = f"read {raw.hex()}, expected {step['expect_data']}"
+            return line
+        data = _encode(drive, index, sub, step, loc)
+        drive.sdo_download(index, sub, data, complete_access=ca, expect_reply=bool(step.get("expect_reply", True)))
+        return Line(n, ln, "write", addr, "ok", data=data.hex(), expected=want_abort is None)
+    except SdoAbort as exc:
+        return Line(n, ln, op, addr, "abort", exc.message.split(": ", 1)[-1], exc.code, want_abort == exc.code)
+    except SdoTimeout:
+        return Line(n, ln, op, addr, "timeout", "no reply", expected=bool(step.get("expect_timeout", False)))
+
+
+def _expected_value(v: Any, loc: Location) -> Any:
+    if isinstance(v, str):
+        try:
+            return parse_int(v, loc)
+        except InputError:
+            return v
+    return v
+
+
+def _decode(drive: Drive, index: int, sub: int, raw: bytes, ca: bool) -> Any:
+    e = drive.device.dictionary.entry(index, sub)
+    if ca or e is None or e.datatype is None:
+        return raw.hex()
+    try:
+        v = e.decode(raw)
+    except EcatToolError:
+        return raw.hex()
+    return v.hex() if isinstance(v, bytes) else v
+
+
+def _encode(drive: Drive, index: int, sub: int, step: dict[str, Any], loc: Location) -> bytes:
+    if "data" in step:
+        try:
+            return bytes.fromhex(str(step["data"]).replace(" ", ""))
+        except ValueError:
+            raise InputError(f"data must be hex bytes (\"0800\"), not {step['data']!r}", loc) from None
+    if "value" not in step:
+        raise InputError("a write needs value: or data:", loc)
+    e = drive.device.dictionary.entry(index, sub)
+    if e is None:
+        raise InputError(f"{format_address(index, sub)} is not in the dictionary; give data: as hex bytes", loc)
+    value = step["value"]
+    if isinstance(value, str):
+        try:
+            value = parse_int(value, loc)
+        except InputError:
+            pass
+    try:
+        return e.encode(value)
+    except EcatToolError as exc:
+        raise InputError(f"{format_address(index, sub)}: {exc.message}", loc) from None
