@@ -31,10 +31,40 @@ def _all_pdos(device: Device, direction: Direction) -> list[Pdo]:
     seen: dict[int, Pdo] = {}
     for p in device.pdos(direction):
         seen.setdefault(p.index, p)
-    for m in device.modules:
-        for p in (m.rx_pdos if direction is Direction.RX else m.tx_pdos):
-            seen.setdefault(p.index, p)
     return [seen[k] for k in sorted(seen)]
+
+
+def _shift(index: int, offset: int) -> int:
+    return index + offset if index >= 0x2000 else index
+
+
+def expand_default_modules(device: Device) -> tuple[list[Pdo], list[OdObject]]:
+    """PDOs and objects of each slot's default module, with the slot increments applied.
+
+    Slot k (0-based) moves a ``DependOnSlot`` PDO by k × SlotPdoIncrement and the objects it maps (and the
+    module's dictionary objects) by k × SlotIndexIncrement; the model keeps DependOnSlot only on the PDO,
+    so its entries are taken to depend on the slot too (decision "Profiles: slot expansion").
+    """
+    pdos: list[Pdo] = []
+    objects: list[OdObject] = []
+    by_ident = {m.ident: m for m in device.modules if m.ident is not None}
+    for k, slot in enumerate(device.slots):
+        module = by_ident.get(slot.default_module)
+        if module is None:
+            continue
+        obj_off = k * (slot.slot_index_increment or 0)
+        for p in (*module.rx_pdos, *module.tx_pdos):
+            q = copy.deepcopy(p)
+            if p.depend_on_slot:
+                q.index = p.index + k * (slot.slot_pdo_increment or 0)
+                for e in q.entries:
+                    e.index = _shift(e.index, obj_off) if not e.is_gap else 0
+            pdos.append(q)
+        for o in module.dictionary:
+            c = copy.deepcopy(o)
+            c.index = _shift(o.index, obj_off)
+            objects.append(c)
+    return pdos, objects
 
 
 def _mapping_object(pdo: Pdo, writable: bool, where: str) -> OdObject:
@@ -74,6 +104,16 @@ def complete_generic(device: Device) -> Device:
     """
     out = copy.deepcopy(device)
     od = ObjectDictionary({o.index: o for o in out.dictionary})
+    if out.slots:
+        pdos, objects = expand_default_modules(out)
+        known = {p.index for p in (*out.rx_pdos, *out.tx_pdos)}
+        for p in pdos:
+            if p.index not in known:
+                out.pdos(p.direction).append(p)
+                known.add(p.index)
+        for o in objects:
+            if o.index not in od:
+                od.add(o)
     where = f"synthesised from {device.source or device.type_name}"
     coe = out.mailbox.coe if out.mailbox is not None else None
     if 0x1000 not in od:
@@ -107,10 +147,57 @@ def complete_generic(device: Device) -> Device:
         for p in pdos:
             if p.index not in od:
                 od.add(_mapping_object(p, config and not p.fixed, where))
+            else:
+                _fill_defaults(od.get(p.index), _mapping_object(p, False, where))  # type: ignore[arg-type]
         if direction.assign_index not in od and pdos:
             od.add(_assign_object(out, direction, pdos, assign, where))
+        elif pdos:
+            _fill_defaults(od.get(direction.assign_index), _assign_object(out, direction, pdos, False, where))  # type: ignore[arg-type]
+    _add_mapped_objects(od, out, where)
     out.dictionary = od
     return out
+
+
+def _add_mapped_objects(od: ObjectDictionary, device: Device, where: str) -> None:
+    """Objects that a PDO maps but the ESI's dictionary lacks, from the PDO entry (name, type, bit length)."""
+    from ecattool.od.types import for_size, lookup
+
+    for p in (*device.rx_pdos, *device.tx_pdos):
+        for e in p.entries:
+            if e.is_gap or od.entry(e.index, e.subindex) is not None or e.index < 0x1000:
+                continue
+            dt = lookup(e.data_type) if e.data_type else None
+            if dt is None or (dt.bits is not None and dt.bits != e.bit_len and not dt.is_bit_type):
+                dt = for_size(e.bit_len) if e.bit_len in (8, 16, 24, 32, 40, 48, 56, 64) else lookup(f"BIT{e.bit_len}")
+            acc = Access.parse("rw") if p.direction is Direction.RX else RO
+            entry = Entry(e.subindex, e.name or f"Object 0x{e.index:04X}:{e.subindex:02X}", dt, e.bit_len, access=acc,
+                          pdo_mapping="R" if p.direction is Direction.RX else "T", location=Location(where))
+            if dt is not None and dt.bits is not None:
+                entry.default = bytes((e.bit_len + 7) // 8)
+            obj = od.get(e.index)
+            if obj is None:
+                code = ObjectCode.VAR if e.subindex == 0 else ObjectCode.RECORD
+                obj = OdObject(e.index, e.name or f"Object 0x{e.index:04X}", code, location=Location(where))
+                od.add(obj)
+            obj.entries[e.subindex] = entry
+            if obj.object_code is not ObjectCode.VAR and 0 not in obj.entries:
+                obj.entries[0] = _u(0, "Number of entries", USINT, 0, RO, where)
+            if 0 in obj.entries and obj.object_code is not ObjectCode.VAR:
+                obj.entries[0].default = bytes([max(obj.entries)])
+
+
+def _fill_defaults(existing: OdObject, synthesised: OdObject) -> None:
+    """Give an ESI object without default values (e.g. 1C12h with no ``DefaultData``) the PDO list's values."""
+    if existing.entry(0) is None or existing.entries[0].default is not None:
+        return
+    for sub, e in synthesised.entries.items():
+        target = existing.entries.get(sub)
+        if target is not None and target.default is None and target.datatype is not None and target.datatype.bits:
+            value = e.default_value
+            try:
+                target.default = target.encode(value)
+            except Exception:  # an ESI entry too small for the value keeps no default (reported by checks)
+                target.default = None
 
 
 #: 6502h bit → 6060h value (CiA-402: pp, vl, pv, tq, reserved, hm, ip, csp, csv, cst)
