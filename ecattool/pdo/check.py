@@ -211,6 +211,8 @@ class _Checker:
 
     # --- entry level ------------------------------------------------------------------------------
     def check_pdo(self, d: Direction, p: MappedPdo, first_of_two: bool) -> None:
+        if p.index in self.bad and not p.entries:
+            return  # reported as unknown already
         if not p.entries:
             self.add("PDO024", f"PDO {_a(p.index)} is assigned with no entries", p.location, pdo=p.index)
         bits = p.bit_size
