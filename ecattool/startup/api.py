@@ -41,10 +41,9 @@ _HWDEVMGR_KEYS = ("param_values", "sync_manager", "test_category")
 
 
 def _yaml_format(data: bytes, source: str) -> str:
-    from ecattool.project.yamlloc import load_yaml
     from ecattool.startup.formats import ros2
 
-    doc = load_yaml(data.decode("utf-8-sig", errors="replace"), source)
+    doc = ros2.load_located(data.decode("utf-8-sig", errors="replace"), source)
     top = doc.data
     if isinstance(top, list) and top and all(isinstance(x, dict) for x in top) and \
             any(k in top[0] for k in _HWDEVMGR_KEYS):
@@ -82,7 +81,11 @@ def import_bytes(data: bytes, source: str = "<input>", fmt: str | None = None) -
     name = fmt or detect_format(data, source)
     if name == "ros2":
         _yaml_format(data, source)  # refuses hw_device_mgr files with a clear message
-    return list(_format(name, "import").module.load(data, source))
+    from ecattool.startup.formats._common import check_commands
+
+    configs = list(_format(name, "import").module.load(data, source))
+    check_commands(configs)
+    return configs
 
 
 def import_file(path: str | Path, fmt: str | None = None) -> list[SlaveConfig]:

@@ -94,3 +94,35 @@ def typed_value(cmd: StartupCommand) -> object:
 
 def source_of(cmd: StartupCommand) -> str:
     return f" ({cmd.source})" if cmd.source else ""
+
+
+def decode_text(data: bytes, source: str) -> str:
+    """UTF-8 text (a BOM allowed); invalid bytes are an error naming the line."""
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise InputError(f"not UTF-8 text (byte 0x{data[exc.start]:02X})", Location(source, line)) from None
+
+
+def as_list(value: object, location: Location | None, what: str) -> list:
+    """A YAML/JSON value that must be a list (None = empty)."""
+    if value is None:
+        return []
+    if not isinstance(value, list):
+        raise InputError(f"{what} must be a list, got {type(value).__name__}", location)
+    return value
+
+
+def check_commands(configs: list[SlaveConfig]) -> None:
+    """Index, sub-index and data of every command are within CoE limits (whatever format they came from)."""
+    for c in configs:
+        for cmd in c.commands:
+            if not 0 <= cmd.index <= 0xFFFF or not 0 <= cmd.subindex <= 0xFF:
+                raise InputError(f"object 0x{cmd.index:X}:{cmd.subindex:X} is out of range (index 0..0xFFFF, "
+                                 "sub-index 0..0xFF)", cmd.source)
+            if not cmd.data:
+                raise InputError(f"{cmd.address}: a startup download needs at least one data byte", cmd.source)
+        for s in c.soe_commands:
+            if not 0 <= s.idn <= 0xFFFF or not 0 <= s.drive_no <= 7:
+                raise InputError(f"SoE IDN {s.idn} drive {s.drive_no} is out of range", s.source)

@@ -15,7 +15,7 @@ import json
 from ecattool.errors import InputError, Location
 from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import check_transition, parse_hex
+from ecattool.startup.formats._common import check_transition, decode_text, parse_hex
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "csv"
@@ -40,7 +40,7 @@ def export(configs: list[SlaveConfig]) -> str:
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
-    text = data.decode("utf-8-sig")
+    text = decode_text(data, source)
     reader = csv.reader(io.StringIO(text))
     header = next(reader, None)
     if header is None or [h.strip().lower() for h in header[:len(COLUMNS)]] != list(COLUMNS):

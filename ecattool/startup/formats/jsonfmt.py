@@ -12,7 +12,7 @@ from typing import Any
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.startup.config import SlaveConfig, SoeCommand
-from ecattool.startup.formats._common import check_transition, parse_hex
+from ecattool.startup.formats._common import as_list, check_transition, decode_text, parse_hex
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "json"
@@ -125,60 +125,77 @@ def _int(v: Any, loc: Location, what: str) -> int:
     return v
 
 
+def _opt(d: dict[str, Any], key: str, default: int, loc: Location) -> int:
+    return _int(d.get(key, default), loc, key)
+
+
+def _obj(v: Any, loc: Location, what: str) -> dict[str, Any]:
+    if not isinstance(v, dict):
+        raise InputError(f"{what} must be an object", loc)
+    return v
+
+
 def _read_slave(s: Any, doc: _Doc, i: int) -> SlaveConfig:
     base = ("slaves", i)
     sloc = doc.loc(*base)
     if not isinstance(s, dict):
         raise InputError("a slave must be an object", sloc)
-    cfg = SlaveConfig(startup=StartupList(), name=str(s.get("name") or ""), position=s.get("position"), source=sloc)
+    position = s.get("position")
+    cfg = SlaveConfig(startup=StartupList(), name=str(s.get("name") or ""), source=sloc,
+                      position=None if position is None else _int(position, sloc, "position"))
     ident = s.get("identity")
     if ident:
         iloc = doc.loc(*base, "identity")
+        _obj(ident, iloc, "identity")
         cfg.identity = Identity(_int(_need(ident, "vendor_id", iloc), iloc, "vendor_id"),
                                 _int(_need(ident, "product_code", iloc), iloc, "product_code"),
-                                int(ident.get("revision", 0)), int(ident.get("serial", 0)))
+                                _opt(ident, "revision", 0, iloc), _opt(ident, "serial", 0, iloc))
         cfg.startup.vendor_id, cfg.startup.product_code = cfg.identity.vendor_id, cfg.identity.product_code
         cfg.startup.revision = cfg.identity.revision
     cfg.startup.name = cfg.name
-    dc = s.get("dc") or {}
-    cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns = dc.get("assign_activate"), dc.get("cycle_ns"), dc.get("shift_ns")
-    for j, c in enumerate(s.get("commands") or []):
+    dloc = doc.loc(*base, "dc")
+    dc = _obj(s.get("dc") or {}, dloc, "dc")
+    cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns = (
+        None if dc.get(k) is None else _int(dc[k], dloc, k) for k in ("assign_activate", "cycle_ns", "shift_ns"))
+    for j, c in enumerate(as_list(s.get("commands"), doc.loc(*base, "commands"), "commands")):
         loc = doc.loc(*base, "commands", j)
         cfg.startup.commands.append(StartupCommand(
             check_transition(str(_need(c, "transition", loc)), loc), _int(_need(c, "index", loc), loc, "index"),
             _int(_need(c, "subindex", loc), loc, "subindex"), parse_hex(str(_need(c, "data", loc)), loc),
             comment=str(c.get("comment", "")), complete_access=bool(c.get("complete_access", False)),
-            timeout_ms=int(c.get("timeout_ms", 0)), type_name=c.get("type"), value=c.get("value"),
+            timeout_ms=_opt(c, "timeout_ms", 0, loc), type_name=c.get("type"), value=c.get("value"),
             expect_reply=bool(c.get("expect_reply", True)), verify=bool(c.get("verify", True)), source=loc))
     for key, direction in (("rx_pdos", Direction.RX), ("tx_pdos", Direction.TX)):
-        for j, p in enumerate(s.get(key) or []):
+        for j, p in enumerate(as_list(s.get(key), doc.loc(*base, key), key)):
             ploc = doc.loc(*base, key, j)
+            sm = p.get("sm") if isinstance(p, dict) else None
             pdo = Pdo(direction, _int(_need(p, "index", ploc), ploc, "index"), name=str(p.get("name", "")),
-                      sm=p.get("sm"), location=ploc)
-            for k, e in enumerate(p.get("entries") or []):
+                      sm=None if sm is None else _int(sm, ploc, "sm"), location=ploc)
+            for k, e in enumerate(as_list(p.get("entries"), ploc, "entries")):
                 eloc = doc.loc(*base, key, j, "entries", k)
                 pdo.entries.append(PdoEntry(_int(_need(e, "index", eloc), eloc, "index"),
-                                            _int(e.get("subindex", 0), eloc, "subindex"),
+                                            _opt(e, "subindex", 0, eloc),
                                             _int(_need(e, "bit_len", eloc), eloc, "bit_len"),
                                             name=str(e.get("name", "")), data_type=str(e.get("data_type", "")),
                                             location=eloc))
             cfg.pdos(direction).append(pdo)
-    for j, x in enumerate(s.get("soe_commands") or []):
+    for j, x in enumerate(as_list(s.get("soe_commands"), doc.loc(*base, "soe_commands"), "soe_commands")):
         loc = doc.loc(*base, "soe_commands", j)
         cfg.soe_commands.append(SoeCommand(
             check_transition(str(_need(x, "transition", loc)), loc), _int(_need(x, "idn", loc), loc, "idn"),
-            parse_hex(str(x.get("data", "")), loc), drive_no=int(x.get("drive_no", 0)), op_code=int(x.get("op_code", 3)),
-            elements=int(x.get("elements", 64)), attribute=int(x.get("attribute", 0)), comment=str(x.get("comment", "")),
-            timeout_ms=int(x.get("timeout_ms", 0)), fixed=bool(x.get("fixed", False)), source=loc))
-    for ch in s.get("channel_info") or []:
-        rest = {k: v for k, v in ch.items() if k not in ("pdo", "entry")}
-        cfg.channel_info[(int(ch["pdo"]), int(ch["entry"]))] = rest
-    cfg.extra = dict(s.get("extra") or {})
+            parse_hex(str(x.get("data", "")), loc), drive_no=_opt(x, "drive_no", 0, loc), op_code=_opt(x, "op_code", 3, loc),
+            elements=_opt(x, "elements", 64, loc), attribute=_opt(x, "attribute", 0, loc), comment=str(x.get("comment", "")),
+            timeout_ms=_opt(x, "timeout_ms", 0, loc), fixed=bool(x.get("fixed", False)), source=loc))
+    for j, ch in enumerate(as_list(s.get("channel_info"), doc.loc(*base, "channel_info"), "channel_info")):
+        cloc = doc.loc(*base, "channel_info", j)
+        rest = {k: v for k, v in _obj(ch, cloc, "channel_info entry").items() if k not in ("pdo", "entry")}
+        cfg.channel_info[(_int(_need(ch, "pdo", cloc), cloc, "pdo"), _int(_need(ch, "entry", cloc), cloc, "entry"))] = rest
+    cfg.extra = dict(_obj(s.get("extra") or {}, doc.loc(*base, "extra"), "extra"))
     return cfg
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
-    text = data.decode("utf-8-sig")
+    text = decode_text(data, source)
     try:
         top = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -189,7 +206,8 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
         raise InputError(f"unsupported ecattool startup JSON version {top.get('version')!r} (this is {VERSION})",
                          Location(source, 1))
     doc = _Doc(text, source)
-    return [_read_slave(s, doc, i) for i, s in enumerate(top.get("slaves") or [])]
+    slaves = as_list(top.get("slaves"), doc.loc("slaves"), "slaves")
+    return [_read_slave(s, doc, i) for i, s in enumerate(slaves)]
 
 
 def detect(data: bytes) -> bool:

@@ -16,6 +16,7 @@ from typing import Any
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.findings import Severity
+from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig
 from ecattool.startup.formats._common import parse_hex, unsigned_type
 from ecattool.startup.model import StartupCommand, StartupList
@@ -61,7 +62,8 @@ def _pdos(slave: Any, cfg: SlaveConfig, source: str) -> None:
             pdo = Pdo(direction, _hex(p, "idx", source) or 0, sm=number, location=Location(source, p.sourceline))
             for k, e in enumerate(p.findall("pdoEntry")):
                 pdo.entries.append(PdoEntry(_hex(e, "idx", source) or 0, _hex(e, "subIdx", source, 0) or 0,
-                                            int(e.get("bitLen") or 0), name=e.get("halPin") or "",
+                                            parse_int(e.get("bitLen") or "0", Location(source, e.sourceline), "bitLen"),
+                                            name=e.get("halPin") or "",
                                             location=Location(source, e.sourceline)))
                 info = {a: e.get(a) for a in ("halPin", "halType") if e.get(a)}
                 complex_entries = [dict(c.attrib) for c in e.findall("complexEntry")]

@@ -18,7 +18,7 @@ from ecattool.errors import EncodeError, InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.od import types as dt
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import one_line
+from ecattool.startup.formats._common import as_list, one_line
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "ros2"
@@ -183,11 +183,23 @@ def _sdo(item: Any, loc: Location, comment: str) -> StartupCommand:
                           comment=comment, type_name=t.name, value=value, source=loc)
 
 
-def load(data: bytes, source: str) -> list[SlaveConfig]:
+def load_located(text: str, source: str) -> Any:
+    """YAML with locations; errors PyYAML raises before parsing (bad characters) become InputErrors too."""
+    import yaml
+
     from ecattool.project.yamlloc import load_yaml
 
+    try:
+        return load_yaml(text, source)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        raise InputError(f"invalid YAML: {getattr(exc, 'problem', None) or exc}",
+                         Location(source, mark.line + 1 if mark else None)) from None
+
+
+def load(data: bytes, source: str) -> list[SlaveConfig]:
     text = data.decode("utf-8-sig", errors="replace")
-    doc = load_yaml(text, source)
+    doc = load_located(text, source)
     lines = text.splitlines()
     top = doc.data
     if not isinstance(top, dict):
@@ -202,17 +214,17 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
         cfg.startup.vendor_id, cfg.startup.product_code = cfg.identity.vendor_id, cfg.identity.product_code
     if "assign_activate" in top:
         cfg.dc_assign_activate = _int(top["assign_activate"], doc.locate(("assign_activate",)), "assign_activate")
-    for i, item in enumerate(top.get("sdo") or []):
+    for i, item in enumerate(as_list(top.get("sdo"), doc.locate(("sdo",)), "sdo")):
         loc = doc.locate(("sdo", i))
         cfg.startup.commands.append(_sdo(item, loc, _comment_at(lines, loc)))
     for key, direction in (("rpdo", Direction.RX), ("tpdo", Direction.TX)):
-        for i, p in enumerate(top.get(key) or []):
+        for i, p in enumerate(as_list(top.get(key), doc.locate((key,)), key)):
             ploc = doc.locate((key, i))
             if not isinstance(p, dict) or "index" not in p:
                 raise InputError(f"a {key} entry needs an index and channels", ploc)
             pdo = Pdo(direction, _int(p["index"], doc.locate((key, i, "index")), "PDO index"),
                       name=_comment_at(lines, doc.locate((key, i, "index"))), location=ploc)
-            for j, ch in enumerate(p.get("channels") or []):
+            for j, ch in enumerate(as_list(p.get("channels"), doc.locate((key, i, "channels")), "channels")):
                 cloc = doc.locate((key, i, "channels", j))
                 if not isinstance(ch, dict) or "type" not in ch:
                     raise InputError("a channel needs index, sub_index and type", cloc)

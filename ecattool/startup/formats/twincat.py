@@ -53,8 +53,8 @@ def parse_value(text: str, loc: Location) -> bytes:
     m = _INT_VALUE.match(t)
     if m:
         digits = m.group(1).replace(" ", "")
-        if len(digits) % 2:
-            raise InputError(f"value {text!r} has an odd number of hex digits; the width gives the size", loc)
+        if not digits or len(digits) % 2:
+            raise InputError(f"value {text!r} needs an even number of hex digits; the width gives the size", loc)
         return int(digits, 16).to_bytes(len(digits) // 2, "little")
     data = parse_hex(t, loc, "value")
     if not data:
