@@ -1,0 +1,96 @@
+"""``ecattool startup`` commands: import (text and JSON), export, convert, errors and exit codes."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from ecattool.cli import main
+from ecattool.startup import import_file
+from tests.conftest import corpus_path
+
+
+def run(capsys, *args: str) -> tuple[int, str, str]:
+    try:
+        main(list(args))
+        code = 0
+    except SystemExit as exc:
+        code = int(exc.code or 0)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_import_shows_commands_and_pdos(capsys):
+    code, out, _ = run(capsys, "startup", "import", str(corpus_path("configs", "ros2_technosoft_ipos3604.yaml")))
+    assert code == 0
+    assert "0x60C2:01" in out and "Set base 10-3s" in out and "RxPDO 0x1602" in out
+
+
+def test_import_json_has_locations(capsys):
+    path = str(corpus_path("configs", "ecmc_ecmciPOSXXXX.cmd"))
+    code, out, _ = run(capsys, "startup", "import", path, "--json")
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["format"] == "ecmc" and len(doc["slaves"]) == 1
+    assert doc["slaves"][0]["commands"][0]["source"] == f"{path}:11"
+
+
+def test_import_reports_soe_entries(capsys):
+    code, out, _ = run(capsys, "startup", "import", str(corpus_path("configs", "lcec_initcmds_AX5206-AM8032-async.xml")))
+    assert code == 0 and "87 SoE init command(s)" in out and "startup.soe" in out
+
+
+def test_export_to_stdout(capsys):
+    code, out, _ = run(capsys, "startup", "export", "--from", str(corpus_path("configs", "ros2_elmo_gold.yaml")),
+                       "--format", "twincat")
+    assert code == 0
+    assert out.splitlines() == [
+        "<PS>,CoE,0x60C2:01,0x0A (10),Set interpolation time for cyclic modes to 10 ms",
+        "<PS>,CoE,0x60C2:02,0xFD (253),Set base 10-3s",
+        "<PS>,CoE,0x6098:00,0x23 (35),",
+    ]
+
+
+def test_convert_writes_file_and_round_trips(tmp_path, capsys):
+    out_file = tmp_path / "ipos.json"
+    src = corpus_path("configs", "ecmc_ecmciPOSXXXX.cmd")
+    code, _, _ = run(capsys, "startup", "convert", str(src), "--format", "json", "-o", str(out_file))
+    assert code == 0
+    (again,) = import_file(out_file)
+    (orig,) = import_file(src)
+    assert [(c.index, c.subindex, c.data) for c in again.commands] == [(c.index, c.subindex, c.data) for c in orig.commands]
+    code, _, _ = run(capsys, "startup", "export", "--from", str(out_file), "--format", "igh", "-o", str(tmp_path / "x.c"))
+    assert code == 0 and "ecrt_slave_config_sdo8" in (tmp_path / "x.c").read_text()
+
+
+def test_convert_never_overwrites_its_input(tmp_path, capsys):
+    src = tmp_path / "in.json"
+    src.write_text(json.dumps({"format": "ecattool-startup", "version": 1, "slaves": []}))
+    code, _, err = run(capsys, "startup", "convert", str(src), "--format", "json", "-o", str(src))
+    assert code == 1 and "ecattool: error:" in err
+
+
+def test_bad_input_is_one_line_with_location(tmp_path, capsys):
+    bad = tmp_path / "bad.txt"
+    bad.write_text("<PS>,CoE,0x1C12:00,0x00 (0),ok\n<PS>,CoE,nonsense,0x00 (0),x\n")
+    code, _, err = run(capsys, "startup", "import", str(bad))
+    assert code == 1
+    assert err.strip().count("\n") == 0 and f"{bad}:2:" in err
+
+
+def test_hwdevmgr_refusal_exit_code(capsys):
+    code, _, err = run(capsys, "startup", "import", str(corpus_path("configs", "hwdevmgr_device_config.yaml")))
+    assert code == 1 and "hw_device_mgr" in err
+
+
+@pytest.mark.parametrize("args", [["startup", "export", "--format", "eni"], ["startup", "convert", "x", "--format", "nope"]])
+def test_usage_errors_exit_2(capsys, args):
+    code, _, _ = run(capsys, *args)
+    assert code == 2
+
+
+def test_help_has_examples(capsys):
+    for sub in ("import", "export", "convert"):
+        code, out, _ = run(capsys, "startup", sub, "--help")
+        assert code == 0 and "Examples:" in out and "ecattool startup" in out
