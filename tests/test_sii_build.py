@@ -14,8 +14,8 @@ import pytest
 from ecattool.errors import InputError
 from ecattool.esi import load as load_esi
 from ecattool.sii import build, load
-from ecattool.sii.build import data_type_code, physical_port
-from ecattool.sii.diff import diff
+from ecattool.sii.builder import data_type_code, physical_port
+from ecattool.sii.compare import diff
 from tests.conftest import corpus_path
 
 # reasons shared by several pairs

@@ -148,7 +148,7 @@ Exit codes: 0 no errors (no warnings either with --strict), 1 findings or invali
 def check_cmd(files: tuple[str, ...], selector: str | None, policy: str, strict: bool, as_json: bool) -> None:
     """Check IMAGE, or check IMAGE against an ESI device: `sii check [ESI] IMAGE`."""
     from ecattool.findings import has_errors
-    from ecattool.sii.check import check_against, check_file
+    from ecattool.sii.checks import check_against, check_file
 
     if len(files) > 2:
         raise click.UsageError("give IMAGE, or ESI IMAGE")
@@ -168,7 +168,7 @@ Example:
 @output_option(required=True)
 def fix_crc_cmd(image: str, output: str) -> None:
     """Recompute the checksum (word 7) over bytes 0-13 and write the repaired image."""
-    from ecattool.sii.check import fix_crc
+    from ecattool.sii.checks import fix_crc
 
     img = _load(image)
     old = img.header.checksum & 0xFF
@@ -185,7 +185,7 @@ Example:
 @output_option(required=True)
 def set_alias_cmd(image: str, alias: str, output: str) -> None:
     """Set the configured station alias (word 4) to ALIAS and update the checksum."""
-    from ecattool.sii.check import set_alias
+    from ecattool.sii.checks import set_alias
 
     img = _load(image)
     set_alias(img, parse_int_arg(alias, "station alias"))
@@ -207,7 +207,7 @@ Examples:
 def build_cmd(esi: str, selector: str | None, no_pdo_categories: bool, size: str | None, policy: str,
               output: str) -> None:
     """Build an SII EEPROM image from an ESI device; unused space is filled with 0xFF."""
-    from ecattool.sii.build import build
+    from ecattool.sii.builder import build
 
     device = _select(esi, selector, policy=policy)
     img = build(device, pdo_categories=not no_pdo_categories,
@@ -226,7 +226,7 @@ Exit codes: 0 identical fields, 1 differences.""")
 @json_option
 def diff_cmd(a: str, b: str, as_json: bool) -> None:
     """Compare two images field by field and category by category (strings resolved)."""
-    from ecattool.sii.diff import diff
+    from ecattool.sii.compare import diff
 
     diffs = diff(_load(a), _load(b))
     if as_json:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import asdict
 from typing import Any
 
-from ecattool.sii.check import category_offsets
+from ecattool.sii.checks import category_offsets
 from ecattool.sii.image import category_body
 from ecattool.sii.model import (
     FMMU_USAGE,

@@ -216,8 +216,8 @@ def check_against(device: "Device", image: SiiImage) -> list[Finding]:
     (both are optional in an SII)."""
     import re
 
-    from ecattool.sii.build import assemble
-    from ecattool.sii.diff import flatten
+    from ecattool.sii.builder import assemble
+    from ecattool.sii.compare import flatten
 
     expected = assemble(device)
     got, want = flatten(image), flatten(expected)

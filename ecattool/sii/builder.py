@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device, Pdo
-from ecattool.sii.check import fix_crc
+from ecattool.sii.checks import fix_crc
 from ecattool.sii.image import HEADER_BYTES, strings_content, category_body, parse
 from ecattool.sii.model import (
     MAILBOX_PROTOCOLS,

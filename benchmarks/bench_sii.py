@@ -1,0 +1,69 @@
+"""Benchmark: ``ecattool sii build`` of one device of the 141-device beckhoff_EL1xxx.xml, as a whole
+process, against a bare ``lxml.etree.parse`` of the same file plus Python start-up.
+
+Each variant runs as its own process (interpreter start, imports, work), several times, interleaved;
+the median wall time of each is reported with the ratio to the bare parse measured in the same run.
+The aim (issue 8) is a ratio of at most 1.25.
+
+    python benchmarks/bench_sii.py [FILE] [--device EL1008] [--runs 9]
+
+Variants:
+  bare-parse  python -c "from lxml import etree; etree.parse(FILE)"
+  sii-build   ecattool sii build FILE --device EL1008 --policy newest -o OUT.bin (the installed CLI entry)
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT = ROOT.parent / "shared" / "corpus" / "esi" / "beckhoff_EL1xxx.xml"
+
+
+def run_once(cmd: list[str]) -> float:
+    t0 = time.perf_counter()
+    subprocess.run(cmd, check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - t0
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("file", nargs="?", type=Path, default=DEFAULT)
+    ap.add_argument("--device", default="EL1008")
+    ap.add_argument("--runs", type=int, default=9)
+    args = ap.parse_args(argv)
+    if not args.file.exists():
+        print(f"benchmark file missing: {args.file}", file=sys.stderr)
+        return 1
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "out.bin"
+        cmds = {
+            "bare-parse": [sys.executable, "-c", "import sys\nfrom lxml import etree\netree.parse(sys.argv[1])\n",
+                           str(args.file)],
+            "sii-build": [sys.executable, "-m", "ecattool", "sii", "build", str(args.file), "--device", args.device,
+                          "--policy", "newest", "-o", str(out)],
+        }
+        for cmd in cmds.values():  # warm the OS file cache and the .pyc files
+            run_once(cmd)
+        times: dict[str, list[float]] = {k: [] for k in cmds}
+        for _ in range(args.runs):
+            for name, cmd in cmds.items():
+                times[name].append(run_once(cmd))
+        size = out.stat().st_size
+    base = statistics.median(times["bare-parse"])
+    print(f"file: {args.file.name} ({args.file.stat().st_size} bytes), device {args.device} -> {size}-byte image, "
+          f"{args.runs} runs each, median wall time per process")
+    for name, ts in times.items():
+        med = statistics.median(ts)
+        print(f"  {name:11s} {med * 1000:7.1f} ms   ratio {med / base:4.2f}x   (min {min(ts) * 1000:.1f} ms)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
