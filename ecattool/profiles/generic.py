@@ -125,14 +125,16 @@ def complete_generic(device: Device) -> Device:
         od.add(OdObject(0x1008, "Device name", ObjectCode.VAR,
                         {0: Entry(0, "Device name", STRING, 8 * len(text), access=Access.parse("const"), default=text,
                                   location=Location(where))}, location=Location(where)))
+    ident = out.identity
+    obj = OdObject(0x1018, "Identity", ObjectCode.RECORD, location=Location(where))
+    for sub, name, value in ((0, "Number of entries", 4), (1, "Vendor ID", ident.vendor_id),
+                             (2, "Product code", ident.product_code), (3, "Revision", ident.revision),
+                             (4, "Serial number", ident.serial)):
+        obj.entries[sub] = _u(sub, name, USINT if sub == 0 else UDINT, value, RO, where)
     if 0x1018 not in od:
-        ident = out.identity
-        obj = OdObject(0x1018, "Identity", ObjectCode.RECORD, location=Location(where))
-        for sub, name, value in ((0, "Number of entries", 4), (1, "Vendor ID", ident.vendor_id),
-                                 (2, "Product code", ident.product_code), (3, "Revision", ident.revision),
-                                 (4, "Serial number", ident.serial)):
-            obj.entries[sub] = _u(sub, name, USINT if sub == 0 else UDINT, value, RO, where)
         od.add(obj)
+    else:
+        _fill_entries(od.get(0x1018), obj)  # type: ignore[arg-type]
     if 0x1C00 not in od and out.sync_managers:
         sms = sorted(out.sync_managers, key=lambda s: s.number)
         obj = OdObject(0x1C00, "Sync manager type", ObjectCode.ARRAY, location=Location(where))
@@ -190,6 +192,11 @@ def _fill_defaults(existing: OdObject, synthesised: OdObject) -> None:
     """Give an ESI object without default values (e.g. 1C12h with no ``DefaultData``) the PDO list's values."""
     if existing.entry(0) is None or existing.entries[0].default is not None:
         return
+    _fill_entries(existing, synthesised)
+
+
+def _fill_entries(existing: OdObject, synthesised: OdObject) -> None:
+    """Entries of ``existing`` without a default take the value of the same sub-index of ``synthesised``."""
     for sub, e in synthesised.entries.items():
         target = existing.entries.get(sub)
         if target is not None and target.default is None and target.datatype is not None and target.datatype.bits:
