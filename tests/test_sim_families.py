@@ -246,7 +246,7 @@ def test_random_writes_only_raise_ecattool_errors(writes, family):
         d.request_state(OP)
         d.exchange(bytes(d.process_image_sizes()[0]))
     except StateChangeError as exc:
-        assert exc.al_status in (0x001D, 0x001E)
+        assert exc.al_status in (0x001D, 0x001E, 0x0030)
 
 
 _CACHE: dict[str, object] = {}
@@ -260,3 +260,32 @@ def _fresh(family: str) -> Drive:
     d = Drive.from_device(_CACHE[family])  # type: ignore[arg-type]
     d.request_state(PRE)
     return d
+
+
+def test_hdt_oracle_30_6046_max_not_above_min():
+    d = at("hdt")
+    assert code_of(w, d, 0x6046, 2, 0, 4) == 0x06090030  # min 0, max 0
+    w(d, 0x6046, 2, 100, 4)
+    assert code_of(w, d, 0x6046, 1, 100, 4) == 0x06090030
+
+
+def test_ct_oracle_42_vl_factor_zero_refused():
+    d = at("controltechniques")
+    assert code_of(w, d, 0x604B, 1, 0, 2) == 0x06090030
+    assert code_of(w, d, 0x604C, 2, 0, 2) == 0x06090030
+    w(d, 0x604B, 1, 0xFFFF, 2)  # -1 allowed
+
+
+def test_ct_positioning_mode_needs_dc_and_sync_interval():
+    d = at("controltechniques", SAFE)
+    d._put(0x6060, 0, 8)
+    d._put(0x6061, 0, 8)
+    with pytest.raises(StateChangeError) as exc:
+        d.request_state(OP)
+    assert exc.value.al_status == 0x0030 and d.state() is SAFE
+    d.configure_dc(0x0300, 1_100_000)  # 1.1 ms: not a multiple of 250 us (oracle 36)
+    with pytest.raises(StateChangeError) as exc:
+        d.request_state(OP)
+    assert exc.value.al_status == 0x0035
+    d.configure_dc(0x0300, 15_000_000)
+    d.request_state(OP)

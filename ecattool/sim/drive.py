@@ -40,6 +40,8 @@ AL_INVALID_STATE_CHANGE = 0x0011
 AL_BOOTSTRAP_NOT_SUPPORTED = 0x0013
 AL_INVALID_OUTPUT_CONFIG = 0x001D
 AL_INVALID_INPUT_CONFIG = 0x001E
+AL_DC_INVALID_SYNC = 0x0030
+AL_DC_INVALID_CYCLE = 0x0035
 
 
 class FoeError(TargetError):
@@ -688,6 +690,8 @@ class Drive:
             self._refuse(state, AL_BOOTSTRAP_NOT_SUPPORTED, "the device has no FoE bootstrap")
         if current is EcState.PREOP and state is EcState.SAFEOP:
             self.layout = {RX: self._check_sm(RX), TX: self._check_sm(TX)}
+        if state is EcState.OP:
+            self._check_dc()
         if current is EcState.OP and self.has_cia402:
             self._cia_moves(self.cia.communication_lost(), "ESM left OP")
         self.esm = state
@@ -835,6 +839,38 @@ class Drive:
                 raise _abort(0x6060, sub, A.INVALID_VALUE)
         return True
 
+    def _check_min_max(self, sub: int, data: bytes, value: int | None) -> bool:
+        """HDT §4.11.6: 6046h max <= min is refused with 0609 0030h."""
+        other = self._read_int(0x6046, 2 if sub == 1 else 1) or 0
+        lo, hi = (value or 0, other) if sub == 1 else (other, value or 0)
+        if sub in (1, 2) and hi <= lo:
+            raise _abort(0x6046, sub, A.INVALID_VALUE)
+        return True
+
+    @staticmethod
+    def _nonzero(index: int) -> Callable[[int, bytes, int | None], bool]:
+        """Control Techniques 7.5.9/7.5.10: a 0 in 604Bh/604Ch is invalid (code not stated: 0609 0030h)."""
+        def check(sub: int, data: bytes, value: int | None) -> bool:
+            if sub and not value:
+                raise _abort(index, sub, A.INVALID_VALUE)
+            return True
+        return check
+
+    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0) -> None:
+        """What the master writes to the ESC before SAFE-OP: DC activation (0x0981, e.g. 0x0300 = SYNC0)
+        and the SYNC0 cycle time in ns. ``assign_activate = 0`` = free run."""
+        self.dc = (assign_activate, sync0_cycle_ns)
+        self._log("dc", assign_activate=assign_activate, sync0_cycle_ns=sync0_cycle_ns)
+
+    def _check_dc(self) -> None:
+        active, cycle = getattr(self, "dc", (0, 0))
+        if self.family == "controltechniques" and active:
+            # 8.1.1: SYNC0 = n x 250 us, n = 1..60
+            if cycle <= 0 or cycle % 250_000 or not 1 <= cycle // 250_000 <= 60:
+                self._refuse(EcState.OP, AL_DC_INVALID_CYCLE, f"SYNC0 cycle {cycle} ns is not n x 250 us (n = 1..60)")
+        if not active and self.has_cia402 and self.mode() in self.rules.dc_required_modes:
+            self._refuse(EcState.OP, AL_DC_INVALID_SYNC, f"mode {self.mode()} needs distributed clocks")
+
     def mode(self) -> int:
         return self._read_int(0x6061, 0) if (0x6061, 0) in self._entries else (self._read_int(0x6060, 0) or 0)  # type: ignore[return-value]
 
@@ -906,6 +942,11 @@ class Drive:
             0x6060: self._on_mode,
         }
         self._handlers_down[0x6060] = self._check_mode
+        if self.family == "hdt":
+            self._handlers_down[0x6046] = self._check_min_max
+        if self.family == "controltechniques":
+            self._handlers_down[0x604B] = self._nonzero(0x604B)
+            self._handlers_down[0x604C] = self._nonzero(0x604C)
         if self.family != "technosoft-ipos":
             return
         m = self.memory
