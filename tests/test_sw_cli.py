@@ -160,3 +160,29 @@ def test_build_sample(capsys, tmp_path):
 def test_every_command_has_help_with_an_example(capsys, command):
     code, out, _ = run(capsys, "sw", command, "--help")
     assert code == 0 and "Examples:" in out and f"ecattool sw {command}" in out
+
+
+def _project(tmp_path) -> str:
+    (tmp_path / "axis.sw").write_bytes(corpus_path("sw", SW).read_bytes())
+    p = tmp_path / "machine.yaml"
+    p.write_text("ecattool: 1\nname: m\ndrives:\n  - name: x\n    device: {profile: technosoft-ipos}\n"
+                 "  - name: y\n    device: {profile: technosoft-ipos}\n    sw: axis.sw\n")
+    return str(p)
+
+
+def test_project_drive_with_sw_is_verified_and_downloaded(capsys, tmp_path):
+    project = _project(tmp_path)
+    code, out, _ = run(capsys, "sw", "verify", "--project", project, "--json")
+    assert code == 1 and len(json.loads(out)["blocks"]) == 3
+    code, out, _ = run(capsys, "sw", "download", "--project", project, "--drive", "y", "--json")
+    assert code == 0 and json.loads(out)["reset"] is True
+
+
+def test_project_drive_selection_errors(capsys, tmp_path):
+    project = _project(tmp_path)
+    code, _, err = run(capsys, "sw", "verify", "--project", project, "--drive", "z")
+    assert code == 1 and "no drive 'z'" in err and "(x, y)" in err
+    code, _, err = run(capsys, "sw", "verify", "--project", project, "--drive", "x")
+    assert code == 1 and "has no readable sw image" in err
+    code, _, err = run(capsys, "sw", "verify", c(SW), "--drive", "x")
+    assert code == 1 and "--drive needs --project" in err

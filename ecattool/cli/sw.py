@@ -108,10 +108,12 @@ def from_foe_cmd(file: str, output: str | None) -> None:
 
 
 # ---------------------------------------------------------------------------------------------- targets
-def _open_target(spec: str, slave: int) -> Any:
+def _open_target(spec: str, slave: int, device: Any = None, rules: Any = None) -> Any:
     if spec == "sim":
         from ecattool.sim import Drive
 
+        if device is not None:
+            return Drive.from_device(device, rules, position=slave)
         return Drive.from_profile("technosoft-ipos")
     if spec.startswith("pysoem:"):
         from ecattool.target.pysoem import PysoemTarget
@@ -119,29 +121,74 @@ def _open_target(spec: str, slave: int) -> Any:
         master = PysoemTarget(spec.split(":", 1)[1])
         slaves = master.slaves()
         if not 0 <= slave < len(slaves):
-            raise InputError(f"--slave {slave}: the bus has {len(slaves)} slaves")
+            raise InputError(f"slave position {slave}: the bus has {len(slaves)} slaves")
         return slaves[slave]
     raise InputError(f"unknown target {spec!r} (use 'sim' or 'pysoem:<interface>')")
 
 
-_target_option = click.option("--target", default="sim", show_default=True,
-                              help="'sim' (a simulated Technosoft iPOS) or 'pysoem:<interface>'.")
-_slave_option = click.option("--slave", default=0, show_default=True, help="Slave position on a real bus.")
+def _project_drive(project: str, name: str | None) -> tuple[Any, str]:
+    """The resolved drive ``name`` of a project (or its only drive) and the project's default target."""
+    from ecattool.project.lint import lint_project
+
+    result = lint_project(project)
+    if result.loaded is None:
+        first = result.findings[0]
+        raise InputError(first.message, first.location)
+    drives = result.drives
+    if name is not None:
+        chosen = [rd for rd in drives if rd.drive.name == name]
+    else:
+        chosen = [rd for rd in drives if rd.drive.sw_config is not None] or drives
+    if len(chosen) != 1:
+        names = ", ".join(rd.drive.name for rd in drives)
+        why = f"has no drive {name!r}" if name is not None else "has several drives"
+        raise InputError(f"the project {why}; choose one with --drive ({names})", Location(project))
+    return chosen[0], result.loaded.project.target
+
+
+_target_option = click.option("--target", default=None,
+                              help="'sim' (a simulated Technosoft iPOS; the default) or 'pysoem:<interface>'; "
+                                   "with --project, the project's target.")
+_slave_option = click.option("--slave", default=None, type=int, help="Slave position on the bus (default 0, or the project's).")
+_project_option = click.option("--project", type=click.Path(dir_okay=False),
+                               help="Project file: the drive's device, bus position, target and .sw file.")
+_drive_option = click.option("--drive", "drive_name", help="Drive name in --project (needed when it has several).")
 _preload_option = click.option("--preload", type=click.Path(dir_okay=False),
                                help="Simulator only: program this .sw into the simulated EEPROM first.")
 
 
-def _target_for(spec: str, slave: int, preload: str | None) -> Any:
-    target = _open_target(spec, slave)
+def _target_and_image(file: str | None, target: str | None, slave: int | None, project: str | None,
+                      drive_name: str | None, preload: str | None) -> tuple[Any, Any, str, str]:
+    """(target, image, image name, target name) for verify/download."""
+    device = rules = None
+    image = None
+    name = file
+    if project is not None:
+        rd, project_target = _project_drive(project, drive_name)
+        device, rules = rd.device, rd.rules
+        target = target or project_target
+        slave = rd.position if slave is None else slave
+        if file is None:
+            cfg = rd.drive.sw_config
+            if cfg is None or rd.sw_image is None:
+                raise InputError(f"drive {rd.drive.name!r} has no readable sw image; give FILE", Location(project))
+            image, name = rd.sw_image, cfg.file
+    elif drive_name is not None:
+        raise InputError("--drive needs --project")
+    if image is None:
+        if file is None:
+            raise click.UsageError("give the .sw FILE (or --project with a drive that has 'sw:')")
+        image = _image(file)
+    spec = target or "sim"
+    tgt = _open_target(spec, slave or 0, device, rules)
     if preload:
         if spec != "sim":
             raise InputError("--preload is for the simulator only")
         from ecattool.sw.apply import download
 
-        report = download(_image(preload), target, reset=True)
-        if not report.ok:
+        if not download(_image(preload), tgt, reset=True).ok:
             raise InputError(f"could not preload {preload} into the simulator", Location(preload))
-    return target
+    return tgt, image, name or "", spec
 
 
 def _checks_table(title: str, checks: list[Any]) -> Any:
@@ -159,25 +206,29 @@ def _checks_table(title: str, checks: list[Any]) -> Any:
 @sw.command(epilog="""\b
 Examples:
   ecattool sw verify axis1.sw --target sim
-  ecattool sw verify axis1.sw --target pysoem:eth0 --slave 2 --json""")
-@click.argument("file", type=click.Path(dir_okay=False))
+  ecattool sw verify axis1.sw --target pysoem:eth0 --slave 2 --json
+  ecattool sw verify --project machine.yaml --drive x_axis""")
+@click.argument("file", type=click.Path(dir_okay=False), required=False)
 @_target_option
 @_slave_option
+@_project_option
+@_drive_option
 @_preload_option
 @json_option
-def verify(file: str, target: str, slave: int, preload: str | None, as_json: bool) -> None:
+def verify(file: str | None, target: str | None, slave: int | None, project: str | None, drive_name: str | None,
+           preload: str | None, as_json: bool) -> None:
     """Compare the drive's EEPROM checksums (2069h/206Ah) with the file, block by block.
 
     Exit status 1 when any block differs: reload it with 'ecattool sw download'.
     """
     from ecattool.sw.apply import verify as verify_image
 
-    image = _image(file)
-    checks = verify_image(image, _target_for(target, slave, preload))
+    tgt, image, name, spec = _target_and_image(file, target, slave, project, drive_name, preload)
+    checks = verify_image(image, tgt)
     if as_json:
         print_json({"ok": all(c.ok for c in checks), "blocks": [c.to_json() for c in checks]})
     else:
-        console().print(_checks_table(f"{file} on {target}", checks))
+        console().print(_checks_table(f"{name} on {spec}", checks))
     if not all(c.ok for c in checks):
         sys.exit(1)
 
@@ -187,8 +238,9 @@ Examples:
   ecattool sw download axis1.sw --dry-run
   ecattool sw download axis1.sw --dry-run --mode 32 --json
   ecattool sw download axis1.sw --target sim
-  ecattool sw download axis1.sw --target pysoem:eth0 --slave 1""")
-@click.argument("file", type=click.Path(dir_okay=False))
+  ecattool sw download axis1.sw --target pysoem:eth0 --slave 1
+  ecattool sw download --project machine.yaml --drive x_axis""")
+@click.argument("file", type=click.Path(dir_okay=False), required=False)
 @click.option("--dry-run", is_flag=True, help="Only list the SDO writes (a startup list); touch no drive.")
 @click.option("--mode", type=click.Choice(["16", "32"]), default="16", show_default=True,
               help="2065h data width: one word per write, or two (low word at the lower address).")
@@ -196,20 +248,25 @@ Examples:
 @click.option("--no-reset", is_flag=True, help="Do not reset the drive (2080h) after a successful download.")
 @_target_option
 @_slave_option
+@_project_option
+@_drive_option
 @_preload_option
 @json_option
-def download(file: str, dry_run: bool, mode: str, force: bool, no_reset: bool, target: str, slave: int,
-             preload: str | None, as_json: bool) -> None:
+def download(file: str | None, dry_run: bool, mode: str, force: bool, no_reset: bool, target: str | None,
+             slave: int | None, project: str | None, drive_name: str | None, preload: str | None,
+             as_json: bool) -> None:
     """Program the image into the drive EEPROM over CoE (2064h/2065h), verify, then reset.
 
     Without --dry-run only the blocks whose drive checksum differs are written; each is verified after
     writing; the drive is reset (2080h, no SDO reply) only when every block checks out. A failed block is
     reported and the command exits 1; running it again repairs the drive.
     """
-    image = _image(file)
     if dry_run:
         from ecattool.sw.plan import download_plan
 
+        if file is None:
+            raise click.UsageError("--dry-run needs the .sw FILE")
+        image = _image(file)
         plan = download_plan(image, int(mode), reset=not no_reset, name=file)
         if as_json:
             print_json({"mode": int(mode), "commands": [
@@ -221,7 +278,7 @@ def download(file: str, dry_run: bool, mode: str, force: bool, no_reset: bool, t
             t.add_row(str(n), c.address, f"0x{c.int_value:0{2 * len(c.data)}X}", c.comment)
         console().print(t)
         return
-    tgt = _target_for(target, slave, preload)
+    tgt, image, file, _ = _target_and_image(file, target, slave, project, drive_name, preload)
     report = _run_download(image, tgt, int(mode), not no_reset, force, show_progress=not as_json)
     if as_json:
         print_json(report.to_json())

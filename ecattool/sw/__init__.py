@@ -16,9 +16,12 @@ from ecattool.sw.params import ParameterTable, parse_parameters, read_parameters
 from ecattool.sw.plan import config_value, download_plan
 from ecattool.sw.setup import diff, patch, setup_values
 
+#: every integrity word that does not hold, as findings (rule ids sw-…); the project lint uses it
+check = integrity_findings
+
 __all__ = [
     "Block", "BlockCheck", "BlockInfo", "DownloadReport", "ParameterTable", "SwImage",
-    "build", "check_foe_name", "checksum", "checksum_request", "config_value", "describe", "diff", "download",
+    "build", "check", "check_foe_name", "checksum", "checksum_request", "config_value", "describe", "diff", "download",
     "download_plan", "fix_integrity", "from_foe", "integrity_findings", "load_image", "make_image", "parse",
     "parse_parameters", "patch", "read", "read_foe", "read_parameters", "setup_table", "setup_values", "to_foe",
     "verify", "write",

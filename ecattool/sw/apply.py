@@ -33,6 +33,14 @@ class BlockCheck:
     def ok(self) -> bool:
         return self.error is None and self.actual == self.expected
 
+    @property
+    def start(self) -> int:
+        return self.block.start
+
+    @property
+    def end(self) -> int:
+        return self.block.end
+
     def to_json(self) -> dict[str, Any]:
         b = self.block
         return {"start": b.start, "end": b.end, "count": b.count, "expected": self.expected,
