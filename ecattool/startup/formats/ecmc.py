@@ -51,8 +51,10 @@ def _command_line(slave: str, cmd: StartupCommand) -> str:
             raise EncodeError(f"0x{cmd.index:04X}:{cmd.subindex:02X}: ecmc complete access starts at sub-index 0")
         return f'ecmcConfigOrDie "Cfg.EcAddSdoComplete({slave},0x{cmd.index:04X},{cmd.data.hex(" ")},{size})"'
     if size in (1, 2, 4):
-        return f'ecmcConfigOrDie "Cfg.EcAddSdo({slave},0x{cmd.index:04X},0x{cmd.subindex:X},0x{cmd.int_value:X},{size})"'
-    return f'ecmcConfigOrDie "Cfg.EcAddSdoBuffer({slave},0x{cmd.index:04X},0x{cmd.subindex:X},{cmd.data.hex(" ")},{size})"'
+        args = f"0x{cmd.index:04X},0x{cmd.subindex:X},0x{cmd.int_value:X},{size}"
+        return f'ecmcConfigOrDie "Cfg.EcAddSdo({slave},{args})"'
+    args = f"0x{cmd.index:04X},0x{cmd.subindex:X},{cmd.data.hex(' ')},{size}"
+    return f'ecmcConfigOrDie "Cfg.EcAddSdoBuffer({slave},{args})"'
 
 
 def export(configs: list[SlaveConfig]) -> str:
@@ -80,7 +82,8 @@ def export(configs: list[SlaveConfig]) -> str:
                         out.append(f'ecmcConfigOrDie "Cfg.EcAddEntryComplete({slave},{v},{p},{direction},{sm},'
                                    f'0x{pdo.index:04x},0x{e.index:04x},0x{e.subindex:x},{e.bit_len},{name})"')
         for s in c.soe_commands:
-            out.append(f"#- SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()} not representable in ecmc")
+            out.append(f"#- SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()}: "
+                       "not representable in ecmc")
     return "\n".join(out) + "\n"
 
 
@@ -140,7 +143,8 @@ class _Reader:
     def call(self, func: str, args: list[str], loc: Location) -> None:
         if func in _SDO_WRITES:
             if len(args) != 5:
-                raise InputError(f"Cfg.{func} takes (slave,index,subindex,value,bytesize); got {len(args)} arguments", loc)
+                raise InputError(f"Cfg.{func} takes (slave,index,subindex,value,bytesize); "
+                                 f"got {len(args)} arguments", loc)
             cfg = self.slave(args[0], loc)
             size = self.number(args[4], loc, "byte size")
             value = self.number(args[3], loc, "value")
@@ -169,7 +173,8 @@ class _Reader:
 
     def entry(self, args: list[str], loc: Location) -> None:
         if len(args) < 10:
-            raise InputError("Cfg.EcAddEntryComplete takes (slave,vendor,product,dir,sm,pdo,index,sub,bits,[signed,]name)", loc)
+            raise InputError("Cfg.EcAddEntryComplete takes "
+                             "(slave,vendor,product,dir,sm,pdo,index,sub,bits,[signed,]name)", loc)
         cfg = self.slave(args[0], loc)
         vendor, product = args[1], args[2]
         if not _MACRO.search(vendor + product) and cfg.identity is None:

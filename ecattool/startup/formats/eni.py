@@ -92,6 +92,17 @@ def _process_data(slave: Any, c: SlaveConfig) -> None:
         _pdo_element(pd, "RxPdo", p, 2)
 
 
+def _mailbox_cmd(parent: Any, attrs: dict[str, str], transition: str, comment: str,
+                 fields: tuple[tuple[str, object], ...]) -> None:
+    ic = _sub(parent, "InitCmd")
+    for key, value in attrs.items():
+        ic.set(key, value)
+    _sub(ic, "Transition", transition)
+    _sub(ic, "Comment", comment, cdata=True)
+    for tag, value in fields:
+        _sub(ic, tag, value)
+
+
 def _mailbox(slave: Any, c: SlaveConfig) -> None:
     mb = _sub(slave, "Mailbox")
     for kind, tag in (("MBoxOut", "Send"), ("MBoxIn", "Recv")):
@@ -105,28 +116,15 @@ def _mailbox(slave: Any, c: SlaveConfig) -> None:
         _sub(mb, "Protocol", "SoE")
     cmds = _sub(_sub(mb, "CoE"), "InitCmds")
     for cmd in c.commands:
-        ic = _sub(cmds, "InitCmd")
-        if cmd.complete_access:
-            ic.set("CompleteAccess", "true")
-        _sub(ic, "Transition", cmd.transition)
-        _sub(ic, "Comment", cmd.comment, cdata=True)
-        _sub(ic, "Timeout", cmd.timeout_ms)
-        _sub(ic, "Ccs", 1)
-        _sub(ic, "Index", cmd.index)
-        _sub(ic, "SubIndex", cmd.subindex)
-        _sub(ic, "Data", cmd.data.hex())
+        _mailbox_cmd(cmds, {"CompleteAccess": "true"} if cmd.complete_access else {}, cmd.transition, cmd.comment,
+                     (("Timeout", cmd.timeout_ms), ("Ccs", 1), ("Index", cmd.index), ("SubIndex", cmd.subindex),
+                      ("Data", cmd.data.hex())))
     if c.soe_commands:
         soe = _sub(_sub(mb, "SoE"), "InitCmds")
         for s in c.soe_commands:
-            ic = _sub(soe, "InitCmd")
-            if s.fixed:
-                ic.set("Fixed", "1")
-            _sub(ic, "Transition", s.transition)
-            _sub(ic, "Comment", s.comment, cdata=True)
-            for tag, value in (("Timeout", s.timeout_ms), ("OpCode", s.op_code), ("DriveNo", s.drive_no),
-                               ("IDN", s.idn), ("Elements", s.elements), ("Attribute", s.attribute)):
-                _sub(ic, tag, value)
-            _sub(ic, "Data", s.data.hex())
+            _mailbox_cmd(soe, {"Fixed": "1"} if s.fixed else {}, s.transition, s.comment,
+                         (("Timeout", s.timeout_ms), ("OpCode", s.op_code), ("DriveNo", s.drive_no), ("IDN", s.idn),
+                          ("Elements", s.elements), ("Attribute", s.attribute), ("Data", s.data.hex())))
 
 
 def _dc(slave: Any, c: SlaveConfig, phys_addr: int) -> None:

@@ -4,8 +4,9 @@ Per slave: ``ec_pdo_entry_info_t``, ``ec_pdo_info_t`` and ``ec_sync_info_t`` tab
 (SM0/SM1 mailboxes, SM2 outputs, SM3 inputs), and a function ``int <name>_configure(ec_master_t *master)``
 that creates the slave configuration, registers the PDOs, adds every startup SDO with
 ``ecrt_slave_config_sdo8/16/32`` by size (``ecrt_slave_config_sdo`` for other sizes,
-``ecrt_slave_config_complete_sdo`` for complete access), SoE IDNs with ``ecrt_slave_config_idn`` and sets DC. IgH sends all SDO configurations in
-PRE-OP before SAFE-OP; a command of another transition gets a comment saying so. Export only.
+``ecrt_slave_config_complete_sdo`` for complete access), SoE IDNs with ``ecrt_slave_config_idn``, and sets
+DC. IgH sends all SDO configurations in PRE-OP before SAFE-OP; a command of another transition gets a
+comment saying so. Export only.
 """
 
 from __future__ import annotations
@@ -113,7 +114,8 @@ def export(configs: list[SlaveConfig]) -> str:
         out.append("")
         out.append(f"int {ident}_configure(ec_master_t *master)")
         out.append("{")
-        out.append(f"    ec_slave_config_t *sc = ecrt_master_slave_config(master, {ident.upper()}_POS, {ident.upper()}_ID);")
+        out.append(f"    ec_slave_config_t *sc = ecrt_master_slave_config(master, {ident.upper()}_POS, "
+                   f"{ident.upper()}_ID);")
         out.append("    if (!sc) return -1;")
         body: list[str] = []
         if c.has_pdo_info:

@@ -183,13 +183,15 @@ def _read_slave(s: Any, doc: _Doc, i: int) -> SlaveConfig:
         loc = doc.loc(*base, "soe_commands", j)
         cfg.soe_commands.append(SoeCommand(
             check_transition(str(_need(x, "transition", loc)), loc), _int(_need(x, "idn", loc), loc, "idn"),
-            parse_hex(str(x.get("data", "")), loc), drive_no=_opt(x, "drive_no", 0, loc), op_code=_opt(x, "op_code", 3, loc),
-            elements=_opt(x, "elements", 64, loc), attribute=_opt(x, "attribute", 0, loc), comment=str(x.get("comment", "")),
+            parse_hex(str(x.get("data", "")), loc), drive_no=_opt(x, "drive_no", 0, loc),
+            op_code=_opt(x, "op_code", 3, loc), elements=_opt(x, "elements", 64, loc),
+            attribute=_opt(x, "attribute", 0, loc), comment=str(x.get("comment", "")),
             timeout_ms=_opt(x, "timeout_ms", 0, loc), fixed=bool(x.get("fixed", False)), source=loc))
     for j, ch in enumerate(as_list(s.get("channel_info"), doc.loc(*base, "channel_info"), "channel_info")):
         cloc = doc.loc(*base, "channel_info", j)
         rest = {k: v for k, v in _obj(ch, cloc, "channel_info entry").items() if k not in ("pdo", "entry")}
-        cfg.channel_info[(_int(_need(ch, "pdo", cloc), cloc, "pdo"), _int(_need(ch, "entry", cloc), cloc, "entry"))] = rest
+        key = (_int(_need(ch, "pdo", cloc), cloc, "pdo"), _int(_need(ch, "entry", cloc), cloc, "entry"))
+        cfg.channel_info[key] = rest
     cfg.extra = dict(_obj(s.get("extra") or {}, doc.loc(*base, "extra"), "extra"))
     return cfg
 
@@ -201,7 +203,8 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
     except json.JSONDecodeError as exc:
         raise InputError(f"invalid JSON: {exc.msg}", Location(source, exc.lineno, exc.colno)) from None
     if not isinstance(top, dict) or top.get("format") != FORMAT_TAG:
-        raise InputError(f"not an ecattool startup JSON file (expected \"format\": \"{FORMAT_TAG}\")", Location(source, 1))
+        raise InputError(f"not an ecattool startup JSON file (expected \"format\": \"{FORMAT_TAG}\")",
+                         Location(source, 1))
     if top.get("version") != VERSION:
         raise InputError(f"unsupported ecattool startup JSON version {top.get('version')!r} (this is {VERSION})",
                          Location(source, 1))

@@ -41,8 +41,8 @@ def export(configs: list[SlaveConfig]) -> str:
             if cmd.transition != "PS":
                 note = f"{note} [transition {cmd.transition}; pysoem writes it in PRE-OP]".strip()
             ca = ", True" if cmd.complete_access else ""
-            out.append(f"    slave.sdo_write(0x{cmd.index:04X}, 0x{cmd.subindex:02X}, bytes.fromhex({cmd.data.hex()!r}){ca})"
-                       + (f"  # {note}" if note else ""))
+            call = f"slave.sdo_write(0x{cmd.index:04X}, 0x{cmd.subindex:02X}, bytes.fromhex({cmd.data.hex()!r}){ca})"
+            out.append(f"    {call}" + (f"  # {note}" if note else ""))
         for s in c.soe_commands:
             out.append(f"    # SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()}: not sent by pysoem")
         out.append("")

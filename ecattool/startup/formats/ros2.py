@@ -107,7 +107,8 @@ def export(configs: list[SlaveConfig]) -> str:
     if len(configs) != 1:
         raise EncodeError(f"an ethercat_driver_ros2 slave file describes one slave; got {len(configs)}")
     c = configs[0]
-    lines = [f"# ethercat_driver_ros2 slave configuration written by ecattool{': ' + one_line(c.name) if c.name else ''}"]
+    title = f": {one_line(c.name)}" if c.name else ""
+    lines = [f"# ethercat_driver_ros2 slave configuration written by ecattool{title}"]
     if c.identity is not None:
         lines += [f"vendor_id: 0x{c.identity.vendor_id:08x}", f"product_id: 0x{c.identity.product_code:08x}"]
     if c.dc_assign_activate is not None:

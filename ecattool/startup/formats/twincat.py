@@ -35,7 +35,8 @@ def format_value(data: bytes) -> str:
 
 def format_line(cmd: StartupCommand) -> str:
     ca = " CA" if cmd.complete_access else ""
-    return f"<{cmd.transition}>,CoE,0x{cmd.index:04X}:{cmd.subindex:02X}{ca},{format_value(cmd.data)},{one_line(cmd.comment)}"
+    address = f"0x{cmd.index:04X}:{cmd.subindex:02X}{ca}"
+    return f"<{cmd.transition}>,CoE,{address},{format_value(cmd.data)},{one_line(cmd.comment)}"
 
 
 def export(configs: list[SlaveConfig]) -> str:
