@@ -28,6 +28,14 @@ def r(d: Drive, index: int, sub: int = 0, signed: bool = False) -> int:
     return int.from_bytes(d.sdo_upload(index, sub), "little", signed=signed)
 
 
+def remap(d: Drive, pdo: int, *entries: int) -> None:
+    """Disable ``pdo``, write its entries, enable it (sub-index 0 := count), as §2.4 prescribes."""
+    w(d, pdo, 0, 0, 1)
+    for s, v in enumerate(entries, start=1):
+        w(d, pdo, s, v, 4)
+    w(d, pdo, 0, len(entries), 1)
+
+
 def to_op(d: Drive) -> None:
     d.request_state(SAFE)
     d.request_state(OP)
@@ -105,15 +113,10 @@ def test_oracle_19_cst_assignment():
 def test_oracle_20_48_bit_examples_accepted():
     d = drive()
     w(d, 0x1C12, 0, 0, 1)
-    w(d, 0x1601, 0, 0, 1)
-    w(d, 0x1601, 1, 0x60B80010, 4)
-    w(d, 0x1601, 2, 0x20920120, 4)
-    w(d, 0x1601, 0, 2, 1)
+    remap(d, 0x1601, 0x60B80010, 0x20920120)
     w(d, 0x1C13, 0, 0, 1)
-    w(d, 0x1A02, 0, 0, 1)
-    w(d, 0x1A02, 1, 0x60B90010, 4)
-    w(d, 0x1A02, 2, 0x60BA0020, 4)
-    w(d, 0x1A02, 0, 2, 1)
+    remap(d, 0x1A02, 0x60B90010, 0x60BA0020)
+    assert r(d, 0x1601, 0) == 2 and r(d, 0x1A02, 0) == 2
 
 
 def test_72_bit_pdo_refused_with_0604_0042():
@@ -181,10 +184,7 @@ def test_dummies_only_in_rxpdos():
     d = drive()
     w(d, 0x1C12, 0, 0, 1)
     w(d, 0x1C13, 0, 0, 1)
-    w(d, 0x1601, 0, 0, 1)
-    w(d, 0x1601, 1, 0x207D0008, 4)
-    w(d, 0x1601, 2, 0x00050008, 4)
-    w(d, 0x1601, 0, 2, 1)
+    remap(d, 0x1601, 0x207D0008, 0x00050008)
     w(d, 0x1A03, 0, 0, 1)
     aborts(0x06040041, w, d, 0x1A03, 1, 0x207D0008, 4)
 
