@@ -24,7 +24,6 @@ from ecattool.sii.model import (
     PdoCategory,
     RawCategory,
     SiiImage,
-    StringsCategory,
     category_name,
 )
 
@@ -150,9 +149,6 @@ def _check_categories(image: SiiImage, r: _Report) -> None:
     for i, u in enumerate(image.fmmus):
         if u not in FMMU_USAGE:
             r.add("sii.fmmu", W, f"FMMU {i} has usage 0x{u:02X} (0 none, 1 outputs, 2 inputs, 3 SyncM status)")
-    for c in image.categories:
-        if isinstance(c, StringsCategory) and c is not image.first(StringsCategory):
-            continue
 
 
 def _check_sms(image: SiiImage, r: _Report) -> None:

@@ -96,7 +96,16 @@ def flatten(image: SiiImage) -> dict[str, Any]:
         seen[base] = n
         return base if n == 1 else f"{base}#{n}"
 
-    sm_i = fmmu_i = dc_i = 0
+    counters = {"sm": 0, "dc": 0}
+
+    def numbered(prefix: str, items: list[Any], extra: bytes) -> None:
+        for item in items:
+            _put(out, f"{prefix}[{counters[prefix]}]", item, image)
+            counters[prefix] += 1
+        if extra:
+            out[key(f"{prefix}.extra")] = extra
+
+    fmmu_i = 0
     for c in image.categories:
         if isinstance(c, StringsCategory):
             k = key("strings")
@@ -110,11 +119,9 @@ def flatten(image: SiiImage) -> dict[str, Any]:
                 out[f"fmmu[{fmmu_i}]"] = FMMU_USAGE.get(u, f"0x{u:02X}") or f"unused(0x{u:02X})"
                 fmmu_i += 1
         elif isinstance(c, SyncMCategory):
-            for s in c.sync_managers:
-                _put(out, f"sm[{sm_i}]", s, image)
-                sm_i += 1
-            if c.extra:
-                out[key("syncm.extra")] = c.extra
+            numbered("sm", c.sync_managers, c.extra)
+        elif isinstance(c, DcCategory):
+            numbered("dc", c.opmodes, c.extra)
         elif isinstance(c, PdoCategory):
             kind = "txpdo" if c.type == CategoryType.TXPDO else "rxpdo"
             for p in c.pdos:
@@ -125,12 +132,6 @@ def flatten(image: SiiImage) -> dict[str, Any]:
                     _put(out, f"{pk}.entry[{j}]", e, image)
             if c.extra:
                 out[key(f"{kind}.extra")] = c.extra
-        elif isinstance(c, DcCategory):
-            for o in c.opmodes:
-                _put(out, f"dc[{dc_i}]", o, image)
-                dc_i += 1
-            if c.extra:
-                out[key("dc.extra")] = c.extra
         elif isinstance(c, RawCategory):
             out[key(f"cat[{category_name(c.type)}]")] = c.data
     return out

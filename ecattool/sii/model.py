@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import IntEnum
+from typing import ClassVar
 
 
 class CategoryType(IntEnum):
@@ -92,9 +93,11 @@ class Category:
     """Base of every category. ``extra`` holds body bytes after the typed content (padding included,
     except a single 0x00 that only pads an odd-length content to a whole word)."""
 
+    TYPE: ClassVar[int] = CategoryType.NOP
+
     @property
-    def cat_type(self) -> int:  # pragma: no cover - overridden
-        raise NotImplementedError
+    def cat_type(self) -> int:
+        return self.TYPE
 
 
 @dataclass(slots=True)
@@ -113,16 +116,14 @@ class RawCategory(Category):
 
 @dataclass(slots=True)
 class StringsCategory(Category):
+    TYPE: ClassVar[int] = CategoryType.STRINGS
     strings: list[str] = field(default_factory=list)  # Latin-1; index 1 = strings[0]
     extra: bytes = b""
-
-    @property
-    def cat_type(self) -> int:
-        return CategoryType.STRINGS
 
 
 @dataclass(slots=True)
 class GeneralCategory(Category):
+    TYPE: ClassVar[int] = CategoryType.GENERAL
     group_idx: int = 0
     image_idx: int = 0
     order_idx: int = 0
@@ -143,18 +144,11 @@ class GeneralCategory(Category):
     reserved_14: bytes = bytes(12)
     extra: bytes = b""
 
-    @property
-    def cat_type(self) -> int:
-        return CategoryType.GENERAL
-
 
 @dataclass(slots=True)
 class FmmuCategory(Category):
+    TYPE: ClassVar[int] = CategoryType.FMMU
     usages: list[int] = field(default_factory=list)  # one byte per FMMU (FMMU_USAGE)
-
-    @property
-    def cat_type(self) -> int:
-        return CategoryType.FMMU
 
 
 @dataclass(slots=True)
@@ -173,12 +167,9 @@ class SiiSyncManager:
 
 @dataclass(slots=True)
 class SyncMCategory(Category):
+    TYPE: ClassVar[int] = CategoryType.SYNCM
     sync_managers: list[SiiSyncManager] = field(default_factory=list)
     extra: bytes = b""
-
-    @property
-    def cat_type(self) -> int:
-        return CategoryType.SYNCM
 
 
 @dataclass(slots=True)
@@ -230,12 +221,9 @@ class SiiDcOpMode:
 
 @dataclass(slots=True)
 class DcCategory(Category):
+    TYPE: ClassVar[int] = CategoryType.DC
     opmodes: list[SiiDcOpMode] = field(default_factory=list)
     extra: bytes = b""
-
-    @property
-    def cat_type(self) -> int:
-        return CategoryType.DC
 
 
 @dataclass(slots=True)
