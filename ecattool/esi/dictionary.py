@@ -127,31 +127,62 @@ class TypeResolver:
         return ResolvedType(name, "unknown")
 
 
+_FLAGS_MEMO: dict[tuple[Any, ...], tuple[Access, str, bool, bool, str]] = {}
+
+
 def _flags(flags_el: Any, ctx: Context) -> tuple[Access, str, bool, bool, str]:
+    """(access, PdoMapping, Backup, Setting, Category) of a ``Flags`` element (memoised by content)."""
     if flags_el is None:
         return _DEFAULT_ACCESS, "", False, False, ""
-    acc_el = flags_el.find("Access")
-    if acc_el is not None:
-        access = Access.parse(acc_el.text, acc_el.get("ReadRestrictions"), acc_el.get("WriteRestrictions"))
-    else:
-        access = _DEFAULT_ACCESS
-    mapping = flags_el.findtext("PdoMapping") or ""
-    b = flags_el.find("Backup")
-    s = flags_el.find("Setting")
-    backup = ctx.number(b.text, b, "Flags/Backup") != 0 if b is not None and (b.text or "").strip() else False
-    setting = ctx.number(s.text, s, "Flags/Setting") != 0 if s is not None and (s.text or "").strip() else False
-    return access, mapping, backup, setting, (flags_el.findtext("Category") or "").strip()
+    key_parts: list[Any] = []
+    for c in flags_el:
+        tag = c.tag
+        if tag == "Access":
+            key_parts.append((tag, c.text, c.get("ReadRestrictions"), c.get("WriteRestrictions")))
+        elif tag in ("PdoMapping", "Backup", "Setting", "Category"):
+            key_parts.append((tag, c.text))
+    key = tuple(key_parts)
+    hit = _FLAGS_MEMO.get(key)
+    if hit is not None:
+        return hit
+    access = _DEFAULT_ACCESS
+    mapping = category = ""
+    backup = setting = False
+    for part in key_parts:
+        tag, text = part[0], part[1]
+        if tag == "Access":
+            access = Access.parse(text, part[2], part[3])
+        elif tag == "PdoMapping":
+            mapping = text or ""
+        elif tag == "Category":
+            category = (text or "").strip()
+        elif (text or "").strip():
+            v = ctx.number(text, flags_el, f"Flags/{tag}") != 0
+            if tag == "Backup":
+                backup = v
+            else:
+                setting = v
+    result = (access, mapping, backup, setting, category)
+    if len(_FLAGS_MEMO) < 4096:
+        _FLAGS_MEMO[key] = result
+    return result
 
 
 _ENTRY_SLOTS = tuple(Entry.__slots__)  # type: ignore[attr-defined]
 
 
-def _clone(e: Entry) -> Entry:
-    """A shallow copy of a template entry (objects of one record type share the template)."""
-    c = object.__new__(Entry)
-    for name in _ENTRY_SLOTS:
-        object.__setattr__(c, name, getattr(e, name))
-    return c
+def _make_clone() -> Any:
+    """A shallow copy of a template entry (objects of one record type share the template).
+
+    Generated from ``Entry.__slots__`` so that fields added to the shared model are copied too.
+    """
+    body = "\n".join(f"    c.{n} = e.{n}" for n in _ENTRY_SLOTS)
+    ns: dict[str, Any] = {"_new": object.__new__, "Entry": Entry}
+    exec(f"def _clone(e):\n    c = _new(Entry)\n{body}\n    return c\n", ns)  # noqa: S102 - fixed template
+    return ns["_clone"]
+
+
+_clone = _make_clone()
 
 
 def _signed_fix(value: int, dt: DataType | None, bits: int) -> int:
@@ -370,7 +401,15 @@ class DictionaryBuilder:
         for e in entries:
             by_name.setdefault(e.name, e)
         for pos, si in enumerate(info.iterchildren("SubItem")):
-            n = lc_text(si, "Name")
+            n = ""
+            sub_info = None
+            for c in si:
+                tag = c.tag
+                if tag == "Name":
+                    if not n or (c.get("LcId") or "").strip() == "1033":
+                        n = (c.text or "").strip()
+                elif tag == "Info" and sub_info is None:
+                    sub_info = c
             e = by_name.get(n)
             if e is None and pos < len(entries):
                 e = entries[pos]
@@ -379,7 +418,7 @@ class DictionaryBuilder:
                 continue
             if n and e.name.startswith("SubIndex ") and not n.startswith("SubIndex "):
                 e.name = n
-            _apply_info(e, si.find("Info"), self.ctx)
+            _apply_info(e, sub_info, self.ctx)
 
 
 def build_dictionary(dict_el: Any, ctx: Context) -> ObjectDictionary:
