@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ecattool.errors import Location
-from ecattool.esi.model import Direction, Identity, Pdo, SyncManager
+from ecattool.esi.model import Device, Direction, Identity, Pdo, SyncManager
 from ecattool.findings import Finding, Severity
 from ecattool.startup.model import StartupCommand, StartupList
 
@@ -85,6 +85,43 @@ class SlaveConfig:
     def note(self, rule: str, message: str, location: Location | None = None,
              severity: Severity = Severity.WARNING) -> None:
         self.notes.append(Finding(rule, severity, message, location or self.source))
+
+    @classmethod
+    def from_device(cls, device: Device, startup: StartupList | None = None, *, mapping: Any = None,
+                    position: int | None = None, name: str | None = None, dc_opmode: str | None = None,
+                    dc_cycle_ns: int | None = None, dc_shift_ns: int | None = None) -> "SlaveConfig":
+        """A slave configuration for ``device``: its identity and sync managers, the assigned PDOs of
+        ``mapping`` (an :class:`ecattool.pdo.Mapping`) or else the device's default assignment (PDOs with an
+        ``Sm``), and DC from the named ESI ``OpMode`` (its SYNC0 cycle unless ``dc_cycle_ns`` is given)."""
+        from ecattool.errors import SelectionError
+
+        def copy(p: Any, direction: Direction) -> Pdo:
+            return Pdo(direction, p.index, p.name, list(p.entries), sm=2 if direction is Direction.RX else 3)
+
+        if mapping is not None:
+            rx = [copy(p, Direction.RX) for p in mapping.rx]
+            tx = [copy(p, Direction.TX) for p in mapping.tx]
+        else:
+            rx = [p for p in device.rx_pdos if p.sm is not None]
+            tx = [p for p in device.tx_pdos if p.sm is not None]
+        sl = startup if startup is not None else StartupList()
+        cfg = cls(startup=sl, name=name or sl.name or device.name or device.type_name, position=position,
+                  identity=device.identity, rx_pdos=rx, tx_pdos=tx, sync_managers=list(device.sync_managers),
+                  dc_cycle_ns=dc_cycle_ns, dc_shift_ns=dc_shift_ns)
+        if dc_opmode is not None:
+            mode = next((m for m in device.dc_opmodes if m.name.lower() == dc_opmode.lower()), None)
+            if mode is None:
+                names = ", ".join(m.name for m in device.dc_opmodes) or "none"
+                raise SelectionError(f"device {device.type_name} has no DC OpMode {dc_opmode!r} (has: {names})",
+                                     device.location)
+            cfg.dc_assign_activate = mode.assign_activate
+            if cfg.dc_cycle_ns is None and mode.cycle_time_sync0:
+                cfg.dc_cycle_ns = mode.cycle_time_sync0
+            if cfg.dc_shift_ns is None and mode.shift_time_sync0 is not None:
+                cfg.dc_shift_ns = mode.shift_time_sync0
+        if sl.vendor_id is None:
+            sl.vendor_id, sl.product_code, sl.revision = device.vendor_id, device.product_code, device.revision
+        return cfg
 
     @classmethod
     def from_list(cls, startup: StartupList) -> "SlaveConfig":
