@@ -7,21 +7,12 @@ import pytest
 from ecattool import profiles
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Direction
+from tests.profiles_helpers import mapping, value
 
 
 @pytest.fixture(scope="module")
 def dev():
     return profiles.load("hdt")
-
-
-def value(device, index, sub=0):
-    e = device.dictionary.entry(index, sub)
-    assert e is not None, f"missing {index:04X}:{sub}"
-    return e.default_value
-
-
-def mapping(device, index):
-    return [value(device, index, s) for s in range(1, value(device, index, 0) + 1)]
 
 
 def test_oracle_1_device_type(dev):

@@ -13,6 +13,7 @@ from ecattool.od.model import EcState
 from ecattool.profiles import technosoft
 from ecattool.profiles.generic import supported_modes_of
 from ecattool.profiles.technosoft import Firmware
+from tests.profiles_helpers import mapping, value
 
 
 @pytest.fixture(scope="module")
@@ -23,17 +24,6 @@ def dev():
 @pytest.fixture(scope="module")
 def old():
     return profiles.load("technosoft-ipos", revision="F515I")
-
-
-def value(device, index, sub=0):
-    e = device.dictionary.entry(index, sub)
-    assert e is not None, f"missing {index:04X}:{sub}"
-    return e.default_value
-
-
-def mapping(device, index):
-    n = value(device, index, 0)
-    return [value(device, index, s) for s in range(1, n + 1)]
 
 
 # --- A. identity, revisions -----------------------------------------------------------------------------
