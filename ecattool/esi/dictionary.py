@@ -293,6 +293,7 @@ class DictionaryBuilder:
         name = ""
         name_lc = False
         flags_el = info = None
+        comment = ""
         idx_el = el
         for c in el:
             tag = c.tag
@@ -311,6 +312,8 @@ class DictionaryBuilder:
                 flags_el = c
             elif tag == "Info":
                 info = c
+            elif tag == "Comment" and not comment:
+                comment = (c.text or "").strip()
         index = ctx.number(index_t, idx_el, "Object/Index")
         type_name = type_name or ""
         bits = ctx.opt_number(bits_t, el, "Object/BitSize")
@@ -331,7 +334,7 @@ class DictionaryBuilder:
             size = bits if bits is not None else (t.bits or 0)
             access, mapping, backup, setting, category = flags
             e = Entry(0, name, dt, size, type_name=type_name, access=access, pdo_mapping=mapping, enum=dict(t.enum),
-                      backup=backup, setting=setting, category=category, location=loc)
+                      backup=backup, setting=setting, category=category, comment=comment, location=loc)
             _apply_info(e, info, ctx)
             entries = [e]
             code = ObjectCode.VAR
