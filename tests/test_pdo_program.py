@@ -75,7 +75,12 @@ def test_unwritable_assignment_and_mapping_are_left_alone() -> None:
     m = Mapping.from_text(rx="0x1600=controlword", device=dev)
     assert seq(program(dev, m, rules=FamilyRules("f", assign_writable=False))) == [
         (0x1600, 0, 1, 0), (0x1600, 1, 4, 0x60400010), (0x1600, 0, 1, 1)]
-    assert [w[0] for w in seq(program(dev, m, rules=FamilyRules("f", mapping_writable=False)))] == [0x1C12] * 3
+    same = Mapping.from_text(rx="0x1600=controlword,0x607A:00/32", device=dev)  # the PDO's own contents
+    assert [w[0] for w in seq(program(dev, same, rules=FamilyRules("f", mapping_writable=False)))] == [0x1C12] * 3
+    # asked for what cannot be done (check: PDO022/PDO023), the writes are still made: the drive refuses them
+    assert [w[0] for w in seq(program(dev, m, rules=FamilyRules("f", mapping_writable=False)))][1] == 0x1600
+    other = Mapping.from_text(rx="0x1601", device=dev)
+    assert (0x1C12, 1, 2, 0x1601) in seq(program(dev, other, rules=FamilyRules("f", assign_writable=False)))
 
 
 def test_complete_access_variant() -> None:

@@ -92,6 +92,8 @@ class _Checker:
         self.out: list[Finding] = []
         #: assigned PDO indices already reported as unknown or of the wrong direction
         self.bad: set[int] = set()
+        #: PDOs assigned to the wrong sync manager -> their own direction (their contents are judged as such)
+        self.wrong: dict[int, Direction] = {}
         #: entries the device's own PDOs map, per direction (index, sub, bits): legal by evidence
         self.known_entries: dict[Direction, set[tuple[int, int, int]]] = {
             d: {(e.index, e.subindex, e.bit_len) for p in device.pdos(d) for e in p.entries if e.index}
@@ -124,17 +126,18 @@ class _Checker:
                          pdo=p.index)
             seen.add(p.index)
             if p.index not in known:
-                self.bad.add(p.index)
                 if p.index in known_other or pdo_direction(p.index) is other:
+                    self.wrong[p.index] = other
                     self.add("PDO002", f"{_a(p.index)} is a{'n Rx' if other is Direction.RX else ' Tx'}PDO; it cannot be "
                              f"assigned to 0x{d.assign_index:04X} ({d.value.upper()})", p.location, pdo=p.index)
                 else:
+                    self.bad.add(p.index)
                     choices = ", ".join(_a(i) for i in sorted(known)) or "none"
                     self.add("PDO001", f"{_a(p.index)} is not a {_kind(d)} mapping object of "
                              f"{self.device.type_name} (known: {choices})", p.location, pdo=p.index)
             dev_pdo = self.device.pdo(p.index)
             if dev_pdo is not None and p.index not in self.bad:
-                self.check_device_pdo(d, p, dev_pdo)
+                self.check_device_pdo(d, p, dev_pdo, sm_check=p.index not in self.wrong)
         # assignment size
         limit = self.rules.max_assigned_rx if d is Direction.RX else self.rules.max_assigned_tx
         assign_entries = getattr(self.rules, "max_assign_entries", None)
@@ -200,9 +203,9 @@ class _Checker:
             return f"{self.device.type_name} (its ESI: CoE PdoAssign/PdoConfig, Fixed PDOs)"
         return f"the {self.rules.family} family"
 
-    def check_device_pdo(self, d: Direction, p: MappedPdo, dev_pdo: Pdo) -> None:
+    def check_device_pdo(self, d: Direction, p: MappedPdo, dev_pdo: Pdo, sm_check: bool = True) -> None:
         sm = self.device.process_sm(d)
-        if dev_pdo.sm is not None and sm is not None and dev_pdo.sm != sm.number:
+        if sm_check and dev_pdo.sm is not None and sm is not None and dev_pdo.sm != sm.number:
             self.add("PDO017", f"PDO {_a(p.index)} belongs to SM{dev_pdo.sm} (Sm attribute), not to SM{sm.number}",
                      p.location, pdo=p.index, sm=dev_pdo.sm)
         if dev_pdo.fixed and p.explicit and _key(p.entries) != _key(dev_pdo.entries):
@@ -213,8 +216,12 @@ class _Checker:
     def check_pdo(self, d: Direction, p: MappedPdo, first_of_two: bool) -> None:
         if p.index in self.bad and not p.entries:
             return  # reported as unknown already
+        if p.index in self.wrong:  # assigned to the wrong SM: its contents are still written to its object
+            d, first_of_two = self.wrong[p.index], False
         if not p.entries:
             self.add("PDO024", f"PDO {_a(p.index)} is assigned with no entries", p.location, pdo=p.index)
+        if not p.explicit:
+            return  # the device's own contents: limits and entry rules are the ESI's/profile's business
         bits = p.bit_size
         if self.rules.max_pdo_bits is not None and bits > self.rules.max_pdo_bits:
             self.add("PDO009", f"PDO {_a(p.index)} has {bits} bits; {self.rules.family} allows at most "
@@ -228,15 +235,15 @@ class _Checker:
                          p.entries[lim].location or p.location, pdo=p.index, entries=len(p.entries), limit=lim)
                 break
         dev_pdo = self.device.pdo(p.index)
-        if p.explicit and p.index not in self.bad and not (dev_pdo is not None and dev_pdo.fixed):
+        if p.index not in self.bad and not (dev_pdo is not None and dev_pdo.fixed):
             current = next((q for q in self.default.pdos(d) if q.index == p.index), None)
             reference = current.entries if current is not None else (dev_pdo.entries if dev_pdo is not None else None)
             if reference is None or _key(reference) != _key(p.entries):
                 why = self.mapping_not_writable(p.index)
+                if not why and current is not None and self.assign_not_writable(d):
+                    why = f"it is assigned by default and {self.assign_not_writable(d)}"
                 if why:
                     self.add("PDO023", f"PDO {_a(p.index)} cannot be rewritten: {why}", p.location, pdo=p.index)
-        if not p.explicit:
-            return  # the device's own contents: entry rules are the ESI's/profile's business
         for e in p.entries:
             self.check_entry(d, p, e, first_of_two)
 

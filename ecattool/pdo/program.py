@@ -21,7 +21,7 @@ from collections.abc import Iterable
 
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device, Direction
-from ecattool.pdo.model import MappedPdo, Mapping
+from ecattool.pdo.model import MappedPdo, Mapping, default_mapping
 from ecattool.profiles.rules import FamilyRules
 from ecattool.startup.model import StartupCommand, StartupList
 
@@ -85,8 +85,21 @@ def program(
     out = StartupList(name=device.name or device.type_name, vendor_id=device.vendor_id,
                       product_code=device.product_code, revision=device.revision)
 
+    power_on = default_mapping(device)
+
     def assignable(d: Direction) -> bool:
-        return rules.assign_writable and (not device.dictionary or d.assign_index in device.dictionary)
+        if rules.assign_writable and (not device.dictionary or d.assign_index in device.dictionary):
+            return True
+        # not changeable: write only when asked for something else (the drive then refuses it, as check says)
+        return [p.index for p in mapping.pdos(d)] != [p.index for p in power_on.pdos(d)]
+
+    def rewritable(pdo: MappedPdo) -> bool:
+        dev_pdo = device.pdo(pdo.index)
+        if rules.mapping_writable and not (dev_pdo is not None and dev_pdo.fixed):
+            return True
+        own = dev_pdo.entries if dev_pdo is not None else next(
+            (p.entries for p in (*power_on.rx, *power_on.tx) if p.index == pdo.index), [])
+        return _key(pdo) != [(e.index, e.subindex, e.bit_len) for e in own]
 
     # phase 1: disable the assignments
     if not count_first:
@@ -95,15 +108,12 @@ def program(
                 out.commands.append(_cmd(transition, d.assign_index, 0, 0, 1,
                                          f"clear sm pdos (0x{d.assign_index:04X})",
                                          Location(mapping.source) if mapping.source else None))
-    # phase 2: rewrite the mapping objects
+    # phase 2: rewrite the mapping objects (never a Fixed PDO or an unwritable one with its own contents)
     done: set[int] = set()
     base_pdos = {p.index: p for p in (*(baseline.rx if baseline else ()), *(baseline.tx if baseline else ()))}
     for d in dirs:
         for pdo in mapping.pdos(d):
-            dev_pdo = device.pdo(pdo.index)
-            if not pdo.explicit or pdo.index in done or (dev_pdo is not None and dev_pdo.fixed):
-                continue
-            if not rules.mapping_writable:
+            if not pdo.explicit or pdo.index in done or not rewritable(pdo):
                 continue
             base = base_pdos.get(pdo.index)
             if base is not None and _key(base) == _key(pdo):
