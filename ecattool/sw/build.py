@@ -96,7 +96,7 @@ def build_from(data: Any, locate: Any, base_dir: Path, source: str) -> SwImage:
             raw = spec["words"]
             if not isinstance(raw, list) or not raw:
                 raise InputError("words must be a non-empty list of 16-bit values", locate(where + ("words",)))
-            words = []
+            words: list[int] = []
             for k, w in enumerate(raw):
                 v = number(w, where + ("words", k), "16-bit word")
                 if not 0 <= v <= 0xFFFF:
@@ -131,10 +131,10 @@ def build_from(data: Any, locate: Any, base_dir: Path, source: str) -> SwImage:
             raise InputError("identification needs an identification block at 0x7FBF from the base image",
                              locate(("identification",)))
         try:
-            words = identification_words(identification_text_words(str(text)), ident.words[IDENT_TEXT_WORDS + 1])
+            ident_words = identification_words(identification_text_words(str(text)), ident.words[IDENT_TEXT_WORDS + 1])
         except InputError as exc:
             raise InputError(exc.message, locate(("identification",))) from None
-        image = image.with_words({IDENT_START + i: w for i, w in enumerate(words)})
+        image = image.with_words({IDENT_START + i: w for i, w in enumerate(ident_words)})
 
     setup = data.get("setup")
     if setup is not None:

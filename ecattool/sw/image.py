@@ -166,18 +166,20 @@ def check_overlaps(blocks: Sequence[Block], source: str | None = None) -> None:
 
 def parse(text: str | bytes, source: str | None = None) -> SwImage:
     """Parse ``.sw`` text. Raises :class:`InputError` with file and line for anything malformed."""
+    content: str
     if isinstance(text, bytes):
-        if text.startswith(b"\xef\xbb\xbf"):
-            text = text[3:]
+        raw = text[3:] if text.startswith(b"\xef\xbb\xbf") else text
         try:
-            text = text.decode("ascii")
+            content = raw.decode("ascii")
         except UnicodeDecodeError as exc:
-            line = text.count(b"\n", 0, exc.start) + 1
+            line = raw.count(b"\n", 0, exc.start) + 1
             raise InputError(
-                f"byte 0x{text[exc.start]:02X} is not ASCII; a .sw line holds one hex word of at most 4 digits",
+                f"byte 0x{raw[exc.start]:02X} is not ASCII; a .sw line holds one hex word of at most 4 digits",
                 Location(source, line),
             ) from None
-    lines = text.split("\n")
+    else:
+        content = text
+    lines = content.split("\n")
     if lines and lines[-1] == "":
         lines.pop()  # the newline that ends the last line
     blocks: list[Block] = []
@@ -185,7 +187,7 @@ def parse(text: str | bytes, source: str | None = None) -> SwImage:
     start_line = 0
     words: list[int] = []
 
-    def close(line_no: int) -> None:
+    def close() -> None:
         nonlocal start
         if start is None:
             return
@@ -200,7 +202,7 @@ def parse(text: str | bytes, source: str | None = None) -> SwImage:
     for no, raw in enumerate(lines, 1):
         s = raw.strip()
         if s == "":
-            close(no)
+            close()
             last_blank = True
             continue
         last_blank = False
@@ -219,7 +221,7 @@ def parse(text: str | bytes, source: str | None = None) -> SwImage:
                 f"block 0x{start:04X} (line {start_line}) runs past address 0xFFFF at this word", Location(source, no)
             )
         words.append(value)
-    close(len(lines) + 1)
+    close()
     if not blocks:
         raise InputError("no data blocks: a .sw file needs a start address followed by data words", Location(source, 1))
     return SwImage(tuple(blocks), final_blank_line=last_blank, source=source)

@@ -190,6 +190,8 @@ def diff(a: SwImage, b: SwImage, params: ParameterTable | None = None) -> list[D
     """Differences by EEPROM address; where both images have a setup table, by setup variable instead."""
     out: list[Difference] = []
     covered: set[int] = set()
+    ta: SetupTable | None
+    tb: SetupTable | None
     try:
         ta, tb = setup_table(a), setup_table(b)
     except InputError:
