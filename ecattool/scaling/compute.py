@@ -7,6 +7,7 @@ position units per second^order for one unit ``U`` (order 1 velocity, 2 accelera
 
 from __future__ import annotations
 
+import functools
 import re
 from fractions import Fraction
 from typing import Any
@@ -85,6 +86,11 @@ def _types(device: Any, family: str, firmware: str | None = None) -> Any:
         return getattr(device, "dictionary", None)
     if family == "generic":
         return None
+    return _profile_dictionary(family, firmware)
+
+
+@functools.lru_cache(maxsize=16)
+def _profile_dictionary(family: str, firmware: str | None) -> Any:
     try:
         from ecattool.profiles import load
     except ImportError:

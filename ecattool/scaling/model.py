@@ -205,8 +205,8 @@ class Axis:
             return internal_per_motor_rev * pos.size
         if pos.kind != out:
             raise InputError(
-                f"unit {unit.text!r} is a {pos.kind} but the {self.transmission.kind} axis moves its load as a "
-                f"{out}; choose a {out} unit", self.source)
+                f"unit {unit.text!r} is {_article(pos.kind)} but the {self.transmission.kind} axis moves its load as "
+                f"{_article(out)}; choose {_article(out)} unit", self.source)
         return internal_per_motor_rev * pos.size / self.travel_per_motor_rev
 
     def with_(self, **changes: Any) -> "Axis":
@@ -367,3 +367,7 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
         except InputError as exc:
             raise InputError(exc.message, _loc(locate, "units", key) or source) from None
     return axis
+
+
+def _article(kind: str) -> str:
+    return ("an " if kind[:1] in "aeiou" else "a ") + kind
