@@ -199,8 +199,8 @@ def parse(text: str | bytes, source: str | None = None) -> SwImage:
         start = None
 
     last_blank = False
-    for no, line in enumerate(lines, 1):
-        s = line.strip()
+    for no, text_line in enumerate(lines, 1):
+        s = text_line.strip()
         if s == "":
             close()
             last_blank = True
