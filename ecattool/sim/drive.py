@@ -765,28 +765,34 @@ class Drive:
         if len(outputs) != rx.size:
             raise TargetError(f"output image is {len(outputs)} bytes, the drive expects {rx.size}")
         if self.esm is EcState.OP:
+            # A drive latches the whole RxPDO image first and only then reacts to it (a new set-point in
+            # the controlword must see the target position of the same cycle).
             image = int.from_bytes(outputs, "little")
+            reactions: list[tuple[int, int, bytes]] = []
             for index, sub, offset, bits in rx.entries:
                 if index == 0:
                     continue
                 raw = ((image >> offset) & ((1 << bits) - 1)).to_bytes((bits + 7) // 8, "little")
-                self._pdo_write(index, sub, raw)
+                if self._pdo_write(index, sub, raw):
+                    reactions.append((index, sub, raw))
+            for index, sub, raw in reactions:
+                self._after_write[index](sub, int.from_bytes(raw, "little"))
             self.step()
         return self._pack_inputs()
 
-    def _pdo_write(self, index: int, sub: int, raw: bytes) -> None:
+    def _pdo_write(self, index: int, sub: int, raw: bytes) -> bool:
+        """Store one mapped output; True when the object has a reaction to run once the image is latched."""
         old = self._store.get((index, sub))
         handler = self._handlers_down.get(index)
         if index in (0x2065, 0x2067) and handler is not None:
             if old == raw:
-                return
+                return False
             try:
                 handler(sub, raw, int.from_bytes(raw, "little"))
             except (SdoAbort, ee.PowerLost):
-                return
+                return False
         self._store[(index, sub)] = raw
-        if index in self._after_write and old != raw:
-            self._after_write[index](sub, int.from_bytes(raw, "little"))
+        return index in self._after_write and old != raw
 
     def _pack_inputs(self) -> bytes:
         tx = self.layout[TX]
