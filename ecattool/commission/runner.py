@@ -88,10 +88,10 @@ class ProcessIo:
         self.rd = rd
         assert rd.device is not None and rd.mapping is not None
         self.layout = pdo.layout(rd.device, rd.mapping)
-        self.out_pos = {(v.index, v.subindex): v for v in self.layout.rx if not v.is_gap}
-        self.in_pos = {(v.index, v.subindex): v for v in self.layout.tx if not v.is_gap}
-        self.outputs = bytearray(self.layout.rx_bytes)
-        self.inputs = bytes(self.layout.tx_bytes)
+        self.out_pos = {(v.index, v.subindex): v for v in self.layout.outputs.entries if not v.is_gap}
+        self.in_pos = {(v.index, v.subindex): v for v in self.layout.inputs.entries if not v.is_gap}
+        self.outputs = bytearray(self.layout.outputs.byte_size)
+        self.inputs = bytes(self.layout.inputs.byte_size)
 
     def _entry(self, index: int, sub: int) -> Any:
         assert self.rd.device is not None
@@ -225,25 +225,36 @@ def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     if not cfg.download:
         raise _Failed(Step("sw verify", False, f"{len(bad)} block(s) differ from {cfg.file}: "
                            + ", ".join(f"0x{b.start:04X}" for b in bad) + " (download disabled)"))
-    _sdo_step("sw download", lambda: sw.download(rd.sw_image, slave, mode=cfg.mode))
-    # the drive resets after the download; bring it back to PRE-OP and check again
-    _sdo_step("sw reset", lambda: slave.request_state(EcState.INIT))
+    result = _sdo_step("sw download", lambda: sw.download(rd.sw_image, slave, mode=cfg.mode))
+    if not result.ok:
+        why = [f"0x{c.start:04X}" for c in result.failed] + [f"0x{k:04X} ({v})" for k, v in result.write_errors.items()]
+        raise _Failed(Step("sw download", False, "after download, block(s) still differ: " + ", ".join(why)))
+    # the drive resets after the download (2080h); bring it back to PRE-OP and check once more
+    _sdo_step("sw reset", lambda: slave.request_state(EcState.INIT) if slave.state() is not EcState.INIT else None)
     _sdo_step("sw reset", lambda: slave.request_state(EcState.PREOP))
-    again = _sdo_step("sw verify", lambda: sw.verify(rd.sw_image, slave))
-    still = [b for b in again if not b.ok]
+    still = [b for b in _sdo_step("sw verify", lambda: sw.verify(rd.sw_image, slave)) if not b.ok]
     if still:
-        raise _Failed(Step("sw verify", False, "after download, block(s) still differ: "
+        raise _Failed(Step("sw verify", False, "after reset, block(s) differ: "
                            + ", ".join(f"0x{b.start:04X}" for b in still)))
-    report.steps.append(Step("sw download", True, f"{len(bad)} block(s) written and verified from {cfg.file}"))
+    report.steps.append(Step("sw download", True, f"{len(result.written)} block(s) written and verified from {cfg.file}"))
 
 
-def _counts_per_unit(rd: ResolvedDrive) -> Fraction | None:
-    """Internal position counts per position user unit, from the drive's factor group, if known."""
-    group = rd.factor_group
-    if group is None:
-        return None
-    value = getattr(group, "counts_per_position_unit", None)
-    return Fraction(value) if value is not None else None
+def _cycle_until(io: ProcessIo, done: Callable[[int], bool], max_cycles: int) -> bool:
+    for _ in range(max_cycles):
+        io.cycle()
+        if done(io.read(0x6041, 0)):
+            return True
+    return False
+
+
+def _set_mode(io: ProcessIo, mode: int) -> None:
+    """Write 6060h and wait until the drive shows the mode in 6061h."""
+    io.write(0x6060, 0, mode)
+    for _ in range(100):
+        io.cycle()
+        if not io.has(0x6061) or io.read(0x6061, 0) == mode:
+            return
+    raise _Failed(Step("move", False, f"the drive did not switch to mode {mode} (6061h stays {io.read(0x6061, 0)})"))
 
 
 def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
@@ -259,42 +270,35 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     p0 = io.read(0x6064, 0)
     i0 = io.read(0x6063, 0) if internal else None
     target = int(p0 + dist)
+    _set_mode(io, 1 if mode == "pp" else 8)
     if mode == "pp":
-        io.write(0x6060, 0, 1)
         io.write(0x607A, 0, target)
         io.write(0x6040, 0, cia402.ENABLE_OPERATION | cia402.NEW_SETPOINT)
-        reached = False
-        for n in range(200_000):
-            io.cycle()
-            sw = io.read(0x6041, 0)
-            if sw & 0x1000:  # set-point acknowledged: release the new-set-point bit
-                io.write(0x6040, 0, cia402.ENABLE_OPERATION)
-            if n > 2 and sw & 0x0400 and not sw & 0x1000:
-                reached = True
-                break
-        if not reached:
-            raise _Failed(Step("move", False, f"profile position move to {target} did not reach its target"))
+        if not _cycle_until(io, lambda sw: bool(sw & 0x1000), 1000):
+            raise _Failed(Step("move", False, "the drive did not acknowledge the new set-point (statusword bit 12)"))
+        io.write(0x6040, 0, cia402.ENABLE_OPERATION)
+        if not _cycle_until(io, lambda sw: bool(sw & 0x0400) and not sw & 0x1000, 200_000):
+            raise _Failed(Step("move", False, f"profile position move to {target} did not reach its target "
+                                              "(statusword bit 10)"))
     else:
-        io.write(0x6060, 0, 8)
         steps = 100
         for k in range(1, steps + 1):
             io.write(0x607A, 0, int(p0 + dist * k / steps))
             io.cycle()
-        for _ in range(50):
-            io.cycle()
+        _cycle_until(io, lambda sw: False, 50)
     p1 = io.read(0x6064, 0)
     if p1 - p0 != dist:
         raise _Failed(Step("move", False, f"position moved {p1 - p0} user units, commanded {dist}"))
     detail = f"{mode.upper()} move of {dist} user units: position {p0} -> {p1}"
     if internal and i0 is not None:
         i1 = io.read(0x6063, 0)
-        cpu = _counts_per_unit(rd)
+        cpu = rd.counts_per_unit
         if cpu is not None:
             want = dist * cpu
-            if abs(Fraction(i1 - i0) - want) > 1:
+            if abs(Fraction(i1 - i0) - want) > max(1, abs(want) / 1_000_000):
                 raise _Failed(Step("move", False, f"internal position moved {i1 - i0} counts, the factor group "
                                                   f"says {float(want):g} counts for {dist} user units"))
-            detail += f"; internal {i0} -> {i1} = {i1 - i0} counts (expected {want})"
+            detail += f"; internal {i0} -> {i1} = {i1 - i0} counts (factor group: {float(want):g})"
         else:
             detail += f"; internal {i0} -> {i1} counts"
     report.steps.append(Step("move", True, detail))

@@ -7,6 +7,7 @@ them; ``commission`` refuses to run when any of them is an error.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 from typing import Any
 
 from ecattool.errors import EcatToolError, EncodeError, InputError, Location
@@ -40,6 +41,7 @@ class ResolvedDrive:
     findings: list[Finding] = field(default_factory=list)
     mapping: Any = None  # ecattool.pdo mapping (when the pdo section resolved)
     factor_group: Any = None  # ecattool.scaling result (when the scaling section resolved)
+    counts_per_unit: Fraction | None = None  # internal position units per position user unit (ideal)
     sw_image: Any = None  # ecattool.sw image (when an image is configured and readable)
 
     @property

@@ -48,21 +48,36 @@ def pdo_commands(lp: LoadedProject, i: int, rd: ResolvedDrive, params: list[Star
 
 
 def scaling_commands(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[StartupCommand]:
+    """Compute the drive's factor group from its mechanics and units (``scaling:`` section)."""
     if rd.drive.scaling is None:
         return []
-    from ecattool import scaling
+    from ecattool import profiles, scaling
+    from ecattool.scaling.spec import spec_from_dict
 
     assert rd.device is not None
+    base = ("drives", i, "scaling")
     loc = lp.drive_location(i, "scaling")
     try:
-        group = scaling.from_project(rd.drive.scaling, device=rd.device, rules=rd.rules)
+        spec = spec_from_dict(rd.drive.scaling, lambda path: lp.yaml.locate((*base, *path)), loc)
+        family = spec.family or profiles.family_of(rd.device)
+        firmware = spec.firmware
+        if firmware is None and rd.drive.device.revision is not None:
+            firmware = str(rd.drive.device.revision)
+        group = scaling.compute(spec.axis, family, firmware=firmware, device=rd.device,
+                                strategy=spec.approximation, vl_setpoint=spec.vl_setpoint)  # type: ignore[arg-type]
     except EcatToolError as exc:
         rd.error("PRJ050", exc.message, exc.location if exc.location and exc.location.line else loc)
         return []
     rd.factor_group = group
-    for note in scaling.findings(group):
+    from ecattool.scaling.compute import HDT_COUNTS_PER_REV
+    from ecattool.scaling.exact import Exact
+
+    family_key = scaling.resolve_family(family)
+    ipr = Exact.of(HDT_COUNTS_PER_REV) if family_key == "hdt" else spec.axis.counts_per_motor_rev
+    rd.counts_per_unit = spec.axis.internal_per_unit(spec.axis.units[0], ipr).rational
+    for note in group.findings:
         rd.findings.append(_relocate(note, loc))
-    return list(group.startup())
+    return [c for c in group.startup()]
 
 
 def check_sw(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
