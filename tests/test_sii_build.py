@@ -199,3 +199,48 @@ def test_build_of_an_ebus_device_from_a_large_esi() -> None:
     inputs_sm = [i for i, s in enumerate(img.sync_managers) if s.type == 4]
     assert img.tx_pdos and inputs_sm and all(p.sm in inputs_sm for p in img.tx_pdos if p.sm != 0xFF)
     assert img.crc_ok
+
+
+def _device(**kw):
+    from ecattool.esi.model import Device, Identity, SyncManager
+
+    dev = Device(Identity(0xE0000001, 0x10, 2), "T", "Test device", physics="KK",
+                 sync_managers=[SyncManager(0, "Outputs", 0x1000, 2, control_byte=0x64),
+                                SyncManager(1, "Inputs", 0x1100, 2, control_byte=0x20)], **kw)
+    return dev
+
+
+def test_vendor_categories_come_first_and_ebus_current_is_signed() -> None:
+    from ecattool.esi.model import Eeprom, EepromCategory
+    from ecattool.sii import RawCategory
+
+    dev = _device(eeprom=Eeprom(byte_size=256, categories=[EepromCategory(0x0800, b"\x01\x02\x03\x04")]),
+                  ebus_current_ma=-2000)
+    img = build(dev)
+    assert isinstance(img.categories[0], RawCategory) and img.categories[0].type == 0x0800
+    assert img.categories[0].data == b"\x01\x02\x03\x04"
+    assert img.general is not None and img.general.current_on_ebus == -2000 and img.general.physical_port == 0x33
+    assert load_bytes_roundtrip(img)
+
+
+def load_bytes_roundtrip(img) -> bool:
+    from ecattool.sii import parse
+
+    return parse(img.to_bytes()) == img
+
+
+def test_raw_eeprom_data_is_used_as_is() -> None:
+    from ecattool.esi.model import Eeprom
+
+    raw = corpus_path("sii", "ni9144.bin").read_bytes()
+    assert build(_device(eeprom=Eeprom(data=raw))).to_bytes() == raw
+
+
+def test_check_against_reports_a_sync_manager_mismatch() -> None:
+    from ecattool.sii import check_against
+
+    dev = _device()
+    img = build(dev)
+    img.sync_managers[1].start = 0x1200
+    findings = check_against(dev, img)
+    assert [(f.rule, f.data["field"]) for f in findings] == [("sii.esi.sm", "sm[1].start")]
