@@ -211,19 +211,21 @@ def approximate(
         if scale_exact:
             p, q = _scale_up(p, q, max_num, max_den)
         return Approximation(p, q, ex, True, Fraction(0), Fraction(0), "exact")
+    if x > max_num + Fraction(1, 2) or x < Fraction(1, 2 * max_den):
+        raise EncodeError(
+            f"{what} {float(x):.6g} is out of reach of numerator <= {max_num} and divisor <= {max_den}", location)
     if strategy == "max-scale":
-        if x >= 1:
+        # the field that limits the ratio gets its maximum, the other is rounded (Technosoft §5.1.10.1)
+        if x * max_den >= max_num:
             p, q = max_num, _round(Fraction(max_num) / x)
             bound = x / (2 * q) if q else Fraction(0)
         else:
             p, q = _round(x * max_den), max_den
             bound = Fraction(1, 2 * max_den)
-        if p <= 0 or q <= 0 or q > max_den or p > max_num:
-            raise EncodeError(
-                f"{what} {float(x):.6g} does not fit numerator <= {max_num} and divisor <= {max_den}", location
-            )
         method = "max-scale"
-    else:
+        if not (0 < p <= max_num and 0 < q <= max_den):
+            strategy = "best"  # rounding left the field (or the ratio is out of reach): fall through
+    if strategy != "max-scale":
         try:
             p, q = _best(x, max_num, max_den)
         except EncodeError as exc:
