@@ -1,0 +1,136 @@
+"""`ecattool scale` end to end: compute, startup, explain, si; errors with locations; exit codes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from ecattool.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+SAMPLES = ROOT / "samples" / "scaling"
+
+
+def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    try:
+        main(list(args))
+        code = 0
+    except SystemExit as exc:
+        code = int(exc.code or 0)
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.mark.parametrize("sample", sorted(p.name for p in SAMPLES.glob("*.yaml")))
+def test_every_sample_computes(capsys, sample: str) -> None:
+    code, out, err = run(capsys, "scale", "compute", str(SAMPLES / sample), "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["objects"] and data["family"] in ("technosoft-ipos", "hdt", "controltechniques", "generic")
+
+
+def test_compute_table_for_ballscrew(capsys) -> None:
+    code, out, _ = run(capsys, "scale", "compute", str(SAMPLES / "ballscrew.yaml"))
+    assert code == 0
+    assert "0x6093:01" in out and "0xFD010100" in out and "1200" in out  # 1200 counts per mm
+
+
+def test_compute_from_options_reproduces_radian_example(capsys) -> None:
+    code, out, _ = run(capsys, "scale", "compute", "--lines", "500", "--position", "rad", "--firmware", "F515I", "--json")
+    assert code == 0
+    objs = {(o["index"], o["subindex"]): o for o in json.loads(out)["objects"]}
+    assert objs[("0x6093", 1)]["value"] == 4294967295 and objs[("0x6093", 2)]["value"] == 13493038
+    assert objs[("0x6093", 1)]["exact"] is False and abs(objs[("0x6093", 1)]["error_ppm"]) < 0.1
+
+
+def test_options_override_spec(capsys) -> None:
+    code, out, _ = run(capsys, "scale", "compute", str(SAMPLES / "ballscrew.yaml"), "--family", "hdt", "--gear", "1:1", "--json")
+    assert code == 0
+    data = json.loads(out)
+    objs = {(o["index"], o["subindex"]): o["value"] for o in data["objects"]}
+    assert data["family"] == "hdt" and objs[("0x6093", 1)] * 5 == objs[("0x6093", 2)] * 65536
+
+
+def test_startup_formats(capsys, tmp_path: Path) -> None:
+    code, out, _ = run(capsys, "scale", "startup", str(SAMPLES / "ct_screw.yaml"))
+    assert code == 0 and "<PS>,CoE,0x6092:01,0x0000000A" in out and "0x608F" not in out
+    target = tmp_path / "scaling.json"
+    code, _, _ = run(capsys, "scale", "startup", str(SAMPLES / "belt.yaml"), "--format", "json", "-o", str(target))
+    assert code == 0 and target.exists()
+    from ecattool.startup import import_file
+
+    cmds = import_file(target)[0].commands
+    assert any(c.index == 0x6093 for c in cmds)
+
+
+def test_startup_never_overwrites_the_spec(capsys, tmp_path: Path) -> None:
+    spec = tmp_path / "axis.yaml"
+    spec.write_bytes((SAMPLES / "belt.yaml").read_bytes())
+    code, _, err = run(capsys, "scale", "startup", str(spec), "-o", str(spec))
+    assert code == 1 and spec.read_bytes() == (SAMPLES / "belt.yaml").read_bytes()
+
+
+def test_explain_from_assignments(capsys) -> None:
+    code, out, _ = run(capsys, "scale", "explain", "--family", "hdt", "6093:01=65536", "6093:02=360", "6094:01=65536",
+                       "6094:02=60", "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["data"]["counts per position unit"]["exact"] == "8192/45"
+
+
+def test_explain_from_compute_json_file(capsys, tmp_path: Path) -> None:
+    target = tmp_path / "group.json"
+    code, _, _ = run(capsys, "scale", "compute", str(SAMPLES / "rotary_table.yaml"), "-o", str(target))
+    assert code == 0
+    code, out, _ = run(capsys, "scale", "explain", "--from", str(target))
+    assert code == 0 and "1 deg = 2777.777778 (25000/9) counts" in out
+
+
+def test_explain_from_startup_file(capsys, tmp_path: Path) -> None:
+    target = tmp_path / "startup.csv"
+    code, _, _ = run(capsys, "scale", "startup", str(SAMPLES / "ballscrew.yaml"), "--format", "csv", "-o", str(target))
+    assert code == 0
+    code, out, _ = run(capsys, "scale", "explain", "--from", str(target), "--json")
+    assert code == 0
+    assert json.loads(out)["data"]["counts per position unit"]["exact"] == 1200
+
+
+def test_si_command(capsys) -> None:
+    code, out, _ = run(capsys, "scale", "si", "mm", "rpm", "0x03105700", "--json")
+    assert code == 0
+    rows = json.loads(out)
+    assert rows == [{"word": "0xFD010100", "unit": "mm"}, {"word": "0x00B44700", "unit": "rpm"},
+                    {"word": "0x03105700", "unit": "krad/s²"}]
+
+
+def test_bad_unit_names_file_and_line(capsys, tmp_path: Path) -> None:
+    spec = tmp_path / "bad.yaml"
+    spec.write_text("feedback: {lines: 500}\nunits:\n  position: mm\n  velocity: furlong/s\n")
+    code, _, err = run(capsys, "scale", "compute", str(spec))
+    assert code == 1
+    assert f"{spec}:4" in err and "furlong" in err and "Traceback" not in err
+
+
+def test_unit_not_matching_axis_is_an_error(capsys) -> None:
+    code, _, err = run(capsys, "scale", "compute", "--lines", "500", "--position", "mm")
+    assert code == 1 and "angle unit" in err
+
+
+def test_missing_feedback_is_an_error(capsys) -> None:
+    code, _, err = run(capsys, "scale", "compute", "--position", "deg")
+    assert code == 1 and "feedback" in err
+
+
+def test_usage_error_exit_2(capsys) -> None:
+    code, _, _ = run(capsys, "scale", "compute", "--family", "nope")
+    assert code == 2
+    code, _, _ = run(capsys, "scale", "explain", "6093:01")
+    assert code == 2
+
+
+@pytest.mark.parametrize("cmd", ["compute", "startup", "explain", "si"])
+def test_help_has_examples(capsys, cmd: str) -> None:
+    code, out, _ = run(capsys, "scale", cmd, "--help")
+    assert code == 0 and "Examples:" in out and f"ecattool scale {cmd}" in out
