@@ -16,6 +16,7 @@ from ecattool.pdo.model import (
     default_assignment,
     default_mapping,
     entry_text,
+    mapping_from_startup,
     parse_direction,
     parse_entry,
     pdo_direction,
@@ -24,6 +25,6 @@ from ecattool.pdo.program import ORDERS, program, resolve_rules
 
 __all__ = [
     "ImageEntry", "Layout", "MappedPdo", "Mapping", "ORDERS", "RULES", "SmImage", "check", "default_assignment",
-    "default_mapping", "entry_text", "layout", "parse_direction", "parse_entry", "pdo_direction", "program",
+    "default_mapping", "entry_text", "layout", "mapping_from_startup", "parse_direction", "parse_entry", "pdo_direction", "program",
     "resolve_rules", "rule_ids",
 ]

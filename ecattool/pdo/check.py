@@ -72,6 +72,10 @@ def _finding(rule: str, message: str, location: Any, **data: Any) -> Finding:
     return Finding(rule, RULES[rule][0], message, location, data)
 
 
+def _image(d: Direction) -> str:
+    return "output image (SM2)" if d is Direction.RX else "input image (SM3)"
+
+
 def _kind(d: Direction) -> str:
     return "RxPDO" if d is Direction.RX else "TxPDO"
 
@@ -129,7 +133,7 @@ class _Checker:
                 if p.index in known_other or pdo_direction(p.index) is other:
                     self.wrong[p.index] = other
                     self.add("PDO002", f"{_a(p.index)} is a{'n Rx' if other is Direction.RX else ' Tx'}PDO; it cannot be "
-                             f"assigned to 0x{d.assign_index:04X} ({d.value.upper()})", p.location, pdo=p.index)
+                             f"assigned to 0x{d.assign_index:04X}", p.location, pdo=p.index)
                 else:
                     self.bad.add(p.index)
                     choices = ", ".join(_a(i) for i in sorted(known)) or "none"
@@ -169,7 +173,7 @@ class _Checker:
         if [p.index for p in pdos] != [p.index for p in self.default.pdos(d)]:
             why = self.assign_not_writable(d)
             if why:
-                self.add("PDO022", f"the {d.value.upper()} assignment differs from the default but {why}",
+                self.add("PDO022", f"the {_kind(d)} assignment differs from the default but {why}",
                          pdos[0].location if pdos else self.mapping_location())
 
     def mapping_location(self) -> Any:
@@ -347,19 +351,22 @@ class _Checker:
             sm = self.device.process_sm(d)
             if img.bit_size and sm is None and self.device.sync_managers:
                 self.add("PDO018", f"the device has no {d.sm_kind} sync manager for {img.byte_size} bytes of "
-                         f"{d.value.upper()} process data", loc, bytes=img.byte_size)
+                         f"{_kind(d)} process data", loc, bytes=img.byte_size)
             elif sm is not None and sm.max_size is not None and img.byte_size > sm.max_size:
-                self.add("PDO018", f"{d.value.upper()} image is {img.byte_size} bytes; SM{sm.number} holds at most "
+                self.add("PDO018", f"the {_image(d)} is {img.byte_size} bytes; SM{sm.number} holds at most "
                          f"{sm.max_size} bytes", loc, bytes=img.byte_size, max=sm.max_size)
             if img.bit_size % 8:
-                self.add("PDO027", f"the {d.value.upper()} image is {img.bit_size} bits, not a whole number of bytes; "
+                self.add("PDO027", f"the {_image(d)} is {img.bit_size} bits, not a whole number of bytes; "
                          f"add a gap of {8 - img.bit_size % 8} bits (gap/{8 - img.bit_size % 8})", loc,
                          bits=img.bit_size)
             by_pdo = {p.index: p for p in pdos}
             seen: dict[tuple[int, int], int] = {}
+            # every mapped RxPDO object is overwritten every cycle, default PDOs included
+            mapped_rx: dict[tuple[int, int], int] = {}
             for ie, src in zip(img.entries, (e for p in pdos for e in p.entries)):
                 if ie.is_gap:
                     continue
+                mapped_rx.setdefault((ie.index, ie.subindex), ie.pdo)
                 pdo = by_pdo.get(ie.pdo)
                 if pdo is None or not pdo.explicit:
                     continue
@@ -368,15 +375,15 @@ class _Checker:
                 bit_type = ie.bit_len < 8 or (dt is not None and dt.is_bit_type)
                 if ie.bit % 8 and not bit_type:
                     self.add("PDO019", f"{_a(ie.index, ie.subindex)} starts at bit {ie.offset} of the "
-                             f"{d.value.upper()} image; a {ie.bit_len}-bit value should start on a byte boundary",
+                             f"{_image(d)}; a {ie.bit_len}-bit value should start on a byte boundary",
                              eloc, offset=ie.offset)
                 key = (ie.index, ie.subindex)
                 if key in seen:
-                    self.add("PDO020", f"{_a(*key)} is mapped twice in the {d.value.upper()} image "
+                    self.add("PDO020", f"{_a(*key)} is mapped twice in the {_image(d)} "
                              f"(PDO {_a(seen[key])} and {_a(ie.pdo)})", eloc, index=ie.index, subindex=ie.subindex)
                 seen[key] = ie.pdo
             if d is Direction.RX:
-                self.check_startup_overlap(seen, pdos)
+                self.check_startup_overlap(mapped_rx, pdos)
 
     def check_startup_overlap(self, mapped: dict[tuple[int, int], int], pdos: list[MappedPdo]) -> None:
         locs = {(e.index, e.subindex): e.location or p.location for p in pdos for e in p.entries}

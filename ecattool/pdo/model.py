@@ -444,3 +444,53 @@ def default_mapping(device: Device) -> Mapping:
                 pdos.append(MappedPdo(index, entries, False, "", None))
         out.set_pdos(direction, pdos)
     return out
+
+
+# --- from a startup list ---------------------------------------------------------------------------
+
+
+def mapping_from_startup(commands: Iterable[Any], device: Device | None = None, source: str = "") -> Mapping:
+    """The mapping a startup list installs: its 1C12h/1C13h and mapping-object writes (single or complete
+    access) applied in order over the device's power-on mapping. Directions whose assignment is never
+    written keep the default; ``given`` holds the others. Commands are :class:`StartupCommand`-like objects
+    (``index``, ``subindex``, ``data``, ``complete_access``, ``source``)."""
+    base = default_mapping(device) if device is not None else Mapping()
+    store: dict[tuple[int, int], int] = {}
+    where: dict[tuple[int, int], Location | None] = {}
+    written: set[int] = set()
+    for cmd in commands:
+        index, sub, data = cmd.index, cmd.subindex, bytes(cmd.data)
+        kind = Direction.RX if index == 0x1C12 else Direction.TX if index == 0x1C13 else pdo_direction(index)
+        if kind is None:
+            continue
+        written.add(index)
+        loc = getattr(cmd, "source", None)
+        if getattr(cmd, "complete_access", False) and sub == 0 and len(data) >= 2:
+            width = 2 if index in (0x1C12, 0x1C13) else 4
+            store[(index, 0)], where[(index, 0)] = data[0], loc
+            body = data[2:]
+            for k in range(len(body) // width):
+                store[(index, k + 1)] = int.from_bytes(body[k * width:(k + 1) * width], "little")
+                where[(index, k + 1)] = loc
+        else:
+            store[(index, sub)], where[(index, sub)] = int.from_bytes(data, "little"), loc
+    out = Mapping(rx=list(base.rx), tx=list(base.tx), source=source or base.source)
+    for direction in Direction:
+        assign = direction.assign_index
+        if assign not in written:
+            continue
+        pdos: list[MappedPdo] = []
+        for k in range(1, store.get((assign, 0), 0) + 1):
+            index = store.get((assign, k), 0)
+            loc = where.get((assign, k))
+            if index in written:
+                entries = [
+                    _complete(PdoEntry.from_mapping_value(store.get((index, s), 0)), device, where.get((index, s)))
+                    for s in range(1, store.get((index, 0), 0) + 1)
+                ]
+                pdos.append(MappedPdo(index, entries, True, "", where.get((index, 0)) or loc))
+            else:
+                pdos.append(_device_pdo(index, direction, device, base, loc))
+        out.set_pdos(direction, pdos)
+        out.given.add(direction)
+    return out
