@@ -242,3 +242,9 @@ def test_revision_round_trip(xx, yy, zz):
     value_, text = ct.parse_revision(f"{xx:02d}.{yy:02d}.{zz:02d}")
     assert ct.parse_revision(value_) == (value_, text)
     assert value_ >> 16 == xx * 100 + yy and value_ & 0xFFFF == zz
+
+
+def test_oracle_j53_error_register(dev):
+    e = dev.dictionary.entry(0x1001, 0)
+    assert e.default_value == 0 and e.bit_size == 8 and not e.access.writable()
+    assert value(dev, 0x603F) == 0

@@ -290,3 +290,24 @@ def test_firmware_parse_rejects_or_round_trips_any_int(n):
     except SelectionError:
         return
     assert fw.revision == n
+
+
+def test_oracle_c30_sync_test_config_range(dev):
+    e = dev.dictionary.entry(0x2089, 0)
+    assert (e.minimum, e.maximum) == (0, 7) and e.access.writable()
+
+
+def test_oracle_g69_cam_scaling_defaults_are_fixed32_one(dev):
+    assert value(dev, 0x206B) == 0x00010000 == value(dev, 0x206C)
+
+
+def test_oracle_g70_egear_ratio_defaults(dev):
+    assert (value(dev, 0x2013, 1), value(dev, 0x2013, 2)) == (1, 1)
+    assert dev.dictionary.entry(0x2013, 1).type_name == "INT" and dev.dictionary.entry(0x2013, 2).type_name == "UINT"
+
+
+def test_oracle_i75_eoe_ip_config_objects():
+    d = profiles.load("technosoft", revision="F515J")
+    assert [d.dictionary.entry(0x210E, s).type_name for s in (1, 2, 3)] == ["UDINT"] * 3
+    assert d.dictionary.entry(0x210E, 1).encode(0x0C18A8C0) == bytes([192, 168, 24, 12])
+    assert d.dictionary.entry(0x210D, 0).bit_size == 48
