@@ -157,6 +157,13 @@ _preload_option = click.option("--preload", type=click.Path(dir_okay=False),
                                help="Simulator only: program this .sw into the simulated EEPROM first.")
 
 
+def _target_options(f: Any) -> Any:
+    """--target, --slave, --project, --drive and --preload (verify and download)."""
+    for option in (_preload_option, _drive_option, _project_option, _slave_option, _target_option):
+        f = option(f)
+    return f
+
+
 def _target_and_image(file: str | None, target: str | None, slave: int | None, project: str | None,
                       drive_name: str | None, preload: str | None) -> tuple[Any, Any, str, str]:
     """(target, image, image name, target name) for verify/download."""
@@ -209,11 +216,7 @@ Examples:
   ecattool sw verify axis1.sw --target pysoem:eth0 --slave 2 --json
   ecattool sw verify --project machine.yaml --drive x_axis""")
 @click.argument("file", type=click.Path(dir_okay=False), required=False)
-@_target_option
-@_slave_option
-@_project_option
-@_drive_option
-@_preload_option
+@_target_options
 @json_option
 def verify(file: str | None, target: str | None, slave: int | None, project: str | None, drive_name: str | None,
            preload: str | None, as_json: bool) -> None:
@@ -246,11 +249,7 @@ Examples:
               help="2065h data width: one word per write, or two (low word at the lower address).")
 @click.option("--force", is_flag=True, help="Write every block, not only those whose checksum differs.")
 @click.option("--no-reset", is_flag=True, help="Do not reset the drive (2080h) after a successful download.")
-@_target_option
-@_slave_option
-@_project_option
-@_drive_option
-@_preload_option
+@_target_options
 @json_option
 def download(file: str | None, dry_run: bool, mode: str, force: bool, no_reset: bool, target: str | None,
              slave: int | None, project: str | None, drive_name: str | None, preload: str | None,
