@@ -207,3 +207,12 @@ def test_random_models_round_trip(image: SiiImage) -> None:
     again = parse(image.to_bytes())
     assert again == image
     assert again.to_bytes() == image.to_bytes()
+
+
+def test_out_of_range_fields_are_input_errors() -> None:
+    bad = SiiImage(SiiHeader(vendor_id=1 << 32))
+    with pytest.raises(InputError, match="out of range"):
+        bad.to_bytes()
+    bad = SiiImage(SiiHeader(), [DcCategory([SiiDcOpMode(sync0_cycle_factor=0x8000)])])
+    with pytest.raises(InputError, match="out of range"):
+        bad.to_bytes()

@@ -347,7 +347,10 @@ def parse(data: bytes, source: str | None = None, locate: ByteLocator | None = N
 def serialize(image: SiiImage) -> bytes:
     out = bytearray(header_bytes(image.header))
     for c in image.categories:
-        body = category_body(c)
+        try:
+            body = category_body(c)
+        except struct.error as exc:
+            raise InputError(f"{type(c).__name__} field out of range: {exc}") from None
         if len(body) // 2 > 0xFFFF:
             raise InputError(f"category {c.cat_type} is {len(body)} bytes, more than a length word can hold")
         out += struct.pack("<HH", c.cat_type, len(body) // 2) + body
