@@ -114,7 +114,7 @@ class FactorGroup:
                 data = o.encode()
             except EncodeError as exc:
                 raise EncodeError(f"{o.address} {o.name}: {exc.message}", self.source) from None
-            comment = f"{o.name}: {o.part}" + ("" if o.exact else " (approximated)")
+            comment = (o.name if o.part == o.name else f"{o.name}: {o.part}") + ("" if o.exact else " (approximated)")
             out.commands.append(StartupCommand(transition, o.index, o.subindex, data, comment, type_name=o.type_name,
                                                value=o.value, source=self.source))
         return out
