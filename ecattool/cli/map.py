@@ -99,7 +99,16 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
     from ecattool import pdo
     from ecattool.findings import has_errors
 
-    device, mapping = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file)
+    from ecattool.errors import InputError
+
+    device = _load_device(esi, selector, profile, product, revision)
+    try:
+        mapping = _load_mapping(device, rx, tx, mapping_file)
+    except InputError as exc:
+        if not as_json:
+            raise
+        print_json({"device": device.type_name, "ok": False, "findings": [pdo.input_finding(exc).to_json()]})
+        raise SystemExit(1) from None
     findings = pdo.check(device, mapping)
     lay = pdo.layout(device, mapping)
     failed = has_errors(findings, strict=strict)
@@ -115,7 +124,7 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
                    f"({len(mapping.rx)} RxPDOs), inputs {lay.inputs.byte_size} bytes ({len(mapping.tx)} TxPDOs), "
                    f"{len(findings)} finding(s)")
     if failed:
-        raise click.exceptions.Exit(1)
+        raise SystemExit(1)
 
 
 @map_.command(epilog=_EXAMPLES.format(cmd="layout"))
@@ -169,7 +178,7 @@ def sdo(esi: str | None, selector: str | None, profile: str | None, product: str
     if has_errors(findings) and not force:
         for f in findings:
             click.echo(str(f), err=True)
-        raise click.exceptions.Exit(1)
+        raise SystemExit(1)
     seq = pdo.program(device, mapping, complete_access=complete_access, transition=transition.upper(), order=order)
     rows = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
              "size": len(c.data), "data": c.data.hex(), "value": f"0x{c.int_value:X}" if not c.complete_access else None,
