@@ -235,3 +235,10 @@ def test_oracle_63_68_screenshot_defaults(address):
 
 def test_oracle_23_i2t_time_default(dev):
     assert value(dev, 0x2037) == 120
+
+
+def test_revision_is_an_optional_number():
+    assert profiles.load("hdt", revision="0x00010002").revision == 0x00010002
+    assert value(profiles.load("hdt", revision=5), 0x1018, 3) == 5
+    with pytest.raises(SelectionError):
+        profiles.load("hdt", revision="rev-b")

@@ -9,7 +9,7 @@ from functools import lru_cache
 from importlib import resources
 from typing import Any
 
-from ecattool.errors import EncodeError, InputError, Location
+from ecattool.errors import InputError, Location, SelectionError
 from ecattool.esi.model import (
     CoeDetails,
     DcOpMode,
@@ -227,17 +227,8 @@ def assemble_device(
     )
 
 
-def encode_value(od: ObjectDictionary, index: int, sub: int, value: Any) -> bytes:
-    e = od.entry(index, sub)
-    if e is None:
-        raise EncodeError(f"no object 0x{index:04X}:{sub:02X} in the profile")
-    return e.encode(value)
-
-
 def choose(options: dict[str, Any], key: str | None, default: str, what: str, family: str) -> str:
     """Resolve a product name (case-insensitive) or raise SelectionError listing the valid ones."""
-    from ecattool.errors import SelectionError
-
     if key is None or key == "":
         return default
     k = key.strip().lower()

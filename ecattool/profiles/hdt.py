@@ -7,8 +7,18 @@ product code (printed with a lost digit, decision HDT-2) and no revision.
 
 from __future__ import annotations
 
+from ecattool.errors import EcatToolError, SelectionError
 from ecattool.esi.model import CoeDetails, Device, Identity, Pdo
-from ecattool.profiles._common import ProductInfo, ProfileInfo, assemble_device, build_dictionary, choose, load_data
+from ecattool.od.numbers import parse_int
+from ecattool.profiles._common import (
+    ProductInfo,
+    ProfileInfo,
+    assemble_device,
+    build_dictionary,
+    choose,
+    load_data,
+    set_default,
+)
 from ecattool.profiles.rules import FamilyRules
 
 NAME = "hdt"
@@ -54,14 +64,22 @@ def _max_pdo_bytes(pdos: list[Pdo]) -> int:
     return len(pdos) * 8 * 32 // 8  # 8 entries of at most 32 bits (no byte limit documented for EtherCAT)
 
 
+def _revision(revision: str | int | None) -> int:
+    """HDT documents no revision: accept a number (``0x00010000``, ``#x…``, decimal) for ESI matching, else 0."""
+    if revision is None or revision == "":
+        return 0
+    try:
+        return parse_int(revision)
+    except EcatToolError:
+        raise SelectionError(f"HDT revision {revision!r} is not a number (write e.g. 0x00010000)") from None
+
+
 def load(product: str | None = None, revision: str | int | None = None) -> Device:
     key = choose({p.name: p for p in PRODUCTS}, product, INFO.default_product, "product", NAME)
     prod = next(p for p in PRODUCTS if p.name == key)
-    rev = int(revision, 0) if isinstance(revision, str) and revision else int(revision or 0)
+    rev = _revision(revision)
     od = build_dictionary(load_data("hdt"), lambda req: req == key)
     if rev:
-        from ecattool.profiles._common import set_default
-
         set_default(od, 0x1018, 3, rev)
     return assemble_device(
         identity=Identity(VENDOR_ID, prod.product_code, rev),
