@@ -248,3 +248,12 @@ def test_oracle_j53_error_register(dev):
     e = dev.dictionary.entry(0x1001, 0)
     assert e.default_value == 0 and e.bit_size == 8 and not e.access.writable()
     assert value(dev, 0x603F) == 0
+
+
+def test_rules_for_esi_device_infers_host_drive_from_its_name():
+    from ecattool.esi.model import Device, Identity
+
+    sk = Device(Identity(0xF9, 421, 0x00660000), "SM-EtherCAT Commander SK")
+    assert profiles.rules_for(sk).supported_modes == (2, 4)
+    unknown = Device(Identity(0xF9, 421, 0x00660000), "SM-EtherCAT")
+    assert profiles.rules_for(unknown).supported_modes == (2, 4, 6, 7, 8)

@@ -123,8 +123,24 @@ def _cf_of(device: Device) -> int:
     return max(subs) if subs else CF
 
 
+_DRIVE_WORDS = {"unidrive": "unidrive-sp", "digitax": "digitax-st", "mentor": "mentor-mp", "commander": "commander-sk",
+                "affinity": "affinity"}
+
+
+def drive_of(device: Device) -> str | None:
+    """The host drive: the profile's product, else a drive name in the ESI's type name or name."""
+    drive = device.extra.get("drive") or device.extra.get("product")
+    if drive in DRIVES:
+        return drive
+    text = f"{device.type_name} {device.name}".lower()
+    for word, key in _DRIVE_WORDS.items():
+        if word in text:
+            return key
+    return None
+
+
 def rules(device: Device | None = None) -> FamilyRules:
-    drive = (device.extra.get("drive") or device.extra.get("product")) if device is not None else None
+    drive = drive_of(device) if device is not None else None
     modes = DRIVES[drive][2] if drive in DRIVES else (2, 4, 6, 7, 8)
     return FamilyRules(
         family=NAME,
