@@ -185,6 +185,12 @@ def _text(el: Any, tag: str) -> str | None:
     return child.text.strip()
 
 
+def _comment(el: Any) -> str:
+    """The Comment element's text as written (CDATA keeps spaces, so they are not stripped)."""
+    child = el.find("Comment")
+    return "" if child is None or child.text is None else str(child.text)
+
+
 def _int(el: Any, tag: str, source: str, default: int | None = None) -> int | None:
     t = _text(el, tag)
     if t is None or t == "":
@@ -222,7 +228,7 @@ def _coe_initcmds(parent: Any, cfg: SlaveConfig, source: str) -> None:
             raise InputError("InitCmd without Transition", loc)
         for t in transitions:
             cfg.startup.commands.append(StartupCommand(
-                t, int(index), int(sub or 0), data, comment=(_text(ic, "Comment") or ""),
+                t, int(index), int(sub or 0), data, comment=_comment(ic),
                 complete_access=_bool_attr(ic, "CompleteAccess"), timeout_ms=_int(ic, "Timeout", source, 0) or 0,
                 type_name=unsigned_type(len(data)), value=int.from_bytes(data, "little"), source=loc))
 
@@ -239,7 +245,7 @@ def _soe_initcmds(parent: Any, cfg: SlaveConfig, source: str) -> None:
             cfg.soe_commands.append(SoeCommand(
                 check_transition(t.text or "", loc), idn, data, drive_no=_int(ic, "DriveNo", source, 0) or 0,
                 op_code=_int(ic, "OpCode", source, 3) or 0, elements=_int(ic, "Elements", source, 64) or 0,
-                attribute=_int(ic, "Attribute", source, 0) or 0, comment=_text(ic, "Comment") or "",
+                attribute=_int(ic, "Attribute", source, 0) or 0, comment=_comment(ic),
                 timeout_ms=_int(ic, "Timeout", source, 0) or 0, fixed=_bool_attr(ic, "Fixed"), source=loc))
     if found:
         cfg.note("startup.soe", f"{len(found)} SoE init command(s) kept as SoE entries; they are not CoE SDO "
