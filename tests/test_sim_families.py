@@ -289,3 +289,27 @@ def test_ct_positioning_mode_needs_dc_and_sync_interval():
     assert exc.value.al_status == 0x0035
     d.configure_dc(0x0300, 15_000_000)
     d.request_state(OP)
+
+
+def test_ct_priority_rule_slow_parameter_in_first_pdo():
+    """SM-EtherCAT 6.1.1: with two PDOs in SM2, a slow parameter (2046h) in the first one is refused."""
+    d = at("controltechniques")
+    w(d, 0x1C12, 0, 0, 1)
+    w(d, 0x1600, 0, 0, 1)
+    w(d, 0x1600, 1, 0x60400010, 4)
+    w(d, 0x1600, 2, 0x20460120, 4)
+    w(d, 0x1600, 0, 2, 1)
+    w(d, 0x1C12, 1, 0x1600, 2)
+    w(d, 0x1C12, 2, 0x1605, 2)
+    assert code_of(w, d, 0x1C12, 0, 2, 1) == 0x06040043
+    w(d, 0x1C12, 1, 0x1605, 2)  # slow parameters in the second (low priority) PDO are fine
+    w(d, 0x1C12, 2, 0x1600, 2)
+    w(d, 0x1C12, 0, 2, 1)
+    w(d, 0x1C12, 0, 0, 1)
+    w(d, 0x1C12, 1, 0x1600, 2)
+    w(d, 0x1C12, 0, 1, 1)  # alone it is allowed (low priority, not deterministic)
+
+
+def test_ct_pdo_only_objects_refuse_sdo():
+    d = at("controltechniques")
+    assert code_of(d.sdo_upload, 0x2830, 0) in (0x06010000, 0x06090011)

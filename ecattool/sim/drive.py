@@ -447,8 +447,13 @@ class Drive:
             raise _abort(index, sub, A.SUBINDEX_DOES_NOT_EXIST)
         return e
 
+    def _pdo_only(self, index: int, sub: int) -> None:
+        if index in getattr(self.rules, "pdo_only_indices", ()):
+            raise _abort(index, sub, A.UNSUPPORTED_ACCESS)  # Control Techniques 8.5: 2830h/2831h cyclic only
+
     def _upload(self, index: int, sub: int) -> bytes:
         e = self._entry(index, sub)
+        self._pdo_only(index, sub)
         if not e.access.read:
             raise _abort(index, sub, A.WRITE_ONLY)
         if self.esm not in e.access.read:
@@ -490,6 +495,7 @@ class Drive:
     def _download(self, index: int, sub: int, data: bytes) -> bool:
         """Check and apply one download; returns True when the drive sends no reply (2080h reset)."""
         e = self._entry(index, sub)
+        self._pdo_only(index, sub)
         if not e.access.write or (sub and index in getattr(self.rules, "read_only_indices", ())):
             raise _abort(index, sub, A.READ_ONLY)
         if self.esm not in e.access.write:
@@ -660,11 +666,21 @@ class Drive:
             chosen = [p for p in chosen if p]
             if any(not self._valid_pdo_index(d, p) for p in chosen) or len(set(chosen)) != len(chosen):
                 raise _abort(index, 0, A.INVALID_VALUE)
+            if self._slow_in_first(d, chosen):
+                raise _abort(index, 0, A.GENERAL_PARAMETER_INCOMPATIBILITY)
             return
         if self.rules.assign_write_needs_sub0_zero and self._read_int(index, 0):
             raise _abort(index, sub, self.behaviour.assign_busy)
         if value and not self._valid_pdo_index(d, value):
             raise _abort(index, sub, A.INVALID_VALUE)
+
+    def _slow_in_first(self, d: Direction, chosen: list[int]) -> bool:
+        """Control Techniques 6.1.1: with two PDOs in a sync manager, slow parameters (SM-Applications,
+        Inter-Option) may only be in the second (low priority) one; in the first the drive aborts."""
+        if not self.rules.priority_rule or len(chosen) < 2:
+            return False
+        slow = getattr(self.rules, "slow_indices", frozenset())
+        return any(e.index in slow for e in self._pdo_entries(d, chosen[0]) or [])
 
     def _valid_pdo_index(self, d: Direction, pdo: int) -> bool:
         allowed = self.rules.rx_mapping_indices if d is RX else self.rules.tx_mapping_indices
@@ -710,6 +726,8 @@ class Drive:
         limit = self.rules.max_assigned_rx if d is RX else self.rules.max_assigned_tx
         if limit is not None and len(assigned) > limit:
             self._refuse(EcState.SAFEOP, code, f"{len(assigned)} PDOs assigned, at most {limit}")
+        if self._slow_in_first(d, assigned):
+            self._refuse(EcState.SAFEOP, code, "a slow parameter is mapped in the first (high priority) PDO")
         for pdo in assigned:
             entries = self._pdo_entries(d, pdo)
             if entries is None:
