@@ -107,3 +107,12 @@ def test_hexbin_round_trip(raw):
     ctx = Context("h.xml")
     assert ctx.hexbin(raw.hex(), None, "d") == raw
     assert ctx.hexbin(raw.hex().upper(), None, "d") == raw
+
+
+@given(st.one_of(st.text(max_size=10), st.integers(0, 2**40).map(lambda n: f"#x{n:x}"), st.integers(0, 2**40).map(str)))
+def test_fast_number_path_agrees_with_the_checked_parser(text):
+    from ecattool.esi.reader import _fast_number
+
+    fast = _fast_number(text)
+    if fast is not None:
+        assert Context("f.xml").number(text, None, "n") == fast

@@ -115,6 +115,20 @@ def _decode_fallback(data: bytes, source: str, ctx: Context) -> bytes | None:
     return text.encode("utf-8")
 
 
+def _fast_number(t: str | None) -> int | None:
+    """The common HexDecValue spellings without any checks; None sends the text to ``Context.number``."""
+    if t is None or not t.isascii():
+        return None
+    if t.isdigit():
+        return int(t)
+    if t[:2] == "#x" and t[2:].isalnum() and "x" not in t[2:] and "X" not in t[2:]:
+        try:
+            return int(t[2:], 16)
+        except ValueError:
+            return None
+    return None
+
+
 class Reader:
     def __init__(self, source: str, base_dir: Path | None, follow_references: bool = True) -> None:
         self.source = source
@@ -286,6 +300,7 @@ class Reader:
 
     def entry(self, en: Any) -> PdoEntry:
         number = self.ctx.number
+        fast = _fast_number
         index = sub = bits = None
         name = dtype = ""
         name_lc = False
@@ -293,13 +308,21 @@ class Reader:
         for c in en:
             tag = c.tag
             if tag == "Index":
-                index = number(c.text, c, "Entry/Index")
+                t = c.text
+                index = fast(t)
+                if index is None:
+                    index = number(t, c, "Entry/Index")
                 dep = c.get("DependOnSlot")
             elif tag == "SubIndex":
                 t = c.text
-                sub = number(t, c, "Entry/SubIndex") if t is not None and t.strip() else 0
+                sub = fast(t)
+                if sub is None:
+                    sub = number(t, c, "Entry/SubIndex") if t is not None and t.strip() else 0
             elif tag == "BitLen":
-                bits = number(c.text, c, "Entry/BitLen")
+                t = c.text
+                bits = fast(t)
+                if bits is None:
+                    bits = number(t, c, "Entry/BitLen")
             elif tag == "Name":
                 lcid = c.get("LcId")
                 if not name_lc:
