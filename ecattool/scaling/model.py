@@ -106,19 +106,27 @@ class Transmission:
 
     @staticmethod
     def belt_diameter(diameter: Exact) -> "Transmission":
-        return Transmission("belt", diameter * Exact(Fraction(1), 1), "length", f"belt/pulley, pulley diameter {_mm(diameter)} (travel pi*D)")
+        return Transmission._circumference("belt", diameter, "belt/pulley, pulley diameter")
 
     @staticmethod
     def belt_teeth(teeth: int, tooth_pitch: Exact) -> "Transmission":
-        return Transmission("belt", tooth_pitch * teeth, "length", f"toothed belt, {teeth} teeth x {_mm(tooth_pitch)} pitch")
+        return Transmission._toothed("belt", teeth, tooth_pitch, "toothed belt")
 
     @staticmethod
     def rack_diameter(pitch_diameter: Exact) -> "Transmission":
-        return Transmission("rack", pitch_diameter * Exact(Fraction(1), 1), "length", f"rack and pinion, pitch diameter {_mm(pitch_diameter)}")
+        return Transmission._circumference("rack", pitch_diameter, "rack and pinion, pitch diameter")
 
     @staticmethod
     def rack_teeth(teeth: int, tooth_pitch: Exact) -> "Transmission":
-        return Transmission("rack", tooth_pitch * teeth, "length", f"rack and pinion, {teeth} teeth x {_mm(tooth_pitch)} pitch")
+        return Transmission._toothed("rack", teeth, tooth_pitch, "rack and pinion")
+
+    @staticmethod
+    def _circumference(kind: str, diameter: Exact, what: str) -> "Transmission":
+        return Transmission(kind, diameter * Exact(Fraction(1), 1), "length", f"{what} {_mm(diameter)} (travel pi*D)")
+
+    @staticmethod
+    def _toothed(kind: str, teeth: int, tooth_pitch: Exact, what: str) -> "Transmission":
+        return Transmission(kind, tooth_pitch * teeth, "length", f"{what}, {teeth} teeth x {_mm(tooth_pitch)} pitch")
 
     @staticmethod
     def linear_motor(pole_pitch: Exact) -> "Transmission":
