@@ -257,3 +257,8 @@ def test_rules_for_esi_device_infers_host_drive_from_its_name():
     assert profiles.rules_for(sk).supported_modes == (2, 4)
     unknown = Device(Identity(0xF9, 421, 0x00660000), "SM-EtherCAT")
     assert profiles.rules_for(unknown).supported_modes == (2, 4, 6, 7, 8)
+
+
+def test_ambiguities_a17_a23_types(dev):
+    assert dev.dictionary.entry(0x60C1, 1).type_name == "DINT"
+    assert dev.dictionary.entry(0x6099, 0).type_name == "USINT"

@@ -242,3 +242,23 @@ def test_revision_is_an_optional_number():
     assert value(profiles.load("hdt", revision=5), 0x1018, 3) == 5
     with pytest.raises(SelectionError):
         profiles.load("hdt", revision="rev-b")
+
+
+def test_ambiguity_6_emcy_cob_id_read_only(dev):
+    assert not dev.dictionary.entry(0x1014, 0).access.writable()
+
+
+def test_ambiguity_9_tpdo1_inhibit_and_event_timer(dev):
+    assert dev.dictionary.entry(0x1800, 3) is not None and dev.dictionary.entry(0x1800, 5) is not None
+
+
+def test_ambiguities_34_35_option_codes_mappable(dev):
+    for idx in (0x6007, 0x605A, 0x605D):
+        assert dev.dictionary.entry(idx, 0).rx_mappable
+    assert dev.dictionary.entry(0x6007, 0).type_name == "UINT"
+
+
+def test_ambiguities_53_55_57_types_and_access(dev):
+    assert dev.dictionary.entry(0x60B9, 0).access.writable()  # printed rw
+    assert dev.dictionary.entry(0x604C, 1).type_name == "DINT"
+    assert not dev.dictionary.entry(0x6093, 0).access.writable()

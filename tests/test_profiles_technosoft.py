@@ -311,3 +311,32 @@ def test_oracle_i75_eoe_ip_config_objects():
     assert [d.dictionary.entry(0x210E, s).type_name for s in (1, 2, 3)] == ["UDINT"] * 3
     assert d.dictionary.entry(0x210E, 1).encode(0x0C18A8C0) == bytes([192, 168, 24, 12])
     assert d.dictionary.entry(0x210D, 0).bit_size == 48
+
+
+def test_ambiguity_3_device_type_kept_as_printed(dev):
+    assert value(dev, 0x1000) == 0x00060192
+
+
+def test_ambiguities_13_14_16_assignment_types_and_ranges(dev):
+    od = dev.dictionary
+    for idx in (0x1C12, 0x1C13):
+        assert od.entry(idx, 0).type_name == "USINT" and (od.entry(idx, 0).minimum, od.entry(idx, 0).maximum) == (0, 4)
+        assert all(od.entry(idx, s).type_name == "UINT" for s in range(1, 5))
+    assert (od.entry(0x1C13, 1).minimum, od.entry(0x1C13, 1).maximum) == (0x1A00, 0x1A03)
+
+
+def test_ambiguities_38_75_record_objects(dev):
+    assert dev.dictionary.get(0x20A0).object_code.value == "RECORD"
+    assert not dev.dictionary.entry(0x20A0, 0).pdo_mapping and dev.dictionary.entry(0x20A0, 2).tx_mappable
+    fa = profiles.load("technosoft", revision="FA00G").dictionary
+    assert fa.get(0x2113).object_code.value == "ARRAY" and fa.get(0x2113).max_subindex == 15
+
+
+def test_ambiguities_54_71_72_ranges(dev):
+    od = dev.dictionary
+    assert od.entry(0x607E, 0).maximum == 255
+    assert od.entry(0x2012, 0).maximum is None and od.entry(0x201E, 0).maximum is None
+
+
+def test_ambiguity_78_6063_heading_name(dev):
+    assert dev.dictionary.get(0x6063).name == "Position actual internal value"
