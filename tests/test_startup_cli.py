@@ -94,3 +94,14 @@ def test_help_has_examples(capsys):
     for sub in ("import", "export", "convert"):
         code, out, _ = run(capsys, "startup", sub, "--help")
         assert code == 0 and "Examples:" in out and "ecattool startup" in out
+
+
+def test_import_from_stdin(capsys, monkeypatch):
+    import io
+    import sys
+
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(b"<PS>,CoE,0x6060:00,0x08 (8),CSP\n")))
+    code, out, _ = run(capsys, "startup", "import", "-", "--json")
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["format"] == "twincat" and doc["slaves"][0]["commands"][0]["source"] == "<stdin>:1"

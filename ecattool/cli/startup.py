@@ -31,10 +31,19 @@ def startup() -> None:
     """
 
 
-def _read(path: str, fmt: str | None) -> list[Any]:
-    from ecattool.startup import import_file
+def _read_with_format(path: str, fmt: str | None) -> tuple[list[Any], str]:
+    """Read a startup configuration from a file, or from stdin for ``-``; also say which format it was."""
+    from ecattool.fileio import read_bytes
+    from ecattool.startup import detect_format, import_bytes
 
-    return import_file(path, fmt)
+    source = "<stdin>" if path == "-" else path
+    data = click.get_binary_stream("stdin").read() if path == "-" else read_bytes(path)
+    name = fmt or detect_format(data, source)
+    return import_bytes(data, source, name), name
+
+
+def _read(path: str, fmt: str | None) -> list[Any]:
+    return _read_with_format(path, fmt)[0]
 
 
 def _write(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, ...]) -> None:
@@ -48,8 +57,9 @@ Examples:
   ecattool startup export --from drive.json --format twincat
   ecattool startup export --from ecmciPOSXXXX.cmd --format igh -o ipos.c
   ecattool startup export --from test_eni.xml --format pysoem -o startup_pysoem.py""")
-@click.option("--from", "source", required=True, type=click.Path(exists=True, dir_okay=False),
-              help="Startup configuration to read (ecattool JSON or any importable format, detected from content).")
+@click.option("--from", "source", required=True, type=click.Path(exists=True, dir_okay=False, allow_dash=True),
+              help="Startup configuration to read (ecattool JSON or any importable format, detected from "
+                   "content; '-' = stdin).")
 @click.option("--from-format", type=click.Choice(_FORMAT_NAMES), help="Format of --from (default: detect).")
 @click.option("--format", "fmt", required=True, type=click.Choice(_FORMAT_NAMES[:-1]), help="Format to write.")
 @output_option()
@@ -74,20 +84,17 @@ def convert_cmd(input_file: str, fmt: str, from_format: str | None, output: str)
 @startup.command("import", epilog="""\b
 Examples:
   ecattool startup import ros2_technosoft_ipos3604.yaml
-  ecattool startup import test_eni.xml --json""")
-@click.argument("input_file", type=click.Path(exists=True, dir_okay=False))
+  ecattool startup import test_eni.xml --json
+  cat startup.txt | ecattool startup import - --from-format twincat""")
+@click.argument("input_file", type=click.Path(exists=True, dir_okay=False, allow_dash=True))
 @click.option("--from-format", type=click.Choice(_FORMAT_NAMES), help="Format of INPUT_FILE (default: detect).")
 @json_option
 def import_cmd(input_file: str, from_format: str | None, as_json: bool) -> None:
     """Read a startup configuration and show what was read: slaves, commands, PDOs, notes."""
-    from ecattool.startup import detect_format
     from ecattool.startup.formats.jsonfmt import slave_to_json
 
-    configs = _read(input_file, from_format)
+    configs, fmt = _read_with_format(input_file, from_format)
     if as_json:
-        from ecattool.fileio import read_bytes
-
-        fmt = from_format or detect_format(read_bytes(input_file), input_file)
         print_json({"file": input_file, "format": fmt, "slaves": [
             {**slave_to_json(c), "commands": [{**d, "source": str(cmd.source) if cmd.source else None}
                                               for d, cmd in zip(slave_to_json(c)["commands"], c.commands)]}
