@@ -120,3 +120,8 @@ def test_help_has_examples():
     for cmd in ("devices", "show", "validate"):
         code, out = run("esi", cmd, "--help")
         assert code == 0 and "Examples:" in out and "ecattool esi " + cmd in out
+
+
+def test_devices_from_stdin():
+    res = CliRunner().invoke(cli, ["esi", "devices", "-", "--json"], input=SAMPLE.read_bytes())
+    assert res.exit_code == 0 and json.loads(res.output)[0]["type"] == "Drive1"

@@ -8,7 +8,16 @@ import click
 
 from ecattool.cli.common import console, json_option, print_json, table
 
-_FILE = click.argument("file", type=click.Path(dir_okay=False))
+_FILE = click.argument("file", type=click.Path(dir_okay=False, allow_dash=True))
+
+
+def _load(file: str) -> Any:
+    """Load FILE, or standard input for '-'."""
+    from ecattool.esi import load, load_bytes
+
+    if file == "-":
+        return load_bytes(click.get_binary_stream("stdin").read(), "<stdin>")
+    return load(file)
 
 
 def _hex(v: int | None, width: int = 8) -> str:
@@ -50,14 +59,13 @@ def device_summary(dev: Any, index: int) -> dict[str, Any]:
 @esi.command("devices", epilog="""\b
 Examples:
   ecattool esi devices samples/esi/etg2001_cia402.xml
-  ecattool esi devices beckhoff_EL1xxx.xml --json""")
+  ecattool esi devices beckhoff_EL1xxx.xml --json
+  curl -s https://example.com/drive.xml | ecattool esi devices -""")
 @_FILE
 @json_option
 def devices_cmd(file: str, as_json: bool) -> None:
     """List the devices of FILE: type, product code, revision, PDO and object counts."""
-    from ecattool.esi import load
-
-    doc = load(file)
+    doc = _load(file)
     rows = [device_summary(d, i) for i, d in enumerate(doc.devices)]
     if as_json:
         print_json(rows)
@@ -215,9 +223,9 @@ Examples:
 def show_cmd(file: str, selector: str | None, policy: str, pdos: bool, objects: bool, sm: bool, dc: bool,
              init_cmds: bool, as_json: bool) -> None:
     """Show one device of FILE: identity and summary, or the chosen tables."""
-    from ecattool.esi import load, select
+    from ecattool.esi import select
 
-    doc = load(file)
+    doc = _load(file)
     dev = select(doc, selector, policy)
     index = doc.devices.index(dev)
     any_section = pdos or objects or sm or dc or init_cmds
@@ -286,6 +294,8 @@ def validate_cmd(file: str, schema_dir: str | None, strict: bool, as_json: bool)
     from ecattool.esi import validate
     from ecattool.findings import has_errors
 
+    if file == "-":
+        raise click.UsageError("validate reads a file path (DictionaryFile/InfoReference are resolved beside it)")
     findings = validate(file, schema_dir)
     failed = has_errors(findings, strict)
     if as_json:
