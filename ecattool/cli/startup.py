@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import click
@@ -37,7 +38,7 @@ def _read_with_format(path: str, fmt: str | None) -> tuple[list[Any], str]:
     from ecattool.startup import detect_format, import_bytes
 
     source = "<stdin>" if path == "-" else path
-    data = click.get_binary_stream("stdin").read() if path == "-" else read_bytes(path)
+    data = sys.stdin.buffer.read() if path == "-" else read_bytes(path)
     name = fmt or detect_format(data, source)
     return import_bytes(data, source, name), name
 
