@@ -89,9 +89,8 @@ _BY_VENDOR = {0x000001A3: "technosoft-ipos", 0x00000289: "hdt", 0x000000F9: "con
 
 def family_of(device: Device) -> str:
     """``technosoft-ipos``, ``hdt``, ``controltechniques`` (by vendor id) or ``generic``."""
-    prof = device.extra.get("profile") if device.extra else None
-    if prof in _MODULES:
-        return str(prof)
+    if device.source.startswith("profile:") and device.source[8:] in _MODULES:
+        return device.source[8:]
     return _BY_VENDOR.get(device.vendor_id, "generic")
 
 
