@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import click
@@ -16,7 +17,7 @@ def _load(file: str) -> Any:
     from ecattool.esi import load, load_bytes
 
     if file == "-":
-        return load_bytes(click.get_binary_stream("stdin").read(), "<stdin>")
+        return load_bytes(sys.stdin.buffer.read(), "<stdin>")
     return load(file)
 
 
