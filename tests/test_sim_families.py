@@ -313,3 +313,38 @@ def test_ct_priority_rule_slow_parameter_in_first_pdo():
 def test_ct_pdo_only_objects_refuse_sdo():
     d = at("controltechniques")
     assert code_of(d.sdo_upload, 0x2830, 0) in (0x06010000, 0x06090011)
+
+
+def test_limit_switch_bits_per_family():
+    """60FDh: Technosoft/CT bit 0 = negative, bit 1 = positive; HDT §4.04.1 bit 0 = CW (positive)."""
+    for name, bit in (("technosoft-ipos", 1), ("hdt", 0), ("controltechniques", 1)):
+        d = at(name)
+        if (0x60FD, 0) not in d._entries:
+            continue
+        d.set_limit_switches(positive=True)
+        assert r(d, 0x60FD) == 1 << bit, name
+        assert r(d, 0x6041) & 0x0800
+
+
+def test_technosoft_limit_switch_emcy():
+    d = at("technosoft-ipos")
+    d.set_limit_switches(positive=True)
+    d.set_limit_switches()
+    assert [m.code for m in d.emergencies[-2:]] == [0x5443, 0x0000]
+
+
+def test_profile_velocity_ramps_with_acceleration():
+    d = at("hdt")
+    w(d, 0x6060, 0, 3, 1)
+    w(d, 0x60FF, 0, 600, 4)  # rpm with the default 6094h = 65536/60
+    w(d, 0x6083, 0, 6000, 4)  # rpm/s with the default 6097h
+    d.request_state(SAFE)
+    d.request_state(OP)
+    for cw in (0x06, 0x07, 0x0F):
+        w(d, 0x6040, 0, cw, 2)
+    assert d.cycle_time() == Fraction(2, 1000)  # 60C2h default 2 x 10^-3 s (oracle 42)
+    d.step(25)  # 50 ms at 6000 rpm/s -> 300 rpm
+    assert int(d.units.velocity_to_user(d.cia.velocity)) == 300
+    d.step(100)
+    assert d.internal_velocity == 655360 and not r(d, 0x6041) & 0x4000
+    assert any(e.kind == "cia402" and e.data["state"] == "OPERATION_ENABLED" for e in d.events)

@@ -21,7 +21,7 @@ from ecattool.od.model import MAILBOX_STATES, EcState, Entry, ObjectCode
 from ecattool.od.types import Kind, lookup
 from ecattool.profiles.rules import FamilyRules
 from ecattool.sim import eeprom as ee
-from ecattool.sim.cia402 import CSP, CSV, PP, PV, Cia402, State
+from ecattool.sim.cia402 import PP, Cia402, State
 from ecattool.sim.faults import Faults
 from ecattool.sim.units import Units, to_int, units_for
 
@@ -230,6 +230,10 @@ class Drive:
     # ------------------------------------------------------------------------------------------
     @classmethod
     def from_device(cls, device: Device, rules: FamilyRules | None = None, **kw: Any) -> "Drive":
+        """A drive of ``device``. ESI devices are completed first (synthesised 1018h, mapping and assignment
+        objects, default modules), exactly as :meth:`from_esi` does; built-in profile devices are complete."""
+        if not device.source.startswith("profile:"):
+            device = _complete(expand_default_modules(device))
         return cls(device, rules, **kw)
 
     @classmethod
@@ -281,6 +285,7 @@ class Drive:
         self._sync_memory_objects()
         self.layout: dict[Direction, _Layout] = {RX: _Layout(), TX: _Layout()}
         self.cia = Cia402(enable_needs_op=self.behaviour.enable_needs_op)
+        self.limit_active = False
         self.has_cia402 = (0x6040, 0) in self._entries and (0x6041, 0) in self._entries
         self.units: Units = units_for(self.family, self._read_int, revision=d.revision,
                                       has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
@@ -921,7 +926,7 @@ class Drive:
         """Actual values from the state: 6041h, 6063h/6064h, 606Ch, 603Fh."""
         if not getattr(self, "has_cia402", False):
             return
-        self._put(0x6041, 0, self.cia.statusword(mode=self.mode()))
+        self._put(0x6041, 0, self.cia.statusword(mode=self.mode()) | (0x0800 if self.limit_active else 0))
         u = self.units
         self._put(0x6063, 0, to_int(self.cia.position))
         self._put(0x6064, 0, to_int(u.position_to_user(self.cia.position)))
@@ -947,6 +952,26 @@ class Drive:
         """A drive fault: FAULT REACTION ACTIVE -> FAULT, 603Fh = code, EMCY with the code."""
         self._cia_moves(self.cia.fault(code), f"fault 0x{code:04X}")
         self.emcy(code, data)
+        self._refresh_inputs()
+
+    def set_limit_switches(self, *, negative: bool = False, positive: bool = False) -> None:
+        """The limit-switch inputs change: 60FDh bits per the family (HDT swaps them: bit 0 = CW =
+        positive); Technosoft sends EMCY 0x5442/0x5443 when one becomes active and 0x0000 when it clears
+        (§3.1.3), and statusword bit 11 (internal limit active) follows."""
+        neg_bit, pos_bit = self.rules.limit_switch_bits
+        old = self._read_int(0x60FD, 0) or 0
+        new = old & ~((1 << neg_bit) | (1 << pos_bit))
+        new |= (negative << neg_bit) | (positive << pos_bit)
+        self._put(0x60FD, 0, new)
+        was_neg, was_pos = bool(old >> neg_bit & 1), bool(old >> pos_bit & 1)
+        self.limit_active = negative or positive
+        self._log("inputs", digital_inputs=new)
+        if self.family == "technosoft-ipos":
+            for was, now, code in ((was_neg, negative, 0x5442), (was_pos, positive, 0x5443)):
+                if now and not was:
+                    self.emcy(code)
+                elif was and not now:
+                    self.emcy(0x0000)
         self._refresh_inputs()
 
     def inject_hdt_alarm(self, alarm: int, code: int) -> None:
