@@ -12,11 +12,6 @@ from ecattool.cli.common import console, json_option, output_option, print_json,
 _FORMAT_NAMES = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv", "lcec")
 
 
-def _format_help() -> str:
-    from ecattool.startup import FORMATS
-
-    return "; ".join(f"{n}: {'read/write' if f.can_export and f.can_import else 'write' if f.can_export else 'read'}"
-                     for n, f in FORMATS.items())
 
 
 @click.group("startup", epilog="""\b

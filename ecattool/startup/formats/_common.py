@@ -5,9 +5,8 @@ from __future__ import annotations
 import re
 
 from ecattool.errors import InputError, Location
-from ecattool.od import types as dt
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.model import TRANSITIONS, StartupCommand
+from ecattool.startup.model import TRANSITIONS
 
 #: unsigned type names by byte size, for commands that carry no type
 _UNSIGNED_BY_SIZE = {1: "USINT", 2: "UINT", 4: "UDINT", 8: "ULINT"}
@@ -16,10 +15,6 @@ _UNSIGNED_BY_SIZE = {1: "USINT", 2: "UINT", 4: "UDINT", 8: "ULINT"}
 def unsigned_type(size: int) -> str | None:
     return _UNSIGNED_BY_SIZE.get(size)
 
-
-def hex_bytes(data: bytes) -> str:
-    """``b'\\x01\\x16'`` → ``0116`` (ENI ``Data`` style: little-endian bytes in order, lower case)."""
-    return data.hex()
 
 
 def parse_hex(text: str, location: Location | None, what: str = "data") -> bytes:
@@ -81,19 +76,6 @@ def unique_identifiers(configs: list[SlaveConfig]) -> list[str]:
     return out
 
 
-def typed_value(cmd: StartupCommand) -> object:
-    """The command's value decoded through its type when it has one, else its unsigned integer."""
-    t = dt.lookup(cmd.type_name) if cmd.type_name else None
-    if t is not None and t.bits is not None and t.is_numeric and (t.bits + 7) // 8 == len(cmd.data):
-        try:
-            return t.decode(cmd.data)
-        except InputError:
-            pass
-    return cmd.int_value
-
-
-def source_of(cmd: StartupCommand) -> str:
-    return f" ({cmd.source})" if cmd.source else ""
 
 
 def decode_text(data: bytes, source: str) -> str:
