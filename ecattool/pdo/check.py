@@ -16,7 +16,15 @@ from ecattool.findings import Finding, Severity
 from ecattool.od.model import Entry
 from ecattool.od.types import lookup
 from ecattool.pdo.layout import layout
-from ecattool.pdo.model import MappedPdo, Mapping, RX_RANGE, TX_RANGE, default_mapping, pdo_direction
+from ecattool.pdo.model import (
+    RX_RANGE,
+    TX_RANGE,
+    MappedPdo,
+    Mapping,
+    default_mapping,
+    entry_keys,
+    pdo_direction,
+)
 from ecattool.pdo.program import resolve_rules
 from ecattool.profiles.rules import FamilyRules
 from ecattool.startup.model import StartupCommand
@@ -212,7 +220,7 @@ class _Checker:
         if sm_check and dev_pdo.sm is not None and sm is not None and dev_pdo.sm != sm.number:
             self.add("PDO017", f"PDO {_a(p.index)} belongs to SM{dev_pdo.sm} (Sm attribute), not to SM{sm.number}",
                      p.location, pdo=p.index, sm=dev_pdo.sm)
-        if dev_pdo.fixed and p.explicit and _key(p.entries) != _key(dev_pdo.entries):
+        if dev_pdo.fixed and p.explicit and entry_keys(p.entries) != entry_keys(dev_pdo.entries):
             self.add("PDO014", f"PDO {_a(p.index)} ({dev_pdo.name}) is Fixed; its entries cannot be changed "
                      f"(omit 'entries' to assign it as it is)", p.location, pdo=p.index)
 
@@ -242,7 +250,7 @@ class _Checker:
         if p.index not in self.bad and not (dev_pdo is not None and dev_pdo.fixed):
             current = next((q for q in self.default.pdos(d) if q.index == p.index), None)
             reference = current.entries if current is not None else (dev_pdo.entries if dev_pdo is not None else None)
-            if reference is None or _key(reference) != _key(p.entries):
+            if reference is None or entry_keys(reference) != entry_keys(p.entries):
                 why = self.mapping_not_writable(p.index)
                 if not why and current is not None and self.assign_not_writable(d):
                     why = f"it is assigned by default and {self.assign_not_writable(d)}"
@@ -402,10 +410,6 @@ class _Checker:
                 self.check_pdo(d, p, first_of_two=(i == 0 and len(pdos) >= 2))
         self.check_image()
         return self.out
-
-
-def _key(entries: list[PdoEntry]) -> list[tuple[int, int, int]]:
-    return [(e.index, e.subindex, e.bit_len) for e in entries]
 
 
 def check(
