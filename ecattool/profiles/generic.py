@@ -134,7 +134,14 @@ def complete_generic(device: Device) -> Device:
     if 0x1018 not in od:
         od.add(obj)
     else:
-        _fill_entries(od.get(0x1018), obj)  # type: ignore[arg-type]
+        existing = od.get(0x1018)
+        _fill_entries(existing, obj)  # type: ignore[arg-type]
+        # The device's identity (Type@ProductCode/RevisionNo, Vendor/Id) is what the drive reports; ESI 1018h
+        # defaults are often stale (Ingenia, Inovance and the ETG.2001 example disagree with their Type).
+        for sub in (1, 2, 3):
+            e = existing.entry(sub) if existing is not None else None
+            if e is not None and e.datatype is not None and e.bit_size == 32:
+                e.default = obj.entries[sub].default
     if 0x1C00 not in od and out.sync_managers:
         sms = sorted(out.sync_managers, key=lambda s: s.number)
         obj = OdObject(0x1C00, "Sync manager type", ObjectCode.ARRAY, location=Location(where))
