@@ -42,6 +42,9 @@ class FakeSlave:
             raise SdoError(1, index, subindex, 0x06010002, "read only")
         self.od[(index, subindex)] = data
 
+    def dc_sync(self, act, cycle):
+        self.dc = (act, cycle)
+
     def write_state(self):
         pass
 

@@ -92,6 +92,12 @@ class ProcessIo:
         self.in_pos = {(v.index, v.subindex): v for v in self.layout.inputs.entries if not v.is_gap}
         self.outputs = bytearray(self.layout.outputs.byte_size)
         self.inputs = bytes(self.layout.inputs.byte_size)
+        # mapped outputs start from the values the startup list gives them (else the PDO would write 0
+        # over them every cycle; lint warns about such objects with PDO021)
+        for cmd in rd.startup:
+            pos = self.out_pos.get((cmd.index, cmd.subindex))
+            if pos is not None and not cmd.complete_access:
+                _put_bits(self.outputs, pos.bit_offset, pos.bit_len, int.from_bytes(cmd.data, "little"))
 
     def _entry(self, index: int, sub: int) -> Any:
         assert self.rd.device is not None
@@ -304,6 +310,17 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     report.steps.append(Step("move", True, detail))
 
 
+def _dc(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+    from ecattool.project.steps import dc_assign_activate
+
+    act = dc_assign_activate(rd)
+    if act is None or rd.drive.dc is None:
+        return
+    cycle = rd.drive.dc.cycle_ns or 0
+    _sdo_step("dc", lambda: slave.configure_dc(act, cycle))
+    report.steps.append(Step("dc", True, f"AssignActivate 0x{act:04X}, SYNC0 cycle {cycle} ns"))
+
+
 def _safe_stop(slave: SlaveTarget, io: ProcessIo | None, report: DriveReport) -> None:
     """Leave the drive with its power stage off, in PRE-OP, whatever state it reached."""
     try:
@@ -337,6 +354,7 @@ def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
         _check_identity(slave, rd, report)
         _sw(slave, rd, report)
         _startup(slave, rd, _PREOP_TRANSITIONS, report)
+        _dc(slave, rd, report)
         _goto(slave, EcState.SAFEOP, report)
         io = ProcessIo(slave, rd)
         io.cycle()
@@ -352,6 +370,11 @@ def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
     except _Failed as exc:
         report.steps.append(exc.step)
         report.error = f"{exc.step.name}: {exc.step.detail}"
+        _safe_stop(slave, io, report)
+    except EcatToolError as exc:  # anything a target or the device model raised outside a named step
+        step = Step("commission", False, str(exc))
+        report.steps.append(step)
+        report.error = f"{step.name}: {step.detail}"
         _safe_stop(slave, io, report)
     return report
 

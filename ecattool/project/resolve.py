@@ -58,9 +58,9 @@ class ResolvedDrive:
 def resolve_device(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     ref = rd.drive.device
     try:
-        if ref.profile is not None:
-            from ecattool import profiles
+        from ecattool import profiles
 
+        if ref.profile is not None:
             rd.device = profiles.load(ref.profile, product=ref.product, revision=ref.revision)
         else:
             from ecattool import esi
@@ -72,7 +72,9 @@ def resolve_device(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
                 rd.error("PRJ002", f"ESI file {ref.esi!r} not found (looked in {path})", lp.drive_location(i, "device", "esi"))
                 return
             esi_file = load_esi_cached(path)
-            rd.device = esi.select(esi_file, None if ref.select is None else str(ref.select), policy=ref.policy)
+            selected = esi.select(esi_file, None if ref.select is None else str(ref.select), policy=ref.policy)
+            # the device as it runs: default modules in its slots, synthesised mapping/assignment objects
+            rd.device = profiles.complete_generic(selected)
     except EcatToolError as exc:
         loc = exc.location if exc.location and exc.location.line else lp.drive_location(i, "device")
         rd.error("PRJ005", exc.message, loc)

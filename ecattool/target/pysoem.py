@@ -78,6 +78,9 @@ class PysoemSlave:
             al = int(getattr(self._slave, "al_status", 0) or 0)
             raise StateChangeError(state.value, current.value, al)
 
+    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0) -> None:
+        self._slave.dc_sync(bool(assign_activate), sync0_cycle_ns)
+
     def exchange(self, outputs: bytes) -> bytes:
         self._slave.output = bytes(outputs)
         self._master.master.send_processdata()
