@@ -227,3 +227,14 @@ def test_alternative_sm_mapping(el1xxx):
     assert devs
     alt = devs[0].alternative_sm_mappings[0]
     assert alt.default and alt.name == "Standard (MDP 125)" and alt.sms[0][:2] == [0x1A00, 0x1A01]
+
+
+def test_loaded_file_pickles_with_its_dictionaries():
+    import pickle
+
+    esi = load(corpus_path("esi", "etg_ETG2001_ModulesSlots_CiA402.xml"))
+    back = pickle.loads(pickle.dumps(esi, protocol=pickle.HIGHEST_PROTOCOL))
+    assert [d.type_name for d in back.devices] == ["Drive1"]
+    assert back.devices[0].dictionary.indices() == esi.devices[0].dictionary.indices() and len(back.devices[0].dictionary) == 14
+    assert back.devices[0].dictionary.entry(0x1018, 1) is not None
+    assert len(back.modules) == 8

@@ -90,6 +90,11 @@ class LazyDictionary(ObjectDictionary):
         self._load()
         return super().indices()
 
+    def __reduce__(self) -> Any:
+        # pickled (e.g. by project caches) as the plain dictionary it builds: the lxml tree stays behind
+        self._load()
+        return (ObjectDictionary, (dict(self._objects),))
+
     def merged(self, other: ObjectDictionary) -> ObjectDictionary:
         self._load()
         if isinstance(other, LazyDictionary):
