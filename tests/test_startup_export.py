@@ -431,3 +431,12 @@ def test_every_format_is_registered_with_its_directions():
         export(sample_config(), "lcec")
     with pytest.raises(InputError, match="unknown startup format"):
         export(sample_config(), "xls")
+
+
+def test_several_slaves_of_unknown_position_stay_apart():
+    configs = import_file(corpus_path("configs", "ros2_elmo_gold.yaml")) + \
+        import_file(corpus_path("configs", "ros2_maxon_epos3.yaml"))
+    assert all(c.position is None for c in configs)
+    for fmt in ("ecmc", "eni", "json", "csv"):
+        back = import_bytes(export(configs, fmt).encode(), f"x.{fmt}", fmt)
+        assert [[_key(c) for c in s.commands] for s in back] == [[_key(c) for c in s.commands] for s in configs], fmt

@@ -3,7 +3,8 @@
 Writing: one ``ecmcConfigOrDie "Cfg.EcAddSdo(<slave>,<index>,<sub>,<value>,<size>)"`` per command of 1, 2
 or 4 bytes (ecmc's SDO value is a 32-bit integer); longer data and complete-access writes use
 ``Cfg.EcAddSdoBuffer`` / ``Cfg.EcAddSdoComplete`` with the data as hex bytes. The slave is its bus position,
-or the ``${ECMC_EC_SLAVE_NUM}`` macro when the position is unknown, as ecmccfg hardware scripts use it.
+or the ``${ECMC_EC_SLAVE_NUM}`` macro when the position of a single slave is unknown (as ecmccfg hardware
+scripts use it; several slaves of unknown position get their list index).
 PDO information becomes ``Cfg.EcAddEntryComplete`` lines.
 
 Reading: ``EcAddSdo``, ``EcWriteSdo`` (both become PS commands: ecmc sends them in PRE-OP),
@@ -40,8 +41,11 @@ _BUFFER_WRITES = {"EcAddSdoBuffer", "EcAddSdoComplete", "EcWriteSdoComplete"}
 _REPORTED = {"EcReadSdo", "EcVerifySdo", "EcAddSdoAsync"}
 
 
-def _slave_ref(c: SlaveConfig) -> str:
-    return str(c.position) if c.position is not None else SLAVE_MACRO
+def _slave_ref(c: SlaveConfig, i: int, many: bool) -> str:
+    """The bus position; for one slave of unknown position the ecmccfg macro, for several their list index."""
+    if c.position is not None:
+        return str(c.position)
+    return str(i) if many else SLAVE_MACRO
 
 
 def _command_line(slave: str, cmd: StartupCommand) -> str:
@@ -59,8 +63,8 @@ def _command_line(slave: str, cmd: StartupCommand) -> str:
 
 def export(configs: list[SlaveConfig]) -> str:
     out = ["#- ecmc startup SDOs written by ecattool"]
-    for c in configs:
-        slave = _slave_ref(c)
+    for i, c in enumerate(configs):
+        slave = _slave_ref(c, i, len(configs) > 1)
         out.append("")
         out.append(f"#- {one_line(c.label)}")
         if c.identity is not None:
