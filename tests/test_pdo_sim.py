@@ -53,7 +53,7 @@ CODES: dict[str, set[int]] = {
     "PDO010": {A.PDO_LENGTH_EXCEEDED, A.SUBINDEX_DOES_NOT_EXIST, A.VALUE_TOO_HIGH, A.LENGTH_MISMATCH,
                A.LENGTH_TOO_HIGH} | AL,
     "PDO011": {A.VALUE_TOO_HIGH, A.SUBINDEX_DOES_NOT_EXIST, A.LENGTH_MISMATCH, A.LENGTH_TOO_HIGH} | AL,
-    "PDO012": {A.NOT_MAPPABLE, A.GENERAL_PARAMETER_INCOMPATIBILITY},
+    "PDO012": {A.NOT_MAPPABLE, A.GENERAL_PARAMETER_INCOMPATIBILITY} | AL,
     "PDO013": {A.NOT_MAPPABLE, A.OBJECT_DOES_NOT_EXIST} | AL,
     "PDO014": {A.READ_ONLY},
     "PDO018": AL,
@@ -63,9 +63,8 @@ CODES: dict[str, set[int]] = {
     "PDO027": AL,
 }
 NOT_WITNESSED = {"PDO015", "PDO016", "PDO017", "PDO025"}
-#: rules the simulator does not implement yet although the manual says the drive enforces them (reported to
-#: the lead; ``test_simulator_*`` below are strict xfails that turn green when the simulator catches up)
-SIM_GAPS = {"PDO012"}
+#: rules the simulator does not implement although the manual says the drive enforces them (none left)
+SIM_GAPS: set[str] = set()
 
 
 @dataclass
@@ -257,11 +256,11 @@ def test_default_mappings_reach_op_with_the_laid_out_size(name: str) -> None:
     assert not v.refused and v.sizes == (lay.outputs.byte_size, lay.inputs.byte_size)
 
 
-@pytest.mark.xfail(strict=True, reason="simulator gap: Control Techniques priority rule (SM-EtherCAT 6.1.1) "
-                   "not enforced; reported to the lead")
 def test_simulator_enforces_ct_priority_rule() -> None:
     t = target("controltechniques")
     m = Mapping.from_text(rx="0x1600=controlword,0x2046:01/32;0x1605", device=t.device)
     assert [f.rule for f in check(t.device, m, rules=t.rules)] == ["PDO012"]
     v = simulate(t, m)
     assert v.refused and v.code in CODES["PDO012"], v
+    second = Mapping.from_text(rx="0x1605;0x1600=controlword,0x2046:01/32", device=t.device)
+    assert check(t.device, second, rules=t.rules) == [] and not simulate(t, second).refused

@@ -214,6 +214,11 @@ class Mapping:
 # --- parsing ---------------------------------------------------------------------------------------
 
 
+def entry_keys(entries: Iterable[PdoEntry]) -> list[tuple[int, int, int]]:
+    """(index, sub-index, bits) of each entry: what a drive compares, names and locations aside."""
+    return [(e.index, e.subindex, e.bit_len) for e in entries]
+
+
 def entry_text(e: PdoEntry) -> str:
     """The compact text of an entry: ``0x6040:00/16``, gaps as ``gap/8``."""
     if e.is_gap:

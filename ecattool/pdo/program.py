@@ -21,7 +21,7 @@ from collections.abc import Iterable
 
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device, Direction
-from ecattool.pdo.model import MappedPdo, Mapping, default_mapping
+from ecattool.pdo.model import MappedPdo, Mapping, default_mapping, entry_keys
 from ecattool.profiles.rules import FamilyRules
 from ecattool.startup.model import StartupCommand, StartupList
 
@@ -51,10 +51,6 @@ def resolve_rules(device: Device, rules: FamilyRules | None) -> FamilyRules:
     except ImportError:
         return FamilyRules("generic")
     return rules_for(device)
-
-
-def _key(pdo: MappedPdo) -> list[tuple[int, int, int]]:
-    return [(e.index, e.subindex, e.bit_len) for e in pdo.entries]
 
 
 def program(
@@ -99,7 +95,7 @@ def program(
             return True
         own = dev_pdo.entries if dev_pdo is not None else next(
             (p.entries for p in (*power_on.rx, *power_on.tx) if p.index == pdo.index), [])
-        return _key(pdo) != [(e.index, e.subindex, e.bit_len) for e in own]
+        return entry_keys(pdo.entries) != entry_keys(own)
 
     # phase 1: disable the assignments
     if not count_first:
@@ -116,7 +112,7 @@ def program(
             if not pdo.explicit or pdo.index in done or not rewritable(pdo):
                 continue
             base = base_pdos.get(pdo.index)
-            if base is not None and _key(base) == _key(pdo):
+            if base is not None and entry_keys(base.entries) == entry_keys(pdo.entries):
                 continue
             done.add(pdo.index)
             out.commands.extend(_mapping_commands(pdo, transition, ca, count_first))
