@@ -348,3 +348,39 @@ def test_profile_velocity_ramps_with_acceleration():
     d.step(100)
     assert d.internal_velocity == 655360 and not r(d, 0x6041) & 0x4000
     assert any(e.kind == "cia402" and e.data["state"] == "OPERATION_ENABLED" for e in d.events)
+
+
+_OPS = st.one_of(
+    st.tuples(st.just("up"), st.integers(0, 0xFFFF), st.integers(0, 255), st.booleans()),
+    st.tuples(st.just("down"), st.sampled_from([0x1600, 0x1603, 0x1A00, 0x1C12, 0x1C13, 0x6040, 0x6060, 0x6081,
+                                                0x2064, 0x2065, 0x2069, 0x2091, 0x60C2, 0x6093]),
+              st.integers(0, 9), st.binary(max_size=8), st.booleans()),
+    st.tuples(st.just("state"), st.sampled_from(list(EcState))),
+    st.tuples(st.just("cycle"), st.integers(1, 5)),
+)
+
+
+@given(st.lists(_OPS, max_size=30), st.sampled_from(["hdt", "controltechniques", "technosoft-ipos"]))
+def test_random_operations_only_raise_ecattool_errors(ops, family):
+    d = _fresh(family)
+    for op in ops:
+        try:
+            if op[0] == "up":
+                d.sdo_upload(op[1], op[2], complete_access=op[3])
+            elif op[0] == "down":
+                d.sdo_download(op[1], op[2], op[3], complete_access=op[4])
+            elif op[0] == "state":
+                d.request_state(op[1])
+            elif d.state() in (SAFE, OP):
+                d.exchange(bytes(d.process_image_sizes()[0]))
+                d.step(op[1])
+        except EcatToolError:
+            pass
+    assert isinstance(d.state(), EcState)
+
+
+def test_hdt_oracle_19_603f_is_low_word_of_1003_1():
+    d = at("hdt", OP)
+    d.inject_fault(0x8611)
+    assert r(d, 0x1003, 1) & 0xFFFF == r(d, 0x603F) == 0x8611
+    assert r(d, 0x1003, 0) == 1

@@ -374,10 +374,20 @@ class Drive:
             register |= 0x01
             register |= {0x2: 0x02, 0x3: 0x04, 0x4: 0x08, 0x8: 0x10}.get(code >> 12, 0)
             self._put(0x1001, 0, register)
+        if code and (0x1003, 1) in self._entries:
+            self._push_error_history(code)
         m = Emergency(code, register, bytes(data))
         self.emergencies.append(m)
         self._log("emcy", code=code, register=register, data=bytes(data).hex())
         return m
+
+    def _push_error_history(self, code: int) -> None:
+        """1003h: newest error in sub-index 1, older ones shifted down, sub-index 0 = count (CiA-301)."""
+        subs = sorted(s for (i, s) in self._entries if i == 0x1003 and s > 0)
+        for s in reversed(subs[1:]):
+            self._store[(0x1003, s)] = self._store[(0x1003, s - 1)]
+        self._put(0x1003, 1, code)
+        self._put(0x1003, 0, min(len(subs), (self._read_int(0x1003, 0) or 0) + 1))
 
     # ------------------------------------------------------------------------------------------
     # SlaveTarget
