@@ -218,3 +218,16 @@ def test_unknown_content_is_a_clear_error():
     with pytest.raises(InputError) as err:
         import_bytes(b"just: text\n", "x.yaml")
     assert "ethercat_driver_ros2" in str(err.value)
+
+
+def test_ecmc_tolerated_reset_write_expects_no_reply():
+    (c,) = import_file(corpus_path("configs", "ecmc_ecmciPOS4808-EEPROM-BaseConfig-StepperOpenLoopCSV.cmd"))
+    reset = c.commands[-1]
+    assert reset.index == 0x2080 and reset.expect_reply is False
+    assert all(x.expect_reply for x in c.commands[:-1])
+    from ecattool.startup import export
+
+    text = export(c, "ecmc")
+    assert 'ecmcConfig "Cfg.EcAddSdo(${ECMC_EC_SLAVE_NUM},0x2080,0x0,0x1,2)"' in text
+    (back,) = import_bytes(text.encode(), "again.cmd")
+    assert [x.expect_reply for x in back.commands] == [x.expect_reply for x in c.commands]

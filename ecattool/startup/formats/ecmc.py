@@ -12,6 +12,8 @@ Reading: ``EcAddSdo``, ``EcWriteSdo`` (both become PS commands: ecmc sends them 
 macros (``$(NAME)``/``${NAME}``, ``${NAME=default}``). An unresolved slave macro such as
 ``${ECMC_EC_SLAVE_NUM}`` names the slave; an unresolved macro in an index or value is an error with the line.
 Reads and verifies (``EcReadSdo``, ``EcVerifySdo``) and included scripts are reported, not followed.
+A write through ``ecmcConfig`` (not ``ecmcConfigOrDie``, so its failure is tolerated, as ecmccfg does for the
+Technosoft 2080h reset that sends no reply) gets ``expect_reply=False``, and is written back that way.
 A comment line right before a command becomes its comment.
 """
 
@@ -49,6 +51,12 @@ def _slave_ref(c: SlaveConfig, i: int, many: bool) -> str:
 
 
 def _command_line(slave: str, cmd: StartupCommand) -> str:
+    """The ecmc call; ``ecmcConfig`` instead of ``ecmcConfigOrDie`` for writes the drive answers by resetting."""
+    line = _call(slave, cmd)
+    return line if cmd.expect_reply else line.replace("ecmcConfigOrDie ", "ecmcConfig ", 1)
+
+
+def _call(slave: str, cmd: StartupCommand) -> str:
     size = len(cmd.data)
     if cmd.complete_access:
         if cmd.subindex != 0:
@@ -104,6 +112,7 @@ class _Reader:
         self.slaves: dict[str, SlaveConfig] = {}
         self.pending_comment = ""
         self.pdos: dict[tuple[str, int], Pdo] = {}
+        self.tolerant = False  # `ecmcConfig` (not OrDie): a failure is tolerated, e.g. a reset with no reply
 
     def expand(self, text: str) -> str:
         def repl(m: re.Match[str]) -> str:
@@ -155,7 +164,8 @@ class _Reader:
             data = encode_sized(value, size, loc)
             cfg.startup.commands.append(StartupCommand(
                 "PS", self.number(args[1], loc, "index"), self.number(args[2], loc, "subindex"), data,
-                comment=self.pending_comment, type_name=unsigned_type(size), value=value, source=loc))
+                comment=self.pending_comment, type_name=unsigned_type(size), value=value,
+                expect_reply=not self.tolerant, source=loc))
         elif func in _BUFFER_WRITES:
             complete = "Complete" in func
             if len(args) != (4 if complete else 5):
@@ -207,6 +217,7 @@ class _Reader:
             return
         m = _CALL.search(s)
         if m:
+            self.tolerant = not s.startswith("ecmcConfigOrDie")
             self.call(m.group(1), _split_args(self.expand(m.group(2))), loc)
             return
         if "SCRIPTEXEC" in s or s.startswith("<"):
