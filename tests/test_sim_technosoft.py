@@ -443,3 +443,13 @@ def test_foe_corpus_setup_image_checksum():
     for start, words in parse_foe_setup(data):
         w(d, 0x2069, 0, ((start + len(words) - 1) << 16) | start, 4)
         assert r(d, 0x206A) == sum(words) & 0xFFFF
+
+
+def test_oracle_80_value_range_and_write_only():
+    d = drive()
+    aborts(0x06090032, w, d, 0x2006, 0, 0, 2)  # 2006h range 1..10
+    aborts(0x06090031, w, d, 0x2006, 0, 11, 2)
+    w(d, 0x2006, 0, 10, 2)
+    aborts(0x06010001, d.sdo_upload, 0x2065, 0)  # write-only
+    aborts(0x06010002, w, d, 0x2066, 0, 0, 4)  # read-only
+    aborts(0x06070013, d.sdo_download, 0x2064, 0, b"\x08\x00")
