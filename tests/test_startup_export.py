@@ -440,3 +440,21 @@ def test_several_slaves_of_unknown_position_stay_apart():
     for fmt in ("ecmc", "eni", "json", "csv"):
         back = import_bytes(export(configs, fmt).encode(), f"x.{fmt}", fmt)
         assert [[_key(c) for c in s.commands] for s in back] == [[_key(c) for c in s.commands] for s in configs], fmt
+
+
+def test_pysoem_tolerates_no_reply_writes():
+    cfg = SlaveConfig(StartupList([StartupCommand("PS", 0x2080, 0, b"\x01\x00", expect_reply=False, comment="reset"),
+                                   StartupCommand("PS", 0x6060, 0, b"\x08")]), position=0)
+
+    class Resetting(FakeSlave):
+        def sdo_write(self, index, subindex, data, ca=False):
+            super().sdo_write(index, subindex, data, ca)
+            if index == 0x2080:
+                raise TimeoutError("no reply")
+
+    namespace: dict = {}
+    exec(compile(export(cfg, "pysoem"), "m.py", "exec"), namespace)
+    slave = Resetting(0, 0)
+    namespace["install"](FakeMaster([slave]))
+    slave.config_func(0)
+    assert [w[0] for w in slave.writes] == [0x2080, 0x6060]

@@ -42,7 +42,13 @@ def export(configs: list[SlaveConfig]) -> str:
                 note = f"{note} [transition {cmd.transition}; pysoem writes it in PRE-OP]".strip()
             ca = ", True" if cmd.complete_access else ""
             call = f"slave.sdo_write(0x{cmd.index:04X}, 0x{cmd.subindex:02X}, bytes.fromhex({cmd.data.hex()!r}){ca})"
-            out.append(f"    {call}" + (f"  # {note}" if note else ""))
+            if cmd.expect_reply:
+                out.append(f"    {call}" + (f"  # {note}" if note else ""))
+            else:
+                out.append("    try:")
+                out.append(f"        {call}" + (f"  # {note}" if note else ""))
+                out.append("    except Exception:  # the drive answers this write by resetting, not with a reply")
+                out.append("        pass")
         for s in c.soe_commands:
             out.append(f"    # SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()}: not sent by pysoem")
         out.append("")
