@@ -384,3 +384,26 @@ def test_hdt_oracle_19_603f_is_low_word_of_1003_1():
     d.inject_fault(0x8611)
     assert r(d, 0x1003, 1) & 0xFFFF == r(d, 0x603F) == 0x8611
     assert r(d, 0x1003, 0) == 1
+
+
+def _products():
+    from ecattool import profiles
+
+    out = []
+    for p in profiles.list_profiles():
+        for prod in p.products:
+            for rev in (prod.revisions or (None,)):
+                out.append((p.name, prod.name, rev))
+    return out
+
+
+@pytest.mark.parametrize("profile,product,revision", _products())
+def test_every_model_and_revision_reaches_op_after_reset(profile, product, revision):
+    d = Drive.from_profile(profile, product=product, revision=revision)
+    for s in (PRE, SAFE, OP):
+        d.request_state(s)
+    outputs, inputs = d.process_image_sizes()
+    assert outputs > 0 and inputs > 0
+    assert len(d.exchange(bytes(outputs))) == inputs
+    d.sdo_download(0x6040, 0, b"\x06\x00")
+    assert r(d, 0x6041) & 0x6F == 0x21
