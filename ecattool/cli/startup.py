@@ -52,15 +52,31 @@ def _write(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, 
 Examples:
   ecattool startup export --from drive.json --format twincat
   ecattool startup export --from ecmciPOSXXXX.cmd --format igh -o ipos.c
-  ecattool startup export --from test_eni.xml --format pysoem -o startup_pysoem.py""")
-@click.option("--from", "source", required=True, type=click.Path(exists=True, dir_okay=False, allow_dash=True),
+  ecattool startup export --from test_eni.xml --format pysoem -o startup_pysoem.py
+  ecattool startup export --project samples/technosoft_ipos/project.yaml --format eni -o x.xml""")
+@click.option("--from", "source", type=click.Path(exists=True, dir_okay=False, allow_dash=True),
               help="Startup configuration to read (ecattool JSON or any importable format, detected from "
                    "content; '-' = stdin).")
+@click.option("--project", "project", type=click.Path(exists=True, dir_okay=False),
+              help="An ecattool project file instead of --from: every drive's startup list, PDOs and DC "
+                   "(refused when the project has lint errors).")
 @click.option("--from-format", type=click.Choice(_FORMAT_NAMES), help="Format of --from (default: detect).")
 @click.option("--format", "fmt", required=True, type=click.Choice(_FORMAT_NAMES[:-1]), help="Format to write.")
 @output_option()
-def export_cmd(source: str, from_format: str | None, fmt: str, output: str | None) -> None:
-    """Write the startup list of FILE in another master's format (stdout unless -o)."""
+def export_cmd(source: str | None, project: str | None, from_format: str | None, fmt: str,
+               output: str | None) -> None:
+    """Write the startup list of FILE (--from) or of a project (--project) in a master's format (stdout
+    unless -o)."""
+    if (source is None) == (project is None):
+        raise click.UsageError("give exactly one of --from FILE or --project PROJECT")
+    if project is not None:
+        if from_format is not None:
+            raise click.UsageError("--from-format belongs to --from, not --project")
+        from ecattool.project.export import slave_configs
+
+        _write(slave_configs(project), fmt, output, (project,))
+        return
+    assert source is not None
     _write(_read(source, from_format), fmt, output, (source,))
 
 
