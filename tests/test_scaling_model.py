@@ -57,7 +57,7 @@ def test_hollow_shaft_with_gear_is_warned() -> None:
 
 @pytest.mark.parametrize("firmware,expected", [
     ("F515K", "cia402-2"), ("F515I", "obsolete"), ("F515F", "obsolete"), ("FA00C", "cia402-2"), ("F510A", "obsolete"),
-    ("0x3531354B", "cia402-2"), ("0x35313549", "obsolete"), (None, "cia402-2"),
+    ("0x3531354B", "cia402-2"), ("0x35313549", "obsolete"), ("892417353", "obsolete"), (None, "cia402-2"),
 ])
 def test_technosoft_factor_set_by_firmware(firmware: str | None, expected: str) -> None:
     assert technosoft_factor_set(firmware) == expected
@@ -131,3 +131,24 @@ def test_generic_family_on_a_real_esi_copley_xe2() -> None:
     for c in g.startup():
         entry = device.dictionary.entry(c.index, c.subindex)
         assert entry is not None and len(c.data) * 8 == entry.bit_size
+
+
+def test_read_values_from_the_simulator_hdt_defaults() -> None:
+    """HDT oracle 32: the drive's defaults read back mean counts (65536/rev), rpm and rpm/s."""
+    from ecattool.od.model import EcState
+    from ecattool.scaling.explain import read_values
+    from ecattool.sim import Drive
+
+    d = Drive.from_profile("hdt")
+    d.request_state(EcState.PREOP)
+    values = read_values(d)
+    assert (0x6093, 1) in values and (0x210F, 1) not in values
+    e = explain(values, "hdt")
+    assert e.data["counts per position unit"] == 1
+    assert e.data["counts/s per velocity unit"] == Fraction(65536, 60)
+    assert any("1 rpm" in m or "= 1 motor rpm" in m for _, m in e.lines)
+
+
+def test_hdt_vl_dimension_factor_is_int32() -> None:
+    g = compute(Axis(Feedback.encoder(4096), position="rev", velocity="rev/s"), "hdt", vl=True)
+    assert g.pair(0x604C) == (60, 1) and g.get(0x604C, 1).type_name == "DINT"

@@ -12,7 +12,7 @@ Public API::
 
 from ecattool.scaling.compute import FAMILIES, compute, resolve_family, technosoft_factor_set
 from ecattool.scaling.exact import PI, Approximation, Exact, approximate
-from ecattool.scaling.explain import Explanation, explain
+from ecattool.scaling.explain import Explanation, explain, read_values
 from ecattool.scaling.group import FactorGroup, FactorObject
 from ecattool.scaling.model import Axis, Feedback, Gear, Transmission, axis_from_dict
 from ecattool.scaling.spec import load_spec
@@ -23,6 +23,6 @@ Mechanics = Axis
 __all__ = [
     "FAMILIES", "PI", "Approximation", "Axis", "Exact", "Explanation", "FactorGroup", "FactorObject", "Feedback",
     "Gear", "Mechanics", "Transmission", "Unit", "approximate", "axis_from_dict", "compute", "decode_si_unit",
-    "dimension_notation", "encode_si_unit", "explain", "load_spec", "parse_unit", "resolve_family",
+    "dimension_notation", "encode_si_unit", "explain", "load_spec", "parse_unit", "read_values", "resolve_family",
     "technosoft_factor_set",
 ]

@@ -43,6 +43,8 @@ def technosoft_factor_set(firmware: str | None) -> str:
     if not firmware:
         return "cia402-2"
     fw = firmware.strip().upper()
+    if fw.isdigit() and int(fw) > 0xFFFF:  # an ESI revision number in decimal (892417353 = "515I")
+        fw = f"0X{int(fw):08X}"
     if fw.startswith("0X"):  # revision number = firmware name in ASCII, MSB first
         try:
             fw = bytes.fromhex(fw[2:].rjust(8, "0")).decode("ascii")

@@ -209,3 +209,32 @@ def _technosoft(e: Explanation, r: _Reader, T: Fraction, unit_name: dict[int, st
                 e.lines.append((label, f"dimension {dim}, notation {notation}: {describe_dimension(dim, notation)}; "
                                        f"0x{factor:04X} {'active' if active else 'INACTIVE (indices 0)'}"))
     return out
+
+
+#: every object explain() understands (index, sub-indices)
+SCALING_OBJECTS: tuple[tuple[int, tuple[int, ...]], ...] = (
+    (0x608F, (1, 2)), (0x6091, (1, 2)), (0x6092, (1, 2)), (0x6093, (1, 2)), (0x6094, (1, 2)), (0x6096, (1, 2)),
+    (0x6097, (1, 2)), (0x210F, (1, 2)), (0x60A2, (1, 2)), (0x2110, (1, 2)), (0x2071, (1, 2)), (0x604B, (1, 2)),
+    (0x604C, (1, 2)), (0x60A8, (0,)), (0x60A9, (0,)), (0x60AA, (0,)), (0x60AB, (0,)), (0x607E, (0,)),
+    (0x6089, (0,)), (0x608A, (0,)), (0x608B, (0,)), (0x608C, (0,)), (0x608D, (0,)), (0x608E, (0,)),
+    (0x206F, (0,)), (0x2070, (0,)),
+)
+_SIGNED = {0x604B, 0x604C, 0x6089, 0x608B, 0x608D, 0x206F}  # INT/DINT vl factors, INTEGER8 notation indices
+
+
+def read_values(slave: Any) -> Values:
+    """Read the scaling objects a drive has over SDO (any :class:`~ecattool.target.base.SlaveTarget`).
+
+    Objects the drive aborts on (absent, not readable) are skipped; the result feeds :func:`explain`.
+    """
+    from ecattool.errors import TargetError
+
+    values: Values = {}
+    for index, subs in SCALING_OBJECTS:
+        for sub in subs:
+            try:
+                data = slave.sdo_upload(index, sub)
+            except TargetError:
+                break
+            values[(index, sub)] = int.from_bytes(data, "little", signed=index in _SIGNED)
+    return values
