@@ -248,3 +248,17 @@ def test_structure_checks_each_rule():
 def test_materialize_counts_objects():
     esi = load(corpus_path("esi", "synapticon_Somanet_CiA402-single.xml"))
     assert materialize(esi) == 20
+
+
+def test_absurd_sizes_are_bounded():
+    datatypes = ("<DataType><Name>ARR</Name><BaseType>UDINT</BaseType><BitSize>64</BitSize>"
+                 "<ArrayInfo><LBound>1</LBound><Elements>99999999999999999999</Elements></ArrayInfo></DataType>"
+                 "<DataType><Name>REC</Name><BitSize>80</BitSize>"
+                 "<SubItem><SubIdx>0</SubIdx><Name>n</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs></SubItem>"
+                 "<SubItem><Name>Elements</Name><Type>ARR</Type><BitSize>64</BitSize><BitOffs>16</BitOffs></SubItem></DataType>")
+    objects = (obj("#x1600", "m", "REC", 80)
+               + obj("#x2000", "s", "STRING(99999999999)", 799999999992, "<Info><DefaultValue>abc</DefaultValue></Info>"))
+    esi = load_bytes(esi_doc(datatypes=datatypes, objects=objects), "big.xml")
+    od = esi.devices[0].dictionary
+    assert len(od.get(0x1600).entries) == 256 and od.entry(0x2000, 0).default is None
+    assert {w.rule for w in esi.warnings} == {"esi-array-size", "esi-default-size"}

@@ -25,6 +25,7 @@ _UINT_BY_BITS = {8: BY_CODE[0x05], 16: BY_CODE[0x06], 24: BY_CODE[0x16], 32: BY_
                  48: BY_CODE[0x19], 56: BY_CODE[0x1A], 64: BY_CODE[0x1B]}
 _BITS = {i: BY_CODE[0x30 + i - 1] for i in range(1, 9)}
 _DEFAULT_ACCESS = Access.parse("ro")
+_MAX_VALUE_BITS = 8 * 65536  # no CoE value is larger; guards encoders against absurd sizes in hostile files
 
 
 @dataclass(slots=True)
@@ -246,6 +247,9 @@ def _encode_value(entry: Entry, text: str | None, el: Any, ctx: Context) -> byte
     dt = entry.datatype
     if dt is None:
         return None
+    if max(dt.bits or 0, entry.bit_size) > _MAX_VALUE_BITS:
+        ctx.warn("esi-default-size", f"DefaultValue of a {entry.bit_size}-bit entry is not encoded (larger than 64 KiB)", el)
+        return None
     try:
         if dt.kind in (Kind.STRING, Kind.UNICODE):
             return dt.encode(text or "", entry.bit_size or None)
@@ -351,18 +355,38 @@ class DictionaryBuilder:
         expanded = False
         sub_items = list(t.element.iterchildren("SubItem"))
         for si in sub_items:
-            si_name = lc_text(si, "Name")
-            si_type = (si.findtext("Type") or "").strip()
+            si_name = si_type = ""
+            name_lc = False
+            sidx_t = bits_t = offs_t = flags_el = None
+            for c in si:
+                tag = c.tag
+                if tag == "Name":
+                    if not name_lc:
+                        si_name = (c.text or "").strip()
+                        lcid = c.get("LcId")
+                        name_lc = lcid is None or lcid.strip() == "1033"
+                elif tag == "Type":
+                    si_type = (c.text or "").strip()
+                elif tag == "SubIdx":
+                    sidx_t = c.text
+                elif tag == "BitSize":
+                    bits_t = c.text
+                elif tag == "BitOffs":
+                    offs_t = c.text
+                elif tag == "Flags" and flags_el is None:
+                    flags_el = c
             st = self.types.resolve(si_type, si)
-            sidx_t = si.findtext("SubIdx")
             sidx = ctx.number(sidx_t, si, "SubItem/SubIdx") if sidx_t is not None and sidx_t.strip() else None
-            bits = ctx.opt_number(si.findtext("BitSize"), si, "SubItem/BitSize")
-            offs = ctx.opt_number(si.findtext("BitOffs"), si, "SubItem/BitOffs") or 0
-            flags_el = si.find("Flags")
+            bits = ctx.opt_number(bits_t, si, "SubItem/BitSize")
+            offs = ctx.opt_number(offs_t, si, "SubItem/BitOffs") or 0
             access, mapping, backup, setting, category = _flags(flags_el, ctx) if flags_el is not None else obj_flags
             if st.kind == "array" and sidx is None:
                 elem = self.types.resolve(st.element_type, si)
                 n = st.elements
+                if n < 0 or max(st.lbound, next_sub) + n > 256:
+                    ctx.warn("esi-array-size", f"array {st.name!r} has {n} elements from {st.lbound}; sub-indices end at 255",
+                             si)
+                    n = max(0, 256 - max(st.lbound, next_sub))
                 total = bits if bits is not None else st.bits
                 ebits = elem.bits if elem.bits is not None else ((total // n) if total and n else 0)
                 edt = elem.datatype if elem.kind == "base" else (_blob(elem.name, ebits) if elem.kind != "unknown" else None)
