@@ -1,0 +1,50 @@
+"""Helpers shared by the project, lint and commission tests (samples, temporary projects, the CLI)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+from typing import Any
+
+from tests.conftest import ROOT
+
+SAMPLES = ("technosoft_ipos", "hdt", "controltechniques", "generic_esi")
+DATA = ROOT / "tests" / "data" / "projects"
+
+
+def sample(name: str) -> Path:
+    p = ROOT / "samples" / name / "project.yaml"
+    assert p.exists(), f"sample project missing: {p}"
+    return p
+
+
+def copy_sample(name: str, tmp_path: Path) -> Path:
+    """A writable copy of a sample directory (project, ESI, .sw); returns the project file."""
+    dst = tmp_path / name
+    shutil.copytree(ROOT / "samples" / name, dst)
+    return dst / "project.yaml"
+
+
+def write_project(tmp_path: Path, text: str, name: str = "project.yaml") -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def run(capsys: Any, *args: str) -> tuple[int, str, str]:
+    """Run ``ecattool ARGS`` through the real entry point; returns (exit code, stdout, stderr)."""
+    from ecattool.cli import main
+
+    try:
+        main(list(args))
+        code = 0
+    except SystemExit as exc:
+        code = int(exc.code or 0)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def run_json(capsys: Any, *args: str) -> tuple[int, Any]:
+    code, out, _ = run(capsys, *args)
+    return code, json.loads(out)
