@@ -134,3 +134,14 @@ def test_usage_error_exit_2(capsys) -> None:
 def test_help_has_examples(capsys, cmd: str) -> None:
     code, out, _ = run(capsys, "scale", cmd, "--help")
     assert code == 0 and "Examples:" in out and f"ecattool scale {cmd}" in out
+
+
+def test_explain_reads_the_simulated_drive(capsys) -> None:
+    code, out, _ = run(capsys, "scale", "explain", "--family", "hdt", "--target", "sim", "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["data"]["counts/s per velocity unit"]["exact"] == "16384/15"  # HDT default: rpm
+    code, out, _ = run(capsys, "scale", "explain", "--family", "technosoft-ipos", "--target", "sim", "--json")
+    assert code == 0 and json.loads(out)["findings"] == []  # defaults (IU) are not "inconsistent"
+    code, _, _ = run(capsys, "scale", "explain", "--target", "nowhere")
+    assert code == 2

@@ -248,17 +248,21 @@ Examples:
   ecattool scale explain --family technosoft-ipos 6093:01=4294967295 6093:02=13493038
   ecattool scale explain --family hdt 6093:01=65536 6093:02=360 6094:01=65536 6094:02=60
   ecattool scale explain --family controltechniques 608F:01=4096 6091:01=3 6092:01=10 604C:01=60
-  ecattool scale explain --family technosoft-ipos --from drive_startup.xml --json""")
+  ecattool scale explain --family technosoft-ipos --from drive_startup.xml --json
+  ecattool scale explain --family hdt --target sim
+  ecattool scale explain --family technosoft-ipos --target pysoem:eth0 --slave 2""")
 @click.argument("assignments", nargs=-1)
 @click.option("--family", type=click.Choice(_FAMILIES), default="technosoft-ipos", show_default=True)
 @click.option("--from", "source", type=click.Path(exists=True, dir_okay=False),
               help="Read values from a startup file (any format), a `scale compute --json` file or a YAML mapping.")
+@click.option("--target", help="Read the values from a drive: 'sim' (the family's simulated drive) or 'pysoem:IFACE'.")
+@click.option("--slave", type=int, default=0, show_default=True, help="Bus position of the drive (with --target).")
 @click.option("--firmware", help="Technosoft firmware (F515I → obsolete factor set).")
 @click.option("--slow-loop", default="1ms", show_default=True, help="Technosoft slow-loop period.")
 @click.option("--counts-per-rev", help="Increments per motor revolution, to express velocities in rpm.")
 @json_option
-def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, firmware: str | None, slow_loop: str,
-                counts_per_rev: str | None, as_json: bool) -> None:
+def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, target: str | None, slave: int,
+                firmware: str | None, slow_loop: str, counts_per_rev: str | None, as_json: bool) -> None:
     """What one user unit is in counts, and what velocity and acceleration units mean, from object values."""
     from fractions import Fraction
 
@@ -268,6 +272,10 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, f
     from ecattool.scaling.units import time_seconds
 
     values = _values_from_file(source) if source else {}
+    if target:
+        from ecattool.scaling.explain import read_values
+
+        values.update(read_values(_target_slave(target, family, slave, firmware)))
     for a in assignments:
         if "=" not in a:
             raise click.BadParameter(f"{a!r}: write INDEX:SUB=VALUE, e.g. 6093:01=2000", param_hint="ASSIGNMENTS")
@@ -287,6 +295,28 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, f
     con.print(t)
     for f in e.findings:
         con.print(f"{f.severity.value}: {f.message} [{f.rule}]")
+
+
+def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> Any:
+    from ecattool.errors import InputError
+
+    if spec == "sim":
+        from ecattool.od.model import EcState
+        from ecattool.sim import Drive
+
+        if family == "generic":
+            raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
+        drive = Drive.from_profile(family, revision=firmware) if firmware else Drive.from_profile(family)
+        drive.request_state(EcState.PREOP)
+        return drive
+    if spec.startswith("pysoem:"):
+        from ecattool.target.pysoem import PysoemTarget
+
+        slaves = PysoemTarget(spec.split(":", 1)[1]).slaves()
+        if not 0 <= slave < len(slaves):
+            raise InputError(f"--slave {slave}: the bus has {len(slaves)} slaves")
+        return slaves[slave]
+    raise click.BadParameter("use 'sim' or 'pysoem:<interface>'", param_hint="--target")
 
 
 @scale.command("si", epilog="""\b

@@ -61,8 +61,8 @@ class _Reader:
 
 
 def _consistency(e: Explanation, what: str, stored: Fraction | None, expected: Fraction | None, loc: Location | None) -> None:
-    if stored is None or expected is None or expected == 0:
-        return
+    if stored is None or expected is None or expected == 0 or stored == 1:
+        return  # 1/1 is the drive's default: internal units, the informative objects are not in use
     ppm = (stored - expected) / expected * 1_000_000
     e.data[f"{what} mismatch [ppm]"] = ppm
     if abs(ppm) > 1:
@@ -113,7 +113,7 @@ def explain(values: Values, family: str = "technosoft-ipos", *, slow_loop: Fract
         _consistency(e, "6093h vs 608Fh x 6091h / 6092h", pf, res * gear / feed, location)
     unit_name = {0: "position unit", 1: "velocity unit", 2: "acceleration unit", 3: "jerk unit"}
     for i, index in enumerate((0x60A8, 0x60A9, 0x60AA, 0x60AB)):
-        if (index, 0) in values:
+        if values.get((index, 0)):
             unit_name[i] = decode_si_unit(values[(index, 0)])
             e.data[f"0x{index:04X}"] = unit_name[i]
     if pf is not None:
@@ -158,7 +158,8 @@ def explain(values: Values, family: str = "technosoft-ipos", *, slow_loop: Fract
     if fam == "technosoft-ipos":
         used = (0x6093, 0x6094, 0x6097, 0x2071) if fs == "obsolete" else (0x6093, 0x6094, 0x210F, 0x2110)
         for index in used:
-            if (index, 1) in values and max(values[(index, 1)], values.get((index, 2), 1)) < 0x10000:
+            num, den = values.get((index, 1)), values.get((index, 2), 1)
+            if num is not None and num != den and max(num, den) < 0x10000:
                 e.findings.append(Finding("scaling.small-pair", Severity.WARNING,
                                           f"0x{index:04X} = {values[(index, 1)]}/{values.get((index, 2), 1)}: Technosoft "
                                           "computes small pairs with round-off (§5.1.10.1); write e.g. "
