@@ -150,3 +150,17 @@ def test_technosoft_random_screws_on_the_simulator(pitch_um: int, counts: int, m
     a = group.get(0x6093, 1).approximation
     assert got - exact == a.error
     assert abs(got - exact) <= a.bound
+
+
+@pytest.mark.parametrize("name,axis,cpu", AXES, ids=[a[0] for a in AXES])
+def test_generic_round_trip_on_a_real_esi(name: str, axis: Axis, cpu: Fraction) -> None:
+    """Copley XE2 (corpus ESI) simulated as a generic CiA-402 drive: 608Fh x 6091h / 6092h per user unit."""
+    from ecattool.esi import load
+    from tests.conftest import corpus_path
+
+    device = load(corpus_path("esi", "copley_XE2_4.60.xml")).devices[0]
+    d = Drive.from_device(device)
+    d.request_state(EcState.PREOP)
+    _apply(d, compute(axis, "generic", device=device))
+    assert d.units.position_to_internal(10) == 10 * cpu
+    assert d.units.increments_per_second(d.units.velocity_to_internal(100)) == 100 * cpu
