@@ -73,6 +73,8 @@ def test_ethercatmodule_root_has_82_modules():
     esi = load(corpus_path("esi", "weidmueller_UR20_IO.xml"))
     assert esi.root == "EtherCATModule" and esi.devices == [] and len(esi.modules) == 82
     assert esi.vendor_id == 560
+    assert sum(len(m.dictionary) for m in esi.modules) == 470  # SOURCES.md: objects=470
+    assert sum(len(m.init_cmds) for m in esi.modules) == 164  # SOURCES.md: InitCmd=164
 
 
 def test_ethercatdict_root_gives_a_dictionary():
@@ -197,6 +199,7 @@ def test_copley_init_cmds_and_odd_hex():
     cmds = [c for m in esi.modules for c in m.init_cmds]
     assert cmds and cmds[0].transitions == ["PS"] and cmds[0].index == 0x6060 and cmds[0].depend_on_slot
     assert esi.vendor_id == 171
+    assert esi.devices[0].extra["ESC"] == "Reg0108=0 Reg0400=2498 Reg0410=1000 Reg0420=1000"  # kept, not dropped
 
 
 def test_soe_init_cmds_and_missing_dictionary_file():

@@ -38,6 +38,16 @@ from ecattool.od.model import ObjectDictionary, OdObject
 from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
 
 ROOTS = ("EtherCATInfo", "EtherCATModule", "EtherCATDict")
+_MODELLED = frozenset({"Type", "Name", "Profile"})
+
+
+def etree_text(el: Any) -> str:
+    """Compact text of a small element tree (child tag=text pairs) for ``Device.extra``."""
+    parts = []
+    for c in el.iter():
+        if c is not el and isinstance(c.tag, str) and (c.text or "").strip():
+            parts.append(f"{c.tag}={c.text.strip()}")
+    return " ".join(parts)[:500]
 _PROTOCOLS = ("AoE", "EoE", "CoE", "FoE", "SoE", "VoE")
 
 
@@ -566,6 +576,12 @@ class Reader:
                 dev.extra["HideType"] = (hidden + " " if hidden else "") + (child.get("RevisionNo") or child.get("ProductRevision") or "")
             elif tag == "Comment":
                 dev.extra.setdefault("Comment", lc_text(el, "Comment"))
+            elif isinstance(tag, str) and tag not in _MODELLED:
+                # kept, not dropped: attributes and text of elements the model has no field for (Su, ESC, …)
+                attrs = " ".join(f"{k}={v}" for k, v in child.attrib.items())
+                text = (child.text or "").strip()
+                note = " ".join(p for p in (attrs, text if len(child) == 0 else "") if p) or etree_text(child)
+                dev.extra[tag] = f"{dev.extra[tag]}; {note}" if tag in dev.extra else note
         dev.group_name = esi.groups.get(dev.group_type, "")
         if dev.slots and esi.modules:
             idents = {i for s in dev.slots for i in s.module_idents}
