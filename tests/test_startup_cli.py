@@ -6,19 +6,9 @@ import json
 
 import pytest
 
-from ecattool.cli import main
 from ecattool.startup import import_file
 from tests.conftest import corpus_path
-
-
-def run(capsys, *args: str) -> tuple[int, str, str]:
-    try:
-        main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    out, err = capsys.readouterr()
-    return code, out, err
+from tests.project_helpers import run
 
 
 def test_import_shows_commands_and_pdos(capsys):
