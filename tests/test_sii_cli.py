@@ -123,3 +123,8 @@ def test_diff(capsys) -> None:
 def test_help_has_an_example(capsys, cmd: str) -> None:
     code, out, _ = run(capsys, "sii", cmd, "--help")
     assert code == 0 and "ecattool sii " + cmd in out
+
+
+def test_swapped_arguments_name_the_order(capsys) -> None:
+    code, out, _ = run(capsys, "sii", "check", str(corpus_path("sii", "ni9144.bin")), str(corpus_path("sii", "ni9144.xml")))
+    assert code == 1 and "XML file (an ESI?)" in out and "ni9144.xml:1:" in out

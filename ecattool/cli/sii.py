@@ -132,7 +132,7 @@ def _select(esi_path: str, selector: str | None, image: Any = None, policy: str 
     return select(esi, selector, policy)
 
 
-@sii.command("check", epilog="""\b
+@sii.command("check", short_help="Check IMAGE, or IMAGE against an ESI device.", epilog="""\b
 Examples:
   ecattool sii check slave.bin                # CRC, size, category chain, strings, SMs, PDOs
   ecattool sii check slave.xml slave.bin      # also: does the image match the ESI device?

@@ -366,6 +366,9 @@ def load(path: str | Path, data: bytes | None = None) -> SiiImage:
 
     src = str(path)
     raw = data if data is not None else read_bytes(path, max_bytes=4 * MAX_IMAGE_BYTES)
+    if raw.lstrip(b"\xef\xbb\xbf \t\r\n")[:1] == b"<":
+        raise InputError("this is an XML file (an ESI?), not an SII image; `sii check` takes ESI first, then "
+                         "IMAGE", Location(src, 1))
     if is_intel_hex(raw):
         binary, locator = read_intel_hex(raw, src)
         return parse(binary, src, locator)
