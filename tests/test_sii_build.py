@@ -244,3 +244,33 @@ def test_check_against_reports_a_sync_manager_mismatch() -> None:
     img.sync_managers[1].start = 0x1200
     findings = check_against(dev, img)
     assert [(f.rule, f.data["field"]) for f in findings] == [("sii.esi.sm", "sm[1].start")]
+
+
+ESI_WITH_CATEGORIES = b"""<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x1234</Id><Name>V</Name></Vendor><Descriptions><Groups/><Devices>
+<Device Physics="YY"><Type ProductCode="#x7" RevisionNo="1">CAT</Type><Name>Cat device</Name>
+<Eeprom><ByteSize>512</ByteSize><ConfigData>0800</ConfigData>
+<Category><CatNo>#x0800</CatNo><Data>0102030405</Data></Category>
+<Category><CatNo>1</CatNo><DataString>abc</DataString></Category>
+<Category><CatNo>3</CatNo><DataUDINT>#x11223344</DataUDINT></Category>
+</Eeprom></Device></Devices></Descriptions></EtherCATInfo>"""
+
+
+def test_esi_eeprom_categories_end_to_end() -> None:
+    from ecattool.esi import load_bytes
+    from ecattool.sii import RawCategory, parse
+
+    dev = load_bytes(ESI_WITH_CATEGORIES, "cat.xml").devices[0]
+    img = parse(build(dev).to_bytes())
+    raws = [(c.type, c.data) for c in img.categories if isinstance(c, RawCategory)]
+    assert raws == [(0x0800, b"\x01\x02\x03\x04\x05\x00"), (1, b"abc\x00"), (3, b"\x44\x33\x22\x11")]
+    assert img.header.pdi_control == 0x0008 and img.header.size_word == 3 and img.crc_ok
+
+
+def test_esi_eeprom_data_end_to_end() -> None:
+    from ecattool.esi import load_bytes
+
+    raw = corpus_path("sii", "soes_linux_lan9252demo.bin").read_bytes()
+    xml = ESI_WITH_CATEGORIES.replace(b"<ByteSize>512</ByteSize>", b"<Data>" + raw.hex().encode() + b"</Data>")
+    dev = load_bytes(xml, "data.xml").devices[0]
+    assert build(dev).to_bytes() == raw
