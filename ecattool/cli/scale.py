@@ -115,12 +115,10 @@ def _render(group: Any) -> None:
     con = console()
     t = table(f"Factor group — {group.family} ({group.factor_set})", ["object", "name", "part", "value", "hex", "exact", "meaning"])
     for o in group.objects:
-        hexv = f"0x{o.value & 0xFFFFFFFF:08X}" if o.type_name in ("UDINT", "DINT") else f"0x{o.value & 0xFFFF:04X}" \
-            if o.type_name in ("UINT", "INT") else f"0x{o.value & 0xFF:02X}"
         a = o.approximation
         exact = "yes" if o.exact else f"≈ {float(a.ppm):+.3g} ppm" if a else "no"
         meaning = o.meaning + ("" if o.write else " [not written]")
-        t.add_row(o.address, o.name, o.part, str(o.value), hexv, exact, meaning)
+        t.add_row(o.address, o.name, o.part, str(o.value), o.hex, exact, meaning)
     con.print(t)
     s = table("Axis", ["quantity", "value"])
     for k, v in group.summary.items():

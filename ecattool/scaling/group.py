@@ -40,6 +40,12 @@ class FactorObject:
     def address(self) -> str:
         return f"0x{self.index:04X}:{self.subindex:02X}"
 
+    @property
+    def hex(self) -> str:
+        """The value as the drive stores it (two's complement for signed types), e.g. 0xFD for notation -3."""
+        bits = od_types.require(self.type_name).bits or 32
+        return f"0x{self.value & ((1 << bits) - 1):0{bits // 4}X}"
+
     def encode(self) -> bytes:
         dt = od_types.require(self.type_name)
         return dt.encode(self.value)
@@ -47,7 +53,7 @@ class FactorObject:
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {
             "index": f"0x{self.index:04X}", "subindex": self.subindex, "name": self.name, "part": self.part,
-            "value": self.value, "hex": f"0x{self.value & 0xFFFFFFFF:08X}" if self.value >= 0 else hex(self.value),
+            "value": self.value, "hex": self.hex,
             "type": self.type_name, "meaning": self.meaning, "exact": self.exact, "write": self.write,
         }
         a = self.approximation
