@@ -81,3 +81,17 @@ def test_copley_assigns_a_pdo_over_sdo_and_reaches_op():
     d.request_state(EcState.SAFEOP)
     d.request_state(EcState.OP)
     assert d.process_image_sizes()[0] == (rx.bit_size + 7) // 8
+
+
+def test_sim_target_from_raw_esi_devices():
+    """SimTarget.from_devices completes raw ESI devices (modules, 1C12h/1C13h) like Drive.from_esi."""
+    from ecattool import esi
+    from ecattool.target import SimTarget
+
+    devices = [esi.load_device(corpus_path("esi", "etg_ETG2001_ModulesSlots_CiA402.xml")),
+               esi.load_device(corpus_path("esi", "synapticon_Somanet_CiA402-single.xml"))]
+    t = SimTarget.from_devices(devices)
+    for slave in t.slaves():
+        for s in (EcState.PREOP, EcState.SAFEOP, EcState.OP):
+            slave.request_state(s)
+        assert slave.sdo_upload(0x1C12, 0) != b"\x00"

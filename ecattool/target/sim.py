@@ -19,10 +19,20 @@ class SimTarget:
 
     @classmethod
     def from_devices(cls, devices: Iterable[Device]) -> "SimTarget":
-        """One simulated drive per device (built-in profile devices or ESI devices), in bus order."""
-        from ecattool.sim import Drive
+        """One simulated drive per device (built-in profile devices or ESI devices), in bus order.
 
-        return cls([Drive.from_device(d) for d in devices])
+        ESI devices get their default modules plugged in and the communication objects their ESI leaves
+        out (``profiles.complete_generic``), as :meth:`Drive.from_esi` does."""
+        from ecattool.profiles import complete_generic, family_of
+        from ecattool.sim import Drive
+        from ecattool.sim.drive import expand_default_modules
+
+        drives = []
+        for d in devices:
+            if family_of(d) == "generic":
+                d = complete_generic(expand_default_modules(d))
+            drives.append(Drive.from_device(d))
+        return cls(drives)
 
     def slaves(self) -> list[SlaveTarget]:
         return list(self._drives)
