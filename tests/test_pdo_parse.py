@@ -174,3 +174,40 @@ def test_from_yaml_file_with_line_numbers(tmp_path) -> None:
     m = Mapping.from_data(doc.data, device=DEV, locations=doc.locations, source="map.yaml")
     assert m.rx[0].entries[1].location.line == 5
     assert (m.rx[0].entries[1].index, m.rx[0].entries[1].bit_len) == (0x6060, 8)
+
+
+_ENTRY_TEXTS = ["controlword", "0x607A:00/32", "0x60FF:00/32", "0x6060:00/8", "gap/8", "0x60FE:01/32", "0x5000:01/16",
+                "0x60400010", "statusword", "0x2000:00/1"]
+
+
+@st.composite
+def _mappings(draw: st.DrawFn) -> dict:
+    out: dict = {}
+    for d, pool in (("rx", [0x1600, 0x1601, 0x1605]), ("tx", [0x1A00, 0x1A01, 0x1A02])):
+        if draw(st.booleans()):
+            continue
+        pdos = []
+        for index in draw(st.lists(st.sampled_from(pool), max_size=3)):
+            if draw(st.booleans()):
+                pdos.append({"index": f"0x{index:04X}", "entries": draw(st.lists(st.sampled_from(_ENTRY_TEXTS),
+                                                                                 max_size=6))})
+            else:
+                pdos.append({"index": index})
+        out[d] = pdos
+    return out
+
+
+def _shape(m: Mapping) -> list:
+    return [(d, [(p.index, p.explicit, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in m.pdos(d)])
+            for d in Direction]
+
+
+@given(_mappings())
+def test_data_and_text_forms_roundtrip(data: dict) -> None:
+    m = Mapping.from_data(data, device=DEV)
+    assert m.given == {Direction(k) for k in data}
+    again = Mapping.from_data(m.to_data(), device=DEV)
+    assert _shape(again) == _shape(m) and again.given == m.given
+    text = {d: m.to_text(d) for d in m.given}
+    back = Mapping.from_text(rx=text.get(Direction.RX), tx=text.get(Direction.TX), device=DEV)
+    assert _shape(back) == _shape(m)

@@ -343,3 +343,27 @@ def test_hdt_eight_entries_per_pdo_oracle_14() -> None:
     dev = _profile("hdt")
     nine = Mapping.from_text(rx="0x1600=" + ",".join(["0x6060:00/8"] * 9), device=dev)
     assert "PDO010" in {f.rule for f in check(dev, nine)}
+
+
+# --- program <-> mapping_from_startup (encoder/decoder pair) -------------------------------------
+
+
+@given(st.lists(st.sampled_from(["0x1600=controlword,0x60FF:00/32", "0x1600=0x6060:00/8,gap/8", "0x1601",
+                                 "0x1601=0x60FE:01/32,0x60FE:02/32", "0x1600="]), max_size=2, unique=True),
+       st.lists(st.sampled_from(["0x1A00=statusword", "0x1A01", "0x1A02=0x6077:00/16,0x2000:00/1,gap/7"]),
+                max_size=3, unique=True),
+       st.booleans(), st.sampled_from(["standard", "count-first"]))
+def test_the_startup_list_installs_the_mapping(rx: list[str], tx: list[str], ca: bool, order: str) -> None:
+    from hypothesis import assume
+
+    from ecattool.pdo import mapping_from_startup
+
+    assume(len({p.split("=")[0] for p in rx}) == len(rx))  # a PDO assigned twice is PDO003, not a mapping
+    dev = make_device(complete_access=True)
+    m = Mapping.from_text(rx=";".join(rx), tx=";".join(tx), device=dev)
+    startup = program(dev, m, complete_access=ca, rules=GENERIC, order=order)
+    back = mapping_from_startup(startup, dev)
+    assert back.given == m.given
+    for d in Direction:
+        assert [(p.index, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in back.pdos(d)] == \
+               [(p.index, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in m.pdos(d)]

@@ -106,6 +106,22 @@ class Mapping:
     def to_json(self) -> dict[str, Any]:
         return {d.value: [p.to_json() for p in self.pdos(d)] for d in Direction}
 
+    def to_data(self) -> dict[str, Any]:
+        """The dict/YAML form :meth:`from_data` reads (given directions only; PDOs kept as they are have no
+        ``entries``)."""
+        return {
+            d.value: [{"index": f"0x{p.index:04X}", **({"entries": [entry_text(e) for e in p.entries]}
+                                                       if p.explicit else {})} for p in self.pdos(d)]
+            for d in Direction if d in self.given
+        }
+
+    def to_text(self, direction: Direction) -> str:
+        """The whole-mapping syntax of one direction (what ``--rx``/``--tx`` take)."""
+        return ";".join(
+            f"0x{p.index:04X}=" + ",".join(entry_text(e) for e in p.entries) if p.explicit else f"0x{p.index:04X}"
+            for p in self.pdos(direction)
+        )
+
     # --- constructors ----------------------------------------------------------------------------
     @classmethod
     def from_text(
