@@ -71,6 +71,11 @@ class Context:
 
     def hexbin(self, text: str | None, el: Any, what: str) -> bytes:
         """xs:hexBinary; an odd number of digits is read with a leading 0 and a warning."""
+        if text is not None and not len(text) & 1:
+            try:
+                return bytes.fromhex(text)
+            except ValueError:
+                pass
         s = "".join((text or "").split())
         if s[:2] in ("#x", "0x"):
             s = s[2:]
