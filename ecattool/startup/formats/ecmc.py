@@ -61,11 +61,11 @@ def _call(slave: str, cmd: StartupCommand) -> str:
     if cmd.complete_access:
         if cmd.subindex != 0:
             raise EncodeError(f"0x{cmd.index:04X}:{cmd.subindex:02X}: ecmc complete access starts at sub-index 0")
-        return f'ecmcConfigOrDie "Cfg.EcAddSdoComplete({slave},0x{cmd.index:04X},{cmd.data.hex(" ")},{size})"'
+        return f'ecmcConfigOrDie "Cfg.EcAddSdoComplete({slave},0x{cmd.index:04X},{cmd.data.hex(" ").upper()},{size})"'
     if size in (1, 2, 4):
         args = f"0x{cmd.index:04X},0x{cmd.subindex:X},0x{cmd.int_value:X},{size}"
         return f'ecmcConfigOrDie "Cfg.EcAddSdo({slave},{args})"'
-    args = f"0x{cmd.index:04X},0x{cmd.subindex:X},{cmd.data.hex(' ')},{size}"
+    args = f"0x{cmd.index:04X},0x{cmd.subindex:X},{cmd.data.hex(' ').upper()},{size}"
     return f'ecmcConfigOrDie "Cfg.EcAddSdoBuffer({slave},{args})"'
 
 
