@@ -152,3 +152,9 @@ def test_read_values_from_the_simulator_hdt_defaults() -> None:
 def test_hdt_vl_dimension_factor_is_int32() -> None:
     g = compute(Axis(Feedback.encoder(4096), position="rev", velocity="rev/s"), "hdt", vl=True)
     assert g.pair(0x604C) == (60, 1) and g.get(0x604C, 1).type_name == "DINT"
+
+
+def test_ct_negative_setpoint_allowed_and_no_polarity_object() -> None:
+    g = compute(Axis(Feedback.encoder(4096), reverse=True), "controltechniques", vl_setpoint=(-1, 1))
+    assert g.pair(0x604B) == (-1, 1) and g.get(0x604B, 1).hex == "0xFFFF"
+    assert g.get(0x607E, 0) is None and any(f.rule == "scaling.no-polarity" for f in g.findings)

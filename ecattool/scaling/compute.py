@@ -360,13 +360,16 @@ def _controltechniques(b: _Builder, ctx: _Ctx, vl: bool, setpoint: tuple[int, in
             err = (effective - ctx.pf.rational) / ctx.pf.rational * 1_000_000
             b.g.summary["position factor error [ppm]"] = float(err)
     if vl:
-        sp = Fraction(*setpoint)
-        if sp <= 0 or not all(-32768 <= v <= 32767 and v for v in setpoint):
+        if not all(-32768 <= v <= 32767 and v for v in setpoint):
             raise InputError(f"vl setpoint factor {setpoint[0]}/{setpoint[1]} must be a non-zero 16-bit ratio", b.loc)
         b.g.objects.append(_setpoint_object(0x604B, 1, setpoint[0]))
         b.g.objects.append(_setpoint_object(0x604B, 2, setpoint[1]))
         _vl_dimension(b, ctx, "INT", 0x7FFF)
     b.g.notes.append("SM-EtherCAT velocities other than vl use the same position constants (no 6094h/6096h)")
+    if ctx.axis.reverse:
+        b.g.findings.append(Finding("scaling.no-polarity", Severity.WARNING,
+                                    "SM-EtherCAT has no polarity object 607Eh: reverse the motor direction in the drive "
+                                    "(or use a negative vl setpoint factor 604Bh for vl mode)", b.loc))
 
 
 def _setpoint_object(index: int, sub: int, value: int) -> Any:
