@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ecattool.errors import EcatToolError
-from ecattool.esi.values import Context, child_text, lc_text
+from ecattool.esi.values import Context, lc_text
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import BY_CODE, DataType, Kind, lookup, parse_array_name
@@ -452,4 +452,4 @@ def build_dictionary(dict_el: Any, ctx: Context) -> ObjectDictionary:
     return DictionaryBuilder(dict_el, ctx).build()
 
 
-__all__ = ["TypeResolver", "ResolvedType", "DictionaryBuilder", "build_dictionary", "child_text"]
+__all__ = ["TypeResolver", "ResolvedType", "DictionaryBuilder", "build_dictionary"]

@@ -8,8 +8,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from lxml import etree
-
 from ecattool.errors import InputError, Location
 from ecattool.findings import Finding, Severity
 
@@ -99,15 +97,4 @@ def lc_text(parent: Any, tag: str) -> str:
     return (first.text or "").strip() if first is not None else ""
 
 
-def child_text(parent: Any, tag: str) -> str | None:
-    el = parent.find(tag)
-    if el is None:
-        return None
-    return el.text if el.text is not None else ""
-
-
-def is_element(el: Any) -> bool:
-    return isinstance(el.tag, str)
-
-
-__all__ = ["Context", "lc_text", "child_text", "is_element", "etree"]
+__all__ = ["Context", "lc_text"]
