@@ -262,3 +262,17 @@ def test_absurd_sizes_are_bounded():
     od = esi.devices[0].dictionary
     assert len(od.get(0x1600).entries) == 256 and od.entry(0x2000, 0).default is None
     assert {w.rule for w in esi.warnings} == {"esi-array-size", "esi-default-size"}
+
+
+def test_unreadable_referenced_files_are_warnings(tmp_path):
+    (tmp_path / "bad Dict.xml").write_bytes(b"<EtherCATDict><Dictionary>")
+    (tmp_path / "mods.xml").write_bytes(b"<NotModules/>")
+    dev = ('<Device><Type ProductCode="1" RevisionNo="1">D</Type>'
+           "<Profile><DictionaryFile>bad Dict.xml</DictionaryFile></Profile></Device>")
+    doc = esi_doc(devices=dev).replace(b'<EtherCATInfo Version="1.6">',
+                                       b'<EtherCATInfo Version="1.6"><InfoReference>mods.xml</InfoReference>')
+    path = tmp_path / "main.xml"
+    path.write_bytes(doc)
+    esi = load(path)
+    assert len(esi.devices[0].dictionary) == 0 and esi.modules == []
+    assert {w.rule for w in esi.warnings} == {"esi-inforeference-bad", "esi-dictionaryfile-bad"}

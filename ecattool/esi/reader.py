@@ -244,8 +244,11 @@ class Reader:
             self.ctx.warn("esi-inforeference-missing", f"InfoReference {text!r} not found beside the file; its modules are not loaded", ref_el)
             return []
         sub = Reader(str(path), path.parent, follow_references=False)
-        data = _read(path)
-        esi = sub.read(data)
+        try:
+            esi = sub.read(_read(path))
+        except EcatToolError as exc:
+            self.ctx.warn("esi-inforeference-bad", f"InfoReference {text!r} could not be read: {exc}", ref_el)
+            return []
         self.ctx.warnings.extend(sub.ctx.warnings)
         return esi.modules
 
@@ -267,7 +270,11 @@ class Reader:
 
             def build() -> ObjectDictionary:
                 sub = Reader(src, path.parent, follow_references=False)
-                esi = sub.read(_read(path))
+                try:
+                    esi = sub.read(_read(path))
+                except EcatToolError as exc:
+                    self.ctx.warn("esi-dictionaryfile-bad", f"DictionaryFile {text!r} could not be read: {exc}", f)
+                    return ObjectDictionary()
                 self.ctx.warnings.extend(sub.ctx.warnings)
                 return esi.dictionary or ObjectDictionary()
 
