@@ -310,6 +310,32 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     report.steps.append(Step("move", True, detail))
 
 
+def _expected_readbacks(rd: ResolvedDrive) -> list[Any]:
+    """Factor objects the drive computes from its own hardware configuration (Control Techniques' read-only
+    608Fh): the scaling is only right if the drive reports the value the project's feedback assumes."""
+    group = rd.factor_group
+    return [o for o in getattr(group, "objects", ()) if not o.write] if group is not None else []
+
+
+def _check_readbacks(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+    assert rd.device is not None
+    expected = _expected_readbacks(rd)
+    checked = []
+    for o in expected:
+        entry = rd.device.dictionary.entry(o.index, o.subindex)
+        if entry is None:
+            continue
+        address = f"0x{o.index:04X}:{o.subindex:02X}"
+        raw = _sdo_step(f"read {address}", lambda o=o: slave.sdo_upload(o.index, o.subindex))
+        got = entry.decode(bytes(raw))
+        if got != o.value:
+            raise _Failed(Step("scaling", False, f"{address} ({o.name}: {o.part}) reads {got}, the project's scaling "
+                                                 f"expects {o.value}; put the drive's value into the feedback section"))
+        checked.append(f"{address} = {got}")
+    if checked:
+        report.steps.append(Step("scaling", True, "drive reports " + ", ".join(checked)))
+
+
 def _dc(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     from ecattool.project.steps import dc_assign_activate
 
@@ -354,6 +380,7 @@ def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
         _check_identity(slave, rd, report)
         _sw(slave, rd, report)
         _startup(slave, rd, _PREOP_TRANSITIONS, report)
+        _check_readbacks(slave, rd, report)
         _dc(slave, rd, report)
         _goto(slave, EcState.SAFEOP, report)
         io = ProcessIo(slave, rd)
@@ -395,16 +422,25 @@ def open_target(spec: str, drives: list[ResolvedDrive]) -> tuple[Target, str]:
     raise InputError(f"unknown target {spec!r} (use 'sim' or 'pysoem:<interface>')")
 
 
-def commission(path: str | Path, target: str | None = None, on_drive: Callable[[DriveReport], None] | None = None) -> CommissionReport:
-    """Commission every drive of the project at ``path`` on ``target`` (default: the project's, i.e. 'sim')."""
+def commission(path: str | Path, target: str | Target | None = None,
+               on_drive: Callable[[DriveReport], None] | None = None) -> CommissionReport:
+    """Commission every drive of the project at ``path`` on ``target``.
+
+    ``target`` is a spec string (``"sim"``, ``"pysoem:eth0"``; default: the project's, i.e. ``"sim"``) or a
+    ready :class:`~ecattool.target.base.Target` object (e.g. a ``SimTarget`` of prepared simulated drives with
+    faults scheduled); a target object passed in is not closed, its owner closes it.
+    """
     from ecattool.project.lint import lint_project
 
     result = lint_project(path)
     if result.loaded is None:
         first = result.findings[0]
         raise InputError(first.message, first.location)
-    spec = target or result.loaded.project.target
-    tgt, name = open_target(spec, result.drives)
+    owned = target is None or isinstance(target, str)
+    if owned:
+        tgt, name = open_target(target or result.loaded.project.target, result.drives)  # type: ignore[arg-type]
+    else:
+        tgt, name = target, type(target).__name__  # type: ignore[assignment]
     report = CommissionReport(str(path), name)
     try:
         slaves = tgt.slaves()
@@ -419,5 +455,6 @@ def commission(path: str | Path, target: str | None = None, on_drive: Callable[[
             if on_drive:
                 on_drive(dr)
     finally:
-        tgt.close()
+        if owned:
+            tgt.close()
     return report

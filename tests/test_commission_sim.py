@@ -1,0 +1,279 @@
+"""Commissioning on the embedded simulator: the four samples succeed with the internal-unit results the
+manuals give; injected faults (SDO abort, refused state change, wrong identity, corrupted .sw, lost reply)
+are reported precisely, leave the drive safe and never report success; a second run converges."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from ecattool.commission import commission
+from ecattool.commission.runner import open_target
+from ecattool.od.model import EcState
+from ecattool.project.lint import lint_project
+from ecattool.sim import Drive
+from ecattool.target.sim import SimTarget
+from tests.project_helpers import SAMPLES, copy_sample, sample
+
+ENABLED = "operation enabled"
+
+
+def sim_drives(path: Path, **profile: str) -> list[Drive]:
+    """One simulated drive per project drive, as `commission` builds them (bus order); ``profile`` replaces the
+    built-in profile device of a single-drive project (another firmware on the bus)."""
+    if profile:
+        return [Drive.from_profile(**profile)]  # type: ignore[arg-type]
+    return open_target("sim", lint_project(path).drives)[0].slaves()  # type: ignore[return-value]
+
+
+def run(path: Path, drives: list[Drive]):
+    report = commission(path, target=SimTarget(drives))
+    assert len(report.drives) == len(drives)
+    return report, report.drives[0]
+
+
+def step(dr, name: str):
+    return next(s for s in dr.steps if s.name == name)
+
+
+def sdo_writes(drive: Drive) -> list:
+    return [e for e in drive.events if e.kind == "sdo_download"]
+
+
+# --- the samples --------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", SAMPLES)
+def test_sample_commissions_on_the_default_target(name):
+    report = commission(sample(name))
+    assert report.ok and report.target == "sim"
+    (dr,) = report.drives
+    assert dr.ok and dr.error is None and dr.final_state == "OP"
+    names = [s.name for s in dr.steps]
+    assert names[:2] == ["state PREOP", "identity"] and names[-1] == "move"
+    assert names.index("state SAFEOP") < names.index("state OP") < names.index("enable")
+    assert all(s.ok for s in dr.steps)
+
+
+def test_technosoft_1000_um_is_1200_counts():
+    # 500 lines (2000 counts/rev) x 3:1 gear / 5 mm pitch: 1 mm = 1200 counts (digest of the iPOS manual §5)
+    path = sample("technosoft_ipos")
+    drives = sim_drives(path)
+    _, dr = run(path, drives)
+    assert dr.ok, dr.error
+    assert "1000 user units" in step(dr, "move").detail and "= 1200 counts" in step(dr, "move").detail
+    assert drives[0].internal_position == 1200
+    assert int.from_bytes(drives[0].sdo_upload(0x6064, 0), "little", signed=True) == 1000
+    assert "3 block(s) written" in step(dr, "sw download").detail
+
+
+def test_hdt_90_deg_is_81920_counts():
+    # 65536 counts/rev x 5:1 gear: 90 deg of the table = 1.25 motor revolutions = 81920 counts
+    path = sample("hdt")
+    drives = sim_drives(path)
+    _, dr = run(path, drives)
+    assert dr.ok, dr.error
+    assert "= 81920 counts" in step(dr, "move").detail and drives[0].internal_position == 81920
+
+
+def test_controltechniques_csp_5000_um_on_dc():
+    # 65536 counts/rev x 3:1 / 10 mm: 5 mm = 1.5 motor revolutions = 98304 counts; CSP needs SYNC0
+    path = sample("controltechniques")
+    drives = sim_drives(path)
+    _, dr = run(path, drives)
+    assert dr.ok, dr.error
+    assert step(dr, "dc").detail.startswith("AssignActivate 0x0300")
+    assert step(dr, "move").detail.startswith("CSP move of 5000 user units")
+    assert drives[0].internal_position == 98304
+    assert step(dr, "scaling").detail == "drive reports 0x608F:01 = 65536, 0x608F:02 = 1"
+
+
+def test_controltechniques_encoder_resolution_other_than_the_project_is_refused():
+    # 608Fh is read-only on SM-EtherCAT: with another encoder resolution than the project's feedback the
+    # drive would move 5000 um as 307 counts; commissioning refuses instead of reporting success
+    path = sample("controltechniques")
+    (drive,) = sim_drives(path)
+    drive._put(0x608F, 1, 4096)  # the encoder configuration sets the read-only 608Fh (as the sim tests do)
+    _, dr = run(path, [drive])
+    assert not dr.ok and dr.steps[-1].name == "scaling"
+    assert "0x608F:01 (Position encoder resolution: Encoder increments) reads 4096" in dr.error
+    assert "expects 65536" in dr.error and dr.final_state == "PREOP"
+
+
+def test_generic_esi_default_mapping_csp():
+    path = sample("generic_esi")
+    drives = sim_drives(path)
+    _, dr = run(path, drives)
+    assert dr.ok and drives[0].internal_position == 10000
+    assert not any(s.name.startswith("startup") for s in dr.steps)  # default mapping: nothing to write
+
+
+# --- faults ---------------------------------------------------------------------------------------------------
+
+def test_sdo_abort_on_a_startup_write_is_reported_and_the_drive_left_safe():
+    path = sample("hdt")
+    drives = sim_drives(path)
+    drives[0].faults.abort_sdo(4, 0x06090030)  # 3 identity reads, then the first startup write
+    report, dr = run(path, drives)
+    assert not report.ok and not dr.ok
+    failed = dr.steps[-1]
+    assert failed.name == "write 0x6093:01" and not failed.ok and failed.abort_code == 0x06090030
+    assert failed.to_json()["abort_code"] == "0x06090030"
+    assert "0x6093:01" in dr.error and "0x06090030" in dr.error
+    assert dr.final_state == "PREOP" and drives[0].state() is EcState.PREOP
+    assert drives[0].cia402_state.name.lower().replace("_", " ") != ENABLED
+    # nothing was sent after the failing command
+    last = drives[0].events[-1]
+    assert (last.kind, last.data["index"], last.data["subindex"]) == ("sdo_abort", 0x6093, 1)
+    assert not any(s.name in ("state SAFEOP", "state OP", "move") for s in dr.steps)
+
+
+def test_abort_in_the_middle_names_that_command():
+    path = sample("hdt")
+    drives = sim_drives(path)
+    drives[0].faults.abort_sdo(3 + 2 * 3 + 1, 0x08000022)  # the 4th write (each write is read back)
+    _, dr = run(path, drives)
+    lint = lint_project(path).drives[0]
+    fourth = [c for c in lint.startup if c.transition in ("IP", "PS")][3]
+    assert dr.steps[-1].name == f"write {fourth.address}" and dr.steps[-1].abort_code == 0x08000022
+
+
+def test_second_run_after_a_fault_converges():
+    path = sample("hdt")
+    drives = sim_drives(path)
+    drives[0].faults.abort_sdo(4, 0x06090030)
+    first, _ = run(path, drives)
+    second, dr = run(path, drives)
+    assert not first.ok and second.ok and dr.final_state == "OP"
+    third, _ = run(path, drives)  # and again: idempotent
+    assert third.ok
+
+
+def test_refused_state_change_reports_the_al_status():
+    path = sample("hdt")
+    drives = sim_drives(path)
+    drives[0].faults.refuse_state(EcState.SAFEOP, 0x001D)
+    report, dr = run(path, drives)
+    assert not report.ok
+    failed = dr.steps[-1]
+    assert failed.name == "state SAFEOP" and failed.al_status == 0x001D and failed.abort_code is None
+    assert failed.to_json()["al_status"] == "0x001D" and "0x001D" in dr.error
+    assert dr.final_state == "PREOP"
+    assert run(path, drives)[0].ok  # converges
+
+
+def test_refused_op_after_safeop_goes_back_to_preop():
+    path = sample("technosoft_ipos")
+    drives = sim_drives(path)
+    drives[0].faults.refuse_state(EcState.OP, 0x001B)
+    _, dr = run(path, drives)
+    assert dr.steps[-1].name == "state OP" and dr.steps[-1].al_status == 0x001B
+    assert dr.final_state == "PREOP" and drives[0].state() is EcState.PREOP
+
+
+def test_lost_sdo_reply_is_a_failed_step():
+    path = sample("controltechniques")
+    drives = sim_drives(path)
+    drives[0].faults.drop_reply(4)
+    _, dr = run(path, drives)
+    assert not dr.ok and dr.steps[-1].name.startswith("write 0x") and dr.final_state == "PREOP"
+    assert run(path, drives)[0].ok
+
+
+def test_wrong_firmware_is_refused_with_revision_exact():
+    # the project names F515K exactly; the drive on the bus runs F515L
+    path = sample("technosoft_ipos")
+    drives = sim_drives(path, name="technosoft-ipos", product="ipos4808-bx-cat-sto", revision="F515L")
+    report, dr = run(path, drives)
+    assert not report.ok and dr.steps[-1].name == "identity"
+    assert "revision 0x3531354C (expected exactly 0x3531354B)" in dr.error
+    assert sdo_writes(drives[0]) == []  # nothing was written to the wrong device
+    assert dr.final_state == "PREOP"
+
+
+def _with_identity(tmp_path: Path, name: str, policy: str) -> Path:
+    p = copy_sample(name, tmp_path)
+    text = p.read_text()
+    if "identity:" in text:
+        text = "\n".join(line for line in text.splitlines() if not line.strip().startswith("identity:"))
+    p.write_text(text.replace("    device:\n", f"    identity: {{revision: {policy}}}\n    device:\n", 1))
+    return p
+
+
+def test_newer_firmware_is_accepted_with_revision_at_least(tmp_path):
+    path = _with_identity(tmp_path, "technosoft_ipos", "at-least")
+    drives = sim_drives(path, name="technosoft-ipos", product="ipos4808-bx-cat-sto", revision="F515L")
+    report, dr = run(path, drives)
+    assert report.ok, dr.error
+    assert "revision 0x3531354C" in step(dr, "identity").detail
+
+
+def test_older_firmware_is_refused_with_revision_at_least(tmp_path):
+    path = _with_identity(tmp_path, "technosoft_ipos", "at-least")
+    drives = sim_drives(path, name="technosoft-ipos", product="ipos4808-bx-cat-sto", revision="F515J")
+    _, dr = run(path, drives)
+    assert dr.steps[-1].name == "identity" and "expected at least 0x3531354B" in dr.error
+
+
+def test_revision_ignore_accepts_other_firmware(tmp_path):
+    path = _with_identity(tmp_path, "technosoft_ipos", "ignore")
+    drives = sim_drives(path, name="technosoft-ipos", product="ipos4808-bx-cat-sto", revision="F515L")
+    _, dr = run(path, drives)
+    assert step(dr, "identity").ok
+
+
+def test_another_product_is_refused_whatever_the_revision_policy(tmp_path):
+    path = _with_identity(tmp_path, "technosoft_ipos", "ignore")
+    drives = sim_drives(path, name="technosoft-ipos", product="ipos4808-my-cat-sto", revision="F515K")
+    _, dr = run(path, drives)
+    assert dr.steps[-1].name == "identity" and "product 0x" in dr.error and "expected 0x01A0C82D" in dr.error
+
+
+def test_corrupted_sw_on_the_drive_is_repaired_by_download():
+    path = sample("technosoft_ipos")
+    drives = sim_drives(path)
+    assert run(path, drives)[0].ok
+    # second run: the EEPROM holds the setup, nothing to download
+    _, dr = run(path, drives)
+    assert dr.ok and step(dr, "sw verify").ok and not any(s.name == "sw download" for s in dr.steps)
+    # flip one word of the setup in the drive's EEPROM
+    lint = lint_project(path).drives[0]
+    block = lint.sw_image.blocks[0]
+    address = block.start + 1
+    drives[0].memory.eeprom[address] ^= 0x5A5A
+    _, dr = run(path, drives)
+    assert dr.ok, dr.error
+    assert "1 block(s) written and verified" in step(dr, "sw download").detail
+    assert drives[0].eeprom_words(address, 1) == [block.words[1]]
+
+
+def test_sw_verify_only_fails_when_download_is_disabled(tmp_path):
+    p = copy_sample("technosoft_ipos", tmp_path)
+    p.write_text(p.read_text().replace("sw: setup.sw", "sw: {file: setup.sw, download: false}"))
+    drives = sim_drives(p)
+    _, dr = run(p, drives)
+    assert not dr.ok and dr.steps[-1].name == "sw verify" and "download disabled" in dr.error
+
+
+def test_a_drive_missing_from_the_bus_fails_that_drive_only(tmp_path):
+    p = copy_sample("hdt", tmp_path)
+    p.write_text(p.read_text().replace("  - name: table\n", "  - name: table\n    position: 1\n"))
+    report = commission(p, target=SimTarget([]))
+    (dr,) = report.drives
+    assert not report.ok and dr.steps == [dr.steps[0]] and dr.steps[0].name == "bus"
+    assert "no slave at bus position 1" in dr.error
+
+
+def test_a_target_passed_in_is_not_closed():
+    path = sample("hdt")
+    tgt = SimTarget(sim_drives(path))
+    assert commission(path, target=tgt).ok
+    assert len(tgt.slaves()) == 1 and commission(path, target=tgt).ok
+
+
+def test_project_with_lint_errors_is_never_commissioned(tmp_path):
+    p = copy_sample("hdt", tmp_path)
+    p.write_text(p.read_text().replace('value: 90, comment', 'value: -1, comment'))
+    drives = sim_drives(p)
+    report, dr = run(p, drives)
+    assert not report.ok and dr.steps[-1].name == "lint" and drives[0].events == []
