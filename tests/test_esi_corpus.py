@@ -241,3 +241,21 @@ def test_loaded_file_pickles_with_its_dictionaries():
     assert back.devices[0].dictionary.indices() == esi.devices[0].dictionary.indices() and len(back.devices[0].dictionary) == 14
     assert back.devices[0].dictionary.entry(0x1018, 1) is not None
     assert len(back.modules) == 8
+
+
+@pytest.mark.parametrize("path", [p for p in ESI_FILES if p.stat().st_size < 1_000_000], ids=_ids)
+def test_missing_object_findings_match_an_independent_count(path: Path):
+    from ecattool.esi import check_structure
+
+    expected = 0
+    for dev in etree.parse(str(path)).xpath("/EtherCATInfo/Descriptions/Devices/Device"):
+        objs = {int(i.strip()[2:], 16) if i.strip().startswith("#x") else int(i) for i in
+                dev.xpath("Profile[1]/Dictionary/Objects/Object/Index/text()")}
+        if not objs:
+            continue
+        for idx in dev.xpath("RxPdo/Entry/Index/text() | TxPdo/Entry/Index/text()"):
+            v = int(idx.strip()[2:], 16) if idx.strip().startswith("#x") else int(idx)
+            if v and v not in objs:
+                expected += 1
+    found = [f for f in check_structure(load(path)) if f.rule == "esi-pdo-object-missing" and "no such object" in f.message]
+    assert len(found) == expected
