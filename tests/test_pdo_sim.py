@@ -125,7 +125,8 @@ def _pdo_candidates(device: Device, rules: FamilyRules, d: Direction) -> list[in
 @lru_cache(maxsize=None)
 def target(name: str) -> Target:
     if name.endswith(".xml"):
-        selector = {"elmo_Elmo_ECAT_00010420_V11.xml": "2"}.get(name)
+        selector = {"elmo_Elmo_ECAT_00010420_V11.xml": "2", "beckhoff_EM7xxx.xml": "4",
+                    "beckhoff_EL1xxx.xml": "16"}.get(name)
         dev = complete_generic(expand_default_modules(esi.load_device(corpus_path("esi", name), selector)))
     else:
         dev = profiles.load(name)
@@ -139,7 +140,8 @@ def target(name: str) -> Target:
 
 TARGETS = ["technosoft-ipos", "hdt", "controltechniques", "synapticon_Somanet_CiA402-single.xml",
            "inovance_SV660_EOE_1Axis_V9.12.xml", "ingenia_eve-xcr-e_esi.xml", "elmo_Elmo_ECAT_00010420_V11.xml",
-           "beckhoff_AX2xxx.xml"]
+           "beckhoff_AX2xxx.xml", "copley_XE2_4.60.xml", "etg_ETG2001_ModulesSlots_CiA402.xml", "beckhoff_EM7xxx.xml",
+           "beckhoff_EL1xxx.xml"]
 
 
 @st.composite
@@ -155,6 +157,9 @@ def mappings(draw: st.DrawFn, t: Target) -> Mapping:
         limit = (t.rules.max_assigned_rx if d is Direction.RX else t.rules.max_assigned_tx) or 3
         n = draw(st.integers(0 if not legal_only else 1, min(limit, len(own)) + (0 if legal_only else 1)))
         indices = draw(st.lists(st.sampled_from(pool), min_size=n, max_size=n, unique=legal_only))
+        mandatory = [p.index for p in t.device.pdos(d) if p.mandatory]
+        if mandatory and draw(st.integers(0, 3)):  # mostly keep the Mandatory PDOs (PDO015 is not witnessed)
+            indices = mandatory + [i for i in indices if i not in mandatory]
         cands = [c for c in t.entries[d] if c[1]] if legal_only else t.entries[d]
         parts = []
         for index in indices:
