@@ -6,6 +6,8 @@ import glob
 import os
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from ecattool.esi import load as load_esi
 from ecattool.findings import Severity, has_errors
@@ -163,3 +165,13 @@ def test_pollen_vendor_id_mismatch_is_named() -> None:
     errors = [f for f in findings if f.severity is Severity.ERROR]
     assert [f.data["field"] for f in errors] == ["header.vendor_id"]
     assert "0xF3F in the ESI" in errors[0].message
+
+
+@given(st.integers(0, 0xFFFF))
+def test_oracle_controltechniques_21_alias_n_is_sii_word_4(alias: int) -> None:
+    """reference/controltechniques/oracles.md #21: after storing alias N (0-65535), SII word 0x0004 = N."""
+    from ecattool.sii import crc8
+
+    raw = set_alias(load(corpus_path("sii", "soes_tiesc_am335xice.bin")), alias).to_bytes()
+    assert int.from_bytes(raw[2 * 0x0004:2 * 0x0004 + 2], "little") == alias
+    assert raw[14] == crc8(raw[:14])
