@@ -149,7 +149,8 @@ def test_ct_oracle_28_mode_locked_when_enabled():
 
 def test_ct_oracle_30_position_factor():
     d = at("controltechniques")
-    d._put(0x608F, 1, 4096)  # 608Fh is read-only over SDO: the encoder sets it
+    assert r(d, 0x608F, 1) == 65536 and r(d, 0x608F, 2) == 1  # A24: from the drive's encoder configuration
+    d.set_encoder_resolution(4096)  # 608Fh is read-only over SDO: the encoder sets it
     w(d, 0x6091, 1, 3, 4)
     w(d, 0x6092, 1, 10, 4)
     assert d.units.position_factor() == Fraction(12288, 10)

@@ -280,6 +280,7 @@ class Drive:
             for idx, sub, bits in dset:
                 self._store.setdefault((idx, sub), b"\x00" * ((bits + 7) // 8))
         self._identity_defaults()
+        self._encoder_resolution()
         self._pdo_defaults()
         self.memory.reset()
         self._sync_memory_objects()
@@ -306,6 +307,19 @@ class Drive:
             e = self._entries.get((0x1018, sub))
             if e is not None and e.default is None and e.byte_size == 4:
                 self._store[(0x1018, sub)] = value.to_bytes(4, "little")
+
+    def _encoder_resolution(self) -> None:
+        """Control Techniques 608Fh is read-only and "read from the drive's encoder configuration" (A24):
+        the drive reports its position resolution, 65536 increments per revolution (the drive's 1/2^16-turn
+        position format), not the table default 1/1. :meth:`set_encoder_resolution` changes it."""
+        if self.family == "controltechniques" and (0x608F, 1) in self._entries:
+            self._put(0x608F, 1, self.rules.counts_per_rev or 65536)
+            self._put(0x608F, 2, 1)
+
+    def set_encoder_resolution(self, increments: int, revolutions: int = 1) -> None:
+        """The drive's feedback configuration changes (what 608Fh reports; also writable where 608Fh is RW)."""
+        self._put(0x608F, 1, increments)
+        self._put(0x608F, 2, revolutions)
 
     def _pdo_defaults(self) -> None:
         """Mapping objects hold the device's PDO entries; 1C12h/1C13h its default assignment (PDO@Sm)."""
