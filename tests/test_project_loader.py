@@ -111,3 +111,23 @@ def test_github_annotations_escape():
     assert out[0] == "::error file=a/p.yaml,line=7,col=9,title=PRJ010::object 0x1234 does not exist"
     assert out[1].startswith("::warning file=a/p.yaml,line=9,title=PDO011::mapped twice, 50%25 of it")
     assert out[2] == "::notice title=PRJ005::note without line"
+
+
+@pytest.mark.parametrize("data", [b"ecattool: 1\x00\ndrives: []\n", b"\xff\xfe\x00garbage", "ecattool: 1\x07\n".encode()])
+def test_non_printable_input_is_a_located_error(tmp_path, data):
+    p = tmp_path / "np.yaml"
+    p.write_bytes(data)
+    with pytest.raises(InputError) as ei:
+        load_project(p)
+    assert str(ei.value).startswith(str(p)) and "\n" not in str(ei.value)
+
+
+from hypothesis import given, strategies as st  # noqa: E402
+
+
+@given(st.binary(max_size=200))
+def test_random_bytes_never_crash_the_loader(data):
+    try:
+        parse_project(data, "fuzz.yaml")
+    except InputError:
+        pass

@@ -45,7 +45,10 @@ class LocatedYaml:
 def load_yaml(text: str | bytes, source: str) -> LocatedYaml:
     if len(text) > _MAX_YAML_BYTES:
         raise InputError(f"YAML file is larger than {_MAX_YAML_BYTES} bytes", Location(source))
-    loader = yaml.SafeLoader(text)
+    try:
+        loader = yaml.SafeLoader(text)
+    except yaml.YAMLError as exc:  # the reader checks characters and encoding up front
+        raise InputError(f"invalid YAML: {exc}".splitlines()[0], Location(source, 1)) from None
     try:
         node = loader.get_single_node()
     except yaml.MarkedYAMLError as exc:
@@ -54,7 +57,10 @@ def load_yaml(text: str | bytes, source: str) -> LocatedYaml:
         col = mark.column + 1 if mark else None
         raise InputError(f"invalid YAML: {exc.problem or exc.context}", Location(source, line, col)) from None
     except yaml.YAMLError as exc:
-        raise InputError(f"invalid YAML: {exc}", Location(source)) from None
+        mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+        line = mark.line + 1 if mark else None
+        text0 = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(f"invalid YAML: {text0}", Location(source, line)) from None
     finally:
         loader.dispose()
     locations: dict[Path_, Location] = {}
