@@ -128,3 +128,15 @@ def test_help_has_an_example(capsys, cmd: str) -> None:
 def test_swapped_arguments_name_the_order(capsys) -> None:
     code, out, _ = run(capsys, "sii", "check", str(corpus_path("sii", "ni9144.bin")), str(corpus_path("sii", "ni9144.xml")))
     assert code == 1 and "XML file (an ESI?)" in out and "ni9144.xml:1:" in out
+
+
+def test_image_from_stdin() -> None:
+    from click.testing import CliRunner
+
+    from ecattool.cli import cli
+
+    data = corpus_path("sii", "ni9144.bin").read_bytes()
+    res = CliRunner().invoke(cli, ["sii", "info", "-", "--json"], input=data, catch_exceptions=False)
+    assert res.exit_code == 0 and json.loads(res.output)["source"] == "<stdin>"
+    res = CliRunner().invoke(cli, ["sii", "check", str(corpus_path("sii", "ni9144.xml")), "-"], input=data)
+    assert res.exit_code == 0 and res.output.startswith("OK")

@@ -25,10 +25,19 @@ def sii() -> None:
     """
 
 
+def _stdin(path: str) -> bytes | None:
+    """The bytes of standard input when ``path`` is '-' (read once), else None."""
+    if path != "-":
+        return None
+    import sys
+
+    return sys.stdin.buffer.read()
+
+
 def _load(path: str) -> Any:
     from ecattool.sii import load
 
-    return load(path)
+    return load("<stdin>" if path == "-" else path, _stdin(path))
 
 
 def _write_image(output: str, image: Any, inputs: tuple[str, ...]) -> None:
@@ -58,7 +67,8 @@ def _findings_out(findings: list[Any], as_json: bool, extra: dict[str, Any] | No
 @sii.command("info", epilog="""\b
 Examples:
   ecattool sii info slave.bin
-  ecattool sii info eeprom.hex --json | jq .categories""")
+  ecattool sii info eeprom.hex --json | jq .categories
+  ethercat sii_read -p 0 | ecattool sii info -""")
 @click.argument("image", type=click.Path(dir_okay=False))
 @json_option
 def info(image: str, as_json: bool) -> None:
@@ -136,7 +146,8 @@ def _select(esi_path: str, selector: str | None, image: Any = None, policy: str 
 Examples:
   ecattool sii check slave.bin                # CRC, size, category chain, strings, SMs, PDOs
   ecattool sii check slave.xml slave.bin      # also: does the image match the ESI device?
-  ecattool sii check Beckhoff_EL1xxx.xml el1008.bin --device EL1008 --json
+  ecattool sii check beckhoff_EL1xxx.xml el1008.bin --device EL1008 --policy newest --json
+  ethercat sii_read -p 0 | ecattool sii check slave.xml -
 \b
 Exit codes: 0 no errors (no warnings either with --strict), 1 findings or invalid input.""")
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
@@ -153,7 +164,7 @@ def check_cmd(files: tuple[str, ...], selector: str | None, policy: str, strict:
     if len(files) > 2:
         raise click.UsageError("give IMAGE, or ESI IMAGE")
     image_path = files[-1]
-    image, findings = check_file(image_path)
+    image, findings = check_file("<stdin>" if image_path == "-" else image_path, _stdin(image_path))
     if len(files) == 2 and image is not None:
         device = _select(files[0], selector, image, policy)
         findings += check_against(device, image)
