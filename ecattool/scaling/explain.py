@@ -186,7 +186,7 @@ def _technosoft(e: Explanation, r: _Reader, T: Fraction, unit_name: dict[int, st
             continue
         out[what] = iu / 65536 / T**order
         e.data[f"IU per {what} unit"] = iu
-        e.data[f"counts/s^{order} per {what} unit"] = out[what]
+        e.data[f"counts/s{('', '²', '³')[order - 1]} per {what} unit"] = out[what]
     if fs == "cia402-2":
         pf, vf, af, jf = r.ratio(0x6093), r.ratio(0x6096), r.ratio(0x6097), r.ratio(0x60A2)
         v, a, j = r.ratio(0x6094), r.ratio(0x210F), r.ratio(0x2110)
