@@ -145,3 +145,16 @@ def test_explain_reads_the_simulated_drive(capsys) -> None:
     assert code == 0 and json.loads(out)["findings"] == []  # defaults (IU) are not "inconsistent"
     code, _, _ = run(capsys, "scale", "explain", "--target", "nowhere")
     assert code == 2
+
+
+def test_compute_with_a_real_esi_leaves_out_missing_objects(capsys) -> None:
+    from tests.conftest import corpus_path
+
+    esi = corpus_path("esi", "copley_XE2_4.60.xml")
+    code, out, _ = run(capsys, "scale", "compute", str(SAMPLES / "rotary_table.yaml"), "--esi", str(esi), "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["family"] == "generic"  # the device decides, not the spec's family
+    indices = {o["index"] for o in data["objects"]}
+    assert "0x6092" in indices and "0x6093" not in indices
+    assert any("0x6093" in n for n in data["notes"])

@@ -33,6 +33,9 @@ def _mechanics_options(f: Any) -> Any:
         click.option("--approximation", type=click.Choice(["best", "max-scale"]),
                      help="How to approximate non-representable ratios (Technosoft default max-scale, others best)."),
         click.option("--vl/--no-vl", default=None, help="Add the vl velocity factors 604Bh/604Ch (default: Control Techniques only)."),
+        click.option("--esi", type=click.Path(exists=True, dir_okay=False),
+                     help="ESI file of the drive: object types from its dictionary, objects it lacks left out."),
+        click.option("--select", "selector", help="Device in the ESI (product code, name …) when it has several."),
     ]
     for o in reversed(opts):
         f = o(f)
@@ -107,8 +110,18 @@ def _compute(kwargs: dict[str, Any]) -> Any:
     from ecattool.scaling import compute
 
     vl = kwargs.pop("vl")
+    esi, selector = kwargs.pop("esi"), kwargs.pop("selector")
+    device = None
+    if esi:
+        from ecattool.esi import load_device
+        from ecattool.profiles import family_of
+
+        device = load_device(esi, selector)
+        if not kwargs.get("family"):
+            kwargs["family"] = family_of(device)
     spec, family, firmware, approximation = _spec(**kwargs)
-    return compute(spec.axis, family, firmware=firmware, strategy=approximation, vl=vl, vl_setpoint=spec.vl_setpoint)
+    return compute(spec.axis, family, firmware=firmware, strategy=approximation, vl=vl, vl_setpoint=spec.vl_setpoint,
+                   device=device)
 
 
 def _render(group: Any) -> None:
@@ -155,7 +168,8 @@ Examples:
   ecattool scale compute --lines 500 --position rev --velocity rpm --acceleration rev/s^2
   ecattool scale compute --counts 4096 --gear 3:1 --transmission 'ballscrew pitch=10mm' \\
       --position mm --family controltechniques
-  ecattool scale compute --lines 500 --position rad --firmware F515I   # 4294967295 / 13493038""")
+  ecattool scale compute --lines 500 --position rad --firmware F515I   # 4294967295 / 13493038
+  ecattool scale compute samples/scaling/rotary_table.yaml --esi copley_XE2_4.60.xml""")
 @_mechanics_options
 @click.option("--startup", "with_startup", is_flag=True, help="Also print the startup list (transition PS).")
 @json_option
