@@ -1,0 +1,230 @@
+"""``ecattool lint`` on the command line: text, JSON, SARIF 2.1.0 (required properties checked), GitHub
+annotations, --strict, exit codes 0/1/2, and the content-keyed ESI cache (pickle reused, damaged entry rebuilt)."""
+
+from __future__ import annotations
+
+import pickle
+import re
+from pathlib import Path
+
+import pytest
+
+from ecattool.project import cache
+from ecattool.project.lint import lint_project
+from tests.project_helpers import DATA, SAMPLES, run, run_json, sample, write_project
+
+BROKEN = str(DATA / "prj010_no_object.yaml")  # two errors
+WARN_ONLY = str(DATA / "prj015_enum.yaml")  # one warning
+
+
+# --- exit codes and --strict ------------------------------------------------------------------------------
+
+def test_clean_samples_exit_0(capsys):
+    code, out, _ = run(capsys, "lint", *(str(sample(n)) for n in SAMPLES))
+    assert code == 0
+    assert out.count("0 error(s), 0 warning(s)") == 4
+
+
+def test_errors_exit_1_with_located_lines(capsys):
+    code, out, _ = run(capsys, "lint", BROKEN)
+    assert code == 1
+    assert f"{BROKEN}:7:18: error: object 0x5FFF does not exist" in out
+    assert f"{BROKEN}:8:18: error: no object named 'warp factor'" in out and out.rstrip().endswith("2 error(s), 0 warning(s)")
+
+
+def test_warnings_pass_unless_strict(capsys):
+    assert run(capsys, "lint", WARN_ONLY)[0] == 0
+    code, out, _ = run(capsys, "lint", "--strict", WARN_ONLY)
+    assert code == 1 and "[PRJ015]" in out
+
+
+def test_infos_do_not_fail_strict(capsys, tmp_path):
+    p = write_project(tmp_path, """ecattool: 1
+drives:
+  - name: x
+    device: {profile: hdt, product: tomcat}
+    scaling:
+      feedback: {counts_per_rev: 65536}
+      transmission: {type: belt, diameter: 30 mm}
+      units: {position: um}
+""")
+    assert run(capsys, "lint", "--strict", str(p))[0] == 0
+
+
+def test_usage_errors_exit_2(capsys):
+    assert run(capsys, "lint")[0] == 2
+    assert run(capsys, "lint", "--format", "xml", WARN_ONLY)[0] == 2
+
+
+def test_unreadable_project_exits_1(capsys, tmp_path):
+    p = write_project(tmp_path, "ecattool: 2\ndrives: []\n")
+    code, out, _ = run(capsys, "lint", str(p))
+    assert code == 1 and f"{p}:1:11: error: unsupported project format version 2" in out
+    missing = tmp_path / "nope.yaml"
+    code, out, err = run(capsys, "lint", str(missing))
+    assert code == 1 and "nope.yaml" in out + err
+
+
+def test_several_projects_fail_if_one_fails(capsys):
+    assert run(capsys, "lint", str(sample("hdt")), BROKEN)[0] == 1
+
+
+# --- formats ----------------------------------------------------------------------------------------------
+
+def test_json_format(capsys):
+    code, doc = run_json(capsys, "lint", "--format", "json", BROKEN, WARN_ONLY)
+    assert code == 1
+    assert doc["files"] == [BROKEN, WARN_ONLY]
+    assert doc["summary"] == {"error": 2, "warning": 1, "info": 0}
+    rules = [(f["rule"], f["severity"]) for f in doc["findings"]]
+    assert rules == [("PRJ010", "error"), ("PRJ010", "error"), ("PRJ015", "warning")]
+    first = doc["findings"][0]
+    assert "0x5FFF" in first["message"]
+    assert run_json(capsys, "lint", "--json", WARN_ONLY) == (0, run_json(capsys, "lint", "--format", "json", WARN_ONLY)[1])
+
+
+def _check_sarif(log: dict) -> None:
+    """The properties SARIF 2.1.0 requires (sarif-schema-2.1.0.json), and the consistency of rule indexes."""
+    assert log["version"] == "2.1.0" and isinstance(log["runs"], list) and log["runs"]
+    assert log["$schema"].endswith("sarif-2.1.0.json")
+    for r in log["runs"]:
+        driver = r["tool"]["driver"]
+        assert isinstance(driver["name"], str) and driver["name"]
+        rules = driver.get("rules", [])
+        ids = [x["id"] for x in rules]
+        assert len(ids) == len(set(ids))
+        for rule in rules:
+            assert isinstance(rule["id"], str) and isinstance(rule["shortDescription"]["text"], str)
+        for res in r["results"]:
+            assert isinstance(res["message"]["text"], str) and res["message"]["text"]
+            assert res["level"] in ("none", "note", "warning", "error")
+            assert rules[res["ruleIndex"]]["id"] == res["ruleId"]
+            for loc in res.get("locations", []):
+                phys = loc["physicalLocation"]
+                uri = phys["artifactLocation"]["uri"]
+                assert isinstance(uri, str) and uri and "\\" not in uri
+                region = phys.get("region", {})
+                assert region.get("startLine", 1) >= 1 and region.get("startColumn", 1) >= 1
+
+
+def test_sarif_format(capsys, tmp_path):
+    out = tmp_path / "lint.sarif"
+    code, _, _ = run(capsys, "lint", "--format", "sarif", "-o", str(out), BROKEN, WARN_ONLY)
+    assert code == 1
+    import json
+
+    log = json.loads(out.read_text())
+    _check_sarif(log)
+    results = log["runs"][0]["results"]
+    assert [(r["ruleId"], r["level"]) for r in results] == [("PRJ010", "error"), ("PRJ010", "error"), ("PRJ015", "warning")]
+    region = results[0]["locations"][0]["physicalLocation"]["region"]
+    assert region == {"startLine": 7, "startColumn": 18}
+    assert results[0]["locations"][0]["physicalLocation"]["artifactLocation"]["uri"].endswith(
+        "tests/data/projects/prj010_no_object.yaml")
+    rules = {r["id"]: r["shortDescription"]["text"] for r in log["runs"][0]["tool"]["driver"]["rules"]}
+    assert rules["PRJ010"] == "a parameter names an object that does not exist"
+
+
+def test_sarif_of_a_clean_project_is_valid_and_empty(capsys):
+    code, log = run_json(capsys, "lint", "--format", "sarif", str(sample("hdt")))
+    assert code == 0
+    _check_sarif(log)
+    assert log["runs"][0]["results"] == []
+
+
+def test_github_annotations(capsys):
+    code, out, _ = run(capsys, "lint", "--format", "github", BROKEN, WARN_ONLY)
+    assert code == 1
+    lines = out.splitlines()
+    assert len(lines) == 3
+    pattern = re.compile(r"^::(error|warning|notice) file=([^,]+),line=(\d+),col=(\d+),title=([A-Z]+\d+)::(.+)$")
+    parsed = [pattern.match(line) for line in lines]
+    assert all(parsed), lines
+    assert [(m[1], m[3], m[4], m[5]) for m in parsed] == [("error", "7", "18", "PRJ010"), ("error", "8", "18", "PRJ010"),
+                                                         ("warning", "7", "45", "PRJ015")]
+    assert parsed[0][2].endswith("tests/data/projects/prj010_no_object.yaml")
+
+
+def test_text_to_file(capsys, tmp_path):
+    out = tmp_path / "lint.txt"
+    assert run(capsys, "lint", "-o", str(out), BROKEN)[0] == 1
+    text = out.read_text()
+    assert "[PRJ010]" in text and "2 error(s)" in text
+
+
+# --- the ESI cache ----------------------------------------------------------------------------------------
+
+ESI_PROJECT = sample("generic_esi")
+
+
+@pytest.fixture()
+def cache_dir(tmp_path, monkeypatch):
+    d = tmp_path / "cache"
+    monkeypatch.setenv("ECATTOOL_CACHE_DIR", str(d))
+    monkeypatch.delenv("ECATTOOL_NO_CACHE", raising=False)
+    monkeypatch.setattr(cache, "_MEMORY", {})
+    return d
+
+
+def _entries(d: Path) -> list[Path]:
+    return sorted((d / "esi").glob("*.pickle"))
+
+
+def test_second_lint_reads_the_pickle(cache_dir, monkeypatch):
+    first = lint_project(ESI_PROJECT)
+    (entry,) = _entries(cache_dir)
+    assert len(entry.stem) == 64  # SHA-256 of the content
+    assert type(pickle.loads(entry.read_bytes())).__name__ == "EsiFile"
+    # a fresh process: nothing in memory, and parsing the ESI is not allowed any more
+    monkeypatch.setattr(cache, "_MEMORY", {})
+    from ecattool import esi
+
+    def no_parse(*a, **k):
+        raise AssertionError("the ESI was parsed again instead of read from the cache")
+
+    monkeypatch.setattr(esi, "load_bytes", no_parse)
+    second = lint_project(ESI_PROJECT)
+    assert second.findings == first.findings == []
+    assert second.drives[0].device.product_code == first.drives[0].device.product_code
+    assert _entries(cache_dir) == [entry]
+
+
+def test_damaged_cache_entry_is_rebuilt(cache_dir, monkeypatch):
+    lint_project(ESI_PROJECT)
+    (entry,) = _entries(cache_dir)
+    good = entry.read_bytes()
+    entry.write_bytes(b"not a pickle at all")
+    monkeypatch.setattr(cache, "_MEMORY", {})
+    result = lint_project(ESI_PROJECT)
+    assert result.findings == [] and result.drives[0].device is not None
+    assert entry.read_bytes() != b"not a pickle at all"
+    assert type(pickle.loads(entry.read_bytes())).__name__ == "EsiFile" and len(entry.read_bytes()) == len(good)
+
+
+def test_foreign_pickle_is_not_trusted(cache_dir, monkeypatch):
+    lint_project(ESI_PROJECT)
+    (entry,) = _entries(cache_dir)
+    entry.write_bytes(pickle.dumps({"not": "an EsiFile"}))
+    monkeypatch.setattr(cache, "_MEMORY", {})
+    assert lint_project(ESI_PROJECT).drives[0].device is not None
+    assert type(pickle.loads(entry.read_bytes())).__name__ == "EsiFile"
+
+
+def test_changed_esi_content_is_a_new_entry(cache_dir, tmp_path):
+    src = ESI_PROJECT.parent
+    dst = tmp_path / "proj"
+    dst.mkdir()
+    (dst / "project.yaml").write_text(ESI_PROJECT.read_text())
+    xml = (src / "inovance_SV660_EOE_1Axis_V9.12.xml").read_bytes()
+    (dst / "inovance_SV660_EOE_1Axis_V9.12.xml").write_bytes(xml)
+    lint_project(dst / "project.yaml")
+    (dst / "inovance_SV660_EOE_1Axis_V9.12.xml").write_bytes(xml + b"\n<!-- edited -->\n")
+    lint_project(dst / "project.yaml")
+    assert len(_entries(cache_dir)) == 2
+
+
+def test_no_cache_env_writes_nothing(cache_dir, monkeypatch):
+    monkeypatch.setenv("ECATTOOL_NO_CACHE", "1")
+    assert lint_project(ESI_PROJECT).findings == []
+    assert not (cache_dir / "esi").exists()
+
