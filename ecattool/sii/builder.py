@@ -10,7 +10,7 @@ from __future__ import annotations
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device, Pdo
 from ecattool.sii.checks import fix_crc
-from ecattool.sii.image import HEADER_BYTES, strings_content, category_body, parse
+from ecattool.sii.image import HEADER_BYTES, category_body, parse, parse_category, strings_content
 from ecattool.sii.model import (
     MAILBOX_PROTOCOLS,
     PDO_FLAGS,
@@ -182,27 +182,32 @@ def assemble(device: Device, *, pdo_categories: bool = True) -> SiiImage:
     tx = [_pdo(p, strings) for p in device.tx_pdos] if pdo_categories else []
     rx = [_pdo(p, strings) for p in device.rx_pdos] if pdo_categories else []
 
-    cats: list[Category] = [RawCategory(c.cat_no, c.data) for c in (eeprom.categories if eeprom else [])]
+    # Eeprom/Category entries come first (as the vendor categories of the AKD/EL2262 dumps do); one of a
+    # standard type (Elmo's boot devices give their own GENERAL and SYNCM) replaces the generated one.
+    cats: list[Category] = [parse_category(c.cat_no, c.data + b"\x00" * (len(c.data) % 2))
+                            for c in (eeprom.categories if eeprom else [])]
+    given = {c.cat_type for c in cats}
     table = StringsCategory(strings.strings)
     if len(category_body(table)) != len(strings_content(table)):
         table.extra = b"\xff"  # the pad byte of an odd-length STRINGS body, as in the NI 9144 dumps
-    cats += [table, general]
+    generated: list[Category] = [table, general]
     if device.fmmus:
-        cats.append(FmmuCategory([FMMU_CODES.get(f.kind, 0) for f in device.fmmus]))
+        generated.append(FmmuCategory([FMMU_CODES.get(f.kind, 0) for f in device.fmmus]))
     if device.sync_managers:
-        cats.append(SyncMCategory([
+        generated.append(SyncMCategory([
             SiiSyncManager(sm.start_address, sm.default_size or 0, sm.control_byte & 0xFF, 0,
                            (1 if sm.enable else 0) | (4 if sm.virtual else 0), SM_TYPE_CODES.get(sm.kind, 0))
             for sm in device.sync_managers]))
     if any(f.sm is not None for f in device.fmmus):
-        cats.append(RawCategory(CategoryType.FMMUX, b"".join(
+        generated.append(RawCategory(CategoryType.FMMUX, b"".join(
             bytes([0xFA, 0xFF, 0xFF if f.sm is None else f.sm & 0xFF, (f.su or 0) & 0xFF]) for f in device.fmmus)))
     if tx:
-        cats.append(PdoCategory(CategoryType.TXPDO, tx))
+        generated.append(PdoCategory(CategoryType.TXPDO, tx))
     if rx:
-        cats.append(PdoCategory(CategoryType.RXPDO, rx))
+        generated.append(PdoCategory(CategoryType.RXPDO, rx))
     if dc_ops:
-        cats.append(DcCategory(dc_ops))
+        generated.append(DcCategory(dc_ops))
+    cats += [c for c in generated if c.cat_type not in given]
 
     if eeprom and eeprom.byte_size and eeprom.byte_size >= 128:
         h.size_word = eeprom.byte_size // 128 - 1
