@@ -3,7 +3,7 @@
 Rule ids: ``sii.parse``, ``sii.blank``, ``sii.crc``, ``sii.length``, ``sii.size``, ``sii.version``,
 ``sii.end``, ``sii.category``, ``sii.strings``, ``sii.general``, ``sii.fmmu``, ``sii.sm``, ``sii.mailbox``,
 ``sii.pdo``, ``sii.vendor``; against an ESI: ``sii.esi.identity``, ``sii.esi.mailbox``, ``sii.esi.sm``,
-``sii.esi.pdo``.
+``sii.esi.pdo`` (errors) and ``sii.esi.config``, ``sii.esi.size``, ``sii.esi.fmmu``, ``sii.esi.dc`` (warnings).
 """
 
 from __future__ import annotations
