@@ -408,3 +408,30 @@ def test_every_model_and_revision_reaches_op_after_reset(profile, product, revis
     assert len(d.exchange(bytes(outputs))) == inputs
     d.sdo_download(0x6040, 0, b"\x06\x00")
     assert r(d, 0x6041) & 0x6F == 0x21
+
+
+def _enabled(name: str) -> Drive:
+    d = at(name, OP)
+    for cw in (0x06, 0x07, 0x0F):
+        w(d, 0x6040, 0, cw, 2)
+    return d
+
+
+def test_lose_communication_abort_connection_option_codes():
+    """6007h: HDT oracle 27 (0 no action, 1/2 switch on disabled, 3 stays enabled); Technosoft default 1
+    = fault with EMCY 8100h; Control Techniques always switch on disabled."""
+    for name, option, mask, state in (("hdt", 0, 0x6F, 0x27), ("hdt", 2, 0x4F, 0x40), ("hdt", 3, 0x6F, 0x27),
+                                      ("technosoft-ipos", None, 0x4F, 0x08), ("controltechniques", None, 0x4F, 0x40)):
+        d = at(name)
+        if option is not None:
+            w(d, 0x6007, 0, option, 2)
+        d.request_state(SAFE)
+        d.request_state(OP)
+        for cw in (0x06, 0x07, 0x0F):
+            w(d, 0x6040, 0, cw, 2)
+        d.lose_communication()
+        assert d.state() is SAFE
+        assert r(d, 0x6041) & mask == state, (name, option, hex(r(d, 0x6041)))
+    tech = _enabled("technosoft-ipos")
+    tech.lose_communication()
+    assert tech.emergencies[-1].code == 0x8100

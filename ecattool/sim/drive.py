@@ -978,6 +978,37 @@ class Drive:
         self.emcy(code, data)
         self._refresh_inputs()
 
+    def lose_communication(self) -> None:
+        """Fault injection: the process data stops (cable pulled, SM watchdog). The ESM drops from OP to
+        SAFE-OP (AL status 0x001B) and the drive reacts with its abort connection option code 6007h:
+        0 no action, 1 fault (EMCY 0x8100), 2 disable voltage, 3 quick stop, unless the family's
+        rules say otherwise (HDT 3: quick-stop ramp and stay enabled); Control Techniques always ends in
+        SWITCH ON DISABLED (7.3.1)."""
+        if self.esm is EcState.OP:
+            self._log("state", previous="OP", state="SAFEOP", al_status=0x001B, reason="sync manager watchdog")
+            self.esm = EcState.SAFEOP
+        if not self.has_cia402:
+            return
+        option = self._read_int(0x6007, 0)
+        option = 1 if option is None else option
+        ends = {(i, v): end for i, v, end in getattr(self.rules, "option_code_end_states", ())}
+        end = ends.get((0x6007, option), {0: "NO_ACTION", 1: "FAULT", 2: "SWITCH_ON_DISABLED"}.get(option, "QUICK_STOP"))
+        if self.family == "controltechniques":
+            end = "SWITCH_ON_DISABLED"
+        self._log("cia402", reason=f"communication lost, 6007h = {option}", reaction=end)
+        if end == "FAULT":
+            self.inject_fault(0x8100)
+        elif end == "SWITCH_ON_DISABLED":
+            self._cia_moves(self.cia.communication_lost(), "communication lost")
+        elif end == "QUICK_STOP" and self.cia.state is State.OPERATION_ENABLED:
+            self._cia_moves(self.cia.controlword_written(self.cia.controlword & ~0x04 | 0x02, ecat_op=False,
+                                                        quick_stop_option=self._read_int(0x605A, 0) or 2),
+                            "communication lost: quick stop")
+        elif end == "OPERATION_ENABLED":
+            self.cia.velocity = Fraction(0)
+            self.cia.target = None
+        self._refresh_inputs()
+
     def set_limit_switches(self, *, negative: bool = False, positive: bool = False) -> None:
         """The limit-switch inputs change: 60FDh bits per the family (HDT swaps them: bit 0 = CW =
         positive); Technosoft sends EMCY 0x5442/0x5443 when one becomes active and 0x0000 when it clears
