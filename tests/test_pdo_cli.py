@@ -118,3 +118,14 @@ def test_output_never_overwrites_an_input(capsys: pytest.CaptureFixture[str], tm
 def test_help_has_examples(capsys: pytest.CaptureFixture[str], command: str) -> None:
     code, out, _ = run(capsys, "map", command, "--help")
     assert code == 0 and f"ecattool map {command} --profile technosoft-ipos" in out and "Mapping syntax" in out
+
+
+def test_check_a_master_configuration(capsys: pytest.CaptureFixture[str]) -> None:
+    ecmc = str(corpus_path("configs", "ecmc_ecmciPOSXXXX.cmd"))
+    code, out, _ = run(capsys, "map", "check", *TS, "--product", "ipos4808-bx-cat", "--startup", ecmc, "--json")
+    doc = json.loads(out)
+    assert code == 0 and [f["rule"] for f in doc["findings"]] == ["PDO028"] * 3
+    assert doc["inputs_bytes"] == 26 and len(doc["mapping"]["tx"]) == 4
+    code, out, _ = run(capsys, "map", "check", *TS, "--product", "ipos4808-bx-cat", "--startup", ecmc, "--strict")
+    assert code == 1 and f"{ecmc}:164: warning:" in out
+    assert run(capsys, "map", "check", *TS, "--startup", ecmc, "--rx", "0x1600")[0] == 2

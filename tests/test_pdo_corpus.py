@@ -111,6 +111,24 @@ def test_ecmc_ipos_declared_entries_disagree_with_the_programmed_mapping() -> No
             offset += e.bit_len
     wrong = sorted(i for i in declared_offsets if declared_offsets[i] != actual[i])
     assert wrong == [0x2045, 0x6077, 0x60FD]
+    # check_config reports exactly these, at the EcAddEntryComplete lines that declare them (PDO028)
+    from ecattool.pdo import check_config
+
+    mapping, findings = check_config(dev, cfg)
+    assert [p.index for p in mapping.tx] == [p.index for p in m.tx]
+    assert [(f.rule, f.data["index"], f.location.line) for f in findings] == [
+        ("PDO028", 0x6077, 164), ("PDO028", 0x60FD, 165), ("PDO028", 0x2045, 166)]
+    assert all(f.severity is Severity.WARNING for f in findings)
+
+
+def test_ros2_configs_program_their_declared_pdos() -> None:
+    from ecattool.pdo import check_config, mapping_from_config
+
+    cfg = _ros2("ros2_technosoft_ipos3604.yaml")
+    dev = profiles.load("technosoft-ipos")
+    m = mapping_from_config(cfg, dev)
+    assert [p.index for p in m.rx] == [0x1600, 0x1601, 0x1602] and all(p.explicit for p in m.rx)
+    assert check_config(dev, cfg)[1] == []
 
 
 # --- ros2 Elmo Gold ----------------------------------------------------------------------------------

@@ -15,6 +15,7 @@ Examples:
   ecattool map {cmd} --esi synapticon_Somanet_CiA402-single.xml --tx "0x1A00=statusword,0x6064:00/32"
   ecattool map {cmd} --profile technosoft-ipos --rx "0x1600;0x1601;0x1602=controlword,modes of operation"
   ecattool map {cmd} --esi drive.xml --device EL7211 --mapping mapping.yaml --json
+  ecattool map {cmd} --profile technosoft-ipos --product ipos4808-bx-cat --startup ecmc_ecmciPOSXXXX.cmd
 
 \b
 Mapping syntax: PDOs separated by ';', entries by ','; an entry is 0x6040:00/16, 6040:0/16, an object
@@ -35,6 +36,10 @@ def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
         click.option("--tx", multiple=True, help="TxPDO assignment and mapping (inputs, SM3, 1C13h)."),
         click.option("--mapping", "mapping_file", type=click.Path(exists=True, dir_okay=False, allow_dash=True),
                      help="YAML/JSON file with rx/tx PDO lists (or a 'pdo:' section)."),
+        click.option("--startup", "startup_file", type=click.Path(exists=True, dir_okay=False),
+                     help="A master configuration (ENI, TwinCAT, ecmc, ros2, IgH, JSON/CSV startup list): use the "
+                     "mapping its SDOs program (or its declared PDOs)."),
+        click.option("--slave", type=int, default=None, help="Which slave of a --startup file (0-based index)."),
     ]
     for opt in reversed(opts):
         f = opt(f)
@@ -78,10 +83,32 @@ def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping
     return pdo.Mapping.from_text(rx=list(rx) if rx else None, tx=list(tx) if tx else None, device=device)
 
 
+def _load_config(startup_file: str, slave: int | None) -> Any:
+    from ecattool.errors import SelectionError
+    from ecattool.startup import import_file
+
+    configs = import_file(startup_file)
+    if slave is None and len(configs) == 1:
+        return configs[0]
+    if slave is None or not 0 <= slave < len(configs):
+        names = ", ".join(f"[{i}] {c.label}" for i, c in enumerate(configs))
+        raise SelectionError(f"{startup_file} has {len(configs)} slaves; choose one with --slave N ({names})")
+    return configs[slave]
+
+
 def _setup(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
-           rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None) -> tuple[Any, Any]:
-    device = _load_device(esi, selector, profile, product, revision)
-    return device, _load_mapping(device, rx, tx, mapping_file)
+           rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None = None,
+           slave: int | None = None, device: Any = None) -> tuple[Any, Any, Any]:
+    """(device, mapping, master configuration or None)."""
+    device = device if device is not None else _load_device(esi, selector, profile, product, revision)
+    if startup_file:
+        if rx or tx or mapping_file:
+            raise click.UsageError("give the mapping with one of --rx/--tx, --mapping or --startup")
+        from ecattool import pdo
+
+        config = _load_config(startup_file, slave)
+        return device, pdo.mapping_from_config(config, device), config
+    return device, _load_mapping(device, rx, tx, mapping_file), None
 
 
 @click.group(name="map")
@@ -94,7 +121,8 @@ def map_() -> None:
 @click.option("--strict", is_flag=True, help="Exit 1 on warnings too.")
 @json_option
 def check(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
-          rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, strict: bool, as_json: bool) -> None:
+          rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
+          slave: int | None, strict: bool, as_json: bool) -> None:
     """Check a PDO mapping statically; exit 1 when an error-level finding exists."""
     from ecattool import pdo
     from ecattool.findings import has_errors
@@ -103,13 +131,14 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
 
     device = _load_device(esi, selector, profile, product, revision)
     try:
-        mapping = _load_mapping(device, rx, tx, mapping_file)
+        _, mapping, config = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file,
+                                    slave, device)
     except InputError as exc:
         if not as_json:
             raise
         print_json({"device": device.type_name, "ok": False, "findings": [pdo.input_finding(exc).to_json()]})
         raise SystemExit(1) from None
-    findings = pdo.check(device, mapping)
+    findings = pdo.check_config(device, config)[1] if config is not None else pdo.check(device, mapping)
     lay = pdo.layout(device, mapping)
     failed = has_errors(findings, strict=strict)
     if as_json:
@@ -132,15 +161,15 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
 @json_option
 @output_option()
 def layout(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
-           rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, as_json: bool,
-           output: str | None) -> None:
+           rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
+           slave: int | None, as_json: bool, output: str | None) -> None:
     """Show the process image per sync manager: byte.bit offsets, sizes, names and types."""
     from ecattool import pdo
     from ecattool.cli.common import dump_json
 
-    device, mapping = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file)
+    device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, slave)
     lay = pdo.layout(device, mapping)
-    inputs = tuple(p for p in (esi, mapping_file) if p and p != "-")
+    inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
     if as_json or output not in (None, "-"):
         write_output(output, dump_json(lay.to_json()) + "\n", inputs)
         return
@@ -166,14 +195,15 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
 @json_option
 @output_option()
 def sdo(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
-        rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, complete_access: bool, order: str,
-        transition: str, force: bool, as_json: bool, output: str | None) -> None:
+        rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
+        slave: int | None, complete_access: bool, order: str, transition: str, force: bool, as_json: bool,
+        output: str | None) -> None:
     """Print the SDO writes that program the mapping, in the order drives require, with exact sizes."""
     from ecattool import pdo
     from ecattool.cli.common import dump_json
     from ecattool.findings import has_errors
 
-    device, mapping = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file)
+    device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, slave)
     findings = pdo.check(device, mapping)
     if has_errors(findings) and not force:
         for f in findings:
@@ -183,7 +213,7 @@ def sdo(esi: str | None, selector: str | None, profile: str | None, product: str
     rows = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
              "size": len(c.data), "data": c.data.hex(), "value": f"0x{c.int_value:X}" if not c.complete_access else None,
              "complete_access": c.complete_access, "comment": c.comment} for c in seq]
-    inputs = tuple(p for p in (esi, mapping_file) if p and p != "-")
+    inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
     if as_json or output not in (None, "-"):
         write_output(output, dump_json(rows) + "\n", inputs)
         return

@@ -8,7 +8,7 @@ SDO sequence that programs a mapping.
     >>> pdo.program(device, m)          # StartupList: 1C12:00=0, 1600:00=0, …            # doctest: +SKIP
 """
 
-from ecattool.pdo.check import RULES, check, input_finding, rule_ids
+from ecattool.pdo.check import RULES, check, check_config, input_finding, rule_ids
 from ecattool.pdo.layout import ImageEntry, Layout, SmImage, layout
 from ecattool.pdo.model import (
     MappedPdo,
@@ -16,6 +16,8 @@ from ecattool.pdo.model import (
     default_assignment,
     default_mapping,
     entry_text,
+    declared_mapping,
+    mapping_from_config,
     mapping_from_startup,
     parse_direction,
     parse_entry,
@@ -24,7 +26,7 @@ from ecattool.pdo.model import (
 from ecattool.pdo.program import ORDERS, program, resolve_rules
 
 __all__ = [
-    "ImageEntry", "Layout", "MappedPdo", "Mapping", "ORDERS", "RULES", "SmImage", "check", "default_assignment",
-    "default_mapping", "entry_text", "input_finding", "layout", "mapping_from_startup", "parse_direction", "parse_entry", "pdo_direction", "program",
+    "ImageEntry", "Layout", "MappedPdo", "Mapping", "ORDERS", "RULES", "SmImage", "check", "check_config", "declared_mapping", "default_assignment",
+    "default_mapping", "entry_text", "input_finding", "layout", "mapping_from_config", "mapping_from_startup", "parse_direction", "parse_entry", "pdo_direction", "program",
     "resolve_rules", "rule_ids",
 ]

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-from ecattool.errors import EcatToolError
+from ecattool.errors import EcatToolError, Location
 from ecattool.esi.model import Device, Direction, Pdo, PdoEntry
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Entry
@@ -61,6 +61,7 @@ RULES: dict[str, tuple[Severity, str]] = {
     "PDO025": (W, "an entry cannot be verified: the device has no object dictionary"),
     "PDO026": (E, "the entry's length is outside the family's entry size range"),
     "PDO027": (E, "the process image of a sync manager is not a whole number of bytes"),
+    "PDO028": (W, "a master configuration declares other process data than its startup SDOs program"),
 }
 
 #: CiA-301 data-type indices usable as dummy entries, with their bit sizes
@@ -421,3 +422,36 @@ def check(
     """All findings of ``mapping`` on ``device`` (see :data:`RULES`). ``startup`` are the other startup
     commands of the drive (for PDO021)."""
     return _Checker(device, mapping, resolve_rules(device, rules), startup).run()
+
+
+def check_config(
+    device: Device, config: Any, rules: FamilyRules | None = None
+) -> tuple[Mapping, list[Finding]]:
+    """Check a master configuration (:class:`ecattool.startup.SlaveConfig`): the mapping it leaves the drive
+    with (:func:`ecattool.pdo.model.mapping_from_config`), its other startup SDOs (PDO021), and whether the
+    entries it declares sit where its startup SDOs put them (PDO028)."""
+    from ecattool.pdo.model import declared_mapping, mapping_from_config, programs_pdos
+
+    mapping = mapping_from_config(config, device)
+    others = [c for c in config.commands if c.index not in (0x1C12, 0x1C13) and pdo_direction(c.index) is None]
+    findings = check(device, mapping, rules=rules, startup=others)
+    declared = declared_mapping(config, device) if programs_pdos(config.commands) else None
+    if declared is not None:
+        lay, dec = layout(device, mapping), layout(device, declared)
+        for d in Direction:
+            if d not in declared.given:
+                continue
+            actual = {(e.index, e.subindex): e for e in lay.image(d).entries if not e.is_gap}
+            where_declared = {(e.index, e.subindex): e.location or p.location
+                              for p in declared.pdos(d) for e in p.entries}
+            for e in dec.image(d).entries:
+                a = actual.get((e.index, e.subindex))
+                if e.is_gap or (a is not None and a.bit_offset == e.bit_offset and a.bit_len == e.bit_len):
+                    continue
+                where = f"at {a.offset} in PDO {_a(a.pdo)}" if a is not None else "nowhere"
+                findings.append(_finding(
+                    "PDO028", f"{_a(e.index, e.subindex)} is declared at {e.offset} in PDO {_a(e.pdo)} of the "
+                    f"{_image(d)}, but the startup SDOs map it {where}",
+                    where_declared.get((e.index, e.subindex)) or (Location(mapping.source) if mapping.source else None),
+                    index=e.index, subindex=e.subindex, declared=e.offset, actual=a.offset if a else None))
+    return mapping, findings

@@ -515,3 +515,43 @@ def mapping_from_startup(commands: Iterable[Any], device: Device | None = None, 
         out.set_pdos(direction, pdos)
         out.given.add(direction)
     return out
+
+
+def programs_pdos(commands: Iterable[Any]) -> bool:
+    """Whether a startup list writes the PDO assignment or a mapping object."""
+    return any(c.index in (0x1C12, 0x1C13) or pdo_direction(c.index) is not None for c in commands)
+
+
+def declared_mapping(config: Any, device: Device | None = None) -> Mapping | None:
+    """The process data a master configuration declares (``SlaveConfig.rx_pdos``/``tx_pdos``: ros2 channels,
+    ENI/ecmc entry lists), as an explicit mapping of the directions it lists; None when it lists none."""
+    data = {
+        d.value: [{"index": p.index, "entries": [e.mapping_value if e.index else f"gap/{e.bit_len}" for e in p.entries]}
+                  for p in config.pdos(d)]
+        for d in Direction if config.pdos(d)
+    }
+    if not data:
+        return None
+    locations = {(d.value, i, "entries", k): e.location
+                 for d in Direction for i, p in enumerate(config.pdos(d)) for k, e in enumerate(p.entries)
+                 if e.location is not None}
+    locations.update({(d.value, i): p.location for d in Direction for i, p in enumerate(config.pdos(d))
+                      if p.location is not None})
+    return Mapping.from_data(data, device=device, locations=locations, source=_config_source(config))
+
+
+def _config_source(config: Any) -> str:
+    src = getattr(config, "source", None)
+    return (src.file or "") if src is not None else ""
+
+
+def mapping_from_config(config: Any, device: Device | None = None) -> Mapping:
+    """The mapping a master configuration (:class:`ecattool.startup.SlaveConfig`) leaves the drive with: what
+    its startup SDOs program when they touch 1C12h/1C13h or mapping objects, else what it declares (masters
+    such as IgH/ros2 program declared PDOs themselves), else the device default."""
+    if programs_pdos(config.commands):
+        return mapping_from_startup(config.commands, device, source=_config_source(config))
+    declared = declared_mapping(config, device)
+    if declared is not None:
+        return declared
+    return default_mapping(device) if device is not None else Mapping()
