@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 
 import pytest
+from hypothesis import given
 
 from ecattool.errors import InputError
 from ecattool.esi import load as load_esi
@@ -312,3 +313,45 @@ def test_every_corpus_device_builds_round_trips_and_checks_clean(name: str) -> N
             continue
         assert not has_errors(check(img)), dev.type_name
         assert not has_errors(check_against(dev, img)), dev.type_name
+
+
+def _devices():
+    from hypothesis import strategies as st
+
+    from ecattool.esi.model import (CoeDetails, DcOpMode, Device, Direction, Eeprom, Fmmu, Identity, Mailbox, Pdo,
+                                    PdoEntry, SyncManager)
+
+    u16, u32 = st.integers(0, 0xFFFF), st.integers(0, 0xFFFFFFFF)
+    text = st.text(max_size=40)
+    kinds = st.sampled_from(["MBoxOut", "MBoxIn", "Outputs", "Inputs", "", "Other"])
+    sms = st.lists(st.builds(SyncManager, st.integers(0, 7), kinds, u16, st.none() | u16, control_byte=st.integers(0, 255),
+                             enable=st.booleans(), virtual=st.booleans()), max_size=5)
+    entries = st.lists(st.builds(PdoEntry, u16, st.integers(0, 255), st.integers(0, 64), text,
+                                 st.sampled_from(["BOOL", "UINT", "WORD", "REAL", "DT0800", "BIT2", ""])), max_size=6)
+    pdos = lambda d: st.lists(st.builds(Pdo, st.just(d), u16, text, entries, st.none() | st.integers(0, 7),  # noqa: E731
+                                        st.booleans(), st.booleans()), max_size=4)
+    dcs = st.lists(st.builds(DcOpMode, text, text, u16, st.none() | u32, st.none() | st.integers(-5, 5),
+                             st.none() | st.integers(-2 ** 31, 2 ** 31 - 1)), max_size=3)
+    mbx = st.none() | st.builds(Mailbox, st.lists(st.sampled_from(["AoE", "EoE", "CoE", "FoE", "SoE", "VoE"]),
+                                                  unique=True), st.none() | st.builds(CoeDetails, *[st.booleans()] * 5),
+                                st.booleans())
+    eeprom = st.none() | st.builds(Eeprom, st.sampled_from([None, 2048, 4096, 65536]),
+                                   st.none() | st.binary(max_size=16), st.none() | st.binary(max_size=8))
+    return st.builds(Device, st.builds(Identity, u32, u32, u32), text, text, text, text,
+                     st.text("YKH ", max_size=4), sync_managers=sms,
+                     fmmus=st.lists(st.builds(Fmmu, st.sampled_from(["Outputs", "Inputs", "MBoxState", "x"]),
+                                              st.none() | st.integers(0, 7)), max_size=4),
+                     rx_pdos=pdos(Direction.RX), tx_pdos=pdos(Direction.TX), mailbox=mbx, dc_opmodes=dcs,
+                     eeprom=eeprom, ebus_current_ma=st.none() | st.integers(-40000, 40000))
+
+
+@given(_devices())
+def test_random_devices_build_or_refuse_and_round_trip(dev) -> None:
+    from ecattool.sii import check, parse
+
+    try:
+        img = build(dev)
+    except InputError:
+        return
+    assert parse(img.to_bytes()) == img and img.crc_ok
+    check(img)

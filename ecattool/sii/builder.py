@@ -192,7 +192,10 @@ def assemble(device: Device, *, pdo_categories: bool = True) -> SiiImage:
         table.extra = b"\xff"  # the pad byte of an odd-length STRINGS body, as in the NI 9144 dumps
     generated: list[Category] = [table, general]
     if device.fmmus:
-        generated.append(FmmuCategory([FMMU_CODES.get(f.kind, 0) for f in device.fmmus]))
+        usages = [FMMU_CODES.get(f.kind, 0) for f in device.fmmus]
+        if len(usages) % 2 == 0 and usages[-1] == 0:
+            usages.pop()  # a last unused FMMU is the same byte as the word padding; keep the model canonical
+        generated.append(FmmuCategory(usages))
     if device.sync_managers:
         generated.append(SyncMCategory([
             SiiSyncManager(sm.start_address, sm.default_size or 0, sm.control_byte & 0xFF, 0,
