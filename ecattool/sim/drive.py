@@ -186,8 +186,11 @@ def _is_mapping(index: int) -> Direction | None:
     return None
 
 
+_ASSIGN = {0x1C12: RX, 0x1C13: TX}
+
+
 def _is_assign(index: int) -> Direction | None:
-    return {0x1C12: RX, 0x1C13: TX}.get(index)
+    return _ASSIGN.get(index)
 
 
 @dataclass
@@ -220,6 +223,8 @@ class Drive:
         self._seq = 0
         self._pdo_known = self._known_pdo_entries()
         self._fixed = {p.index for p in (*device.rx_pdos, *device.tx_pdos) if p.fixed}
+        self._pdo_only_set = frozenset(getattr(self.rules, "pdo_only_indices", ()))
+        self._read_only_set = frozenset(getattr(self.rules, "read_only_indices", ()))
         self._handlers_down: dict[int, Callable[[int, bytes, int | None], bool]] = {}
         self._handlers_up: dict[int, Callable[[int], bytes]] = {}
         self._install_handlers()
@@ -477,7 +482,7 @@ class Drive:
         return e
 
     def _pdo_only(self, index: int, sub: int) -> None:
-        if index in getattr(self.rules, "pdo_only_indices", ()):
+        if index in self._pdo_only_set:
             raise _abort(index, sub, A.UNSUPPORTED_ACCESS)  # Control Techniques 8.5: 2830h/2831h cyclic only
 
     def _upload(self, index: int, sub: int) -> bytes:
@@ -525,7 +530,7 @@ class Drive:
         """Check and apply one download; returns True when the drive sends no reply (2080h reset)."""
         e = self._entry(index, sub)
         self._pdo_only(index, sub)
-        if not e.access.write or (sub and index in getattr(self.rules, "read_only_indices", ())):
+        if not e.access.write or (sub and index in self._read_only_set):
             raise _abort(index, sub, A.READ_ONLY)
         if self.esm not in e.access.write:
             raise _abort(index, sub, A.DATA_CANNOT_BE_STORED_STATE)
