@@ -103,7 +103,7 @@ class _Checker:
         self.od = device.dictionary
         self.default = default_mapping(device)
         self.out: list[Finding] = []
-        #: assigned PDO indices already reported as unknown or of the wrong direction
+        #: assigned PDO indices already reported as unknown (PDO001)
         self.bad: set[int] = set()
         #: PDOs assigned to the wrong sync manager -> their own direction (their contents are judged as such)
         self.wrong: dict[int, Direction] = {}
@@ -141,8 +141,9 @@ class _Checker:
             if p.index not in known:
                 if p.index in known_other or pdo_direction(p.index) is other:
                     self.wrong[p.index] = other
-                    self.add("PDO002", f"{_a(p.index)} is a{'n Rx' if other is Direction.RX else ' Tx'}PDO; it cannot be "
-                             f"assigned to 0x{d.assign_index:04X}", p.location, pdo=p.index)
+                    article = "an" if other is Direction.RX else "a"
+                    self.add("PDO002", f"{_a(p.index)} is {article} {_kind(other)}; it cannot be assigned to "
+                             f"0x{d.assign_index:04X}", p.location, pdo=p.index)
                 else:
                     self.bad.add(p.index)
                     choices = ", ".join(_a(i) for i in sorted(known)) or "none"
@@ -153,7 +154,7 @@ class _Checker:
                 self.check_device_pdo(d, p, dev_pdo, sm_check=p.index not in self.wrong)
         # assignment size
         limit = self.rules.max_assigned_rx if d is Direction.RX else self.rules.max_assigned_tx
-        assign_entries = getattr(self.rules, "max_assign_entries", None)
+        assign_entries = self.rules.max_assign_entries
         if assign_entries is not None and (limit is None or assign_entries < limit):
             limit = assign_entries
         obj = self.od.get(d.assign_index)
@@ -186,10 +187,10 @@ class _Checker:
                          pdos[0].location if pdos else self.mapping_location())
 
     def mapping_location(self) -> Any:
-        from ecattool.errors import Location
-
-        source = self.mapping.source or self.device.source
-        return self.device.location or (Location(source) if source else None)
+        """Where a finding without an entry or PDO of its own points: the mapping's file, else the device."""
+        if self.mapping.source:
+            return Location(self.mapping.source)
+        return self.device.location or (Location(self.device.source) if self.device.source else None)
 
     def assign_not_writable(self, d: Direction) -> str:
         if not self.rules.assign_writable:
@@ -265,8 +266,11 @@ class _Checker:
         rx = d is Direction.RX
         if e.is_gap:
             if not self.rules.gaps_allowed:
+                hint = ""
+                if rx and self.rules.dummies_in_rx and self.rules.dummy_indices:
+                    hint = " (pad with a dummy entry instead, e.g. 0x0005:00/8)"
                 self.add("PDO013", f"gap entry ({e.bit_len} bits) in {_a(p.index)}: {self.rules.family} does not "
-                         "allow gaps (index 0) in mapping objects", loc, pdo=p.index)
+                         f"allow gaps (index 0) in mapping objects{hint}", loc, pdo=p.index)
             return
         if self.is_dummy(e.index):
             allowed = self.rules.dummies_in_rx if rx else self.rules.dummies_in_tx
@@ -279,6 +283,9 @@ class _Checker:
                 self.add("PDO007", f"dummy {_a(e.index, e.subindex)} is {size} bits, mapped with {e.bit_len}", loc,
                          pdo=p.index, expected=size, given=e.bit_len)
             return
+        if first_of_two and self.rules.priority_rule and self.is_slow(e.index, self.od.entry(e.index, e.subindex)):
+            self.add("PDO012", f"{_a(e.index, e.subindex)} ({e.name}) is a slow parameter; with two {_kind(d)}s it "
+                     f"must be in the second PDO, not in {_a(p.index)}", loc, index=e.index, subindex=e.subindex)
         if (e.index, e.subindex, e.bit_len) in self.known_entries[d]:
             return  # the device maps exactly this entry in one of its own PDOs of this direction
         if not len(self.od):
@@ -297,7 +304,7 @@ class _Checker:
                      f"{e.subindex:02X} (has {subs})", loc, index=e.index, subindex=e.subindex)
             return
         label = f"{_a(e.index, e.subindex)} ({e.name or entry.name})"
-        lo, hi = getattr(self.rules, "min_entry_bits", None), getattr(self.rules, "max_entry_bits", None)
+        lo, hi = self.rules.min_entry_bits, self.rules.max_entry_bits
         if (lo is not None and e.bit_len < lo) or (hi is not None and e.bit_len > hi):
             self.add("PDO026", f"{label} has {e.bit_len} bits; {self.rules.family} maps entries of "
                      f"{lo or 1}..{hi or 255} bits", loc, bits=e.bit_len)
@@ -306,14 +313,11 @@ class _Checker:
                      f"{e.bit_len} bits (write {_a(e.index, e.subindex)}/{entry.bit_size})", loc,
                      expected=entry.bit_size, given=e.bit_len)
         self.check_direction(d, label, entry, e, loc)
-        if first_of_two and self.rules.priority_rule and self.is_slow(e.index, entry):
-            self.add("PDO012", f"{label} is a slow parameter; with two {_kind(d)}s it must be in the "
-                     f"second PDO, not in {_a(p.index)}", loc, index=e.index, subindex=e.subindex)
 
     def check_direction(self, d: Direction, label: str, entry: Entry, e: PdoEntry, loc: Any) -> None:
         rx = d is Direction.RX
         flag = entry.pdo_mapping
-        if e.index in getattr(self.rules, "sdo_only_indices", frozenset()):
+        if e.index in self.rules.sdo_only_indices:
             self.add("PDO006", f"{label} can only be accessed by SDO on {self.rules.family} drives", loc,
                      index=e.index, subindex=e.subindex, pdo_mapping="")
             return
@@ -342,12 +346,12 @@ class _Checker:
             return entry.bit_size
         return DUMMY_TYPE_BITS.get(index)
 
-    def is_slow(self, index: int, entry: Entry) -> bool:
+    def is_slow(self, index: int, entry: Entry | None) -> bool:
         """A slow parameter (Control Techniques priority rule): the dictionary marks it (category "slow")."""
-        if index in getattr(self.rules, "slow_indices", frozenset()):
+        if index in self.rules.slow_indices:
             return True
         obj = self.od.get(index)
-        marks = (entry.category, obj.category if obj is not None else "")
+        marks = (entry.category if entry is not None else "", obj.category if obj is not None else "")
         return any(m.strip().lower() == "slow" for m in marks)
 
     # --- image level ------------------------------------------------------------------------------

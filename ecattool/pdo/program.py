@@ -43,13 +43,11 @@ def _cmd(transition: str, index: int, sub: int, value: int, size: int, comment: 
 
 
 def resolve_rules(device: Device, rules: FamilyRules | None) -> FamilyRules:
-    """The family rules to use: the given ones, the device family's (``ecattool.profiles``), or generic."""
+    """The family rules to use: the given ones, else the device family's (``ecattool.profiles.rules_for``)."""
     if rules is not None:
         return rules
-    try:
-        from ecattool.profiles import rules_for  # type: ignore[attr-defined]
-    except ImportError:
-        return FamilyRules("generic")
+    from ecattool.profiles import rules_for
+
     return rules_for(device)
 
 
