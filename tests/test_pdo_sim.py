@@ -269,3 +269,45 @@ def test_simulator_enforces_ct_priority_rule() -> None:
     assert v.refused and v.code in CODES["PDO012"], v
     second = Mapping.from_text(rx="0x1605;0x1600=controlword,0x2046:01/32", device=t.device)
     assert check(t.device, second, rules=t.rules) == [] and not simulate(t, second).refused
+
+
+def _run_on_sim(t: Target, startup) -> Verdict:
+    drive = Drive.from_device(t.device, t.rules)
+    drive.request_state(EcState.PREOP)
+    for cmd in startup:
+        try:
+            drive.sdo_download(cmd.index, cmd.subindex, cmd.data, complete_access=cmd.complete_access)
+        except SdoAbort as exc:
+            return Verdict(True, exc.code, where=cmd.address)
+    drive.request_state(EcState.SAFEOP)
+    drive.request_state(EcState.OP)
+    return Verdict(False, sizes=drive.process_image_sizes())
+
+
+def _ct_quick_start() -> tuple[Target, Mapping]:
+    ct = target("controltechniques")
+    m = Mapping.from_text(rx="0x1600=0x60400010,0x60420010,0x20141520",
+                          tx="0x1A00=0x60410010,0x60640020;0x1A05=0x20121610,0x20141520", device=ct.device)
+    assert check(ct.device, m, rules=ct.rules) == []
+    return ct, m
+
+
+def test_ct_quick_start_in_the_standard_order_reaches_op() -> None:
+    ct, m = _ct_quick_start()
+    assert _run_on_sim(ct, program(ct.device, m)) == Verdict(False, sizes=(8, 12))
+
+
+@pytest.mark.xfail(strict=True, reason="simulator bug reported to the lead: the SM-EtherCAT quick start (5.1.3) "
+                   "rewrites 1A05h while the default 1C13h assigns it; the simulator aborts 0800 0022h")
+def test_simulator_accepts_the_ct_quick_start_literally() -> None:
+    ct, m = _ct_quick_start()
+    assert _run_on_sim(ct, program(ct.device, m, order="count-first")) == Verdict(False, sizes=(8, 12))
+
+
+def test_technosoft_refuses_the_count_first_order() -> None:
+    # Technosoft needs sub-index 0 = 0 before entries are written (§2.3.1): the literal CT order is refused
+    ts = target("technosoft-ipos")
+    m = Mapping.from_text(rx="0x1600;0x1601;0x1602=controlword,0x6060:00/8", device=ts.device)
+    v = _run_on_sim(ts, program(ts.device, m, order="count-first"))
+    assert v.refused and v.code in (A.DATA_CANNOT_BE_STORED_STATE, A.SUBINDEX_CANNOT_BE_WRITTEN_SI0_NONZERO), v
+    assert _run_on_sim(ts, program(ts.device, m)) == Verdict(False, sizes=(17, 16))
