@@ -196,6 +196,8 @@ def test_copley_init_cmds_and_odd_hex():
     materialize(esi)  # dictionaries are read on first use; their warnings arrive then
     odd = [w for w in esi.warnings if w.rule == "esi-hex-odd"]
     assert odd and odd[0].location.line is not None
+    sync_type = esi.devices[0].dictionary.entry(0x1C32, 1)  # DefaultData "2" for a UINT
+    assert sync_type.default == b"\x02\x00" and sync_type.default_value == 2
     cmds = [c for m in esi.modules for c in m.init_cmds]
     assert cmds and cmds[0].transitions == ["PS"] and cmds[0].index == 0x6060 and cmds[0].depend_on_slot
     assert esi.vendor_id == 171

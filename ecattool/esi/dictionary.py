@@ -25,6 +25,7 @@ _UINT_BY_BITS = {8: BY_CODE[0x05], 16: BY_CODE[0x06], 24: BY_CODE[0x16], 32: BY_
                  48: BY_CODE[0x19], 56: BY_CODE[0x1A], 64: BY_CODE[0x1B]}
 _BITS = {i: BY_CODE[0x30 + i - 1] for i in range(1, 9)}
 _DEFAULT_ACCESS = Access.parse("ro")
+_INT_KINDS = frozenset({Kind.UNSIGNED, Kind.SIGNED, Kind.BITS, Kind.BOOL})
 _MAX_VALUE_BITS = 8 * 65536  # no CoE value is larger; guards encoders against absurd sizes in hostile files
 
 
@@ -204,7 +205,13 @@ def _apply_info(entry: Entry, info: Any, ctx: Context) -> None:
             continue
         text = child.text
         if tag == "DefaultData":
-            entry.default = ctx.hexbin(text, child, "DefaultData")
+            raw = ctx.hexbin(text, child, "DefaultData")
+            size = (entry.bit_size + 7) // 8
+            if dt is not None and dt.kind in _INT_KINDS and 0 < len(raw) < size <= 8:
+                ctx.warn("esi-default-short", f"DefaultData {raw.hex()} is shorter than {entry.type_name or dt.name} "
+                         f"({size} bytes); zero-extended", child)
+                raw = raw.ljust(size, b"\x00")
+            entry.default = raw
         elif tag == "DefaultValue":
             entry.default = _encode_value(entry, text, child, ctx)
         elif tag == "DefaultString":
