@@ -11,6 +11,7 @@ import pytest
 
 from ecattool.project import cache
 from ecattool.project.lint import lint_project
+from tests.conftest import corpus_path
 from tests.project_helpers import DATA, SAMPLES, run, run_json, sample, write_project
 
 BROKEN = str(DATA / "prj010_no_object.yaml")  # two errors
@@ -157,57 +158,80 @@ def test_text_to_file(capsys, tmp_path):
 ESI_PROJECT = sample("generic_esi")
 
 
+def fresh_process(monkeypatch) -> None:
+    """Forget what this process has cached in memory, as a new `ecattool lint` process would."""
+    for name in ("_MEMORY", "_DEVICES", "_CHECKS", "_PROFILES", "_DIGESTS"):
+        monkeypatch.setattr(cache, name, {})
+
+
 @pytest.fixture()
 def cache_dir(tmp_path, monkeypatch):
     d = tmp_path / "cache"
     monkeypatch.setenv("ECATTOOL_CACHE_DIR", str(d))
     monkeypatch.delenv("ECATTOOL_NO_CACHE", raising=False)
-    monkeypatch.setattr(cache, "_MEMORY", {})
+    fresh_process(monkeypatch)
     return d
 
 
-def _entries(d: Path) -> list[Path]:
-    return sorted((d / "esi").glob("*.pickle"))
+def _entries(d: Path, kind: str) -> list[Path]:
+    return sorted((d / kind).glob("*.pickle"))
 
 
-def test_second_lint_reads_the_pickle(cache_dir, monkeypatch):
+def test_second_lint_reads_the_pickles(cache_dir, monkeypatch):
     first = lint_project(ESI_PROJECT)
-    (entry,) = _entries(cache_dir)
-    assert len(entry.stem) == 64  # SHA-256 of the content
-    assert type(pickle.loads(entry.read_bytes())).__name__ == "EsiFile"
-    # a fresh process: nothing in memory, and parsing the ESI is not allowed any more
-    monkeypatch.setattr(cache, "_MEMORY", {})
-    from ecattool import esi
+    (device_entry,) = _entries(cache_dir, "device")
+    (check_entry,) = _entries(cache_dir, "check")
+    assert len(device_entry.stem) == 64  # a SHA-256
+    assert type(pickle.loads(device_entry.read_bytes())).__name__ == "Device"
+    assert pickle.loads(check_entry.read_bytes()) == []  # the Inovance ESI is structurally clean
+    # a fresh process: nothing in memory, and reading the ESI or completing the device is not allowed any more
+    fresh_process(monkeypatch)
+    from ecattool import esi, profiles
 
     def no_parse(*a, **k):
-        raise AssertionError("the ESI was parsed again instead of read from the cache")
+        raise AssertionError("the ESI was parsed (or the device completed) again instead of read from the cache")
 
     monkeypatch.setattr(esi, "load_bytes", no_parse)
+    monkeypatch.setattr(esi, "check_structure", no_parse)
+    monkeypatch.setattr(profiles, "complete_generic", no_parse)
     second = lint_project(ESI_PROJECT)
     assert second.findings == first.findings == []
     assert second.drives[0].device.product_code == first.drives[0].device.product_code
-    assert _entries(cache_dir) == [entry]
+    assert _entries(cache_dir, "device") == [device_entry] and _entries(cache_dir, "check") == [check_entry]
 
 
-def test_damaged_cache_entry_is_rebuilt(cache_dir, monkeypatch):
+def test_cached_esi_findings_keep_their_locations(cache_dir, monkeypatch, tmp_path):
+    esi = corpus_path("esi", "synapticon_Somanet_CiA402-single.xml")
+    p = write_project(tmp_path, f"ecattool: 1\ndrives:\n  - name: s\n    device: {{esi: {esi}}}\n")
+    first = lint_project(p).findings
+    fresh_process(monkeypatch)
+    second = lint_project(p).findings
+    assert second == first and any(f.location.line == 898 for f in second)
+
+
+@pytest.mark.parametrize("kind, check", [("device", lambda o: type(o).__name__ == "Device"),
+                                         ("check", lambda o: o == [])])
+def test_damaged_cache_entry_is_rebuilt(cache_dir, monkeypatch, kind, check):
     lint_project(ESI_PROJECT)
-    (entry,) = _entries(cache_dir)
+    (entry,) = _entries(cache_dir, kind)
     good = entry.read_bytes()
     entry.write_bytes(b"not a pickle at all")
-    monkeypatch.setattr(cache, "_MEMORY", {})
+    fresh_process(monkeypatch)
     result = lint_project(ESI_PROJECT)
     assert result.findings == [] and result.drives[0].device is not None
     assert entry.read_bytes() != b"not a pickle at all"
-    assert type(pickle.loads(entry.read_bytes())).__name__ == "EsiFile" and len(entry.read_bytes()) == len(good)
+    assert check(pickle.loads(entry.read_bytes())) and len(entry.read_bytes()) == len(good)
 
 
-def test_foreign_pickle_is_not_trusted(cache_dir, monkeypatch):
+@pytest.mark.parametrize("kind, check", [("device", lambda o: type(o).__name__ == "Device"),
+                                         ("check", lambda o: o == [])])
+def test_foreign_pickle_is_not_trusted(cache_dir, monkeypatch, kind, check):
     lint_project(ESI_PROJECT)
-    (entry,) = _entries(cache_dir)
-    entry.write_bytes(pickle.dumps({"not": "an EsiFile"}))
-    monkeypatch.setattr(cache, "_MEMORY", {})
+    (entry,) = _entries(cache_dir, kind)
+    entry.write_bytes(pickle.dumps({"not": "what the cache wrote"}))
+    fresh_process(monkeypatch)
     assert lint_project(ESI_PROJECT).drives[0].device is not None
-    assert type(pickle.loads(entry.read_bytes())).__name__ == "EsiFile"
+    assert check(pickle.loads(entry.read_bytes()))
 
 
 def test_changed_esi_content_is_a_new_entry(cache_dir, tmp_path):
@@ -220,11 +244,11 @@ def test_changed_esi_content_is_a_new_entry(cache_dir, tmp_path):
     lint_project(dst / "project.yaml")
     (dst / "inovance_SV660_EOE_1Axis_V9.12.xml").write_bytes(xml + b"\n<!-- edited -->\n")
     lint_project(dst / "project.yaml")
-    assert len(_entries(cache_dir)) == 2
+    assert len(_entries(cache_dir, "check")) == 2 and len(_entries(cache_dir, "device")) == 2
 
 
 def test_no_cache_env_writes_nothing(cache_dir, monkeypatch):
     monkeypatch.setenv("ECATTOOL_NO_CACHE", "1")
     assert lint_project(ESI_PROJECT).findings == []
-    assert not (cache_dir / "esi").exists()
+    assert not cache_dir.exists()
 

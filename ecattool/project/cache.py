@@ -1,8 +1,18 @@
-"""A cache of parsed ESI files keyed by file content, so linting a large project is fast the second time.
+"""Caches that keep linting a large project fast the second time, keyed by file content.
 
-Entries live in ``$ECATTOOL_CACHE_DIR`` (default ``~/.cache/ecattool``) as pickles named by the SHA-256 of
-the ESI bytes and the ecattool version. A damaged or foreign entry is ignored and rebuilt. Set
-``ECATTOOL_NO_CACHE=1`` to disable the cache.
+Entries live in ``$ECATTOOL_CACHE_DIR`` (default ``~/.cache/ecattool``) as pickles named by a SHA-256 of the
+ESI bytes, the ecattool version and what else the entry depends on:
+
+- ``device/<key>.pickle``: a device selected from an ESI and completed for use (default modules in its
+  slots, synthesised mapping and assignment objects), keyed also by the selector, the policy and the path
+  (its locations name the file). Completing copies the whole dictionary: the expensive part of a cold lint.
+- ``check/<key>.pickle``: the ESI's structural findings (``esi.check_structure``), keyed also by the path.
+
+With both, a warm lint does not read the ESI at all. The parsed ``EsiFile`` itself is kept in memory only:
+the reader is lazy, so parsing an ESI costs about what unpickling it would (docs/performance.md, "Lint").
+Within one process every ESI, device and built-in profile is computed once and shared by every drive that
+uses it (callers treat devices as read-only). A damaged or foreign entry is ignored and rebuilt. Set
+``ECATTOOL_NO_CACHE=1`` to disable the disk cache.
 """
 
 from __future__ import annotations
@@ -13,10 +23,16 @@ import pickle
 from pathlib import Path
 
 from ecattool import __version__
-from ecattool.esi.model import EsiFile
+from ecattool.esi.model import Device, EsiFile
 from ecattool.fileio import read_bytes, write_atomic
+from ecattool.findings import Finding
 
 _MEMORY: dict[str, EsiFile] = {}
+_DEVICES: dict[str, Device] = {}
+_CHECKS: dict[str, list[Finding]] = {}
+_PROFILES: dict[tuple[str, str | None, str | None], Device] = {}
+#: path -> ((mtime_ns, size), content key): a file used by many drives is read and hashed once per process
+_DIGESTS: dict[str, tuple[tuple[int, int], str]] = {}
 
 
 def cache_dir() -> Path:
@@ -27,33 +43,110 @@ def cache_dir() -> Path:
     return Path(base) / "ecattool"
 
 
-def load_esi_cached(path: str | Path) -> EsiFile:
-    """``ecattool.esi.load_bytes`` with a content-keyed memory and disk cache."""
+def _key(*parts: bytes) -> str:
+    return hashlib.sha256(b"\0".join((*parts, b"ecattool " + __version__.encode()))).hexdigest()
+
+
+def _disk_get(kind: str, key: str, cls: type) -> object | None:
+    if os.environ.get("ECATTOOL_NO_CACHE"):
+        return None
+    file = cache_dir() / kind / f"{key}.pickle"
+    if not file.exists():
+        return None
+    try:
+        with open(file, "rb") as fh:
+            obj = pickle.load(fh)
+    except Exception:  # a damaged cache entry is rebuilt
+        return None
+    return obj if isinstance(obj, cls) else None
+
+
+def _disk_put(kind: str, key: str, obj: object) -> None:
+    if os.environ.get("ECATTOOL_NO_CACHE"):
+        return
+    try:
+        file = cache_dir() / kind / f"{key}.pickle"
+        file.parent.mkdir(parents=True, exist_ok=True)
+        write_atomic(file, pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL))
+    except Exception:  # a read-only cache directory only costs speed
+        pass
+
+
+def _content_key(path: str | Path) -> tuple[str, bytes | None]:
+    """The content key of the file at ``path``, and its bytes when they had to be read (else None)."""
+    st = os.stat(path)
+    sig = (st.st_mtime_ns, st.st_size)
+    known = _DIGESTS.get(str(path))
+    if known is not None and known[0] == sig:
+        return known[1], None
+    data = read_bytes(path)
+    key = _key(data)
+    _DIGESTS[str(path)] = (sig, key)
+    return key, data
+
+
+def _esi(path: str | Path) -> EsiFile:
     from ecattool import esi
 
-    data = read_bytes(path)
-    key = hashlib.sha256(data + b"\0ecattool " + __version__.encode()).hexdigest()
+    key, data = _content_key(path)
     hit = _MEMORY.get(key)
     if hit is not None:
         return hit
-    use_disk = not os.environ.get("ECATTOOL_NO_CACHE")
-    file = cache_dir() / "esi" / f"{key}.pickle"
-    if use_disk and file.exists():
-        try:
-            with open(file, "rb") as fh:
-                obj = pickle.load(fh)
-            if isinstance(obj, EsiFile):
-                obj.source = str(path)
-                _MEMORY[key] = obj
-                return obj
-        except Exception:  # a damaged cache entry is rebuilt
-            pass
-    obj = esi.load_bytes(data, str(path))
-    _MEMORY[key] = obj
-    if use_disk:
-        try:
-            file.parent.mkdir(parents=True, exist_ok=True)
-            write_atomic(file, pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL))
-        except Exception:  # a read-only cache directory only costs speed
-            pass
+    if data is None:
+        data = read_bytes(path)
+        key = _key(data)
+    obj = _MEMORY[key] = esi.load_bytes(data, str(path))
     return obj
+
+
+def load_esi_cached(path: str | Path) -> EsiFile:
+    """``ecattool.esi.load_bytes`` once per process for each file content."""
+    return _esi(path)
+
+
+def load_device_cached(path: str | Path, select: str | None, policy: str) -> Device:
+    """The device ``select`` of the ESI at ``path``, completed for use (``profiles.complete_generic``), with a
+    memory and disk cache keyed by the ESI content, the selector, the policy and the path. Shared: do not
+    modify the returned device."""
+    from ecattool import esi, profiles
+
+    content, _ = _content_key(path)
+    key = _key(content.encode(), str(select).encode(), policy.encode(), str(path).encode())
+    hit = _DEVICES.get(key)
+    if hit is not None:
+        return hit
+    obj = _disk_get("device", key, Device)
+    if not isinstance(obj, Device):
+        selected = esi.select(_esi(path), select, policy=policy)
+        obj = profiles.complete_generic(selected)
+        _disk_put("device", key, obj)
+    _DEVICES[key] = obj
+    return obj
+
+
+def esi_findings_cached(path: str | Path) -> list[Finding]:
+    """``esi.check_structure`` of the ESI at ``path``, with a memory and disk cache (content and path)."""
+    from ecattool import esi
+
+    content, _ = _content_key(path)
+    key = _key(content.encode(), b"check", str(path).encode())
+    hit = _CHECKS.get(key)
+    if hit is not None:
+        return hit
+    obj = _disk_get("check", key, list)
+    if not isinstance(obj, list) or not all(isinstance(f, Finding) for f in obj):
+        obj = list(esi.check_structure(_esi(path)))
+        _disk_put("check", key, obj)
+    _CHECKS[key] = obj
+    return obj
+
+
+def load_profile_cached(name: str, product: str | None, revision: str | int | None) -> Device:
+    """``profiles.load`` once per process for each (profile, product, revision). Shared: do not modify."""
+    from ecattool import profiles
+
+    key = (name, product, None if revision is None else str(revision))
+    hit = _PROFILES.get(key)
+    if hit is None:
+        hit = _PROFILES[key] = profiles.load(name, product=product, revision=revision)
+    return hit

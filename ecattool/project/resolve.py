@@ -61,20 +61,19 @@ def resolve_device(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         from ecattool import profiles
 
         if ref.profile is not None:
-            rd.device = profiles.load(ref.profile, product=ref.product, revision=ref.revision)
+            from ecattool.project.cache import load_profile_cached
+
+            rd.device = load_profile_cached(ref.profile, ref.product, ref.revision)
         else:
-            from ecattool import esi
-            from ecattool.project.cache import load_esi_cached
+            from ecattool.project.cache import load_device_cached
 
             assert ref.esi is not None
             path = lp.resolve(ref.esi)
             if not path.exists():
                 rd.error("PRJ002", f"ESI file {ref.esi!r} not found (looked in {path})", lp.drive_location(i, "device", "esi"))
                 return
-            esi_file = load_esi_cached(path)
-            selected = esi.select(esi_file, None if ref.select is None else str(ref.select), policy=ref.policy)
             # the device as it runs: default modules in its slots, synthesised mapping/assignment objects
-            rd.device = profiles.complete_generic(selected)
+            rd.device = load_device_cached(path, None if ref.select is None else str(ref.select), ref.policy)
     except EcatToolError as exc:
         loc = exc.location if exc.location and exc.location.line else lp.drive_location(i, "device")
         rd.error("PRJ005", exc.message, loc)

@@ -8,7 +8,7 @@ from __future__ import annotations
 from typing import Any
 
 from ecattool.errors import EcatToolError
-from ecattool.findings import Finding, Severity
+from ecattool.findings import Finding
 from ecattool.project.loader import LoadedProject
 from ecattool.project.resolve import ResolvedDrive
 from ecattool.startup.model import StartupCommand
@@ -130,18 +130,14 @@ def dc_assign_activate(rd: ResolvedDrive) -> int | None:
 
 def check_esi(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     """The ESI's own structural findings (file-level; de-duplicated across drives by lint)."""
-    from ecattool import esi
-    from ecattool.project.cache import load_esi_cached
+    from ecattool.project.cache import esi_findings_cached
 
     ref = rd.drive.device
     if ref.esi is None:
         return
     try:
-        f = load_esi_cached(lp.resolve(ref.esi))
-        findings = esi.check_structure(f)
+        findings = esi_findings_cached(lp.resolve(ref.esi))
     except EcatToolError as exc:
         rd.error("PRJ005", exc.message, exc.location)
         return
-    for fd in findings:
-        # keep only findings about this device or the file as a whole
-        rd.findings.append(fd if fd.severity is not Severity.ERROR else fd)
+    rd.findings.extend(findings)

@@ -17,6 +17,9 @@ Path_ = tuple[str | int, ...]
 
 _MAX_YAML_BYTES = 16 * 1024 * 1024
 
+#: libyaml's parser where PyYAML has it (10x faster on large projects; same nodes, marks and errors)
+_Loader: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
 
 class LocatedYaml:
     """A loaded YAML document plus a map from value paths to locations."""
@@ -46,7 +49,7 @@ def load_yaml(text: str | bytes, source: str) -> LocatedYaml:
     if len(text) > _MAX_YAML_BYTES:
         raise InputError(f"YAML file is larger than {_MAX_YAML_BYTES} bytes", Location(source))
     try:
-        loader = yaml.SafeLoader(text)
+        loader = _Loader(text)
     except yaml.YAMLError as exc:  # the reader checks characters and encoding up front
         raise InputError(f"invalid YAML: {exc}".splitlines()[0], Location(source, 1)) from None
     try:
@@ -58,7 +61,7 @@ def load_yaml(text: str | bytes, source: str) -> LocatedYaml:
         raise InputError(f"invalid YAML: {exc.problem or exc.context}", Location(source, line, col)) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
-        line = mark.line + 1 if mark else None
+        line = mark.line + 1 if mark else 1  # reader errors (encoding, control characters) have no mark
         text0 = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputError(f"invalid YAML: {text0}", Location(source, line)) from None
     finally:
