@@ -7,20 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from ecattool.cli import main
 from tests.conftest import corpus_path
+from tests.project_helpers import run
 
 TS = ["--profile", "technosoft-ipos"]
-
-
-def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    try:
-        main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_check_ok_and_failed(capsys: pytest.CaptureFixture[str]) -> None:
