@@ -13,6 +13,18 @@ SAMPLES = ("technosoft_ipos", "hdt", "controltechniques", "generic_esi")
 DATA = ROOT / "tests" / "data" / "projects"
 
 
+#: an HDT drive on a belt: pi in the factors, so they are approximated (info findings, lint still passes)
+BELT_PROJECT = """ecattool: 1
+drives:
+  - name: x
+    device: {profile: hdt, product: tomcat}
+    scaling:
+      feedback: {counts_per_rev: 65536}
+      transmission: {type: belt, diameter: 30 mm}
+      units: {position: um}
+"""
+
+
 def sample(name: str) -> Path:
     p = ROOT / "samples" / name / "project.yaml"
     assert p.exists(), f"sample project missing: {p}"

@@ -12,7 +12,7 @@ import pytest
 from ecattool.project import cache
 from ecattool.project.lint import lint_project
 from tests.conftest import corpus_path
-from tests.project_helpers import DATA, SAMPLES, run, run_json, sample, write_project
+from tests.project_helpers import BELT_PROJECT, DATA, SAMPLES, run, run_json, sample, write_project
 
 BROKEN = str(DATA / "prj010_no_object.yaml")  # two errors
 WARN_ONLY = str(DATA / "prj015_enum.yaml")  # one warning
@@ -40,15 +40,7 @@ def test_warnings_pass_unless_strict(capsys):
 
 
 def test_infos_do_not_fail_strict(capsys, tmp_path):
-    p = write_project(tmp_path, """ecattool: 1
-drives:
-  - name: x
-    device: {profile: hdt, product: tomcat}
-    scaling:
-      feedback: {counts_per_rev: 65536}
-      transmission: {type: belt, diameter: 30 mm}
-      units: {position: um}
-""")
+    p = write_project(tmp_path, BELT_PROJECT)
     assert run(capsys, "lint", "--strict", str(p))[0] == 0
 
 

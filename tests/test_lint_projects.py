@@ -12,7 +12,7 @@ import pytest
 from ecattool.findings import Severity
 from ecattool.project.lint import PROJECT_RULES, lint_project
 from tests.conftest import ROOT, corpus_path
-from tests.project_helpers import DATA, SAMPLES, sample, write_project
+from tests.project_helpers import BELT_PROJECT, DATA, SAMPLES, sample, write_project
 
 E, W = Severity.ERROR, Severity.WARNING
 
@@ -152,15 +152,7 @@ def test_synapticon_esi_maps_a_missing_subindex(tmp_path):
 
 
 def test_inexact_scaling_is_an_info_at_the_scaling_section(tmp_path):
-    p = write_project(tmp_path, """ecattool: 1
-drives:
-  - name: x
-    device: {profile: hdt, product: tomcat}
-    scaling:
-      feedback: {counts_per_rev: 65536}
-      transmission: {type: belt, diameter: 30 mm}
-      units: {position: um}
-""")
+    p = write_project(tmp_path, BELT_PROJECT)
     findings = lint_project(p).findings
     assert findings and {f.rule for f in findings} == {"scaling.approximated"}
     assert {(f.severity, f.location.line) for f in findings} == {(Severity.INFO, 6)}
