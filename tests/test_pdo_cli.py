@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from ecattool.esi.model import Direction
 from tests.conftest import corpus_path
 from tests.project_helpers import run
 
@@ -119,3 +120,20 @@ def test_check_a_master_configuration(capsys: pytest.CaptureFixture[str]) -> Non
     code, out, _ = run(capsys, "map", "check", *TS, "--product", "ipos4808-bx-cat", "--startup", ecmc, "--strict")
     assert code == 1 and f"{ecmc}:164: warning:" in out
     assert run(capsys, "map", "check", *TS, "--startup", ecmc, "--rx", "0x1600")[0] == 2
+
+
+@pytest.mark.parametrize("fmt", ["twincat", "eni", "ecmc", "json"])
+def test_sdo_as_a_master_startup_list_round_trips(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                                  fmt: str) -> None:
+    from ecattool import pdo, profiles
+    from ecattool.startup import import_file
+
+    target = tmp_path / f"startup.{ {'twincat': 'txt', 'eni': 'xml', 'ecmc': 'cmd', 'json': 'json'}[fmt]}"
+    spec = "0x1600;0x1601;0x1602=controlword,modes of operation"
+    code, _, _ = run(capsys, "map", "sdo", *TS, "--rx", spec, "--format", fmt, "-o", str(target))
+    assert code == 0
+    if fmt == "twincat":
+        assert target.read_text().splitlines()[0] == "<PS>,CoE,0x1C12:00,0x00 (0),clear sm pdos (0x1C12)"
+    dev = profiles.load("technosoft-ipos")
+    back = pdo.mapping_from_startup(import_file(target)[0].commands, dev)
+    assert back.to_text(Direction.RX) == "0x1600;0x1601;0x1602=0x6040:00/16,0x6060:00/8"

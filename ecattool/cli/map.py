@@ -16,6 +16,7 @@ Examples:
   ecattool map {cmd} --profile technosoft-ipos --rx "0x1600;0x1601;0x1602=controlword,modes of operation"
   ecattool map {cmd} --esi drive.xml --device EL7211 --mapping mapping.yaml --json
   ecattool map {cmd} --profile technosoft-ipos --product ipos4808-bx-cat --startup ecmc_ecmciPOSXXXX.cmd
+  ecattool map sdo --profile hdt --rx "0x1600=controlword,0x607A:00/32" --format twincat -o startup.txt
 
 \b
 Mapping syntax: PDOs separated by ';', entries by ','; an entry is 0x6040:00/16, 6040:0/16, an object
@@ -192,12 +193,14 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
               help="standard: sub-index 0 = 0, entries, count; count-first: the Control Techniques quick start order.")
 @click.option("--transition", default="PS", show_default=True, help="Transition the writes belong to.")
 @click.option("--force", is_flag=True, help="Print the sequence even when the mapping has errors.")
+@click.option("--format", "fmt", help="Write the sequence as a startup list for a master: eni, twincat, igh, "
+              "pysoem, ros2, ecmc, json, csv, lcec (see `ecattool startup`).")
 @json_option
 @output_option()
 def sdo(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
         rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
-        slave: int | None, complete_access: bool, order: str, transition: str, force: bool, as_json: bool,
-        output: str | None) -> None:
+        slave: int | None, complete_access: bool, order: str, transition: str, force: bool, fmt: str | None,
+        as_json: bool, output: str | None) -> None:
     """Print the SDO writes that program the mapping, in the order drives require, with exact sizes."""
     from ecattool import pdo
     from ecattool.cli.common import dump_json
@@ -210,10 +213,16 @@ def sdo(esi: str | None, selector: str | None, profile: str | None, product: str
             click.echo(str(f), err=True)
         raise SystemExit(1)
     seq = pdo.program(device, mapping, complete_access=complete_access, transition=transition.upper(), order=order)
+    inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
+    if fmt:
+        from ecattool.startup import SlaveConfig, export
+
+        config = SlaveConfig.from_device(device, seq, mapping=mapping)  # with the process data it installs
+        write_output(output, export(config, fmt.lower()), inputs)
+        return
     rows = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
              "size": len(c.data), "data": c.data.hex(), "value": f"0x{c.int_value:X}" if not c.complete_access else None,
              "complete_access": c.complete_access, "comment": c.comment} for c in seq]
-    inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
     if as_json or output not in (None, "-"):
         write_output(output, dump_json(rows) + "\n", inputs)
         return
