@@ -430,9 +430,9 @@ def _pdo_entries(device: Device, pdo: Pdo) -> list[PdoEntry]:
 
 
 def default_assignment(device: Device, direction: Direction) -> list[int]:
-    """PDO indices assigned by default: the ESI PDOs with an ``Sm`` attribute (in file order), else the
-    dictionary's 1C12h/1C13h defaults."""
-    pdos = [p.index for p in device.pdos(direction) if p.sm is not None]
+    """PDO indices assigned by default: the ESI PDOs with an ``Sm`` attribute or ``Mandatory`` (in file
+    order), else the dictionary's 1C12h/1C13h defaults."""
+    pdos = [p.index for p in device.pdos(direction) if p.sm is not None or p.mandatory]
     if pdos:
         return pdos
     obj = device.dictionary.get(direction.assign_index)
