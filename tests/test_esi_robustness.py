@@ -276,3 +276,13 @@ def test_unreadable_referenced_files_are_warnings(tmp_path):
     esi = load(path)
     assert len(esi.devices[0].dictionary) == 0 and esi.modules == []
     assert {w.rule for w in esi.warnings} == {"esi-inforeference-bad", "esi-dictionaryfile-bad"}
+
+
+def test_names_prefer_1033_else_the_first():
+    pdo = ('<TxPdo><Index>#x1A00</Index><Name LcId="1031">Eingänge</Name><Name LcId="1036">Entrées</Name>'
+           '<Entry><Index>#x6000</Index><SubIndex>1</SubIndex><BitLen>1</BitLen><Name LcId="1031">Eingang</Name>'
+           '<Name LcId="1033">Input</Name><DataType>BOOL</DataType></Entry></TxPdo>')
+    objects = obj("#x6000", "x", "BOOL", 1).replace("<Name>x</Name>", '<Name>Plain</Name><Name LcId="1033">English</Name>')
+    dev = load_bytes(esi_doc(extra_device=pdo, objects=objects), "n.xml").devices[0]
+    assert dev.tx_pdos[0].name == "Eingänge" and dev.tx_pdos[0].entries[0].name == "Input"
+    assert dev.dictionary.get(0x6000).name == "English"

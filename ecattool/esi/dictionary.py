@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ecattool.errors import EcatToolError
-from ecattool.esi.values import Context, lc_text
+from ecattool.esi.values import Context, lc_text, name_step
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import BY_CODE, DataType, Kind, lookup, parse_array_name
@@ -301,8 +301,8 @@ class DictionaryBuilder:
         ctx = self.ctx
         loc = ctx.loc(el)
         index_t = type_name = bits_t = None
-        name = ""
-        name_lc = False
+        name: str | None = None
+        final = False
         flags_el = info = None
         comment = ""
         idx_el = el
@@ -311,10 +311,7 @@ class DictionaryBuilder:
             if tag == "Index":
                 index_t, idx_el = c.text, c
             elif tag == "Name":
-                if not name_lc:
-                    name = (c.text or "").strip()
-                    lcid = c.get("LcId")
-                    name_lc = lcid is None or lcid.strip() == "1033"
+                name, final = name_step(c, name, final)
             elif tag == "Type":
                 type_name = (c.text or "").strip()
             elif tag == "BitSize":
@@ -327,6 +324,7 @@ class DictionaryBuilder:
                 comment = (c.text or "").strip()
         index = ctx.number(index_t, idx_el, "Object/Index")
         type_name = type_name or ""
+        name = name or ""
         bits = ctx.opt_number(bits_t, el, "Object/BitSize")
         flags = _flags(flags_el, ctx)
         t = self.types.resolve(type_name, el)
@@ -362,16 +360,14 @@ class DictionaryBuilder:
         expanded = False
         sub_items = list(t.element.iterchildren("SubItem"))
         for si in sub_items:
-            si_name = si_type = ""
-            name_lc = False
+            si_type = ""
+            si_name: str | None = None
+            final = False
             sidx_t = bits_t = offs_t = flags_el = None
             for c in si:
                 tag = c.tag
                 if tag == "Name":
-                    if not name_lc:
-                        si_name = (c.text or "").strip()
-                        lcid = c.get("LcId")
-                        name_lc = lcid is None or lcid.strip() == "1033"
+                    si_name, final = name_step(c, si_name, final)
                 elif tag == "Type":
                     si_type = (c.text or "").strip()
                 elif tag == "SubIdx":
@@ -382,6 +378,7 @@ class DictionaryBuilder:
                     offs_t = c.text
                 elif tag == "Flags" and flags_el is None:
                     flags_el = c
+            si_name = si_name or ""
             st = self.types.resolve(si_type, si)
             sidx = ctx.number(sidx_t, si, "SubItem/SubIdx") if sidx_t is not None and sidx_t.strip() else None
             bits = ctx.opt_number(bits_t, si, "SubItem/BitSize")
@@ -435,15 +432,16 @@ class DictionaryBuilder:
         for e in entries:
             by_name.setdefault(e.name, e)
         for pos, si in enumerate(info.iterchildren("SubItem")):
-            n = ""
+            n_opt: str | None = None
+            final = False
             sub_info = None
             for c in si:
                 tag = c.tag
                 if tag == "Name":
-                    if not n or (c.get("LcId") or "").strip() == "1033":
-                        n = (c.text or "").strip()
+                    n_opt, final = name_step(c, n_opt, final)
                 elif tag == "Info" and sub_info is None:
                     sub_info = c
+            n = n_opt or ""
             e = by_name.get(n)
             if e is None and pos < len(entries):
                 e = entries[pos]

@@ -33,7 +33,7 @@ from ecattool.esi.model import (
     Slot,
     SyncManager,
 )
-from ecattool.esi.values import Context, lc_text
+from ecattool.esi.values import Context, lc_text, name_step
 from ecattool.od.model import ObjectDictionary, OdObject
 from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
 
@@ -285,7 +285,8 @@ class Reader:
         ctx = self.ctx
         get = el.get
         pdo = Pdo(direction, -1, location=Location(self.source, el.sourceline))
-        name_set = False
+        name: str | None = None
+        final = False
         entries = pdo.entries
         for child in el:
             tag = child.tag
@@ -296,12 +297,10 @@ class Reader:
                 if child.get("DependOnSlot") is not None:
                     pdo.depend_on_slot = ctx.boolean(child.get("DependOnSlot"), child, "DependOnSlot")
             elif tag == "Name":
-                lcid = child.get("LcId")
-                if not name_set or (lcid is not None and lcid.strip() == "1033"):
-                    pdo.name = (child.text or "").strip()
-                    name_set = lcid is None or lcid.strip() == "1033"
+                name, final = name_step(child, name, final)
             elif tag == "Exclude":
                 pdo.excludes.append(ctx.number(child.text, child, "Exclude"))
+        pdo.name = name or ""
         if pdo.index < 0:
             raise InputError(f"{el.tag} has no Index", ctx.loc(el))
         if len(el.attrib):
@@ -324,8 +323,9 @@ class Reader:
         number = self.ctx.number
         fast = _fast_number
         index = sub = bits = None
-        name = dtype = ""
-        name_lc = False
+        dtype = ""
+        name: str | None = None
+        final = False
         dep = None
         for c in en:
             tag = c.tag
@@ -346,10 +346,7 @@ class Reader:
                 if bits is None:
                     bits = number(t, c, "Entry/BitLen")
             elif tag == "Name":
-                lcid = c.get("LcId")
-                if not name_lc:
-                    name = (c.text or "").strip()
-                    name_lc = lcid is None or lcid.strip() == "1033"
+                name, final = name_step(c, name, final)
             elif tag == "DataType":
                 dtype = (c.text or "").strip()
         loc = Location(self.source, en.sourceline)
@@ -357,7 +354,7 @@ class Reader:
             raise InputError("PDO Entry has no Index", loc)
         if bits is None:
             raise InputError(f"PDO Entry 0x{index:04X}:{sub or 0:02X} has no BitLen", loc)
-        e = PdoEntry(index, sub or 0, bits, name, dtype, loc)
+        e = PdoEntry(index, sub or 0, bits, name or "", dtype, loc)
         if dep is not None:
             e.depend_on_slot = self.ctx.boolean(dep, en, "DependOnSlot")
         return e

@@ -97,4 +97,16 @@ def lc_text(parent: Any, tag: str) -> str:
     return (first.text or "").strip() if first is not None else ""
 
 
-__all__ = ["Context", "lc_text"]
+def name_step(c: Any, name: str | None, final: bool) -> tuple[str | None, bool]:
+    """One ``Name`` element seen, by the rule of :func:`lc_text` (LcId 1033, else the first): (name, final)."""
+    if final:
+        return name, True
+    lcid = c.get("LcId")
+    if lcid is not None and lcid.strip() == "1033":
+        return (c.text or "").strip(), True
+    if name is None:
+        return (c.text or "").strip(), False
+    return name, False
+
+
+__all__ = ["Context", "lc_text", "name_step"]
