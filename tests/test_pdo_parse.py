@@ -156,6 +156,8 @@ def test_from_data_with_locations() -> None:
         ({"rx": [{"index": "0x1600", "entries": ["nothing here"]}]}, ("rx", 0, "entries", 0), "no object named"),
         ({"rx": {"index": 1}}, ("rx",), "must be a list"),
         ({"rxx": []}, ("rxx",), "unknown key"),
+        ({"rx": [{"index": 0x16000}]}, ("rx", 0, "index"), "is not a PDO index"),
+        ({"rx": [{"index": "0x1600", "entries": [1 << 32]}]}, ("rx", 0, "entries", 0), "is not a PDO entry"),
         ({"rx": [{"index": "0x1600", "entry": []}]}, ("rx", 0, "entry"), "unknown key"),
     ],
 )
@@ -211,3 +213,12 @@ def test_data_and_text_forms_roundtrip(data: dict) -> None:
     text = {d: m.to_text(d) for d in m.given}
     back = Mapping.from_text(rx=text.get(Direction.RX), tx=text.get(Direction.TX), device=DEV)
     assert _shape(back) == _shape(m)
+
+
+@given(st.text(max_size=40))
+def test_whole_mapping_syntax_never_crashes(text: str) -> None:
+    try:
+        m = Mapping.from_text(rx=text, device=DEV)
+    except InputError:
+        return
+    assert all(0 < p.index <= 0xFFFF for p in m.rx)

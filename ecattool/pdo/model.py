@@ -43,6 +43,14 @@ _ENTRY_RE = re.compile(
 _RAW_RE = re.compile(r"^(?:0x|#x)(?P<value>[0-9a-f]{8})$", re.IGNORECASE)
 
 
+def pdo_index(text: str | int, location: Location | None = None) -> int:
+    """A PDO (mapping object) index: ``0x1600``, ``#x1A00``, ``1600h``, 5632; must fit 16 bits."""
+    index = parse_int(text, location, "PDO index")
+    if not 0 < index <= 0xFFFF:
+        raise InputError(f"{text!r} is not a PDO index (RxPDOs 0x1600-0x17FF, TxPDOs 0x1A00-0x1BFF)", location)
+    return index
+
+
 def pdo_direction(index: int) -> Direction | None:
     """The direction a mapping object index belongs to by its number (None outside both ranges)."""
     if index in RX_RANGE:
@@ -209,7 +217,7 @@ class Mapping:
                 if extra:
                     raise InputError(f"unknown key {extra[0]!r} in a PDO (use index, entries)",
                                      where(direction.value, i, extra[0]))
-                index = parse_int(item["index"], where(direction.value, i, "index"), "PDO index")
+                index = pdo_index(item["index"], where(direction.value, i, "index"))
                 raw_entries = item.get("entries")
                 if raw_entries is None:
                     pdos.append(_device_pdo(index, direction, device, base, where(direction.value, i, "index")))
@@ -269,6 +277,8 @@ def parse_entry(text: str | int, device: Device | None = None, location: Locatio
     if isinstance(text, bool):
         raise InputError(f"{text!r} is not a PDO entry", location)
     if isinstance(text, int):
+        if not 0 <= text <= 0xFFFFFFFF:
+            raise InputError(f"{text} is not a PDO entry (a 32-bit mapping value or an object index)", location)
         if text > 0xFFFF:
             return _complete(PdoEntry.from_mapping_value(text), device, location)
         return _with_bits(text, 0, None, device, location, str(text))
@@ -366,11 +376,11 @@ def parse_direction(
             continue
         if "=" in part:
             idx_text, _, rest = part.partition("=")
-            index = parse_int(idx_text.strip(), location, "PDO index")
+            index = pdo_index(idx_text.strip(), location)
             entries = [parse_entry(e, device, location) for e in rest.split(",") if e.strip()]
             out.append(MappedPdo(index, entries, True, "", location))
         elif "," not in part and _is_pdo_index(part, direction):
-            out.append(_device_pdo(parse_int(part, location, "PDO index"), direction, device, base, location))
+            out.append(_device_pdo(pdo_index(part, location), direction, device, base, location))
         else:
             entries = [parse_entry(e, device, location) for e in part.split(",") if e.strip()]
             index = _first_free_pdo(direction, device, base, used + [p.index for p in out])
