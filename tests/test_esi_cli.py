@@ -125,3 +125,16 @@ def test_help_has_examples():
 def test_devices_from_stdin():
     res = CliRunner().invoke(cli, ["esi", "devices", "-", "--json"], input=SAMPLE.read_bytes())
     assert res.exit_code == 0 and json.loads(res.output)[0]["type"] == "Drive1"
+
+
+def test_sample_validates_against_all_three_schema_sets():
+    for version in ("v1.3_etg2001_example_bundled", "v1.14_ETG2000_1.0.10", "v1.17"):
+        code, out = run("esi", "validate", str(SAMPLE), "--schema-dir", str(corpus_path("xsd", version)), "--json")
+        assert code == 0 and json.loads(out)["findings"] == [], version
+
+
+def test_validate_igh_file_reports_vendor_without_name_both_ways():
+    code, out = run("esi", "validate", str(corpus_path("esi", "weidmueller_UR20_FBC_from_IgH.xml")), "--schema-dir",
+                    str(corpus_path("xsd", "v1.14_ETG2000_1.0.10")), "--json")
+    rules = {(f["rule"], f["line"]) for f in json.loads(out)["findings"]}
+    assert code == 1 and ("esi-vendor-name", 4) in rules and ("esi-xsd", 4) in rules
