@@ -304,7 +304,8 @@ def parse_entry(text: str | int, device: Device | None = None, location: Locatio
             raise InputError(f"a gap needs a length: write {head}/8", location)
         return PdoEntry(0, 0, bits, "gap", "", location)
     m = _ENTRY_RE.match(head)
-    if m and (m.group("sub") is not None or head.lower().startswith(("0x", "#x")) or head.isdigit()):
+    if m and (m.group("sub") is not None or head.lower().startswith(("0x", "#x")) or head.isdigit()
+              or head.lower().endswith("h")):
         index = int(m.group("index"), 16)
         sub = int(m.group("sub"), 16) if m.group("sub") is not None else 0
         return _with_bits(index, sub, bits, device, location, s)
