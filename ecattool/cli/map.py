@@ -213,6 +213,10 @@ def sdo(esi: str | None, selector: str | None, profile: str | None, product: str
             click.echo(str(f), err=True)
         raise SystemExit(1)
     seq = pdo.program(device, mapping, complete_access=complete_access, transition=transition.upper(), order=order)
+    coe = device.mailbox.coe if device.mailbox is not None else None
+    if complete_access and not (coe is not None and coe.complete_access):
+        click.echo(f"note: {device.type_name} does not advertise CoE complete access; writing single sub-indices",
+                   err=True)
     inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
     if fmt:
         from ecattool.startup import SlaveConfig, export
