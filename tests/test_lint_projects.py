@@ -28,6 +28,7 @@ EXPECTED: dict[str, set[tuple[str, Severity, int, int | None]]] = {
     "prj010_no_object.yaml": {("PRJ010", E, 7, 18), ("PRJ010", E, 8, 18)},
     "prj011_no_subindex.yaml": {("PRJ011", E, 7, 18)},
     "prj012_not_writable.yaml": {("PRJ012", E, 7, 18), ("PRJ012", E, 8, 18)},
+    "prj012_pdo_only.yaml": {("PRJ012", E, 7, 18)},
     "prj013_type.yaml": {("PRJ013", E, 7, 38), ("PRJ013", E, 8, 38)},
     "prj014_range.yaml": {("PRJ014", E, 7, 38)},
     "prj015_enum.yaml": {("PRJ015", W, 7, 45)},
@@ -66,10 +67,13 @@ def test_every_project_rule_has_a_broken_project():
 
 
 def test_messages_say_what_is_right():
-    by_rule = {f.rule: f.message for name in EXPECTED for f in lint_project(DATA / name).findings}
-    assert "writable in PREOP" in by_rule["PRJ012"]
+    by_rule: dict[str, str] = {}
+    for name in EXPECTED:
+        for f in lint_project(DATA / name).findings:
+            by_rule[f.rule] = by_rule.get(f.rule, "") + f.message + "\n"
+    assert "writable in PREOP" in by_rule["PRJ012"] and "map it in an RxPDO instead" in by_rule["PRJ012"]
     assert "write 0x6040:00/16" in by_rule["PDO007"]
-    assert "technosoft-ipos, hdt, controltechniques" in by_rule["PRJ005"] or "selector" in by_rule["PRJ005"]
+    assert "choose one of: technosoft-ipos, hdt, controltechniques" in by_rule["PRJ005"]
     assert "choose an angle unit" in by_rule["PRJ050"]
 
 

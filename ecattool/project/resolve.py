@@ -129,7 +129,10 @@ def _coerce(entry: Entry, value: Any, location: Location) -> Any:
     return value
 
 
-def encode_parameter(device: Device, p: Parameter, location: Location, value_location: Location) -> tuple[StartupCommand | None, list[Finding]]:
+def encode_parameter(device: Device, p: Parameter, location: Location, value_location: Location,
+                     rules: Any = None) -> tuple[StartupCommand | None, list[Finding]]:
+    """One parameter as a startup command, or the findings that refuse it (``rules``: the family's
+    FamilyRules, for objects the family restricts beyond the dictionary)."""
     out: list[Finding] = []
 
     def err(rule: str, msg: str, loc: Location = location) -> tuple[None, list[Finding]]:
@@ -146,6 +149,9 @@ def encode_parameter(device: Device, p: Parameter, location: Location, value_loc
     entry = obj.entry(sub)
     if entry is None:
         return err("PRJ011", f"0x{index:04X} ({obj.name}) has no sub-index {sub}")
+    if index in getattr(rules, "pdo_only_indices", ()):
+        return err("PRJ012", f"0x{index:04X}:{sub:02X} ({entry.name}) can only be accessed cyclically on this drive "
+                             "(it refuses SDO access with 0601 0000h); map it in an RxPDO instead")
     state = TRANSITION_STATE.get(p.transition, EcState.PREOP)
     if not entry.access.writable(state):
         if entry.access.writable():
@@ -188,7 +194,7 @@ def resolve_parameters(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[Sta
     for j, p in enumerate(rd.drive.parameters):
         loc = lp.drive_location(i, "parameters", j, "object")
         vloc = lp.drive_location(i, "parameters", j, "value")
-        cmd, findings = encode_parameter(rd.device, p, loc, vloc)
+        cmd, findings = encode_parameter(rd.device, p, loc, vloc, rd.rules)
         rd.findings.extend(findings)
         if cmd is None:
             continue
