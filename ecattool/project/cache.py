@@ -95,7 +95,7 @@ def _esi(path: str | Path) -> EsiFile:
     if data is None:
         data = read_bytes(path)
         key = _key(data)
-    obj = _MEMORY[key] = esi.load_bytes(data, str(path))
+    obj = _MEMORY[key] = esi.load_bytes(data, str(path), base_dir=Path(path).parent)
     return obj
 
 
