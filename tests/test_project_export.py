@@ -4,7 +4,6 @@ by the importers), the `startup export --project` CLI, and refusal of projects w
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 from lxml import etree
@@ -13,6 +12,7 @@ from ecattool.errors import InputError
 from ecattool.project.export import slave_configs
 from ecattool.startup import StartupCommand, export, import_bytes
 from ecattool.startup.formats import eni
+from tests.conftest import ROOT
 from tests.project_helpers import SAMPLES, run, sample, write_project
 from tests.test_startup_export import FakeMaster, FakeSlave, _children, _gcc, _in_order
 
@@ -58,7 +58,7 @@ def test_default_mapping_is_exported_without_commands():
 
 
 def test_drives_come_in_bus_order(tmp_path):
-    root = Path(sample("hdt")).parent.parent
+    root = ROOT / "samples"
     p = write_project(tmp_path, f"""ecattool: 1
 drives:
   - name: b
@@ -241,3 +241,24 @@ def test_cli_export_never_overwrites_the_project(tmp_path, capsys):
     before = p.read_text()
     code, _, err = run(capsys, "startup", "export", "--project", str(p), "--format", "json", "-o", str(p))
     assert code != 0 and p.read_text() == before
+
+
+def test_igh_c_of_a_multi_drive_project_compiles(tmp_path):
+    root = ROOT / "samples"
+    p = write_project(tmp_path, f"""ecattool: 1
+drives:
+  - name: x-axis
+    device: {{profile: hdt, product: tomcat}}
+  - name: x axis 2
+    device: {{esi: {root}/generic_esi/inovance_SV660_EOE_1Axis_V9.12.xml, select: InoSV660N}}
+    dc: {{opmode: DC, cycle_ns: 2000000}}
+  - name: feed
+    device: {{profile: controltechniques, product: digitax-st}}
+    parameters:
+      - {{object: modes of operation, value: 8}}
+""")
+    cfgs = slave_configs(p)
+    text = export(cfgs, "igh")
+    result = _gcc(text, tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert text.count("ecrt_master_slave_config(") == 3 and "2000000U" in text
