@@ -4,7 +4,6 @@ by the importers), the `startup export --project` CLI, and refusal of projects w
 
 from __future__ import annotations
 
-
 import pytest
 from lxml import etree
 
