@@ -277,3 +277,24 @@ def test_project_with_lint_errors_is_never_commissioned(tmp_path):
     drives = sim_drives(p)
     report, dr = run(p, drives)
     assert not report.ok and dr.steps[-1].name == "lint" and drives[0].events == []
+
+
+def test_power_loss_during_sw_download_fails_and_the_next_run_repairs():
+    path = sample("technosoft_ipos")
+    drives = sim_drives(path)
+    drives[0].faults.power_loss_during_eeprom_write(after_words=100)
+    report, dr = run(path, drives)
+    assert not report.ok and dr.steps[-1].name == "sw download"
+    assert dr.error.count("0x7ABD") == 1 and "SDO timeout on 0x2065:00" in dr.error
+    _, dr = run(path, drives)
+    assert dr.ok and "1 block(s) written and verified" in step(dr, "sw download").detail
+    assert "= 1200 counts" in step(dr, "move").detail
+
+
+def test_a_drive_in_fault_is_reset_through_the_state_machine():
+    path = sample("technosoft_ipos")
+    drives = sim_drives(path)
+    assert run(path, drives)[0].ok
+    drives[0].inject_fault(0x2310)  # continuous over-current
+    _, dr = run(path, drives)
+    assert dr.ok and step(dr, "enable").detail.startswith("fault -> fault reset sent -> switch on disabled")

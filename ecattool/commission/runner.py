@@ -233,7 +233,8 @@ def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
                            + ", ".join(f"0x{b.start:04X}" for b in bad) + " (download disabled)"))
     result = _sdo_step("sw download", lambda: sw.download(rd.sw_image, slave, mode=cfg.mode))
     if not result.ok:
-        why = [f"0x{c.start:04X}" for c in result.failed] + [f"0x{k:04X} ({v})" for k, v in result.write_errors.items()]
+        starts = dict.fromkeys([*(c.start for c in result.failed), *result.write_errors])
+        why = [f"0x{k:04X}" + (f" ({result.write_errors[k]})" if k in result.write_errors else "") for k in starts]
         raise _Failed(Step("sw download", False, "after download, block(s) still differ: " + ", ".join(why)))
     # the drive resets after the download (2080h); bring it back to PRE-OP and check once more
     _sdo_step("sw reset", lambda: slave.request_state(EcState.INIT) if slave.state() is not EcState.INIT else None)
