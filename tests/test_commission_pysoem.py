@@ -14,19 +14,10 @@ from ecattool.od.model import EcState
 from ecattool.project.lint import lint_project
 from ecattool.target.pysoem import PysoemTarget
 from tests.project_helpers import SAMPLES, sample
+from tests.test_target_pysoem import SdoError, WkcError
 
 CODES = {EcState.INIT: 1, EcState.PREOP: 2, EcState.BOOT: 3, EcState.SAFEOP: 4, EcState.OP: 8}
 STATES = {v: k for k, v in CODES.items()}
-
-
-class SdoError(Exception):
-    def __init__(self, slave_pos, index, subindex, abort_code, desc):
-        super().__init__(desc)
-        self.abort_code = abort_code
-
-
-class WkcError(Exception):
-    pass
 
 
 class SoemSlave:
