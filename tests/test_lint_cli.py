@@ -244,3 +244,26 @@ def test_no_cache_env_writes_nothing(cache_dir, monkeypatch):
     assert lint_project(ESI_PROJECT).findings == []
     assert not cache_dir.exists()
 
+
+
+def test_a_changed_dictionary_file_invalidates_the_esi_entries(cache_dir, tmp_path):
+    # an ESI whose dictionary lives in another file (DictionaryFile): editing that file must not reuse the
+    # device completed from the old one
+    d = tmp_path / "proj"
+    d.mkdir()
+    esi = d / "device.xml"
+    esi.write_text("""<?xml version="1.0"?>
+<EtherCATInfo><Vendor><Id>#x2</Id><Name>V</Name></Vendor><Descriptions><Groups><Group><Type>G</Type><Name>G</Name></Group></Groups>
+<Devices><Device><Type ProductCode="#x10" RevisionNo="#x1">Dev</Type><Name>Dev</Name><GroupType>G</GroupType>
+<Sm StartAddress="#x1000" ControlByte="#x26" Enable="1">MBoxOut</Sm><Sm StartAddress="#x1400" ControlByte="#x22" Enable="1">MBoxIn</Sm>
+<Mailbox><CoE/></Mailbox>
+<Profile><DictionaryFile>dict.xml</DictionaryFile></Profile></Device></Devices></Descriptions></EtherCATInfo>
+""")
+    p = write_project(d, "ecattool: 1\ndrives:\n  - name: a\n    device: {esi: device.xml}\n")
+    lint_project(p)
+    assert len(_entries(cache_dir, "device")) == 1
+    (d / "dict.xml").write_text("<Dictionary/>\n")
+    cache._DIGESTS.clear()
+    cache._DEVICES.clear()
+    lint_project(p)
+    assert len(_entries(cache_dir, "device")) == 2

@@ -8,6 +8,9 @@ ESI bytes, the ecattool version and what else the entry depends on:
   (its locations name the file). Completing copies the whole dictionary: the expensive part of a cold lint.
 - ``check/<key>.pickle``: the ESI's structural findings (``esi.check_structure``), keyed also by the path.
 
+An ESI that names other files (``DictionaryFile``, ``InfoReference``) is keyed also by the names, sizes and
+modification times of the XML files beside it and one directory down, where the reader finds them.
+
 With both, a warm lint does not read the ESI at all. The parsed ``EsiFile`` itself is kept in memory only:
 the reader is lazy, so parsing an ESI costs about what unpickling it would (docs/performance.md, "Lint").
 Within one process every ESI, device and built-in profile is computed once and shared by every drive that
@@ -80,9 +83,25 @@ def _content_key(path: str | Path) -> tuple[str, bytes | None]:
     if known is not None and known[0] == sig:
         return known[1], None
     data = read_bytes(path)
-    key = _key(data)
+    key = _key(data, _references_signature(path, data))
     _DIGESTS[str(path)] = (sig, key)
     return key, data
+
+
+def _references_signature(path: str | Path, data: bytes) -> bytes:
+    """What an ESI that names other files (DictionaryFile, InfoReference) also depends on: the XML files beside
+    it and one directory down (where the reader looks for them), by name, size and modification time."""
+    if b"DictionaryFile" not in data and b"InfoReference" not in data:
+        return b""
+    base = Path(path).parent
+    items = []
+    for p in sorted([*base.glob("*.xml"), *base.glob("*/*.xml")]):
+        try:
+            st = p.stat()
+        except OSError:
+            continue
+        items.append(f"{p.relative_to(base)}:{st.st_size}:{st.st_mtime_ns}")
+    return "\n".join(items).encode()
 
 
 def _esi(path: str | Path) -> EsiFile:
@@ -94,7 +113,7 @@ def _esi(path: str | Path) -> EsiFile:
         return hit
     if data is None:
         data = read_bytes(path)
-        key = _key(data)
+        key = _key(data, _references_signature(path, data))
     obj = _MEMORY[key] = esi.load_bytes(data, str(path), base_dir=Path(path).parent)
     return obj
 
