@@ -297,9 +297,8 @@ def test_ct_quick_start_in_the_standard_order_reaches_op() -> None:
     assert _run_on_sim(ct, program(ct.device, m)) == Verdict(False, sizes=(8, 12))
 
 
-@pytest.mark.xfail(strict=True, reason="simulator bug reported to the lead: the SM-EtherCAT quick start (5.1.3) "
-                   "rewrites 1A05h while the default 1C13h assigns it; the simulator aborts 0800 0022h")
 def test_simulator_accepts_the_ct_quick_start_literally() -> None:
+    # the SM-EtherCAT quick start (5.1.3) rewrites 1A05h while the default 1C13h assigns it (ambiguity A4b)
     ct, m = _ct_quick_start()
     assert _run_on_sim(ct, program(ct.device, m, order="count-first")) == Verdict(False, sizes=(8, 12))
 

@@ -82,8 +82,9 @@ class Behaviour:
     mapping_busy: int = A.SUBINDEX_CANNOT_BE_WRITTEN_SI0_NONZERO
     #: assignment entry (1C12/1C13 sub n) written while sub-index 0 is not 0
     assign_busy: int = A.SUBINDEX_CANNOT_BE_WRITTEN_SI0_NONZERO
-    #: any write to a mapping object whose PDO is assigned
-    mapping_assigned: int = A.DATA_CANNOT_BE_STORED_STATE
+    #: any write to a mapping object whose PDO is assigned (None: allowed in PRE-OP; the Control Techniques
+    #: quick start rewrites 1A05h while the default 1C13h assigns it, ambiguity A4b)
+    mapping_assigned: int | None = A.DATA_CANNOT_BE_STORED_STATE
     #: CiA-402 Shutdown only leaves SWITCH ON DISABLED in OP (Control Techniques 7.3.1)
     enable_needs_op: bool = False
     #: 6060h cannot change in OPERATION ENABLED / QUICK STOP ACTIVE (Control Techniques 7.3.6)
@@ -102,7 +103,7 @@ BEHAVIOURS: dict[str, Behaviour] = {
         unsupported_mode_emcy=0xFF04, mode_display_on_enable=True, pdo_length_emcy=0x8220,
     ),
     "hdt": Behaviour(),
-    "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True),
+    "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None),
     "generic": Behaviour(),
 }
 
@@ -625,7 +626,7 @@ class Drive:
             raise _abort(index, sub, A.READ_ONLY)
         if self.esm is not EcState.PREOP:
             raise _abort(index, sub, A.DATA_CANNOT_BE_STORED_STATE)
-        if index in self._assigned(d):
+        if self.behaviour.mapping_assigned is not None and index in self._assigned(d):
             raise _abort(index, sub, self.behaviour.mapping_assigned)
         if sub == 0:
             self._check_mapping_count(d, index, value)
