@@ -70,3 +70,15 @@ def test_cli_unknown_error_is_one_line(tmp_path):
     assert out.returncode == 1
     assert "Traceback" not in out.stderr
     assert len(out.stderr.strip().splitlines()) == 1
+
+
+def test_name_lookup_prefers_the_standard_object_whatever_the_order():
+    def od_with(order):
+        od = ObjectDictionary()
+        for index in order:
+            od.add(OdObject(index, "Control word", ObjectCode.VAR, {0: Entry(0, "Control word", lookup("UINT"), 16)}))
+        return od
+
+    assert od_with([0x2010, 0x6040]).find("controlword") == (0x6040, 0)
+    assert od_with([0x6040, 0x2010]).find("controlword") == (0x6040, 0)
+    assert od_with([0x2010, 0x1000]).find("control word") == (0x1000, 0)

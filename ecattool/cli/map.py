@@ -53,9 +53,11 @@ def _load_device(esi: str | None, selector: str | None, profile: str | None, pro
         if profile:
             raise click.UsageError("give either --esi or --profile, not both")
         from ecattool.esi import load_device
+        from ecattool.profiles import complete_generic
 
         sel = selector if not revision else f"{selector}:{revision}" if selector else None
-        return load_device(esi, sel)
+        # the device as it runs (default modules in its slots, mapping objects), as lint and the simulator see it
+        return complete_generic(load_device(esi, sel))
     name = profile or selector
     if not name:
         raise click.UsageError("name the device: --esi FILE [--device SEL] or --profile NAME")

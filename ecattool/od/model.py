@@ -187,6 +187,11 @@ class OdObject:
         return iter(sorted(self.entries.values(), key=lambda e: e.subindex))
 
 
+def _name_priority(obj: "OdObject") -> tuple[int, int]:
+    area = 0 if 0x6000 <= obj.index <= 0x9FFF else 1 if 0x1000 <= obj.index <= 0x1FFF else 2
+    return area, obj.index
+
+
 def normalize_name(name: str) -> str:
     """``Control word``, ``controlword``, ``CONTROL_WORD`` → ``controlword`` (for lookups by name)."""
     return re.sub(r"[^0-9a-z]", "", name.lower())
@@ -220,7 +225,9 @@ class ObjectDictionary:
         """
         if self._names is None:
             names: dict[str, tuple[int, int]] = {}
-            for obj in self._objects.values():
+            # where names collide (Ingenia has a vendor "Control word" at 2010h), the standard object wins:
+            # device profile area 6000h-9FFFh, then communication area 1000h-1FFFh, then the rest, by index
+            for obj in sorted(self._objects.values(), key=_name_priority):
                 key = normalize_name(obj.name)
                 if obj.object_code is ObjectCode.VAR or len(obj.entries) == 1:
                     names.setdefault(key, (obj.index, min(obj.entries) if obj.entries else 0))
