@@ -134,7 +134,7 @@ def test_github_annotations(capsys):
     parsed = [pattern.match(line) for line in lines]
     assert all(parsed), lines
     assert [(m[1], m[3], m[4], m[5]) for m in parsed] == [("error", "7", "18", "PRJ010"), ("error", "8", "18", "PRJ010"),
-                                                         ("warning", "7", "45", "PRJ015")]
+                                                         ("warning", "7", "36", "PRJ015")]
     assert parsed[0][2].endswith("tests/data/projects/prj010_no_object.yaml")
 
 

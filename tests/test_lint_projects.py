@@ -31,7 +31,8 @@ EXPECTED: dict[str, set[tuple[str, Severity, int, int | None]]] = {
     "prj012_pdo_only.yaml": {("PRJ012", E, 7, 18)},
     "prj013_type.yaml": {("PRJ013", E, 7, 38), ("PRJ013", E, 8, 38)},
     "prj014_range.yaml": {("PRJ014", E, 7, 38)},
-    "prj015_enum.yaml": {("PRJ015", W, 7, 45)},
+    "prj015_enum.yaml": {("PRJ015", W, 7, 36)},
+    "prj017_mode.yaml": {("PRJ017", E, 7, 45)},
     "prj016_twice.yaml": {("PRJ016", W, 8, 18), ("PDO021", W, 7, 38), ("PDO021", W, 8, 43)},
     "prj020_position.yaml": {("PRJ020", E, 8, 15)},
     "prj031_sw_not_technosoft.yaml": {("PRJ031", W, 6, 9)},
@@ -61,8 +62,8 @@ def test_broken_project_is_reported_at_its_line(name):
 def test_every_project_rule_has_a_broken_project():
     covered = {rule for findings in EXPECTED.values() for rule, *_ in findings}
     # PRJ030 (.sw image) and PRJ002 for a .sw are below with tmp copies; an inexact ratio is reported by the
-    # scaling package itself (scaling.approximated, below), PRJ051 is catalogued but not emitted
-    assert set(PROJECT_RULES) - covered - {"PRJ030", "PRJ051"} == set()
+    # scaling package itself (scaling.approximated, below), every catalogued rule is emitted
+    assert set(PROJECT_RULES) - covered - {"PRJ030"} == set()
     assert set(EXPECTED) == {p.name for p in DATA.glob("*.yaml")}
 
 
@@ -119,16 +120,16 @@ def test_missing_sw_file(tmp_path):
 # --- rule disabling ---------------------------------------------------------------------------------------
 
 def test_project_wide_disable_with_reason_removes_the_finding(tmp_path):
-    text = (DATA / "prj015_enum.yaml").read_text().replace(
-        "drives:", "disable_rules:\n  - {rule: PRJ015, reason: mode 5 is a vendor mode}\ndrives:", 1)
+    text = (DATA / "prj017_mode.yaml").read_text().replace(
+        "drives:", "disable_rules:\n  - {rule: PRJ017, reason: mode 5 is a vendor mode}\ndrives:", 1)
     assert lint_project(write_project(tmp_path, text)).findings == []
 
 
 def test_project_wide_disable_without_reason_keeps_the_finding(tmp_path):
-    text = (DATA / "prj015_enum.yaml").read_text().replace(
-        "drives:", "disable_rules:\n  - {rule: PRJ015, reason: ''}\ndrives:", 1)
+    text = (DATA / "prj017_mode.yaml").read_text().replace(
+        "drives:", "disable_rules:\n  - {rule: PRJ017, reason: ''}\ndrives:", 1)
     found = _found(lint_project(write_project(tmp_path, text)).findings)
-    assert found == {("PRJ004", E, 4, 28), ("PRJ015", W, 9, 45)}
+    assert found == {("PRJ004", E, 4, 28), ("PRJ017", E, 9, 45)}
 
 
 def test_drive_disable_affects_only_that_drive():

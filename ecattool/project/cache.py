@@ -114,7 +114,8 @@ def _esi(path: str | Path) -> EsiFile:
     if data is None:
         data = read_bytes(path)
         key = _key(data, _references_signature(path, data))
-    obj = _MEMORY[key] = esi.load_bytes(data, str(path), base_dir=Path(path).parent)
+    # lazy: a selected device is built alone; reading .devices (structure checks) builds the rest
+    obj = _MEMORY[key] = esi.load_bytes(data, str(path), base_dir=Path(path).parent, lazy=True)
     return obj
 
 

@@ -30,12 +30,12 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ014": "a parameter value is outside the object's minimum/maximum",
     "PRJ015": "a parameter value is not one of the object's documented values",
     "PRJ016": "the same object is written twice in the same transition",
+    "PRJ017": "a mode of operation (6060h) the drive does not support",
     "PRJ020": "two drives share a bus position",
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
     "PRJ040": "the DC OpMode named does not exist in the ESI",
     "PRJ050": "the scaling section cannot be computed",
-    "PRJ051": "a scaling factor is not exact (rounded to the best 32-bit ratio)",
 }
 
 

@@ -175,7 +175,19 @@ def encode_parameter(device: Device, p: Parameter, location: Location, value_loc
             return err("PRJ014", f"{value} is below the minimum {entry.minimum} of 0x{index:04X}:{sub:02X} ({entry.name})", value_location)
         if entry.maximum is not None and value > entry.maximum:
             return err("PRJ014", f"{value} is above the maximum {entry.maximum} of 0x{index:04X}:{sub:02X} ({entry.name})", value_location)
-        if entry.enum and isinstance(value, int) and value not in entry.enum:
+        modes = tuple(getattr(rules, "supported_modes", ()) or ())
+        if (index, sub) == (0x6060, 0) and modes and isinstance(value, int) and value not in modes and value != 0:
+            # HDT and Control Techniques abort an unsupported mode (0609 0030h); Technosoft accepts it and
+            # answers with emergency FF04h (manual §4.2.3)
+            lenient = getattr(rules, "family", "") == "technosoft-ipos"
+            out.append(Finding("PRJ017", Severity.WARNING if lenient else Severity.ERROR,
+                               f"mode {value} is not supported by {device.type_name} (supported: "
+                               + ", ".join(str(m) for m in modes) + ")"
+                               + ("; the drive accepts it and reports emergency FF04h" if lenient else ""),
+                               value_location))
+            if not lenient:
+                return None, out
+        elif entry.enum and isinstance(value, int) and value not in entry.enum:
             out.append(Finding("PRJ015", Severity.WARNING,
                                f"{value} is not one of the documented values of {entry.name}: "
                                + ", ".join(f"{k}={v}" for k, v in sorted(entry.enum.items())), value_location))
