@@ -32,3 +32,16 @@ def corpus() -> Path:
     if not CORPUS.is_dir():
         raise FileNotFoundError(f"corpus directory missing: {CORPUS}")
     return CORPUS
+
+
+def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    """Run ``ecattool ARGS`` through the real entry point; returns (exit code, stdout, stderr)."""
+    from ecattool.cli import main
+
+    try:
+        main(list(args))
+        code = 0
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else 0
+    out, err = capsys.readouterr()
+    return code, out, err

@@ -7,7 +7,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from tests.conftest import ROOT
+from tests.conftest import ROOT, run  # noqa: F401  (run is re-exported for the project tests)
 
 SAMPLES = ("technosoft_ipos", "hdt", "controltechniques", "generic_esi")
 DATA = ROOT / "tests" / "data" / "projects"
@@ -42,19 +42,6 @@ def write_project(tmp_path: Path, text: str, name: str = "project.yaml") -> Path
     p = tmp_path / name
     p.write_text(text)
     return p
-
-
-def run(capsys: Any, *args: str) -> tuple[int, str, str]:
-    """Run ``ecattool ARGS`` through the real entry point; returns (exit code, stdout, stderr)."""
-    from ecattool.cli import main
-
-    try:
-        main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def run_json(capsys: Any, *args: str) -> tuple[int, Any]:

@@ -9,20 +9,12 @@ import pytest
 
 from ecattool.cli import main
 from ecattool.sii import crc8, load
-from tests.conftest import ROOT, corpus_path
+from tests.conftest import run, ROOT, corpus_path
 
 SAMPLE_ESI = ROOT / "samples" / "sii" / "custom_slave.xml"
 SAMPLE_BIN = ROOT / "samples" / "sii" / "custom_slave.bin"
 
 
-def run(capsys, *args: str) -> tuple[int, str, str]:
-    try:
-        main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 0
-    out = capsys.readouterr()
-    return code, out.out, out.err
 
 
 def test_info_json_has_the_listed_keys(capsys) -> None:

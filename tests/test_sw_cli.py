@@ -10,20 +10,12 @@ import pytest
 
 from ecattool.cli import main
 from ecattool.sw import read, write
-from tests.conftest import corpus_path
+from tests.conftest import run, corpus_path
 
 SW = "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw"
 PARAMS = "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.ems_parameters.cfg"
 
 
-def run(capsys, *args: str) -> tuple[int, str, str]:
-    try:
-        main(list(args))
-        code = 0
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    out = capsys.readouterr()
-    return code, out.out, out.err
 
 
 def c(name: str) -> str:
