@@ -7,7 +7,6 @@ import shutil
 
 import pytest
 
-from ecattool.cli import main
 from ecattool.sii import crc8, load
 from tests.conftest import run, ROOT, corpus_path
 

@@ -8,7 +8,6 @@ import sys
 
 import pytest
 
-from ecattool.cli import main
 from ecattool.sw import read, write
 from tests.conftest import run, corpus_path
 
