@@ -89,7 +89,9 @@ CASES: dict[str, dict] = {
         "general.flags": DLL_FLAG, "general.group_name": GROUP_NAME}},
     "asix_AX58100_EVB_DIO": {"pdo": False, "diffs": {
         "image.length": NO_FILL, "image.fill": NO_FILL, "image.categories": DC_ABSENT, "dc[*": DC_ABSENT,
-        "strings": STRING_TABLE, "general.order": SIITOOL_ORDER}},
+        "strings": STRING_TABLE, "general.order": SIITOOL_ORDER,
+        "sm[0].enable": "Sm OpOnly=\"1\": ecattool sets SyncM enable bit 3 (OP only); siitool does not",
+        "sm[1].enable": "Sm OpOnly=\"1\": ecattool sets SyncM enable bit 3 (OP only); siitool does not"}},
     "pollen_Orbita2d": {"diffs": {
         "header.vendor_id": "the ESI writes <Id>0xF3F</Id> (0x, not #x); siitool read 0, ecattool reads 0xF3F",
         "image.length": NO_FILL, "image.fill": NO_FILL,

@@ -12,13 +12,13 @@ from ecattool.cli.common import console, json_option, print_json, table
 _FILE = click.argument("file", type=click.Path(dir_okay=False, allow_dash=True))
 
 
-def _load(file: str) -> Any:
-    """Load FILE, or standard input for '-'."""
+def _load(file: str, lazy: bool = False) -> Any:
+    """Load FILE, or standard input for '-' (``lazy``: devices built when selected)."""
     from ecattool.esi import load, load_bytes
 
     if file == "-":
-        return load_bytes(sys.stdin.buffer.read(), "<stdin>")
-    return load(file)
+        return load_bytes(sys.stdin.buffer.read(), "<stdin>", lazy=lazy)
+    return load(file, lazy=lazy)
 
 
 def _hex(v: int | None, width: int = 8) -> str:
@@ -224,11 +224,9 @@ Examples:
 def show_cmd(file: str, selector: str | None, policy: str, pdos: bool, objects: bool, sm: bool, dc: bool,
              init_cmds: bool, as_json: bool) -> None:
     """Show one device of FILE: identity and summary, or the chosen tables."""
-    from ecattool.esi import select
+    from ecattool.esi import select_index
 
-    doc = _load(file)
-    dev = select(doc, selector, policy)
-    index = doc.devices.index(dev)
+    index, dev = select_index(_load(file, lazy=True), selector, policy)
     any_section = pdos or objects or sm or dc or init_cmds
     if as_json:
         data: dict[str, Any] = device_summary(dev, index)

@@ -133,12 +133,12 @@ _POLICY = click.option("--policy", type=click.Choice(["exact", "newest-not-newer
 def _select(esi_path: str, selector: str | None, image: Any = None, policy: str = "exact") -> Any:
     from ecattool.esi import load, select
 
-    esi = load(esi_path)
-    if selector is None and image is not None and len(esi.devices) > 1:
+    esi = load(esi_path, lazy=True)  # builds only the device chosen (a full load when listing is needed)
+    if selector is None and image is not None and len(esi.device_heads) > 1:
         h = image.header
-        matching = [d for d in esi.devices if (d.product_code, d.revision) == (h.product_code, h.revision)]
+        matching = [d for d in esi.device_heads if (d.product_code, d.revision) == (h.product_code, h.revision)]
         if matching:
-            return matching[0]
+            return esi.device_at(matching[0].index)
     return select(esi, selector, policy)
 
 

@@ -3,9 +3,10 @@
 Public API::
 
     load(path) -> EsiFile                       # every device, module, PDO, SM, DC, EEPROM, dictionary
-    load_bytes(data, source) -> EsiFile
+    load(path, lazy=True) -> EsiFile            # same content; devices built when selected or listed
+    load_bytes(data, source, lazy=False) -> EsiFile
     select(esi_or_devices, selector=None, policy="exact") -> Device
-    load_device(path, selector=None, policy="exact") -> Device
+    load_device(path, selector=None, policy="exact") -> Device   # builds only the selected device
     validate(path, schema_dir=None) -> list[Finding]
     check_structure(esi) -> list[Finding]
 
@@ -16,25 +17,60 @@ Selectors: a type name (``EL1008``), ``product[:revision]`` in any number notati
 
 from __future__ import annotations
 
+import importlib
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
-from ecattool.esi.checks import check_structure
 from ecattool.esi.model import Device, EsiFile
 from ecattool.esi.reader import load
 from ecattool.esi.reader import load_bytes as _load_bytes
-from ecattool.esi.select import POLICIES, select
-from ecattool.esi.validate import materialize, validate
+from ecattool.esi.select import POLICIES, select, select_index
+
+if TYPE_CHECKING:
+    from ecattool.findings import Finding
+
+# Checks and validation (and their XSD machinery) are imported on first use: reading a file does not need them.
+# The wrappers stay bound after the first call (importing the submodule ``validate`` would otherwise leave the
+# package attribute ``validate`` pointing at the module).
 
 
-def load_bytes(data: bytes, source: str = "<bytes>", base_dir: str | Path | None = None) -> EsiFile:
-    """Read an ESI document from bytes; ``source`` names it in locations, ``base_dir`` resolves referenced files."""
-    return _load_bytes(data, source, base_dir)
+def _validate_module() -> Any:
+    module = importlib.import_module("ecattool.esi.validate")
+    globals()["validate"] = _validate  # the import bound the package attribute to the submodule
+    return module
+
+
+def validate(path: str | Path, schema_dir: str | Path | None = None) -> list["Finding"]:
+    """All findings for one ESI file (see :func:`ecattool.esi.validate.validate`)."""
+    return _validate_module().validate(path, schema_dir)  # type: ignore[no-any-return]
+
+
+def materialize(esi: EsiFile) -> int:
+    """Build every (lazily read) dictionary of ``esi``; returns the number of objects."""
+    return _validate_module().materialize(esi)  # type: ignore[no-any-return]
+
+
+def check_structure(esi: EsiFile) -> list["Finding"]:
+    """Schema-free structural checks of every device in ``esi`` (see :mod:`ecattool.esi.checks`)."""
+    from ecattool.esi.checks import check_structure as check
+
+    return check(esi)
+
+
+_validate = validate
+
+
+def load_bytes(data: bytes, source: str = "<bytes>", base_dir: str | Path | None = None,
+               lazy: bool = False) -> EsiFile:
+    """Read an ESI document from bytes; ``source`` names it in locations, ``base_dir`` resolves referenced files,
+    ``lazy`` builds devices only when selected or listed."""
+    return _load_bytes(data, source, base_dir, lazy)
 
 
 def load_device(path: str | Path, selector: str | None = None, policy: str = "exact") -> Device:
-    """Load ``path`` and select one device (see :func:`select`)."""
-    return select(load(path), selector, policy)
+    """Load ``path`` and select one device (see :func:`select`); only that device is built."""
+    return select(load(path, lazy=True), selector, policy)
 
 
-__all__ = ["load", "load_bytes", "select", "load_device", "validate", "check_structure", "materialize", "POLICIES",
+__all__ = ["load", "load_bytes", "select", "select_index", "load_device", "validate", "check_structure", "materialize", "POLICIES",
            "Device", "EsiFile"]

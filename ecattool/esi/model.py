@@ -56,6 +56,8 @@ class SyncManager:
     enable: bool = True
     virtual: bool = False
     location: Location | None = None
+    #: ``Sm@OpOnly``: the SyncManager is enabled only in OP (SII SyncM enable byte bit 3)
+    op_only: bool = False
 
     @property
     def direction(self) -> Direction | None:

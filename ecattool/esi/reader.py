@@ -9,11 +9,11 @@ Tolerated deviations become warnings on ``EsiFile.warnings``; malformed required
 
 from __future__ import annotations
 
+from dataclasses import fields
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from ecattool.errors import EcatToolError, InputError, Location
-from ecattool.esi.dictionary import build_dictionary
 from ecattool.esi.model import (
     AlternativeSmMapping,
     CoeDetails,
@@ -49,6 +49,89 @@ def etree_text(el: Any) -> str:
             parts.append(f"{c.tag}={c.text.strip()}")
     return " ".join(parts)[:500]
 _PROTOCOLS = ("AoE", "EoE", "CoE", "FoE", "SoE", "VoE")
+
+
+def build_dictionary(el: Any, ctx: Context) -> ObjectDictionary:
+    """:func:`ecattool.esi.dictionary.build_dictionary`, imported when a dictionary is first read."""
+    from ecattool.esi.dictionary import build_dictionary as build
+
+    return build(el, ctx)
+
+
+class DeviceHead:
+    """What selecting a device needs (its ``Type``: name, product code, revision), read without the rest."""
+
+    __slots__ = ("index", "type_name", "identity", "element")
+
+    def __init__(self, index: int, type_name: str, identity: Identity, element: Any) -> None:
+        self.index = index
+        self.type_name = type_name
+        self.identity = identity
+        self.element = element
+
+    @property
+    def vendor_id(self) -> int:
+        return self.identity.vendor_id
+
+    @property
+    def product_code(self) -> int:
+        return self.identity.product_code
+
+    @property
+    def revision(self) -> int:
+        return self.identity.revision
+
+
+_DEVICES_SLOT = EsiFile.devices  # the dataclass slot, under LazyEsiFile's property
+
+
+class LazyEsiFile(EsiFile):
+    """An :class:`EsiFile` whose devices are built on demand.
+
+    :func:`ecattool.esi.select` picks among :attr:`device_heads` and builds only the chosen device
+    (:meth:`device_at`); reading :attr:`devices` builds all the others (the same objects for the ones already
+    built), so the file behaves exactly like a complete :func:`load`. Pickles as a plain :class:`EsiFile`.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        self.device_heads: list[DeviceHead] = []
+        self._build: Callable[[DeviceHead], Device] | None = None
+        self._built: dict[int, Device] = {}
+        super().__init__(*args, **kwargs)
+
+    @property  # type: ignore[override]
+    def devices(self) -> list[Device]:
+        if self._build is not None:
+            build, self._build = self._build, None
+            _DEVICES_SLOT.__set__(self, [self._built.get(h.index) or build(h) for h in self.device_heads])
+            self._built.clear()
+        return _DEVICES_SLOT.__get__(self)  # type: ignore[no-any-return]
+
+    @devices.setter
+    def devices(self, value: list[Device]) -> None:
+        self._build = None
+        _DEVICES_SLOT.__set__(self, value)
+
+    @property
+    def pending(self) -> bool:
+        """True while some devices are still unbuilt."""
+        return self._build is not None
+
+    def defer(self, heads: list[DeviceHead], build: Callable[[DeviceHead], Device]) -> None:
+        self.device_heads = heads
+        self._build = build
+
+    def device_at(self, index: int) -> Device:
+        """The device at ``index`` in document order, building only that one if the rest are still pending."""
+        if self._build is None:
+            return self.devices[index]
+        dev = self._built.get(index)
+        if dev is None:
+            dev = self._built[index] = self._build(self.device_heads[index])
+        return dev
+
+    def __reduce__(self) -> Any:
+        return (EsiFile, tuple(getattr(self, f.name) for f in fields(EsiFile)))
 
 
 class LazyDictionary(ObjectDictionary):
@@ -152,7 +235,7 @@ class Reader:
         self.ctx = Context(source)
 
     # --- entry points ---------------------------------------------------------------------------
-    def read(self, data: bytes) -> EsiFile:
+    def read(self, data: bytes, lazy: bool = False) -> EsiFile:
         try:
             tree = parse_xml(data, self.source)
         except InputError:
@@ -167,7 +250,8 @@ class Reader:
         if tag not in ROOTS:
             raise InputError(f"root element is <{tag}>, not an ESI file (expected one of {', '.join(ROOTS)})",
                              self.ctx.loc(root))
-        esi = EsiFile(self.source, tag, version=root.get("Version", ""), warnings=self.ctx.warnings)
+        cls = LazyEsiFile if lazy else EsiFile
+        esi = cls(self.source, tag, version=root.get("Version", ""), warnings=self.ctx.warnings)
         if tag == "EtherCATDict":
             d = root.find("Dictionary")
             esi.dictionary = build_dictionary(d, self.ctx) if d is not None else ObjectDictionary()
@@ -194,8 +278,11 @@ class Reader:
                 esi.modules.extend(self._referenced_modules(ref_el))
         devices = desc.find("Devices")
         if devices is not None:
-            for dev in devices.iterchildren("Device"):
-                esi.devices.append(self.device(dev, esi))
+            if isinstance(esi, LazyEsiFile):
+                heads = [self.head(el, esi, i) for i, el in enumerate(devices.iterchildren("Device"))]
+                esi.defer(heads, lambda h: self.device(h.element, esi, h))
+            else:
+                esi.devices = [self.device(el, esi) for el in devices.iterchildren("Device")]
         return esi
 
     # --- parts ------------------------------------------------------------------------------------
@@ -419,6 +506,7 @@ class Reader:
             enable=ctx.boolean(g("Enable"), el, "Sm Enable", default=True),
             virtual=ctx.boolean(g("Virtual"), el, "Sm Virtual"),
             location=ctx.loc(el),
+            op_only=ctx.boolean(g("OpOnly"), el, "Sm OpOnly"),
         )
 
     def dc(self, el: Any) -> list[DcOpMode]:
@@ -520,7 +608,8 @@ class Reader:
                 m.sms[no] = [ctx.number(p.text, p, "AlternativeSmMapping Pdo") for p in sm.iterchildren("Pdo")]
             dev.alternative_sm_mappings.append(m)
 
-    def device(self, el: Any, esi: EsiFile) -> Device:
+    def head(self, el: Any, esi: EsiFile, index: int) -> DeviceHead:
+        """The device's ``Type``: all that selection needs."""
         ctx = self.ctx
         t = el.find("Type")
         if t is None:
@@ -530,7 +619,12 @@ class Reader:
             ctx.warn("esi-productcode-missing", "Device Type has no ProductCode; taken as 0", t)
         ident = Identity(esi.vendor_id or 0, ctx.opt_number(pc, t, "ProductCode") or 0,
                          ctx.opt_number(t.get("RevisionNo"), t, "RevisionNo") or 0)
-        dev = Device(ident, (t.text or "").strip(), lc_text(el, "Name"), physics=el.get("Physics", "") or "",
+        return DeviceHead(index, (t.text or "").strip(), ident, el)
+
+    def device(self, el: Any, esi: EsiFile, head: DeviceHead | None = None) -> Device:
+        ctx = self.ctx
+        h = head or self.head(el, esi, -1)
+        dev = Device(h.identity, h.type_name, lc_text(el, "Name"), physics=el.get("Physics", "") or "",
                      source=self.source, location=ctx.loc(el))
         sm_no = 0
         profile_seen = False
@@ -606,18 +700,20 @@ def _read(path: Path) -> bytes:
         raise InputError(f"cannot read file: {exc.strerror or exc}", Location(str(path))) from None
 
 
-def load_bytes(data: bytes, source: str = "<bytes>", base_dir: str | Path | None = None) -> EsiFile:
-    """Read an ESI document from bytes. ``base_dir`` resolves DictionaryFile/InfoReference paths."""
+def load_bytes(data: bytes, source: str = "<bytes>", base_dir: str | Path | None = None,
+               lazy: bool = False) -> EsiFile:
+    """Read an ESI document from bytes. ``base_dir`` resolves DictionaryFile/InfoReference paths; ``lazy``
+    returns a :class:`LazyEsiFile` (devices built when selected or listed)."""
     reader = Reader(source, Path(base_dir) if base_dir is not None else None)
     try:
-        return reader.read(data)
+        return reader.read(data, lazy)
     except EcatToolError:
         raise
     except RecursionError:
         raise InputError("ESI document is nested too deeply", Location(source)) from None
 
 
-def load(path: str | Path) -> EsiFile:
-    """Read an ESI file (EtherCATInfo, EtherCATModule or EtherCATDict root)."""
+def load(path: str | Path, lazy: bool = False) -> EsiFile:
+    """Read an ESI file (EtherCATInfo, EtherCATModule or EtherCATDict root); ``lazy`` as in :func:`load_bytes`."""
     p = Path(path)
-    return load_bytes(_read(p), str(p), p.parent)
+    return load_bytes(_read(p), str(p), p.parent, lazy)

@@ -11,21 +11,26 @@ Policies for the revision (numbers compared as integers, never as strings):
 from __future__ import annotations
 
 import re
+from typing import Any, Sequence, TypeVar
 
 from ecattool.errors import InputError, SelectionError
 from ecattool.esi.model import Device, EsiFile
+from ecattool.esi.reader import LazyEsiFile
 from ecattool.od.numbers import parse_int
+
+# a Device, or a reader DeviceHead (type name and identity of a device not built yet)
+_D = TypeVar("_D", bound=Any)
 
 POLICIES = ("exact", "newest-not-newer", "newest")
 _MAX_LISTED = 25
 
 
-def describe(dev: Device, index: int | None = None) -> str:
+def describe(dev: Any, index: int | None = None) -> str:
     pre = f"[{index}] " if index is not None else ""
     return f"{pre}{dev.type_name} (product 0x{dev.product_code:08X} revision 0x{dev.revision:08X})"
 
 
-def candidates_text(devices: list[Device], all_devices: list[Device] | None = None) -> str:
+def candidates_text(devices: Sequence[Any], all_devices: Sequence[Any] | None = None) -> str:
     """``[i] TYPE (product … revision …)`` for each candidate; ``i`` is the position in the whole file."""
     pos = {id(d): i for i, d in enumerate(all_devices if all_devices is not None else devices)}
     shown = [describe(d, pos.get(id(d))) for d in devices[:_MAX_LISTED]]
@@ -48,7 +53,7 @@ def _parse_selector(selector: str) -> tuple[int | None, int, int | None]:
     raise SelectionError(f"device selector {selector!r} has too many ':' parts (use product[:revision])")
 
 
-def _by_revision(pool: list[Device], revision: int | None, policy: str, what: str, all_devices: list[Device]) -> Device:
+def _by_revision(pool: list[_D], revision: int | None, policy: str, what: str, all_devices: list[_D]) -> _D:
     if policy not in POLICIES:
         raise SelectionError(f"unknown selection policy {policy!r} (use {', '.join(POLICIES)})")
     if not pool:
@@ -74,9 +79,27 @@ def _by_revision(pool: list[Device], revision: int | None, policy: str, what: st
 
 
 def select(esi: EsiFile | list[Device], selector: str | int | None = None, policy: str = "exact") -> Device:
-    """Pick one device. Raises :class:`SelectionError` listing the candidates when nothing (or too much) matches."""
-    devices = list(esi.devices if isinstance(esi, EsiFile) else esi)
-    source = esi.source if isinstance(esi, EsiFile) else ""
+    """Pick one device. Raises :class:`SelectionError` listing the candidates when nothing (or too much) matches.
+
+    On a lazily loaded file (``load(path, lazy=True)``) only the chosen device is built."""
+    if isinstance(esi, LazyEsiFile) and esi.pending:
+        return esi.device_at(_choose(esi.device_heads, esi.source, selector, policy).index)
+    if isinstance(esi, EsiFile):
+        return _choose(list(esi.devices), esi.source, selector, policy)
+    return _choose(list(esi), "", selector, policy)
+
+
+def select_index(esi: EsiFile, selector: str | int | None = None, policy: str = "exact") -> tuple[int, Device]:
+    """:func:`select`, also giving the device's position in the file (without building the others if lazy)."""
+    if isinstance(esi, LazyEsiFile) and esi.pending:
+        head = _choose(esi.device_heads, esi.source, selector, policy)
+        return head.index, esi.device_at(head.index)
+    devices = list(esi.devices)
+    dev = _choose(devices, esi.source, selector, policy)
+    return next(i for i, d in enumerate(devices) if d is dev), dev
+
+
+def _choose(devices: list[_D], source: str, selector: str | int | None, policy: str) -> _D:
     if policy not in POLICIES:
         raise SelectionError(f"unknown selection policy {policy!r} (use {', '.join(POLICIES)})")
     if not devices:

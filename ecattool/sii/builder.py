@@ -199,7 +199,8 @@ def assemble(device: Device, *, pdo_categories: bool = True) -> SiiImage:
     if device.sync_managers:
         generated.append(SyncMCategory([
             SiiSyncManager(sm.start_address, sm.default_size or 0, sm.control_byte & 0xFF, 0,
-                           (1 if sm.enable else 0) | (4 if sm.virtual else 0), SM_TYPE_CODES.get(sm.kind, 0))
+                           (1 if sm.enable else 0) | (4 if sm.virtual else 0) | (8 if sm.op_only else 0),
+                           SM_TYPE_CODES.get(sm.kind, 0))
             for sm in device.sync_managers]))
     if any(f.sm is not None for f in device.fmmus):
         generated.append(RawCategory(CategoryType.FMMUX, b"".join(

@@ -231,6 +231,11 @@ def check_against(device: "Device", image: SiiImage) -> list[Finding]:
         a, b = got.get(key), want.get(key)
         if a == b or (key.startswith(("txpdo", "rxpdo")) and not has_pdos) or (key.startswith("dc") and not has_dc):
             continue
+        if re.match(r"sm\[\d+\]\.enable$", key) and isinstance(a, int) and isinstance(b, int) and a ^ b == 0x08:
+            # only the OP-only bit (ESI Sm@OpOnly); generators such as siitool do not write it
+            r.add("sii.esi.sm", W, f"sync manager: {key} is {_fmt(a)} in the image but {_fmt(b)} in the ESI device "
+                  f"{dev} (only bit 3, OP only, differs)", field=key)
+            continue
         for pattern, rule, sev, what in _AGAINST:
             if re.match(pattern, key):
                 if rule in skip:
