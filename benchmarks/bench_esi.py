@@ -9,6 +9,8 @@ Variants:
   bare-parse   python -c "from lxml import etree; etree.parse(FILE)"
   esi-load     ecattool.esi.load(FILE): every device, PDO, SM, DC, EEPROM, module; dictionaries on demand
   esi-full     esi-load plus building every object dictionary (all objects, entries, data types)
+  esi-device   ecattool.esi.load_device(FILE, "EL1008", "newest"): the selective load (one device built,
+               with its dictionary; vendor, groups and modules of the file read too)
 """
 
 from __future__ import annotations
@@ -30,6 +32,10 @@ SCRIPTS = {
     "esi-full": (
         "import sys\nfrom ecattool.esi import load, materialize\n"
         "esi = load(sys.argv[1])\nn = materialize(esi)\nassert n > 0 or not esi.devices\n"
+    ),
+    "esi-device": (
+        "import sys\nfrom ecattool.esi import load_device\n"
+        "dev = load_device(sys.argv[1], 'EL1008', 'newest')\nlen(dev.dictionary)\n"
     ),
 }
 

@@ -1,33 +1,38 @@
-"""SII EEPROM images: parse (binary or Intel HEX), serialize, CRC, check, diff, build from an ESI device."""
+"""SII EEPROM images: parse (binary or Intel HEX), serialize, CRC, check, diff, build from an ESI device.
 
-from ecattool.sii.builder import assemble, build
-from ecattool.sii.checks import check, check_against, check_file, fix_crc, set_alias
-from ecattool.sii.crc import crc8, preamble_crc
-from ecattool.sii.compare import Difference, diff, flatten
-from ecattool.sii.image import load, parse, serialize, write_intel_hex
-from ecattool.sii.model import (
-    Category,
-    CategoryType,
-    DcCategory,
-    FmmuCategory,
-    GeneralCategory,
-    PdoCategory,
-    RawCategory,
-    SiiDcOpMode,
-    SiiHeader,
-    SiiImage,
-    SiiPdo,
-    SiiPdoEntry,
-    SiiSyncManager,
-    StringsCategory,
-    SyncMCategory,
-    category_name,
-)
+The names below are imported from their submodules on first use, so ``sii build`` does not pay for the
+checks, the comparison or the formatting it does not run.
+"""
 
-__all__ = [
-    "assemble", "build", "check", "check_against", "check_file", "fix_crc", "set_alias", "Difference", "diff",
-    "flatten",
-    "Category", "CategoryType", "DcCategory", "FmmuCategory", "GeneralCategory", "PdoCategory", "RawCategory",
-    "SiiDcOpMode", "SiiHeader", "SiiImage", "SiiPdo", "SiiPdoEntry", "SiiSyncManager", "StringsCategory",
-    "SyncMCategory", "category_name", "crc8", "load", "parse", "preamble_crc", "serialize", "write_intel_hex",
-]
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_WHERE = {
+    "ecattool.sii.builder": ("assemble", "build"),
+    "ecattool.sii.checks": ("check", "check_against", "check_file", "fix_crc", "set_alias"),
+    "ecattool.sii.crc": ("crc8", "preamble_crc"),
+    "ecattool.sii.compare": ("Difference", "diff", "flatten"),
+    "ecattool.sii.image": ("load", "parse", "serialize", "write_intel_hex"),
+    "ecattool.sii.model": ("Category", "CategoryType", "DcCategory", "FmmuCategory", "GeneralCategory",
+                           "PdoCategory", "RawCategory", "SiiDcOpMode", "SiiHeader", "SiiImage", "SiiPdo",
+                           "SiiPdoEntry", "SiiSyncManager", "StringsCategory", "SyncMCategory", "category_name"),
+}
+_MODULE_OF = {name: module for module, names in _WHERE.items() for name in names}
+
+
+def __getattr__(name: str) -> Any:
+    module = _MODULE_OF.get(name)
+    if module is None:
+        raise AttributeError(f"module 'ecattool.sii' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_MODULE_OF])
+
+
+__all__ = sorted(_MODULE_OF)
