@@ -192,3 +192,32 @@ def test_op_only_from_a_corpus_esi() -> None:
     dev = load_device(corpus_path("sii", "asix_AX58100_EVB_DIO.xml"))
     assert [sm.op_only for sm in dev.sync_managers if sm.kind == "Outputs"] == [True, True]
     assert not any(sm.op_only for sm in dev.sync_managers if sm.kind != "Outputs")
+
+
+# -- the reader's parse options -------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["beckhoff_AX5xxx.xml", "weidmueller_UR20_FBC.xml", "inovance_SV660_EOE_1Axis_V9.12.xml"])
+def test_dropping_blank_text_changes_nothing_in_the_model(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    import ecattool.esi.reader as reader
+    from ecattool.esi import materialize
+    from ecattool.xmlsafe import parse_xml
+
+    path = corpus_path("esi", name)
+    fast = load(path)
+    materialize(fast)
+    monkeypatch.setattr(reader, "parse_xml", lambda data, source, **_: parse_xml(data, source))
+    plain = load(path)
+    materialize(plain)
+    _same(fast.devices, plain.devices, name)
+    _same(fast.modules, plain.modules, name)
+    assert [str(w) for w in fast.warnings] == [str(w) for w in plain.warnings]
+
+
+def test_the_fast_parse_keeps_the_protections() -> None:
+    from ecattool.errors import XmlSecurityError
+    from ecattool.xmlsafe import parse_xml
+
+    for doc in (b'<!DOCTYPE a [<!ENTITY x "y">]><a>&x;</a>', b'<!DOCTYPE a SYSTEM "http://example.com/a.dtd"><a/>'):
+        with pytest.raises(XmlSecurityError):
+            parse_xml(doc, "t.xml", drop_blank_text=True)
+    root = parse_xml(b"<a>\n  <b> </b>\n  <c>x</c>\n</a>", "t.xml", drop_blank_text=True).getroot()
+    assert root.text is None and root[0].text == " " and root[1].text == "x" and root[1].sourceline == 3

@@ -237,12 +237,12 @@ class Reader:
     # --- entry points ---------------------------------------------------------------------------
     def read(self, data: bytes, lazy: bool = False) -> EsiFile:
         try:
-            tree = parse_xml(data, self.source)
+            tree = parse_xml(data, self.source, drop_blank_text=True)
         except InputError:
             fixed = _decode_fallback(data, self.source, self.ctx)
             if fixed is None:
                 raise
-            tree = parse_xml(fixed, self.source)
+            tree = parse_xml(fixed, self.source, drop_blank_text=True)
         root = tree.getroot()
         tag = root.tag if isinstance(root.tag, str) else ""
         if "}" in tag:
