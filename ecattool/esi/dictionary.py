@@ -428,10 +428,11 @@ class DictionaryBuilder:
     def _apply_subitem_infos(self, entries: list[Entry], info: Any, index: int) -> None:
         if info is None:
             return
-        by_name: dict[str, Entry] = {}
-        for e in entries:
-            by_name.setdefault(e.name, e)
-        for pos, si in enumerate(info.iterchildren("SubItem")):
+        sub_items = list(info.iterchildren("SubItem"))
+        if not sub_items:
+            return
+        by_name = {e.name: e for e in reversed(entries)}  # the first entry of each name
+        for pos, si in enumerate(sub_items):
             n_opt: str | None = None
             final = False
             sub_info = None
