@@ -222,8 +222,27 @@ class AlternativeSmMapping:
     sms: dict[int, list[int]] = field(default_factory=dict)  # SM number -> PDO indices
 
 
+class IdentityView:
+    """``vendor_id``/``product_code``/``revision`` of an object with an ``identity`` (devices and device heads)."""
+
+    __slots__ = ()
+    identity: Identity
+
+    @property
+    def vendor_id(self) -> int:
+        return self.identity.vendor_id
+
+    @property
+    def product_code(self) -> int:
+        return self.identity.product_code
+
+    @property
+    def revision(self) -> int:
+        return self.identity.revision
+
+
 @dataclass(slots=True)
-class Device:
+class Device(IdentityView):
     identity: Identity
     type_name: str
     name: str = ""
@@ -249,18 +268,6 @@ class Device:
     #: free-form facts the reader could keep but the model has no field for (never silently dropped)
     extra: dict[str, str] = field(default_factory=dict)
     alternative_sm_mappings: list[AlternativeSmMapping] = field(default_factory=list)
-
-    @property
-    def vendor_id(self) -> int:
-        return self.identity.vendor_id
-
-    @property
-    def product_code(self) -> int:
-        return self.identity.product_code
-
-    @property
-    def revision(self) -> int:
-        return self.identity.revision
 
     def pdos(self, direction: Direction) -> list[Pdo]:
         return self.rx_pdos if direction is Direction.RX else self.tx_pdos

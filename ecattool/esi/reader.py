@@ -25,6 +25,7 @@ from ecattool.esi.model import (
     EsiFile,
     Fmmu,
     Identity,
+    IdentityView,
     InitCmd,
     Mailbox,
     Module,
@@ -58,7 +59,7 @@ def build_dictionary(el: Any, ctx: Context) -> ObjectDictionary:
     return build(el, ctx)
 
 
-class DeviceHead:
+class DeviceHead(IdentityView):
     """What selecting a device needs (its ``Type``: name, product code, revision), read without the rest."""
 
     __slots__ = ("index", "type_name", "identity", "element")
@@ -68,18 +69,6 @@ class DeviceHead:
         self.type_name = type_name
         self.identity = identity
         self.element = element
-
-    @property
-    def vendor_id(self) -> int:
-        return self.identity.vendor_id
-
-    @property
-    def product_code(self) -> int:
-        return self.identity.product_code
-
-    @property
-    def revision(self) -> int:
-        return self.identity.revision
 
 
 _DEVICES_SLOT = EsiFile.devices  # the dataclass slot, under LazyEsiFile's property
