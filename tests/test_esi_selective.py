@@ -148,7 +148,7 @@ def test_import_esi_does_not_import_checks_validation_or_dictionaries() -> None:
 
 
 def test_on_demand_names_still_work_after_the_submodule_is_imported() -> None:
-    import ecattool.esi as esi
+    from ecattool import esi
 
     assert callable(esi.validate) and callable(esi.materialize) and callable(esi.check_structure)
     esi.materialize(load(corpus_path("esi", "etg_ETG2001_ModulesSlots_CiA402.xml")))
@@ -197,8 +197,7 @@ def test_op_only_from_a_corpus_esi() -> None:
 # -- the reader's parse options -------------------------------------------------------------------------------
 @pytest.mark.parametrize("name", ["beckhoff_AX5xxx.xml", "weidmueller_UR20_FBC.xml", "inovance_SV660_EOE_1Axis_V9.12.xml"])
 def test_dropping_blank_text_changes_nothing_in_the_model(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
-    import ecattool.esi.reader as reader
-    from ecattool.esi import materialize
+    from ecattool.esi import materialize, reader
     from ecattool.xmlsafe import parse_xml
 
     path = corpus_path("esi", name)

@@ -40,7 +40,7 @@ def _validate_module() -> Any:
     return module
 
 
-def validate(path: str | Path, schema_dir: str | Path | None = None) -> list["Finding"]:
+def validate(path: str | Path, schema_dir: str | Path | None = None) -> list[Finding]:
     """All findings for one ESI file (see :func:`ecattool.esi.validate.validate`)."""
     return _validate_module().validate(path, schema_dir)  # type: ignore[no-any-return]
 
@@ -50,7 +50,7 @@ def materialize(esi: EsiFile) -> int:
     return _validate_module().materialize(esi)  # type: ignore[no-any-return]
 
 
-def check_structure(esi: EsiFile) -> list["Finding"]:
+def check_structure(esi: EsiFile) -> list[Finding]:
     """Schema-free structural checks of every device in ``esi`` (see :mod:`ecattool.esi.checks`)."""
     from ecattool.esi.checks import check_structure as check
 
@@ -72,5 +72,16 @@ def load_device(path: str | Path, selector: str | None = None, policy: str = "ex
     return select(load(path, lazy=True), selector, policy)
 
 
-__all__ = ["load", "load_bytes", "select", "select_index", "load_device", "validate", "check_structure", "materialize", "POLICIES",
-           "Device", "EsiFile"]
+__all__ = [
+    "POLICIES",
+    "Device",
+    "EsiFile",
+    "check_structure",
+    "load",
+    "load_bytes",
+    "load_device",
+    "materialize",
+    "select",
+    "select_index",
+    "validate",
+]

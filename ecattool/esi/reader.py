@@ -9,9 +9,10 @@ Tolerated deviations become warnings on ``EsiFile.warnings``; malformed required
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import fields
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from ecattool.errors import EcatToolError, InputError, Location
 from ecattool.esi.model import (
@@ -62,7 +63,7 @@ def build_dictionary(el: Any, ctx: Context) -> ObjectDictionary:
 class DeviceHead(IdentityView):
     """What selecting a device needs (its ``Type``: name, product code, revision), read without the rest."""
 
-    __slots__ = ("index", "type_name", "identity", "element")
+    __slots__ = ("element", "identity", "index", "type_name")
 
     def __init__(self, index: int, type_name: str, identity: Identity, element: Any) -> None:
         self.index = index

@@ -11,7 +11,8 @@ Policies for the revision (numbers compared as integers, never as strings):
 from __future__ import annotations
 
 import re
-from typing import Any, Sequence, TypeVar
+from collections.abc import Sequence
+from typing import Any, TypeVar
 
 from ecattool.errors import InputError, SelectionError
 from ecattool.esi.model import Device, EsiFile

@@ -35,4 +35,10 @@ def __dir__() -> list[str]:
     return sorted([*globals(), *_MODULE_OF])
 
 
-__all__ = sorted(_MODULE_OF)
+__all__ = [
+    "Category", "CategoryType", "DcCategory", "Difference", "FmmuCategory", "GeneralCategory", "PdoCategory",
+    "RawCategory", "SiiDcOpMode", "SiiHeader", "SiiImage", "SiiPdo", "SiiPdoEntry", "SiiSyncManager",
+    "StringsCategory", "SyncMCategory", "assemble", "build", "category_name", "check", "check_against",
+    "check_file", "crc8", "diff", "fix_crc", "flatten", "load", "parse", "preamble_crc", "serialize",
+    "set_alias", "write_intel_hex",
+]
