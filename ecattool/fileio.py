@@ -33,13 +33,20 @@ def write_atomic(path: str | Path, data: bytes | str, inputs: Iterable[str | Pat
         except OSError:
             pass
     payload = data.encode("utf-8") if isinstance(data, str) else data
-    directory = target.parent if str(target.parent) else Path(".")
-    import tempfile  # here, not at module level: a few ms of every CLI start-up
-
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
-    except OSError as exc:
-        raise InputError(f"cannot write file: {exc.strerror or exc}", Location(str(target))) from None
+    # An exclusive temporary name beside the target (same file system, so the rename is atomic). Not
+    # tempfile.mkstemp: importing tempfile costs ~15 ms of a CLI run, and mkstemp makes 0600 files where an
+    # output should get the user's umask like any other file.
+    for _ in range(16):
+        tmp = target.with_name(f".{target.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+            break
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise InputError(f"cannot write file: {exc.strerror or exc}", Location(str(target))) from None
+    else:  # pragma: no cover - 16 collisions of 32 random bits
+        raise InputError("cannot create a temporary file beside the output", Location(str(target)))
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(payload)

@@ -82,3 +82,24 @@ def test_name_lookup_prefers_the_standard_object_whatever_the_order():
     assert od_with([0x2010, 0x6040]).find("controlword") == (0x6040, 0)
     assert od_with([0x6040, 0x2010]).find("controlword") == (0x6040, 0)
     assert od_with([0x2010, 0x1000]).find("control word") == (0x1000, 0)
+
+
+def test_write_atomic_respects_umask_and_replaces(tmp_path):
+    import os
+    import stat
+
+    old = os.umask(0o022)
+    try:
+        out = tmp_path / "o.bin"
+        write_atomic(out, b"\x01\x02")
+        assert stat.S_IMODE(out.stat().st_mode) == 0o644
+        write_atomic(out, b"\x03")
+        assert out.read_bytes() == b"\x03"
+    finally:
+        os.umask(old)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o.bin"]
+
+
+def test_write_atomic_into_missing_directory_is_an_input_error(tmp_path):
+    with pytest.raises(InputError, match="cannot write file"):
+        write_atomic(tmp_path / "nope" / "o.bin", b"x")
