@@ -6,6 +6,8 @@ from fractions import Fraction
 
 import pytest
 
+from ecattool.errors import TargetError
+
 from ecattool.errors import SdoAbort, SdoTimeout, StateChangeError
 from ecattool.od.model import EcState
 from ecattool.sim import Cia402State, Drive, FoeError, decode_statusword
@@ -408,6 +410,27 @@ def test_power_loss_during_eeprom_write():
         w(d, 0x2065, 0, 0xCDEF09AB, 4)
     assert d.state() is EcState.INIT
     assert d.eeprom_words(0x5E06, 4) == [0x1234, 0x5678, 0x09AB, 0xFFFF]
+
+
+def test_power_loss_during_an_eeprom_write_over_process_data():
+    # 2065h mapped in an RxPDO (manual §17: EEPROM data through PDOs); the drive drops off the bus
+    d = drive()
+    w(d, 0x2064, 0, 0x5E060009, 4)
+    w(d, 0x1C12, 0, 0, 1)
+    w(d, 0x1600, 0, 0, 1)
+    w(d, 0x1600, 1, 0x20650020, 4)
+    w(d, 0x1600, 0, 1, 1)
+    w(d, 0x1C12, 1, 0x1600, 2)
+    w(d, 0x1C12, 0, 1, 1)
+    d.request_state(EcState.SAFEOP)
+    d.request_state(EcState.OP)
+    d.exchange((0x56781234).to_bytes(4, "little"))
+    d.faults.power_loss_during_eeprom_write(after_words=1)
+    with pytest.raises(TargetError, match="lost power"):
+        d.exchange((0xCDEF09AB).to_bytes(4, "little"))
+    assert d.state() is EcState.INIT
+    assert d.eeprom_words(0x5E06, 3) == [0x1234, 0x5678, 0x09AB]
+    assert any(e.kind == "power_loss" for e in d.events)
 
 
 # --- A11 / FoE ------------------------------------------------------------------------------------

@@ -822,12 +822,17 @@ class Drive:
             # the controlword must see the target position of the same cycle).
             image = int.from_bytes(outputs, "little")
             reactions: list[tuple[int, int, bytes]] = []
-            for index, sub, offset, bits in rx.entries:
-                if index == 0:
-                    continue
-                raw = ((image >> offset) & ((1 << bits) - 1)).to_bytes((bits + 7) // 8, "little")
-                if self._pdo_write(index, sub, raw):
-                    reactions.append((index, sub, raw))
+            try:
+                for index, sub, offset, bits in rx.entries:
+                    if index == 0:
+                        continue
+                    raw = ((image >> offset) & ((1 << bits) - 1)).to_bytes((bits + 7) // 8, "little")
+                    if self._pdo_write(index, sub, raw):
+                        reactions.append((index, sub, raw))
+            except ee.PowerLost:
+                # the drive drops off the bus; it comes back in INIT with the EEPROM as far as it was written
+                self._power_loss()
+                raise TargetError("the drive lost power during an EEPROM write (it is back in INIT)") from None
             for index, sub, raw in reactions:
                 self._after_write[index](sub, int.from_bytes(raw, "little"))
             self.step()
@@ -842,7 +847,7 @@ class Drive:
                 return False
             try:
                 handler(sub, raw, int.from_bytes(raw, "little"))
-            except (SdoAbort, ee.PowerLost):
+            except SdoAbort:
                 return False
         self._store[(index, sub)] = raw
         return index in self._after_write and old != raw
