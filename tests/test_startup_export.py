@@ -179,13 +179,24 @@ def test_igh_c_compiles(tmp_path):
     text = export(sample_config(), "igh")
     result = _gcc(text, tmp_path)
     assert result.returncode == 0, result.stderr
-    assert "ecrt_slave_config_sdo8(sc, 0x1c12, 0x00, 0x00U)" in text
-    assert "ecrt_slave_config_sdo32(sc, 0x1600, 0x01, 0x60400010U)" in text
-    assert "ecrt_slave_config_complete_sdo(sc, 0x1c12," in text
+    # with PDO tables, IgH programs 1C12h/1C13h and the mapping objects itself: not again as SDOs
+    assert "0x1c12" not in text and "0x1600, 0x01" not in text
+    assert "PDO assignment/mapping writes of the startup list are done by ecrt_slave_config_pdos()" in text
     assert "ecrt_slave_config_sdo(sc, 0x2010, 0x00," in text
     assert "{2, EC_DIR_OUTPUT, 2, axis_1_pdos + 0, EC_WD_ENABLE}" in text
     assert "{3, EC_DIR_INPUT, 1, axis_1_pdos + 2, EC_WD_DISABLE}" in text
     assert "ecrt_slave_config_dc(sc, 0x0300, 1000000U, 0, 0U, 0);" in text
+
+
+def test_igh_c_without_pdo_tables_keeps_every_write_with_exact_sizes(tmp_path):
+    cfg = sample_config()
+    cfg.rx_pdos, cfg.tx_pdos = [], []
+    text = export(cfg, "igh")
+    assert _gcc(text, tmp_path).returncode == 0
+    assert "ecrt_slave_config_pdos(" not in text
+    assert "ecrt_slave_config_sdo8(sc, 0x1c12, 0x00, 0x00U)" in text
+    assert "ecrt_slave_config_sdo32(sc, 0x1600, 0x01, 0x60400010U)" in text
+    assert "ecrt_slave_config_complete_sdo(sc, 0x1c12," in text
 
 
 def test_igh_c_of_every_corpus_config_compiles(tmp_path):

@@ -99,6 +99,11 @@ def _tables(ident: str, c: SlaveConfig) -> list[str]:
     return out
 
 
+def _programs_pdos(index: int) -> bool:
+    """1C12h/1C13h and the RxPDO/TxPDO mapping objects 1600h-17FFh / 1A00h-1BFFh."""
+    return index in (0x1C12, 0x1C13) or 0x1600 <= index <= 0x17FF or 0x1A00 <= index <= 0x1BFF
+
+
 def export(configs: list[SlaveConfig]) -> str:
     out = ["/* IgH EtherCAT master slave configuration, written by ecattool. */", "#include <stddef.h>",
            "#include <stdint.h>", "#include <ecrt.h>", ""]
@@ -118,9 +123,17 @@ def export(configs: list[SlaveConfig]) -> str:
                    f"{ident.upper()}_ID);")
         out.append("    if (!sc) return -1;")
         body: list[str] = []
+        commands = list(c.commands)
         if c.has_pdo_info:
             body.append(f"    if (ecrt_slave_config_pdos(sc, EC_END, {ident}_syncs)) return -1;")
-        for n, cmd in enumerate(c.commands):
+            # IgH writes the assignment (1C12h/1C13h) and the mapping objects itself from the tables above;
+            # the same writes as SDOs would program the mapping twice (and abort on fixed PDOs)
+            pdo_writes = [cmd for cmd in commands if _programs_pdos(cmd.index)]
+            if pdo_writes:
+                body.append(f"    /* {len(pdo_writes)} PDO assignment/mapping writes of the startup list are done by "
+                            "ecrt_slave_config_pdos() */")
+                commands = [cmd for cmd in commands if not _programs_pdos(cmd.index)]
+        for n, cmd in enumerate(commands):
             _sdo_call(ident, n, cmd, body)
         if c.dc_assign_activate:
             body.append(f"    ecrt_slave_config_dc(sc, 0x{c.dc_assign_activate:04x}, {c.dc_cycle_ns or 0}U, "
