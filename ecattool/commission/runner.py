@@ -5,8 +5,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from fractions import Fraction
+from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.commission import cia402
 from ecattool.errors import EcatToolError, InputError, SdoAbort, StateChangeError, TargetError
@@ -15,6 +16,9 @@ from ecattool.od.model import EcState
 from ecattool.project.resolve import TRANSITION_STATE, ResolvedDrive
 from ecattool.startup.model import StartupCommand
 from ecattool.target.base import SlaveTarget, Target
+
+if TYPE_CHECKING:
+    from ecattool.scaling.group import FactorObject
 
 #: transitions whose commands are sent while the slave is in PRE-OP on the way up
 _PREOP_TRANSITIONS = ("IP", "PS")
@@ -302,7 +306,7 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
         cpu = rd.counts_per_unit
         if cpu is not None:
             want = dist * cpu
-            if abs(Fraction(i1 - i0) - want) > max(1, abs(want) / 1_000_000):
+            if abs(Fraction(i1 - i0) - want) > max(Fraction(1), abs(want) / 1_000_000):
                 raise _Failed(Step("move", False, f"internal position moved {i1 - i0} counts, the factor group "
                                                   f"says {float(want):g} counts for {dist} user units"))
             detail += f"; internal {i0} -> {i1} = {i1 - i0} counts (factor group: {float(want):g})"
@@ -311,7 +315,7 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     report.steps.append(Step("move", True, detail))
 
 
-def _expected_readbacks(rd: ResolvedDrive) -> list[Any]:
+def _expected_readbacks(rd: ResolvedDrive) -> list[FactorObject]:
     """Factor objects the drive computes from its own hardware configuration (Control Techniques' read-only
     608Fh): the scaling is only right if the drive reports the value the project's feedback assumes."""
     group = rd.factor_group
@@ -321,13 +325,13 @@ def _expected_readbacks(rd: ResolvedDrive) -> list[Any]:
 def _check_readbacks(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     assert rd.device is not None
     expected = _expected_readbacks(rd)
-    checked = []
+    checked: list[str] = []
     for o in expected:
         entry = rd.device.dictionary.entry(o.index, o.subindex)
         if entry is None:
             continue
         address = f"0x{o.index:04X}:{o.subindex:02X}"
-        raw = _sdo_step(f"read {address}", lambda o=o: slave.sdo_upload(o.index, o.subindex))
+        raw = _sdo_step(f"read {address}", partial(slave.sdo_upload, o.index, o.subindex))
         got = entry.decode(bytes(raw))
         if got != o.value:
             raise _Failed(Step("scaling", False, f"{address} ({o.name}: {o.part}) reads {got}, the project's scaling "
