@@ -384,11 +384,11 @@ def parse_direction(
             out.append(_device_pdo(pdo_index(part, location), direction, device, base, location))
         else:
             entries = [parse_entry(e, device, location) for e in part.split(",") if e.strip()]
-            index = _first_free_pdo(direction, device, base, used + [p.index for p in out])
-            if index is None:
+            free = _first_free_pdo(direction, device, base, used + [p.index for p in out])
+            if free is None:
                 raise InputError(f"no free {direction.value.upper()} PDO for {part!r}; write 0x1600=… explicitly",
                                  location)
-            out.append(MappedPdo(index, entries, True, "", location))
+            out.append(MappedPdo(free, entries, True, "", location))
     return out
 
 
@@ -543,7 +543,7 @@ def declared_mapping(config: Any, device: Device | None = None) -> Mapping | Non
     }
     if not data:
         return None
-    locations = {(d.value, i, "entries", k): e.location
+    locations: dict[tuple[str | int, ...], Location] = {(d.value, i, "entries", k): e.location
                  for d in Direction for i, p in enumerate(config.pdos(d)) for k, e in enumerate(p.entries)
                  if e.location is not None}
     locations.update({(d.value, i): p.location for d in Direction for i, p in enumerate(config.pdos(d))
