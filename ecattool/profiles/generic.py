@@ -13,7 +13,7 @@ import copy
 from ecattool.errors import Location
 from ecattool.esi.model import Device, Direction, Pdo
 from ecattool.od.model import RO, Access, Entry, ObjectCode, ObjectDictionary, OdObject
-from ecattool.od.types import STRING, UDINT, UINT, USINT
+from ecattool.od.types import STRING, UDINT, UINT, USINT, DataType
 from ecattool.profiles.rules import FamilyRules
 
 #: SM kinds → 1C00h communication type values (ETG.1000.6: 1 mailbox out, 2 mailbox in, 3 outputs, 4 inputs)
@@ -22,9 +22,9 @@ SM_TYPE = {"MBoxOut": 1, "MBoxIn": 2, "Outputs": 3, "Inputs": 4}
 _PREOP_RW = Access.parse("rw", None, "PreOP")
 
 
-def _u(sub: int, name: str, dt: type | object, value: int, access: Access = RO, where: str = "") -> Entry:
-    bits = dt.bits  # type: ignore[attr-defined]
-    return Entry(sub, name, dt, bits, access=access, default=dt.encode(value), location=Location(where or None))  # type: ignore[arg-type, attr-defined]
+def _u(sub: int, name: str, dt: DataType, value: int, access: Access = RO, where: str = "") -> Entry:
+    assert dt.bits is not None, "only fixed-size types are synthesised"
+    return Entry(sub, name, dt, dt.bits, access=access, default=dt.encode(value), location=Location(where or None))
 
 
 def _all_pdos(device: Device, direction: Direction) -> list[Pdo]:
@@ -49,7 +49,7 @@ def expand_default_modules(device: Device) -> tuple[list[Pdo], list[OdObject]]:
     objects: list[OdObject] = []
     by_ident = {m.ident: m for m in device.modules if m.ident is not None}
     for k, slot in enumerate(device.slots):
-        module = by_ident.get(slot.default_module)
+        module = by_ident.get(slot.default_module) if slot.default_module is not None else None
         if module is None:
             continue
         obj_off = k * (slot.slot_index_increment or 0)
