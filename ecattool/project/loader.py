@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
+from pydantic_core import ErrorDetails
 
 from ecattool.errors import InputError, Location
 from ecattool.fileio import read_bytes
@@ -36,7 +37,7 @@ class LoadedProject:
         return self.yaml.locate(("drives", i, *path))
 
 
-def _message(err: dict[str, Any]) -> str:
+def _message(err: ErrorDetails) -> str:
     loc = ".".join(str(p) for p in err.get("loc", ()))
     msg = err.get("msg", "invalid value")
     if err.get("type") == "extra_forbidden":

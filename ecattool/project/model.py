@@ -22,16 +22,20 @@ class _Strict(BaseModel):
 class DeviceRef(_Strict):
     """Which device a drive is: a vendor ESI file plus a selector, or a built-in family profile."""
 
-    esi: str | None = Field(None, description="ESI file, relative to the project file")
+    esi: str | None = Field(default=None, description="ESI file, relative to the project file")
     select: str | int | None = Field(
-        None, description="Device in the ESI: type name, product_code[:revision] or list index"
+        default=None, description="Device in the ESI: type name, product_code[:revision] or list index"
     )
     policy: Literal["exact", "newest-not-newer", "newest"] = Field(
-        "exact", description="Revision selection policy when the selector names a revision"
+        default="exact", description="Revision selection policy when the selector names a revision"
     )
-    profile: str | None = Field(None, description="Built-in family: technosoft-ipos, hdt, controltechniques")
-    product: str | None = Field(None, description="Model/product of the built-in family")
-    revision: str | int | None = Field(None, description="Firmware revision of the built-in family (e.g. F515K)")
+    profile: str | None = Field(
+        default=None, description="Built-in family: technosoft-ipos, hdt, controltechniques"
+    )
+    product: str | None = Field(default=None, description="Model/product of the built-in family")
+    revision: str | int | None = Field(
+        default=None, description="Firmware revision of the built-in family (e.g. F515K)"
+    )
 
     @model_validator(mode="after")
     def _one_source(self) -> "DeviceRef":
@@ -45,9 +49,11 @@ class DeviceRef(_Strict):
 class IdentityCheck(_Strict):
     """What to check against the identity (1018h) the drive reports when commissioning."""
 
-    vendor: bool = Field(True, description="Check the vendor id")
-    product: bool = Field(True, description="Check the product code")
-    revision: Literal["exact", "at-least", "ignore"] = Field("exact", description="How to check the revision")
+    vendor: bool = Field(default=True, description="Check the vendor id")
+    product: bool = Field(default=True, description="Check the product code")
+    revision: Literal["exact", "at-least", "ignore"] = Field(
+        default="exact", description="How to check the revision"
+    )
 
 
 class PdoDef(_Strict):
@@ -55,16 +61,20 @@ class PdoDef(_Strict):
 
     index: IntLike = Field(description="Mapping object index, e.g. 0x1600")
     entries: list[str | IntLike] | None = Field(
-        None, description="Entries; omit to keep the PDO's default (or fixed) mapping"
+        default=None, description="Entries; omit to keep the PDO's default (or fixed) mapping"
     )
 
 
 class PdoConfig(_Strict):
     """PDO assignment and mapping per direction (rx = outputs/SM2/1C12h, tx = inputs/SM3/1C13h)."""
 
-    rx: list[PdoDef] | None = Field(None, description="RxPDOs assigned to SM2, in order; omit for the default")
-    tx: list[PdoDef] | None = Field(None, description="TxPDOs assigned to SM3, in order; omit for the default")
-    complete_access: bool = Field(False, description="Program the mapping with SDO complete access")
+    rx: list[PdoDef] | None = Field(
+        default=None, description="RxPDOs assigned to SM2, in order; omit for the default"
+    )
+    tx: list[PdoDef] | None = Field(
+        default=None, description="TxPDOs assigned to SM3, in order; omit for the default"
+    )
+    complete_access: bool = Field(default=False, description="Program the mapping with SDO complete access")
 
 
 class Parameter(_Strict):
@@ -74,7 +84,7 @@ class Parameter(_Strict):
     value: int | float | str | bool | list[int] = Field(
         description="Value in engineering form (8, 0x10, -5, 2.5, 'text', enum name) or 'hex:0a0b' raw bytes"
     )
-    transition: str = Field("PS", description="Transition it is written in: IP, PS, SO, …")
+    transition: str = Field(default="PS", description="Transition it is written in: IP, PS, SO, …")
     comment: str = ""
 
     @field_validator("transition")
@@ -91,18 +101,18 @@ class Parameter(_Strict):
 class DcConfig(_Strict):
     """Distributed clocks: an OpMode of the ESI by name, or explicit values."""
 
-    opmode: str | None = Field(None, description="Name of an ESI Dc/OpMode (e.g. DC, DC-Synchron)")
-    assign_activate: IntLike | None = Field(None, description="AssignActivate word, e.g. 0x0300")
-    cycle_ns: int | None = Field(None, description="SYNC0 cycle time in ns")
-    shift_ns: int | None = Field(None, description="SYNC0 shift time in ns")
+    opmode: str | None = Field(default=None, description="Name of an ESI Dc/OpMode (e.g. DC, DC-Synchron)")
+    assign_activate: IntLike | None = Field(default=None, description="AssignActivate word, e.g. 0x0300")
+    cycle_ns: int | None = Field(default=None, description="SYNC0 cycle time in ns")
+    shift_ns: int | None = Field(default=None, description="SYNC0 shift time in ns")
 
 
 class SwConfig(_Strict):
     """A Technosoft .sw setup image to verify (and download where it differs)."""
 
     file: str = Field(description=".sw file, relative to the project file")
-    mode: Literal[16, 32] = Field(16, description="EEPROM write width for downloads")
-    download: bool = Field(True, description="Download blocks that differ (else only verify)")
+    mode: Literal[16, 32] = Field(default=16, description="EEPROM write width for downloads")
+    download: bool = Field(default=True, description="Download blocks that differ (else only verify)")
 
 
 class RuleOff(_Strict):
@@ -113,24 +123,32 @@ class RuleOff(_Strict):
 class MoveTest(_Strict):
     """The short move of the commissioning run, in user units."""
 
-    distance: float = Field(1.0, description="Relative move in position user units")
-    mode: Literal["pp", "csp"] = Field("pp", description="Profile position or cyclic synchronous position")
+    distance: float = Field(default=1.0, description="Relative move in position user units")
+    mode: Literal["pp", "csp"] = Field(
+        default="pp", description="Profile position or cyclic synchronous position"
+    )
 
 
 class Drive(_Strict):
     name: str = Field(description="Axis/drive name, unique in the project")
-    position: int | None = Field(None, ge=0, description="Position on the bus (default: order in the file)")
+    position: int | None = Field(
+        default=None, ge=0, description="Position on the bus (default: order in the file)"
+    )
     device: DeviceRef
     identity: IdentityCheck = Field(default_factory=IdentityCheck)
     pdo: PdoConfig | None = None
     scaling: dict[str, Any] | None = Field(
-        None, description="Mechanics and units for the factor group (see docs/scaling.md)"
+        default=None, description="Mechanics and units for the factor group (see docs/scaling.md)"
     )
     parameters: list[Parameter] = Field(default_factory=list)
-    sw: SwConfig | str | None = Field(None, description="Technosoft .sw image (file name or settings)")
+    sw: SwConfig | str | None = Field(
+        default=None, description="Technosoft .sw image (file name or settings)"
+    )
     dc: DcConfig | None = None
-    move: MoveTest | None = Field(None, description="Commissioning move; omit to skip the move")
-    enable: bool = Field(True, description="Enable the drive through the CiA-402 state machine when commissioning")
+    move: MoveTest | None = Field(default=None, description="Commissioning move; omit to skip the move")
+    enable: bool = Field(
+        default=True, description="Enable the drive through the CiA-402 state machine when commissioning"
+    )
     disable_rules: list[RuleOff] = Field(default_factory=list)
 
     @property
@@ -146,7 +164,7 @@ class Project(_Strict):
     ecattool: Literal[1] = Field(description="Project file format version (1)")
     name: str = ""
     description: str = ""
-    target: str = Field("sim", description="Default target of commission: 'sim' or 'pysoem:<ifname>'")
+    target: str = Field(default="sim", description="Default target of commission: 'sim' or 'pysoem:<ifname>'")
     drives: list[Drive] = Field(min_length=1)
     disable_rules: list[RuleOff] = Field(default_factory=list)
 
