@@ -173,10 +173,10 @@ def _check_sms(image: SiiImage, r: _Report) -> None:
                   "has no MBoxOut/MBoxIn pair")
         for t, off, size, what in ((1, h.std_rx_offset, h.std_rx_size, "receive (MBoxOut)"),
                                    (2, h.std_tx_offset, h.std_tx_size, "send (MBoxIn)")):
-            s = mbx.get(t)
-            if s is not None and (s.start, s.length) != (off, size):
+            mbx_sm = mbx.get(t)
+            if mbx_sm is not None and (mbx_sm.start, mbx_sm.length) != (off, size):
                 r.add("sii.mailbox", W, f"standard {what} mailbox 0x{off:04X}/{size} in the header differs from "
-                      f"its sync manager 0x{s.start:04X}/{s.length}")
+                      f"its sync manager 0x{mbx_sm.start:04X}/{mbx_sm.length}")
     for cat_type, want in ((CategoryType.TXPDO, 4), (CategoryType.RXPDO, 3)):
         for p in image.pdos(cat_type):
             if p.sm == 0xFF:
