@@ -8,16 +8,23 @@ The pysoem module is injectable so the adapter is tested with a fake in the test
 from __future__ import annotations
 
 from types import ModuleType
-from typing import Any
+from typing import Any, Protocol, cast
 
 from ecattool.errors import SdoAbort, SdoTimeout, StateChangeError, TargetError
 from ecattool.esi.model import Identity
 from ecattool.od.model import EcState
+from ecattool.target.base import SlaveTarget
 
 _STATE_CODES = {EcState.INIT: 1, EcState.PREOP: 2, EcState.BOOT: 3, EcState.SAFEOP: 4, EcState.OP: 8}
 _CODE_STATES = {v: k for k, v in _STATE_CODES.items()}
 #: how long a state change may take, in microseconds
 STATE_TIMEOUT_US = 2_000_000
+
+
+class _SdoError(Protocol):
+    """What ecattool reads from pysoem's ``SdoError``."""
+
+    abort_code: int
 
 
 def _import_pysoem() -> ModuleType:
@@ -42,7 +49,7 @@ class PysoemSlave:
     def _translate(self, exc: Exception, index: int, subindex: int) -> Exception:
         mod = self._master.pysoem
         if isinstance(exc, getattr(mod, "SdoError", ())):
-            return SdoAbort(index, subindex, int(exc.abort_code))
+            return SdoAbort(index, subindex, int(cast(_SdoError, exc).abort_code))
         if isinstance(exc, (getattr(mod, "WkcError", ()), getattr(mod, "MailboxError", ()), getattr(mod, "PacketError", ()))):
             return SdoTimeout(index, subindex)
         return exc
@@ -109,7 +116,7 @@ class PysoemTarget:
         self.master.config_map()
         self.mapped = True
 
-    def slaves(self) -> list[PysoemSlave]:
+    def slaves(self) -> list[SlaveTarget]:
         return list(self._slaves)
 
     def close(self) -> None:
