@@ -9,6 +9,8 @@ import subprocess
 from pathlib import Path
 
 import pytest
+
+from ecattool.startup.model import is_pdo_programming
 from lxml import etree
 
 from ecattool.errors import EncodeError, InputError
@@ -314,11 +316,15 @@ def test_ros2_from_eni_types_by_size_and_marks_transitions():
     cfg = sample_config()
     cfg.commands[:] = [c for c in cfg.commands if not c.complete_access and len(c.data) in (1, 2, 4, 8)]
     text = export(cfg, "ros2")
-    assert "{index: 0x1600, sub_index: 1, type: uint32, value: 1614807056}" in text
     assert "{index: 0x60C2, sub_index: 2, type: int8, value: -3}" in text
     assert "transition IP" in text
+    # the mapping travels as rpdo/tpdo, which the driver programs: not again as sdo writes
+    assert "{index: 0x1600, sub_index: 1" not in text and "done by the driver from rpdo/tpdo" in text
     (back,) = import_bytes(text.encode(), "r.yaml")
-    assert [(c.index, c.subindex, c.data) for c in back.commands] == [(c.index, c.subindex, c.data) for c in cfg.commands]
+    assert [(c.index, c.subindex, c.data) for c in back.commands] == \
+        [(c.index, c.subindex, c.data) for c in cfg.commands if not is_pdo_programming(c.index)]
+    cfg.rx_pdos, cfg.tx_pdos = [], []  # without PDO tables every write stays an sdo entry
+    assert "{index: 0x1600, sub_index: 1, type: uint32, value: 1614807056}" in export(cfg, "ros2")
 
 
 def test_ros2_refuses_complete_access_and_odd_sizes():

@@ -16,6 +16,15 @@ from ecattool.errors import Location
 TRANSITIONS = ("IP", "PS", "SP", "SO", "OS", "OP", "PI", "SI", "OI", "IB", "BI", "II", "PP", "SS")
 
 
+def is_pdo_programming(index: int) -> bool:
+    """Whether a write to ``index`` programs process data: 1C12h/1C13h or a mapping object 1600h-17FFh/1A00h-1BFFh.
+
+    Masters that are given PDO tables (IgH ``ecrt_slave_config_pdos``, ethercat_driver_ros2 ``rpdo``/``tpdo``)
+    write these objects themselves; exporters for them leave such startup commands out.
+    """
+    return index in (0x1C12, 0x1C13) or 0x1600 <= index <= 0x17FF or 0x1A00 <= index <= 0x1BFF
+
+
 @dataclass(slots=True)
 class StartupCommand:
     transition: str  # "PS" (PRE-OP → SAFE-OP) is the usual one

@@ -99,8 +99,8 @@ def _mailbox_cmd(parent: Any, attrs: dict[str, str], transition: str, comment: s
         ic.set(key, value)
     _sub(ic, "Transition", transition)
     _sub(ic, "Comment", comment, cdata=True)
-    for tag, value in fields:
-        _sub(ic, tag, value)
+    for tag, field_value in fields:
+        _sub(ic, tag, field_value)
 
 
 def _mailbox(slave: Any, c: SlaveConfig) -> None:
@@ -278,12 +278,12 @@ def _read_process_data(pd: Any, cfg: SlaveConfig, source: str) -> None:
             continue
         for ref in sm.findall("Pdo"):
             idx = parse_int((ref.text or "").strip(), _loc(source, ref), "Pdo")
-            p = defined[direction].get(idx)
-            if p is None:
+            assigned = defined[direction].get(idx)
+            if assigned is None:
                 cfg.note("startup.eni.pdo", f"Sm{number} assigns PDO 0x{idx:04X} that ProcessData does not define",
                          _loc(source, ref))
-                p = Pdo(direction, idx)
-            target.append(p)
+                assigned = Pdo(direction, idx)
+            target.append(assigned)
 
 
 def _read_slave(slave: Any, source: str, i: int) -> SlaveConfig:

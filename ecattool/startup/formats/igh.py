@@ -14,7 +14,7 @@ from __future__ import annotations
 from ecattool.errors import EncodeError
 from ecattool.startup.config import SlaveConfig, SoeCommand
 from ecattool.startup.formats._common import unique_identifiers
-from ecattool.startup.model import StartupCommand
+from ecattool.startup.model import StartupCommand, is_pdo_programming
 
 NAME = "igh"
 EXTENSIONS = (".c",)
@@ -99,11 +99,6 @@ def _tables(ident: str, c: SlaveConfig) -> list[str]:
     return out
 
 
-def _programs_pdos(index: int) -> bool:
-    """1C12h/1C13h and the RxPDO/TxPDO mapping objects 1600h-17FFh / 1A00h-1BFFh."""
-    return index in (0x1C12, 0x1C13) or 0x1600 <= index <= 0x17FF or 0x1A00 <= index <= 0x1BFF
-
-
 def export(configs: list[SlaveConfig]) -> str:
     out = ["/* IgH EtherCAT master slave configuration, written by ecattool. */", "#include <stddef.h>",
            "#include <stdint.h>", "#include <ecrt.h>", ""]
@@ -128,11 +123,11 @@ def export(configs: list[SlaveConfig]) -> str:
             body.append(f"    if (ecrt_slave_config_pdos(sc, EC_END, {ident}_syncs)) return -1;")
             # IgH writes the assignment (1C12h/1C13h) and the mapping objects itself from the tables above;
             # the same writes as SDOs would program the mapping twice (and abort on fixed PDOs)
-            pdo_writes = [cmd for cmd in commands if _programs_pdos(cmd.index)]
+            pdo_writes = [cmd for cmd in commands if is_pdo_programming(cmd.index)]
             if pdo_writes:
                 body.append(f"    /* {len(pdo_writes)} PDO assignment/mapping writes of the startup list are done by "
                             "ecrt_slave_config_pdos() */")
-                commands = [cmd for cmd in commands if not _programs_pdos(cmd.index)]
+                commands = [cmd for cmd in commands if not is_pdo_programming(cmd.index)]
         for n, cmd in enumerate(commands):
             _sdo_call(ident, n, cmd, body)
         if c.dc_assign_activate:

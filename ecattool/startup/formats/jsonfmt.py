@@ -190,8 +190,8 @@ def _read_slave(s: Any, doc: _Doc, i: int) -> SlaveConfig:
     for j, ch in enumerate(as_list(s.get("channel_info"), doc.loc(*base, "channel_info"), "channel_info")):
         cloc = doc.loc(*base, "channel_info", j)
         rest = {k: v for k, v in _obj(ch, cloc, "channel_info entry").items() if k not in ("pdo", "entry")}
-        key = (_int(_need(ch, "pdo", cloc), cloc, "pdo"), _int(_need(ch, "entry", cloc), cloc, "entry"))
-        cfg.channel_info[key] = rest
+        channel = (_int(_need(ch, "pdo", cloc), cloc, "pdo"), _int(_need(ch, "entry", cloc), cloc, "entry"))
+        cfg.channel_info[channel] = rest
     cfg.extra = dict(_obj(s.get("extra") or {}, doc.loc(*base, "extra"), "extra"))
     return cfg
 

@@ -19,7 +19,7 @@ from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.od import types as dt
 from ecattool.startup.config import SlaveConfig
 from ecattool.startup.formats._common import as_list, one_line
-from ecattool.startup.model import StartupCommand, StartupList
+from ecattool.startup.model import StartupCommand, StartupList, is_pdo_programming
 
 NAME = "ros2"
 EXTENSIONS = (".yaml", ".yml")
@@ -119,9 +119,18 @@ def export(configs: list[SlaveConfig]) -> str:
                 lines.append(yaml.safe_dump({key: value}, default_flow_style=None, sort_keys=False).strip())
             else:
                 lines.append(f"{key}: {_scalar(value)}")
-    if c.commands:
+    commands = list(c.commands)
+    if c.has_pdo_info:
+        # the driver configures the PDOs from rpdo/tpdo itself; writing 1C12h/1C13h/16xxh/1Axxh as SDOs too
+        # would program the mapping twice
+        skipped = [cmd for cmd in commands if is_pdo_programming(cmd.index)]
+        commands = [cmd for cmd in commands if not is_pdo_programming(cmd.index)]
+        if skipped:
+            lines.append(f"# {len(skipped)} PDO assignment/mapping writes of the startup list are done by the driver "
+                         "from rpdo/tpdo")
+    if commands:
         lines.append("sdo:  # sdo data to be transferred at drive startup")
-        lines += [_sdo_line(cmd) for cmd in c.commands]
+        lines += [_sdo_line(cmd) for cmd in commands]
     for key, pdos in (("rpdo", c.rx_pdos), ("tpdo", c.tx_pdos)):
         if pdos:
             lines.append(f"{key}:")
