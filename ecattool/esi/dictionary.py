@@ -26,6 +26,7 @@ _UINT_BY_BITS = {8: BY_CODE[0x05], 16: BY_CODE[0x06], 24: BY_CODE[0x16], 32: BY_
 _BITS = {i: BY_CODE[0x30 + i - 1] for i in range(1, 9)}
 _DEFAULT_ACCESS = Access.parse("ro")
 _INT_KINDS = frozenset({Kind.UNSIGNED, Kind.SIGNED, Kind.BITS, Kind.BOOL})
+_INFO_TAGS = frozenset({"DefaultValue", "MinValue", "MaxValue"})  # a DataType SubItem with its own values
 _MAX_VALUE_BITS = 8 * 65536  # no CoE value is larger; guards encoders against absurd sizes in hostile files
 
 
@@ -364,6 +365,7 @@ class DictionaryBuilder:
             si_name: str | None = None
             final = False
             sidx_t = bits_t = offs_t = flags_el = None
+            has_info = False
             for c in si:
                 tag = c.tag
                 if tag == "Name":
@@ -378,6 +380,8 @@ class DictionaryBuilder:
                     offs_t = c.text
                 elif tag == "Flags" and flags_el is None:
                     flags_el = c
+                elif tag in _INFO_TAGS:
+                    has_info = True
             si_name = si_name or ""
             st = self.types.resolve(si_type, si)
             sidx = ctx.number(sidx_t, si, "SubItem/SubIdx") if sidx_t is not None and sidx_t.strip() else None
@@ -417,10 +421,8 @@ class DictionaryBuilder:
             size = bits if bits is not None else (st.bits or 0)
             e = Entry(sidx, si_name, dt, size, type_name=si_type, bit_offset=offs, access=access, pdo_mapping=mapping,
                       enum=dict(st.enum), backup=backup, setting=setting, category=category)
-            for tag in ("DefaultValue", "MinValue", "MaxValue"):
-                if si.find(tag) is not None:
-                    _apply_info(e, si, ctx)
-                    break
+            if has_info:
+                _apply_info(e, si, ctx)
             out.append(e)
             next_sub = sidx + 1
         return out, expanded and array_like
