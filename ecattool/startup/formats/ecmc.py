@@ -180,9 +180,10 @@ class _Reader:
         elif func == "EcAddEntryComplete":
             self.entry(args, loc)
         elif func in _REPORTED:
-            cfg = self.slave(args[0], loc) if args else None
-            if cfg is not None:
-                cfg.note("startup.ecmc.read", f"Cfg.{func} reads or verifies; not a startup write", loc, Severity.INFO)
+            reader = self.slave(args[0], loc) if args else None
+            if reader is not None:
+                reader.note("startup.ecmc.read", f"Cfg.{func} reads or verifies; not a startup write", loc,
+                            Severity.INFO)
         self.pending_comment = ""
 
     def entry(self, args: list[str], loc: Location) -> None:

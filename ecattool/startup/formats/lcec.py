@@ -11,7 +11,7 @@ application period) is kept in ``extra``.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
@@ -21,9 +21,17 @@ from ecattool.startup.config import SlaveConfig
 from ecattool.startup.formats._common import parse_hex, unsigned_type
 from ecattool.startup.model import StartupCommand, StartupList
 
+if TYPE_CHECKING:
+    from lxml import etree
+
 NAME = "lcec"
 EXTENSIONS = (".xml",)
 DESCRIPTION = "LinuxCNC-EtherCAT ethercat-conf.xml (sdoConfig, syncManager/pdo, dcConf, initCmds files); import only"
+
+
+def _line(el: etree._Element) -> int | None:
+    """The element's source line (lxml-stubs declare ``sourceline`` as ``...``; lxml gives ``int | None``)."""
+    return cast("int | None", el.sourceline)
 
 
 def _hex(el: Any, attr: str, source: str, default: int | None = None) -> int | None:
@@ -110,11 +118,11 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
     root = parse_xml(data, source).getroot()
     if root.tag != "masters":
         raise InputError(f"root element is <{root.tag}>, expected <masters> (lcec ethercat-conf.xml)",
-                         Location(source, root.sourceline))
+                         Location(source, _line(root)))
     out = []
     for master in root.findall("master"):
         for slave in master.findall("slave"):
-            loc = Location(source, slave.sourceline)
+            loc = Location(source, _line(slave))
             idx = slave.get("idx")
             cfg = SlaveConfig(startup=StartupList(), name=slave.get("name") or slave.get("type") or "",
                               position=int(idx) if idx and idx.isdigit() else None, source=loc)
