@@ -136,7 +136,7 @@ class Cia402:
         return moves
 
     def fault(self, code: int) -> list[tuple[State, State]]:
-        moves = []
+        moves: list[tuple[State, State]] = []
         if self.state is not State.FAULT:
             moves.append((self.state, State.FAULT_REACTION))
             moves.append((State.FAULT_REACTION, State.FAULT))

@@ -151,7 +151,7 @@ def expand_default_modules(device: Device) -> Device:
     out = copy.deepcopy(device)
     by_ident = {m.ident: m for m in out.modules if m.ident is not None}
     for k, slot in enumerate(out.slots):
-        module = by_ident.get(slot.default_module)
+        module = by_ident.get(slot.default_module) if slot.default_module is not None else None
         if module is None:
             continue
         for _ in range(max(1, slot.min_instances)):
@@ -226,7 +226,8 @@ class Drive:
         self._fixed = {p.index for p in (*device.rx_pdos, *device.tx_pdos) if p.fixed}
         self._pdo_only_set = frozenset(getattr(self.rules, "pdo_only_indices", ()))
         self._read_only_set = frozenset(getattr(self.rules, "read_only_indices", ()))
-        self._handlers_down: dict[int, Callable[[int, bytes, int | None], bool]] = {}
+        # a handler returns True to store the value, False to skip storing it, None when the drive does not reply
+        self._handlers_down: dict[int, Callable[[int, bytes, int | None], bool | None]] = {}
         self._handlers_up: dict[int, Callable[[int], bytes]] = {}
         self._install_handlers()
         self._power_on()
@@ -243,12 +244,12 @@ class Drive:
         return cls(device, rules, **kw)
 
     @classmethod
-    def from_profile(cls, name: str, product: str | int | None = None, revision: str | int | None = None,
+    def from_profile(cls, name: str, product: str | None = None, revision: str | int | None = None,
                      **kw: Any) -> "Drive":
         from ecattool import profiles
 
-        device = profiles.load(name, product=product, revision=revision)  # type: ignore[attr-defined]
-        return cls(device, profiles.rules_for(device), **kw)  # type: ignore[attr-defined]
+        device = profiles.load(name, product=product, revision=revision)
+        return cls(device, profiles.rules_for(device), **kw)
 
     @classmethod
     def from_esi(cls, path: str | Path, selector: str | None = None, **kw: Any) -> "Drive":
@@ -714,7 +715,7 @@ class Drive:
         Inter-Option) may only be in the second (low priority) one; in the first the drive aborts."""
         if not self.rules.priority_rule or len(chosen) < 2:
             return False
-        slow = getattr(self.rules, "slow_indices", frozenset())
+        slow: frozenset[int] = getattr(self.rules, "slow_indices", frozenset())
         return any(e.index in slow for e in self._pdo_entries(d, chosen[0]) or [])
 
     def _valid_pdo_index(self, d: Direction, pdo: int) -> bool:
