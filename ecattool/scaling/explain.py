@@ -130,11 +130,11 @@ def explain(values: Values, family: str = "technosoft-ipos", *, slow_loop: Fract
                                   f"{rpm(cps, per)}"))
     elif fs == "hdt":
         for index, what, per in ((0x6094, "velocity", ""), (0x6097, "acceleration", "/s")):
-            cps = r.ratio(index)
-            if cps is not None:
-                e.data[f"counts/s{'' if not per else '²'} per {what} unit"] = cps
-                e.lines.append((what, f"1 {unit_name[1 if what == 'velocity' else 2]} = {_g(cps)} pulses/s"
-                                      f"{'²' if per else ''}{rpm(cps, per)}"))
+            pulses = r.ratio(index)
+            if pulses is not None:
+                e.data[f"counts/s{'' if not per else '²'} per {what} unit"] = pulses
+                e.lines.append((what, f"1 {unit_name[1 if what == 'velocity' else 2]} = {_g(pulses)} pulses/s"
+                                      f"{'²' if per else ''}{rpm(pulses, per)}"))
         acc = r.ratio(0x6097)
         if acc is not None:
             e.lines.append(("jerk", f"2011h: 1 unit = {_g(acc)} pulses/s³ (acceleration unit per second)"))
