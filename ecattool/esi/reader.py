@@ -223,6 +223,7 @@ class Reader:
         self.base_dir = base_dir
         self.follow_references = follow_references
         self.ctx = Context(source)
+        self._numbers: dict[str, int] = {}
 
     # --- entry points ---------------------------------------------------------------------------
     def read(self, data: bytes, lazy: bool = False) -> EsiFile:
@@ -396,9 +397,19 @@ class Reader:
                     setattr(pdo, name, ctx.opt_number(v, el, attr))
         return pdo
 
+    def _number(self, text: str | None, el: Any, what: str) -> int:
+        """:meth:`Context.number`, remembering the common spellings (:func:`_fast_number`) for :attr:`_numbers`."""
+        v = _fast_number(text)
+        if v is None:
+            return self.ctx.number(text, el, what)
+        if len(self._numbers) < 65536:
+            self._numbers[text] = v  # type: ignore[index]
+        return v
+
     def entry(self, en: Any) -> PdoEntry:
-        number = self.ctx.number
-        fast = _fast_number
+        # the hot loop of a large file (one call per PDO entry): numbers seen before are a dict look-up, and
+        # the Name rule of values.name_step is written out
+        known = self._numbers
         index = sub = bits = None
         dtype = ""
         name: str | None = None
@@ -408,22 +419,27 @@ class Reader:
             tag = c.tag
             if tag == "Index":
                 t = c.text
-                index = fast(t)
+                index = known.get(t)  # type: ignore[arg-type]
                 if index is None:
-                    index = number(t, c, "Entry/Index")
+                    index = self._number(t, c, "Entry/Index")
                 dep = c.get("DependOnSlot")
             elif tag == "SubIndex":
                 t = c.text
-                sub = fast(t)
+                sub = known.get(t)  # type: ignore[arg-type]
                 if sub is None:
-                    sub = number(t, c, "Entry/SubIndex") if t is not None and t.strip() else 0
+                    sub = self._number(t, c, "Entry/SubIndex") if t is not None and t.strip() else 0
             elif tag == "BitLen":
                 t = c.text
-                bits = fast(t)
+                bits = known.get(t)  # type: ignore[arg-type]
                 if bits is None:
-                    bits = number(t, c, "Entry/BitLen")
+                    bits = self._number(t, c, "Entry/BitLen")
             elif tag == "Name":
-                name, final = name_step(c, name, final)
+                if not final:
+                    lcid = c.get("LcId")
+                    if lcid is not None and lcid.strip() == "1033":
+                        name, final = (c.text or "").strip(), True
+                    elif name is None:
+                        name = (c.text or "").strip()
             elif tag == "DataType":
                 dtype = (c.text or "").strip()
         loc = Location(self.source, en.sourceline)
