@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -75,10 +76,11 @@ def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping
         from ecattool.fileio import read_bytes
         from ecattool.project.yamlloc import load_yaml
 
-        raw = click.get_binary_stream("stdin").read() if mapping_file == "-" else read_bytes(mapping_file)
+        raw = sys.stdin.buffer.read() if mapping_file == "-" else read_bytes(mapping_file)
         source = "<stdin>" if mapping_file == "-" else mapping_file
         doc = load_yaml(raw, source)
-        data, prefix = doc.data, ()
+        data = doc.data
+        prefix: tuple[str, ...] = ()
         if isinstance(data, dict) and "pdo" in data and "rx" not in data and "tx" not in data:
             data, prefix = data["pdo"], ("pdo",)
         locations = {path[len(prefix):]: loc for path, loc in doc.locations.items() if path[:len(prefix)] == prefix}
