@@ -31,8 +31,9 @@ def schema(output: str | None, check: str | None) -> None:
         from pathlib import Path
 
         if Path(check).read_text(encoding="utf-8") != text:
-            raise SystemExit(click.echo(f"ecattool: error: {check}: out of date; regenerate with "
-                                        f"'ecattool project schema -o {check}'", err=True) or 1)
+            click.echo(f"ecattool: error: {check}: out of date; regenerate with "
+                       f"'ecattool project schema -o {check}'", err=True)
+            raise SystemExit(1)
         click.echo(f"{check}: up to date")
         return
     write_output(output, text)

@@ -132,9 +132,10 @@ _POLICY = click.option("--policy", type=click.Choice(["exact", "newest-not-newer
 
 def _select(esi_path: str, selector: str | None, image: Any = None, policy: str = "exact") -> Any:
     from ecattool.esi import load, select
+    from ecattool.esi.reader import LazyEsiFile
 
     esi = load(esi_path, lazy=True)  # builds only the device chosen (a full load when listing is needed)
-    if selector is None and image is not None and len(esi.device_heads) > 1:
+    if selector is None and image is not None and isinstance(esi, LazyEsiFile) and len(esi.device_heads) > 1:
         h = image.header
         matching = [d for d in esi.device_heads if (d.product_code, d.revision) == (h.product_code, h.revision)]
         if matching:

@@ -28,7 +28,7 @@ def profiles_cmd(as_json: bool) -> None:
     """List the built-in drive families with their models, product codes and firmware revisions."""
     from ecattool import profiles
 
-    rows = []
+    rows: list[dict[str, Any]] = []  # JSON rows
     for p in profiles.list_profiles():
         for prod in p.products:
             rows.append({"profile": p.name, "vendor_id": p.vendor_id, "vendor": p.vendor_name, "product": prod.name,
