@@ -11,8 +11,12 @@ Table 4.1.1, HDT §4.03.1, Control Techniques Table 7.2); the family differences
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from enum import Enum
 from fractions import Fraction
+
+#: a unit conversion of the drive (internal velocity/acceleration units <-> increments per second)
+_Convert = Callable[[Fraction], Fraction]
 
 
 class State(str, Enum):
@@ -177,8 +181,8 @@ class Cia402:
         self.setpoint_ack = True
 
     def step(self, mode: int, dt: Fraction, *, target_position: Fraction, target_velocity: Fraction,
-             profile_velocity: Fraction, acceleration: Fraction, inc_per_s, vel_from_inc_per_s,
-             inc_per_s2) -> None:
+             profile_velocity: Fraction, acceleration: Fraction, inc_per_s: _Convert,
+             vel_from_inc_per_s: _Convert, inc_per_s2: _Convert) -> None:
         """Advance the motion by ``dt`` seconds. Velocity/acceleration are internal units; the callables
         convert them to increments per second (per second²) and back."""
         if self.state is not State.OPERATION_ENABLED:
@@ -215,8 +219,8 @@ class Cia402:
                 self.position += sign * stepped
                 self.velocity = vel_from_inc_per_s(sign * speed)
 
-    def _ramp_to(self, target: Fraction, acceleration: Fraction, dt: Fraction, inc_per_s, vel_from_inc_per_s,
-                 inc_per_s2) -> None:
+    def _ramp_to(self, target: Fraction, acceleration: Fraction, dt: Fraction, inc_per_s: _Convert,
+                 vel_from_inc_per_s: _Convert, inc_per_s2: _Convert) -> None:
         acc = abs(inc_per_s2(acceleration))
         if acc == 0:
             self.velocity = target

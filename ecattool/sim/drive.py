@@ -114,7 +114,7 @@ CT_TRIP_CODES = {0: 0x0000, 1: 0x3200, 3: 0x2300, 6: 0x9000, 30: 0x7510, 31: 0x5
 
 def _rules_for(device: Device) -> FamilyRules:
     try:
-        from ecattool.profiles import rules_for  # type: ignore[attr-defined]
+        from ecattool.profiles import rules_for
     except ImportError:
         return FamilyRules("generic", vendor_id=device.vendor_id)
     return rules_for(device)
@@ -122,7 +122,7 @@ def _rules_for(device: Device) -> FamilyRules:
 
 def _complete(device: Device) -> Device:
     try:
-        from ecattool.profiles import complete_generic  # type: ignore[attr-defined]
+        from ecattool.profiles import complete_generic
     except ImportError:
         return device
     return complete_generic(device)
