@@ -7,6 +7,7 @@ ros2, ecmc, JSON and CSV; the commissioning run sends them to a target.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -60,7 +61,7 @@ class StartupList:
     product_code: int | None = None
     revision: int | None = None
 
-    def __iter__(self):  # type: ignore[no-untyped-def]
+    def __iter__(self) -> Iterator[StartupCommand]:
         return iter(self.commands)
 
     def __len__(self) -> int:
