@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import click
 
 from ecattool.cli.common import console, dump_json, output_option, write_output
+
+if TYPE_CHECKING:
+    from ecattool.commission.runner import DriveReport
 
 
 @click.command(
@@ -33,7 +38,7 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, out
     reports = []
     con = None if as_json else console()
     for path in projects:
-        def show(dr, path=path):  # type: ignore[no-untyped-def]
+        def show(dr: DriveReport, path: str = path) -> None:
             if con is None:
                 return
             mark = "[green]OK[/green]" if dr.ok else "[red]FAILED[/red]"

@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import click
 
 from ecattool.cli.common import console, dump_json, output_option, write_output
+
+if TYPE_CHECKING:
+    from ecattool.project.lint import ProjectResult
 
 
 @click.command(
@@ -49,7 +54,7 @@ def lint(projects: tuple[str, ...], fmt: str, as_json: bool, strict: bool, outpu
     raise SystemExit(1 if failed else 0)
 
 
-def _text(results, output: str | None) -> None:  # type: ignore[no-untyped-def]
+def _text(results: list[ProjectResult], output: str | None) -> None:
     lines = []
     for r in results:
         for f in r.findings:

@@ -62,7 +62,7 @@ def _load_device(esi: str | None, selector: str | None, profile: str | None, pro
     name = profile or selector
     if not name:
         raise click.UsageError("name the device: --esi FILE [--device SEL] or --profile NAME")
-    from ecattool.profiles import load  # type: ignore[attr-defined]
+    from ecattool.profiles import load
 
     return load(name, product=product, revision=revision)
 
