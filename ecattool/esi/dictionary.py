@@ -200,13 +200,18 @@ def _apply_info(entry: Entry, info: Any, ctx: Context) -> None:
     if info is None:
         return
     dt = entry.datatype
-    for child in info.iterchildren():
+    for child in info:  # comments and processing instructions match none of the tags below
         tag = child.tag
-        if not isinstance(tag, str):
-            continue
         text = child.text
         if tag == "DefaultData":
-            raw = ctx.hexbin(text, child, "DefaultData")
+            raw = None
+            if text is not None and not len(text) & 1:  # Context.hexbin's common case, without the call
+                try:
+                    raw = bytes.fromhex(text)
+                except ValueError:
+                    pass
+            if raw is None:
+                raw = ctx.hexbin(text, child, "DefaultData")
             size = (entry.bit_size + 7) // 8
             if dt is not None and dt.kind in _INT_KINDS and 0 < len(raw) < size <= 8:
                 ctx.warn("esi-default-short", f"DefaultData {raw.hex()} is shorter than {entry.type_name or dt.name} "
@@ -441,7 +446,12 @@ class DictionaryBuilder:
             for c in si:
                 tag = c.tag
                 if tag == "Name":
-                    n_opt, final = name_step(c, n_opt, final)
+                    if not final:  # values.name_step, written out: one call per SubItem of a large file
+                        lcid = c.get("LcId")
+                        if lcid is not None and lcid.strip() == "1033":
+                            n_opt, final = (c.text or "").strip(), True
+                        elif n_opt is None:
+                            n_opt = (c.text or "").strip()
                 elif tag == "Info" and sub_info is None:
                     sub_info = c
             n = n_opt or ""
