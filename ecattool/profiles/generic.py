@@ -131,15 +131,15 @@ def complete_generic(device: Device) -> Device:
                              (2, "Product code", ident.product_code), (3, "Revision", ident.revision),
                              (4, "Serial number", ident.serial)):
         obj.entries[sub] = _u(sub, name, USINT if sub == 0 else UDINT, value, RO, where)
-    if 0x1018 not in od:
+    existing = od.get(0x1018)
+    if existing is None:
         od.add(obj)
     else:
-        existing = od.get(0x1018)
-        _fill_entries(existing, obj)  # type: ignore[arg-type]
+        _fill_entries(existing, obj)
         # The device's identity (Type@ProductCode/RevisionNo, Vendor/Id) is what the drive reports; ESI 1018h
         # defaults are often stale (Ingenia, Inovance and the ETG.2001 example disagree with their Type).
         for sub in (1, 2, 3):
-            e = existing.entry(sub) if existing is not None else None
+            e = existing.entry(sub)
             if e is not None and e.datatype is not None and e.bit_size == 32:
                 e.default = obj.entries[sub].default
     if 0x1C00 not in od and out.sync_managers:
@@ -154,14 +154,17 @@ def complete_generic(device: Device) -> Device:
     for direction in (Direction.RX, Direction.TX):
         pdos = _all_pdos(out, direction)
         for p in pdos:
-            if p.index not in od:
+            mapping = od.get(p.index)
+            if mapping is None:
                 od.add(_mapping_object(p, config and not p.fixed, where))
             else:
-                _fill_defaults(od.get(p.index), _mapping_object(p, False, where))  # type: ignore[arg-type]
-        if direction.assign_index not in od and pdos:
-            od.add(_assign_object(out, direction, pdos, assign, where))
-        elif pdos:
-            _fill_defaults(od.get(direction.assign_index), _assign_object(out, direction, pdos, False, where))  # type: ignore[arg-type]
+                _fill_defaults(mapping, _mapping_object(p, False, where))
+        if pdos:
+            assignment = od.get(direction.assign_index)
+            if assignment is None:
+                od.add(_assign_object(out, direction, pdos, assign, where))
+            else:
+                _fill_defaults(assignment, _assign_object(out, direction, pdos, False, where))
     _add_mapped_objects(od, out, where)
     out.dictionary = od
     return out
