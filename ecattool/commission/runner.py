@@ -416,10 +416,10 @@ def open_target(spec: str, drives: list[ResolvedDrive]) -> tuple[Target, str]:
     if spec == "sim":
         from ecattool.target.sim import SimTarget
 
-        devices = [rd.device for rd in sorted(drives, key=lambda r: r.position)]
-        if any(d is None for d in devices):
+        devices = [rd.device for rd in sorted(drives, key=lambda r: r.position) if rd.device is not None]
+        if len(devices) != len(drives):
             raise InputError("cannot simulate a drive whose device did not resolve (see lint)")
-        return SimTarget.from_devices(devices), "sim"  # type: ignore[arg-type]
+        return SimTarget.from_devices(devices), "sim"
     if spec.startswith("pysoem:"):
         from ecattool.target.pysoem import PysoemTarget
 
@@ -442,10 +442,10 @@ def commission(path: str | Path, target: str | Target | None = None,
         first = result.findings[0]
         raise InputError(first.message, first.location)
     owned = target is None or isinstance(target, str)
-    if owned:
-        tgt, name = open_target(target or result.loaded.project.target, result.drives)  # type: ignore[arg-type]
+    if target is None or isinstance(target, str):
+        tgt, name = open_target(target or result.loaded.project.target, result.drives)
     else:
-        tgt, name = target, type(target).__name__  # type: ignore[assignment]
+        tgt, name = target, type(target).__name__
     report = CommissionReport(str(path), name)
     try:
         slaves = tgt.slaves()
