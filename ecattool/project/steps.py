@@ -64,7 +64,7 @@ def scaling_commands(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[Start
         if firmware is None and rd.drive.device.revision is not None:
             firmware = str(rd.drive.device.revision)
         group = scaling.compute(spec.axis, family, firmware=firmware, device=rd.device,
-                                strategy=spec.approximation, vl_setpoint=spec.vl_setpoint)  # type: ignore[arg-type]
+                                strategy=spec.approximation, vl_setpoint=spec.vl_setpoint)
     except EcatToolError as exc:
         rd.error("PRJ050", exc.message, exc.location if exc.location and exc.location.line else loc)
         return []

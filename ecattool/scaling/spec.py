@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from ecattool.errors import InputError, Location
+from ecattool.scaling.exact import Strategy
 from ecattool.scaling.model import Axis, axis_from_dict
 
 
@@ -16,7 +17,7 @@ class Spec:
     axis: Axis
     family: str | None = None
     firmware: str | None = None
-    approximation: str | None = None
+    approximation: Strategy | None = None
     vl_setpoint: tuple[int, int] = (1, 1)
 
 

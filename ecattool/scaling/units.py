@@ -87,9 +87,10 @@ class Unit:
         else:
             if len(self.time_tokens) != 1:
                 return None
-            den = _SI_DEN.get(self.time_tokens[0])  # type: ignore[assignment]
-            if den is None:
+            time_den = _SI_DEN.get(self.time_tokens[0])
+            if time_den is None:
                 return None
+            den = time_den
         return ((p.si_prefix & 0xFF) << 24) | (p.si_numerator << 16) | (den << 8)
 
     def __str__(self) -> str:
