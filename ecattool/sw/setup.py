@@ -202,7 +202,9 @@ def diff(a: SwImage, b: SwImage, params: ParameterTable | None = None) -> list[D
         for address in sorted(set(va) | set(vb)):
             x, y = va.get(address), vb.get(address)
             if x is None or y is None or x.entry.words != y.entry.words:
-                name = (x or y).name  # type: ignore[union-attr]
+                either = x if x is not None else y
+                assert either is not None  # the address comes from va or vb
+                name = either.name
                 out.append(Difference(address, x.entry.raw if x else None, y.entry.raw if y else None, name, "parameter"))
         for t in (ta, tb):
             covered.update(range(t.block.start, t.block.end + 1))
