@@ -937,7 +937,9 @@ class Drive:
             self._refuse(EcState.OP, AL_DC_INVALID_SYNC, f"mode {self.mode()} needs distributed clocks")
 
     def mode(self) -> int:
-        return self._read_int(0x6061, 0) if (0x6061, 0) in self._entries else (self._read_int(0x6060, 0) or 0)  # type: ignore[return-value]
+        # every dictionary entry has a stored value, so 6061h reads as an int whenever the drive has it
+        index = 0x6061 if (0x6061, 0) in self._entries else 0x6060
+        return self._read_int(index, 0) or 0
 
     def step(self, cycles: int = 1) -> None:
         """Advance the motion model by ``cycles`` process-data cycles (see :meth:`cycle_time`)."""
