@@ -15,6 +15,7 @@ from typing import Any
 
 import pytest
 
+from ecattool.errors import InputError
 from ecattool.esi import load, load_bytes, materialize
 from ecattool.od.model import ObjectDictionary
 from ecattool.xmlsafe import parse_xml
@@ -124,7 +125,7 @@ def test_entry_number_memo_keeps_warnings_and_errors_per_element() -> None:
     assert [(e.index, e.subindex, e.location.line) for e in entries] == [(0x6000, 1, 3), (0x6000, 2, 4), (0x6000, 3, 5)]
     warned = [w.location.line for w in esi.warnings if w.rule == "esi-number-0x"]
     assert warned == [3, 4]
-    with pytest.raises(Exception, match="BitLen"):
+    with pytest.raises(InputError, match="BitLen"):
         load_bytes(doc.replace("<BitLen>1</BitLen><Name>C", "<BitLen>x1</BitLen><Name>C").encode(), "bad.xml")
 
 
@@ -192,6 +193,24 @@ def test_materialised_dictionaries_are_unchanged(name: str) -> None:
 
 def test_every_corpus_esi_has_a_digest() -> None:
     assert sorted(DIGESTS) == _esi_files()
+
+
+def test_load_leaves_the_garbage_collector_as_it_was() -> None:
+    """The reader pauses the cyclic collector while it builds; enabled or not, it is as before, also after errors."""
+    import gc
+
+    path = corpus_path("esi", "etg_ETG2001_ModulesSlots_CiA402.xml")
+    was = gc.isenabled()
+    try:
+        for enabled in (True, False):
+            (gc.enable if enabled else gc.disable)()
+            materialize(load(path))
+            assert gc.isenabled() is enabled
+            with pytest.raises(InputError, match="not an ESI file"):
+                load_bytes(b"<Other/>", "x.xml")
+            assert gc.isenabled() is enabled
+    finally:
+        (gc.enable if was else gc.disable)()
 
 
 if __name__ == "__main__":
