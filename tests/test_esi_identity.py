@@ -1,7 +1,7 @@
 """The ESI reader's fast paths (issue 2) change no fact of the model.
 
-* Every PDO and PDO entry of every corpus ESI (devices and modules, with the line of each entry) equals what a
-  plain reader written here with ``find``/``findall`` reads from the same tree.
+* Every PDO (index, name, line, excludes) and PDO entry of every corpus ESI (devices and modules, with the line
+  of each entry) equals what a plain reader written here with ``find``/``findall`` reads from the same tree.
 * Every materialised dictionary of every corpus ESI has the facts (objects, entries, types, sizes, offsets,
   access, defaults, limits, enums, lines) and the reader warnings it had before the fast paths: a digest
   computed with the reader of commit ff2b56f (before issue 2's changes). A deliberate change of a dictionary
@@ -73,7 +73,7 @@ def _entry_facts(en: Any) -> tuple[Any, ...]:
 
 def _pdo_facts_xml(owner: Any) -> list[tuple[Any, ...]]:
     return [(pdo.tag, _num(pdo.findtext("Index")), _name(pdo), pdo.sourceline,
-             [_entry_facts(en) for en in pdo.findall("Entry")])
+             [_entry_facts(en) for en in pdo.findall("Entry")], [_num(x.text) for x in pdo.findall("Exclude")])
             for pdo in owner if pdo.tag in ("RxPdo", "TxPdo")]
 
 
@@ -82,7 +82,8 @@ def _pdo_facts_model(owner: Any) -> list[tuple[Any, ...]]:
     for pdo in list(owner.rx_pdos) + list(owner.tx_pdos):
         tag = "RxPdo" if pdo.direction.name == "RX" else "TxPdo"
         out.append((tag, pdo.index, pdo.name, pdo.location.line,
-                    [(e.index, e.subindex, e.bit_len, e.name, e.data_type, e.location.line) for e in pdo.entries]))
+                    [(e.index, e.subindex, e.bit_len, e.name, e.data_type, e.location.line) for e in pdo.entries],
+                    pdo.excludes))
     return out
 
 

@@ -385,18 +385,23 @@ class Reader:
         name: str | None = None
         final = False
         entries = pdo.entries
+        known = self._numbers
         for child in el:
             tag = child.tag
             if tag == "Entry":
                 entries.append(self.entry(child))
+            elif tag == "Exclude":  # Beckhoff: several per PDO
+                t = child.text
+                v = known.get(t)  # type: ignore[arg-type]
+                pdo.excludes.append(self._number(t, child, "Exclude") if v is None else v)
             elif tag == "Index":
-                pdo.index = ctx.number(child.text, child, f"{el.tag}/Index")
+                t = child.text
+                v = known.get(t)  # type: ignore[arg-type]
+                pdo.index = self._number(t, child, f"{el.tag}/Index") if v is None else v
                 if child.get("DependOnSlot") is not None:
                     pdo.depend_on_slot = ctx.boolean(child.get("DependOnSlot"), child, "DependOnSlot")
             elif tag == "Name":
                 name, final = name_step(child, name, final)
-            elif tag == "Exclude":
-                pdo.excludes.append(ctx.number(child.text, child, "Exclude"))
         pdo.name = name or ""
         if pdo.index < 0:
             raise InputError(f"{el.tag} has no Index", ctx.loc(el))
