@@ -126,9 +126,11 @@ class ProcessIo:
         entry = self._entry(index, sub)
         pos = self.in_pos.get((index, sub))
         if pos is None:
-            return entry.decode(self.slave.sdo_upload(index, sub))
-        raw = _get_bits(self.inputs, pos.bit_offset, pos.bit_len)
-        return entry.decode(raw.to_bytes(entry.byte_size, "little"))
+            value: int = entry.decode(self.slave.sdo_upload(index, sub))
+        else:
+            raw = _get_bits(self.inputs, pos.bit_offset, pos.bit_len)
+            value = entry.decode(raw.to_bytes(entry.byte_size, "little"))
+        return value
 
     def has(self, index: int, sub: int = 0) -> bool:
         assert self.rd.device is not None

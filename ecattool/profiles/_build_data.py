@@ -63,7 +63,7 @@ def parse_number(token: str) -> int | None:
     body = t[1:] if neg else t
     m = re.fullmatch(r"(\d+)\^(\d+)(?:-(\d+))?", body)
     if m:
-        v = int(m.group(1)) ** int(m.group(2)) - int(m.group(3) or 0)
+        v: int = int(m.group(1)) ** int(m.group(2)) - int(m.group(3) or 0)
     elif re.fullmatch(r"0x[0-9A-Fa-f]+", body):
         v = int(body, 16)
     elif re.fullmatch(r"[0-9A-Fa-f]+h", body):

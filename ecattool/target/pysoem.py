@@ -32,7 +32,8 @@ def _import_pysoem() -> ModuleType:
         import pysoem  # type: ignore[import-not-found]
     except ImportError:
         raise TargetError("the pysoem target needs the optional extra: pip install 'ecattool[pysoem]'") from None
-    return pysoem
+    module: ModuleType = pysoem
+    return module
 
 
 class PysoemSlave:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from typing import Any
 
 from ecattool.errors import InputError, Location
 from ecattool.startup.config import SlaveConfig
@@ -87,7 +88,7 @@ def decode_text(data: bytes, source: str) -> str:
         raise InputError(f"not UTF-8 text (byte 0x{data[exc.start]:02X})", Location(source, line)) from None
 
 
-def as_list(value: object, location: Location | None, what: str) -> list:
+def as_list(value: object, location: Location | None, what: str) -> list[Any]:
     """A YAML/JSON value that must be a list (None = empty)."""
     if value is None:
         return []

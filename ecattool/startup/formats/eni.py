@@ -182,7 +182,8 @@ def _text(el: Any, tag: str) -> str | None:
     child = el.find(tag)
     if child is None or child.text is None:
         return None
-    return child.text.strip()
+    text: str = child.text
+    return text.strip()
 
 
 def _comment(el: Any) -> str:
