@@ -7,6 +7,11 @@ Table 4.1.1, HDT §4.03.1, Control Techniques Table 7.2); the family differences
   operation cannot change in OPERATION ENABLED or QUICK STOP ACTIVE.
 * quick stop option code 605Ah: 0..4 end in SWITCH ON DISABLED, 5..8 stay in QUICK STOP ACTIVE (and allow
   transition 16 back to OPERATION ENABLED).
+
+Halt (controlword bit 8) and homing (mode 6) keep their state here; what the option codes and homing methods
+mean per family is decided by the drive (``drive.py``), which reads the dictionary. The motion model has no
+ramps in the position modes, so a halt stops PP, CSP, CSV and a homing search within the cycle; profile
+velocity ramps down with the deceleration the drive passes in (increments per second²).
 """
 
 from __future__ import annotations
@@ -44,6 +49,17 @@ STATUS_BITS = {
 
 PP, PV, HOMING, CSP, CSV = 1, 3, 6, 8, 9
 
+HALT = 0x0100  # controlword bit 8
+
+
+class Homing(str, Enum):
+    """The homing procedure as statusword bits 13/12/10 report it (Technosoft Table 6.3.3, CT Table 7.54)."""
+
+    NOT_STARTED = "not started or interrupted"  # 0 0 1
+    IN_PROGRESS = "in progress"  # 0 0 0 (0 0 1 while halted at standstill)
+    ATTAINED = "attained"  # 0 1 1
+    ERROR = "error"  # 1 0 0 moving / 1 0 1 at standstill
+
 
 def decode_statusword(sw: int) -> State:
     """The state a statusword shows (CiA-402 masks 0x004F / 0x006F)."""
@@ -72,6 +88,54 @@ class Cia402:
         self.setpoint_ack = False
         self.following_error = Fraction(0)
         self.voltage = True
+        self.homing = Homing.NOT_STARTED
+        #: internal velocity of the homing search (set by the drive when it starts a search)
+        self.homing_velocity = Fraction(0)
+        #: seconds of search left before the drive gives up (no switch or index pulse is connected)
+        self.homing_search_left = Fraction(0)
+
+    @property
+    def halted(self) -> bool:
+        """Controlword bit 8 in OPERATION ENABLED: the axis is stopped (or stopping) by a halt."""
+        return self.state is State.OPERATION_ENABLED and bool(self.controlword & HALT)
+
+    def _stop(self) -> None:
+        """The power stage leaves OPERATION ENABLED (or faults): motion and any homing search end."""
+        self.velocity = Fraction(0)
+        self.target = None
+        if self.homing is Homing.IN_PROGRESS:
+            self.homing = Homing.NOT_STARTED
+
+    def start_homing(self, velocity: Fraction, search_s: Fraction) -> None:
+        self.homing = Homing.IN_PROGRESS
+        self.homing_velocity = velocity
+        self.homing_search_left = search_s
+        self.target = None
+
+    def interrupt_homing(self) -> None:
+        if self.homing is Homing.IN_PROGRESS:
+            self.homing = Homing.NOT_STARTED
+            self.velocity = Fraction(0)
+
+    def home_found(self, position: Fraction | None) -> None:
+        """Homing attained: the axis stands still; ``position`` is the new internal position (None: kept)."""
+        self.homing = Homing.ATTAINED
+        self.velocity = Fraction(0)
+        self.target = None
+        if position is not None:
+            self.position = position
+
+    def homing_failed(self) -> None:
+        self.homing = Homing.ERROR
+        self.velocity = Fraction(0)
+
+    def disable(self) -> list[tuple[State, State]]:
+        """OPERATION ENABLED -> SWITCH ON DISABLED without a controlword command (HDT halt option 0)."""
+        if self.state is not State.OPERATION_ENABLED:
+            return []
+        self.state = State.SWITCH_ON_DISABLED
+        self._stop()
+        return [(State.OPERATION_ENABLED, State.SWITCH_ON_DISABLED)]
 
     # --- state machine ----------------------------------------------------------------------------
     def controlword_written(self, cw: int, *, ecat_op: bool, quick_stop_option: int) -> list[tuple[State, State]]:
@@ -121,8 +185,7 @@ class Cia402:
                 go(State.SWITCH_ON_DISABLED)
             elif quick_stop:
                 go(State.QUICK_STOP)
-                self.velocity = Fraction(0)
-                self.target = None
+                self._stop()
                 if quick_stop_option in (0, 1, 2, 3, 4):
                     go(State.SWITCH_ON_DISABLED)
             elif shutdown:
@@ -135,8 +198,7 @@ class Cia402:
             elif enable and quick_stop_option in (5, 6, 7, 8):
                 go(State.OPERATION_ENABLED)
         if self.state is not State.OPERATION_ENABLED:
-            self.velocity = Fraction(0)
-            self.target = None
+            self._stop()
         return moves
 
     def fault(self, code: int) -> list[tuple[State, State]]:
@@ -146,8 +208,7 @@ class Cia402:
             moves.append((State.FAULT_REACTION, State.FAULT))
             self.state = State.FAULT
         self.fault_code = code
-        self.velocity = Fraction(0)
-        self.target = None
+        self._stop()
         return moves
 
     def communication_lost(self) -> list[tuple[State, State]]:
@@ -155,8 +216,7 @@ class Cia402:
         if self.state in (State.READY, State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP):
             old = self.state
             self.state = State.SWITCH_ON_DISABLED
-            self.velocity = Fraction(0)
-            self.target = None
+            self._stop()
             return [(old, self.state)]
         return []
 
@@ -166,12 +226,22 @@ class Cia402:
             sw |= 0x0010
         if self.state is State.FAULT_REACTION or self.state is State.FAULT:
             sw |= 0x0008
-        if self.target_reached:
+        reached = self.target_reached
+        if mode == HOMING:
+            # bits 13/12/10 (Technosoft Table 6.3.3, Control Techniques Table 7.54 with bit 13 per CiA-402)
+            reached = self.homing is not Homing.IN_PROGRESS and (self.homing is not Homing.ERROR or self.velocity == 0)
+            if self.homing is Homing.ATTAINED:
+                sw |= 0x1000
+            elif self.homing is Homing.ERROR:
+                sw |= 0x2000
+        if self.halted:
+            reached = self.velocity == 0  # halt: 0 = decelerating, 1 = axis at standstill (HDT §4.07.2)
+        if reached:
             sw |= 0x0400
         if mode == PP and self.setpoint_ack:
             sw |= 0x1000
-        if mode in (CSP, CSV) and self.state is State.OPERATION_ENABLED:
-            sw |= 0x1000  # target value ignored = 0 / drive follows the command value
+        if mode in (CSP, CSV) and self.state is State.OPERATION_ENABLED and not self.halted:
+            sw |= 0x1000  # the drive follows the command value (0 = target ignored, e.g. while halted)
         return sw
 
     # --- motion -------------------------------------------------------------------------------------
@@ -182,13 +252,27 @@ class Cia402:
 
     def step(self, mode: int, dt: Fraction, *, target_position: Fraction, target_velocity: Fraction,
              profile_velocity: Fraction, acceleration: Fraction, inc_per_s: _Convert,
-             vel_from_inc_per_s: _Convert, inc_per_s2: _Convert) -> None:
+             vel_from_inc_per_s: _Convert, inc_per_s2: _Convert,
+             halt_deceleration: Fraction | None = None) -> None:
         """Advance the motion by ``dt`` seconds. Velocity/acceleration are internal units; the callables
-        convert them to increments per second (per second²) and back."""
+        convert them to increments per second (per second²) and back. ``halt_deceleration`` (increments/s²)
+        is the ramp a halt uses in profile velocity; None or 0 stops within the cycle."""
         if self.state is not State.OPERATION_ENABLED:
             self.velocity = Fraction(0)
             return
-        if mode == CSP:
+        if self.controlword & HALT:
+            self._halt_step(mode, dt, halt_deceleration, inc_per_s, vel_from_inc_per_s)
+            return
+        if mode == HOMING:
+            if self.homing is not Homing.IN_PROGRESS:
+                self.velocity = Fraction(0)
+                return
+            self.velocity = self.homing_velocity
+            self.position += inc_per_s(self.velocity) * dt
+            self.homing_search_left -= dt
+            if self.homing_search_left <= 0:
+                self.homing_failed()
+        elif mode == CSP:
             delta = target_position - self.position
             self.velocity = vel_from_inc_per_s(delta / dt) if dt else Fraction(0)
             self.position = target_position
@@ -218,6 +302,17 @@ class Cia402:
                 sign = 1 if remaining > 0 else -1
                 self.position += sign * stepped
                 self.velocity = vel_from_inc_per_s(sign * speed)
+
+    def _halt_step(self, mode: int, dt: Fraction, deceleration: Fraction | None, inc_per_s: _Convert,
+                   vel_from_inc_per_s: _Convert) -> None:
+        """Halt: the pending set-point (PP target, homing search) is kept for when bit 8 clears."""
+        now = inc_per_s(self.velocity)
+        if mode != PV or not deceleration or deceleration <= 0 or abs(now) <= deceleration * dt:
+            self.velocity = Fraction(0)
+            return
+        now -= deceleration * dt if now > 0 else -deceleration * dt
+        self.velocity = vel_from_inc_per_s(now)
+        self.position += now * dt
 
     def _ramp_to(self, target: Fraction, acceleration: Fraction, dt: Fraction, inc_per_s: _Convert,
                  vel_from_inc_per_s: _Convert, inc_per_s2: _Convert) -> None:

@@ -21,7 +21,8 @@ from ecattool.od.model import MAILBOX_STATES, EcState, Entry, ObjectCode
 from ecattool.od.types import Kind, lookup
 from ecattool.profiles.rules import FamilyRules
 from ecattool.sim import eeprom as ee
-from ecattool.sim.cia402 import PP, Cia402, State
+from ecattool.sim import halt_homing as hh
+from ecattool.sim.cia402 import CSP, HOMING, PP, Cia402, Homing, State
 from ecattool.sim.faults import Faults
 from ecattool.sim.units import Units, to_int, units_for
 
@@ -56,7 +57,7 @@ class FoeError(TargetError):
 @dataclass(frozen=True, slots=True)
 class Event:
     """One thing the drive did. ``kind``: sdo_upload, sdo_download, sdo_abort, sdo_timeout, state,
-    state_refused, cia402, emcy, reset, power_loss, eeprom, foe."""
+    state_refused, cia402, emcy, reset, power_loss, eeprom, foe, halt, homing."""
 
     seq: int
     kind: str
@@ -95,16 +96,31 @@ class Behaviour:
     mode_display_on_enable: bool = False
     #: EMCY sent when an over-long PDO is found at PRE-OP -> SAFE-OP (Technosoft 0x8220)
     pdo_length_emcy: int | None = None
+    #: controlword bit 4 1 -> 0 stops a homing search (HDT §4.08.1 "1->0 stop"; CT/CiA-402 "1 = start or
+    #: continue"); Technosoft only reacts to the 0 -> 1 edge (§6.3.1)
+    homing_stop_on_bit4_clear: bool = True
+    #: homing on the current position (35) also outside OPERATION ENABLED (Control Techniques 7.7.1, CiA-402)
+    homing_current_outside_enabled: bool = False
+    #: EMCY when a homing search fails (HDT FF02h, alarm FA_14 = bit 13 of the alarm bitmap) and its data
+    homing_error_emcy: int | None = None
+    homing_error_emcy_data: bytes = b""
+    #: EMCY when a homing start names a method the drive does not have (Technosoft FF03h)
+    homing_unavailable_emcy: int | None = None
+    #: 6064h = sensor position + 607Ch at all times (HDT §4.06.6), not only when homing ends
+    home_offset_continuous: bool = False
 
 
 BEHAVIOURS: dict[str, Behaviour] = {
     "technosoft-ipos": Behaviour(
         mapping_busy=A.DATA_CANNOT_BE_STORED_STATE, assign_busy=A.DATA_CANNOT_BE_STORED_STATE,
         unsupported_mode_emcy=0xFF04, mode_display_on_enable=True, pdo_length_emcy=0x8220,
+        homing_stop_on_bit4_clear=False, homing_unavailable_emcy=0xFF03,
     ),
-    "hdt": Behaviour(),
-    "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None),
-    "generic": Behaviour(),
+    "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
+                     home_offset_continuous=True),
+    "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
+                                   homing_current_outside_enabled=True),
+    "generic": Behaviour(homing_current_outside_enabled=True),
 }
 
 #: Control Techniques trip number -> 603Fh error code (SM-EtherCAT Table 9.17)
@@ -207,6 +223,10 @@ class _Layout:
 
 class Drive:
     """A simulated EtherCAT CoE slave (a servo drive when its dictionary has the CiA-402 objects)."""
+
+    #: seconds a homing method searches for its switch or index pulse before it reports a homing error
+    #: (the simulated axis has none connected; docs/decisions.md)
+    homing_search_s = Fraction(1)
 
     def __init__(self, device: Device, rules: FamilyRules | None = None, *, position: int = 0,
                  strict_pdo_length: bool = True, record_events: bool = True) -> None:
@@ -880,15 +900,18 @@ class Drive:
         self._cia_moves(moves, f"controlword 0x{cw:04X}")
         if self.cia.state is State.OPERATION_ENABLED and self.mode() == PP:
             if cw & 0x10 and not prev & 0x10:
-                target = self.units.position_to_internal(self._read_int(0x607A, 0) or 0)
-                self.cia.new_setpoint(target, relative=bool(cw & 0x40))
+                relative = bool(cw & 0x40)
+                target = (self._read_int(0x607A, 0) or 0) - (0 if relative else self._home_offset())
+                self.cia.new_setpoint(self.units.position_to_internal(target), relative=relative)
             elif not cw & 0x10:
                 self.cia.setpoint_ack = False
+        hh.on_controlword(self, cw, prev)
         self._refresh_inputs()
 
     def _on_mode(self, sub: int, value: int | None) -> None:
         if not self.behaviour.mode_display_on_enable or self.cia.state is State.OPERATION_ENABLED:
             self._put(0x6061, 0, value or 0)
+        hh.on_mode(self)
         self._refresh_inputs()
 
     def _check_mode(self, sub: int, data: bytes, value: int | None) -> bool:
@@ -902,6 +925,10 @@ class Drive:
                 self.emcy(self.behaviour.unsupported_mode_emcy)
             else:
                 raise _abort(0x6060, sub, A.INVALID_VALUE)
+        return True
+
+    def _check_homing_method(self, sub: int, data: bytes, value: int | None) -> bool:
+        hh.check_method(self, sub, value or 0)
         return True
 
     def _check_min_max(self, sub: int, data: bytes, value: int | None) -> bool:
@@ -949,28 +976,46 @@ class Drive:
         u = self.units
         for _ in range(cycles):
             mode = self.mode()
+            homing_before = self.cia.homing
             self.cia.step(
                 mode, dt,
-                target_position=u.position_to_internal(self._read_int(0x607A, 0) or 0),
+                target_position=u.position_to_internal((self._read_int(0x607A, 0) or 0) - self._home_offset()
+                                                       if mode == CSP else 0),
                 target_velocity=u.velocity_to_internal(self._read_int(0x60FF, 0) or 0),
                 profile_velocity=u.velocity_to_internal(self._read_int(0x6081, 0) or 0),
                 acceleration=u.acceleration_to_internal(self._read_int(0x6083, 0) or 0),
                 inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
-                inc_per_s2=u.increments_per_second2,
+                inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
             )
+            if homing_before is not self.cia.homing:
+                hh.after_step(self, homing_before)
         self._refresh_inputs()
 
     def _refresh_inputs(self) -> None:
         """Actual values from the state: 6041h, 6063h/6064h, 606Ch, 603Fh."""
         if not getattr(self, "has_cia402", False):
             return
-        self._put(0x6041, 0, self.cia.statusword(mode=self.mode()) | (0x0800 if self.limit_active else 0))
+        mode = self.mode()
+        sw = self.cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
+        if self.family == "technosoft-ipos" and mode == HOMING and self.cia.homing is Homing.IN_PROGRESS:
+            sw |= 0x0100  # §4.2.2 bit 8: homing executing
+        self._put(0x6041, 0, sw)
         u = self.units
         self._put(0x6063, 0, to_int(self.cia.position))
-        self._put(0x6064, 0, to_int(u.position_to_user(self.cia.position)))
-        self._put(0x6062, 0, to_int(u.position_to_user(self.cia.position)))
+        self._put(0x6064, 0, self._user_position())
+        self._put(0x6062, 0, self._user_position())
         self._put(0x606C, 0, to_int(u.velocity_to_user(self.cia.velocity)))
         self._put(0x603F, 0, self.cia.fault_code)
+
+    def _home_offset(self) -> int:
+        """607Ch where the family adds it to the measured position at all times (HDT), else 0."""
+        if not self.behaviour.home_offset_continuous:
+            return 0
+        return self._read_int(0x607C, 0) or 0
+
+    def _user_position(self) -> int:
+        """6064h: the position in user units (HDT: sensor position + home offset 607Ch, §4.06.6)."""
+        return to_int(self.units.position_to_user(self.cia.position)) + self._home_offset()
 
     @property
     def internal_position(self) -> int:
@@ -1021,6 +1066,7 @@ class Drive:
         elif end == "OPERATION_ENABLED":
             self.cia.velocity = Fraction(0)
             self.cia.target = None
+            self.cia.interrupt_homing()
         self._refresh_inputs()
 
     def set_limit_switches(self, *, negative: bool = False, positive: bool = False) -> None:
@@ -1060,6 +1106,7 @@ class Drive:
             0x6060: self._on_mode,
         }
         self._handlers_down[0x6060] = self._check_mode
+        self._handlers_down[0x6098] = self._check_homing_method
         if self.family == "hdt":
             self._handlers_down[0x6046] = self._check_min_max
         if self.family == "controltechniques":

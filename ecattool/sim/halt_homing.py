@@ -1,0 +1,203 @@
+"""Halt (controlword bit 8) and homing mode (6) of the simulated drive, per family.
+
+The state of both lives in :class:`~ecattool.sim.cia402.Cia402`; this module decides what the option codes
+and homing methods mean, reading the drive's dictionary the way the manuals describe it:
+
+* Halt option code 605Dh. HDT §4.03.7: 0 = disable the drive -> SWITCH ON DISABLED, 1 = slow-down ramp
+  (604Eh / 6050h), 2 = quick-stop ramp (604Eh / 6051h), both staying in OPERATION ENABLED. Technosoft §4.4.10:
+  1 = slow-down ramp (6083h), 2 = quick-stop ramp (6085h), stay in OPERATION ENABLED; 0 and 3.. reserved.
+  Control Techniques lists 605Dh without a table; generic drives follow CiA-402 (1 slow-down ramp = 6084h,
+  2 quick-stop ramp = 6085h, 3/4 current/voltage limit). The end state comes from the family rules
+  (``option_code_end_states``), the same data the rest of ecattool reads.
+* Homing 6098h: 35 (and the generic 37) = the current position is home; HDT 0 = the home is the position
+  zeroed at power-on. The simulated axis has no limit switch, home switch or index pulse connected: a method
+  that needs one searches at its homing speed for :attr:`Drive.homing_search_s` and then reports a homing
+  error (docs/decisions.md, "Simulator: halt and homing").
+* After homing the position actual value 6064h equals the home offset 607Ch (Technosoft §6.1 and §6.3.3,
+  HDT §4.06.6 ``measured = sensor + home offset`` with the sensor reset to 0); HDT applies 607Ch to 6064h
+  at all times.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import TYPE_CHECKING
+
+from ecattool.od import abort as A
+from ecattool.errors import SdoAbort
+from ecattool.sim.cia402 import HALT, HOMING, PV, Homing, State
+
+if TYPE_CHECKING:
+    from ecattool.sim.drive import Drive
+
+HOMING_START = 0x0010  # controlword bit 4 in homing mode
+
+#: methods whose home is the current position, per family (HDT 0 = zeroed at power-on is separate)
+CURRENT_POSITION = {"hdt": frozenset({35}), "technosoft-ipos": frozenset({35}),
+                    "controltechniques": frozenset({35}), "generic": frozenset({35, 37})}
+_RESERVED = frozenset({15, 16, 31, 32})
+#: methods that search for a switch, a mechanical limit or an index pulse, per family
+SEARCH = {
+    "hdt": frozenset(set(range(1, 35)) - _RESERVED),  # §4.08.3: 1..34 except 15, 16, 31, 32
+    "technosoft-ipos": frozenset((set(range(-4, 35)) - _RESERVED) - {0}),  # §6.3.4: -4..-1, 1..14, 17..30, 33, 34
+    "controltechniques": frozenset(set(range(1, 35)) - _RESERVED),  # Table 7.59
+}
+
+
+def reserved_method(family: str, method: int) -> bool:
+    """A 6098h value the drive refuses when it is written (HDT §4.08.3 "0..35 except 15, 16, 31, 32",
+    Control Techniques Table 7.59 "15, 16, 31, 32 reserved"). Values outside 0..35 are refused by the
+    entry's range (0609 0031h / 0609 0032h); Technosoft stores any INTEGER8 and answers at the start."""
+    return family in ("hdt", "controltechniques") and method in _RESERVED
+
+
+def homing_kind(family: str, method: int) -> str:
+    """What a homing start does with ``method``: "current" (home here), "power_on" (HDT 0: the power-on
+    zero is home), "none" (0: no homing is executed), "search" (needs a switch or index pulse) or
+    "unavailable" (Technosoft EMCY FF03h; generic: a reserved method)."""
+    if method in CURRENT_POSITION.get(family, CURRENT_POSITION["generic"]):
+        return "current"
+    if method == 0:
+        return "power_on" if family == "hdt" else "none"
+    methods = SEARCH.get(family)
+    if methods is None:  # generic CiA-402: 1..34 standard, negative = manufacturer specific
+        return "unavailable" if method in _RESERVED or method == 36 or method > 37 else "search"
+    return "search" if method in methods else "unavailable"
+
+
+def search_direction(method: int) -> tuple[int, int]:
+    """(direction, 6099h sub-index) of the first search move (CiA-402 method figures; HDT §4.08.3:
+    CW = positive). Index-pulse methods 33/34 search at the zero search speed, the others at the switch
+    search speed; a positive home switch that is not active (none is connected) is searched in the
+    positive direction, a negative one in the negative direction."""
+    if method in (33, 34):
+        return (-1 if method == 33 else 1), 2
+    base = method - 16 if 17 <= method <= 30 else method
+    negative = base in (1, 5, 6, 11, 12, 13, 14, -1, -3)
+    return (-1 if negative else 1), 1
+
+
+# --- halt ---------------------------------------------------------------------------------------------
+def halt_option(drive: Drive) -> int:
+    """605Dh, or the CiA-402 default 1 where the drive has no such object."""
+    value = drive._read_int(0x605D, 0) if (0x605D, 0) in drive._entries else None
+    return 1 if value is None else value
+
+
+def halt_end_state(drive: Drive, option: int) -> str:
+    ends = {(i, v): end for i, v, end in getattr(drive.rules, "option_code_end_states", ())}
+    return ends.get((0x605D, option), "OPERATION_ENABLED")
+
+
+def halt_deceleration(drive: Drive) -> Fraction | None:
+    """The ramp a halt uses in profile velocity, in increments per second² (None: stop within the cycle)."""
+    option = halt_option(drive)
+    read = drive._read_int
+    if drive.family == "hdt":
+        # §4.03.7-4.03.9: deceleration = 604Eh (6042h units, x 604Ch -> rpm) / 6050h or 6051h (ms)
+        time_ms = read(0x6051 if option == 2 else 0x6050, 0)
+        num, den = read(0x604C, 1) or 1, read(0x604C, 2) or 1
+        rpm = Fraction(read(0x604E, 0) or 0) * Fraction(num, den)
+        return rpm * 65536 / 60 / Fraction(time_ms, 1000) if time_ms else None
+    if drive.family == "technosoft-ipos":
+        index = 0x6085 if option == 2 else 0x6083  # §4.4.10: slow-down ramp 6083h, quick-stop ramp 6085h
+    elif option in (3, 4):
+        return None  # current / voltage limit: the model has no torque, the axis stops within the cycle
+    else:
+        index = 0x6085 if option == 2 else (0x6084 if (0x6084, 0) in drive._entries else 0x6083)
+    u = drive.units
+    return abs(u.increments_per_second2(u.acceleration_to_internal(read(index, 0) or 0)))
+
+
+# --- controlword and mode reactions -------------------------------------------------------------------
+def on_controlword(drive: Drive, cw: int, prev: int) -> None:
+    """Halt and homing reactions to a controlword, after the state machine has moved."""
+    cia = drive.cia
+    if (cw ^ prev) & HALT:
+        drive._log("halt", active=bool(cw & HALT), option=halt_option(drive), mode=drive.mode(),
+                   state=cia.state.value)
+    if cia.halted:
+        option = halt_option(drive)
+        if halt_end_state(drive, option) == "SWITCH_ON_DISABLED":
+            drive._cia_moves(cia.disable(), f"halt, 605Dh = {option}")
+            return
+    if drive.mode() != HOMING:
+        return
+    rising, falling = cw & ~prev, prev & ~cw
+    if rising & HOMING_START and not cw & HALT:
+        start_homing(drive)
+    elif cia.homing is Homing.IN_PROGRESS and falling & HOMING_START and drive.behaviour.homing_stop_on_bit4_clear:
+        cia.interrupt_homing()
+        drive._log("homing", event="interrupted", reason="controlword bit 4 cleared")
+
+
+def on_mode(drive: Drive) -> None:
+    if drive.cia.homing is Homing.IN_PROGRESS and drive.mode() != HOMING:
+        drive.cia.interrupt_homing()
+        drive._log("homing", event="interrupted", reason=f"mode changed to {drive.mode()}")
+
+
+def start_homing(drive: Drive) -> None:
+    cia = drive.cia
+    method = drive._read_int(0x6098, 0) if (0x6098, 0) in drive._entries else 0
+    method = method or 0
+    kind = homing_kind(drive.family, method)
+    enabled = cia.state is State.OPERATION_ENABLED
+    outside = kind == "current" and drive.behaviour.homing_current_outside_enabled and \
+        cia.state in (State.READY, State.SWITCHED_ON)
+    if not (enabled or outside):
+        return
+    drive._log("homing", event="start", method=method, procedure=kind, state=cia.state.value)
+    if kind == "none":
+        cia.homing = Homing.NOT_STARTED  # "no homing operation will be executed" (Technosoft §6.3.4)
+        return
+    if kind == "unavailable":
+        cia.homing_failed()
+        drive._log("homing", event="error", method=method, reason="method not available")
+        if drive.behaviour.homing_unavailable_emcy is not None:
+            drive.emcy(drive.behaviour.homing_unavailable_emcy)
+        return
+    if kind == "power_on":
+        cia.home_found(None)  # HDT 0: the position zeroed at power-on is home; nothing moves
+    elif kind == "current":
+        cia.home_found(home_position(drive))
+    else:
+        direction, sub = search_direction(method)
+        u = drive.units
+        speed = abs(u.velocity_to_internal(drive._read_int(0x6099, sub) or 0))
+        cia.start_homing(direction * speed, drive.homing_search_s)
+        return
+    drive._log("homing", event="attained", method=method, position=drive._user_position())
+
+
+def home_position(drive: Drive) -> Fraction | None:
+    """The internal position the home gets: HDT resets the sensor to 0 (6064h = 0 + 607Ch); the others set
+    6064h to 607Ch, except Technosoft with 210Bh bit 12 = 1 (position kept, §6.3.3)."""
+    if drive.behaviour.home_offset_continuous:
+        return Fraction(0)
+    if drive.family == "technosoft-ipos" and (drive._read_int(0x210B, 0) or 0) & 0x1000:
+        return None
+    offset = drive._read_int(0x607C, 0) if (0x607C, 0) in drive._entries else 0
+    return drive.units.position_to_internal(offset or 0)
+
+
+def after_step(drive: Drive, before: Homing) -> None:
+    """Log and signal a homing search that ended in this step (no switch or index pulse was found)."""
+    if before is Homing.IN_PROGRESS and drive.cia.homing is Homing.ERROR:
+        drive._log("homing", event="error", method=drive._read_int(0x6098, 0),
+                   reason="no switch or index pulse found (none is connected)")
+        code = drive.behaviour.homing_error_emcy
+        if code is not None:
+            drive.emcy(code, drive.behaviour.homing_error_emcy_data)
+
+
+def check_method(drive: Drive, sub: int, value: int) -> None:
+    if reserved_method(drive.family, value):
+        raise SdoAbort(0x6098, sub, A.INVALID_VALUE)
+
+
+def halt_decel_for_step(drive: Drive, mode: int) -> Fraction | None:
+    """Only profile velocity ramps a halt in this motion model."""
+    if mode != PV or not drive.cia.controlword & HALT:
+        return None
+    return halt_deceleration(drive)
