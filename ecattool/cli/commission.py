@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import click
 
 from ecattool.cli.common import console, dump_json, output_option, write_output
+from ecattool.cli.paths import InputFile
 
 if TYPE_CHECKING:
     from ecattool.commission.runner import DriveReport
@@ -22,7 +23,7 @@ Examples:
 \b
 Exit codes: 0 every drive commissioned, 1 a drive failed or the project is invalid, 2 usage error.""",
 )
-@click.argument("projects", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.argument("projects", nargs=-1, required=True, type=InputFile())
 @click.option("--target", default=None, help="'sim' (default: the project's target) or 'pysoem:<interface>'.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @output_option(help="Also write the JSON report to FILE.")

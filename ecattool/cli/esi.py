@@ -8,8 +8,9 @@ from typing import Any
 import click
 
 from ecattool.cli.common import console, json_option, print_json, table
+from ecattool.cli.paths import InputFile
 
-_FILE = click.argument("file", type=click.Path(dir_okay=False, allow_dash=True))
+_FILE = click.argument("file", type=InputFile(allow_dash=True))
 
 
 def _load(file: str, lazy: bool = False) -> Any:

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import click
 
 from ecattool.cli.common import console, dump_json, output_option, write_output
+from ecattool.cli.paths import InputFile
 
 if TYPE_CHECKING:
     from ecattool.project.lint import ProjectResult
@@ -22,7 +23,7 @@ Examples:
 \b
 Exit codes: 0 no errors (no warnings either with --strict), 1 findings or invalid input, 2 usage error.""",
 )
-@click.argument("projects", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.argument("projects", nargs=-1, required=True, type=InputFile())
 @click.option("--format", "fmt", type=click.Choice(["text", "json", "sarif", "github"]), default="text",
               show_default=True, help="Output format.")
 @click.option("--json", "as_json", is_flag=True, help="Same as --format json.")

@@ -9,6 +9,7 @@ from typing import Any
 import click
 
 from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.paths import InputFile
 
 _EXAMPLES = """\b
 Examples:
@@ -28,7 +29,7 @@ name (controlword, "modes of operation"), a raw value 0x60400010, or gap/8. A PD
 
 def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
     opts = [
-        click.option("--esi", type=click.Path(exists=True, dir_okay=False), help="ESI file of the device."),
+        click.option("--esi", type=InputFile(), help="ESI file of the device."),
         click.option("--device", "selector", help="Device in the ESI (type, product[:revision]); "
                      "without --esi: a built-in profile name."),
         click.option("--profile", help="Built-in drive family (technosoft-ipos, hdt, controltechniques)."),
@@ -36,9 +37,9 @@ def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
         click.option("--revision", help="Revision/firmware of the built-in family or ESI device."),
         click.option("--rx", multiple=True, help="RxPDO assignment and mapping (outputs, SM2, 1C12h)."),
         click.option("--tx", multiple=True, help="TxPDO assignment and mapping (inputs, SM3, 1C13h)."),
-        click.option("--mapping", "mapping_file", type=click.Path(exists=True, dir_okay=False, allow_dash=True),
+        click.option("--mapping", "mapping_file", type=InputFile(allow_dash=True),
                      help="YAML/JSON file with rx/tx PDO lists (or a 'pdo:' section)."),
-        click.option("--startup", "startup_file", type=click.Path(exists=True, dir_okay=False),
+        click.option("--startup", "startup_file", type=InputFile(),
                      help="A master configuration (ENI, TwinCAT, ecmc, ros2, IgH, JSON/CSV startup list): use the "
                      "mapping its SDOs program (or its declared PDOs)."),
         click.option("--slave", type=int, default=None, help="Which slave of a --startup file (0-based index)."),
@@ -83,6 +84,12 @@ def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping
         prefix: tuple[str, ...] = ()
         if isinstance(data, dict) and "pdo" in data and "rx" not in data and "tx" not in data:
             data, prefix = data["pdo"], ("pdo",)
+        if not isinstance(data, dict) or not {"rx", "tx"} & set(data):
+            from ecattool.errors import InputError, Location
+
+            # an empty file (or one without rx/tx) would silently leave the device's default mapping
+            raise InputError("a mapping file needs rx: and/or tx: PDO lists (or a 'pdo:' section holding them)",
+                             doc.locations.get(prefix, Location(source, 1)))
         locations = {path[len(prefix):]: loc for path, loc in doc.locations.items() if path[:len(prefix)] == prefix}
         return pdo.Mapping.from_data(data, device=device, locations=locations, source=source)
     return pdo.Mapping.from_text(rx=list(rx) if rx else None, tx=list(tx) if tx else None, device=device)

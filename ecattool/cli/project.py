@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from ecattool.cli.common import dump_json, output_option, write_output
+from ecattool.cli.paths import InputFile
 
 
 @click.group("project")
@@ -20,7 +21,7 @@ Examples:
   ecattool project schema --check schemas/project.schema.json   # CI drift check""",
 )
 @output_option()
-@click.option("--check", "check", type=click.Path(exists=True, dir_okay=False),
+@click.option("--check", "check", type=InputFile(),
               help="Compare with a checked-in schema file; exit 1 if it differs.")
 def schema(output: str | None, check: str | None) -> None:
     """Print the JSON Schema of the project file (for editor completion and validation)."""
@@ -28,9 +29,9 @@ def schema(output: str | None, check: str | None) -> None:
 
     text = dump_json(json_schema()) + "\n"
     if check:
-        from pathlib import Path
+        from ecattool.fileio import read_bytes
 
-        if Path(check).read_text(encoding="utf-8") != text:
+        if read_bytes(check) != text.encode("utf-8"):  # bytes: a file that is not even UTF-8 is simply out of date
             click.echo(f"ecattool: error: {check}: out of date; regenerate with "
                        f"'ecattool project schema -o {check}'", err=True)
             raise SystemExit(1)

@@ -7,6 +7,7 @@ from typing import Any
 import click
 
 from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.paths import InputFile
 
 _FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
 _STARTUP_FORMATS = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv")
@@ -14,7 +15,7 @@ _STARTUP_FORMATS = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "
 
 def _mechanics_options(f: Any) -> Any:
     opts = [
-        click.argument("spec", required=False, type=click.Path(dir_okay=False, allow_dash=True)),
+        click.argument("spec", required=False, type=InputFile(allow_dash=True)),
         click.option("--family", type=click.Choice(_FAMILIES), help="Drive family (default: the spec's, else technosoft-ipos)."),
         click.option("--firmware", help="Technosoft firmware, e.g. F515I (obsolete factors) or F515K (CiA-402-2)."),
         click.option("--counts", help="Feedback increments per revolution (e.g. 2000)."),
@@ -33,7 +34,7 @@ def _mechanics_options(f: Any) -> Any:
         click.option("--approximation", type=click.Choice(["best", "max-scale"]),
                      help="How to approximate non-representable ratios (Technosoft default max-scale, others best)."),
         click.option("--vl/--no-vl", default=None, help="Add the vl velocity factors 604Bh/604Ch (default: Control Techniques only)."),
-        click.option("--esi", type=click.Path(exists=True, dir_okay=False),
+        click.option("--esi", type=InputFile(),
                      help="ESI file of the drive: object types from its dictionary, objects it lacks left out."),
         click.option("--select", "selector", help="Device in the ESI (product code, name …) when it has several."),
     ]
@@ -238,7 +239,7 @@ def _values_from_file(path: str) -> dict[tuple[int, int], int]:
         from ecattool.project.yamlloc import load_yaml
 
         try:
-            y = load_yaml(raw.decode("utf-8-sig"), path)
+            y = load_yaml(raw, path)  # bytes: load_yaml decodes (BOM, invalid UTF-8 as an InputError)
             doc = y.data
         except InputError:
             doc = None
@@ -265,7 +266,7 @@ Examples:
   ecattool scale explain --family technosoft-ipos --target pysoem:eth0 --slave 2""")
 @click.argument("assignments", nargs=-1)
 @click.option("--family", type=click.Choice(_FAMILIES), default="technosoft-ipos", show_default=True)
-@click.option("--from", "source", type=click.Path(exists=True, dir_okay=False),
+@click.option("--from", "source", type=InputFile(),
               help="Read values from a startup file (any format), a `scale compute --json` file or a YAML mapping.")
 @click.option("--target", help="Read the values from a drive: 'sim' (the family's simulated drive) or 'pysoem:IFACE'.")
 @click.option("--slave", type=int, default=0, show_default=True, help="Bus position of the drive (with --target).")

@@ -7,6 +7,7 @@ from typing import Any
 import click
 
 from ecattool.cli.common import console, dump_json, json_option, output_option, parse_int_arg, table, write_output
+from ecattool.cli.paths import InputFile
 
 
 @click.group("sii", epilog="""\b
@@ -69,7 +70,7 @@ Examples:
   ecattool sii info slave.bin
   ecattool sii info eeprom.hex --json | jq .categories
   ethercat sii_read -p 0 | ecattool sii info -""")
-@click.argument("image", type=click.Path(dir_okay=False))
+@click.argument("image", type=InputFile())
 @json_option
 def info(image: str, as_json: bool) -> None:
     """Show the fixed area, every category, strings, SMs, PDOs and DC modes of IMAGE."""
@@ -151,7 +152,7 @@ Examples:
   ethercat sii_read -p 0 | ecattool sii check slave.xml -
 \b
 Exit codes: 0 no errors (no warnings either with --strict), 1 findings or invalid input.""")
-@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.argument("files", nargs=-1, required=True, type=InputFile())
 @click.option("--device", "selector", help="ESI device: type name, product[:revision] or list index "
               "(default: the device whose product code and revision match the image).")
 @_POLICY
@@ -176,7 +177,7 @@ def check_cmd(files: tuple[str, ...], selector: str | None, policy: str, strict:
 @sii.command("fix-crc", epilog="""\b
 Example:
   ecattool sii fix-crc edited.bin -o fixed.bin""")
-@click.argument("image", type=click.Path(dir_okay=False))
+@click.argument("image", type=InputFile())
 @output_option(required=True)
 def fix_crc_cmd(image: str, output: str) -> None:
     """Recompute the checksum (word 7) over bytes 0-13 and write the repaired image."""
@@ -192,7 +193,7 @@ def fix_crc_cmd(image: str, output: str) -> None:
 @sii.command("set-alias", epilog="""\b
 Example:
   ecattool sii set-alias slave.bin 0x1001 -o slave-alias.bin""")
-@click.argument("image", type=click.Path(dir_okay=False))
+@click.argument("image", type=InputFile())
 @click.argument("alias")
 @output_option(required=True)
 def set_alias_cmd(image: str, alias: str, output: str) -> None:
@@ -209,7 +210,7 @@ Examples:
   ecattool sii build slave.xml -o slave.bin
   ecattool sii build beckhoff_EL1xxx.xml --device EL1008 --policy newest -o el1008.bin
   ecattool sii build slave.xml --no-pdo-categories --size 256 -o slave.hex""")
-@click.argument("esi", type=click.Path(dir_okay=False))
+@click.argument("esi", type=InputFile())
 @click.option("--device", "selector", help="Device: type name, product[:revision] or list index (needed when "
               "the ESI describes several).")
 @click.option("--no-pdo-categories", is_flag=True, help="Leave out TXPDO/RXPDO (PDOs come from CoE only).")
@@ -233,8 +234,8 @@ Examples:
   ecattool sii diff a.bin b.hex --json
 \b
 Exit codes: 0 identical fields, 1 differences.""")
-@click.argument("a", type=click.Path(dir_okay=False))
-@click.argument("b", type=click.Path(dir_okay=False))
+@click.argument("a", type=InputFile())
+@click.argument("b", type=InputFile())
 @json_option
 def diff_cmd(a: str, b: str, as_json: bool) -> None:
     """Compare two images field by field and category by category (strings resolved)."""

@@ -8,6 +8,7 @@ from typing import Any
 import click
 
 from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.paths import InputFile
 
 
 @click.group("sim")
@@ -125,7 +126,7 @@ Script (YAML or JSON list):
   - state: OP
     expect_al_status: 0x0011""")
 @click.argument("target")
-@click.argument("script", type=click.Path(dir_okay=False, exists=True))
+@click.argument("script", type=InputFile())
 @click.option("--product", help="Model of a built-in family.")
 @click.option("--revision", help="Firmware revision of a built-in family.")
 @click.option("--device", "selector", help="Device selector when TARGET is an ESI file with several devices.")

@@ -8,6 +8,7 @@ from typing import Any
 import click
 
 from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.paths import InputFile
 
 _FORMAT_NAMES = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv", "lcec")
 
@@ -54,10 +55,10 @@ Examples:
   ecattool startup export --from ecmciPOSXXXX.cmd --format igh -o ipos.c
   ecattool startup export --from test_eni.xml --format pysoem -o startup_pysoem.py
   ecattool startup export --project samples/technosoft_ipos/project.yaml --format eni -o x.xml""")
-@click.option("--from", "source", type=click.Path(exists=True, dir_okay=False, allow_dash=True),
+@click.option("--from", "source", type=InputFile(allow_dash=True),
               help="Startup configuration to read (ecattool JSON or any importable format, detected from "
                    "content; '-' = stdin).")
-@click.option("--project", "project", type=click.Path(exists=True, dir_okay=False),
+@click.option("--project", "project", type=InputFile(),
               help="An ecattool project file instead of --from: every drive's startup list, PDOs and DC "
                    "(refused when the project has lint errors).")
 @click.option("--from-format", type=click.Choice(_FORMAT_NAMES), help="Format of --from (default: detect).")
@@ -84,7 +85,7 @@ def export_cmd(source: str | None, project: str | None, from_format: str | None,
 Examples:
   ecattool startup convert ros2_elmo_gold.yaml --format eni -o elmo.eni.xml
   ecattool startup convert AX5206-AM8032-async.xml --format json -o ax5206.json""")
-@click.argument("input_file", type=click.Path(exists=True, dir_okay=False))
+@click.argument("input_file", type=InputFile())
 @click.option("--format", "fmt", required=True, type=click.Choice(_FORMAT_NAMES[:-1]), help="Format to write.")
 @click.option("--from-format", type=click.Choice(_FORMAT_NAMES), help="Format of INPUT_FILE (default: detect).")
 @output_option(required=True)
@@ -98,7 +99,7 @@ Examples:
   ecattool startup import ros2_technosoft_ipos3604.yaml
   ecattool startup import test_eni.xml --json
   cat startup.txt | ecattool startup import - --from-format twincat""")
-@click.argument("input_file", type=click.Path(exists=True, dir_okay=False, allow_dash=True))
+@click.argument("input_file", type=InputFile(allow_dash=True))
 @click.option("--from-format", type=click.Choice(_FORMAT_NAMES), help="Format of INPUT_FILE (default: detect).")
 @json_option
 def import_cmd(input_file: str, from_format: str | None, as_json: bool) -> None:

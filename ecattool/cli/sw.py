@@ -9,6 +9,7 @@ from typing import Any
 import click
 
 from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.paths import InputFile
 from ecattool.errors import InputError, Location
 
 
@@ -36,7 +37,7 @@ def _params(path: str | None) -> Any:
     return read_parameters(path)
 
 
-_params_option = click.option("--parameters", "-p", "parameters", type=click.Path(dir_okay=False),
+_params_option = click.option("--parameters", "-p", "parameters", type=InputFile(),
                               help="EasyMotion parameters.cfg that names and types the setup variables.")
 
 
@@ -45,7 +46,7 @@ _params_option = click.option("--parameters", "-p", "parameters", type=click.Pat
 Examples:
   ecattool sw info axis1.sw
   ecattool sw info FOESW_AXIS1.bin --json""")
-@click.argument("file", type=click.Path(dir_okay=False))
+@click.argument("file", type=InputFile())
 @json_option
 def info(file: str, as_json: bool) -> None:
     """Blocks of a .sw (or FoE .bin) image: range, word count, checksum, 2069h value and what each block is.
@@ -81,7 +82,7 @@ def info(file: str, as_json: bool) -> None:
 Examples:
   ecattool sw foe axis1.sw -o FOESW_AXIS1.bin
   ecattool sw foe axis1.sw -o FOESW_AXIS1.efw""")
-@click.argument("file", type=click.Path(dir_okay=False))
+@click.argument("file", type=InputFile())
 @output_option(required=True, help="FoE file: FOESW_ prefix, at most 14 characters without .bin/.efw.")
 def foe(file: str, output: str) -> None:
     """Convert a .sw image to a FoE setup file (the drive's rules for the file name are enforced)."""
@@ -97,7 +98,7 @@ def foe(file: str, output: str) -> None:
 Examples:
   ecattool sw from-foe FOESW_AXIS1.bin -o axis1.sw
   ecattool sw from-foe FOESW_AXIS1.bin | head""")
-@click.argument("file", type=click.Path(dir_okay=False))
+@click.argument("file", type=InputFile())
 @output_option()
 def from_foe_cmd(file: str, output: str | None) -> None:
     """Convert a FoE setup file back to .sw text (CRLF, as the vendor tools write it)."""
@@ -150,10 +151,10 @@ _target_option = click.option("--target", default=None,
                               help="'sim' (a simulated Technosoft iPOS; the default) or 'pysoem:<interface>'; "
                                    "with --project, the project's target.")
 _slave_option = click.option("--slave", default=None, type=int, help="Slave position on the bus (default 0, or the project's).")
-_project_option = click.option("--project", type=click.Path(dir_okay=False),
+_project_option = click.option("--project", type=InputFile(),
                                help="Project file: the drive's device, bus position, target and .sw file.")
 _drive_option = click.option("--drive", "drive_name", help="Drive name in --project (needed when it has several).")
-_preload_option = click.option("--preload", type=click.Path(dir_okay=False),
+_preload_option = click.option("--preload", type=InputFile(),
                                help="Simulator only: program this .sw into the simulated EEPROM first.")
 
 
@@ -215,7 +216,7 @@ Examples:
   ecattool sw verify axis1.sw --target sim
   ecattool sw verify axis1.sw --target pysoem:eth0 --slave 2 --json
   ecattool sw verify --project machine.yaml --drive x_axis""")
-@click.argument("file", type=click.Path(dir_okay=False), required=False)
+@click.argument("file", type=InputFile(), required=False)
 @_target_options
 @json_option
 def verify(file: str | None, target: str | None, slave: int | None, project: str | None, drive_name: str | None,
@@ -243,7 +244,7 @@ Examples:
   ecattool sw download axis1.sw --target sim
   ecattool sw download axis1.sw --target pysoem:eth0 --slave 1
   ecattool sw download --project machine.yaml --drive x_axis""")
-@click.argument("file", type=click.Path(dir_okay=False), required=False)
+@click.argument("file", type=InputFile(), required=False)
 @click.option("--dry-run", is_flag=True, help="Only list the SDO writes (a startup list); touch no drive.")
 @click.option("--mode", type=click.Choice(["16", "32"]), default="16", show_default=True,
               help="2065h data width: one word per write, or two (low word at the lower address).")
@@ -317,7 +318,7 @@ def _run_download(image: Any, target: Any, mode: int, reset: bool, force: bool, 
 Examples:
   ecattool sw show axis1.sw
   ecattool sw show axis1.sw --parameters parameters.cfg --json""")
-@click.argument("file", type=click.Path(dir_okay=False))
+@click.argument("file", type=InputFile())
 @_params_option
 @json_option
 def show(file: str, parameters: str | None, as_json: bool) -> None:
@@ -346,7 +347,7 @@ def show(file: str, parameters: str | None, as_json: bool) -> None:
 Examples:
   ecattool sw patch axis1.sw -p parameters.cfg --set PWMPER=2250 --set CACC=3.18311 -o axis1_new.sw
   ecattool sw patch axis1.sw --set 0x0250=2 -o axis1_new.sw""")
-@click.argument("file", type=click.Path(dir_okay=False))
+@click.argument("file", type=InputFile())
 @click.option("--set", "sets", multiple=True, required=True, metavar="NAME=VALUE",
               help="Variable (name from --parameters, or address 0xADDR) and new value; repeatable.")
 @_params_option
@@ -371,8 +372,8 @@ def patch(file: str, sets: tuple[str, ...], parameters: str | None, output: str)
 Examples:
   ecattool sw diff old.sw new.sw
   ecattool sw diff old.sw new.sw --parameters parameters.cfg --json""")
-@click.argument("a", type=click.Path(dir_okay=False))
-@click.argument("b", type=click.Path(dir_okay=False))
+@click.argument("a", type=InputFile())
+@click.argument("b", type=InputFile())
 @_params_option
 @json_option
 def diff(a: str, b: str, parameters: str | None, as_json: bool) -> None:
@@ -398,7 +399,7 @@ def diff(a: str, b: str, parameters: str | None, as_json: bool) -> None:
 @sw.command(epilog="""\b
 Examples:
   ecattool sw build samples/sw/build.yaml -o axis1.sw""")
-@click.argument("spec", type=click.Path(dir_okay=False))
+@click.argument("spec", type=InputFile())
 @output_option(required=True)
 def build(spec: str, output: str) -> None:
     """Assemble an image from a YAML spec (base image, extra blocks, setup values) with correct integrity words."""

@@ -43,7 +43,9 @@ _HWDEVMGR_KEYS = ("param_values", "sync_manager", "test_category")
 def _yaml_format(data: bytes, source: str) -> str:
     from ecattool.startup.formats import ros2
 
-    doc = ros2.load_located(data.decode("utf-8-sig", errors="replace"), source)
+    from ecattool.startup.formats._common import decode_text
+
+    doc = ros2.load_located(decode_text(data, source), source)
     top = doc.data
     if isinstance(top, list) and top and all(isinstance(x, dict) for x in top) and \
             any(k in top[0] for k in _HWDEVMGR_KEYS):

@@ -27,7 +27,7 @@ from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.findings import Severity
 from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import encode_sized, one_line, parse_hex, unsigned_type
+from ecattool.startup.formats._common import decode_text, encode_sized, one_line, parse_hex, unsigned_type
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "ecmc"
@@ -252,7 +252,7 @@ class _Reader:
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
     reader = _Reader(source)
-    for n, raw in enumerate(data.decode("utf-8-sig", errors="replace").splitlines(), 1):
+    for n, raw in enumerate(decode_text(data, source).splitlines(), 1):
         reader.line(raw, n)
     return reader.result()
 

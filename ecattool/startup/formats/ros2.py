@@ -18,7 +18,7 @@ from ecattool.errors import EncodeError, InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.od import types as dt
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import as_list, one_line
+from ecattool.startup.formats._common import as_list, decode_text, one_line
 from ecattool.startup.model import StartupCommand, StartupList, is_pdo_programming
 
 NAME = "ros2"
@@ -208,7 +208,7 @@ def load_located(text: str, source: str) -> Any:
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
-    text = data.decode("utf-8-sig", errors="replace")
+    text = decode_text(data, source)
     doc = load_located(text, source)
     lines = text.splitlines()
     top = doc.data

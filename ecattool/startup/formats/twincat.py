@@ -13,7 +13,8 @@ import re
 
 from ecattool.errors import EncodeError, InputError, Location
 from ecattool.startup.config import SlaveConfig, SoeCommand
-from ecattool.startup.formats._common import check_transition, int_in_range, one_line, parse_hex, unsigned_type
+from ecattool.startup.formats._common import (check_transition, decode_text, int_in_range, one_line, parse_hex,
+                                              unsigned_type)
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "twincat"
@@ -89,7 +90,7 @@ def parse_line(line: str, loc: Location) -> StartupCommand | SoeCommand:
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
-    text = data.decode("utf-8-sig", errors="replace")
+    text = decode_text(data, source)
     cfg = SlaveConfig(startup=StartupList(), source=Location(source, 1))
     for n, line in enumerate(text.splitlines(), 1):
         s = line.strip()

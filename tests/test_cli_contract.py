@@ -1,0 +1,351 @@
+"""The CLI contract, swept over the whole command tree (docs/cli.md, "Exit codes and errors").
+
+The tree is walked from the click group, so a new command is covered without editing a list here:
+
+* every leaf command has ``--help`` with an example line for that very command, and ``--json`` unless it is
+  in :data:`NO_JSON` (commands that only write a file or a format of their own);
+* every file a command reads (a ``click.Path`` parameter, found from the parameters) is swapped, one at a
+  time, for bad input of every kind in :data:`BAD_KINDS` in an otherwise valid invocation from
+  :data:`HAPPY`. Each must end with exit status 1, exactly one non-empty line on stderr naming the file,
+  no traceback, and no output file (a pre-existing one is left byte-identical).
+
+Commands run in-process through the real entry point (``tests.conftest.run``).
+"""
+
+from __future__ import annotations
+
+import random
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import click
+import pytest
+
+from ecattool.cli import cli
+from tests.conftest import ROOT, corpus_path, run
+
+
+def _leaves(group: click.Group, path: tuple[str, ...] = ()) -> Iterator[tuple[tuple[str, ...], click.Command]]:
+    ctx = click.Context(group)
+    for name in group.list_commands(ctx):
+        cmd = group.get_command(ctx, name)
+        assert cmd is not None, f"{' '.join((*path, name))}: listed but cannot be loaded"
+        if isinstance(cmd, click.Group):
+            yield from _leaves(cmd, (*path, name))
+        else:
+            yield (*path, name), cmd
+
+
+LEAVES: dict[tuple[str, ...], click.Command] = dict(_leaves(cli))
+
+
+def _name(cmd: tuple[str, ...]) -> str:
+    return " ".join(cmd)
+
+
+# ------------------------------------------------------------------------------------------- --help, --json
+#: Commands that print no data of their own, so have no --json (each says why). Everything else must.
+NO_JSON: dict[tuple[str, ...], str] = {
+    ("project", "new"): "writes a project skeleton (YAML) to -o or stdout",
+    ("project", "schema"): "prints the JSON Schema itself (JSON already) or checks a checked-in copy",
+    ("scale", "startup"): "writes a startup list in the master format chosen with --format (json is one)",
+    ("sii", "build"): "writes an SII image (-o required)",
+    ("sii", "fix-crc"): "writes the repaired image (-o required)",
+    ("sii", "set-alias"): "writes the changed image (-o required)",
+    ("startup", "convert"): "writes the startup list in --format (json is one) to -o",
+    ("startup", "export"): "writes the startup list in --format (json is one)",
+    ("sw", "build"): "writes a .sw image (-o required)",
+    ("sw", "foe"): "writes a FoE file (-o required)",
+    ("sw", "from-foe"): "writes .sw text",
+    ("sw", "patch"): "writes the patched .sw image (-o required)",
+}
+
+
+def test_tree_is_walked_and_the_allowlist_names_real_commands() -> None:
+    assert len(LEAVES) >= 35 and ("sw", "info") in LEAVES and ("lint",) in LEAVES
+    assert set(NO_JSON) <= set(LEAVES), set(NO_JSON) - set(LEAVES)
+
+
+@pytest.mark.parametrize("cmd", sorted(LEAVES), ids=_name)
+def test_help_has_an_example_of_the_command(capsys: pytest.CaptureFixture[str], cmd: tuple[str, ...]) -> None:
+    code, out, err = run(capsys, *cmd, "--help")
+    assert code == 0 and not err
+    assert re.search(rf"^\s+ecattool {re.escape(_name(cmd))}\b", out, re.M), f"no example line in:\n{out}"
+
+
+@pytest.mark.parametrize("cmd", sorted(LEAVES), ids=_name)
+def test_json_where_data_is_printed(cmd: tuple[str, ...]) -> None:
+    has_json = any("--json" in p.opts for p in LEAVES[cmd].params if isinstance(p, click.Option))
+    # in NO_JSON exactly when it has no --json: the allowlist cannot go stale either way
+    assert has_json != (cmd in NO_JSON), NO_JSON.get(cmd, "prints data but has no --json")
+
+
+# --------------------------------------------------------------------------------------- valid invocations
+@dataclass(frozen=True)
+class In:
+    """An input file of a valid invocation. ``where``: 'samples/...' (repository), 'corpus:...' or 'gen:...'
+    (written by the ``gen`` fixture); ``kind`` chooses the truncated corpus file and the wrong-command file."""
+
+    kind: str
+    where: str
+
+
+@dataclass(frozen=True)
+class Out:
+    """The -o file of a valid invocation (created in the test's tmp_path)."""
+
+    name: str
+
+
+ESI = In("esi", "samples/esi/etg2001_cia402.xml")
+SW = In("sw", "corpus:sw/ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw")
+PARAMS = In("params", "corpus:sw/ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.ems_parameters.cfg")
+FOE = In("foe", "corpus:sw/ecmc_ipos8020BX_FOESW_8020.bin")
+SII = In("sii", "corpus:sii/ni9144.bin")
+SII_ESI = In("esi", "corpus:sii/ni9144.xml")
+STARTUP = In("startup", "corpus:configs/ros2_technosoft_ipos3604.yaml")
+PROJECT = In("project", "samples/hdt/project.yaml")
+SPEC = In("spec", "samples/scaling/ballscrew.yaml")
+TS = ("--profile", "technosoft-ipos")
+
+#: One or more valid invocations per command that reads or writes files; together they name every file
+#: parameter (checked by test_every_file_parameter_is_swept).
+HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
+    ("commission",): [(PROJECT, "-o", Out("report.json"))],
+    ("lint",): [(PROJECT, "-o", Out("lint.txt"))],
+    ("esi", "devices"): [(ESI,)],
+    ("esi", "show"): [(ESI, "--pdos")],
+    ("esi", "validate"): [(ESI,)],
+    ("map", "check"): [(*TS, "--mapping", In("mapping", "gen:mapping.yaml")),
+                       ("--esi", ESI),
+                       (*TS, "--product", "ipos4808-bx-cat", "--startup", In("startup", "corpus:configs/ecmc_ecmciPOSXXXX.cmd"))],
+    ("map", "layout"): [(*TS, "--mapping", In("mapping", "gen:mapping.yaml"), "-o", Out("layout.json")),
+                        ("--esi", ESI, "-o", Out("layout.json")),
+                        (*TS, "--product", "ipos4808-bx-cat", "--startup", In("startup", "corpus:configs/ecmc_ecmciPOSXXXX.cmd"))],
+    ("map", "sdo"): [(*TS, "--mapping", In("mapping", "gen:mapping.yaml"), "-o", Out("sdo.json")),
+                     ("--esi", ESI, "-o", Out("sdo.json")),
+                     (*TS, "--product", "ipos4808-bx-cat", "--startup", In("startup", "corpus:configs/ecmc_ecmciPOSXXXX.cmd"))],
+    ("project", "new"): [(*TS, "-o", Out("machine.yaml"))],
+    ("project", "schema"): [("-o", Out("schema.json")), ("--check", In("schema", "schemas/project.schema.json"))],
+    ("scale", "compute"): [(SPEC, "-o", Out("factors.json")), (In("spec", "samples/scaling/rotary_table.yaml"), "--esi", ESI)],
+    ("scale", "startup"): [(SPEC, "--format", "json", "-o", Out("startup.json")),
+                           (In("spec", "samples/scaling/rotary_table.yaml"), "--esi", ESI)],
+    ("scale", "explain"): [("--from", In("startup", "gen:factors.csv"))],
+    ("sim", "run"): [("technosoft-ipos", In("script", "gen:steps.yaml"), "-o", Out("transcript.txt")),
+                     (In("esi", "corpus:esi/elmo_Elmo_ECAT_00010420_V11.xml"), In("script", "gen:steps.yaml"), "--device", "2")],
+    ("sii", "info"): [(SII,)],
+    ("sii", "check"): [(SII,), (SII_ESI, SII)],
+    ("sii", "fix-crc"): [(SII, "-o", Out("fixed.bin"))],
+    ("sii", "set-alias"): [(SII, "7", "-o", Out("alias.bin"))],
+    ("sii", "build"): [(SII_ESI, "--device", "#x23B8:2", "-o", Out("built.bin"))],
+    ("sii", "diff"): [(SII, SII)],
+    ("startup", "import"): [(STARTUP,)],
+    ("startup", "convert"): [(STARTUP, "--format", "json", "-o", Out("startup.json"))],
+    ("startup", "export"): [("--from", STARTUP, "--format", "json", "-o", Out("startup.json")),
+                            ("--project", In("project", "samples/technosoft_ipos/project.yaml"), "--format", "json",
+                             "-o", Out("startup.json"))],
+    ("sw", "info"): [(SW,)],
+    ("sw", "show"): [(SW, "-p", PARAMS)],
+    ("sw", "foe"): [(SW, "-o", Out("FOESW_AXIS.bin"))],
+    ("sw", "from-foe"): [(FOE, "-o", Out("back.sw"))],
+    ("sw", "verify"): [(SW, "--preload", SW), ("--project", In("project", "gen:machine.yaml"), "--preload", SW)],
+    ("sw", "download"): [(SW, "--preload", SW, "--json"), ("--project", In("project", "gen:machine.yaml"))],
+    ("sw", "patch"): [(SW, "-p", PARAMS, "--set", "PWMPER=2251", "-o", Out("patched.sw"))],
+    ("sw", "diff"): [(SW, SW, "-p", PARAMS)],
+    ("sw", "build"): [(In("swspec", "samples/sw/build.yaml"), "-o", Out("built.sw"))],
+}
+
+STEPS = "- state: PREOP\n- read: '1018:01'\n- state: SAFEOP\n- state: OP\n"
+MAPPING = "rx:\n  - index: 0x1600\n    entries: [controlword, 0x607A:00/32]\n"
+
+
+@pytest.fixture(scope="session")
+def gen(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Inputs that no sample holds as such: a mapping file, a simulator script, a project with a .sw, the CSV
+    startup list of a factor group."""
+    d = tmp_path_factory.mktemp("gen")
+    (d / "mapping.yaml").write_text(MAPPING)
+    (d / "steps.yaml").write_text(STEPS)
+    (d / "axis.sw").write_bytes(corpus_path("sw", "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw").read_bytes())
+    (d / "machine.yaml").write_text("ecattool: 1\nname: m\ndrives:\n  - name: y\n    device: {profile: technosoft-ipos}\n"
+                                    "    sw: axis.sw\n")
+    cli.main(["scale", "startup", str(ROOT / SPEC.where), "--format", "csv", "-o", str(d / "factors.csv")],
+             standalone_mode=False)
+    return d
+
+
+def resolve(where: str, gen: Path) -> Path:
+    if where.startswith("corpus:"):
+        return corpus_path(*where[len("corpus:"):].split("/"))
+    if where.startswith("gen:"):
+        return gen / where[len("gen:"):]
+    return ROOT / where
+
+
+def argv(inv: tuple[object, ...], gen: Path, out_dir: Path, swap: dict[int, Path] | None = None) -> list[str]:
+    args = []
+    for i, a in enumerate(inv):
+        if swap and i in swap:
+            args.append(str(swap[i]))
+        elif isinstance(a, In):
+            args.append(str(resolve(a.where, gen)))
+        elif isinstance(a, Out):
+            args.append(str(out_dir / a.name))
+        else:
+            args.append(str(a))
+    return args
+
+
+def _is_read_path(p: click.Parameter) -> bool:
+    return isinstance(p.type, click.Path) and bool(p.type.file_okay) and p.name != "output"
+
+
+def test_every_file_parameter_is_swept(gen: Path, tmp_path: Path) -> None:
+    """Every file a command reads and every -o appears in some valid invocation, so the matrix covers it."""
+    assert set(HAPPY) <= set(LEAVES), set(HAPPY) - set(LEAVES)
+    for cmd, command in LEAVES.items():
+        wanted = {p.name for p in command.params if _is_read_path(p) or p.name == "output"}
+        covered: set[str] = set()
+        for inv in HAPPY.get(cmd, []):
+            args = argv(inv, gen, tmp_path)
+            ctx = command.make_context(_name(cmd), list(args), resilient_parsing=True)
+            marked = {args[i] for i, a in enumerate(inv) if isinstance(a, (In, Out))}
+            for name, value in ctx.params.items():
+                values = value if isinstance(value, tuple) else (value,)
+                if any(str(v) in marked for v in values):
+                    covered.add(str(name))
+        assert wanted <= covered, f"{_name(cmd)}: no valid invocation gives {sorted(wanted - covered)}"
+
+
+HAPPY_CASES = [(cmd, n) for cmd, invs in HAPPY.items() for n in range(len(invs))]
+
+
+@pytest.mark.parametrize(("cmd", "n"), HAPPY_CASES, ids=[f"{_name(c)}#{n}" for c, n in HAPPY_CASES])
+def test_valid_invocation_succeeds(capsys: pytest.CaptureFixture[str], gen: Path, tmp_path: Path,
+                                   cmd: tuple[str, ...], n: int) -> None:
+    inv = HAPPY[cmd][n]
+    code, out, err = run(capsys, *cmd, *argv(inv, gen, tmp_path))
+    assert code == 0, err or out
+    for a in inv:
+        if isinstance(a, Out):
+            assert (tmp_path / a.name).stat().st_size > 0
+
+
+# ---------------------------------------------------------------------------------------------- bad input
+BAD_KINDS = ("missing", "empty", "directory", "binary", "other", "truncated", "bad-utf8", "doctype")
+
+#: A real file of each input kind, cut short (the corpus where it has that kind of file).
+TRUNCATED = {
+    "esi": "corpus:esi/smc_EX260-SECx_V11.xml",
+    "sii": "corpus:sii/ni9144.bin",
+    "sw": "corpus:sw/ecmc_TMLCode.sw",
+    "foe": "corpus:sw/ecmc_ipos8020_FOESW_DC48V_TRQ.bin",
+    "params": "corpus:sw/ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.ems_parameters.cfg",
+    "startup": "corpus:configs/eni_kpierczy_test_eni.xml",
+}
+#: Input kinds that are binary: "invalid UTF-8" means nothing there (random bytes are covered by 'binary').
+BINARY_KINDS = {"sii", "foe"}
+
+DOCTYPE = (b'<?xml version="1.0" encoding="UTF-8"?>\n<!DOCTYPE EtherCATInfo [\n  <!ENTITY boom "boom">\n]>\n'
+           b"<EtherCATInfo><Vendor><Id>&boom;</Id></Vendor></EtherCATInfo>\n")
+
+
+def bad_file(kind: str, inp: In, gen: Path, tmp_path: Path) -> Path:
+    real = resolve(inp.where, gen)
+    path = tmp_path / f"bad-{kind}{real.suffix}"
+    if kind == "missing":
+        return path
+    if kind == "directory":
+        path.mkdir()
+        return path
+    if kind == "empty":
+        data = b""
+    elif kind == "binary":
+        data = random.Random(1).randbytes(700)
+    elif kind == "other":  # valid for another command: a .sw where XML is expected, else an ESI
+        data = resolve((SW if inp.kind == "esi" else ESI).where, gen).read_bytes()
+    elif kind == "truncated":  # cut inside the data (an SII image's 0xFF fill is not data)
+        src = resolve(TRUNCATED.get(inp.kind, inp.where), gen).read_bytes()
+        data = src[: len(src.rstrip(b"\xff")) * 3 // 5]
+    elif kind == "bad-utf8":  # a line of bytes that are not UTF-8, in a file that says it is UTF-8
+        src = re.sub(rb"^<\?xml[^>]*\?>", b'<?xml version="1.0" encoding="UTF-8"?>', real.read_bytes())
+        cut = src.index(b"\n", len(src) // 2) + 1
+        data = src[:cut] + b"\xff\xfe\xc3\x28 \x80\n" + src[cut:]
+    elif kind == "doctype":
+        data = DOCTYPE
+    else:  # pragma: no cover
+        raise AssertionError(kind)
+    path.write_bytes(data)
+    return path
+
+
+def _bad_cases() -> list[tuple[tuple[str, ...], int, int, str]]:
+    cases = []
+    for cmd, invs in HAPPY.items():
+        for n, inv in enumerate(invs):
+            for i, a in enumerate(inv):
+                if not isinstance(a, In):
+                    continue
+                for kind in BAD_KINDS:
+                    if kind == "bad-utf8" and a.kind in BINARY_KINDS:
+                        continue
+                    cases.append((cmd, n, i, kind))
+    return cases
+
+
+BAD_CASES = _bad_cases()
+
+
+#: Checkers whose report is their output: the input they check (of this kind), when bad, is a finding in the
+#: report (stdout, or the -o file, which is written), named with its file; exit status 1 as for any error finding.
+REPORTERS: dict[tuple[str, ...], tuple[str, str]] = {
+    ("lint",): ("project", "a CI linter reports every project, readable or not, in its text/JSON/SARIF report"),
+    ("sii", "check"): ("sii", "an unreadable image is an error finding (rule sii.parse), in --json too; a bad "
+                              "ESI to compare with is an ordinary error"),
+}
+
+#: (input kind, bad kind) pairs that cannot be detected, by design of the format (docs/cli.md).
+UNDETECTABLE: dict[tuple[str, str], str] = {
+    ("sw", "truncated"): "a .sw image has no length, end marker or file checksum: a prefix cut at a line is a "
+                         "shorter valid image; 'sw info' integrity words and 'sw verify' are the checks",
+}
+
+
+@pytest.mark.parametrize(("cmd", "n", "i", "kind"), BAD_CASES,
+                         ids=[f"{_name(c)}#{n}.{i}-{k}" for c, n, i, k in BAD_CASES])
+def test_bad_input_is_one_line_and_exit_1(capsys: pytest.CaptureFixture[str], gen: Path, tmp_path: Path,
+                                          cmd: tuple[str, ...], n: int, i: int, kind: str) -> None:
+    inv = HAPPY[cmd][n]
+    inp = inv[i]
+    assert isinstance(inp, In)
+    bad = bad_file(kind, inp, gen, tmp_path)
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    outs = [out_dir / a.name for a in inv if isinstance(a, Out)]
+    previous = b"an earlier result\n"
+    keep = kind == "binary"  # once per input: a pre-existing output must survive the failure untouched
+    for o in outs:
+        if keep:
+            o.write_bytes(previous)
+    code, out, err = run(capsys, *cmd, *argv(inv, gen, out_dir, {i: bad}))
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert "Traceback" not in out + err
+    if (inp.kind, kind) in UNDETECTABLE:
+        assert code in (0, 1)
+        return
+    if cmd in REPORTERS and REPORTERS[cmd][0] == inp.kind:
+        report = out + "".join(o.read_text() for o in outs)
+        assert code == 1 and not lines and f"{bad}" in report, f"exit {code}\nstdout: {out}\nstderr: {err}"
+        assert sorted(out_dir.iterdir()) == sorted(outs), "stray files"
+        return
+    assert code == 1, f"exit {code}\nstdout: {out}\nstderr: {err}"
+    assert len(lines) == 1, f"stderr is not one line:\n{err}"
+    assert bad.name in lines[0], f"the error does not name {bad.name}: {lines[0]}"
+    for o in outs:
+        if keep:
+            assert o.read_bytes() == previous
+        else:
+            assert not o.exists(), f"{o.name} written although the command failed"
+    assert sorted(p.name for p in out_dir.iterdir()) == sorted(o.name for o in outs if keep), "stray files"
