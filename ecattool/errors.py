@@ -7,16 +7,21 @@ with status 1; library users catch :class:`EcatToolError`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from ecattool.record import FrozenRecord, set_field
 
 
-@dataclass(frozen=True, slots=True)
-class Location:
+class Location(FrozenRecord):
     """Where something came from: a file and, where known, a 1-based line and column."""
 
-    file: str | None = None
-    line: int | None = None
-    column: int | None = None
+    __slots__ = ("file", "line", "column")
+    file: str | None
+    line: int | None
+    column: int | None
+
+    def __init__(self, file: str | None = None, line: int | None = None, column: int | None = None) -> None:
+        set_field(self, "file", file)
+        set_field(self, "line", line)
+        set_field(self, "column", column)
 
     def __str__(self) -> str:
         parts = [self.file or "<input>"]

@@ -6,11 +6,11 @@ Checks in ``esi``, ``pdo``, ``scaling``, ``sw``, ``sii`` and ``project`` return 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
 
 from ecattool.errors import Location
+from ecattool.record import FrozenRecord, set_field
 
 
 class Severity(str, Enum):
@@ -23,13 +23,21 @@ class Severity(str, Enum):
         return {"error": 2, "warning": 1, "info": 0}[self.value]
 
 
-@dataclass(frozen=True, slots=True)
-class Finding:
+class Finding(FrozenRecord):
+    __slots__ = ("rule", "severity", "message", "location", "data")
     rule: str
     severity: Severity
     message: str
-    location: Location | None = None
-    data: dict[str, Any] = field(default_factory=dict)
+    location: Location | None
+    data: dict[str, Any]
+
+    def __init__(self, rule: str, severity: Severity, message: str, location: Location | None = None,
+                 data: dict[str, Any] | None = None) -> None:
+        set_field(self, "rule", rule)
+        set_field(self, "severity", severity)
+        set_field(self, "message", message)
+        set_field(self, "location", location)
+        set_field(self, "data", {} if data is None else data)
 
     def __str__(self) -> str:
         where = f"{self.location}: " if self.location else ""

@@ -3,7 +3,6 @@ one at a time; and the import cost of ``ecattool.esi``/``ecattool.sii``; and ``S
 
 from __future__ import annotations
 
-import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -15,6 +14,7 @@ from ecattool.errors import EcatToolError, SelectionError
 from ecattool.esi import load, load_bytes, load_device, select, select_index
 from ecattool.esi.reader import LazyEsiFile
 from ecattool.od.model import ObjectDictionary
+from ecattool.record import Record
 from tests.conftest import corpus_path
 
 FILES = ["beckhoff_EL1xxx.xml", "weidmueller_UR20_FBC.xml", "beckhoff_AX5xxx.xml", "elmo_Elmo_ECAT_00010420_V11.xml",
@@ -28,10 +28,10 @@ def _same(a: Any, b: Any, path: str = "device") -> None:
         assert a.indices() == b.indices(), path
         for i in a.indices():
             _same(a.get(i), b.get(i), f"{path}[0x{i:04X}]")
-    elif dataclasses.is_dataclass(a) and not isinstance(a, type):
+    elif isinstance(a, Record):
         assert type(a) is type(b), path
-        for f in dataclasses.fields(a):
-            _same(getattr(a, f.name), getattr(b, f.name), f"{path}.{f.name}")
+        for name in a._fields:
+            _same(getattr(a, name), getattr(b, name), f"{path}.{name}")
     elif isinstance(a, (list, tuple)):
         assert isinstance(b, (list, tuple)) and len(a) == len(b), path
         for i, (x, y) in enumerate(zip(a, b)):

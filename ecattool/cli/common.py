@@ -11,6 +11,7 @@ from typing import Any
 import click
 
 from ecattool.errors import InputError
+from ecattool.record import Record
 
 
 def json_option(f: Callable[..., Any]) -> Callable[..., Any]:
@@ -19,6 +20,22 @@ def json_option(f: Callable[..., Any]) -> Callable[..., Any]:
 
 def output_option(required: bool = False, help: str = "Write to FILE (atomically; never over an input). '-' = stdout.") -> Callable[..., Any]:
     return click.option("-o", "--output", "output", type=click.Path(dir_okay=False, allow_dash=True), required=required, help=help)
+
+
+def _plain(v: Any) -> Any:
+    """``dataclasses.asdict`` for JSON, for trees that mix dataclasses and records: both become dicts of their
+    fields, nested ones too (a record's ``to_json`` is used only where the encoder meets it, as before)."""
+    if isinstance(v, Record):
+        return {n: _plain(getattr(v, n)) for n in v._fields}
+    if hasattr(v, "__dataclass_fields__") and not isinstance(v, type):
+        import dataclasses
+
+        return {f.name: _plain(getattr(v, f.name)) for f in dataclasses.fields(v)}
+    if isinstance(v, (list, tuple)):
+        return [_plain(x) for x in v]
+    if isinstance(v, dict):
+        return {k: _plain(x) for k, x in v.items()}
+    return v
 
 
 def _default(o: Any) -> Any:
@@ -30,10 +47,8 @@ def _default(o: Any) -> Any:
         return o.to_json()
     if hasattr(o, "model_dump"):
         return o.model_dump(mode="json")
-    if hasattr(o, "__dataclass_fields__"):
-        import dataclasses
-
-        return dataclasses.asdict(o)
+    if isinstance(o, Record) or hasattr(o, "__dataclass_fields__"):
+        return _plain(o)
     if hasattr(o, "value"):
         return o.value
     if hasattr(o, "numerator") and hasattr(o, "denominator"):

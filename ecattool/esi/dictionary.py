@@ -11,7 +11,6 @@ Resolution of a type name, in order:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
 from ecattool.errors import EcatToolError
@@ -19,6 +18,7 @@ from ecattool.esi.values import Context, lc_text, name_step
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import BY_CODE, DataType, Kind, lookup, parse_array_name
+from ecattool.record import Record
 
 _USINT = BY_CODE[0x05]
 _UINT_BY_BITS = {8: BY_CODE[0x05], 16: BY_CODE[0x06], 24: BY_CODE[0x16], 32: BY_CODE[0x07], 40: BY_CODE[0x18],
@@ -30,19 +30,32 @@ _INFO_TAGS = frozenset({"DefaultValue", "MinValue", "MaxValue"})  # a DataType S
 _MAX_VALUE_BITS = 8 * 65536  # no CoE value is larger; guards encoders against absurd sizes in hostile files
 
 
-@dataclass(slots=True)
-class ResolvedType:
+class ResolvedType(Record):
     """A type name resolved against the file's DataTypes."""
 
+    __slots__ = ("name", "kind", "datatype", "bits", "enum", "element", "lbound", "elements", "element_type")
     name: str
     kind: str  # "base", "array", "record", "unknown"
-    datatype: DataType | None = None
-    bits: int | None = None
-    enum: dict[int, str] = field(default_factory=dict)
-    element: Any = None  # the DataType element (records: SubItems; arrays: ArrayInfo)
-    lbound: int = 0
-    elements: int = 0
-    element_type: str = ""
+    datatype: DataType | None
+    bits: int | None
+    enum: dict[int, str]
+    element: Any  # the DataType element (records: SubItems; arrays: ArrayInfo)
+    lbound: int
+    elements: int
+    element_type: str
+
+    def __init__(self, name: str, kind: str, datatype: DataType | None = None, bits: int | None = None,
+                 enum: dict[int, str] | None = None, element: Any = None, lbound: int = 0, elements: int = 0,
+                 element_type: str = "") -> None:
+        self.name = name
+        self.kind = kind
+        self.datatype = datatype
+        self.bits = bits
+        self.enum = {} if enum is None else enum
+        self.element = element
+        self.lbound = lbound
+        self.elements = elements
+        self.element_type = element_type
 
 
 def _blob(name: str, bits: int | None) -> DataType:
@@ -171,7 +184,7 @@ def _flags(flags_el: Any, ctx: Context) -> tuple[Access, str, bool, bool, str]:
     return result
 
 
-_ENTRY_SLOTS = tuple(Entry.__slots__)  # type: ignore[attr-defined]
+_ENTRY_SLOTS = tuple(Entry.__slots__)
 
 
 def _make_clone() -> Any:

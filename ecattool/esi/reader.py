@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import gc
 from collections.abc import Callable
-from dataclasses import fields
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -91,9 +90,6 @@ class DeviceHead(IdentityView):
         self.element = element
 
 
-_DEVICES_SLOT = EsiFile.devices  # the dataclass slot, under LazyEsiFile's property
-
-
 class LazyEsiFile(EsiFile):
     """An :class:`EsiFile` whose devices are built on demand.
 
@@ -108,18 +104,18 @@ class LazyEsiFile(EsiFile):
         self._built: dict[int, Device] = {}
         super().__init__(*args, **kwargs)
 
-    @property  # type: ignore[override]
+    @property
     def devices(self) -> list[Device]:
         if self._build is not None:
             build, self._build = self._build, None
-            _DEVICES_SLOT.__set__(self, [self._built.get(h.index) or build(h) for h in self.device_heads])
+            self._devices = [self._built.get(h.index) or build(h) for h in self.device_heads]
             self._built.clear()
-        return _DEVICES_SLOT.__get__(self)  # type: ignore[no-any-return]
+        return self._devices
 
     @devices.setter
     def devices(self, value: list[Device]) -> None:
         self._build = None
-        _DEVICES_SLOT.__set__(self, value)
+        self._devices = value
 
     @property
     def pending(self) -> bool:
@@ -140,7 +136,7 @@ class LazyEsiFile(EsiFile):
         return dev
 
     def __reduce__(self) -> Any:
-        return (EsiFile, tuple(getattr(self, f.name) for f in fields(EsiFile)))
+        return (EsiFile, tuple(getattr(self, name) for name in EsiFile._fields))
 
 
 class LazyDictionary(ObjectDictionary):
@@ -392,11 +388,11 @@ class Reader:
                 entries.append(self.entry(child))
             elif tag == "Exclude":  # Beckhoff: several per PDO
                 t = child.text
-                v = known.get(t)  # type: ignore[arg-type]
+                v = known.get(t)
                 pdo.excludes.append(self._number(t, child, "Exclude") if v is None else v)
             elif tag == "Index":
                 t = child.text
-                v = known.get(t)  # type: ignore[arg-type]
+                v = known.get(t)
                 pdo.index = self._number(t, child, f"{el.tag}/Index") if v is None else v
                 if child.get("DependOnSlot") is not None:
                     pdo.depend_on_slot = ctx.boolean(child.get("DependOnSlot"), child, "DependOnSlot")
@@ -443,18 +439,18 @@ class Reader:
             tag = c.tag
             if tag == "Index":
                 t = c.text
-                index = known.get(t)  # type: ignore[arg-type]
+                index = known.get(t)
                 if index is None:
                     index = self._number(t, c, "Entry/Index")
                 dep = c.get("DependOnSlot")
             elif tag == "SubIndex":
                 t = c.text
-                sub = known.get(t)  # type: ignore[arg-type]
+                sub = known.get(t)
                 if sub is None:
                     sub = self._number(t, c, "Entry/SubIndex") if t is not None and t.strip() else 0
             elif tag == "BitLen":
                 t = c.text
-                bits = known.get(t)  # type: ignore[arg-type]
+                bits = known.get(t)
                 if bits is None:
                     bits = self._number(t, c, "Entry/BitLen")
             elif tag == "Name":

@@ -62,7 +62,7 @@ def _by_revision(pool: list[_D], revision: int | None, policy: str, what: str, a
     if policy == "newest" or (policy == "newest-not-newer" and revision is None):
         return max(pool, key=lambda d: d.revision)
     if policy == "newest-not-newer":
-        older = [d for d in pool if d.revision <= revision]  # type: ignore[operator]
+        older = [d for d in pool if d.revision <= revision]
         if not older:
             raise SelectionError(
                 f"no revision of {what} is 0x{revision:08X} or older; candidates: {candidates_text(pool, all_devices)}")

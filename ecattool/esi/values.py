@@ -5,22 +5,26 @@ Every function takes the element the text came from, so that errors and warnings
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
 from ecattool.errors import InputError, Location
 from ecattool.findings import Finding, Severity
+from ecattool.record import Record
 
 _TRUE = frozenset({"1", "true"})
 _FALSE = frozenset({"0", "false"})
 
 
-@dataclass(slots=True)
-class Context:
+class Context(Record):
     """Per-file reading state: the source name (for locations) and the collected warnings."""
 
+    __slots__ = ("source", "warnings")
     source: str
-    warnings: list[Finding] = field(default_factory=list)
+    warnings: list[Finding]
+
+    def __init__(self, source: str, warnings: list[Finding] | None = None) -> None:
+        self.source = source
+        self.warnings = [] if warnings is None else warnings
 
     def loc(self, el: Any) -> Location:
         return Location(self.source, getattr(el, "sourceline", None))

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
 
 from ecattool.errors import Location
 from ecattool.od.types import DataType, Kind
+from ecattool.record import FrozenRecord, Record, set_field
 
 
 class EcState(str, Enum):
@@ -50,17 +50,23 @@ def _restriction(text: str | None) -> frozenset[EcState]:
     return frozenset(_RESTRICTION_STATES.get(text.strip().upper(), MAILBOX_STATES))
 
 
-@dataclass(frozen=True, slots=True)
-class Access:
+class Access(FrozenRecord):
     """Which EtherCAT states an entry can be read and written in (via SDO).
 
     Built from an ESI ``Flags/Access`` text (``ro``/``rw``/``wo``/``const``) and its optional
     ``ReadRestrictions``/``WriteRestrictions`` attributes (``PreOp``, ``PreOP_SafeOP``, ``SafeOP_OP`` …).
     """
 
-    read: frozenset[EcState] = MAILBOX_STATES
-    write: frozenset[EcState] = MAILBOX_STATES
-    text: str = "rw"
+    __slots__ = ("read", "write", "text")
+    read: frozenset[EcState]
+    write: frozenset[EcState]
+    text: str
+
+    def __init__(self, read: frozenset[EcState] = MAILBOX_STATES, write: frozenset[EcState] = MAILBOX_STATES,
+                 text: str = "rw") -> None:
+        set_field(self, "read", read)
+        set_field(self, "write", write)
+        set_field(self, "text", text)
 
     @classmethod
     def parse(cls, text: str | None, read_restrictions: str | None = None, write_restrictions: str | None = None) -> "Access":
@@ -98,33 +104,55 @@ def _norm_mapping(text: str | None) -> str:
     return r + x
 
 
-@dataclass(slots=True)
-class Entry:
+class Entry(Record):
     """One sub-index of an object. ``default`` is the encoded little-endian value, if the source gives one."""
 
+    __slots__ = ("subindex", "name", "datatype", "bit_size", "type_name", "bit_offset", "access", "pdo_mapping",
+                 "default", "minimum", "maximum", "enum", "backup", "setting", "category", "unit", "comment",
+                 "location")
     subindex: int
     name: str
     datatype: DataType | None
     bit_size: int
-    type_name: str = ""
-    bit_offset: int = 0
-    access: Access = RO
-    pdo_mapping: str = ""  # "", "R", "T" or "RT"
-    default: bytes | None = None
-    minimum: int | float | None = None
-    maximum: int | float | None = None
-    enum: dict[int, str] = field(default_factory=dict)
-    backup: bool = False
-    setting: bool = False
-    category: str = ""
-    unit: str = ""
-    comment: str = ""
-    location: Location | None = None
+    type_name: str
+    bit_offset: int
+    access: Access
+    pdo_mapping: str  # "", "R", "T" or "RT"
+    default: bytes | None
+    minimum: int | float | None
+    maximum: int | float | None
+    enum: dict[int, str]
+    backup: bool
+    setting: bool
+    category: str
+    unit: str
+    comment: str
+    location: Location | None
 
-    def __post_init__(self) -> None:
-        self.pdo_mapping = _norm_mapping(self.pdo_mapping)
-        if not self.type_name and self.datatype is not None:
-            self.type_name = self.datatype.name
+    def __init__(self, subindex: int, name: str, datatype: DataType | None, bit_size: int, type_name: str = "",
+                 bit_offset: int = 0, access: Access = RO, pdo_mapping: str = "", default: bytes | None = None,
+                 minimum: int | float | None = None, maximum: int | float | None = None,
+                 enum: dict[int, str] | None = None, backup: bool = False, setting: bool = False,
+                 category: str = "", unit: str = "", comment: str = "", location: Location | None = None) -> None:
+        self.subindex = subindex
+        self.name = name
+        self.datatype = datatype
+        self.bit_size = bit_size
+        # the type's own name unless the source gave one
+        self.type_name = type_name if type_name or datatype is None else datatype.name
+        self.bit_offset = bit_offset
+        self.access = access
+        self.pdo_mapping = _norm_mapping(pdo_mapping)
+        self.default = default
+        self.minimum = minimum
+        self.maximum = maximum
+        self.enum = {} if enum is None else enum
+        self.backup = backup
+        self.setting = setting
+        self.category = category
+        self.unit = unit
+        self.comment = comment
+        self.location = location
 
     @property
     def rx_mappable(self) -> bool:
@@ -162,15 +190,25 @@ class Entry:
         return self.datatype.decode(data, self.bit_size)
 
 
-@dataclass(slots=True)
-class OdObject:
+class OdObject(Record):
+    __slots__ = ("index", "name", "object_code", "entries", "type_name", "category", "location")
     index: int
     name: str
     object_code: ObjectCode
-    entries: dict[int, Entry] = field(default_factory=dict)
-    type_name: str = ""
-    category: str = ""
-    location: Location | None = None
+    entries: dict[int, Entry]
+    type_name: str
+    category: str
+    location: Location | None
+
+    def __init__(self, index: int, name: str, object_code: ObjectCode, entries: dict[int, Entry] | None = None,
+                 type_name: str = "", category: str = "", location: Location | None = None) -> None:
+        self.index = index
+        self.name = name
+        self.object_code = object_code
+        self.entries = {} if entries is None else entries
+        self.type_name = type_name
+        self.category = category
+        self.location = location
 
     def entry(self, subindex: int) -> Entry | None:
         return self.entries.get(subindex)

@@ -10,11 +10,11 @@ from __future__ import annotations
 import math
 import re
 import struct
-from dataclasses import dataclass
 from enum import Enum
 from typing import Any
 
 from ecattool.errors import EncodeError
+from ecattool.record import FrozenRecord, set_field
 
 
 class Kind(str, Enum):
@@ -28,14 +28,20 @@ class Kind(str, Enum):
     OCTETS = "octets"  # OCTET_STRING, DOMAIN, GUID, TIME_OF_DAY …
 
 
-@dataclass(frozen=True, slots=True)
-class DataType:
+class DataType(FrozenRecord):
     """A CoE data type. ``bits`` is None for variable-length types (strings, domains)."""
 
+    __slots__ = ("code", "name", "kind", "bits")
     code: int
     name: str
     kind: Kind
     bits: int | None
+
+    def __init__(self, code: int, name: str, kind: Kind, bits: int | None) -> None:
+        set_field(self, "code", code)
+        set_field(self, "name", name)
+        set_field(self, "kind", kind)
+        set_field(self, "bits", bits)
 
     # --- properties -------------------------------------------------------------------------
     @property

@@ -6,7 +6,6 @@ order differ only in ``strings`` (the table), not in every field that points int
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
 from typing import Any
 
 from ecattool.sii.model import (
@@ -22,13 +21,19 @@ from ecattool.sii.model import (
     category_name,
     FMMU_USAGE,
 )
+from ecattool.record import FrozenRecord, Record, set_field
 
 
-@dataclass(frozen=True, slots=True)
-class Difference:
+class Difference(FrozenRecord):
+    __slots__ = ("field", "a", "b")
     field: str
     a: Any
     b: Any
+
+    def __init__(self, field: str, a: Any, b: Any) -> None:
+        set_field(self, "field", field)
+        set_field(self, "a", a)
+        set_field(self, "b", b)
 
     def __str__(self) -> str:
         return f"{self.field}: {_show(self.a)} != {_show(self.b)}"
@@ -67,18 +72,18 @@ _IDX_FIELDS = {"group_idx": "group", "image_idx": "image", "order_idx": "order",
                "group_name_idx": "group_name", "desc_idx": "desc"}
 
 
-def _put(out: dict[str, Any], prefix: str, obj: Any, image: SiiImage, skip: tuple[str, ...] = ()) -> None:
-    for f in fields(obj):
-        if f.name in skip:
+def _put(out: dict[str, Any], prefix: str, obj: Record, image: SiiImage, skip: tuple[str, ...] = ()) -> None:
+    for name in obj._fields:
+        if name in skip:
             continue
-        v = getattr(obj, f.name)
-        if f.name in _IDX_FIELDS:
+        v = getattr(obj, name)
+        if name in _IDX_FIELDS:
             text = image.string(v)
-            out[f"{prefix}.{_IDX_FIELDS[f.name]}"] = text if text is not None else f"<bad string index {v}>"
-        elif f.name == "extra" and not v:
+            out[f"{prefix}.{_IDX_FIELDS[name]}"] = text if text is not None else f"<bad string index {v}>"
+        elif name == "extra" and not v:
             continue
         else:
-            out[f"{prefix}.{f.name}"] = v
+            out[f"{prefix}.{name}"] = v
 
 
 def flatten(image: SiiImage) -> dict[str, Any]:

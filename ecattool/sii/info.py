@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict
 from typing import Any
 
 from ecattool.sii.checks import category_offsets
@@ -79,10 +78,10 @@ def describe(image: SiiImage) -> dict[str, Any]:
         "strings": image.strings,
         "general": general_dict(image, g) if g else None,
         "fmmus": [FMMU_USAGE.get(u, f"0x{u:02X}") or "unused" for u in image.fmmus],
-        "sync_managers": [{**asdict(s), "kind": s.kind} for s in image.sync_managers],
+        "sync_managers": [{**s.as_dict(), "kind": s.kind} for s in image.sync_managers],
         "tx_pdos": [_pdo(image, p) for p in image.tx_pdos],
         "rx_pdos": [_pdo(image, p) for p in image.rx_pdos],
-        "dc_opmodes": [{**{k: v for k, v in asdict(o).items() if k != "reserved"},
+        "dc_opmodes": [{**{k: v for k, v in o.as_dict().items() if k != "reserved"},
                         "name": image.string(o.name_idx), "desc": image.string(o.desc_idx)}
                        for o in image.dc_opmodes],
     }
