@@ -1107,6 +1107,8 @@ class Drive:
         }
         self._handlers_down[0x6060] = self._check_mode
         self._handlers_down[0x6098] = self._check_homing_method
+        if self.behaviour.home_offset_continuous:
+            self._after_write[0x607C] = lambda sub, value: self._refresh_inputs()  # 6064h = sensor + 607Ch
         if self.family == "hdt":
             self._handlers_down[0x6046] = self._check_min_max
         if self.family == "controltechniques":
