@@ -151,7 +151,7 @@ def test_hdt_4_08_3_reserved_homing_methods_are_refused(method, code):
 def test_hdt_4_08_3_valid_homing_methods_are_accepted():
     d = Drive.from_profile("hdt")
     d.request_state(PRE)
-    for method in [*range(0, 15), *range(17, 31), 33, 34, 35]:
+    for method in [*range(15), *range(17, 31), 33, 34, 35]:
         w(d, 0x6098, 0, method, 1)
         assert r(d, 0x6098) == method
 

@@ -1050,8 +1050,8 @@ class Drive:
             return
         option = self._read_int(0x6007, 0)
         option = 1 if option is None else option
-        ends = {(i, v): end for i, v, end in getattr(self.rules, "option_code_end_states", ())}
-        end = ends.get((0x6007, option), {0: "NO_ACTION", 1: "FAULT", 2: "SWITCH_ON_DISABLED"}.get(option, "QUICK_STOP"))
+        end = self.option_end_state(0x6007, option,
+                                    {0: "NO_ACTION", 1: "FAULT", 2: "SWITCH_ON_DISABLED"}.get(option, "QUICK_STOP"))
         if self.family == "controltechniques":
             end = "SWITCH_ON_DISABLED"
         self._log("cia402", reason=f"communication lost, 6007h = {option}", reaction=end)
@@ -1068,6 +1068,13 @@ class Drive:
             self.cia.target = None
             self.cia.interrupt_homing()
         self._refresh_inputs()
+
+    def option_end_state(self, index: int, option: int, default: str) -> str:
+        """The end state the family rules give an option code (``option_code_end_states``), else ``default``."""
+        for i, v, end in getattr(self.rules, "option_code_end_states", ()):
+            if i == index and v == option:
+                return str(end)
+        return default
 
     def set_limit_switches(self, *, negative: bool = False, positive: bool = False) -> None:
         """The limit-switch inputs change: 60FDh bits per the family (HDT swaps them: bit 0 = CW =

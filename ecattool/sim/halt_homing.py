@@ -23,8 +23,8 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from ecattool.od import abort as A
 from ecattool.errors import SdoAbort
+from ecattool.od import abort as A
 from ecattool.sim.cia402 import HALT, HOMING, PV, Homing, State
 
 if TYPE_CHECKING:
@@ -84,11 +84,6 @@ def halt_option(drive: Drive) -> int:
     return 1 if value is None else value
 
 
-def halt_end_state(drive: Drive, option: int) -> str:
-    ends = {(i, v): end for i, v, end in getattr(drive.rules, "option_code_end_states", ())}
-    return ends.get((0x605D, option), "OPERATION_ENABLED")
-
-
 def halt_deceleration(drive: Drive) -> Fraction | None:
     """The ramp a halt uses in profile velocity, in increments per second² (None: stop within the cycle)."""
     option = halt_option(drive)
@@ -118,7 +113,7 @@ def on_controlword(drive: Drive, cw: int, prev: int) -> None:
                    state=cia.state.value)
     if cia.halted:
         option = halt_option(drive)
-        if halt_end_state(drive, option) == "SWITCH_ON_DISABLED":
+        if drive.option_end_state(0x605D, option, "OPERATION_ENABLED") == "SWITCH_ON_DISABLED":
             drive._cia_moves(cia.disable(), f"halt, 605Dh = {option}")
             return
     if drive.mode() != HOMING:
