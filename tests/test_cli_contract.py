@@ -184,7 +184,7 @@ def resolve(where: str, gen: Path) -> Path:
     return ROOT / where
 
 
-def argv(inv: tuple[object, ...], gen: Path, out_dir: Path, swap: dict[int, Path] | None = None) -> list[str]:
+def argv(inv: tuple[object, ...], gen: Path, out_dir: Path, swap: dict[int, Path | str] | None = None) -> list[str]:
     args = []
     for i, a in enumerate(inv):
         if swap and i in swap:
@@ -202,20 +202,27 @@ def _is_read_path(p: click.Parameter) -> bool:
     return isinstance(p.type, click.Path) and bool(p.type.file_okay) and p.name != "output"
 
 
-def test_every_file_parameter_is_swept(gen: Path, tmp_path: Path) -> None:
+def params_at(cmd: tuple[str, ...], inv: tuple[object, ...]) -> dict[int, click.Parameter]:
+    """The click parameter that takes each In/Out of ``inv`` (parsed as click parses it; no file is opened)."""
+    command = LEAVES[cmd]
+    args = [f"@{i}" if isinstance(a, (In, Out)) else str(a) for i, a in enumerate(inv)]  # distinct, so found once
+    ctx = command.make_context(_name(cmd), list(args), resilient_parsing=True)
+    by_name = {p.name: p for p in command.params}
+    found = {}
+    for i, a in enumerate(inv):
+        if isinstance(a, (In, Out)):
+            for name, value in ctx.params.items():
+                if args[i] in (value if isinstance(value, tuple) else (value,)):
+                    found[i] = by_name[name]
+    return found
+
+
+def test_every_file_parameter_is_swept() -> None:
     """Every file a command reads and every -o appears in some valid invocation, so the matrix covers it."""
     assert set(HAPPY) <= set(LEAVES), set(HAPPY) - set(LEAVES)
     for cmd, command in LEAVES.items():
         wanted = {p.name for p in command.params if _is_read_path(p) or p.name == "output"}
-        covered: set[str] = set()
-        for inv in HAPPY.get(cmd, []):
-            args = argv(inv, gen, tmp_path)
-            ctx = command.make_context(_name(cmd), list(args), resilient_parsing=True)
-            marked = {args[i] for i, a in enumerate(inv) if isinstance(a, (In, Out))}
-            for name, value in ctx.params.items():
-                values = value if isinstance(value, tuple) else (value,)
-                if any(str(v) in marked for v in values):
-                    covered.add(str(name))
+        covered = {p.name for inv in HAPPY.get(cmd, []) for p in params_at(cmd, inv).values()}
         assert wanted <= covered, f"{_name(cmd)}: no valid invocation gives {sorted(wanted - covered)}"
 
 
@@ -349,3 +356,60 @@ def test_bad_input_is_one_line_and_exit_1(capsys: pytest.CaptureFixture[str], ge
         else:
             assert not o.exists(), f"{o.name} written although the command failed"
     assert sorted(p.name for p in out_dir.iterdir()) == sorted(o.name for o in outs if keep), "stray files"
+
+
+# ------------------------------------------------------------------------------------- stdin and the output
+def _stdin_cases() -> list[tuple[tuple[str, ...], int, int, str]]:
+    cases = []
+    for cmd, invs in HAPPY.items():
+        for n, inv in enumerate(invs):
+            for i, p in params_at(cmd, inv).items():
+                if isinstance(inv[i], In) and getattr(p.type, "allow_dash", False):
+                    cases += [(cmd, n, i, kind) for kind in ("empty", "binary", "bad-utf8", "doctype")
+                              if not (kind == "bad-utf8" and inv[i].kind in BINARY_KINDS)]
+    return cases
+
+
+STDIN_CASES = _stdin_cases()
+
+
+def test_stdin_is_swept_where_a_command_reads_it() -> None:
+    assert {c[0] for c in STDIN_CASES} >= {("esi", "devices"), ("map", "check"), ("startup", "import"), ("sii", "info")}
+
+
+@pytest.mark.parametrize(("cmd", "n", "i", "kind"), STDIN_CASES,
+                         ids=[f"{_name(c)}#{n}.{i}-{k}" for c, n, i, k in STDIN_CASES])
+def test_bad_stdin_is_one_line_and_exit_1(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch,
+                                          gen: Path, tmp_path: Path, cmd: tuple[str, ...], n: int, i: int,
+                                          kind: str) -> None:
+    """'-' reads standard input: the same bad input there is named as <stdin> (or '-')."""
+    import io
+    import sys
+
+    inv = HAPPY[cmd][n]
+    inp = inv[i]
+    assert isinstance(inp, In)
+    data = bad_file(kind, inp, gen, tmp_path).read_bytes()
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(data), encoding="utf-8"))
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    code, out, err = run(capsys, *cmd, *argv(inv, gen, out_dir, {i: "-"}))
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert "Traceback" not in out + err
+    assert code == 1 and len(lines) == 1, f"exit {code}\nstdout: {out}\nstderr: {err}"
+    assert re.match(r"ecattool: error: (<stdin>|-)[:\s]", lines[0]), lines[0]
+    assert not list(out_dir.iterdir())
+
+
+OUT_CASES = [(cmd, n) for cmd, n in HAPPY_CASES if any(isinstance(a, Out) for a in HAPPY[cmd][n])]
+
+
+@pytest.mark.parametrize(("cmd", "n"), OUT_CASES, ids=[f"{_name(c)}#{n}" for c, n in OUT_CASES])
+def test_output_that_cannot_be_written_is_one_line_and_exit_1(capsys: pytest.CaptureFixture[str], gen: Path,
+                                                              tmp_path: Path, cmd: tuple[str, ...], n: int) -> None:
+    """-o into a directory that does not exist: the command does its work, then cannot write; one line, exit 1."""
+    code, out, err = run(capsys, *cmd, *argv(HAPPY[cmd][n], gen, tmp_path / "no-such-dir"))
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert "Traceback" not in out + err
+    assert code == 1 and len(lines) == 1 and "no-such-dir" in lines[0], f"exit {code}\nstdout: {out}\nstderr: {err}"
+    assert list(tmp_path.iterdir()) == []

@@ -284,7 +284,7 @@ Examples:
 \b
 ecattool does not ship ETG's schema files; point --schema-dir at a directory with EtherCATInfo.xsd
 (EtherCATModule.xsd / EtherCATDict.xsd for those roots) and EtherCATBase.xsd. Exit status 1 on errors.""")
-@_FILE
+@click.argument("file", type=InputFile())  # a path: DictionaryFile/InfoReference are resolved beside it
 @click.option("--schema-dir", type=click.Path(file_okay=False, exists=True),
               help="Directory with the ETG XSD files (chosen by the root element).")
 @click.option("--strict", is_flag=True, help="Fail on warnings too.")

@@ -70,7 +70,7 @@ Examples:
   ecattool sii info slave.bin
   ecattool sii info eeprom.hex --json | jq .categories
   ethercat sii_read -p 0 | ecattool sii info -""")
-@click.argument("image", type=InputFile())
+@click.argument("image", type=InputFile(allow_dash=True))
 @json_option
 def info(image: str, as_json: bool) -> None:
     """Show the fixed area, every category, strings, SMs, PDOs and DC modes of IMAGE."""
@@ -177,7 +177,7 @@ def check_cmd(files: tuple[str, ...], selector: str | None, policy: str, strict:
 @sii.command("fix-crc", epilog="""\b
 Example:
   ecattool sii fix-crc edited.bin -o fixed.bin""")
-@click.argument("image", type=InputFile())
+@click.argument("image", type=InputFile(allow_dash=True))
 @output_option(required=True)
 def fix_crc_cmd(image: str, output: str) -> None:
     """Recompute the checksum (word 7) over bytes 0-13 and write the repaired image."""
@@ -193,7 +193,7 @@ def fix_crc_cmd(image: str, output: str) -> None:
 @sii.command("set-alias", epilog="""\b
 Example:
   ecattool sii set-alias slave.bin 0x1001 -o slave-alias.bin""")
-@click.argument("image", type=InputFile())
+@click.argument("image", type=InputFile(allow_dash=True))
 @click.argument("alias")
 @output_option(required=True)
 def set_alias_cmd(image: str, alias: str, output: str) -> None:
@@ -234,8 +234,8 @@ Examples:
   ecattool sii diff a.bin b.hex --json
 \b
 Exit codes: 0 identical fields, 1 differences.""")
-@click.argument("a", type=InputFile())
-@click.argument("b", type=InputFile())
+@click.argument("a", type=InputFile(allow_dash=True))
+@click.argument("b", type=InputFile(allow_dash=True))
 @json_option
 def diff_cmd(a: str, b: str, as_json: bool) -> None:
     """Compare two images field by field and category by category (strings resolved)."""

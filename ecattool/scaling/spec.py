@@ -43,7 +43,8 @@ def load_spec(path: str | Path, text: str | bytes | None = None) -> Spec:
     src = str(path)
     if text is None:
         try:
-            text = Path(path).read_bytes() if src != "-" else __import__("sys").stdin.read()
+            # bytes from stdin too: load_yaml decodes, so bytes that are not UTF-8 are an InputError, not a crash
+            text = Path(path).read_bytes() if src != "-" else __import__("sys").stdin.buffer.read()
         except OSError as exc:
             raise InputError(f"cannot read spec: {exc.strerror}", Location(src)) from None
     doc = load_yaml(text, src)
