@@ -244,6 +244,40 @@ def test_hdt_4_08_1_bit4_cleared_stops_homing_and_halt_pauses_it():
     assert homing_status(d) == NOT_STARTED and r(d, 0x606C) == 0
 
 
+def test_hdt_4_08_3_method_17_homes_where_the_ccw_limit_switch_is_left():
+    """§4.08.3.b (method 1 = 17 with the index pulse): move CCW at the switch search speed to the CCW limit
+    switch, reverse at low speed (6099h:2) to leave it; 17 takes that point as home (6064h = 607Ch)."""
+    d = _hdt_at(5000)
+    w(d, 0x607C, 0, 40, 4)
+    w(d, 0x6098, 0, 17, 1)
+    w(d, 0x6040, 0, 0x1F, 2)
+    d.step(5)
+    assert r(d, 0x606C, signed=True) == -100
+    d.set_limit_switches(negative=True)
+    assert r(d, 0x60FD) & 0b10  # HDT: bit 1 = CCW limit (oracle 56)
+    d.step(5)
+    assert r(d, 0x606C, signed=True) == 10 and homing_status(d) == IN_PROGRESS
+    d.set_limit_switches()
+    assert homing_status(d) == ATTAINED and r(d, 0x6063) == 0 and r(d, 0x6064) == 40
+    events = [e.data["event"] for e in d.events if e.kind == "homing"]
+    assert events == ["start", "limit switch found", "attained"]
+
+
+def test_hdt_4_08_3_method_1_needs_the_index_pulse_after_the_switch():
+    """Method 1 continues from the switch edge to an index pulse; none is connected: homing error, FF02h."""
+    d = _hdt_at(0)
+    w(d, 0x6098, 0, 1, 1)
+    w(d, 0x6040, 0, 0x1F, 2)
+    d.step(2)
+    d.set_limit_switches(negative=True)
+    d.step(2)
+    d.set_limit_switches()
+    d.step(2)
+    assert homing_status(d) == IN_PROGRESS and r(d, 0x606C, signed=True) == 10
+    d.step(int(d.homing_search_s / d.cycle_time()))
+    assert homing_status(d) == ERROR_STOPPED and d.emergencies[-1].code == 0xFF02
+
+
 # --- Technosoft -------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("option,ramp_index,ramp,counts_per_ms_after_3", [(1, 0x6083, 65536, 7), (2, 0x6085, 131072, 4)])
 def test_technosoft_4_4_10_halt_ramps_with_6083_or_6085(option, ramp_index, ramp, counts_per_ms_after_3):
@@ -324,6 +358,20 @@ def test_technosoft_6_3_4_reserved_method_is_stored_and_answered_with_emcy_ff03(
     w(d, 0x6040, 0, 0x1F, 2)
     assert d.emergencies[-1].code == 0xFF03
     assert homing_status(d) == ERROR_STOPPED
+
+
+def test_technosoft_6_2_8_method_18_starting_on_the_positive_limit_switch():
+    """§6.2.8 method 18 (positive limit switch, no index): already on the switch, the drive leaves it in the
+    negative direction at the zero search speed and homes where it becomes inactive (6064h = 607Ch)."""
+    d = enabled("technosoft-ipos", 6, method=(0x6098, 18, 1), offset=(0x607C, -7, 4))
+    w(d, 0x6099, 2, 3 * 65536, 4)
+    d.set_limit_switches(positive=True)
+    assert d.emergencies[-1].code == 0x5443
+    w(d, 0x6040, 0, 0x1F, 2)
+    d.step(4)
+    assert d.internal_velocity == -3 * 65536 and r(d, 0x6064, signed=True) == -12
+    d.set_limit_switches()
+    assert homing_status(d) == ATTAINED and r(d, 0x6064, signed=True) == -7
 
 
 def test_technosoft_6_3_4_method_0_executes_no_homing():

@@ -93,6 +93,8 @@ class Cia402:
         self.homing_velocity = Fraction(0)
         #: seconds of search left before the drive gives up (no switch or index pulse is connected)
         self.homing_search_left = Fraction(0)
+        #: what a search is looking for: "switch", "leave" (moving off a limit switch) or "index"
+        self.homing_phase = ""
 
     @property
     def halted(self) -> bool:
@@ -106,10 +108,12 @@ class Cia402:
         if self.homing is Homing.IN_PROGRESS:
             self.homing = Homing.NOT_STARTED
 
-    def start_homing(self, velocity: Fraction, search_s: Fraction) -> None:
+    def start_homing(self, velocity: Fraction, search_s: Fraction, phase: str = "switch") -> None:
+        """Start (or move on to the next phase of) a homing search at ``velocity`` (internal units)."""
         self.homing = Homing.IN_PROGRESS
         self.homing_velocity = velocity
         self.homing_search_left = search_s
+        self.homing_phase = phase
         self.target = None
 
     def interrupt_homing(self) -> None:

@@ -314,6 +314,7 @@ class Drive:
         self.layout: dict[Direction, _Layout] = {RX: _Layout(), TX: _Layout()}
         self.cia = Cia402(enable_needs_op=self.behaviour.enable_needs_op)
         self.limit_active = False
+        self.limit_switches = (False, False)  # (negative, positive) inputs, set_limit_switches()
         self.has_cia402 = (0x6040, 0) in self._entries and (0x6041, 0) in self._entries
         self.units: Units = units_for(self.family, self._read_int, revision=d.revision,
                                       has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
@@ -1087,6 +1088,7 @@ class Drive:
         self._put(0x60FD, 0, new)
         was_neg, was_pos = bool(old >> neg_bit & 1), bool(old >> pos_bit & 1)
         self.limit_active = negative or positive
+        self.limit_switches = (negative, positive)
         self._log("inputs", digital_inputs=new)
         if self.family == "technosoft-ipos":
             for was, now, code in ((was_neg, negative, 0x5442), (was_pos, positive, 0x5443)):
@@ -1094,6 +1096,7 @@ class Drive:
                     self.emcy(code)
                 elif was and not now:
                     self.emcy(0x0000)
+        hh.on_limit_switches(self)
         self._refresh_inputs()
 
     def inject_hdt_alarm(self, alarm: int, code: int) -> None:

@@ -13,6 +13,9 @@ and homing methods mean, reading the drive's dictionary the way the manuals desc
   zeroed at power-on. The simulated axis has no limit switch, home switch or index pulse connected: a method
   that needs one searches at its homing speed for :attr:`Drive.homing_search_s` and then reports a homing
   error (docs/decisions.md, "Simulator: halt and homing").
+* Methods 1, 2, 17 and 18 use the limit switches, which a test can operate with
+  :meth:`Drive.set_limit_switches`: the search stops at the switch, leaves it at the zero search speed and
+  homes where it becomes inactive (17/18) or goes on looking for an index pulse (1/2, none connected).
 * After homing the position actual value 6064h equals the home offset 607Ch (Technosoft §6.1 and §6.3.3,
   HDT §4.06.6 ``measured = sensor + home offset`` with the sensor reset to 0); HDT applies 607Ch to 6064h
   at all times.
@@ -63,6 +66,11 @@ def homing_kind(family: str, method: int) -> str:
     if methods is None:  # generic CiA-402: 1..34 standard, negative = manufacturer specific
         return "unavailable" if method in _RESERVED or method == 36 or method > 37 else "search"
     return "search" if method in methods else "unavailable"
+
+
+#: limit-switch methods and whether they look for the negative (True) or positive switch (CiA-402; HDT
+#: §4.08.3.b/c: 1 = CCW limit, 2 = CW limit)
+LIMIT_SWITCH_METHODS = {1: True, 17: True, 2: False, 18: False}
 
 
 def search_direction(method: int) -> tuple[int, int]:
@@ -158,11 +166,45 @@ def start_homing(drive: Drive) -> None:
         cia.home_found(home_position(drive))
     else:
         direction, sub = search_direction(method)
-        u = drive.units
-        speed = abs(u.velocity_to_internal(drive._read_int(0x6099, sub) or 0))
-        cia.start_homing(direction * speed, drive.homing_search_s)
+        if _on_its_switch(drive, method):  # already on the limit switch: move off it first
+            cia.start_homing(-direction * _speed(drive, 2), drive.homing_search_s, "leave")
+        else:
+            cia.start_homing(direction * _speed(drive, sub), drive.homing_search_s)
         return
     drive._log("homing", event="attained", method=method, position=drive._user_position())
+
+
+def _speed(drive: Drive, sub: int) -> Fraction:
+    """Homing speed 6099h:``sub`` (1 switch search, 2 zero search) in internal velocity units."""
+    return abs(drive.units.velocity_to_internal(drive._read_int(0x6099, sub) or 0))
+
+
+def _on_its_switch(drive: Drive, method: int) -> bool:
+    negative = LIMIT_SWITCH_METHODS.get(method)
+    if negative is None:
+        return False
+    return drive.limit_switches[0 if negative else 1]
+
+
+def on_limit_switches(drive: Drive) -> None:
+    """The limit-switch inputs changed: a limit-switch homing search finds the switch, leaves it at the zero
+    search speed, and homes where it becomes inactive (17/18) or then looks for an index pulse (1/2)."""
+    cia = drive.cia
+    method = drive._read_int(0x6098, 0) if (0x6098, 0) in drive._entries else None
+    if cia.homing is not Homing.IN_PROGRESS or drive.mode() != HOMING or method not in LIMIT_SWITCH_METHODS:
+        return
+    on_switch = _on_its_switch(drive, method)
+    direction, _ = search_direction(method)
+    if cia.homing_phase == "switch" and on_switch:
+        cia.start_homing(-direction * _speed(drive, 2), drive.homing_search_s, "leave")
+        drive._log("homing", event="limit switch found", method=method, position=drive._user_position())
+    elif cia.homing_phase == "leave" and not on_switch:
+        if method in (17, 18):
+            cia.home_found(home_position(drive))
+            drive._log("homing", event="attained", method=method, position=drive._user_position())
+        else:
+            cia.start_homing(-direction * _speed(drive, 2), drive.homing_search_s, "index")
+            drive._log("homing", event="limit switch left", method=method, position=drive._user_position())
 
 
 def home_position(drive: Drive) -> Fraction | None:
