@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from operator import attrgetter
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 #: how a frozen record's ``__init__`` (and ``__setstate__``) sets its fields
 set_field = object.__setattr__
@@ -92,11 +92,13 @@ class FrozenRecord(Record):
     def __hash__(self) -> int:
         return hash(type(self)._key(self))
 
-    def __setattr__(self, name: str, value: Any) -> None:
-        raise FrozenRecordError(f"cannot assign to field {name!r} of {type(self).__name__}")
+    if not TYPE_CHECKING:  # hidden from mypy, which would otherwise accept assignment to any attribute name
 
-    def __delattr__(self, name: str) -> None:
-        raise FrozenRecordError(f"cannot delete field {name!r} of {type(self).__name__}")
+        def __setattr__(self, name: str, value: Any) -> None:
+            raise FrozenRecordError(f"cannot assign to field {name!r} of {type(self).__name__}")
+
+        def __delattr__(self, name: str) -> None:
+            raise FrozenRecordError(f"cannot delete field {name!r} of {type(self).__name__}")
 
     def __getstate__(self) -> tuple[Any, ...]:
         return tuple(getattr(self, n) for n in self._fields)

@@ -117,7 +117,7 @@ def test_frozen_records_refuse_assignment_and_deletion() -> None:
     with pytest.raises(AttributeError):  # FrozenRecordError is an AttributeError, like FrozenInstanceError
         del loc.file
     with pytest.raises(FrozenRecordError):
-        loc.other = 1
+        loc.other = 1  # type: ignore[attr-defined]
     assert loc == Location("f", 1)
 
 
