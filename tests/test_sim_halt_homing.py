@@ -524,6 +524,7 @@ _OPS = st.one_of(
     st.tuples(st.just("method"), st.integers(-6, 40)),
     st.tuples(st.just("cycles"), st.integers(1, 40)),
     st.tuples(st.just("pdo"), _CW),
+    st.tuples(st.just("limits"), st.tuples(st.booleans(), st.booleans())),
 )
 _DEVICES: dict[str, Drive] = {}
 
@@ -541,8 +542,9 @@ def _fresh(family: str) -> Drive:
 
 @given(st.lists(_OPS, max_size=25), st.sampled_from(["hdt", "technosoft-ipos", "controltechniques", "generic"]))
 def test_random_controlword_sequences_keep_statusword_consistent(ops, family):
-    """Random controlwords, modes, halt options and homing methods raise nothing but documented aborts, and
-    the statusword always shows the drive's state and a valid homing pattern (never bits 13 and 12)."""
+    """Random controlwords, modes, halt options, homing methods and limit switches raise nothing but
+    documented aborts, and the statusword always shows the drive's state and a valid homing pattern (never
+    bits 13 and 12 together)."""
     d = _fresh(family)
     m = Master(d)
     for op, value in ops:
@@ -557,6 +559,8 @@ def test_random_controlword_sequences_keep_statusword_consistent(ops, family):
                 w(d, 0x6098, 0, value, 1)
             elif op == "cycles":
                 d.step(value)
+            elif op == "limits":
+                d.set_limit_switches(negative=value[0], positive=value[1])
             else:
                 m.cycle(x6040=value)
         except SdoAbort as exc:
