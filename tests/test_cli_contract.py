@@ -176,6 +176,12 @@ def gen(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return d
 
 
+@pytest.fixture(autouse=True)
+def _own_cache(monkeypatch: pytest.MonkeyPatch, tmp_path_factory: pytest.TempPathFactory) -> None:
+    """lint/commission cache parsed ESI files: in a directory of this run, not the user's cache."""
+    monkeypatch.setenv("ECATTOOL_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
 def resolve(where: str, gen: Path) -> Path:
     if where.startswith("corpus:"):
         return corpus_path(*where[len("corpus:"):].split("/"))
@@ -413,3 +419,61 @@ def test_output_that_cannot_be_written_is_one_line_and_exit_1(capsys: pytest.Cap
     assert "Traceback" not in out + err
     assert code == 1 and len(lines) == 1 and "no-such-dir" in lines[0], f"exit {code}\nstdout: {out}\nstderr: {err}"
     assert list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------------------------------ files named in files
+#: An input that names another file: (the file it names, the text naming it, with {ref} for that file's path).
+NESTED: dict[str, tuple[In, str]] = {
+    "project-esi": (In("esi", "samples/generic_esi/inovance_SV660_EOE_1Axis_V9.12.xml"),
+                    "ecattool: 1\nname: m\ndrives:\n  - name: joint1\n    device:\n      esi: {ref}\n"
+                    "      select: InoSV660N\n    move: {{distance: 10000, mode: csp}}\n"),
+    "project-sw": (SW, "ecattool: 1\nname: m\ndrives:\n  - name: y\n    device: {{profile: technosoft-ipos}}\n"
+                       "    sw: {ref}\n"),
+    "swspec-base": (SW, "base: {ref}\nsetup:\n  parameters: " + str(corpus_path("sw", PARAMS.where.split("/")[-1]))
+                        + "\n  values: {{SLPER: 10}}\n"),
+}
+#: The commands that read each nested file; {top} is the naming file, {out} an output, {sw} a good .sw image.
+NESTED_COMMANDS: dict[str, list[tuple[str, ...]]] = {
+    "project-esi": [("commission", "{top}"), ("lint", "{top}"),
+                    ("startup", "export", "--project", "{top}", "--format", "json", "-o", "{out}")],
+    "project-sw": [("commission", "{top}"), ("lint", "{top}"), ("sw", "verify", "--project", "{top}", "--preload", "{sw}"),
+                   ("sw", "download", "--project", "{top}")],
+    "swspec-base": [("sw", "build", "{top}", "-o", "{out}")],
+}
+#: Commands that report a bad file named in a project as a finding or a failed drive, in their report.
+NESTED_REPORTERS: dict[tuple[str, ...], str] = {
+    ("lint",): REPORTERS[("lint",)][1],
+    ("commission",): "a drive that cannot be commissioned is a FAILED drive in the report, the others still run "
+                     "(a project whose simulated target cannot even be built is one error line)",
+}
+NESTED_CASES = [(name, n, kind) for name, cmds in NESTED_COMMANDS.items() for n in range(len(cmds))
+                for kind in ("ok", *BAD_KINDS) if not (kind == "bad-utf8" and NESTED[name][0].kind in BINARY_KINDS)]
+
+
+@pytest.mark.parametrize(("name", "n", "kind"), NESTED_CASES,
+                         ids=[f"{nm}:{' '.join(NESTED_COMMANDS[nm][n][:2])}-{k}" for nm, n, k in NESTED_CASES])
+def test_bad_file_named_in_an_input(capsys: pytest.CaptureFixture[str], gen: Path, tmp_path: Path, name: str,
+                                    n: int, kind: str) -> None:
+    """A bad file named inside a project or a build spec is reported with its own name, like a bad argument."""
+    inp, text = NESTED[name]
+    ref = resolve(inp.where, gen) if kind == "ok" else bad_file(kind, inp, gen, tmp_path)
+    top = tmp_path / "top.yaml"
+    top.write_text(text.format(ref=ref))
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    cmd = NESTED_COMMANDS[name][n]
+    code, out, err = run(capsys, *(a.format(top=top, out=out_dir / "result", sw=resolve(SW.where, gen)) for a in cmd))
+    assert "Traceback" not in out + err
+    if kind == "ok":
+        assert code == 0, err or out
+        return
+    if (inp.kind, kind) in UNDETECTABLE:
+        assert code in (0, 1)
+        return
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    if cmd[:1] in NESTED_REPORTERS:
+        assert code == 1 and len(lines) <= 1 and ref.name in out + err, f"exit {code}\nstdout: {out}\nstderr: {err}"
+        return
+    assert code == 1 and len(lines) == 1, f"exit {code}\nstdout: {out}\nstderr: {err}"
+    assert ref.name in lines[0], f"the error does not name {ref.name}: {lines[0]}"
+    assert not list(out_dir.iterdir())

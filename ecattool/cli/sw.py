@@ -178,6 +178,11 @@ def _target_and_image(file: str | None, target: str | None, slave: int | None, p
         slave = rd.position if slave is None else slave
         if file is None:
             cfg = rd.drive.sw_config
+            if cfg is not None and rd.sw_image is None:  # configured but unreadable: why, where lint says it
+                why = next((f for f in rd.findings if f.rule in ("PRJ002", "PRJ030") and f.severity.value == "error"),
+                           None)
+                if why is not None:
+                    raise InputError(f"drive {rd.drive.name!r}: {why.message}", why.location)
             if cfg is None or rd.sw_image is None:
                 raise InputError(f"drive {rd.drive.name!r} has no readable sw image; give FILE", Location(project))
             image, name = rd.sw_image, cfg.file

@@ -418,9 +418,13 @@ def open_target(spec: str, drives: list[ResolvedDrive]) -> tuple[Target, str]:
     if spec == "sim":
         from ecattool.target.sim import SimTarget
 
+        for rd in drives:  # name the drive and why (the file and line lint names), not just "see lint"
+            if rd.device is None:
+                why = next((f for f in rd.findings if f.severity.value == "error"), None)
+                raise InputError(f"drive {rd.drive.name!r} cannot be simulated: its device did not resolve"
+                                 + (f": {why.message} [{why.rule}]" if why else " (see 'ecattool lint')"),
+                                 why.location if why else None)
         devices = [rd.device for rd in sorted(drives, key=lambda r: r.position) if rd.device is not None]
-        if len(devices) != len(drives):
-            raise InputError("cannot simulate a drive whose device did not resolve (see lint)")
         return SimTarget.from_devices(devices), "sim"
     if spec.startswith("pysoem:"):
         from ecattool.target.pysoem import PysoemTarget

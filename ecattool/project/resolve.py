@@ -75,8 +75,11 @@ def resolve_device(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
             # the device as it runs: default modules in its slots, synthesised mapping/assignment objects
             rd.device = load_device_cached(path, None if ref.select is None else str(ref.select), ref.policy)
     except EcatToolError as exc:
-        loc = exc.location if exc.location and exc.location.line else lp.drive_location(i, "device")
-        rd.error("PRJ005", exc.message, loc)
+        if exc.location and exc.location.line:
+            rd.error("PRJ005", exc.message, exc.location)
+        else:  # at the device entry; the ESI file (a directory, unreadable) named in the message then
+            where = exc.location.file if exc.location else None
+            rd.error("PRJ005", f"{where}: {exc.message}" if where else exc.message, lp.drive_location(i, "device"))
         return
     try:
         from ecattool import profiles
