@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -57,6 +56,8 @@ def _default(o: Any) -> Any:
 
 
 def dump_json(data: Any) -> str:
+    import json  # on first use: most commands print no JSON (json costs ~2 ms to import)
+
     return json.dumps(data, indent=2, default=_default, ensure_ascii=False)
 
 
