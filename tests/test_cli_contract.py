@@ -72,7 +72,7 @@ def test_tree_is_walked_and_the_allowlist_names_real_commands() -> None:
 def test_help_has_an_example_of_the_command(capsys: pytest.CaptureFixture[str], cmd: tuple[str, ...]) -> None:
     code, out, err = run(capsys, *cmd, "--help")
     assert code == 0 and not err
-    assert re.search(rf"^\s+ecattool {re.escape(_name(cmd))}\b", out, re.M), f"no example line in:\n{out}"
+    assert re.search(rf"^\s+ecattool {re.escape(_name(cmd))}\b", out, re.MULTILINE), f"no example line in:\n{out}"
 
 
 @pytest.mark.parametrize("cmd", sorted(LEAVES), ids=_name)
@@ -315,8 +315,8 @@ BAD_CASES = _bad_cases()
 #: report (stdout, or the -o file, which is written), named with its file; exit status 1 as for any error finding.
 REPORTERS: dict[tuple[str, ...], tuple[str, str]] = {
     ("lint",): ("project", "a CI linter reports every project, readable or not, in its text/JSON/SARIF report"),
-    ("sii", "check"): ("sii", "an unreadable image is an error finding (rule sii.parse), in --json too; a bad "
-                              "ESI to compare with is an ordinary error"),
+    ("sii", "check"): ("sii", ("an unreadable image is an error finding (rule sii.parse), in --json too; a bad "
+                               "ESI to compare with is an ordinary error")),
 }
 
 #: (input kind, bad kind) pairs that cannot be detected, by design of the format (docs/cli.md).
@@ -370,9 +370,10 @@ def _stdin_cases() -> list[tuple[tuple[str, ...], int, int, str]]:
     for cmd, invs in HAPPY.items():
         for n, inv in enumerate(invs):
             for i, p in params_at(cmd, inv).items():
-                if isinstance(inv[i], In) and getattr(p.type, "allow_dash", False):
+                a = inv[i]
+                if isinstance(a, In) and getattr(p.type, "allow_dash", False):
                     cases += [(cmd, n, i, kind) for kind in ("empty", "binary", "bad-utf8", "doctype")
-                              if not (kind == "bad-utf8" and inv[i].kind in BINARY_KINDS)]
+                              if not (kind == "bad-utf8" and a.kind in BINARY_KINDS)]
     return cases
 
 
@@ -425,10 +426,10 @@ def test_output_that_cannot_be_written_is_one_line_and_exit_1(capsys: pytest.Cap
 #: An input that names another file: (the file it names, the text naming it, with {ref} for that file's path).
 NESTED: dict[str, tuple[In, str]] = {
     "project-esi": (In("esi", "samples/generic_esi/inovance_SV660_EOE_1Axis_V9.12.xml"),
-                    "ecattool: 1\nname: m\ndrives:\n  - name: joint1\n    device:\n      esi: {ref}\n"
-                    "      select: InoSV660N\n    move: {{distance: 10000, mode: csp}}\n"),
-    "project-sw": (SW, "ecattool: 1\nname: m\ndrives:\n  - name: y\n    device: {{profile: technosoft-ipos}}\n"
-                       "    sw: {ref}\n"),
+                    ("ecattool: 1\nname: m\ndrives:\n  - name: joint1\n    device:\n      esi: {ref}\n"
+                     "      select: InoSV660N\n    move: {{distance: 10000, mode: csp}}\n")),
+    "project-sw": (SW, ("ecattool: 1\nname: m\ndrives:\n  - name: y\n    device: {{profile: technosoft-ipos}}\n"
+                        "    sw: {ref}\n")),
     "swspec-base": (SW, "base: {ref}\nsetup:\n  parameters: " + str(corpus_path("sw", PARAMS.where.split("/")[-1]))
                         + "\n  values: {{SLPER: 10}}\n"),
 }
@@ -489,8 +490,8 @@ UNKNOWN_KEY_GAPS: dict[tuple[str, ...], str] = {
     ("sim", "run"): "ecattool/sim/script.py parse_steps does not check a step's keys (a misspelled 'expcet' "
                     "silently checks nothing); sim/ belongs to another helper, see the contract report",
 }
-UNKNOWN_KEY_CASES = [(cmd, n, i) for cmd, n, i, kind in BAD_CASES
-                     if kind == "empty" and HAPPY[cmd][n][i].kind in YAML_KINDS]  # one case per YAML input slot
+UNKNOWN_KEY_CASES = [(cmd, n, i) for cmd, n, i, kind in BAD_CASES  # one case per YAML input slot
+                     if kind == "empty" and getattr(HAPPY[cmd][n][i], "kind", None) in YAML_KINDS]
 
 
 def with_unknown_key(data: bytes) -> bytes:

@@ -6,7 +6,15 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import console, dump_json, json_option, output_option, parse_int_arg, table, write_output
+from ecattool.cli.common import (
+    console,
+    dump_json,
+    json_option,
+    output_option,
+    parse_int_arg,
+    table,
+    write_output,
+)
 from ecattool.cli.paths import InputFile
 
 

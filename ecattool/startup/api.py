@@ -42,7 +42,6 @@ _HWDEVMGR_KEYS = ("param_values", "sync_manager", "test_category")
 
 def _yaml_format(data: bytes, source: str) -> str:
     from ecattool.startup.formats import ros2
-
     from ecattool.startup.formats._common import decode_text
 
     doc = ros2.load_located(decode_text(data, source), source)

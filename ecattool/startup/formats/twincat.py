@@ -13,8 +13,14 @@ import re
 
 from ecattool.errors import EncodeError, InputError, Location
 from ecattool.startup.config import SlaveConfig, SoeCommand
-from ecattool.startup.formats._common import (check_transition, decode_text, int_in_range, one_line, parse_hex,
-                                              unsigned_type)
+from ecattool.startup.formats._common import (
+    check_transition,
+    decode_text,
+    int_in_range,
+    one_line,
+    parse_hex,
+    unsigned_type,
+)
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "twincat"
