@@ -43,7 +43,7 @@ class Record:
     _fields: ClassVar[tuple[str, ...]] = ()
     #: fields that ``==`` and ``hash`` ignore
     _uncompared: ClassVar[tuple[str, ...]] = ()
-    #: the compared field values of an instance (a tuple, or the value itself for a single field)
+    #: the compared field values of an instance, as a tuple
     _key: ClassVar[Callable[[Any], Any]] = _no_fields
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
@@ -52,7 +52,11 @@ class Record:
             own = cls.__dict__.get("__slots__", ())
             cls._fields = (*cls._fields, *((own,) if isinstance(own, str) else own))
         compared = [n for n in cls._fields if n not in cls._uncompared]
-        cls._key = attrgetter(*compared) if compared else _no_fields
+        if len(compared) == 1:  # attrgetter of one name gives the bare value; compare tuples as dataclasses do
+            one = attrgetter(compared[0])
+            cls._key = lambda obj: (one(obj),)
+        else:
+            cls._key = attrgetter(*compared) if compared else _no_fields
 
     def __eq__(self, other: object) -> bool:
         if type(other) is not type(self):

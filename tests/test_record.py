@@ -196,3 +196,17 @@ def test_the_esi_and_sii_paths_do_not_import_dataclasses() -> None:
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True,
                          cwd=Path(__file__).resolve().parent.parent)
     assert out.stdout.split() == ["True", "False"]
+
+
+class One(Record):
+    __slots__ = ("v",)
+
+    def __init__(self, v: Any) -> None:
+        self.v = v
+
+
+def test_records_compare_field_tuples_like_dataclasses() -> None:
+    nan = float("nan")
+    assert One(nan) == One(nan)  # the same object in both: tuples compare by identity first, as dataclasses did
+    assert One(1) != One(2) and One(1) == One(1)
+    assert Pair(nan, 1) == Pair(nan, 1)
