@@ -83,6 +83,21 @@ class Master:
         return inputs
 
 
+def _home_on_the_spot_through_pdos(d: Drive, offset: int) -> Master:
+    """Mode 6, method 35, 607Ch = ``offset`` by SDO; enable and start (0x1F) through the process image:
+    not started (001) before, attained (011) with 6064h = 607Ch after."""
+    w(d, 0x6060, 0, 6, 1)
+    w(d, 0x6098, 0, 35, 1)
+    w(d, 0x607C, 0, offset, 4)
+    m = Master(d)
+    for cw in (0x06, 0x07, 0x0F):
+        ins = m.cycle(x6040=cw)
+    assert ins[0x6041] & HOMING_BITS == NOT_STARTED
+    ins = m.cycle(x6040=0x1F)
+    assert ins[0x6041] & HOMING_BITS == ATTAINED and ins[0x6064] == offset
+    return m
+
+
 def homing_status(d: Drive) -> int:
     return r(d, 0x6041) & HOMING_BITS
 
@@ -322,16 +337,7 @@ def test_technosoft_13_14_halt_in_csp_and_csv_ignores_the_target():
 def test_technosoft_6_2_13_method_35_sets_6064_to_home_offset_through_pdos():
     """§6.1/§6.3.3: after homing 6064h = 607Ch; method 35 homes on the current position (oracle 33: home
     offset 1 rev of a 500-line encoder = 0x7D0); start 0x001F in mode 6 (oracle 22)."""
-    d = at_op(Drive.from_profile("technosoft-ipos"))
-    w(d, 0x6060, 0, 6, 1)
-    w(d, 0x6098, 0, 35, 1)
-    w(d, 0x607C, 0, 0x7D0, 4)
-    m = Master(d)
-    for cw in (0x06, 0x07, 0x0F):
-        ins = m.cycle(x6040=cw)
-    assert ins[0x6041] & HOMING_BITS == NOT_STARTED
-    ins = m.cycle(x6040=0x1F)
-    assert ins[0x6041] & HOMING_BITS == ATTAINED and ins[0x6064] == 2000
+    _home_on_the_spot_through_pdos(at_op(Drive.from_profile("technosoft-ipos")), 0x7D0)
 
 
 def test_technosoft_6_3_3_asr2_bit12_keeps_the_position():
@@ -479,15 +485,7 @@ def test_generic_inovance_homing_35_and_manufacturer_method_through_pdos():
     """CiA-402 method 35 homes on the current position (6064h = 607Ch); a manufacturer method (-1) needs
     signals the simulated axis does not have: homing error (bit 13) at standstill, no EMCY (none documented)."""
     d = _inovance()
-    w(d, 0x6060, 0, 6, 1)
-    w(d, 0x6098, 0, 35, 1)
-    w(d, 0x607C, 0, 12345, 4)
-    m = Master(d)
-    for cw in (0x06, 0x07, 0x0F):
-        ins = m.cycle(x6040=cw)
-    assert ins[0x6041] & HOMING_BITS == NOT_STARTED
-    ins = m.cycle(x6040=0x1F)
-    assert ins[0x6041] & HOMING_BITS == ATTAINED and ins[0x6064] == 12345
+    m = _home_on_the_spot_through_pdos(d, 12345)
     w(d, 0x6098, 0, -1, 1)
     m.cycle(x6040=0x0F)
     ins = m.cycle(x6040=0x1F)
