@@ -389,7 +389,8 @@ def test_technosoft_6_3_4_method_0_executes_no_homing():
 def test_technosoft_oracle_33_homing_setup_and_search_status_sequence():
     """Oracle 33 (§6.4): 6099h.1 = 0x00140000 (600 rpm), 6099h.2 = 0x00050000, 609Ah = 0x28F, method 18 =
     0x12; oracle 24 / Table 6.3.3: (13,12,10) 001 not started, 000 in progress, 101 error at standstill.
-    Statusword bit 8 = homing executing (§4.2.2). Only the 0 -> 1 edge of bit 4 matters (§6.3.1)."""
+    Statusword bit 8 = homing executing, bit 7 = a homing call ignored (§4.2.2). Only the 0 -> 1 edge of
+    bit 4 matters (§6.3.1)."""
     d = enabled("technosoft-ipos", 6, fast=(0x609A, 0x28F, 4), method=(0x6098, 0x12, 1))
     w(d, 0x6099, 1, 0x00140000, 4)
     w(d, 0x6099, 2, 0x00050000, 4)
@@ -400,9 +401,11 @@ def test_technosoft_oracle_33_homing_setup_and_search_status_sequence():
     assert sw & HOMING_BITS == IN_PROGRESS and sw & 0x0100
     assert d.internal_velocity == 0x00140000 and r(d, 0x6064) == 200  # 20 counts per 1 ms sample, positive
     w(d, 0x6040, 0, 0x0F, 2)  # bit 4 back to 0 does not stop a Technosoft homing
-    d.step(int(d.homing_search_s / d.cycle_time()))
+    w(d, 0x6040, 0, 0x1F, 2)  # a second start while it runs is ignored with the warning bit 7 (§4.2.2)
+    assert r(d, 0x6041) & 0x0180 == 0x0180 and r(d, 0x6064) == 200
+    d.step(int(d.homing_search_s / d.cycle_time()) - 10)
     sw = r(d, 0x6041)
-    assert sw & HOMING_BITS == ERROR_STOPPED and not sw & 0x0100 and d.internal_velocity == 0
+    assert sw & HOMING_BITS == ERROR_STOPPED and not sw & 0x0180 and d.internal_velocity == 0
     assert r(d, 0x6064) == 20000
 
 

@@ -108,13 +108,15 @@ class Behaviour:
     homing_unavailable_emcy: int | None = None
     #: 6064h = sensor position + 607Ch at all times (HDT §4.06.6), not only when homing ends
     home_offset_continuous: bool = False
+    #: a homing start while a search runs is ignored with statusword bit 7 (warning) set (Technosoft §4.2.2)
+    homing_busy_warning: bool = False
 
 
 BEHAVIOURS: dict[str, Behaviour] = {
     "technosoft-ipos": Behaviour(
         mapping_busy=A.DATA_CANNOT_BE_STORED_STATE, assign_busy=A.DATA_CANNOT_BE_STORED_STATE,
         unsupported_mode_emcy=0xFF04, mode_display_on_enable=True, pdo_length_emcy=0x8220,
-        homing_stop_on_bit4_clear=False, homing_unavailable_emcy=0xFF03,
+        homing_stop_on_bit4_clear=False, homing_unavailable_emcy=0xFF03, homing_busy_warning=True,
     ),
     "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
                      home_offset_continuous=True),
@@ -315,6 +317,7 @@ class Drive:
         self.cia = Cia402(enable_needs_op=self.behaviour.enable_needs_op)
         self.limit_active = False
         self.limit_switches = (False, False)  # (negative, positive) inputs, set_limit_switches()
+        self.homing_warning = False  # Technosoft statusword bit 7 (homing start ignored)
         self.has_cia402 = (0x6040, 0) in self._entries and (0x6041, 0) in self._entries
         self.units: Units = units_for(self.family, self._read_int, revision=d.revision,
                                       has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
@@ -999,7 +1002,7 @@ class Drive:
         mode = self.mode()
         sw = self.cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
         if self.family == "technosoft-ipos" and mode == HOMING and self.cia.homing is Homing.IN_PROGRESS:
-            sw |= 0x0100  # §4.2.2 bit 8: homing executing
+            sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
         self._put(0x6041, 0, sw)
         u = self.units
         self._put(0x6063, 0, to_int(self.cia.position))

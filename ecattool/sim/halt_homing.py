@@ -150,6 +150,11 @@ def start_homing(drive: Drive) -> None:
         cia.state in (State.READY, State.SWITCHED_ON)
     if not (enabled or outside):
         return
+    if cia.homing is Homing.IN_PROGRESS and drive.behaviour.homing_busy_warning:
+        drive.homing_warning = True  # Technosoft §4.2.2 bit 7: homing called while another runs; ignored
+        drive._log("homing", event="ignored", method=method, reason="a homing is already running")
+        return
+    drive.homing_warning = False
     drive._log("homing", event="start", method=method, procedure=kind, state=cia.state.value)
     if kind == "none":
         cia.homing = Homing.NOT_STARTED  # "no homing operation will be executed" (Technosoft §6.3.4)
