@@ -1006,8 +1006,9 @@ class Drive:
         self._put(0x6041, 0, sw)
         u = self.units
         self._put(0x6063, 0, to_int(self.cia.position))
-        self._put(0x6064, 0, self._user_position())
-        self._put(0x6062, 0, self._user_position())
+        user_position = self._user_position()
+        self._put(0x6064, 0, user_position)
+        self._put(0x6062, 0, user_position)
         self._put(0x606C, 0, to_int(u.velocity_to_user(self.cia.velocity)))
         self._put(0x603F, 0, self.cia.fault_code)
 
