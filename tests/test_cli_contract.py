@@ -2,13 +2,18 @@
 
 The tree is walked from the click group, so a new command is covered without editing a list here:
 
-* every leaf command has ``--help`` with an example line for that very command, and ``--json`` unless it is
-  in :data:`NO_JSON` (commands that only write a file or a format of their own);
+* every group and leaf command has ``--help`` with an example line for itself, and every leaf has ``--json``
+  unless it is in :data:`NO_JSON` (commands that only write a file or a format of their own); with ``--json``
+  stdout is JSON and nothing else;
 * every file a command reads (a ``click.Path`` parameter, found from the parameters) is swapped, one at a
   time, for bad input of every kind in :data:`BAD_KINDS` in an otherwise valid invocation from
-  :data:`HAPPY`. Each must end with exit status 1, exactly one non-empty line on stderr naming the file,
-  no traceback, and no output file (a pre-existing one is left byte-identical).
+  :data:`HAPPY` (which must exit 0). Each must end with exit status 1, exactly one non-empty line on stderr
+  naming the file, no traceback, and no output file (a pre-existing one is left byte-identical). The same on
+  standard input where a command accepts '-', for files named inside projects and build specs, for an -o that
+  cannot be written, and for unknown keys in YAML inputs.
 
+Deliberate exceptions are data here, each with its reason: :data:`REPORTERS` (checkers that report bad input
+as a finding), :data:`UNDETECTABLE` (what a format cannot show), :data:`UNKNOWN_KEY_GAPS` (strict xfail).
 Commands run in-process through the real entry point (``tests.conftest.run``).
 """
 
@@ -73,6 +78,25 @@ def test_help_has_an_example_of_the_command(capsys: pytest.CaptureFixture[str], 
     code, out, err = run(capsys, *cmd, "--help")
     assert code == 0 and not err
     assert re.search(rf"^\s+ecattool {re.escape(_name(cmd))}\b", out, re.MULTILINE), f"no example line in:\n{out}"
+
+
+def _groups(group: click.Group, path: tuple[str, ...] = ()) -> Iterator[tuple[str, ...]]:
+    ctx = click.Context(group)
+    for name in group.list_commands(ctx):
+        cmd = group.get_command(ctx, name)
+        if isinstance(cmd, click.Group):
+            yield (*path, name)
+            yield from _groups(cmd, (*path, name))
+
+
+GROUPS = sorted(_groups(cli))
+
+
+@pytest.mark.parametrize("group", GROUPS, ids=_name)
+def test_group_help_has_examples(capsys: pytest.CaptureFixture[str], group: tuple[str, ...]) -> None:
+    code, out, err = run(capsys, *group, "-h")
+    assert code == 0 and not err
+    assert re.search(rf"^\s+ecattool {re.escape(_name(group))} ", out, re.MULTILINE), f"no example in:\n{out}"
 
 
 @pytest.mark.parametrize("cmd", sorted(LEAVES), ids=_name)
@@ -523,3 +547,42 @@ def test_unknown_yaml_key_is_refused(capsys: pytest.CaptureFixture[str], gen: Pa
         (lines[0] if len(lines) == 1 else "")
     assert code == 1 and "bogus_key" in report and re.search(rf"{re.escape(bad.name)}:\d+", report), \
         f"exit {code}\nstdout: {out}\nstderr: {err}"
+
+
+# ------------------------------------------------------------------------------------------------- --json
+def _has_json(cmd: tuple[str, ...]) -> bool:
+    return any("--json" in p.opts for p in LEAVES[cmd].params if isinstance(p, click.Option))
+
+
+def as_json(inv: tuple[object, ...]) -> tuple[object, ...]:
+    """``inv`` printing JSON on stdout: without its -o file, with --json."""
+    out: list[object] = []
+    for a in inv:
+        if isinstance(a, Out):
+            out.pop()  # its -o
+        else:
+            out.append(a)
+    return (*out, "--json") if "--json" not in out else tuple(out)
+
+
+JSON_CASES = [(cmd, n, i) for cmd, n in HAPPY_CASES if _has_json(cmd)
+              for i in (None, *(j for j, a in enumerate(as_json(HAPPY[cmd][n])) if isinstance(a, In)))]
+
+
+@pytest.mark.parametrize(("cmd", "n", "i"), JSON_CASES,
+                         ids=[f"{_name(c)}#{n}" + ("" if i is None else f".{i}-binary") for c, n, i in JSON_CASES])
+def test_json_stdout_is_json_only(capsys: pytest.CaptureFixture[str], gen: Path, tmp_path: Path,
+                                  cmd: tuple[str, ...], n: int, i: int | None) -> None:
+    """With --json, stdout is one JSON document (exit 0), or, for bad input, JSON (a checker's report) or nothing."""
+    import json
+
+    inv = as_json(HAPPY[cmd][n])
+    swap: dict[int, Path | str] = {}
+    if i is not None:
+        bad = inv[i]
+        assert isinstance(bad, In)
+        swap[i] = bad_file("binary", bad, gen, tmp_path)
+    code, out, err = run(capsys, *cmd, *argv(inv, gen, tmp_path, swap))
+    assert code == (0 if i is None else 1), err or out
+    if i is None or out.strip():
+        json.loads(out)

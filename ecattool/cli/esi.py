@@ -26,7 +26,11 @@ def _hex(v: int | None, width: int = 8) -> str:
     return "" if v is None else f"0x{v:0{width}X}"
 
 
-@click.group("esi")
+@click.group("esi", epilog="""\b
+Examples:
+  ecattool esi devices samples/esi/etg2001_cia402.xml
+  ecattool esi show beckhoff_EL1xxx.xml --device EL1008 --pdos
+  ecattool esi validate drive.xml --schema-dir ETG/EtherCATInfo_v1.17""")
 def esi() -> None:
     """Read, show and validate ESI (EtherCAT Slave Information) XML files.
 

@@ -123,7 +123,11 @@ def _setup(esi: str | None, selector: str | None, profile: str | None, product: 
     return device, _load_mapping(device, rx, tx, mapping_file), None
 
 
-@click.group(name="map")
+@click.group(name="map", epilog="""\b
+Examples:
+  ecattool map check --profile technosoft-ipos --rx "0x1600=controlword,0x607A:00/32"
+  ecattool map layout --esi drive.xml --device EL7211 --mapping mapping.yaml
+  ecattool map sdo --profile hdt --rx "0x1600=controlword,0x607A:00/32" --format twincat -o startup.txt""")
 def map_() -> None:
     """Check, lay out and program PDO mappings (rule ids PDO0nn, see docs/pdo-mapping.md)."""
 

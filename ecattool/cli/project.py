@@ -8,7 +8,10 @@ from ecattool.cli.common import dump_json, output_option, write_output
 from ecattool.cli.paths import InputFile
 
 
-@click.group("project")
+@click.group("project", epilog="""\b
+Examples:
+  ecattool project new --profile technosoft-ipos -o machine.yaml
+  ecattool project schema -o schemas/project.schema.json""")
 def project() -> None:
     """Project files: JSON Schema for editors, new project skeletons."""
 

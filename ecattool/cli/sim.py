@@ -11,7 +11,11 @@ from ecattool.cli.common import console, json_option, output_option, print_json,
 from ecattool.cli.paths import InputFile
 
 
-@click.group("sim")
+@click.group("sim", epilog="""\b
+Examples:
+  ecattool sim profiles
+  ecattool sim show technosoft-ipos --revision F515I
+  ecattool sim run hdt steps.yaml --json""")
 def sim() -> None:
     """Built-in drive profiles and the embedded drive simulator.
 
