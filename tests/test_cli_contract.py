@@ -586,3 +586,37 @@ def test_json_stdout_is_json_only(capsys: pytest.CaptureFixture[str], gen: Path,
     assert code == (0 if i is None else 1), err or out
     if i is None or out.strip():
         json.loads(out)
+
+
+# --------------------------------------------------------------------------- every other kind of input file
+#: One real file of every input kind the valid invocations use (the first In of that kind).
+KIND_FILES: dict[str, str] = {}
+for _invs in HAPPY.values():
+    for _inv in _invs:
+        for _a in _inv:
+            if isinstance(_a, In):
+                KIND_FILES.setdefault(_a.kind, _a.where)
+WRONG_KIND_CASES = [(cmd, n, i, k) for cmd, n, i, kind in BAD_CASES if kind == "other"
+                    for k in sorted(KIND_FILES) if k != getattr(HAPPY[cmd][n][i], "kind", None)]
+
+
+@pytest.mark.parametrize(("cmd", "n", "i", "other"), WRONG_KIND_CASES,
+                         ids=[f"{_name(c)}#{n}.{i}<-{k}" for c, n, i, k in WRONG_KIND_CASES])
+def test_a_file_of_another_kind_is_refused(capsys: pytest.CaptureFixture[str], gen: Path, tmp_path: Path,
+                                           cmd: tuple[str, ...], n: int, i: int, other: str) -> None:
+    """Every input slot given a real file of every other kind (an SII image as a project, a script as an ESI…)."""
+    inv = HAPPY[cmd][n]
+    inp = inv[i]
+    assert isinstance(inp, In)
+    bad = tmp_path / f"wrong-{other}{resolve(inp.where, gen).suffix}"  # the expected suffix: content decides
+    bad.write_bytes(resolve(KIND_FILES[other], gen).read_bytes())
+    (tmp_path / "out").mkdir()
+    code, out, err = run(capsys, *cmd, *argv(inv, gen, tmp_path / "out", {i: bad}))
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert "Traceback" not in out + err
+    if cmd in REPORTERS and REPORTERS[cmd][0] == inp.kind:
+        report = out + "".join(p.read_text() for p in (tmp_path / "out").iterdir())
+        assert code == 1 and not lines and bad.name in report, f"exit {code}\nstdout: {out}\nstderr: {err}"
+        return
+    assert code == 1 and len(lines) == 1 and bad.name in lines[0], f"exit {code}\nstdout: {out}\nstderr: {err}"
+    assert not list((tmp_path / "out").iterdir())
