@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import random
 import re
+import shutil
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -132,6 +133,7 @@ SII_ESI = In("esi", "corpus:sii/ni9144.xml")
 STARTUP = In("startup", "corpus:configs/ros2_technosoft_ipos3604.yaml")
 PROJECT = In("project", "samples/hdt/project.yaml")
 SPEC = In("spec", "samples/scaling/ballscrew.yaml")
+COPLEY = In("esi", "corpus:esi/copley_XE2_4.60.xml")  # a dictionary with the factor group
 TS = ("--profile", "technosoft-ipos")
 
 #: One or more valid invocations per command that reads or writes files; together they name every file
@@ -153,9 +155,10 @@ HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
                      (*TS, "--product", "ipos4808-bx-cat", "--startup", In("startup", "corpus:configs/ecmc_ecmciPOSXXXX.cmd"))],
     ("project", "new"): [(*TS, "-o", Out("machine.yaml"))],
     ("project", "schema"): [("-o", Out("schema.json")), ("--check", In("schema", "schemas/project.schema.json"))],
-    ("scale", "compute"): [(SPEC, "-o", Out("factors.json")), (In("spec", "samples/scaling/rotary_table.yaml"), "--esi", ESI)],
+    ("scale", "compute"): [(SPEC, "-o", Out("factors.json")),
+                           (In("spec", "samples/scaling/rotary_table.yaml"), "--esi", COPLEY, "-o", Out("factors.json"))],
     ("scale", "startup"): [(SPEC, "--format", "json", "-o", Out("startup.json")),
-                           (In("spec", "samples/scaling/rotary_table.yaml"), "--esi", ESI)],
+                           (In("spec", "samples/scaling/rotary_table.yaml"), "--esi", COPLEY, "-o", Out("startup.txt"))],
     ("scale", "explain"): [("--from", In("startup", "gen:factors.csv"))],
     ("sim", "run"): [("technosoft-ipos", In("script", "gen:steps.yaml"), "-o", Out("transcript.txt")),
                      (In("esi", "corpus:esi/elmo_Elmo_ECAT_00010420_V11.xml"), In("script", "gen:steps.yaml"), "--device", "2")],
@@ -620,3 +623,39 @@ def test_a_file_of_another_kind_is_refused(capsys: pytest.CaptureFixture[str], g
         return
     assert code == 1 and len(lines) == 1 and bad.name in lines[0], f"exit {code}\nstdout: {out}\nstderr: {err}"
     assert not list((tmp_path / "out").iterdir())
+
+
+# ------------------------------------------------------------------------------------ -o never over an input
+CLOBBER_CASES = [(cmd, n, i) for cmd, n in OUT_CASES for i, a in enumerate(HAPPY[cmd][n]) if isinstance(a, In)]
+
+
+@pytest.mark.parametrize(("cmd", "n", "i"), CLOBBER_CASES, ids=[f"{_name(c)}#{n}.{i}" for c, n, i in CLOBBER_CASES])
+def test_output_over_an_input_is_refused(capsys: pytest.CaptureFixture[str], gen: Path, tmp_path: Path,
+                                         cmd: tuple[str, ...], n: int, i: int) -> None:
+    """-o naming one of the command's own inputs: refused in one line, the input keeps its bytes."""
+    inv = HAPPY[cmd][n]
+    inp = inv[i]
+    assert isinstance(inp, In)
+    real = resolve(inp.where, gen)
+    if inp.kind == "project":  # with the files it names beside it
+        shutil.copytree(real.parent, tmp_path / "in")
+    copy = tmp_path / "in" / real.name  # a copy: the sample or corpus file itself is never at risk
+    copy.parent.mkdir(exist_ok=True)
+    copy.write_bytes(real.read_bytes().replace(b"../../../shared/corpus", str(CORPUS).encode()))
+    before = copy.read_bytes()
+    args = argv(inv, gen, tmp_path, {i: copy})
+    args = [str(copy) if isinstance(a, Out) else args[j] for j, a in enumerate(inv)]
+    code, out, err = run(capsys, *cmd, *args)
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert copy.read_bytes() == before, "an input was overwritten"
+    # refused as an input, or earlier for a reason of its own (a FoE file must be named .bin)
+    assert code == 1 and len(lines) == 1 and copy.name in lines[0], f"exit {code}\nstdout: {out}\nstderr: {err}"
+
+
+def test_scale_startup_without_factor_objects_says_so(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    """Found by the sweep: an ESI without the factor group gave an empty startup list and exit 0."""
+    esi = ROOT / ESI.where
+    out = tmp_path / "startup.txt"
+    code, _, err = run(capsys, "scale", "startup", str(ROOT / SPEC.where), "--esi", str(esi), "-o", str(out))
+    assert code == 1 and err.startswith(f"ecattool: error: {esi}: the device has none of the scaling objects")
+    assert not out.exists()

@@ -43,19 +43,19 @@ def lint(projects: tuple[str, ...], fmt: str, as_json: bool, strict: bool, outpu
     if as_json:
         fmt = "json"
     if fmt == "json":
-        write_output(output, dump_json(report.to_json(findings, list(projects))) + "\n")
+        write_output(output, dump_json(report.to_json(findings, list(projects))) + "\n", projects)
     elif fmt == "sarif":
         from ecattool.project.lint import PROJECT_RULES
 
-        write_output(output, dump_json(report.to_sarif(findings, PROJECT_RULES)) + "\n")
+        write_output(output, dump_json(report.to_sarif(findings, PROJECT_RULES)) + "\n", projects)
     elif fmt == "github":
-        write_output(output, report.to_github(findings))
+        write_output(output, report.to_github(findings), projects)
     else:
-        _text(results, output)
+        _text(results, output, projects)
     raise SystemExit(1 if failed else 0)
 
 
-def _text(results: list[ProjectResult], output: str | None) -> None:
+def _text(results: list[ProjectResult], output: str | None, projects: tuple[str, ...]) -> None:
     lines = []
     for r in results:
         for f in r.findings:
@@ -66,7 +66,7 @@ def _text(results: list[ProjectResult], output: str | None) -> None:
         lines.append(f"{r.path}: {drives} drive(s), {n_err} error(s), {n_warn} warning(s)")
     text = "\n".join(lines) + "\n"
     if output not in (None, "-"):
-        write_output(output, text)
+        write_output(output, text, projects)  # never over a project it read
         return
     con = console()
     for line in lines:

@@ -179,8 +179,8 @@ def compute_cmd(with_startup: bool, as_json: bool, output: str | None, **kwargs:
     """Table of scaling objects: value (decimal, hex), meaning, exactness; approximations with ppm error."""
     from ecattool.cli.common import dump_json
 
+    inputs = tuple(kwargs[k] for k in ("spec", "esi") if kwargs.get(k) not in (None, "-"))
     group = _compute(kwargs)
-    inputs = (kwargs["spec"],) if kwargs.get("spec") else ()
     if as_json or output:
         data = group.to_json()
         if with_startup:
@@ -215,9 +215,16 @@ def startup_cmd(fmt: str, transition: str, output: str | None, **kwargs: Any) ->
 
     if transition.upper() not in TRANSITIONS:
         raise click.BadParameter(f"one of {', '.join(TRANSITIONS)}", param_hint="--transition")
+    inputs = tuple(kwargs[k] for k in ("spec", "esi") if kwargs.get(k) not in (None, "-"))
+    esi = kwargs.get("esi")
     group = _compute(kwargs)
-    inputs = (kwargs["spec"],) if kwargs.get("spec") else ()
-    write_output(output, export(group.startup(transition.upper()), fmt), inputs)
+    commands = group.startup(transition.upper())
+    if not commands:  # e.g. an ESI whose dictionary has none of the factor objects: say so, do not write nothing
+        from ecattool.errors import InputError, Location
+
+        raise InputError("the device has none of the scaling objects (608Fh, 6091h-6097h, 60A2h, 60A8h-60ABh); "
+                         "no startup list to write", Location(esi) if esi else None)
+    write_output(output, export(commands, fmt), inputs)
 
 
 def _values_from_file(path: str) -> dict[tuple[int, int], int]:

@@ -370,7 +370,7 @@ def patch(file: str, sets: tuple[str, ...], parameters: str | None, output: str)
         assignments.append((k, v))
     image = _image(file)
     new = patch_image(image, assignments, _params(parameters))
-    write_output(output, write(new), (file,))
+    write_output(output, write(new), (file, parameters) if parameters else (file,))
 
 
 @sw.command(epilog="""\b
@@ -411,4 +411,6 @@ def build(spec: str, output: str) -> None:
     from ecattool.sw.build import build as build_image
     from ecattool.sw.image import write
 
-    write_output(output, write(build_image(spec)), (spec,))
+    named: list[Path] = []  # the files the spec names (base, blocks, parameters): -o must not be one of them
+    image = build_image(spec, named)
+    write_output(output, write(image), (spec, *map(str, named)))

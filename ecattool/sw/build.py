@@ -42,16 +42,17 @@ def load_image(path: Path) -> SwImage:
     return read_foe(path) if path.suffix.lower() in (".bin", ".efw") else read(path)
 
 
-def build(spec_path: str | Path) -> SwImage:
+def build(spec_path: str | Path, read: list[Path] | None = None) -> SwImage:
+    """The image a build spec describes; ``read`` (when given) collects the files the spec names."""
     from ecattool.fileio import read_bytes
     from ecattool.project.yamlloc import load_yaml
 
     spec_path = Path(spec_path)
     doc = load_yaml(read_bytes(spec_path, 4 * 1024 * 1024), str(spec_path))
-    return build_from(doc.data, doc.locate, spec_path.parent, str(spec_path))
+    return build_from(doc.data, doc.locate, spec_path.parent, str(spec_path), read)
 
 
-def build_from(data: Any, locate: Any, base_dir: Path, source: str) -> SwImage:
+def build_from(data: Any, locate: Any, base_dir: Path, source: str, read: list[Path] | None = None) -> SwImage:
     if not isinstance(data, dict):
         raise InputError("a build spec is a mapping with base/blocks/setup keys", Location(source, 1))
     for key in data:
@@ -64,6 +65,8 @@ def build_from(data: Any, locate: Any, base_dir: Path, source: str) -> SwImage:
         p = base_dir / value
         if not p.exists():
             raise InputError(f"file not found: {p}", locate(where))
+        if read is not None:
+            read.append(p)
         return p
 
     def number(value: Any, where: tuple[Any, ...], what: str) -> int:
