@@ -19,12 +19,8 @@ def read_bytes(path: str | Path, max_bytes: int | None = None) -> bytes:
         raise InputError(f"cannot read file: {exc.strerror or exc}", Location(str(p))) from None
 
 
-def write_atomic(path: str | Path, data: bytes | str, inputs: Iterable[str | Path] = ()) -> None:
-    """Write ``data`` to ``path`` through a temporary file and a rename.
-
-    Either the complete new content is there afterwards or the old file is untouched. Refuses to
-    overwrite any of ``inputs`` (the files the output was made from).
-    """
+def refuse_input(path: str | Path, inputs: Iterable[str | Path]) -> None:
+    """Raise :class:`InputError` when ``path`` is one of ``inputs`` (checked before long work that ends in a write)."""
     target = Path(path)
     for src in inputs:
         try:
@@ -32,6 +28,16 @@ def write_atomic(path: str | Path, data: bytes | str, inputs: Iterable[str | Pat
                 raise InputError("refusing to overwrite an input file; choose another output", Location(str(target)))
         except OSError:
             pass
+
+
+def write_atomic(path: str | Path, data: bytes | str, inputs: Iterable[str | Path] = ()) -> None:
+    """Write ``data`` to ``path`` through a temporary file and a rename.
+
+    Either the complete new content is there afterwards or the old file is untouched. Refuses to
+    overwrite any of ``inputs`` (the files the output was made from).
+    """
+    target = Path(path)
+    refuse_input(target, inputs)
     payload = data.encode("utf-8") if isinstance(data, str) else data
     # An exclusive temporary name beside the target (same file system, so the rename is atomic). Not
     # tempfile.mkstemp: importing tempfile costs ~15 ms of a CLI run, and mkstemp makes 0600 files where an

@@ -659,3 +659,21 @@ def test_scale_startup_without_factor_objects_says_so(capsys: pytest.CaptureFixt
     code, _, err = run(capsys, "scale", "startup", str(ROOT / SPEC.where), "--esi", str(esi), "-o", str(out))
     assert code == 1 and err.startswith(f"ecattool: error: {esi}: the device has none of the scaling objects")
     assert not out.exists()
+
+
+@pytest.mark.parametrize("cmd", [("commission", "{p}"), ("lint", "{p}"),
+                                 ("startup", "export", "--project", "{p}", "--format", "json")], ids=lambda c: c[0])
+@pytest.mark.parametrize("named", ["setup.sw", "../generic_esi/inovance_SV660_EOE_1Axis_V9.12.xml"])
+def test_output_over_a_file_a_project_names_is_refused(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                                       cmd: tuple[str, ...], named: str) -> None:
+    """Found by the sweep: -o naming the project's .sw image (or ESI) replaced it with the report."""
+    shutil.copytree(ROOT / "samples", tmp_path / "samples")
+    project = tmp_path / "samples" / "technosoft_ipos" / "project.yaml"
+    if named.endswith(".xml"):  # the same project on an ESI device
+        project = project.with_name("esi.yaml")
+        project.write_text(f"ecattool: 1\nname: m\ndrives:\n  - name: a\n    device: {{esi: {named}, select: InoSV660N}}\n")
+    target = project.parent / named
+    before = target.read_bytes()
+    code, _, err = run(capsys, *(a.format(p=project) for a in cmd), "-o", str(target))
+    assert target.read_bytes() == before
+    assert code == 1 and err.startswith(f"ecattool: error: {target}: refusing to overwrite an input file")

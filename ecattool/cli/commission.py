@@ -36,6 +36,13 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, out
     """
     from ecattool.commission import commission as run
 
+    inputs: list[str] = []
+    if output not in (None, "-"):  # refused before the drives are touched, not after
+        from ecattool.fileio import refuse_input
+        from ecattool.project.loader import project_inputs
+
+        inputs = project_inputs(projects)  # the projects and the ESI/.sw files they name
+        refuse_input(output, inputs)
     reports = []
     con = None if as_json else console()
     for path in projects:
@@ -57,5 +64,5 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, out
         con.print(f"{n - bad} of {n} drive(s) commissioned" + (f", {bad} failed" if bad else ""),
                   style="green" if not bad else "red")
     if output:
-        write_output(output, dump_json(data) + "\n", list(projects))
+        write_output(output, dump_json(data) + "\n", inputs)
     raise SystemExit(0 if data["ok"] else 1)

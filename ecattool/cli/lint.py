@@ -39,23 +39,28 @@ def lint(projects: tuple[str, ...], fmt: str, as_json: bool, strict: bool, outpu
     from ecattool.project.lint import lint as run_lint
 
     results, failed = run_lint(list(projects), strict=strict)
+    inputs = projects
+    if output not in (None, "-"):  # the report never replaces a project, nor an ESI/.sw one names
+        from ecattool.project.loader import project_inputs
+
+        inputs = tuple(project_inputs(projects))
     findings = [f for r in results for f in r.findings]
     if as_json:
         fmt = "json"
     if fmt == "json":
-        write_output(output, dump_json(report.to_json(findings, list(projects))) + "\n", projects)
+        write_output(output, dump_json(report.to_json(findings, list(projects))) + "\n", inputs)
     elif fmt == "sarif":
         from ecattool.project.lint import PROJECT_RULES
 
-        write_output(output, dump_json(report.to_sarif(findings, PROJECT_RULES)) + "\n", projects)
+        write_output(output, dump_json(report.to_sarif(findings, PROJECT_RULES)) + "\n", inputs)
     elif fmt == "github":
-        write_output(output, report.to_github(findings), projects)
+        write_output(output, report.to_github(findings), inputs)
     else:
-        _text(results, output, projects)
+        _text(results, output, inputs)
     raise SystemExit(1 if failed else 0)
 
 
-def _text(results: list[ProjectResult], output: str | None, projects: tuple[str, ...]) -> None:
+def _text(results: list[ProjectResult], output: str | None, inputs: tuple[str, ...]) -> None:
     lines = []
     for r in results:
         for f in r.findings:
@@ -66,7 +71,7 @@ def _text(results: list[ProjectResult], output: str | None, projects: tuple[str,
         lines.append(f"{r.path}: {drives} drive(s), {n_err} error(s), {n_warn} warning(s)")
     text = "\n".join(lines) + "\n"
     if output not in (None, "-"):
-        write_output(output, text, projects)  # never over a project it read
+        write_output(output, text, inputs)
         return
     con = console()
     for line in lines:

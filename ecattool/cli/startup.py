@@ -74,8 +74,9 @@ def export_cmd(source: str | None, project: str | None, from_format: str | None,
         if from_format is not None:
             raise click.UsageError("--from-format belongs to --from, not --project")
         from ecattool.project.export import slave_configs
+        from ecattool.project.loader import project_inputs
 
-        _write(slave_configs(project), fmt, output, (project,))
+        _write(slave_configs(project), fmt, output, tuple(project_inputs([project])))
         return
     assert source is not None
     _write(_read(source, from_format), fmt, output, (source,))

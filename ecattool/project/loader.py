@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -9,7 +10,7 @@ from typing import Any
 from pydantic import ValidationError
 from pydantic_core import ErrorDetails
 
-from ecattool.errors import InputError, Location
+from ecattool.errors import EcatToolError, InputError, Location
 from ecattool.fileio import read_bytes
 from ecattool.findings import Finding, Severity
 from ecattool.project.model import Project
@@ -32,6 +33,16 @@ class LoadedProject:
 
     def locate(self, *path: str | int) -> Location:
         return self.yaml.locate(tuple(path))
+
+    def named_files(self) -> list[Path]:
+        """The files the drives name (ESI, .sw image), resolved: an output must never overwrite one of them."""
+        named = []
+        for drive in self.project.drives:
+            if drive.device.esi:
+                named.append(self.resolve(drive.device.esi))
+            if drive.sw_config is not None:
+                named.append(self.resolve(drive.sw_config.file))
+        return named
 
     def drive_location(self, i: int, *path: str | int) -> Location:
         return self.yaml.locate(("drives", i, *path))
@@ -90,3 +101,17 @@ def load_project(path: str | Path) -> LoadedProject:
         first = findings[0]
         raise InputError(first.message, first.location)
     return LoadedProject(project, p, doc)
+
+
+def project_inputs(paths: Iterable[str | Path]) -> list[str]:
+    """The project files and every file they name: what an ``-o`` output must never overwrite.
+
+    A project that cannot be loaded names nothing (its own error is reported where it is read)."""
+    out: list[str] = []
+    for p in paths:
+        out.append(str(p))
+        try:
+            out += [str(f) for f in load_project(p).named_files()]
+        except EcatToolError:
+            pass
+    return out
