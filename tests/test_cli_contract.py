@@ -677,3 +677,15 @@ def test_output_over_a_file_a_project_names_is_refused(capsys: pytest.CaptureFix
     code, _, err = run(capsys, *(a.format(p=project) for a in cmd), "-o", str(target))
     assert target.read_bytes() == before
     assert code == 1 and err.startswith(f"ecattool: error: {target}: refusing to overwrite an input file")
+
+
+def test_sw_build_output_over_its_base_image_is_refused(capsys: pytest.CaptureFixture[str], gen: Path,
+                                                        tmp_path: Path) -> None:
+    """Found by the sweep: 'sw build -o' over the base image its spec names replaced that image."""
+    base = tmp_path / "base.sw"
+    base.write_bytes(resolve(SW.where, gen).read_bytes())
+    spec = tmp_path / "build.yaml"
+    spec.write_text(NESTED["swspec-base"][1].format(ref=base))
+    code, _, err = run(capsys, "sw", "build", str(spec), "-o", str(base))
+    assert base.read_bytes() == resolve(SW.where, gen).read_bytes()
+    assert code == 1 and err.startswith(f"ecattool: error: {base}: refusing to overwrite an input file")
