@@ -669,3 +669,40 @@ def test_sw_build_output_over_its_base_image_is_refused(capsys: pytest.CaptureFi
     code, _, err = run(capsys, "sw", "build", str(spec), "-o", str(base))
     assert base.read_bytes() == resolve(SW.where, gen).read_bytes()
     assert code == 1 and err.startswith(f"ecattool: error: {base}: refusing to overwrite an input file")
+
+
+# ------------------------------------------------------------------------------------------ option values
+#: A valid invocation of the commands that read no file (the others use their first HAPPY one).
+BASE: dict[tuple[str, ...], tuple[object, ...]] = {
+    ("sim", "profiles"): (),
+    ("sim", "show"): ("technosoft-ipos",),
+    ("scale", "si"): ("mm", "rpm"),
+}
+#: Odd values for every option that takes text or a number (not a file, not a choice: click checks those).
+ODD_VALUES = ("", "-1", "99999999999999999999999", "0x", "nonsense", "1:2:3", "\u00e9\u00ff", "6060:00=abc")
+
+
+def _value_options(cmd: tuple[str, ...]) -> list[str]:
+    return [p.opts[-1] for p in LEAVES[cmd].params if isinstance(p, click.Option) and not p.is_flag
+            and not isinstance(p.type, (click.Path, click.Choice)) and p.name != "output"]
+
+
+def test_every_command_has_a_base_invocation() -> None:
+    assert set(BASE).isdisjoint(HAPPY) and set(BASE) <= set(LEAVES)
+    assert set(LEAVES) == set(HAPPY) | set(BASE), set(LEAVES) - set(HAPPY) - set(BASE)
+
+
+OPTION_CASES = [(cmd, opt) for cmd in sorted(LEAVES) for opt in _value_options(cmd)]
+
+
+@pytest.mark.parametrize(("cmd", "opt"), OPTION_CASES, ids=[f"{_name(c)} {o}" for c, o in OPTION_CASES])
+def test_odd_option_values_never_trace_back(capsys: pytest.CaptureFixture[str], gen: Path, tmp_path: Path,
+                                           cmd: tuple[str, ...], opt: str) -> None:
+    """Accepted, a usage error (2), or one line with exit 1: never a traceback."""
+    inv = HAPPY[cmd][0] if cmd in HAPPY else BASE[cmd]
+    for value in ODD_VALUES:
+        code, out, err = run(capsys, *cmd, *argv(inv, gen, tmp_path), opt, value)
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        assert "Traceback" not in out + err and code in (0, 1, 2), f"{opt} {value!r}: exit {code}\n{err}"
+        if code == 1 and cmd not in REPORTERS:
+            assert len(lines) == 1 and lines[0].startswith("ecattool: error: "), f"{opt} {value!r}:\n{out}\n{err}"

@@ -58,7 +58,11 @@ class Firmware:
         if value is None or value == "":
             return cls(DEFAULT_REVISION)
         if isinstance(value, str) and value.strip().lower().startswith(("0x", "#x")):
-            value = int(value.strip()[2:], 16)
+            try:
+                value = int(value.strip()[2:], 16)
+            except ValueError:  # "0x" alone, "0xZZ": the same answer as any other wrong name
+                raise SelectionError(f"{value!r} is not a Technosoft firmware revision "
+                                     "(write e.g. F515K, 515K, FA00G or 0x3531354B)") from None
         if isinstance(value, str) and value.strip().isdigit() and len(value.strip()) > 4:
             value = int(value.strip())
         if isinstance(value, int):
