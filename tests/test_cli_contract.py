@@ -706,3 +706,39 @@ def test_odd_option_values_never_trace_back(capsys: pytest.CaptureFixture[str], 
         assert "Traceback" not in out + err and code in (0, 1, 2), f"{opt} {value!r}: exit {code}\n{err}"
         if code == 1 and cmd not in REPORTERS:
             assert len(lines) == 1 and lines[0].startswith("ecattool: error: "), f"{opt} {value!r}:\n{out}\n{err}"
+
+
+def test_startup_format_choices_are_what_the_registry_reads_and_writes() -> None:
+    """--from-format offered igh and pysoem, which cannot be read (exit 1 after parsing); now click refuses them."""
+    from ecattool.startup.formats import FORMATS
+
+    for cmd in (("startup", "import"), ("startup", "convert"), ("startup", "export")):
+        params = {p.name: p.type for p in LEAVES[cmd].params}
+        from_format = params["from_format"]
+        assert isinstance(from_format, click.Choice)
+        assert sorted(from_format.choices) == sorted(n for n, f in FORMATS.items() if f.can_import)
+        if "fmt" in params:
+            fmt = params["fmt"]
+            assert isinstance(fmt, click.Choice)
+            assert sorted(fmt.choices) == sorted(n for n, f in FORMATS.items() if f.can_export)
+
+
+@pytest.mark.parametrize("fmt", ["eni", "twincat", "ros2", "ecmc", "json", "csv", "lcec"])
+def test_a_startup_file_forced_into_another_format_is_refused(capsys: pytest.CaptureFixture[str], gen: Path,
+                                                              tmp_path: Path, fmt: str) -> None:
+    """--from-format FMT on a file of every other format: one line, exit 1 (ecmc read anything as an empty slave)."""
+    files = {"eni": corpus_path("configs", "eni_kpierczy_test_eni.xml"),
+             "ros2": corpus_path("configs", "ros2_elmo_gold.yaml"),
+             "ecmc": corpus_path("configs", "ecmc_ecmciPOSXXXX.cmd"),
+             "lcec": corpus_path("configs", "lcec_initcmds_ethercat-conf.xml")}
+    for written in ("twincat", "json", "csv", "igh", "pysoem"):
+        files[written] = tmp_path / f"startup.{written}"
+        assert run(capsys, "startup", "convert", str(resolve(STARTUP.where, gen)), "--format", written,
+                   "-o", str(files[written]))[0] == 0
+    for other, path in files.items():
+        code, _, err = run(capsys, "startup", "import", str(path), "--from-format", fmt)
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        if other == fmt:
+            assert code == 0, err
+        else:
+            assert code == 1 and len(lines) == 1 and path.name in lines[0], f"{fmt} <- {other}: exit {code}\n{err}"

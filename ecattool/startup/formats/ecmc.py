@@ -251,6 +251,8 @@ class _Reader:
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
+    if not detect(data):  # forced with --from-format ecmc on another file: say so, not an empty slave
+        raise InputError("not an ecmc script: no Cfg.Ec… command and no epicsEnvSet", Location(source, 1))
     reader = _Reader(source)
     for n, raw in enumerate(decode_text(data, source).splitlines(), 1):
         reader.line(raw, n)
