@@ -13,7 +13,7 @@ The tree is walked from the click group, so a new command is covered without edi
   cannot be written, and for unknown keys in YAML inputs.
 
 Deliberate exceptions are data here, each with its reason: :data:`REPORTERS` (checkers that report bad input
-as a finding), :data:`UNDETECTABLE` (what a format cannot show), :data:`UNKNOWN_KEY_GAPS` (strict xfail).
+as a finding), :data:`UNDETECTABLE` (what a format cannot show).
 Commands run in-process through the real entry point (``tests.conftest.run``).
 """
 
@@ -526,11 +526,6 @@ def test_bad_file_named_in_an_input(capsys: pytest.CaptureFixture[str], gen: Pat
 #: startup kind is absent on purpose: ethercat_driver_ros2 files keep keys of their own (auto_fault_reset …),
 #: which ecattool carries through to the ros2 writer (ecattool/startup/formats/ros2.py, cfg.extra).
 YAML_KINDS = {"project", "spec", "swspec", "mapping", "script"}
-#: Known gaps, each failing on purpose until fixed (strict xfail: the fix turns it into a failure to remove).
-UNKNOWN_KEY_GAPS: dict[tuple[str, ...], str] = {
-    ("sim", "run"): "ecattool/sim/script.py parse_steps does not check a step's keys (a misspelled 'expcet' "
-                    "silently checks nothing); sim/ belongs to another helper, see the contract report",
-}
 UNKNOWN_KEY_CASES = [(cmd, n, i) for cmd, n, i, kind in BAD_CASES  # one case per YAML input slot
                      if kind == "empty" and getattr(HAPPY[cmd][n][i], "kind", None) in YAML_KINDS]
 
@@ -544,8 +539,7 @@ def with_unknown_key(data: bytes) -> bytes:
 
 @pytest.mark.parametrize(
     ("cmd", "n", "i"),
-    [pytest.param(*c, marks=pytest.mark.xfail(strict=True, reason=UNKNOWN_KEY_GAPS[c[0]]))
-     if c[0] in UNKNOWN_KEY_GAPS else c for c in UNKNOWN_KEY_CASES],
+    UNKNOWN_KEY_CASES,
     ids=[f"{_name(c)}#{n}.{i}" for c, n, i in UNKNOWN_KEY_CASES])
 def test_unknown_yaml_key_is_refused(capsys: pytest.CaptureFixture[str], gen: Path, tmp_path: Path,
                                      cmd: tuple[str, ...], n: int, i: int) -> None:

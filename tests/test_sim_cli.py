@@ -12,6 +12,7 @@ from ecattool.errors import InputError
 from ecattool.sim import Drive
 from ecattool.sim.script import parse_steps, run_script
 from tests.conftest import corpus_path
+from tests.conftest import run as run_main
 
 SCRIPT = """\
 - state: PREOP
@@ -95,3 +96,24 @@ def test_script_errors_carry_locations():
     d = Drive.from_profile("hdt")
     tr = run_script(d, [{"state": "PREOP"}, {"write": "6060:00", "value": "0x08"}, {"read": "6060:00", "expect": 8}], [])
     assert tr.ok and tr.lines[-1].value == 8
+
+
+@pytest.mark.parametrize(("step", "words"), [
+    ({"read": "6041:00", "expcet": 0x0640}, ["step 2 (read)", "'expcet'", "did you mean 'expect'"]),
+    ({"write": "6060:00", "value": 8, "expect": 8}, ["step 2 (write)", "'expect'"]),
+    ({"state": "OP", "expect_abort": 0x06010002}, ["step 2 (state)", "'expect_abort'", "expect_al_status"]),
+    ({"read": "6041:00", "write": "6060:00"}, ["step 2 has read and write"]),
+    ({"cycles": 10, "value": 1}, ["step 2 (cycles)", "nothing else"]),
+])
+def test_script_key_that_would_be_ignored_is_refused(capsys, tmp_path, step, words):
+    """A misspelled or misplaced key would silently check nothing: the script is refused before it runs."""
+    script = tmp_path / "s.yaml"
+    import yaml
+
+    script.write_text(yaml.safe_dump([{"state": "PREOP"}, step], sort_keys=False))
+    code, out, err = run_main(capsys, "sim", "run", "hdt", str(script))
+    assert code == 1 and not out
+    line = err.strip()
+    assert "\n" not in line and f"{script}:" in line and "Traceback" not in line, line
+    for w in words:
+        assert w in line, line

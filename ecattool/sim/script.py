@@ -34,6 +34,15 @@ from ecattool.od.numbers import format_address, parse_address, parse_int
 from ecattool.sim.drive import Drive, FoeError
 
 _KINDS = ("state", "read", "write", "exchange", "cycles", "foe")
+#: The keys each kind of step takes besides its own: anything else is refused, never silently ignored.
+_KEYS: dict[str, frozenset[str]] = {
+    "state": frozenset({"expect_al_status"}),
+    "read": frozenset({"complete_access", "expect", "expect_data", "expect_abort", "expect_timeout"}),
+    "write": frozenset({"value", "data", "complete_access", "expect_abort", "expect_reply", "expect_timeout"}),
+    "exchange": frozenset(),
+    "cycles": frozenset(),
+    "foe": frozenset({"data", "file", "password", "expect_abort"}),
+}
 
 
 @dataclass
@@ -86,7 +95,22 @@ def parse_steps(data: Any, locations: list[Location], source: str = "<script>") 
         loc = locations[i] if i < len(locations) else Location(source)
         if not isinstance(step, dict) or not any(k in step for k in _KINDS):
             raise InputError(f"step {i + 1} needs one of {', '.join(_KINDS)}", loc)
+        kinds = [k for k in _KINDS if k in step]
+        if len(kinds) > 1:
+            raise InputError(f"step {i + 1} has {' and '.join(kinds)}: one operation a step", loc)
+        allowed = _KEYS[kinds[0]]
+        for key in step:
+            if key != kinds[0] and key not in allowed:
+                raise InputError(f"step {i + 1} ({kinds[0]}): unknown key {key!r}{_suggest(str(key), allowed)}"
+                                 f" (a {kinds[0]} step takes {', '.join(sorted(allowed)) or 'nothing else'})", loc)
     return data, locations
+
+
+def _suggest(key: str, allowed: frozenset[str]) -> str:
+    import difflib
+
+    close = difflib.get_close_matches(key, sorted(allowed), n=1)
+    return f", did you mean {close[0]!r}?" if close else ""
 
 
 def _int(v: Any, loc: Location, what: str) -> int:
