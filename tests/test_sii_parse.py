@@ -143,6 +143,32 @@ def test_intel_hex_overrun_is_located_at_the_record_line(tmp_path) -> None:
     assert exc.value.location.line == 0x21A // 16 + 1
 
 
+@pytest.mark.parametrize(("text", "what"), [
+    (":10000000ZZ\n", "non-hex characters"),        # typo in a record: was read as a 12-byte binary
+    (":10000000\n", "does not match its count byte"),
+    (":020000040000FA\nhello\n", "must start with ':'"),
+])
+def test_malformed_intel_hex_is_located_not_read_as_binary(tmp_path, text: str, what: str) -> None:
+    p = tmp_path / "bad.hex"
+    p.write_text(text)
+    with pytest.raises(InputError, match=what) as exc:
+        load(p)
+    assert exc.value.location.line is not None
+
+
+def test_binary_image_starting_with_a_colon_byte_is_binary() -> None:
+    raw = bytearray(corpus_path("sii", "metalmusings_EaserCAT_2000.bin").read_bytes())
+    raw[0] = ord(":")  # PDI control low byte 0x3A: still a binary image
+    assert load("x.bin", bytes(raw)).to_bytes() == bytes(raw)
+
+
+def test_an_esi_given_as_image_says_what_to_do_instead() -> None:
+    esi = corpus_path("sii", "metalmusings_EaserCAT_2000.xml")
+    with pytest.raises(InputError, match=r"XML file .*not an SII image .*sii build ESI") as exc:
+        load(esi)
+    assert exc.value.location.line == 1
+
+
 @given(st.binary(max_size=300))
 def test_intel_hex_writer_reader_round_trip(data: bytes) -> None:
     assert read_intel_hex(write_intel_hex(data).encode())[0] == data

@@ -58,8 +58,10 @@ class ByteLocator:
 
 
 def is_intel_hex(data: bytes) -> bool:
-    head = data.lstrip()[:1]
-    return head == b":" and all(c in b"0123456789abcdefABCDEF:\r\n \t" for c in data[:256])
+    """Text starting with ':' is Intel HEX (a malformed record then gets a located error, not a binary read):
+    a binary image has control bytes or NULs in its first words, so printable ASCII alone tells the two apart."""
+    head = data[:256]
+    return data.lstrip()[:1] == b":" and all(c in b"\t\r\n" or 0x20 <= c < 0x7F for c in head)
 
 
 def read_intel_hex(data: bytes, source: str | None = None) -> tuple[bytes, ByteLocator]:
@@ -367,8 +369,8 @@ def load(path: str | Path, data: bytes | None = None) -> SiiImage:
     src = str(path)
     raw = data if data is not None else read_bytes(path, max_bytes=4 * MAX_IMAGE_BYTES)
     if raw.lstrip(b"\xef\xbb\xbf \t\r\n")[:1] == b"<":
-        raise InputError("this is an XML file (an ESI?), not an SII image; `sii check` takes ESI first, then "
-                         "IMAGE", Location(src, 1))
+        raise InputError("this is an XML file (an ESI?), not an SII image (`sii build ESI -o IMAGE` makes one; "
+                         "`sii check ESI IMAGE` compares the two)", Location(src, 1))
     if is_intel_hex(raw):
         binary, locator = read_intel_hex(raw, src)
         return parse(binary, src, locator)
