@@ -20,14 +20,11 @@ Variants:
 from __future__ import annotations
 
 import argparse
-import os
-import statistics
-import subprocess
 import sys
-import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+from _procs import ROOT, Variant, has_package, interleaved, report  # benchmarks/ is on sys.path as the script's folder
+
 DEFAULT = ROOT.parent / "shared" / "corpus" / "esi" / "beckhoff_EL1xxx.xml"
 
 SCRIPTS = {
@@ -44,24 +41,6 @@ SCRIPTS = {
 }
 
 
-def _env(package_dir: Path | None = None) -> dict[str, str]:
-    # measure ecattool as installed: byte-compiled modules (the warm-up run writes the .pyc files even
-    # where the shell sets PYTHONDONTWRITEBYTECODE, which would otherwise recompile every module per run)
-    env = dict(os.environ)
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    if package_dir is not None:
-        env["PYTHONPATH"] = str(package_dir)
-    return env
-
-
-def run_once(code: str, path: Path, package_dir: Path | None = None) -> float:
-    # another revision's package: run outside the repository so that its ecattool is found first
-    cwd = package_dir if package_dir is not None else ROOT
-    t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-c", code, str(path)], check=True, cwd=cwd, env=_env(package_dir))
-    return time.perf_counter() - t0
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("file", nargs="?", type=Path, default=DEFAULT)
@@ -71,25 +50,16 @@ def main(argv: list[str] | None = None) -> int:
     if not args.file.exists():
         print(f"benchmark file missing: {args.file}", file=sys.stderr)
         return 1
-    variants: dict[str, tuple[str, Path | None]] = {name: (code, None) for name, code in SCRIPTS.items()}
+    variants: dict[str, Variant] = {
+        name: ([sys.executable, "-c", code, str(args.file)], None) for name, code in SCRIPTS.items()}
     if args.against is not None:
-        if not (args.against / "ecattool" / "__init__.py").is_file():
+        if not has_package(args.against):
             print(f"no ecattool package in {args.against}", file=sys.stderr)
             return 1
-        variants["esi-full@" + args.against.name] = (SCRIPTS["esi-full"], args.against.resolve())
-    for code, package_dir in variants.values():  # warm the OS file cache and the .pyc files
-        run_once(code, args.file, package_dir)
-    times: dict[str, list[float]] = {k: [] for k in variants}
-    for _ in range(args.runs):
-        for name, (code, package_dir) in variants.items():
-            times[name].append(run_once(code, args.file, package_dir))
-    base = statistics.median(times["bare-parse"])
-    base_min = min(times["bare-parse"])
+        variants["esi-full@" + args.against.name] = (variants["esi-full"][0], args.against.resolve())
+    times = interleaved(variants, args.runs)
     print(f"file: {args.file.name} ({args.file.stat().st_size} bytes), {args.runs} runs each, median wall time per process")
-    for name, ts in times.items():
-        med = statistics.median(ts)
-        print(f"  {name:16s} {med * 1000:7.1f} ms   ratio {med / base:4.2f}x   "
-              f"(min {min(ts) * 1000:.1f} ms, ratio of minima {min(ts) / base_min:4.2f}x)")
+    report(times, "bare-parse")
     return 0
 
 

@@ -19,34 +19,13 @@ Variants:
 from __future__ import annotations
 
 import argparse
-import os
-import statistics
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+from _procs import ROOT, Variant, has_package, interleaved, report  # benchmarks/ is on sys.path as the script's folder
+
 DEFAULT = ROOT.parent / "shared" / "corpus" / "esi" / "beckhoff_EL1xxx.xml"
-
-
-def _env(package_dir: Path | None = None) -> dict[str, str]:
-    # measure ecattool as installed: byte-compiled modules. Where the shell sets PYTHONDONTWRITEBYTECODE every
-    # run would recompile every imported module (the earlier 2.4-2.9x figures included that); the warm-up run
-    # writes the .pyc files.
-    env = dict(os.environ)
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    if package_dir is not None:
-        env["PYTHONPATH"] = str(package_dir)
-    return env
-
-
-def run_once(cmd: list[str], package_dir: Path | None = None) -> float:
-    # another revision's package: run in its directory so that `-m ecattool` finds it first
-    t0 = time.perf_counter()
-    subprocess.run(cmd, check=True, cwd=package_dir or ROOT, stdout=subprocess.DEVNULL, env=_env(package_dir))
-    return time.perf_counter() - t0
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -59,36 +38,25 @@ def main(argv: list[str] | None = None) -> int:
     if not args.file.exists():
         print(f"benchmark file missing: {args.file}", file=sys.stderr)
         return 1
-    if args.against is not None and not (args.against / "ecattool" / "__init__.py").is_file():
+    if args.against is not None and not has_package(args.against):
         print(f"no ecattool package in {args.against}", file=sys.stderr)
         return 1
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out.bin"
         build = [sys.executable, "-m", "ecattool", "sii", "build", str(args.file), "--device", args.device,
                  "--policy", "newest", "-o", str(out)]
-        cmds: dict[str, tuple[list[str], Path | None]] = {
+        cmds: dict[str, Variant] = {
             "bare-parse": ([sys.executable, "-c", "import sys\nfrom lxml import etree\netree.parse(sys.argv[1])\n",
                             str(args.file)], None),
             "sii-build": (build, None),
         }
         if args.against is not None:
             cmds["sii-build@" + args.against.name] = (build, args.against.resolve())
-        for cmd, package_dir in cmds.values():  # warm the OS file cache and the .pyc files
-            run_once(cmd, package_dir)
-            run_once(cmd, package_dir)
-        times: dict[str, list[float]] = {k: [] for k in cmds}
-        for _ in range(args.runs):
-            for name, (cmd, package_dir) in cmds.items():
-                times[name].append(run_once(cmd, package_dir))
+        times = interleaved(cmds, args.runs, warmups=2)
         size = out.stat().st_size
-    base = statistics.median(times["bare-parse"])
-    base_min = min(times["bare-parse"])
     print(f"file: {args.file.name} ({args.file.stat().st_size} bytes), device {args.device} -> {size}-byte image, "
           f"{args.runs} runs each, median wall time per process")
-    for name, ts in times.items():
-        med = statistics.median(ts)
-        print(f"  {name:16s} {med * 1000:7.1f} ms   ratio {med / base:4.2f}x   "
-              f"(min {min(ts) * 1000:.1f} ms, ratio of minima {min(ts) / base_min:4.2f}x)")
+    report(times, "bare-parse")
     return 0
 
 

@@ -1,0 +1,57 @@
+"""Shared by the whole-process benchmarks: run variants as separate processes, interleaved, and report each
+median with its ratio to a baseline measured in the same run (and the ratio of minima, which moves less when
+other jobs share the machine)."""
+
+from __future__ import annotations
+
+import os
+import statistics
+import subprocess
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+#: A variant: the command line, and the directory holding another revision's ``ecattool`` package (or None).
+Variant = tuple[list[str], "Path | None"]
+
+
+def env_for(package_dir: Path | None = None) -> dict[str, str]:
+    # measure ecattool as installed: byte-compiled modules. Where the shell sets PYTHONDONTWRITEBYTECODE every
+    # run would recompile every imported module (earlier 2.4-2.9x figures included that); the warm-up run
+    # writes the .pyc files.
+    env = dict(os.environ)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    if package_dir is not None:
+        env["PYTHONPATH"] = str(package_dir)
+    return env
+
+
+def run_once(cmd: list[str], package_dir: Path | None = None) -> float:
+    """Wall time of one process; another revision's package runs in its own directory so it is found first."""
+    t0 = time.perf_counter()
+    subprocess.run(cmd, check=True, cwd=package_dir or ROOT, stdout=subprocess.DEVNULL, env=env_for(package_dir))
+    return time.perf_counter() - t0
+
+
+def interleaved(variants: dict[str, Variant], runs: int, warmups: int = 1) -> dict[str, list[float]]:
+    """``runs`` wall times of each variant, one of each in turn, after warming the OS file cache and .pyc files."""
+    for _ in range(warmups):
+        for cmd, package_dir in variants.values():
+            run_once(cmd, package_dir)
+    times: dict[str, list[float]] = {k: [] for k in variants}
+    for _ in range(runs):
+        for name, (cmd, package_dir) in variants.items():
+            times[name].append(run_once(cmd, package_dir))
+    return times
+
+
+def report(times: dict[str, list[float]], baseline: str) -> None:
+    base, base_min = statistics.median(times[baseline]), min(times[baseline])
+    for name, ts in times.items():
+        med = statistics.median(ts)
+        print(f"  {name:16s} {med * 1000:7.1f} ms   ratio {med / base:4.2f}x   "
+              f"(min {min(ts) * 1000:.1f} ms, ratio of minima {min(ts) / base_min:4.2f}x)")
+
+
+def has_package(directory: Path) -> bool:
+    return (directory / "ecattool" / "__init__.py").is_file()
