@@ -57,21 +57,15 @@ Examples:
 @click.option("--name", default="axis1", show_default=True, help="Name of the first drive.")
 @output_option()
 def new(profile: str | None, product: str | None, esi_path: str | None, select: str | None, name: str, output: str | None) -> None:
-    """Write a minimal, valid project file to start from."""
+    """Write a minimal project file for one drive that lints clean: the device is resolved first (unknown
+    profile, product, ESI or selector: exit 1), and the PP move is only proposed where the drive has mode 1."""
     if (profile is None) == (esi_path is None):
         raise click.UsageError("give --profile or --esi")
-    if profile:
-        device = f"    device:\n      profile: {profile}\n" + (f"      product: {product}\n" if product else "")
-    else:
-        device = f"    device:\n      esi: {esi_path}\n" + (f"      select: \"{select}\"\n" if select else "")
-    text = (
-        "# ecattool project file (format 1). Docs: docs/project.md\n"
-        "ecattool: 1\n"
-        "name: my-machine\n"
-        "drives:\n"
-        f"  - name: {name}\n{device}"
-        "    parameters:\n"
-        "      - {object: \"6060:00\", value: 1, comment: profile position mode}\n"
-        "    move: {distance: 1}\n"
-    )
-    write_output(output, text)
+    from pathlib import Path
+
+    from ecattool.project.skeleton import new_project, resolve
+
+    base = Path(output).parent if output not in (None, "-") else Path(".")
+    device = resolve(profile, product, esi_path, select, base)
+    write_output(output, new_project(device, name=name, profile=profile, product=product, esi=esi_path,
+                                     select=select))

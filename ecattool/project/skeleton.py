@@ -1,0 +1,112 @@
+"""A new project file that lints clean for the device it names (``ecattool project new``).
+
+The device is resolved first (a built-in family and product, or an ESI device), so that a typo in a profile,
+product, ESI path or selector is reported now rather than by the first lint, and so that the skeleton only
+asks for what the drive can do: profile position mode and a short PP move where the drive supports mode 1,
+otherwise a comment naming the modes it does support (a Digitax ST has no profile position mode; CSP needs
+distributed clocks and a 607Ah PDO, which a skeleton cannot guess).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+from ecattool.esi.model import Device
+
+_PLAIN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-/]*")
+_YAML_WORDS = {"true", "false", "yes", "no", "on", "off", "null", "y", "n", "~"}
+
+#: CiA-402 names of the modes a skeleton comment lists
+MODE_NAMES = {1: "pp", 2: "vl", 3: "pv", 4: "tq", 6: "hm", 7: "ip", 8: "csp", 9: "csv", 10: "cst"}
+
+
+def _scalar(text: str) -> str:
+    """``text`` as a YAML scalar: bare where that reads back as the same string, else double-quoted."""
+    if _PLAIN.fullmatch(text) and text.lower() not in _YAML_WORDS:
+        return text
+    return json.dumps(text, ensure_ascii=False)  # a JSON string is a YAML double-quoted scalar
+
+
+def resolve(profile: str | None, product: str | None, esi: str | None, select: str | None,
+            base_dir: Path) -> Device:
+    """The device a skeleton is for (raises the usual located errors for unknown names and files)."""
+    if profile is not None:
+        from ecattool.project.cache import load_profile_cached
+
+        return load_profile_cached(profile, product, None)
+    from ecattool.project.cache import load_device_cached
+
+    assert esi is not None
+    return load_device_cached(base_dir / esi, select, "exact")
+
+
+def new_project(device: Device, *, name: str = "axis1", profile: str | None = None, product: str | None = None,
+                esi: str | None = None, select: str | None = None) -> str:
+    """The text of a minimal project with one drive of ``device``, named as the user named it."""
+    from ecattool import profiles
+
+    if profile is not None:
+        ref = f"      profile: {_scalar(profile)}\n" + (f"      product: {_scalar(product)}\n" if product else "")
+    else:
+        ref = f"      esi: {_scalar(str(esi))}\n" + (f"      select: {json.dumps(select)}\n" if select else "")
+    body = _motion(device, tuple(profiles.rules_for(device).supported_modes or ()))
+    return ("# ecattool project file (format 1). Docs: docs/project.md\n"
+            "ecattool: 1\n"
+            "name: my-machine\n"
+            "drives:\n"
+            f"  - name: {_scalar(name)}\n"
+            "    device:\n"
+            f"{ref}{body}")
+
+
+#: profile velocity, acceleration, deceleration for a first move where the device leaves them at 0 or unknown
+#: (the drive would not move at all): slow, in the drive's own units until a scaling: section sets user units
+_PROFILE = ((0x6081, 10_000, "profile velocity, slow (drive units until a scaling section sets user units)"),
+            (0x6083, 100_000, "profile acceleration"), (0x6084, 100_000, "profile deceleration"))
+
+
+def _motion(device: Device, modes: tuple[int, ...]) -> str:
+    """The parameters: and move: lines (or a comment saying why there are none)."""
+    from ecattool.esi.model import Direction
+    from ecattool.od.model import EcState
+    from ecattool.pdo import default_mapping
+
+    mode = device.dictionary.entry(0x6060, 0)
+    if mode is None:
+        return "    # no modes of operation (6060h): not a CiA-402 drive; add parameters: as needed\n"
+    if modes and 1 not in modes:
+        listed = ", ".join(f"{m} ({MODE_NAMES.get(m, '?')})" for m in modes)
+        return (f"    # {_comment(device.type_name)} has no profile position mode; it supports {listed}.\n"
+                "    # For a CSP move: parameters 6060:00 = 8, an RxPDO with 607Ah, dc: where the drive needs\n"
+                "    # it, and move: {distance: 1, mode: csp} (docs/project.md, samples/controltechniques).\n")
+    rx = {(e.index, e.subindex) for p in default_mapping(device).pdos(Direction.RX) for e in p.entries}
+    params = []
+    if (0x6060, 0) in rx:
+        pass  # the commissioning move sets the mode through the PDO (a startup write would be overwritten)
+    elif EcState.PREOP in mode.access.write:
+        params.append('{object: "6060:00", value: 1, comment: profile position mode}')
+    else:
+        return ("    # modes of operation 6060h is read-only by SDO and not in the default RxPDOs: map it (pdo:)\n"
+                "    # before adding move: {distance: 1}\n")
+    for index, value, comment in _PROFILE:
+        e = device.dictionary.entry(index, 0)
+        if e is None or (index, 0) in rx or EcState.PREOP not in e.access.write:
+            continue
+        if _zero_or_unknown(e.default):
+            params.append(f'{{object: "{index:04X}:00", value: {value}, comment: {_scalar(comment)}}}')
+    lines = "".join(f"      - {p}\n" for p in params)
+    return (f"    parameters:\n{lines}" if lines else "") + "    move: {distance: 1}\n"
+
+
+def _zero_or_unknown(default: object) -> bool:
+    if default is None:
+        return True
+    if isinstance(default, (bytes, bytearray)):
+        return not any(default)
+    return default == 0
+
+
+def _comment(text: str) -> str:
+    return " ".join(text.split())
