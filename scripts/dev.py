@@ -43,10 +43,13 @@ def main() -> int:
     cmd, rest = sys.argv[1], sys.argv[2:]
     if cmd == "demo":
         ensure_venv("test")
-        args = rest or ["commission", *sorted(str(p) for p in (ROOT / "samples").glob("*/project.yaml"))]
-        if not rest and len(args) == 1:
-            args = ["esi", "show", str(ROOT / "samples" / "esi" / "etg2001_cia402.xml"), "--pdos"]
-        return subprocess.call([str(BIN / "ecattool"), *args])
+        if rest:
+            return subprocess.call([str(BIN / "ecattool"), *rest])
+        # run from the repository root with relative paths, so the report reads as in README.md
+        args = ["commission", *sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / "samples").glob("*/project.yaml"))]
+        if len(args) == 1:
+            args = ["esi", "show", "samples/esi/etg2001_cia402.xml", "--pdos"]
+        return subprocess.call([str(BIN / "ecattool"), *args], cwd=ROOT)
     ensure_venv("test")
     workers = ["-n", "2"] if "-n" not in rest else []
     return subprocess.call([str(BIN / "python"), "-m", "pytest", *workers, *rest], cwd=ROOT)

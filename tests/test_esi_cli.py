@@ -127,6 +127,12 @@ def test_devices_from_stdin():
     assert res.exit_code == 0 and json.loads(res.output)[0]["type"] == "Drive1"
 
 
+def test_devices_table_names_stdin_as_elsewhere():
+    # docs/cli.md: standard input is named <stdin> (as in 'esi show': "defined at <stdin>:20"), not '-'
+    res = CliRunner().invoke(cli, ["esi", "devices", "-"], input=SAMPLE.read_bytes())
+    assert res.exit_code == 0 and res.output.startswith("<stdin>: 1 device(s)"), res.output
+
+
 def test_sample_validates_against_all_three_schema_sets():
     for version in ("v1.3_etg2001_example_bundled", "v1.14_ETG2000_1.0.10", "v1.17"):
         code, out = run("esi", "validate", str(SAMPLE), "--schema-dir", str(corpus_path("xsd", version)), "--json")

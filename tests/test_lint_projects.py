@@ -162,3 +162,13 @@ def test_inexact_scaling_is_an_info_at_the_scaling_section(tmp_path):
     assert findings and {f.rule for f in findings} == {"scaling.approximated"}
     assert {(f.severity, f.location.line) for f in findings} == {(Severity.INFO, 6)}
     assert any("0x6093" in f.message and "π" in f.message for f in findings)
+
+
+@pytest.mark.parametrize("select, lines", [("0x00030924:0x00010420", set()), ("0", {473}), ("1", {975})])
+def test_esi_structure_findings_are_those_of_the_selected_device(tmp_path, select, lines):
+    # The Elmo Gold file maps 0x60FD in the TxPDOs of its two boot devices without defining it; a project that
+    # uses the drive device (index 2) is not blamed for them, one that uses a boot device is, at its own line.
+    esi = corpus_path("esi", "elmo_Elmo_ECAT_00010420_V11.xml")
+    p = write_project(tmp_path, f"ecattool: 1\ndrives:\n  - name: e\n    device: {{esi: {esi}, select: '{select}'}}\n")
+    hit = [f for f in lint_project(p).findings if f.rule == "esi-pdo-object-missing"]
+    assert {f.location.line for f in hit} == lines and all(f.location.file == str(esi) for f in hit)

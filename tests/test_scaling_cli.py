@@ -150,3 +150,20 @@ def test_compute_with_a_real_esi_leaves_out_missing_objects(capsys) -> None:
     indices = {o["index"] for o in data["objects"]}
     assert "0x6092" in indices and "0x6093" not in indices
     assert any("0x6093" in n for n in data["notes"])
+
+
+def test_esi_device_is_chosen_with_device_as_in_every_other_command(capsys) -> None:
+    # --device SELECTOR is how esi/map/sii/sim choose a device of an ESI; scale took only --select (kept as alias)
+    from tests.conftest import corpus_path
+
+    esi = str(corpus_path("esi", "elmo_Elmo_ECAT_00010420_V11.xml"))
+    spec = str(SAMPLES / "ballscrew.yaml")
+    results = []
+    for opt in ("--device", "--select"):
+        code, out, _ = run(capsys, "scale", "compute", spec, "--esi", esi, opt, "0x00030924:0x00010420", "--json")
+        assert code == 0, out
+        results.append(json.loads(out))
+    assert results[0] == results[1]
+    code, out, _ = run(capsys, "scale", "compute", spec, "--esi", esi, "--device", "0", "--json")
+    boot = {o["index"] for o in json.loads(out)["objects"]}
+    assert code == 0 and "0x6092" in {o["index"] for o in results[0]["objects"]} and "0x6092" not in boot

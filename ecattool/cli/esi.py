@@ -77,7 +77,8 @@ def devices_cmd(file: str, as_json: bool) -> None:
         print_json(rows)
         return
     con = console()
-    title = f"{file}: {len(rows)} device(s), vendor {_hex(doc.vendor_id)} {doc.vendor_name}".rstrip()
+    name = "<stdin>" if file == "-" else file
+    title = f"{name}: {len(rows)} device(s), vendor {_hex(doc.vendor_id)} {doc.vendor_name}".rstrip()
     if doc.root != "EtherCATInfo":
         title += f" [{doc.root}: {len(doc.modules)} module(s)"
         title += f", {len(doc.dictionary)} object(s)]" if doc.dictionary is not None else "]"

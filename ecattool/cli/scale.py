@@ -36,7 +36,8 @@ def _mechanics_options(f: Any) -> Any:
         click.option("--vl/--no-vl", default=None, help="Add the vl velocity factors 604Bh/604Ch (default: Control Techniques only)."),
         click.option("--esi", type=InputFile(),
                      help="ESI file of the drive: object types from its dictionary, objects it lacks left out."),
-        click.option("--select", "selector", help="Device in the ESI (product code, name …) when it has several."),
+        click.option("--device", "--select", "selector",
+                     help="Device in the ESI (type name, product[:revision] or list index) when it has several."),
     ]
     for o in reversed(opts):
         f = o(f)

@@ -6,7 +6,8 @@ ESI bytes, the ecattool version and what else the entry depends on:
 - ``device/<key>.pickle``: a device selected from an ESI and completed for use (default modules in its
   slots, synthesised mapping and assignment objects), keyed also by the selector, the policy and the path
   (its locations name the file). Completing copies the whole dictionary: the expensive part of a cold lint.
-- ``check/<key>.pickle``: the ESI's structural findings (``esi.check_structure``), keyed also by the path.
+- ``check/<key>.pickle``: the structural findings of the selected device (``esi.checks.check_device`` of the
+  device as the ESI describes it, before completion), keyed also by the selector, the policy and the path.
 
 An ESI that names other files (``DictionaryFile``, ``InfoReference``) is keyed also by the names, sizes and
 modification times of the XML files beside it and one directory down, where the reader finds them.
@@ -114,7 +115,7 @@ def _esi(path: str | Path) -> EsiFile:
     if data is None:
         data = read_bytes(path)
         key = _key(data, _references_signature(path, data))
-    # lazy: a selected device is built alone; reading .devices (structure checks) builds the rest
+    # lazy: a selected device is built alone
     obj = _MEMORY[key] = esi.load_bytes(data, str(path), base_dir=Path(path).parent, lazy=True)
     return obj
 
@@ -144,18 +145,20 @@ def load_device_cached(path: str | Path, select: str | None, policy: str) -> Dev
     return obj
 
 
-def esi_findings_cached(path: str | Path) -> list[Finding]:
-    """``esi.check_structure`` of the ESI at ``path``, with a memory and disk cache (content and path)."""
+def esi_findings_cached(path: str | Path, select: str | None, policy: str) -> list[Finding]:
+    """The structural findings (``esi.checks.check_device``) of the device ``select`` of the ESI at ``path``,
+    not of the file's other devices, with a memory and disk cache (content, selector, policy and path)."""
     from ecattool import esi
+    from ecattool.esi.checks import check_device
 
     content, _ = _content_key(path)
-    key = _key(content.encode(), b"check", str(path).encode())
+    key = _key(content.encode(), b"check", str(select).encode(), policy.encode(), str(path).encode())
     hit = _CHECKS.get(key)
     if hit is not None:
         return hit
     obj = _disk_get("check", key, list)
     if not isinstance(obj, list) or not all(isinstance(f, Finding) for f in obj):
-        obj = list(esi.check_structure(_esi(path)))
+        obj = check_device(esi.select(_esi(path), select, policy=policy))
         _disk_put("check", key, obj)
     _CHECKS[key] = obj
     return obj

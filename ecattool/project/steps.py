@@ -129,14 +129,15 @@ def dc_assign_activate(rd: ResolvedDrive) -> int | None:
 
 
 def check_esi(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
-    """The ESI's own structural findings (file-level; de-duplicated across drives by lint)."""
+    """The ESI's structural findings about the selected device (de-duplicated across drives by lint); the
+    file's other devices are not the project's concern (``ecattool esi validate`` checks the whole file)."""
     from ecattool.project.cache import esi_findings_cached
 
     ref = rd.drive.device
     if ref.esi is None:
         return
     try:
-        findings = esi_findings_cached(lp.resolve(ref.esi))
+        findings = esi_findings_cached(lp.resolve(ref.esi), None if ref.select is None else str(ref.select), ref.policy)
     except EcatToolError as exc:
         rd.error("PRJ005", exc.message, exc.location)
         return
