@@ -103,6 +103,22 @@ class ProcessIo:
             if pos is not None and not cmd.complete_access:
                 _put_bits(self.outputs, pos.bit_offset, pos.bit_len, int.from_bytes(cmd.data, "little"))
 
+    def seed_from_drive(self) -> None:
+        """Start every mapped output except the controlword from the value the drive holds (read by SDO in
+        SAFE-OP, after the startup list): the first cycles must not write 0 over a profile velocity or an
+        acceleration that the drive's defaults or the startup list set (HDT maps 6081h/6083h/6084h in its
+        default RxPDOs). The controlword starts at 0: the power stage stays off until the enable sequence.
+        An object the drive will not read out keeps its startup value (or 0)."""
+        for (index, sub), pos in self.out_pos.items():
+            if index == 0x6040 or pos.bit_len % 8:
+                continue
+            try:
+                raw = self.slave.sdo_upload(index, sub)
+            except EcatToolError:
+                continue
+            if len(raw) * 8 == pos.bit_len:
+                _put_bits(self.outputs, pos.bit_offset, pos.bit_len, int.from_bytes(raw, "little"))
+
     def _entry(self, index: int, sub: int) -> Any:
         assert self.rd.device is not None
         e = self.rd.device.dictionary.entry(index, sub)
@@ -393,6 +409,7 @@ def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
         io = ProcessIo(slave, rd)
         io.cycle()
         _startup(slave, rd, _SAFEOP_TRANSITIONS, report)
+        io.seed_from_drive()
         _goto(slave, EcState.OP, report)
         if rd.drive.enable:
             passed = _sdo_step("enable", lambda: cia402.enable(lambda: io.read(0x6041, 0),

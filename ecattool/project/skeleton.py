@@ -39,7 +39,12 @@ def resolve(profile: str | None, product: str | None, esi: str | None, select: s
     from ecattool.project.cache import load_device_cached
 
     assert esi is not None
-    return load_device_cached(base_dir / esi, select, "exact")
+    path = base_dir / esi
+    if not path.is_file():
+        from ecattool.errors import InputError
+
+        raise InputError(f"ESI file {esi!r} not found (looked in {path}; --esi is relative to the project file)")
+    return load_device_cached(path, select, "exact")
 
 
 def new_project(device: Device, *, name: str = "axis1", profile: str | None = None, product: str | None = None,
@@ -82,14 +87,15 @@ def _motion(device: Device, modes: tuple[int, ...]) -> str:
                 "    # For a CSP move: parameters 6060:00 = 8, an RxPDO with 607Ah, dc: where the drive needs\n"
                 "    # it, and move: {distance: 1, mode: csp} (docs/project.md, samples/controltechniques).\n")
     rx = {(e.index, e.subindex) for p in default_mapping(device).pdos(Direction.RX) for e in p.entries}
-    params = []
-    if (0x6060, 0) in rx:
-        pass  # the commissioning move sets the mode through the PDO (a startup write would be overwritten)
-    elif EcState.PREOP in mode.access.write:
-        params.append('{object: "6060:00", value: 1, comment: profile position mode}')
-    else:
-        return ("    # modes of operation 6060h is read-only by SDO and not in the default RxPDOs: map it (pdo:)\n"
-                "    # before adding move: {distance: 1}\n")
+    for index, what in ((0x6060, "modes of operation"), (0x607A, "target position")):
+        e = device.dictionary.entry(index, 0)
+        if (index, 0) not in rx and (e is None or EcState.OP not in e.access.write):
+            return (f"    # {what} {index:04X}h is neither writable by SDO nor in the default RxPDOs: map it (pdo:)\n"
+                    "    # before adding move: {distance: 1}\n")
+    # where 6060h is in an RxPDO, the commissioning move sets the mode through it (a startup write would be
+    # overwritten by the PDO every cycle)
+    params = [] if (0x6060, 0) in rx or EcState.PREOP not in mode.access.write else [
+        '{object: "6060:00", value: 1, comment: profile position mode}']
     for index, value, comment in _PROFILE:
         e = device.dictionary.entry(index, 0)
         if e is None or (index, 0) in rx or EcState.PREOP not in e.access.write:

@@ -8,7 +8,7 @@ from __future__ import annotations
 from typing import Any
 
 from ecattool.errors import EcatToolError
-from ecattool.findings import Finding
+from ecattool.findings import Finding, Severity
 from ecattool.project.loader import LoadedProject
 from ecattool.project.resolve import ResolvedDrive
 from ecattool.startup.model import StartupCommand
@@ -130,7 +130,13 @@ def dc_assign_activate(rd: ResolvedDrive) -> int | None:
 
 def check_esi(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     """The ESI's structural findings about the selected device (de-duplicated across drives by lint); the
-    file's other devices are not the project's concern (``ecattool esi validate`` checks the whole file)."""
+    file's other devices are not the project's concern (``ecattool esi validate`` checks the whole file).
+
+    A flaw in a PDO the drive's mapping does not use is a warning: real vendor files describe PDOs whose
+    objects their dictionary leaves out (the AX2000 ESI maps 2901h, 6062h … and never lists them), and the
+    project cannot repair the file. Where the mapping uses the PDO it stays an error (``disable_rules`` with a
+    reason is the way to accept a vendor file's flaw knowingly).
+    """
     from ecattool.project.cache import esi_findings_cached
 
     ref = rd.drive.device
@@ -141,4 +147,10 @@ def check_esi(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     except EcatToolError as exc:
         rd.error("PRJ005", exc.message, exc.location)
         return
-    rd.findings.extend(findings)
+    used = {p.index for p in (*rd.mapping.rx, *rd.mapping.tx)} if rd.mapping is not None else None
+    for f in findings:
+        pdo_index = f.data.get("pdo")
+        if used is not None and f.severity is Severity.ERROR and isinstance(pdo_index, int) and pdo_index not in used:
+            f = Finding(f.rule, Severity.WARNING, f"{f.message} (a PDO this drive's mapping does not use)",
+                        f.location, f.data)
+        rd.findings.append(f)
