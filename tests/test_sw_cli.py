@@ -121,6 +121,22 @@ def test_show_patch_diff(capsys, tmp_path):
     assert run(capsys, "sw", "diff", c(SW), c(SW))[0] == 0
 
 
+def test_diff_with_parameters_shows_values_as_show_does(capsys, tmp_path):
+    new = tmp_path / "new.sw"
+    assert run(capsys, "sw", "patch", c(SW), "-p", c(PARAMS), "--set", "CACC=0.5", "--set", "SLPER=-3",
+               "-o", str(new))[0] == 0
+    code, out, _ = run(capsys, "sw", "diff", c(SW), str(new), "-p", c(PARAMS), "--json")
+    by_name = {d["name"]: d for d in json.loads(out)["differences"]}
+    assert code == 1
+    # FIXED 16.16 as a decimal (raw 0x32EE0 = 3.18311), INT signed (raw 0xFFFD = -3), raw words kept too
+    assert by_name["CACC"].items() >= {"type": "FIXED", "a": 0x32EE0, "a_value": "3.18311", "b": 0x8000, "b_value": "0.5"}.items()
+    assert by_name["SLPER"].items() >= {"type": "INT", "a": 20, "a_value": "20", "b": 0xFFFD, "b_value": "-3"}.items()
+    code, out, _ = run(capsys, "sw", "diff", c(SW), str(new), "-p", c(PARAMS))
+    assert "3.18311 (0x32EE0)" in out and "-3 (0xFFFD)" in out
+    code, out, _ = run(capsys, "sw", "diff", c(SW), str(new), "--json")  # untyped without parameters.cfg
+    assert all("a_value" not in d for d in json.loads(out)["differences"])
+
+
 def test_show_without_parameters_mentions_section_3(capsys):
     code, out, _ = run(capsys, "sw", "show", c("march_imc_left_ankle.sw"))
     assert code == 0 and "section 3" in out and "0x0252" in out

@@ -391,11 +391,14 @@ def diff(a: str, b: str, parameters: str | None, as_json: bool) -> None:
     else:
         t = table(f"{a} vs {b}: {len(diffs)} difference(s)", ["address", "name", "a", "b"])
 
-        def fmt(v: int | None) -> str:
-            return "-" if v is None else f"0x{v:X} ({v})"
+        def fmt(v: int | None, shown: str | None) -> str:
+            if v is None:
+                return "-"
+            return f"{shown} (0x{v:X})" if shown is not None else f"0x{v:X} ({v})"
 
         for d in diffs:
-            t.add_row(f"0x{d.address:04X}", d.name or "", fmt(d.a), fmt(d.b))
+            name = f"{d.name} ({d.type})" if d.type else d.name or ""
+            t.add_row(f"0x{d.address:04X}", name, fmt(d.a, d.a_value), fmt(d.b, d.b_value))
         console().print(t)
     if diffs:
         sys.exit(1)

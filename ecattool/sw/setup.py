@@ -181,9 +181,15 @@ class Difference:
     b: int | None
     name: str | None = None  # a setup variable, when the difference is inside the setup table
     kind: str = "word"  # "word" or "parameter"
+    type: str | None = None  # the variable's type where parameters.cfg names it (then a_value/b_value)
+    a_value: str | None = None  # decoded as ``sw show`` shows it (FIXED 16.16 as a decimal, signed types signed)
+    b_value: str | None = None
 
     def to_json(self) -> dict[str, Any]:
-        return {"kind": self.kind, "address": self.address, "name": self.name, "a": self.a, "b": self.b}
+        out = {"kind": self.kind, "address": self.address, "name": self.name, "a": self.a, "b": self.b}
+        if self.type is not None:
+            out.update(type=self.type, a_value=self.a_value, b_value=self.b_value)
+        return out
 
 
 def diff(a: SwImage, b: SwImage, params: ParameterTable | None = None) -> list[Difference]:
@@ -204,8 +210,11 @@ def diff(a: SwImage, b: SwImage, params: ParameterTable | None = None) -> list[D
             if x is None or y is None or x.entry.words != y.entry.words:
                 either = x if x is not None else y
                 assert either is not None  # the address comes from va or vb
-                name = either.name
-                out.append(Difference(address, x.entry.raw if x else None, y.entry.raw if y else None, name, "parameter"))
+                typed = params is not None and either.type in TYPE_WORDS
+                out.append(Difference(address, x.entry.raw if x else None, y.entry.raw if y else None, either.name,
+                                      "parameter", either.type if typed else None,
+                                      format_value(x.type, x.value) if typed and x else None,
+                                      format_value(y.type, y.value) if typed and y else None))
         for t in (ta, tb):
             covered.update(range(t.block.start, t.block.end + 1))
     wa, wb = a.words(), b.words()
