@@ -1,3 +1,5 @@
-from ecattool.cli import main
+import sys
 
-main()
+from ecattool._entry import main
+
+sys.exit(main())

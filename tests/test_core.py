@@ -58,9 +58,23 @@ def test_cli_version_is_fast_import():
     out = subprocess.run([sys.executable, "-X", "importtime", "-m", "ecattool", "--version"], capture_output=True, text=True)
     assert out.returncode == 0 and "0.1.0" in out.stdout
     imported = out.stderr
-    for heavy in ("lxml", "rich", "pydantic", "yaml"):
+    for heavy in ("lxml", "rich", "pydantic", "yaml", "click"):
         assert f" {heavy}" not in imported.replace("|", " ").split("\n")[-1]
         assert not any(line.rstrip().endswith(f" {heavy}") for line in imported.splitlines()), heavy
+
+
+def test_cli_version_fast_path_prints_what_click_prints(capsys):
+    from ecattool._entry import main as entry
+    from ecattool.cli import main as cli_main
+
+    assert entry(["--version"]) == 0
+    fast = capsys.readouterr().out
+    try:  # click's own version option (what `ecattool --debug --version` and the library entry reach)
+        cli_main(["--version"])
+    except SystemExit as exc:
+        assert exc.code in (0, None)
+    assert capsys.readouterr().out == fast == "ecattool, version 0.1.0\n"
+    assert entry(["-V"]) == 0 and capsys.readouterr().out == fast
 
 
 def test_cli_unknown_error_is_one_line(tmp_path):
