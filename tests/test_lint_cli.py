@@ -3,6 +3,8 @@ annotations, --strict, exit codes 0/1/2, and the content-keyed ESI cache (pickle
 
 from __future__ import annotations
 
+import json
+
 import pickle
 import re
 from pathlib import Path
@@ -116,6 +118,27 @@ def test_sarif_format(capsys, tmp_path):
         "tests/data/projects/prj010_no_object.yaml")
     rules = {r["id"]: r["shortDescription"]["text"] for r in log["runs"][0]["tool"]["driver"]["rules"]}
     assert rules["PRJ010"] == "a parameter names an object that does not exist"
+
+
+def test_sarif_describes_pdo_and_esi_rules_and_invents_no_web_addresses(capsys, tmp_path):
+    import shutil
+
+    from ecattool.pdo.check import RULES as PDO_RULES
+    from ecattool.project.lint import rule_descriptions
+
+    shutil.copy(corpus_path("esi", "beckhoff_AX2xxx.xml"), tmp_path / "ax.xml")
+    p = tmp_path / "m.yaml"  # esi-pdo-object-missing, and a PDO rule (an 80-bit Technosoft PDO)
+    p.write_text("ecattool: 1\ndrives:\n  - name: a\n    device: {esi: ax.xml}\n  - name: b\n"
+                 "    device: {profile: technosoft-ipos}\n    pdo:\n      rx: [{index: 0x1600, entries: "
+                 "['0x6040:00/16', '0x607A:00/32', '0x60FF:00/32']}]\n")
+    code, log = run_json(capsys, "lint", "--format", "sarif", str(p))
+    _check_sarif(log)
+    rules = {r["id"]: r["shortDescription"]["text"] for r in log["runs"][0]["tool"]["driver"]["rules"]}
+    assert rules["esi-pdo-object-missing"].startswith("a PDO entry names an object")
+    assert any(k.startswith("PDO") for k in rules) and all(rules[k] == PDO_RULES[k][1] for k in rules if k.startswith("PDO"))
+    assert all(text != rid for rid, text in rules.items())
+    assert set(rule_descriptions()) >= set(PDO_RULES)
+    assert "ecattool.dev" not in json.dumps(log) and "Uri" not in json.dumps(log["runs"][0]["tool"])
 
 
 def test_sarif_of_a_clean_project_is_valid_and_empty(capsys):

@@ -50,9 +50,9 @@ def lint(projects: tuple[str, ...], fmt: str, as_json: bool, strict: bool, outpu
     if fmt == "json":
         write_output(output, dump_json(report.to_json(findings, list(projects))) + "\n", inputs)
     elif fmt == "sarif":
-        from ecattool.project.lint import PROJECT_RULES
+        from ecattool.project.lint import rule_descriptions
 
-        write_output(output, dump_json(report.to_sarif(findings, PROJECT_RULES)) + "\n", inputs)
+        write_output(output, dump_json(report.to_sarif(findings, rule_descriptions())) + "\n", inputs)
     elif fmt == "github":
         write_output(output, report.to_github(findings), inputs)
     else:

@@ -15,6 +15,18 @@ from ecattool.esi.model import Device, Direction, EsiFile, Pdo
 from ecattool.findings import Finding, Severity
 
 
+#: rule id -> what it means (lint's SARIF rule descriptions)
+RULES: dict[str, str] = {
+    "esi-pdo-duplicate": "two PDOs of one device share an index",
+    "esi-pdo-object-missing": "a PDO entry names an object or sub-index the device's dictionary lacks",
+    "esi-pdo-bitlen": "a PDO entry's BitLen differs from the dictionary entry's bit size",
+    "esi-pdo-sm-missing": "a PDO's default Sm does not exist",
+    "esi-pdo-sm-direction": "a PDO's default Sm carries the other direction",
+    "esi-sm-size": "the default process image of a sync manager is larger than its MaxSize",
+    "esi-exclude-missing": "an Exclude names a PDO the device does not define",
+}
+
+
 def _f(rule: str, sev: Severity, msg: str, loc: object, **data: object) -> Finding:
     return Finding(rule, sev, msg, loc, dict(data))  # type: ignore[arg-type]
 

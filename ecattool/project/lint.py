@@ -39,6 +39,14 @@ PROJECT_RULES: dict[str, str] = {
 }
 
 
+def rule_descriptions() -> dict[str, str]:
+    """Every rule id lint can report (project, PDO mapping, ESI structure) -> what it means."""
+    from ecattool.esi.checks import RULES as ESI_RULES
+    from ecattool.pdo.check import RULES as PDO_RULES
+
+    return {**PROJECT_RULES, **{k: title for k, (_, title) in PDO_RULES.items()}, **ESI_RULES}
+
+
 @dataclass(slots=True)
 class ProjectResult:
     path: str

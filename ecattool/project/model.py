@@ -180,6 +180,6 @@ class Project(_Strict):
 def json_schema() -> dict[str, Any]:
     schema = Project.model_json_schema()
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
-    schema["$id"] = "https://ecattool.dev/schemas/project.schema.json"
+    schema["$id"] = "urn:ecattool:project-schema:1"  # an identifier, not an address: ecattool has no web site
     schema["title"] = "ecattool project file"
     return schema

@@ -37,7 +37,6 @@ def to_sarif(findings: list[Finding], rule_help: dict[str, str] | None = None) -
         {
             "id": rid,
             "shortDescription": {"text": (rule_help or {}).get(rid, rid)},
-            "helpUri": "https://ecattool.dev/docs/rules#" + rid.lower(),
         }
         for rid in rule_ids
     ]
@@ -65,8 +64,7 @@ def to_sarif(findings: list[Finding], rule_help: dict[str, str] | None = None) -
         "version": "2.1.0",
         "runs": [
             {
-                "tool": {"driver": {"name": "ecattool", "version": __version__,
-                                    "informationUri": "https://ecattool.dev", "rules": rules}},
+                "tool": {"driver": {"name": "ecattool", "version": __version__, "rules": rules}},
                 "results": results,
             }
         ],
