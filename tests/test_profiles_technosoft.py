@@ -340,3 +340,49 @@ def test_ambiguities_54_71_72_ranges(dev):
 
 def test_ambiguity_78_6063_heading_name(dev):
     assert dev.dictionary.get(0x6063).name == "Position actual internal value"
+
+
+# --- cross-check with Technosoft's own CANopen EDS of the iPOS (corpus/eds) ------------------------------
+#: CANopen data type codes of the EDS -> ecattool type names
+_EDS_TYPES = {0x1: "BOOL", 0x2: "SINT", 0x3: "INT", 0x4: "DINT", 0x5: "USINT", 0x6: "UINT", 0x7: "UDINT",
+              0x9: "STRING"}
+#: where the EtherCAT manual prints another type than the EDS (docs/decisions.md, "Cross-check with the EDS")
+_MANUAL_TYPE = {(0x2083, 0), (0x2084, 0), (0x2092, 1), (0x2092, 2), (0x2092, 3), (0x2092, 4), (0x206B, 0),
+                (0x206C, 0), (0x2060, 0)}
+
+
+def _eds_entries() -> dict[tuple[int, int], tuple[int, str]]:
+    """(index, sub) -> (CANopen data type code, AccessType) of every VAR and sub-entry in the EDS."""
+    import configparser
+    import re
+
+    from tests.conftest import CORPUS
+
+    cp = configparser.ConfigParser(strict=False, interpolation=None)
+    cp.optionxform = str  # type: ignore[assignment,method-assign]
+    cp.read(CORPUS / "eds" / "technosoft_iPOS.D.v1.04.eds", encoding="latin-1")
+    out = {}
+    for sec in cp.sections():
+        m = re.fullmatch(r"([0-9A-Fa-f]{4})(?:sub([0-9A-Fa-f]+))?", sec)
+        if m and "DataType" in cp[sec]:
+            out[(int(m.group(1), 16), int(m.group(2) or "0", 16))] = (int(cp[sec]["DataType"], 0),
+                                                                      cp[sec].get("AccessType", "").lower())
+    return out
+
+
+@pytest.mark.parametrize("revision", ["F515I", "F515K"])
+def test_profile_agrees_with_technosoft_eds_on_types_and_writability(revision):
+    eds = _eds_entries()
+    assert len(eds) > 250  # the file was read
+    od = profiles.load("technosoft-ipos", revision=revision).dictionary
+    compared, wrong = 0, []
+    for (index, sub), (code, access) in sorted(eds.items()):
+        e = od.entry(index, sub)
+        if e is None or e.datatype is None or code not in _EDS_TYPES:
+            continue
+        compared += 1
+        if (index, sub) not in _MANUAL_TYPE and e.type_name != _EDS_TYPES[code]:
+            wrong.append(f"{index:04X}:{sub} type {e.type_name}, EDS {_EDS_TYPES[code]}")
+        if (access in ("ro", "const")) is e.access.writable():
+            wrong.append(f"{index:04X}:{sub} access {e.access.text}, EDS {access}")
+    assert compared > 150 and wrong == []

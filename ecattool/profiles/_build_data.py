@@ -221,6 +221,9 @@ TS_FIX: dict[tuple[int, int], dict[str, Any]] = {
     (0x208A, 0): {"min": None, "max": None},
     (0x2102, 0): {"min": 0, "max": 1},
     (0x2073, 0): {"min": 1, "max": None},
+    (0x2108, 3): {"type": "INT", "min": None, "max": None,
+                  "comment": "no type printed and a range \"0 -32767\"; Technosoft's iPOS EDS v1.04 "
+                             "declares INTEGER16 (a filtered current is signed) (decision TS-7)"},
 }
 
 
@@ -271,7 +274,7 @@ def build_technosoft(ref: Path) -> dict[str, Any]:
             elif index == 0x1009:
                 nt = ("STRING", 0)
             else:
-                nt = ("UINT", 16)  # 2108h.3 and the reserved 2113h sub-indices (decision TS-7)
+                nt = ("UINT", 16)  # the reserved 2113h sub-indices (decision TS-7); 2108h.3 is fixed in TS_FIX
         typ, bits = nt
         # access
         acc = (r["access"] or "").strip().lower()
