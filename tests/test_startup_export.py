@@ -432,6 +432,28 @@ def test_ecmc_round_trip():
     assert back.position == 2 and back.identity.vendor_id == 0x1A3
     assert [(p.index, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in back.rx_pdos] == \
         [(p.index, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in cfg.rx_pdos]
+    assert 'ecmcConfigOrDie "Cfg.EcSlaveConfigDC(2,0x300,1000000,0,0,0)"' in text
+    assert (back.dc_assign_activate, back.dc_cycle_ns, back.dc_shift_ns) == (0x0300, 1_000_000, 0)
+
+
+def test_ecmc_dc_without_cycle_runs_at_the_ecmc_sample_rate():
+    # a ros2 file has assign_activate but no cycle: ecmc gets SYNC0 at its sample rate, as ecmccfg scripts do
+    (cfg,) = import_file(corpus_path("configs/ros2_technosoft_ipos3604.yaml"))
+    text = export(cfg, "ecmc")
+    assert "Cfg.EcSlaveConfigDC(${ECMC_EC_SLAVE_NUM},0x330,${ECMC_TEMP_PERIOD_NANO_SECS},0,0,0)" in text
+    assert text.index("ecmcEpicsEnvSetCalc(\"ECMC_TEMP_PERIOD_NANO_SECS\"") < text.index("EcSlaveConfigDC")
+    (back,) = import_bytes(text.encode(), "x.cmd")
+    assert (back.dc_assign_activate, back.dc_cycle_ns) == (0x0330, None)
+
+
+def test_ecmc_reads_dc_with_sync1_as_a_note():
+    script = b'ecmcConfigOrDie "Cfg.EcSlaveConfigDC(2,0x320,1000000,500000,1000000,500000)"\n'
+    (cfg,) = import_bytes(script, "dc.cmd", "ecmc")
+    assert (cfg.position, cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns) == (2, 0x320, 1_000_000, 500_000)
+    assert [n.rule for n in cfg.notes] == ["startup.ecmc.sync1"] and cfg.notes[0].location.line == 1
+    with pytest.raises(InputError) as err:
+        import_bytes(b'ecmcConfigOrDie "Cfg.EcSlaveConfigDC(2,0x300)"\n', "dc.cmd", "ecmc")
+    assert err.value.location.line == 1
 
 
 def test_single_slave_formats_refuse_several_slaves():
