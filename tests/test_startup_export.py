@@ -327,6 +327,16 @@ def test_ros2_from_eni_types_by_size_and_marks_transitions():
     assert "{index: 0x1600, sub_index: 1, type: uint32, value: 1614807056}" in export(cfg, "ros2")
 
 
+def test_ros2_from_ecmc_writes_no_ecmc_bookkeeping_keys():
+    # the ecmc importer keeps its slave reference in extra; it is no ethercat_driver_ros2 key
+    (cfg,) = import_file(corpus_path("configs/ecmc_ecmciPOSXXXX.cmd"))
+    assert cfg.extra == {"ecmc_slave": "${ECMC_EC_SLAVE_NUM}"}
+    text = export(cfg, "ros2")
+    assert "ecmc_slave" not in text and "ECMC" not in text
+    (back,) = import_bytes(text.encode(), "x.yaml", "ros2")
+    assert back.extra == {}
+
+
 def test_ros2_refuses_complete_access_and_odd_sizes():
     with pytest.raises(EncodeError, match="complete-access"):
         export(SlaveConfig(StartupList([StartupCommand("PS", 0x1C12, 0, b"\x01\x00\x16", complete_access=True)])), "ros2")
