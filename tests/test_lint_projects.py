@@ -36,6 +36,7 @@ EXPECTED: dict[str, set[tuple[str, Severity, int, int | None]]] = {
     "prj016_twice.yaml": {("PRJ016", W, 8, 18), ("PDO021", W, 7, 38), ("PDO021", W, 8, 43)},
     "prj020_position.yaml": {("PRJ020", E, 8, 15)},
     "prj031_sw_not_technosoft.yaml": {("PRJ031", W, 6, 9)},
+    "prj032_sw_other_drive.yaml": {("PRJ032", W, 6, 9)},
     "prj040_opmode.yaml": {("PRJ040", E, 8, 18)},
     "prj050_scaling.yaml": {("PRJ050", E, 7, 7)},
     "pdo003_twice.yaml": {("PDO003", E, 10, 18)},
@@ -65,6 +66,15 @@ def test_every_project_rule_has_a_broken_project():
     # scaling package itself (scaling.approximated, below), every catalogued rule is emitted
     assert set(PROJECT_RULES) - covered - {"PRJ030"} == set()
     assert set(EXPECTED) == {p.name for p in DATA.glob("*.yaml")}
+
+
+def test_sw_made_for_another_product_or_firmware():
+    # identification 'P027314E221F515K' (manual §4.8.6: P027.314.E221 -> 27314221) against the drive's
+    (f,) = lint_project(DATA / "prj032_sw_other_drive.yaml").findings
+    assert "product code 27314221" in f.message and "27214221" in f.message
+    assert "firmware F515K, the drive has F515I" in f.message
+    # the matching drive is clean; without a revision in the project the firmware is not compared
+    assert lint_project(sample("technosoft_ipos")).findings == []
 
 
 def test_messages_say_what_is_right():

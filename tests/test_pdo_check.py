@@ -100,6 +100,27 @@ def test_dummy_in_txpdo_is_refused_but_allowed_in_rxpdo() -> None:
     assert {f.rule for f in check(dev, wrong, rules=rules)} == {"PDO007"}
 
 
+def test_repeated_dummies_pad_without_a_duplicate_warning() -> None:
+    # Technosoft §2.3.1/§2.3.12: data-type dummies and 207Dh fill an RxPDO; repeating them maps no object twice
+    from ecattool import profiles
+    dev = profiles.load("technosoft-ipos")
+    m = Mapping.from_text(rx="0x1600=controlword,0x0005:00/8,0x0005:00/8,0x207D:00/8,0x207D:00/8", device=dev)
+    assert check(dev, m) == []
+    twice = Mapping.from_text(rx="0x1600=controlword,controlword", device=dev)
+    assert [f.rule for f in check(dev, twice)] == ["PDO020"]
+
+
+def test_odd_image_hint_proposes_what_the_family_accepts() -> None:
+    # a family without gaps must not be told to add a gap (that is PDO013): it is told to pad with dummies
+    from ecattool import profiles
+    dev = profiles.load("technosoft-ipos")
+    m = Mapping.from_text(rx="0x1600=controlword,0x0001:00/1", device=dev)
+    (f,) = check(dev, m)
+    assert f.rule == "PDO027" and "gap/" not in f.message and "dummy entries" in f.message
+    generic = _run("PDO027")
+    assert "gap/7" in generic[0].message
+
+
 def test_entry_limit_of_the_mapping_object() -> None:
     dev = make_device()
     m = Mapping.from_text(rx="0x1600=" + ",".join(["gap/8"] * 9), device=dev)

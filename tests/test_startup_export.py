@@ -327,6 +327,16 @@ def test_ros2_from_eni_types_by_size_and_marks_transitions():
     assert "{index: 0x1600, sub_index: 1, type: uint32, value: 1614807056}" in export(cfg, "ros2")
 
 
+def test_ros2_from_ecmc_writes_no_ecmc_bookkeeping_keys():
+    # the ecmc importer keeps its slave reference in extra; it is no ethercat_driver_ros2 key
+    (cfg,) = import_file(corpus_path("configs/ecmc_ecmciPOSXXXX.cmd"))
+    assert cfg.extra == {"ecmc_slave": "${ECMC_EC_SLAVE_NUM}"}
+    text = export(cfg, "ros2")
+    assert "ecmc_slave" not in text and "ECMC" not in text
+    (back,) = import_bytes(text.encode(), "x.yaml", "ros2")
+    assert back.extra == {}
+
+
 def test_ros2_refuses_complete_access_and_odd_sizes():
     with pytest.raises(EncodeError, match="complete-access"):
         export(SlaveConfig(StartupList([StartupCommand("PS", 0x1C12, 0, b"\x01\x00\x16", complete_access=True)])), "ros2")
@@ -432,6 +442,28 @@ def test_ecmc_round_trip():
     assert back.position == 2 and back.identity.vendor_id == 0x1A3
     assert [(p.index, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in back.rx_pdos] == \
         [(p.index, [(e.index, e.subindex, e.bit_len) for e in p.entries]) for p in cfg.rx_pdos]
+    assert 'ecmcConfigOrDie "Cfg.EcSlaveConfigDC(2,0x300,1000000,0,0,0)"' in text
+    assert (back.dc_assign_activate, back.dc_cycle_ns, back.dc_shift_ns) == (0x0300, 1_000_000, 0)
+
+
+def test_ecmc_dc_without_cycle_runs_at_the_ecmc_sample_rate():
+    # a ros2 file has assign_activate but no cycle: ecmc gets SYNC0 at its sample rate, as ecmccfg scripts do
+    (cfg,) = import_file(corpus_path("configs/ros2_technosoft_ipos3604.yaml"))
+    text = export(cfg, "ecmc")
+    assert "Cfg.EcSlaveConfigDC(${ECMC_EC_SLAVE_NUM},0x330,${ECMC_TEMP_PERIOD_NANO_SECS},0,0,0)" in text
+    assert text.index("ecmcEpicsEnvSetCalc(\"ECMC_TEMP_PERIOD_NANO_SECS\"") < text.index("EcSlaveConfigDC")
+    (back,) = import_bytes(text.encode(), "x.cmd")
+    assert (back.dc_assign_activate, back.dc_cycle_ns) == (0x0330, None)
+
+
+def test_ecmc_reads_dc_with_sync1_as_a_note():
+    script = b'ecmcConfigOrDie "Cfg.EcSlaveConfigDC(2,0x320,1000000,500000,1000000,500000)"\n'
+    (cfg,) = import_bytes(script, "dc.cmd", "ecmc")
+    assert (cfg.position, cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns) == (2, 0x320, 1_000_000, 500_000)
+    assert [n.rule for n in cfg.notes] == ["startup.ecmc.sync1"] and cfg.notes[0].location.line == 1
+    with pytest.raises(InputError) as err:
+        import_bytes(b'ecmcConfigOrDie "Cfg.EcSlaveConfigDC(2,0x300)"\n', "dc.cmd", "ecmc")
+    assert err.value.location.line == 1
 
 
 def test_single_slave_formats_refuse_several_slaves():

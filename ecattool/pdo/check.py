@@ -369,9 +369,16 @@ class _Checker:
                 self.add("PDO018", f"the {_image(d)} is {img.byte_size} bytes; SM{sm.number} holds at most "
                          f"{sm.max_size} bytes", loc, bytes=img.byte_size, max=sm.max_size)
             if img.bit_size % 8:
-                self.add("PDO027", f"the {_image(d)} is {img.bit_size} bits, not a whole number of bytes; "
-                         f"add a gap of {8 - img.bit_size % 8} bits (gap/{8 - img.bit_size % 8})", loc,
-                         bits=img.bit_size)
+                pad = 8 - img.bit_size % 8
+                if self.rules.gaps_allowed:
+                    hint = f"add a gap of {pad} bits (gap/{pad})"
+                elif self.rules.dummy_indices and (self.rules.dummies_in_rx if d is Direction.RX
+                                                   else self.rules.dummies_in_tx):
+                    hint = f"pad it with {pad} bits of dummy entries ({self.rules.family} allows no gaps)"
+                else:
+                    hint = f"map {pad} more bits ({self.rules.family} allows no gaps)"
+                self.add("PDO027", f"the {_image(d)} is {img.bit_size} bits, not a whole number of bytes; {hint}",
+                         loc, bits=img.bit_size)
             by_pdo = {p.index: p for p in pdos}
             seen: dict[tuple[int, int], int] = {}
             # every mapped RxPDO object is overwritten every cycle, default PDOs included
@@ -391,6 +398,8 @@ class _Checker:
                              f"{_image(d)}; a {ie.bit_len}-bit value should start on a byte boundary",
                              eloc, offset=ie.offset)
                 key = (ie.index, ie.subindex)
+                if self.is_dummy(ie.index):
+                    continue  # dummies pad a PDO and carry no data: repeating one is how they are used (§2.3.1)
                 if key in seen:
                     self.add("PDO020", f"{_a(*key)} is mapped twice in the {_image(d)} "
                              f"(PDO {_a(seen[key])} and {_a(ie.pdo)})", eloc, index=ie.index, subindex=ie.subindex)

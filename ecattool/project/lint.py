@@ -34,6 +34,7 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ020": "two drives share a bus position",
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
+    "PRJ032": "a .sw image was made for another Technosoft product or firmware than the drive's",
     "PRJ040": "the DC OpMode named does not exist in the ESI",
     "PRJ050": "the scaling section cannot be computed",
 }

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ecattool.errors import EcatToolError
+from ecattool.errors import EcatToolError, Location
 from ecattool.findings import Finding, Severity
 from ecattool.project.loader import LoadedProject
 from ecattool.project.resolve import ResolvedDrive
@@ -101,6 +101,33 @@ def check_sw(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         return
     for f in sw.check(rd.sw_image):
         rd.findings.append(Finding("PRJ030", f.severity, f"{cfg.file}: {f.message} [{f.rule}]", f.location or loc))
+    if rd.device.vendor_id == 0x1A3:
+        check_sw_identification(rd, cfg.file, loc)
+
+
+def check_sw_identification(rd: ResolvedDrive, file: str, loc: Location | None) -> None:
+    """PRJ032: the image's identification block (ProductID + FirmwareID it was made for, sw-format.md §6) names
+    another product code than the drive's, or (where the project names the revision) another firmware."""
+    from ecattool.sw.layout import describe
+
+    assert rd.device is not None and rd.sw_image is not None
+    info = next((b for b in describe(rd.sw_image) if b.kind == "identification"), None)
+    if info is None:
+        return
+    product_id, firmware = info.details.get("product_id"), str(info.details.get("firmware_id") or "")
+    made_for: list[str] = []
+    if isinstance(product_id, str):  # P027.314.E221 -> 27314221 (manual §4.8.6)
+        code = int("".join(ch for ch in product_id if ch.isdigit()))
+        if code != rd.device.product_code:
+            made_for.append(f"product {product_id} (product code {code}), the drive is {rd.device.type_name} "
+                            f"(product code {rd.device.product_code})")
+    if rd.drive.device.revision is not None and firmware:
+        drive_fw = str(rd.device.extra.get("firmware") or "")
+        if drive_fw and firmware != drive_fw:
+            made_for.append(f"firmware {firmware}, the drive has {drive_fw}")
+    if made_for:
+        rd.warning("PRJ032", f"{file} was made for {'; '.join(made_for)} (identification {info.details['text']!r}); "
+                   "its setup table may not fit this drive", loc)
 
 
 def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:

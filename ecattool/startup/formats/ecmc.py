@@ -5,7 +5,8 @@ or 4 bytes (ecmc's SDO value is a 32-bit integer); longer data and complete-acce
 ``Cfg.EcAddSdoBuffer`` / ``Cfg.EcAddSdoComplete`` with the data as hex bytes. The slave is its bus position,
 or the ``${ECMC_EC_SLAVE_NUM}`` macro when the position of a single slave is unknown (as ecmccfg hardware
 scripts use it; several slaves of unknown position get their list index).
-PDO information becomes ``Cfg.EcAddEntryComplete`` lines.
+PDO information becomes ``Cfg.EcAddEntryComplete`` lines, DC ``Cfg.EcSlaveConfigDC`` (SYNC0 at the ecmc sample
+rate, as ecmccfg writes it, where the cycle is not known).
 
 Reading: ``EcAddSdo``, ``EcWriteSdo`` (both become PS commands: ecmc sends them in PRE-OP),
 ``EcAddSdoBuffer``/``EcAddSdoComplete``, ``EcAddEntryComplete`` (PDO information), and ``epicsEnvSet``
@@ -93,6 +94,14 @@ def export(configs: list[SlaveConfig]) -> str:
                         name = re.sub(r"\W+", "_", e.name).strip("_")[:40] or f"entry_{pdo.index:04x}_{k}"
                         out.append(f'ecmcConfigOrDie "Cfg.EcAddEntryComplete({slave},{v},{p},{direction},{sm},'
                                    f'0x{pdo.index:04x},0x{e.index:04x},0x{e.subindex:x},{e.bit_len},{name})"')
+        if c.dc_assign_activate:
+            if c.dc_cycle_ns:
+                cycle = str(c.dc_cycle_ns)
+            else:  # as ecmccfg hardware scripts do: SYNC0 at the ecmc sample rate
+                cycle = "${ECMC_TEMP_PERIOD_NANO_SECS}"
+                out.append('ecmcEpicsEnvSetCalc("ECMC_TEMP_PERIOD_NANO_SECS",1000/${ECMC_EC_SAMPLE_RATE=1000}*1E6)')
+            out.append(f'ecmcConfigOrDie "Cfg.EcSlaveConfigDC({slave},0x{c.dc_assign_activate:x},{cycle},'
+                       f'{c.dc_shift_ns or 0},0,0)"')
         for s in c.soe_commands:
             out.append(f"#- SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()}: "
                        "not representable in ecmc")
@@ -179,6 +188,8 @@ class _Reader:
                 data, comment=self.pending_comment, complete_access=complete, source=loc))
         elif func == "EcAddEntryComplete":
             self.entry(args, loc)
+        elif func == "EcSlaveConfigDC":
+            self.dc(args, loc)
         elif func in _REPORTED:
             reader = self.slave(args[0], loc) if args else None
             if reader is not None:
@@ -203,6 +214,21 @@ class _Reader:
             cfg.pdos(direction).append(pdo)
         pdo.entries.append(PdoEntry(self.number(args[6], loc, "entry index"), self.number(args[7], loc, "entry sub"),
                                     self.number(args[8], loc, "bit length"), name=args[-1], location=loc))
+
+    def dc(self, args: list[str], loc: Location) -> None:
+        """``Cfg.EcSlaveConfigDC(slave,assign_activate,sync0_cycle,sync0_shift,sync1_cycle,sync1_shift)``; a cycle
+        or shift given by a macro the script leaves to ecmc (its sample rate) stays unknown."""
+        if len(args) != 6:
+            raise InputError("Cfg.EcSlaveConfigDC takes (slave,assign_activate,sync0_cycle,sync0_shift,"
+                             f"sync1_cycle,sync1_shift); got {len(args)} arguments", loc)
+        cfg = self.slave(args[0], loc)
+        cfg.dc_assign_activate = self.number(args[1], loc, "DC assign activate")
+        cycle, shift = (None if _MACRO.search(a) else self.number(a, loc, what)
+                        for a, what in ((args[2], "SYNC0 cycle"), (args[3], "SYNC0 shift")))
+        cfg.dc_cycle_ns, cfg.dc_shift_ns = cycle or None, shift
+        if args[4] not in ("0", "0x0"):
+            cfg.note("startup.ecmc.sync1", f"SYNC1 cycle {args[4]} (shift {args[5]}) is not kept: the startup model "
+                     "holds SYNC0 only", loc, Severity.INFO)
 
     def line(self, raw: str, n: int) -> None:
         loc = Location(self.source, n)

@@ -35,6 +35,9 @@ COE_TO_ROS.update({"BYTE": "uint8", "WORD": "uint16", "DWORD": "uint32", "INTEGE
                    "UNSIGNED32": "uint32", "REAL32": "float", "REAL64": "double"})
 _BY_SIZE = {1: "uint8", 2: "uint16", 4: "uint32", 8: "uint64"}
 _KNOWN_KEYS = ("vendor_id", "product_id", "assign_activate", "sdo", "rpdo", "tpdo")
+#: what other importers keep in ``SlaveConfig.extra`` about their own format (ecmc's slave reference, ENI's
+#: PhysAddr): not ros2 keys, so not written as such
+_OTHER_FORMATS_KEYS = ("ecmc_slave", "phys_addr")
 
 
 def _scalar(value: Any) -> str:
@@ -114,7 +117,7 @@ def export(configs: list[SlaveConfig]) -> str:
     if c.dc_assign_activate is not None:
         lines.append(f"assign_activate: 0x{c.dc_assign_activate:04x}  # DC Synch register")
     for key, value in c.extra.items():
-        if key not in _KNOWN_KEYS and key != "sm":
+        if key not in _KNOWN_KEYS and key != "sm" and key not in _OTHER_FORMATS_KEYS:
             if isinstance(value, (dict, list)):
                 lines.append(yaml.safe_dump({key: value}, default_flow_style=None, sort_keys=False).strip())
             else:
