@@ -466,6 +466,24 @@ def test_ecmc_reads_dc_with_sync1_as_a_note():
     assert err.value.location.line == 1
 
 
+def test_signedness_survives_ecmc_and_reaches_ros2():
+    """ecmc's EcAddEntryComplete has an optional signed flag; without it, a standard CiA-402 object keeps its
+    standard type: a ros2 driver must read a negative position as negative, not as 4 billion."""
+    (cfg,) = import_file(corpus_path("configs/ecmc_ecmciPOSXXXX.cmd"))
+    types = {(e.index, e.subindex): e.data_type for p in (*cfg.rx_pdos, *cfg.tx_pdos) for e in p.entries}
+    assert types[(0x60FF, 0)] == "DINT"  # the script's flag: ...,32,1,velocitySetpoint
+    assert types[(0x6064, 0)] == "DINT" and types[(0x6077, 0)] == "INT"  # CiA-402 standard types, no flag
+    assert types[(0x6040, 0)] == "UINT" and types[(0x2046, 0)] == ""  # vendor object: unknown stays unknown
+    ros = export(cfg, "ros2")
+    assert "{index: 0x60ff, sub_index: 0x00, type: int32}" in ros and "{index: 0x6064, sub_index: 0x00, type: int32}" in ros
+    # and back out to ecmc, the flag is written where the type is known
+    (elmo,) = import_file(corpus_path("configs/ros2_elmo_gold.yaml"))
+    text = export(elmo, "ecmc")
+    assert ",0x1607,0x607a,0x0,32,1,Target_position)" in text
+    (back,) = import_bytes(text.encode(), "x.cmd", "ecmc")
+    assert [e.data_type for p in back.rx_pdos for e in p.entries] == [e.data_type for p in elmo.rx_pdos for e in p.entries]
+
+
 def test_single_slave_formats_refuse_several_slaves():
     two = [sample_config(), sample_config()]
     for fmt in ("twincat", "ros2"):

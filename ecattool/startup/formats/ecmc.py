@@ -25,6 +25,7 @@ from pathlib import Path
 
 from ecattool.errors import EncodeError, InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
+from ecattool.od.standard import standard_type
 from ecattool.findings import Severity
 from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig
@@ -92,8 +93,10 @@ def export(configs: list[SlaveConfig]) -> str:
                 for pdo in pdos:
                     for k, e in enumerate(pdo.entries):
                         name = re.sub(r"\W+", "_", e.name).strip("_")[:40] or f"entry_{pdo.index:04x}_{k}"
+                        signed = _signed(e.data_type)  # given where the type is known, as ecmccfg scripts do
+                        flag = "" if signed is None else f"{int(signed)},"
                         out.append(f'ecmcConfigOrDie "Cfg.EcAddEntryComplete({slave},{v},{p},{direction},{sm},'
-                                   f'0x{pdo.index:04x},0x{e.index:04x},0x{e.subindex:x},{e.bit_len},{name})"')
+                                   f'0x{pdo.index:04x},0x{e.index:04x},0x{e.subindex:x},{e.bit_len},{flag}{name})"')
         if c.dc_assign_activate:
             if c.dc_cycle_ns:
                 cycle = str(c.dc_cycle_ns)
@@ -109,6 +112,21 @@ def export(configs: list[SlaveConfig]) -> str:
 
 
 # --- reading -----------------------------------------------------------------------------------------
+
+#: (bits, signed) -> the integer type ecmc's signed flag means
+_INT_TYPES = {(8, False): "USINT", (16, False): "UINT", (32, False): "UDINT", (64, False): "ULINT",
+              (8, True): "SINT", (16, True): "INT", (32, True): "DINT", (64, True): "LINT"}
+
+
+def _signed(type_name: str | None) -> bool | None:
+    """Whether an entry of ``type_name`` is a signed integer (None: unknown or not an integer)."""
+    from ecattool.od.types import Kind, lookup
+
+    t = lookup(type_name) if type_name else None
+    if t is None or t.kind not in (Kind.SIGNED, Kind.UNSIGNED):
+        return None
+    return t.kind is Kind.SIGNED
+
 
 def _split_args(text: str) -> list[str]:
     return [a.strip().strip('"') for a in text.split(",")]
@@ -212,8 +230,13 @@ class _Reader:
             pdo = Pdo(direction, pdo_index, sm=self.number(args[4], loc, "sync manager"), location=loc)
             self.pdos[(args[0], pdo_index)] = pdo
             cfg.pdos(direction).append(pdo)
-        pdo.entries.append(PdoEntry(self.number(args[6], loc, "entry index"), self.number(args[7], loc, "entry sub"),
-                                    self.number(args[8], loc, "bit length"), name=args[-1], location=loc))
+        index, sub = self.number(args[6], loc, "entry index"), self.number(args[7], loc, "entry sub")
+        bits = self.number(args[8], loc, "bit length")
+        if len(args) >= 11:  # ...,bits,signed,name: the sign is given
+            data_type = _INT_TYPES.get((bits, self.number(args[9], loc, "signed flag") != 0))
+        else:  # no sign in the 10-argument form: a standard CiA-402 object has its standard type
+            data_type = standard_type(index, sub, bits)
+        pdo.entries.append(PdoEntry(index, sub, bits, name=args[-1], data_type=data_type or "", location=loc))
 
     def dc(self, args: list[str], loc: Location) -> None:
         """``Cfg.EcSlaveConfigDC(slave,assign_activate,sync0_cycle,sync0_shift,sync1_cycle,sync1_shift)``; a cycle

@@ -17,6 +17,7 @@ from typing import Any
 from ecattool.errors import EncodeError, InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.od import types as dt
+from ecattool.od.standard import standard_type
 from ecattool.startup.config import SlaveConfig
 from ecattool.startup.formats._common import as_list, decode_text, one_line
 from ecattool.startup.model import StartupCommand, StartupList, is_pdo_programming
@@ -58,7 +59,7 @@ def _flow(items: list[tuple[str, Any]]) -> str:
 
 
 def _ros_type_of_entry(e: PdoEntry) -> str:
-    name = (e.data_type or "").upper()
+    name = (e.data_type or standard_type(e.index, e.subindex, e.bit_len) or "").upper()
     if name in COE_TO_ROS:
         return COE_TO_ROS[name]
     if name.startswith("BIT") and name[3:].isdigit():
@@ -74,7 +75,7 @@ def _sdo_line(cmd: StartupCommand) -> str:
     where = f"0x{cmd.index:04X}:{cmd.subindex:02X}{f' ({cmd.source})' if cmd.source else ''}"
     if cmd.complete_access:
         raise EncodeError(f"{where}: ethercat_driver_ros2 has no complete-access SDO writes")
-    coe = (cmd.type_name or "").upper()
+    coe = (cmd.type_name or standard_type(cmd.index, cmd.subindex, 8 * len(cmd.data)) or "").upper()
     ros = COE_TO_ROS.get(coe) if coe else None
     t = dt.lookup(ROS_TO_COE[ros]) if ros else None
     if ros is None or t is None or t.bits is None or t.bits // 8 != len(cmd.data):

@@ -1,0 +1,37 @@
+"""Data types of the standard CiA-402 objects that are mapped into PDOs (CiA 402-2 object definitions).
+
+For startup-list formats that carry an entry's size but not its sign (ecmc's 10-argument
+``EcAddEntryComplete``, a CSV without types): a target position 607Ah is an INTEGER32 on every drive, and a
+ros2 or TwinCAT configuration written as UNSIGNED32 would read negative positions as large positive ones.
+"""
+
+from __future__ import annotations
+
+#: index -> type name (every sub-index of an ARRAY/RECORD has the same type here, sub-index 0 aside)
+CIA402_TYPES: dict[int, str] = {
+    0x603F: "UINT", 0x6040: "UINT", 0x6041: "UINT", 0x605A: "INT", 0x605B: "INT", 0x605C: "INT",
+    0x605D: "INT", 0x605E: "INT", 0x6060: "SINT", 0x6061: "SINT", 0x6062: "DINT", 0x6063: "DINT",
+    0x6064: "DINT", 0x6065: "UDINT", 0x6066: "UINT", 0x6067: "UDINT", 0x6068: "UINT", 0x6069: "DINT",
+    0x606B: "DINT", 0x606C: "DINT", 0x606D: "UINT", 0x606E: "UINT", 0x606F: "UINT", 0x6070: "UINT",
+    0x6071: "INT", 0x6072: "UINT", 0x6073: "UINT", 0x6074: "INT", 0x6075: "UDINT", 0x6076: "UDINT",
+    0x6077: "INT", 0x6078: "INT", 0x6079: "UDINT", 0x607A: "DINT", 0x607B: "DINT", 0x607C: "DINT",
+    0x607D: "DINT", 0x607E: "USINT", 0x607F: "UDINT", 0x6080: "UDINT", 0x6081: "UDINT", 0x6082: "UDINT",
+    0x6083: "UDINT", 0x6084: "UDINT", 0x6085: "UDINT", 0x6086: "INT", 0x6087: "UDINT", 0x6088: "INT",
+    0x6098: "SINT", 0x6099: "UDINT", 0x609A: "UDINT", 0x60B0: "DINT", 0x60B1: "DINT", 0x60B2: "INT",
+    0x60B8: "UINT", 0x60B9: "UINT", 0x60BA: "DINT", 0x60BB: "DINT", 0x60BC: "DINT", 0x60BD: "DINT",
+    0x60C1: "DINT", 0x60E0: "UINT", 0x60E1: "UINT", 0x60F2: "UINT", 0x60F4: "DINT", 0x60FA: "DINT",
+    0x60FC: "DINT", 0x60FD: "UDINT", 0x60FE: "UDINT", 0x60FF: "DINT", 0x6402: "UINT", 0x6502: "UDINT",
+}
+_BITS = {"USINT": 8, "SINT": 8, "UINT": 16, "INT": 16, "UDINT": 32, "DINT": 32}
+
+
+def standard_type(index: int, subindex: int, bit_len: int) -> str | None:
+    """The CiA-402 type of ``index:subindex`` when it is a standard object of that size, else None."""
+    name = CIA402_TYPES.get(index)
+    if name is None or (subindex == 0 and index in _ARRAYS) or _BITS[name] != bit_len:
+        return None
+    return name
+
+
+#: the ARRAY/RECORD objects of the table (their sub-index 0 is a count, not of the element type)
+_ARRAYS = frozenset({0x607B, 0x607D, 0x6099, 0x60C1, 0x60FE})
