@@ -167,14 +167,15 @@ void ecrt_slave_config_dc(ec_slave_config_t *sc, uint16_t assign_activate, uint3
 """
 
 
-def _gcc(source: str, tmp_path: Path) -> subprocess.CompletedProcess:
+def _gcc(source: str, tmp_path: Path, *defines: str) -> subprocess.CompletedProcess:
     gcc = shutil.which("gcc")
     assert gcc, "gcc is needed for the IgH C exporter test"
     (tmp_path / "ecrt.h").write_text(ECRT_H)
     c = tmp_path / "config.c"
     c.write_text(source)
     return subprocess.run([gcc, "-std=c99", "-Wall", "-Wextra", "-Werror", "-Wno-missing-field-initializers",
-                           "-fsyntax-only", "-I", str(tmp_path), str(c)], capture_output=True, text=True)
+                           "-fsyntax-only", *(f"-D{d}" for d in defines), "-I", str(tmp_path), str(c)],
+                          capture_output=True, text=True)
 
 
 def test_igh_c_compiles(tmp_path):
@@ -209,8 +210,17 @@ def test_igh_c_of_every_corpus_config_compiles(tmp_path):
     for i, src in enumerate(sources):
         sub = tmp_path / str(i)
         sub.mkdir()
-        result = _gcc(src, sub)
+        result = _gcc(src, sub, "SYNC0_CYCLE_NS=1000000U")  # the ros2 file has DC but no cycle
         assert result.returncode == 0, result.stderr
+
+
+def test_igh_dc_without_a_cycle_does_not_compile_until_the_program_gives_one(tmp_path):
+    # SYNC0 activated with a cycle of 0 would be a silent misconfiguration: the C file asks for the cycle
+    src = export(import_file(corpus_path("configs", "ros2_technosoft_ipos3604.yaml")), "igh")
+    assert "ecrt_slave_config_dc(sc, 0x0330, SYNC0_CYCLE_NS, 0, 0U, 0);" in src
+    result = _gcc(src, tmp_path)
+    assert result.returncode != 0 and "define SYNC0_CYCLE_NS" in result.stderr
+    assert _gcc(src, tmp_path, "SYNC0_CYCLE_NS=2000000U").returncode == 0
 
 
 def test_igh_c_compiler_catches_a_broken_table(tmp_path):

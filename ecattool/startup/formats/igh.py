@@ -131,7 +131,15 @@ def export(configs: list[SlaveConfig]) -> str:
         for n, cmd in enumerate(commands):
             _sdo_call(ident, n, cmd, body)
         if c.dc_assign_activate:
-            body.append(f"    ecrt_slave_config_dc(sc, 0x{c.dc_assign_activate:04x}, {c.dc_cycle_ns or 0}U, "
+            if c.dc_cycle_ns:
+                cycle = f"{c.dc_cycle_ns}U"
+            else:  # the source has no SYNC0 cycle (a ros2 file): the program must give its own, it cannot be 0
+                cycle = "SYNC0_CYCLE_NS"
+                if "#ifndef SYNC0_CYCLE_NS" not in out:
+                    out[5:5] = ["/* SYNC0 cycle of the slaves whose configuration gives none: your task period */",
+                                "#ifndef SYNC0_CYCLE_NS", '#error "define SYNC0_CYCLE_NS (the SYNC0 cycle in ns, the '
+                                'application\'s task period): the source configuration has none"', "#endif", ""]
+            body.append(f"    ecrt_slave_config_dc(sc, 0x{c.dc_assign_activate:04x}, {cycle}, "
                         f"{c.dc_shift_ns or 0}, 0U, 0);")
         for n, s in enumerate(c.soe_commands):
             _idn_call(ident, n, s, body)
