@@ -108,5 +108,6 @@ def _convert(node: yaml.Node, path: Path_, locs: dict[Path_, Location], keys: di
         return node.value
     try:
         return loader.construct_object(node)
-    except yaml.YAMLError as exc:
-        raise InputError(f"invalid YAML value: {exc}", _loc(node, source)) from None
+    except yaml.YAMLError as exc:  # the location is ours; the library's text repeats it on further lines
+        what = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise InputError(f"invalid YAML value: {what}", _loc(node, source)) from None
