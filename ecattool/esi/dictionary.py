@@ -151,7 +151,7 @@ def _flags(flags_el: Any, ctx: Context) -> tuple[Access, str, bool, bool, str]:
     if flags_el is None:
         return _DEFAULT_ACCESS, "", False, False, ""
     key_parts: list[Any] = []
-    for c in flags_el:
+    for c in flags_el[:]:
         tag = c.tag
         if tag == "Access":
             key_parts.append((tag, c.text, c.get("ReadRestrictions"), c.get("WriteRestrictions")))
@@ -188,13 +188,14 @@ _ENTRY_SLOTS = tuple(Entry.__slots__)
 
 
 def _make_clone() -> Any:
-    """A shallow copy of a template entry (objects of one record type share the template).
+    """``_clone(e, location)``: a shallow copy of a template entry (objects of one record type share the
+    template) at the object's location.
 
     Generated from ``Entry.__slots__`` so that fields added to the shared model are copied too.
     """
-    body = "\n".join(f"    c.{n} = e.{n}" for n in _ENTRY_SLOTS)
+    body = "\n".join(f"    c.{n} = e.{n}" for n in _ENTRY_SLOTS if n != "location")
     ns: dict[str, Any] = {"_new": object.__new__, "Entry": Entry}
-    exec(f"def _clone(e):\n    c = _new(Entry)\n{body}\n    return c\n", ns)  # noqa: S102 - fixed template
+    exec(f"def _clone(e, location):\n    c = _new(Entry)\n{body}\n    c.location = location\n    return c\n", ns)  # noqa: S102 - fixed template
     return ns["_clone"]
 
 
@@ -213,7 +214,7 @@ def _apply_info(entry: Entry, info: Any, ctx: Context) -> None:
     if info is None:
         return
     dt = entry.datatype
-    for child in info:  # comments and processing instructions match none of the tags below
+    for child in info[:]:  # comments and processing instructions match none of the tags below
         tag = child.tag
         text = child.text
         if tag == "DefaultData":
@@ -299,7 +300,7 @@ class DictionaryBuilder:
         self.el = dict_el
         self.ctx = ctx
         self.types = TypeResolver(dict_el.find("DataTypes"), ctx)
-        self._templates: dict[tuple[str, tuple[Access, str, bool, bool, str]], tuple[list[Entry], bool]] = {}
+        self._templates: dict[tuple[str, tuple[Access, str, bool, bool, str]], _Template] = {}
 
     def build(self) -> ObjectDictionary:
         od = ObjectDictionary()
@@ -325,7 +326,7 @@ class DictionaryBuilder:
         flags_el = info = None
         comment = ""
         idx_el = el
-        for c in el:
+        for c in el[:]:
             tag = c.tag
             if tag == "Index":
                 index_t, idx_el = c.text, c
@@ -349,12 +350,14 @@ class DictionaryBuilder:
         t = self.types.resolve(type_name, el)
         if t.kind == "record":
             key = (t.name, flags)
-            cached = self._templates.get(key)
-            if cached is None:
-                cached = self._templates[key] = self._flatten(t, flags)
-            entries, is_array = [_clone(e) for e in cached[0]], cached[1]
-            code = ObjectCode.ARRAY if is_array else ObjectCode.RECORD
-            self._apply_subitem_infos(entries, info, index)
+            template = self._templates.get(key)
+            if template is None:
+                template = self._templates[key] = _Template(*self._flatten(t, flags))
+            entries = [_clone(e, loc) for e in template.entries]
+            if info is not None:
+                self._apply_subitem_infos(entries, template.first_by_name, info, index)
+            return OdObject(index, name, template.code, dict(zip(template.subindices, entries)), type_name=type_name,
+                            category=flags[4], location=loc)
         else:
             dt = t.datatype
             if t.kind == "array":
@@ -364,12 +367,7 @@ class DictionaryBuilder:
             e = Entry(0, name, dt, size, type_name=type_name, access=access, pdo_mapping=mapping, enum=dict(t.enum),
                       backup=backup, setting=setting, category=category, comment=comment, location=loc)
             _apply_info(e, info, ctx)
-            entries = [e]
-            code = ObjectCode.VAR
-        for e in entries:
-            e.location = loc
-        return OdObject(index, name, code, {e.subindex: e for e in entries}, type_name=type_name,
-                        category=flags[4], location=loc)
+            return OdObject(index, name, ObjectCode.VAR, {0: e}, type_name=type_name, category=flags[4], location=loc)
 
     def _flatten(self, t: ResolvedType, obj_flags: tuple[Access, str, bool, bool, str]) -> tuple[list[Entry], bool]:
         ctx = self.ctx
@@ -384,7 +382,7 @@ class DictionaryBuilder:
             final = False
             sidx_t = bits_t = offs_t = flags_el = None
             has_info = False
-            for c in si:
+            for c in si[:]:
                 tag = c.tag
                 if tag == "Name":
                     si_name, final = name_step(c, si_name, final)
@@ -445,21 +443,23 @@ class DictionaryBuilder:
             next_sub = sidx + 1
         return out, expanded and array_like
 
-    def _apply_subitem_infos(self, entries: list[Entry], info: Any, index: int) -> None:
-        if info is None:
-            return
-        sub_items = list(info.iterchildren("SubItem"))
-        if not sub_items:
-            return
-        by_name = {e.name: e for e in reversed(entries)}  # the first entry of each name
-        for pos, si in enumerate(sub_items):
+    def _apply_subitem_infos(self, entries: list[Entry], first_by_name: dict[str, int], info: Any, index: int) -> None:
+        # one pass per Info/SubItem of every record object (7518 in the largest corpus file): children are read
+        # from slices (el[:] builds the proxies in one call; a child iterator per element costs more than its
+        # proxies) and the Name rule of values.name_step is written out
+        ctx = self.ctx
+        pos = -1
+        for si in info[:]:
+            if si.tag != "SubItem":
+                continue
+            pos += 1
             n_opt: str | None = None
             final = False
             sub_info = None
-            for c in si:
+            for c in si[:]:
                 tag = c.tag
                 if tag == "Name":
-                    if not final:  # values.name_step, written out: one call per SubItem of a large file
+                    if not final:
                         lcid = c.get("LcId")
                         if lcid is not None and lcid.strip() == "1033":
                             n_opt, final = (c.text or "").strip(), True
@@ -468,15 +468,33 @@ class DictionaryBuilder:
                 elif tag == "Info" and sub_info is None:
                     sub_info = c
             n = n_opt or ""
-            e = by_name.get(n)
-            if e is None and pos < len(entries):
-                e = entries[pos]
-            if e is None:
-                self.ctx.warn("esi-info-subitem", f"object 0x{index:04X}: Info/SubItem {n!r} matches no sub-index", si)
+            at = first_by_name.get(n, pos)
+            if at >= len(entries):
+                ctx.warn("esi-info-subitem", f"object 0x{index:04X}: Info/SubItem {n!r} matches no sub-index", si)
                 continue
+            e = entries[at]
             if n and e.name.startswith("SubIndex ") and not n.startswith("SubIndex "):
                 e.name = n
-            _apply_info(e, sub_info, self.ctx)
+            if sub_info is not None:
+                _apply_info(e, sub_info, ctx)
+
+
+class _Template(Record):
+    """The entries of one record type with one set of object flags, cloned for each object of that type."""
+
+    __slots__ = ("entries", "code", "subindices", "first_by_name")
+    entries: list[Entry]
+    code: ObjectCode
+    subindices: list[int]
+    first_by_name: dict[str, int]  # entry name -> position of the first entry of that name (Info/SubItem lookup)
+
+    def __init__(self, entries: list[Entry], is_array: bool) -> None:
+        self.entries = entries
+        self.code = ObjectCode.ARRAY if is_array else ObjectCode.RECORD
+        self.subindices = [e.subindex for e in entries]
+        self.first_by_name = {}
+        for at, e in enumerate(entries):
+            self.first_by_name.setdefault(e.name, at)
 
 
 def build_dictionary(dict_el: Any, ctx: Context) -> ObjectDictionary:

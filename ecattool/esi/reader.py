@@ -377,12 +377,13 @@ class Reader:
     def pdo(self, el: Any, direction: Direction) -> Pdo:
         ctx = self.ctx
         get = el.get
-        pdo = Pdo(direction, -1, location=Location(self.source, el.sourceline))
+        pdo = Pdo(direction, -1)
+        pdo.at_line(self.source, el.sourceline)
         name: str | None = None
         final = False
         entries = pdo.entries
         known = self._numbers
-        for child in el:
+        for child in el[:]:
             tag = child.tag
             if tag == "Entry":
                 entries.append(self.entry(child))
@@ -435,7 +436,7 @@ class Reader:
         name: str | None = None
         final = False
         dep = None
-        for c in en:
+        for c in en[:]:
             tag = c.tag
             if tag == "Index":
                 t = c.text
@@ -462,12 +463,12 @@ class Reader:
                         name = (c.text or "").strip()
             elif tag == "DataType":
                 dtype = (c.text or "").strip()
-        loc = Location(self.source, en.sourceline)
         if index is None:
-            raise InputError("PDO Entry has no Index", loc)
+            raise InputError("PDO Entry has no Index", self.ctx.loc(en))
         if bits is None:
-            raise InputError(f"PDO Entry 0x{index:04X}:{sub or 0:02X} has no BitLen", loc)
-        e = PdoEntry(index, sub or 0, bits, name or "", dtype, loc)
+            raise InputError(f"PDO Entry 0x{index:04X}:{sub or 0:02X} has no BitLen", self.ctx.loc(en))
+        e = PdoEntry(index, sub or 0, bits, name or "", dtype)
+        e.at_line(self.source, en.sourceline)
         if dep is not None:
             e.depend_on_slot = self.ctx.boolean(dep, en, "DependOnSlot")
         return e
