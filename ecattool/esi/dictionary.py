@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from ecattool.errors import EcatToolError
-from ecattool.esi.values import Context, lc_text, name_step
+from ecattool.esi.values import Context, fast_number, lc_text, name_step
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import BY_CODE, DataType, Kind, lookup, parse_array_name
@@ -301,6 +301,22 @@ class DictionaryBuilder:
         self.ctx = ctx
         self.types = TypeResolver(dict_el.find("DataTypes"), ctx)
         self._templates: dict[tuple[str, tuple[Access, str, bool, bool, str]], _Template] = {}
+        self._numbers: dict[str | None, int] = {}
+
+    def _number(self, text: str | None, el: Any, what: str) -> int:
+        """:meth:`Context.number`, with the common spellings (:func:`values.fast_number`) remembered by text."""
+        v = self._numbers.get(text)
+        if v is None:
+            v = fast_number(text)
+            if v is None:
+                return self.ctx.number(text, el, what)
+            self._numbers[text] = v
+        return v
+
+    def _opt_number(self, text: str | None, el: Any, what: str) -> int | None:
+        if text is None or not text.strip():
+            return None
+        return self._number(text, el, what)
 
     def build(self) -> ObjectDictionary:
         od = ObjectDictionary()
@@ -342,10 +358,10 @@ class DictionaryBuilder:
                 info = c
             elif tag == "Comment" and not comment:
                 comment = (c.text or "").strip()
-        index = ctx.number(index_t, idx_el, "Object/Index")
+        index = self._number(index_t, idx_el, "Object/Index")
         type_name = type_name or ""
         name = name or ""
-        bits = ctx.opt_number(bits_t, el, "Object/BitSize")
+        bits = self._opt_number(bits_t, el, "Object/BitSize")
         flags = _flags(flags_el, ctx)
         t = self.types.resolve(type_name, el)
         if t.kind == "record":
@@ -400,9 +416,9 @@ class DictionaryBuilder:
                     has_info = True
             si_name = si_name or ""
             st = self.types.resolve(si_type, si)
-            sidx = ctx.number(sidx_t, si, "SubItem/SubIdx") if sidx_t is not None and sidx_t.strip() else None
-            bits = ctx.opt_number(bits_t, si, "SubItem/BitSize")
-            offs = ctx.opt_number(offs_t, si, "SubItem/BitOffs") or 0
+            sidx = self._number(sidx_t, si, "SubItem/SubIdx") if sidx_t is not None and sidx_t.strip() else None
+            bits = self._opt_number(bits_t, si, "SubItem/BitSize")
+            offs = self._opt_number(offs_t, si, "SubItem/BitOffs") or 0
             access, mapping, backup, setting, category = _flags(flags_el, ctx) if flags_el is not None else obj_flags
             if st.kind == "array" and sidx is None:
                 elem = self.types.resolve(st.element_type, si)

@@ -35,7 +35,7 @@ from ecattool.esi.model import (
     Slot,
     SyncManager,
 )
-from ecattool.esi.values import Context, lc_text, name_step
+from ecattool.esi.values import Context, fast_number, lc_text, name_step
 from ecattool.od.model import ObjectDictionary, OdObject
 from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
 
@@ -216,20 +216,6 @@ def _decode_fallback(data: bytes, source: str, ctx: Context) -> bytes | None:
         end = text.find("?>")
         text = text[end + 2:] if end >= 0 else text
     return text.encode("utf-8")
-
-
-def _fast_number(t: str | None) -> int | None:
-    """The common HexDecValue spellings without any checks; None sends the text to ``Context.number``."""
-    if t is None or not t.isascii():
-        return None
-    if t.isdigit():
-        return int(t)
-    if t[:2] == "#x" and t[2:].isalnum() and "x" not in t[2:] and "X" not in t[2:]:
-        try:
-            return int(t[2:], 16)
-        except ValueError:
-            return None
-    return None
 
 
 class Reader:
@@ -419,8 +405,8 @@ class Reader:
         return pdo
 
     def _number(self, text: str | None, el: Any, what: str) -> int:
-        """:meth:`Context.number`, remembering the common spellings (:func:`_fast_number`) for :attr:`_numbers`."""
-        v = _fast_number(text)
+        """:meth:`Context.number`, remembering the common spellings (:func:`values.fast_number`) in :attr:`_numbers`."""
+        v = fast_number(text)
         if v is None:
             return self.ctx.number(text, el, what)
         if len(self._numbers) < 65536:
