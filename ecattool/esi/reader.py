@@ -35,7 +35,8 @@ from ecattool.esi.model import (
     Slot,
     SyncManager,
 )
-from ecattool.esi.values import Context, fast_number, lc_text, name_step
+from ecattool.esi.values import Context, lc_text, name_step
+from ecattool.esi.values import fast_number as _fast_number  # the name it had here (tests use it)
 from ecattool.od.model import ObjectDictionary, OdObject
 from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
 
@@ -406,7 +407,7 @@ class Reader:
 
     def _number(self, text: str | None, el: Any, what: str) -> int:
         """:meth:`Context.number`, remembering the common spellings (:func:`values.fast_number`) in :attr:`_numbers`."""
-        v = fast_number(text)
+        v = _fast_number(text)
         if v is None:
             return self.ctx.number(text, el, what)
         if len(self._numbers) < 65536:
