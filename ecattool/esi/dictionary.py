@@ -302,6 +302,7 @@ class DictionaryBuilder:
         self.types = TypeResolver(dict_el.find("DataTypes"), ctx)
         self._templates: dict[tuple[str, tuple[Access, str, bool, bool, str]], _Template] = {}
         self._numbers: dict[str | None, int] = {}
+        self._flags_free: dict[str, _Template] = {}  # record types whose SubItems all have their own Flags
 
     def _number(self, text: str | None, el: Any, what: str) -> int:
         """:meth:`Context.number`, with the common spellings (:func:`values.fast_number`) remembered by text."""
@@ -368,7 +369,7 @@ class DictionaryBuilder:
             key = (t.name, flags)
             template = self._templates.get(key)
             if template is None:
-                template = self._templates[key] = _Template(*self._flatten(t, flags))
+                template = self._templates[key] = self._template(t, flags)
             entries = [_clone(e, loc) for e in template.entries]
             if info is not None:
                 self._apply_subitem_infos(entries, template.first_by_name, info, index)
@@ -385,8 +386,26 @@ class DictionaryBuilder:
             _apply_info(e, info, ctx)
             return OdObject(index, name, ObjectCode.VAR, {0: e}, type_name=type_name, category=flags[4], location=loc)
 
-    def _flatten(self, t: ResolvedType, obj_flags: tuple[Access, str, bool, bool, str]) -> tuple[list[Entry], bool]:
+    def _template(self, t: ResolvedType, obj_flags: tuple[Access, str, bool, bool, str]) -> _Template:
+        """The entries of record type ``t`` for an object with ``obj_flags``.
+
+        Where every SubItem of the type has its own Flags the object's flags do not matter, and the entries made
+        for one object serve objects with other flags too (a type flattened again would give the same entries
+        and, if the first time gave no warnings, no warnings either).
+        """
+        template = self._flags_free.get(t.name)
+        if template is None:
+            n_warnings = len(self.ctx.warnings)
+            entries, is_array, used_obj_flags = self._flatten(t, obj_flags)
+            template = _Template(entries, is_array)
+            if not used_obj_flags and len(self.ctx.warnings) == n_warnings:
+                self._flags_free[t.name] = template
+        return template
+
+    def _flatten(self, t: ResolvedType, obj_flags: tuple[Access, str, bool, bool, str]) -> tuple[list[Entry], bool, bool]:
+        """(entries, ARRAY-like, whether ``obj_flags`` were used for a SubItem without its own Flags)."""
         ctx = self.ctx
+        used_obj_flags = False
         out: list[Entry] = []
         next_sub = 0
         array_like = True
@@ -419,7 +438,11 @@ class DictionaryBuilder:
             sidx = self._number(sidx_t, si, "SubItem/SubIdx") if sidx_t is not None and sidx_t.strip() else None
             bits = self._opt_number(bits_t, si, "SubItem/BitSize")
             offs = self._opt_number(offs_t, si, "SubItem/BitOffs") or 0
-            access, mapping, backup, setting, category = _flags(flags_el, ctx) if flags_el is not None else obj_flags
+            if flags_el is not None:
+                access, mapping, backup, setting, category = _flags(flags_el, ctx)
+            else:
+                access, mapping, backup, setting, category = obj_flags
+                used_obj_flags = True
             if st.kind == "array" and sidx is None:
                 elem = self.types.resolve(st.element_type, si)
                 n = st.elements
@@ -457,7 +480,7 @@ class DictionaryBuilder:
                 _apply_info(e, si, ctx)
             out.append(e)
             next_sub = sidx + 1
-        return out, expanded and array_like
+        return out, expanded and array_like, used_obj_flags
 
     def _apply_subitem_infos(self, entries: list[Entry], first_by_name: dict[str, int], info: Any, index: int) -> None:
         # one pass per Info/SubItem of every record object (7518 in the largest corpus file): children are read

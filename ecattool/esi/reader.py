@@ -70,6 +70,9 @@ def etree_text(el: Any) -> str:
             parts.append(f"{c.tag}={c.text.strip()}")
     return " ".join(parts)[:500]
 _PROTOCOLS = ("AoE", "EoE", "CoE", "FoE", "SoE", "VoE")
+_BOOLEANS = {"1": True, "0": False, "true": True, "false": False}  # what Context.boolean reads them as
+_PDO_NUMBER_ATTRIBUTES = (("Sm", "sm"), ("Su", "su"), ("PdoOrder", "pdo_order"), ("OSFac", "os_fac"),
+                          ("OSMin", "os_min"), ("OSMax", "os_max"), ("OSIndexInc", "os_index_inc"))
 
 
 def build_dictionary(el: Any, ctx: Context) -> ObjectDictionary:
@@ -390,19 +393,28 @@ class Reader:
         if pdo.index < 0:
             raise InputError(f"{el.tag} has no Index", ctx.loc(el))
         if len(el.attrib):
-            if get("Fixed") is not None:
-                pdo.fixed = ctx.boolean(get("Fixed"), el, "Fixed")
-            if get("Mandatory") is not None:
-                pdo.mandatory = ctx.boolean(get("Mandatory"), el, "Mandatory")
-            if get("Virtual") is not None:
-                pdo.virtual = ctx.boolean(get("Virtual"), el, "Virtual")
-            if get("OverwrittenByModule") is not None:
-                pdo.overwritten_by_module = ctx.boolean(get("OverwrittenByModule"), el, "OverwrittenByModule")
-            for attr, name in (("Sm", "sm"), ("Su", "su"), ("PdoOrder", "pdo_order"), ("OSFac", "os_fac"),
-                               ("OSMin", "os_min"), ("OSMax", "os_max"), ("OSIndexInc", "os_index_inc")):
+            # booleans and numbers spelled the common way are looked up (_BOOLEANS, the number memo), the rest
+            # go through Context with its warnings and errors, in the same order as before
+            v = get("Fixed")
+            if v is not None:
+                b = _BOOLEANS.get(v)
+                pdo.fixed = ctx.boolean(v, el, "Fixed") if b is None else b
+            v = get("Mandatory")
+            if v is not None:
+                b = _BOOLEANS.get(v)
+                pdo.mandatory = ctx.boolean(v, el, "Mandatory") if b is None else b
+            v = get("Virtual")
+            if v is not None:
+                b = _BOOLEANS.get(v)
+                pdo.virtual = ctx.boolean(v, el, "Virtual") if b is None else b
+            v = get("OverwrittenByModule")
+            if v is not None:
+                pdo.overwritten_by_module = ctx.boolean(v, el, "OverwrittenByModule")
+            for attr, name in _PDO_NUMBER_ATTRIBUTES:
                 v = get(attr)
                 if v is not None:
-                    setattr(pdo, name, ctx.opt_number(v, el, attr))
+                    n = known.get(v)
+                    setattr(pdo, name, ctx.opt_number(v, el, attr) if n is None else n)
         return pdo
 
     def _number(self, text: str | None, el: Any, what: str) -> int:
@@ -527,12 +539,16 @@ class Reader:
         ctx = self.ctx
         out = []
         for om in el.iterchildren("OpMode"):
-            m = DcOpMode((om.findtext("Name") or "").strip(), lc_text(om, "Desc"))
-            aa = om.find("AssignActivate")
+            first: dict[Any, Any] = {}  # the first child of each tag (what find() gives), in one pass
+            for c in om[:]:
+                first.setdefault(c.tag, c)
+            name_el = first.get("Name")
+            m = DcOpMode((name_el.text or "").strip() if name_el is not None else "", lc_text(om, "Desc"))
+            aa = first.get("AssignActivate")
             m.assign_activate = ctx.number(aa.text, aa, "AssignActivate") if aa is not None else 0
             for tag, attr in (("CycleTimeSync0", "cycle_time_sync0"), ("ShiftTimeSync0", "shift_time_sync0"),
                               ("CycleTimeSync1", "cycle_time_sync1"), ("ShiftTimeSync1", "shift_time_sync1")):
-                t = om.find(tag)
+                t = first.get(tag)
                 if t is not None:
                     setattr(m, attr, ctx.opt_number(t.text, t, tag))
                     if t.get("Factor") is not None:
@@ -642,7 +658,7 @@ class Reader:
                      source=self.source, location=ctx.loc(el))
         sm_no = 0
         profile_seen = False
-        for child in el.iterchildren():
+        for child in el[:]:
             tag = child.tag
             if tag == "TxPdo":
                 dev.tx_pdos.append(self.pdo(child, Direction.TX))
