@@ -195,7 +195,8 @@ def _make_clone() -> Any:
     """
     body = "\n".join(f"    c.{n} = e.{n}" for n in _ENTRY_SLOTS if n != "location")
     ns: dict[str, Any] = {"_new": object.__new__, "Entry": Entry}
-    exec(f"def _clone(e, location):\n    c = _new(Entry)\n{body}\n    c.location = location\n    return c\n", ns)  # noqa: S102 - fixed template
+    source = f"def _clone(e, location):\n    c = _new(Entry)\n{body}\n    c.location = location\n    return c\n"
+    exec(source, ns)  # noqa: S102 - fixed template
     return ns["_clone"]
 
 
@@ -408,7 +409,8 @@ class DictionaryBuilder:
                 self._flags_free[t.name] = template
         return template
 
-    def _flatten(self, t: ResolvedType, obj_flags: tuple[Access, str, bool, bool, str]) -> tuple[list[Entry], bool, bool]:
+    def _flatten(self, t: ResolvedType,
+                 obj_flags: tuple[Access, str, bool, bool, str]) -> tuple[list[Entry], bool, bool]:
         """(entries, ARRAY-like, whether ``obj_flags`` were used for a SubItem without its own Flags)."""
         ctx = self.ctx
         used_obj_flags = False

@@ -103,7 +103,7 @@ class _LineLocated(Record):
     first read.
 
     A large ESI file has thousands of PDOs and PDO entries and their locations are rarely read; one Location
-    object each made ~15% of the objects the complete model of the largest corpus file holds, and every garbage
+    object each made ~20% of the objects the complete model of the largest corpus file holds, and every garbage
     collector pass over the model (one at interpreter exit at least) visits each of them. The field behaves as a
     plain ``location`` field otherwise: constructor argument, assignment, ``==``, ``repr`` and pickling.
     """
