@@ -18,6 +18,7 @@ from ecattool.findings import Finding, Severity
 from ecattool.od.model import ObjectDictionary
 from ecattool.record import FrozenRecord, FrozenRecordError, Record, set_field
 from ecattool.sii.model import SiiHeader, SiiImage
+from ecattool.xmlsafe import parse_xml
 from tests.conftest import corpus_path
 
 
@@ -210,3 +211,25 @@ def test_records_compare_field_tuples_like_dataclasses() -> None:
     assert One(nan) == One(nan)  # the same object in both: tuples compare by identity first, as dataclasses did
     assert One(1) != One(2) and One(1) == One(1)
     assert Pair(nan, 1) == Pair(nan, 1)
+
+
+def test_pdo_and_entry_locations_kept_as_lines_read_as_locations() -> None:
+    # the reader gives PDOs and PDO entries their line only (esi.model._LineLocated); read, compared, printed,
+    # pickled and assigned, location behaves as a plain Location field
+    path = corpus_path("esi", "elmo_Elmo_ECAT_00010420_V11.xml")
+    esi = load(path)
+    pdo = esi.devices[0].rx_pdos[0]
+    entry = pdo.entries[0]
+    unread = pickle.loads(pickle.dumps(pdo))  # pickled before any location was read
+    assert isinstance(unread.entries[0]._location, int)
+    xml_entry = next(el for el in parse_xml(path.read_bytes(), str(path)).getroot().iter("RxPdo")).find("Entry")
+    eager = PdoEntry(entry.index, entry.subindex, entry.bit_len, entry.name, entry.data_type,
+                     Location(str(path), xml_entry.sourceline))
+    assert unread.entries[0] == entry == eager and repr(entry) == repr(eager)
+    assert type(entry.location) is Location and entry.location is entry.location
+    assert entry.location == Location(str(path), xml_entry.sourceline) and unread.location == pdo.location
+    assert pdo.location is not None and pdo.location.line is not None and pdo.location.line < xml_entry.sourceline
+    entry.location = None
+    assert entry.location is None and entry != eager
+    entry.location = eager.location
+    assert entry == eager and copy.copy(entry) == eager

@@ -98,14 +98,48 @@ class Fmmu(Record):
         self.su = su
 
 
-class PdoEntry(Record):
-    __slots__ = ("index", "subindex", "bit_len", "name", "data_type", "location", "depend_on_slot")
+class _LineLocated(Record):
+    """A record whose ``location`` the ESI reader may give as a source and a line, made a :class:`Location` when
+    first read.
+
+    A large ESI file has thousands of PDOs and PDO entries and their locations are rarely read; one Location
+    object each made ~20% of the objects the complete model of the largest corpus file holds, and every garbage
+    collector pass over the model (one at interpreter exit at least) visits each of them. The field behaves as a
+    plain ``location`` field otherwise: constructor argument, assignment, ``==``, ``repr`` and pickling.
+    """
+
+    __slots__ = ("_location", "_source")
+    _location: Location | int | None  # an int: a line of _source, not yet made a Location
+    _source: str
+
+    @property
+    def location(self) -> Location | None:
+        loc = self._location
+        if isinstance(loc, int):
+            loc = self._location = Location(self._source, loc)
+        return loc
+
+    @location.setter
+    def location(self, value: Location | None) -> None:
+        self._location = value
+
+    def at_line(self, source: str, line: int | None) -> None:
+        """Set ``location`` to ``Location(source, line)``, made when first read."""
+        if line is None:
+            self._location = Location(source)
+        else:
+            self._location = line
+            self._source = source
+
+
+class PdoEntry(_LineLocated):
+    __slots__ = ("index", "subindex", "bit_len", "name", "data_type", "depend_on_slot")
+    _fields = ("index", "subindex", "bit_len", "name", "data_type", "location", "depend_on_slot")
     index: int
     subindex: int
     bit_len: int
     name: str
     data_type: str  # type name as written in the source ("UINT", "DT0800", "BOOL" …)
-    location: Location | None
     depend_on_slot: bool  # module PDO entry whose index moves with the slot (SlotIndexIncrement)
 
     def __init__(self, index: int, subindex: int, bit_len: int, name: str = "", data_type: str = "",
@@ -115,7 +149,7 @@ class PdoEntry(Record):
         self.bit_len = bit_len
         self.name = name
         self.data_type = data_type
-        self.location = location
+        self._location = location
         self.depend_on_slot = depend_on_slot
 
     @property
@@ -132,10 +166,13 @@ class PdoEntry(Record):
         return cls((value >> 16) & 0xFFFF, (value >> 8) & 0xFF, value & 0xFF)
 
 
-class Pdo(Record):
+class Pdo(_LineLocated):
     __slots__ = ("direction", "index", "name", "entries", "sm", "fixed", "mandatory", "virtual", "excludes",
                  "su", "pdo_order", "os_fac", "os_min", "os_max", "os_index_inc", "depend_on_slot",
-                 "overwritten_by_module", "location")
+                 "overwritten_by_module")
+    _fields = ("direction", "index", "name", "entries", "sm", "fixed", "mandatory", "virtual", "excludes",
+               "su", "pdo_order", "os_fac", "os_min", "os_max", "os_index_inc", "depend_on_slot",
+               "overwritten_by_module", "location")
     direction: Direction
     index: int
     name: str
@@ -153,7 +190,6 @@ class Pdo(Record):
     os_index_inc: int | None
     depend_on_slot: bool
     overwritten_by_module: bool
-    location: Location | None
 
     def __init__(self, direction: Direction, index: int, name: str = "",
                  entries: list[PdoEntry] | None = None, sm: int | None = None, fixed: bool = False,
@@ -179,7 +215,7 @@ class Pdo(Record):
         self.os_index_inc = os_index_inc
         self.depend_on_slot = depend_on_slot
         self.overwritten_by_module = overwritten_by_module
-        self.location = location
+        self._location = location
 
     @property
     def bit_size(self) -> int:

@@ -36,6 +36,7 @@ from ecattool.esi.model import (
     SyncManager,
 )
 from ecattool.esi.values import Context, lc_text, name_step
+from ecattool.esi.values import fast_number as _fast_number  # the name it had here (tests use it)
 from ecattool.od.model import ObjectDictionary, OdObject
 from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
 
@@ -69,6 +70,9 @@ def etree_text(el: Any) -> str:
             parts.append(f"{c.tag}={c.text.strip()}")
     return " ".join(parts)[:500]
 _PROTOCOLS = ("AoE", "EoE", "CoE", "FoE", "SoE", "VoE")
+_BOOLEANS = {"1": True, "0": False, "true": True, "false": False}  # what Context.boolean reads them as
+_PDO_NUMBER_ATTRIBUTES = (("Sm", "sm"), ("Su", "su"), ("PdoOrder", "pdo_order"), ("OSFac", "os_fac"),
+                          ("OSMin", "os_min"), ("OSMax", "os_max"), ("OSIndexInc", "os_index_inc"))
 
 
 def build_dictionary(el: Any, ctx: Context) -> ObjectDictionary:
@@ -218,20 +222,6 @@ def _decode_fallback(data: bytes, source: str, ctx: Context) -> bytes | None:
     return text.encode("utf-8")
 
 
-def _fast_number(t: str | None) -> int | None:
-    """The common HexDecValue spellings without any checks; None sends the text to ``Context.number``."""
-    if t is None or not t.isascii():
-        return None
-    if t.isdigit():
-        return int(t)
-    if t[:2] == "#x" and t[2:].isalnum() and "x" not in t[2:] and "X" not in t[2:]:
-        try:
-            return int(t[2:], 16)
-        except ValueError:
-            return None
-    return None
-
-
 class Reader:
     def __init__(self, source: str, base_dir: Path | None, follow_references: bool = True) -> None:
         self.source = source
@@ -377,12 +367,13 @@ class Reader:
     def pdo(self, el: Any, direction: Direction) -> Pdo:
         ctx = self.ctx
         get = el.get
-        pdo = Pdo(direction, -1, location=Location(self.source, el.sourceline))
+        pdo = Pdo(direction, -1)
+        pdo.at_line(self.source, el.sourceline)
         name: str | None = None
         final = False
         entries = pdo.entries
         known = self._numbers
-        for child in el:
+        for child in el[:]:
             tag = child.tag
             if tag == "Entry":
                 entries.append(self.entry(child))
@@ -402,23 +393,32 @@ class Reader:
         if pdo.index < 0:
             raise InputError(f"{el.tag} has no Index", ctx.loc(el))
         if len(el.attrib):
-            if get("Fixed") is not None:
-                pdo.fixed = ctx.boolean(get("Fixed"), el, "Fixed")
-            if get("Mandatory") is not None:
-                pdo.mandatory = ctx.boolean(get("Mandatory"), el, "Mandatory")
-            if get("Virtual") is not None:
-                pdo.virtual = ctx.boolean(get("Virtual"), el, "Virtual")
-            if get("OverwrittenByModule") is not None:
-                pdo.overwritten_by_module = ctx.boolean(get("OverwrittenByModule"), el, "OverwrittenByModule")
-            for attr, name in (("Sm", "sm"), ("Su", "su"), ("PdoOrder", "pdo_order"), ("OSFac", "os_fac"),
-                               ("OSMin", "os_min"), ("OSMax", "os_max"), ("OSIndexInc", "os_index_inc")):
+            # booleans and numbers spelled the common way are looked up (_BOOLEANS, the number memo), the rest
+            # go through Context with its warnings and errors, in the same order as before
+            v = get("Fixed")
+            if v is not None:
+                b = _BOOLEANS.get(v)
+                pdo.fixed = ctx.boolean(v, el, "Fixed") if b is None else b
+            v = get("Mandatory")
+            if v is not None:
+                b = _BOOLEANS.get(v)
+                pdo.mandatory = ctx.boolean(v, el, "Mandatory") if b is None else b
+            v = get("Virtual")
+            if v is not None:
+                b = _BOOLEANS.get(v)
+                pdo.virtual = ctx.boolean(v, el, "Virtual") if b is None else b
+            v = get("OverwrittenByModule")
+            if v is not None:
+                pdo.overwritten_by_module = ctx.boolean(v, el, "OverwrittenByModule")
+            for attr, name in _PDO_NUMBER_ATTRIBUTES:
                 v = get(attr)
                 if v is not None:
-                    setattr(pdo, name, ctx.opt_number(v, el, attr))
+                    n = known.get(v)
+                    setattr(pdo, name, ctx.opt_number(v, el, attr) if n is None else n)
         return pdo
 
     def _number(self, text: str | None, el: Any, what: str) -> int:
-        """:meth:`Context.number`, remembering the common spellings (:func:`_fast_number`) for :attr:`_numbers`."""
+        """:meth:`Context.number`, remembering the common spellings (:func:`values.fast_number`) in :attr:`_numbers`."""
         v = _fast_number(text)
         if v is None:
             return self.ctx.number(text, el, what)
@@ -435,7 +435,7 @@ class Reader:
         name: str | None = None
         final = False
         dep = None
-        for c in en:
+        for c in en[:]:
             tag = c.tag
             if tag == "Index":
                 t = c.text
@@ -462,12 +462,12 @@ class Reader:
                         name = (c.text or "").strip()
             elif tag == "DataType":
                 dtype = (c.text or "").strip()
-        loc = Location(self.source, en.sourceline)
         if index is None:
-            raise InputError("PDO Entry has no Index", loc)
+            raise InputError("PDO Entry has no Index", self.ctx.loc(en))
         if bits is None:
-            raise InputError(f"PDO Entry 0x{index:04X}:{sub or 0:02X} has no BitLen", loc)
-        e = PdoEntry(index, sub or 0, bits, name or "", dtype, loc)
+            raise InputError(f"PDO Entry 0x{index:04X}:{sub or 0:02X} has no BitLen", self.ctx.loc(en))
+        e = PdoEntry(index, sub or 0, bits, name or "", dtype)
+        e.at_line(self.source, en.sourceline)
         if dep is not None:
             e.depend_on_slot = self.ctx.boolean(dep, en, "DependOnSlot")
         return e
@@ -539,12 +539,16 @@ class Reader:
         ctx = self.ctx
         out = []
         for om in el.iterchildren("OpMode"):
-            m = DcOpMode((om.findtext("Name") or "").strip(), lc_text(om, "Desc"))
-            aa = om.find("AssignActivate")
+            first: dict[Any, Any] = {}  # the first child of each tag (what find() gives), in one pass
+            for c in om[:]:
+                first.setdefault(c.tag, c)
+            name_el = first.get("Name")
+            m = DcOpMode((name_el.text or "").strip() if name_el is not None else "", lc_text(om, "Desc"))
+            aa = first.get("AssignActivate")
             m.assign_activate = ctx.number(aa.text, aa, "AssignActivate") if aa is not None else 0
             for tag, attr in (("CycleTimeSync0", "cycle_time_sync0"), ("ShiftTimeSync0", "shift_time_sync0"),
                               ("CycleTimeSync1", "cycle_time_sync1"), ("ShiftTimeSync1", "shift_time_sync1")):
-                t = om.find(tag)
+                t = first.get(tag)
                 if t is not None:
                     setattr(m, attr, ctx.opt_number(t.text, t, tag))
                     if t.get("Factor") is not None:
@@ -654,7 +658,7 @@ class Reader:
                      source=self.source, location=ctx.loc(el))
         sm_no = 0
         profile_seen = False
-        for child in el.iterchildren():
+        for child in el[:]:
             tag = child.tag
             if tag == "TxPdo":
                 dev.tx_pdos.append(self.pdo(child, Direction.TX))

@@ -90,6 +90,20 @@ class Context(Record):
             raise InputError(f"{what} {s[:40]!r} is not hex binary data", self.loc(el)) from None
 
 
+def fast_number(t: str | None) -> int | None:
+    """The common HexDecValue spellings without any checks; None sends the text to :meth:`Context.number`."""
+    if t is None or not t.isascii():
+        return None
+    if t.isdigit():
+        return int(t)
+    if t[:2] == "#x" and t[2:].isalnum() and "x" not in t[2:] and "X" not in t[2:]:
+        try:
+            return int(t[2:], 16)
+        except ValueError:
+            return None
+    return None
+
+
 def lc_text(parent: Any, tag: str) -> str:
     """Text of the ``tag`` child with LcId 1033 (English), else the first one; '' when absent."""
     first = None
@@ -113,4 +127,4 @@ def name_step(c: Any, name: str | None, final: bool) -> tuple[str | None, bool]:
     return name, False
 
 
-__all__ = ["Context", "lc_text", "name_step"]
+__all__ = ["Context", "fast_number", "lc_text", "name_step"]
