@@ -37,6 +37,8 @@ EXPECTED: dict[str, set[tuple[str, Severity, int, int | None]]] = {
     "prj020_position.yaml": {("PRJ020", E, 8, 15)},
     "prj031_sw_not_technosoft.yaml": {("PRJ031", W, 6, 9)},
     "prj040_opmode.yaml": {("PRJ040", E, 8, 18)},
+    "prj041_dc_needed.yaml": {("PRJ041", E, 7, 45)},
+    "prj042_sync0.yaml": {("PRJ042", E, 6, 45)},
     "prj050_scaling.yaml": {("PRJ050", E, 7, 7)},
     "pdo003_twice.yaml": {("PDO003", E, 10, 18)},
     "pdo006_direction.yaml": {("PDO006", E, 9, 34)},

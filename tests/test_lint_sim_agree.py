@@ -102,3 +102,23 @@ def test_every_entry_written_with_its_default(family):
 def test_lint_and_the_simulated_drive_agree_on_parameter_writes(family, data):
     index, entry = data.draw(st.sampled_from(entries(family)), label="entry")
     _check(family, index, entry, data.draw(_values(entry), label="value"))
+
+
+@pytest.mark.parametrize("mode", [2, 8])
+@pytest.mark.parametrize("cycle_ns", [None, 0, 125_000, 250_000, 1_000_000, 1_100_000, 15_000_000, 15_250_000])
+def test_lint_and_the_simulated_drive_agree_on_distributed_clocks(tmp_path, mode, cycle_ns):
+    """Control Techniques 7.4/8.1.1: CSP needs DC, SYNC0 = n x 250 us (n = 1..60). Lint's PRJ041/PRJ042 error
+    must be exactly what makes the simulated drive refuse OP (commissioned with the rules disabled)."""
+    from ecattool.commission import commission
+    from ecattool.project.lint import lint_project
+
+    dc = "" if cycle_ns is None else f"    dc: {{assign_activate: 0x0300, cycle_ns: {cycle_ns}}}\n"
+    text = ("ecattool: 1\nOFFdrives:\n  - name: x\n    device: {profile: controltechniques, product: digitax-st}\n"
+            f"{dc}    parameters:\n      - {{object: modes of operation, value: {mode}}}\n")
+    path = tmp_path / "p.yaml"
+    path.write_text(text.replace("OFF", ""))
+    lint = sorted(f.rule for f in lint_project(path).findings if f.severity.value == "error")
+    assert set(lint) <= {"PRJ041", "PRJ042"}, lint
+    path.write_text(text.replace("OFF", "disable_rules:\n  - {rule: PRJ041, reason: t}\n  - {rule: PRJ042, reason: t}\n"))
+    report = commission(path)
+    assert (not lint) == report.ok, (lint, [s.detail for d in report.drives for s in d.steps if not s.ok])

@@ -35,6 +35,8 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
     "PRJ040": "the DC OpMode named does not exist in the ESI",
+    "PRJ041": "the drive runs a mode that needs distributed clocks, and DC is not configured",
+    "PRJ042": "a SYNC0 cycle time the drive does not accept",
     "PRJ050": "the scaling section cannot be computed",
 }
 

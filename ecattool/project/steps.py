@@ -103,15 +103,60 @@ def check_sw(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         rd.findings.append(Finding("PRJ030", f.severity, f"{cfg.file}: {f.message} [{f.rule}]", f.location or loc))
 
 
+def move_mode(rd: ResolvedDrive) -> str | None:
+    """The mode of the commissioning move (``pp`` or ``csp``; ``pp`` becomes ``csp`` on a drive that has CSP
+    but no PP, as commission runs it), None without a move."""
+    move = rd.drive.move
+    if move is None:
+        return None
+    modes = tuple(getattr(rd.rules, "supported_modes", ()) or ())
+    if move.mode == "pp" and modes and 1 not in modes and 8 in modes:
+        return "csp"
+    return move.mode
+
+
+def _modes_run(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[tuple[int, Any]]:
+    """The modes of operation the drive will run, with where the project sets them: the 6060h parameters
+    and the commissioning move (which commission sets through the PDO or by SDO)."""
+    out: list[tuple[int, Any]] = [(int.from_bytes(c.data, "little", signed=True), c.source or lp.drive_location(i))
+                                  for c in rd.startup if (c.index, c.subindex) == (0x6060, 0) and len(c.data) == 1]
+    mode = move_mode(rd) if rd.drive.enable else None
+    if mode is not None:
+        out.append((1 if mode == "pp" else 8, lp.drive_location(i, "move")))
+    return out
+
+
 def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """DC OpMode names; modes the drive runs only with distributed clocks (Control Techniques 7.4/8.1: ip and
+    csp; without DC the drive stays in SAFE-OP, AL status 0x0030); SYNC0 cycle times the family accepts."""
     dc = rd.drive.dc
-    if dc is None or dc.opmode is None:
-        return
     assert rd.device is not None
-    names = [m.name for m in rd.device.dc_opmodes]
-    if dc.opmode not in names:
-        rd.error("PRJ040", f"DC OpMode {dc.opmode!r} is not in the device's ESI (has: {', '.join(names) or 'none'})",
-                 lp.drive_location(i, "dc", "opmode"))
+    if dc is not None and dc.opmode is not None:
+        names = [m.name for m in rd.device.dc_opmodes]
+        if dc.opmode not in names:
+            rd.error("PRJ040", f"DC OpMode {dc.opmode!r} is not in the device's ESI (has: {', '.join(names) or 'none'})",
+                     lp.drive_location(i, "dc", "opmode"))
+            return
+    rules = rd.rules
+    active = bool(dc_assign_activate(rd))
+    needs = tuple(getattr(rules, "dc_required_modes", ()) or ())
+    if not active:
+        for mode, loc in _modes_run(lp, i, rd):
+            if mode in needs:
+                rd.error("PRJ041", f"mode {mode} needs distributed clocks on {rd.device.type_name} (the drive stays in "
+                                   "SAFE-OP without them); add dc: {opmode: DC, cycle_ns: 1000000}", loc)
+                break
+        return
+    step = getattr(rules, "dc_sync0_step_ns", None)
+    most = getattr(rules, "dc_sync0_max_steps", None)
+    assert dc is not None
+    if step and most:
+        cycle = dc.cycle_ns or 0
+        if cycle <= 0 or cycle % step or not 1 <= cycle // step <= most:
+            what = f"SYNC0 cycle {cycle} ns" if dc.cycle_ns is not None else "dc: gives no SYNC0 cycle_ns"
+            rd.error("PRJ042", f"{what}: {rd.device.type_name} accepts n x {step} ns for n = 1..{most} "
+                               f"(e.g. cycle_ns: 1000000)",
+                     lp.drive_location(i, "dc", "cycle_ns") if dc.cycle_ns is not None else lp.drive_location(i, "dc"))
 
 
 def dc_assign_activate(rd: ResolvedDrive) -> int | None:
