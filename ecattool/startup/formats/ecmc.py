@@ -93,6 +93,10 @@ def export(configs: list[SlaveConfig]) -> str:
                         name = re.sub(r"\W+", "_", e.name).strip("_")[:40] or f"entry_{pdo.index:04x}_{k}"
                         out.append(f'ecmcConfigOrDie "Cfg.EcAddEntryComplete({slave},{v},{p},{direction},{sm},'
                                    f'0x{pdo.index:04x},0x{e.index:04x},0x{e.subindex:x},{e.bit_len},{name})"')
+        if c.dc_assign_activate:
+            # ecmc's Cfg.EcSlaveConfigDC(slave, assign_activate, sync0_cycle, sync0_shift, sync1_cycle, sync1_shift)
+            out.append(f'ecmcConfigOrDie "Cfg.EcSlaveConfigDC({slave},0x{c.dc_assign_activate:X},'
+                       f'{c.dc_cycle_ns or 0},{c.dc_shift_ns or 0},0,0)"')
         for s in c.soe_commands:
             out.append(f"#- SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()}: "
                        "not representable in ecmc")
@@ -179,6 +183,14 @@ class _Reader:
                 data, comment=self.pending_comment, complete_access=complete, source=loc))
         elif func == "EcAddEntryComplete":
             self.entry(args, loc)
+        elif func == "EcSlaveConfigDC":
+            if len(args) != 6:
+                raise InputError("Cfg.EcSlaveConfigDC takes (slave,assign_activate,sync0_cycle,sync0_shift,"
+                                 f"sync1_cycle,sync1_shift); got {len(args)} arguments", loc)
+            cfg = self.slave(args[0], loc)
+            cfg.dc_assign_activate = self.number(args[1], loc, "assign_activate")
+            cfg.dc_cycle_ns = self.number(args[2], loc, "SYNC0 cycle")
+            cfg.dc_shift_ns = self.number(args[3], loc, "SYNC0 shift")
         elif func in _REPORTED:
             reader = self.slave(args[0], loc) if args else None
             if reader is not None:
