@@ -122,3 +122,28 @@ def test_lint_and_the_simulated_drive_agree_on_distributed_clocks(tmp_path, mode
     path.write_text(text.replace("OFF", "disable_rules:\n  - {rule: PRJ041, reason: t}\n  - {rule: PRJ042, reason: t}\n"))
     report = commission(path)
     assert (not lint) == report.ok, (lint, [s.detail for d in report.drives for s in d.steps if not s.ok])
+
+
+PRODUCTS = [(p.name, prod.name) for p in profiles.list_profiles() for prod in p.products]
+
+
+@pytest.mark.parametrize("move", ["pp", "csp"])
+@pytest.mark.parametrize(("family", "product"), PRODUCTS, ids=[f"{a}-{b}" for a, b in PRODUCTS])
+def test_lint_and_the_simulated_drive_agree_on_the_commissioning_move(tmp_path, family, product, move):
+    """A move in a mode the drive lacks (Commander SK, Affinity: vl and tq only) linted clean and failed at
+    commissioning; now lint refuses exactly the moves the simulated drive refuses."""
+    from ecattool.commission import commission
+    from ecattool.project.lint import lint_project
+
+    path = tmp_path / "p.yaml"
+    path.write_text(f"ecattool: 1\ndrives:\n  - name: x\n    device: {{profile: {family}, product: {product}}}\n"
+                    "    dc: {assign_activate: 0x0300, cycle_ns: 1000000}\n"
+                    f"    move: {{distance: 10, mode: {move}}}\n"
+                    # Technosoft's profile velocity/acceleration come from its setup (.sw); without one they are 0
+                    + ("    parameters: [{object: '6081:00', value: 10000}, {object: '6083:00', value: 100000}]\n"
+                       if family == "technosoft-ipos" else ""))
+    lint = [f for f in lint_project(path).findings if f.severity.value == "error"]
+    assert {f.rule for f in lint} <= {"PRJ017"}, [str(f) for f in lint]
+    path.write_text(path.read_text().replace("drives:", "disable_rules:\n  - {rule: PRJ017, reason: t}\ndrives:"))
+    report = commission(path)
+    assert (not lint) == report.ok, ([str(f) for f in lint], [s.detail for d in report.drives for s in d.steps if not s.ok])

@@ -31,6 +31,7 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ015": "a parameter value is not one of the object's documented values",
     "PRJ016": "the same object is written twice in the same transition",
     "PRJ017": "a mode of operation (6060h) the drive does not support",
+    "PRJ018": "the commissioning move needs an object the drive does not have (6060h, 607Ah, 6064h)",
     "PRJ020": "two drives share a bus position",
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
@@ -81,6 +82,7 @@ def build_drive(lp: LoadedProject, i: int) -> ResolvedDrive:
     startup.extend(params)
     rd.startup = startup
     steps.check_sw(lp, i, rd)
+    steps.check_move(lp, i, rd)
     steps.check_dc(lp, i, rd)
     if rd.device.source and not rd.device.source.startswith("profile:"):
         steps.check_esi(lp, i, rd)

@@ -126,6 +126,26 @@ def _modes_run(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[tuple[int, 
     return out
 
 
+def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """The commissioning move needs 6060h, 607Ah and 6064h, and a mode the drive has (a Commander SK has
+    neither pp nor csp: it aborts 6060h = 8 with 0609 0030h)."""
+    mode = move_mode(rd) if rd.drive.enable else None
+    if mode is None:
+        return
+    assert rd.device is not None
+    loc = lp.drive_location(i, "move")
+    lacking = [f"{index:04X}h" for index in (0x6060, 0x607A, 0x6064) if rd.device.dictionary.entry(index, 0) is None]
+    if lacking:
+        rd.error("PRJ018", f"the {mode} move needs {', '.join(lacking)}, which {rd.device.type_name} does not have "
+                           "(leave out move:)", loc)
+        return
+    code = 1 if mode == "pp" else 8
+    modes = tuple(getattr(rd.rules, "supported_modes", ()) or ())
+    if modes and code not in modes:
+        rd.error("PRJ017", f"the {mode} move needs mode {code}, which {rd.device.type_name} does not support "
+                           f"(supported: {', '.join(str(m) for m in modes)}); leave out move:", loc)
+
+
 def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     """DC OpMode names; modes the drive runs only with distributed clocks (Control Techniques 7.4/8.1: ip and
     csp; without DC the drive stays in SAFE-OP, AL status 0x0030); SYNC0 cycle times the family accepts."""
