@@ -35,6 +35,7 @@ EXPECTED: dict[str, set[tuple[str, Severity, int, int | None]]] = {
     "prj017_mode.yaml": {("PRJ017", E, 7, 45)},
     "prj017_move_mode.yaml": {("PRJ017", E, 6, 11)},
     "prj018_move_objects.yaml": {("PRJ018", E, 7, 11)},
+    "prj019_no_profile_velocity.yaml": {("PRJ019", W, 9, 11)},
     "prj016_twice.yaml": {("PRJ016", W, 8, 18), ("PDO021", W, 7, 38), ("PDO021", W, 8, 43)},
     "prj020_position.yaml": {("PRJ020", E, 8, 15)},
     "prj031_sw_not_technosoft.yaml": {("PRJ031", W, 6, 9)},

@@ -147,3 +147,19 @@ def test_lint_and_the_simulated_drive_agree_on_the_commissioning_move(tmp_path, 
     path.write_text(path.read_text().replace("drives:", "disable_rules:\n  - {rule: PRJ017, reason: t}\ndrives:"))
     report = commission(path)
     assert (not lint) == report.ok, ([str(f) for f in lint], [s.detail for d in report.drives for s in d.steps if not s.ok])
+
+
+@pytest.mark.parametrize("velocity", [None, 10000])
+def test_a_pp_move_without_profile_velocity_is_flagged_and_does_not_move(tmp_path, velocity):
+    """Technosoft leaves 6081h at 0 without a setup: lint warns (PRJ019) exactly when the simulated move fails."""
+    from ecattool.commission import commission
+    from ecattool.project.lint import lint_project
+
+    path = tmp_path / "p.yaml"
+    path.write_text("ecattool: 1\ndrives:\n  - name: x\n    device: {profile: technosoft-ipos}\n    parameters:\n"
+                    "      - {object: '6060:00', value: 1}\n      - {object: '6083:00', value: 100000}\n"
+                    + (f"      - {{object: '6081:00', value: {velocity}}}\n" if velocity else "")
+                    + "    move: {distance: 10}\n")
+    warned = [f.rule for f in lint_project(path).findings] == ["PRJ019"]
+    assert warned is (velocity is None)
+    assert commission(path).ok is not warned

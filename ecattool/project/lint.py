@@ -32,6 +32,7 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ016": "the same object is written twice in the same transition",
     "PRJ017": "a mode of operation (6060h) the drive does not support",
     "PRJ018": "the commissioning move needs an object the drive does not have (6060h, 607Ah, 6064h)",
+    "PRJ019": "the commissioning PP move runs at a profile velocity or acceleration of 0 (not set, no default)",
     "PRJ020": "two drives share a bus position",
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",

@@ -144,6 +144,23 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     if modes and code not in modes:
         rd.error("PRJ017", f"the {mode} move needs mode {code}, which {rd.device.type_name} does not support "
                            f"(supported: {', '.join(str(m) for m in modes)}); leave out move:", loc)
+        return
+    if mode != "pp" or rd.drive.sw_config is not None:  # a Technosoft setup image may hold them
+        return
+    from ecattool.esi.model import Direction
+
+    written = {(c.index, c.subindex) for c in rd.startup}
+    mapped = {(e.index, e.subindex) for p in (rd.mapping.pdos(Direction.RX) if rd.mapping is not None else ())
+              for e in p.entries}
+    for index, name in ((0x6081, "profile velocity"), (0x6083, "profile acceleration")):
+        e = rd.device.dictionary.entry(index, 0)
+        if e is None or (index, 0) in written or (index, 0) in mapped:
+            continue
+        default = e.default
+        if default is None or (not any(default) if isinstance(default, (bytes, bytearray)) else default == 0):
+            rd.warning("PRJ019", f"the pp move runs at {name} {index:04X}h, which the project does not set and "
+                                 f"{rd.device.type_name} leaves at 0 (or does not document): the drive would not "
+                                 f"move; add a parameter {index:04X}:00", loc)
 
 
 def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
