@@ -30,6 +30,7 @@ RELATIONAL = {
     ("hdt", 0x6046): "min velocity must stay below max velocity (the other sub-index)",
     ("controltechniques", 0x604B): "0 is refused; negative numerators give the direction (scaling decisions)",
     ("controltechniques", 0x604C): "0 is refused; negative numerators give the direction",
+    ("controltechniques", 0x60C2): "the period is sub1 x 10^sub2: valid or not with the other sub-index",
     ("technosoft-ipos", 0x2069): "a checksum command over an address range",
     ("technosoft-ipos", 0x2080): "a reset command: the drive does not reply",
 }
@@ -163,3 +164,32 @@ def test_a_pp_move_without_profile_velocity_is_flagged_and_does_not_move(tmp_pat
     warned = [f.rule for f in lint_project(path).findings] == ["PRJ019"]
     assert warned is (velocity is None)
     assert commission(path).ok is not warned
+
+
+#: (60C2h sub1, sub2) targets: 7.4.3 accepts 250 us, 500 us, k x 1 ms (oracle 35's encodings and invalid examples)
+PERIODS = [(250, -6), (25, -5), (50, -5), (5, -4), (1, -3), (10, -4), (100, -5), (2, -3), (20, -4), (200, -5),
+           (15, -3), (100, -6), (75, -5), (3, -4), (0, -3), (16, -3), (1, 0), (255, -1)]
+
+
+@pytest.mark.parametrize("sub2_first", [False, True])
+@pytest.mark.parametrize(("base", "exp"), PERIODS)
+def test_lint_and_the_simulated_drive_agree_on_the_interpolation_period(tmp_path, base, exp, sub2_first):
+    """Each write of 60C2h is checked with the other sub-index as it stands, so the order matters: lint follows
+    the startup list (PRJ043) exactly where the simulated drive aborts."""
+    from ecattool.project.lint import lint_project
+
+    writes = [(1, base), (2, exp)][::-1 if sub2_first else 1]
+    path = tmp_path / "p.yaml"
+    path.write_text("ecattool: 1\ndrives:\n  - name: x\n    device: {profile: controltechniques, product: digitax-st}\n"
+                    "    parameters:\n" + "".join(f"      - {{object: '60C2:0{s}', value: {v}}}\n" for s, v in writes))
+    lint = [f.rule for f in lint_project(path).findings if f.severity.value == "error"]
+    drive = Drive.from_device(device("controltechniques"))
+    drive.request_state(EcState.PREOP)
+    refused = False
+    try:
+        for s, v in writes:
+            drive.sdo_download(0x60C2, s, v.to_bytes(1, "little", signed=s == 2))
+    except SdoAbort as exc:
+        assert exc.code == 0x06090030
+        refused = True
+    assert lint == (["PRJ043"] if refused else []), (writes, lint, refused)

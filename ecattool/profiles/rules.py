@@ -47,6 +47,10 @@ class FamilyRules:
     #: 250 us, 1..60); None = no family rule
     dc_sync0_step_ns: int | None = None
     dc_sync0_max_steps: int | None = None
+    #: interpolation periods (60C2h) the drive accepts: these, and the multiples of ip_period_step_ns
+    #: (Control Techniques 7.4.3: 250 us, 500 us, k x 1 ms); () and None = no family rule
+    ip_periods_ns: tuple[int, ...] = ()
+    ip_period_step_ns: int | None = None
     #: positions / velocities: internal counts per motor revolution where fixed (HDT: 65536)
     counts_per_rev: int | None = None
     notes: tuple[str, ...] = field(default_factory=tuple)

@@ -39,6 +39,7 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ040": "the DC OpMode named does not exist in the ESI",
     "PRJ041": "the drive runs a mode that needs distributed clocks, and DC is not configured",
     "PRJ042": "a SYNC0 cycle time the drive does not accept",
+    "PRJ043": "a write to the interpolation period (60C2h) leaves a period the drive does not accept",
     "PRJ050": "the scaling section cannot be computed",
 }
 
@@ -84,6 +85,7 @@ def build_drive(lp: LoadedProject, i: int) -> ResolvedDrive:
     rd.startup = startup
     steps.check_sw(lp, i, rd)
     steps.check_move(lp, i, rd)
+    steps.check_interpolation_period(lp, i, rd)
     steps.check_dc(lp, i, rd)
     if rd.device.source and not rd.device.source.startswith("profile:"):
         steps.check_esi(lp, i, rd)

@@ -163,6 +163,38 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
                                  f"move; add a parameter {index:04X}:00", loc)
 
 
+def check_interpolation_period(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """60C2h is sub1 x 10^sub2 s; a family that accepts only some periods (Control Techniques: 250 us, 500 us,
+    k x 1 ms) refuses each write that leaves another, so the order of the two writes matters: follow the
+    startup list from the device defaults."""
+    from fractions import Fraction
+
+    fixed = tuple(getattr(rd.rules, "ip_periods_ns", ()) or ())
+    step = getattr(rd.rules, "ip_period_step_ns", None)
+    assert rd.device is not None
+    if not fixed and not step:
+        return
+    state: dict[int, int] = {}
+    for sub in (1, 2):
+        e = rd.device.dictionary.entry(0x60C2, sub)
+        if e is None:
+            return
+        state[sub] = e.decode(e.default) if e.default else 0
+    for cmd in rd.startup:
+        if cmd.index != 0x60C2 or cmd.subindex not in (1, 2) or cmd.complete_access:
+            continue
+        state[cmd.subindex] = int.from_bytes(cmd.data, "little", signed=cmd.subindex == 2)
+        ns = Fraction(state[1]) * Fraction(10) ** (state[2] + 9)
+        if ns in fixed or (step and ns > 0 and ns % step == 0):
+            continue
+        allowed = ", ".join(f"{p // 1000} us" for p in fixed) + (f", k x {step // 1000} us" if step else "")
+        rd.error("PRJ043", f"after this write 60C2h = {state[1]} x 10^{state[2]} s = {float(ns) / 1000:g} us, which "
+                           f"{rd.device.type_name} refuses (it accepts {allowed}); write sub-index 2 first where "
+                           "the unit changes (e.g. 60C2:02 = -3, then 60C2:01 = 1 for 1 ms)",
+                 cmd.source or lp.drive_location(i, "parameters"))
+        return
+
+
 def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     """DC OpMode names; modes the drive runs only with distributed clocks (Control Techniques 7.4/8.1: ip and
     csp; without DC the drive stays in SAFE-OP, AL status 0x0030); SYNC0 cycle times the family accepts."""
