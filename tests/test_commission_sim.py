@@ -88,6 +88,21 @@ def test_controltechniques_csp_5000_um_on_dc():
     assert step(dr, "scaling").detail == "drive reports 0x608F:01 = 65536, 0x608F:02 = 1"
 
 
+def test_controltechniques_csp_move_without_a_mode_parameter_sets_the_mode_before_enabling(tmp_path):
+    # SM-EtherCAT refuses a change of 6060h in OPERATION ENABLED (7.3.6, abort 0800 0022h): a CSP move whose
+    # mode is not a startup parameter must select it before the enable sequence, not after
+    path = copy_sample("controltechniques", tmp_path)
+    text = path.read_text()
+    path.write_text(text.replace("    parameters:\n      - {object: modes of operation, value: 8, "
+                                 "comment: cyclic synchronous position}\n", ""))
+    assert "modes of operation" not in path.read_text()
+    drives = sim_drives(path)
+    _, dr = run(path, drives)
+    assert dr.ok, dr.error
+    assert step(dr, "move").detail.startswith("CSP move of 5000 user units")
+    assert drives[0].internal_position == 98304
+
+
 def test_controltechniques_encoder_resolution_other_than_the_project_is_refused():
     # 608Fh is read-only on SM-EtherCAT: with another encoder resolution than the project's feedback the
     # drive would move 5000 um as 307 counts; commissioning refuses instead of reporting success

@@ -257,6 +257,7 @@ drives:
     dc: {{opmode: DC, cycle_ns: 2000000}}
   - name: feed
     device: {{profile: controltechniques, product: digitax-st}}
+    dc: {{assign_activate: 0x0300, cycle_ns: 1000000}}
     parameters:
       - {{object: modes of operation, value: 8}}
 """)

@@ -55,7 +55,10 @@ def test_every_built_in_product_gets_a_skeleton_that_lints_and_commissions(capsy
         assert {"object": "6060:00", "value": 1, "comment": "profile position mode"} in drive["parameters"]
     else:  # Control Techniques drives have no PP mode: no move the drive would refuse
         assert "move" not in drive and "parameters" not in drive
-        assert "has no profile position mode" in (tmp_path / "m.yaml").read_text()
+        text = (tmp_path / "m.yaml").read_text()
+        assert "has no profile position mode" in text
+        # a CSP move is proposed only to a drive that has CSP (Commander SK and Affinity have vl and tq only)
+        assert ("mode: csp" in text) is (8 in modes), text
 
 
 @pytest.mark.parametrize(("name", "select", "flaws"), ESIS, ids=[e[0].split("_")[0] for e in ESIS])

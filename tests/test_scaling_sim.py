@@ -13,7 +13,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from ecattool.errors import EncodeError
+from ecattool.errors import EncodeError, InputError
 from ecattool.od.model import EcState
 from ecattool.scaling import Axis, Exact, Feedback, Gear, Transmission, compute
 from ecattool.sim import Drive
@@ -152,15 +152,35 @@ def test_technosoft_random_screws_on_the_simulator(pitch_um: int, counts: int, m
     assert abs(got - exact) <= a.bound
 
 
+#: corpus drive ESIs (file, device index): Copley has 608Fh/6091h/6092h; the Inovance SV660N has 6091h only,
+#: so 6091h must carry the encoder resolution and the feed (else the drive moves by the gear ratio alone)
+GENERIC_ESIS = [("copley_XE2_4.60.xml", 0), ("inovance_SV660_EOE_1Axis_V9.12.xml", 0),
+                ("elmo_Elmo_ECAT_00010420_V11.xml", 2)]
+
+
+@pytest.mark.parametrize("esi,index", GENERIC_ESIS, ids=[e[0].split("_")[0] for e in GENERIC_ESIS])
 @pytest.mark.parametrize("name,axis,cpu", AXES, ids=[a[0] for a in AXES])
-def test_generic_round_trip_on_a_real_esi(name: str, axis: Axis, cpu: Fraction) -> None:
-    """Copley XE2 (corpus ESI) simulated as a generic CiA-402 drive: 608Fh x 6091h / 6092h per user unit."""
+def test_generic_round_trip_on_a_real_esi(name: str, axis: Axis, cpu: Fraction, esi: str, index: int) -> None:
+    """Corpus ESI drives simulated as generic CiA-402 drives: 608Fh x 6091h / 6092h per user unit, whichever
+    of them the ESI has."""
     from ecattool.esi import load
     from tests.conftest import corpus_path
 
-    device = load(corpus_path("esi", "copley_XE2_4.60.xml")).devices[0]
+    device = load(corpus_path("esi", esi)).devices[index]
     d = Drive.from_device(device)
     d.request_state(EcState.PREOP)
     _apply(d, compute(axis, "generic", device=device))
     assert d.units.position_to_internal(10) == 10 * cpu
     assert d.units.increments_per_second(d.units.velocity_to_internal(100)) == 100 * cpu
+
+
+@pytest.mark.parametrize("esi", ["etg_ETG2001_ModulesSlots_CiA402.xml", "ingenia_eve-xcr-e_esi.xml"])
+def test_a_drive_without_factor_objects_cannot_take_user_units(esi: str) -> None:
+    """The ETG.2001 example drive and the Ingenia Everest ESI have none of 608Fh/6091h/6092h/6093h: the scaling
+    is an error, not a table of factors nobody writes (lint refused nothing and the move was not checked)."""
+    from ecattool.esi import load
+    from tests.conftest import corpus_path
+
+    device = load(corpus_path("esi", esi)).devices[0]
+    with pytest.raises(InputError, match="none of the scaling objects that set user units"):
+        compute(SCREW, "generic", device=device)

@@ -79,6 +79,17 @@ def test_ecmc_round_trip(cmds):
     assert [c.comment for c in back.commands] == [one_line(c.comment) for c in cmds]
 
 
+@given(assign=st.integers(1, 0xFFFF), cycle=st.integers(1, 0xFFFFFFFF), shift=st.integers(-(1 << 31), (1 << 31) - 1))
+def test_ecmc_round_trip_keeps_distributed_clocks(assign, cycle, shift):
+    # a Control Techniques drive in CSP stays in SAFE-OP without its DC settings: ecmc writes them with
+    # Cfg.EcSlaveConfigDC(slave, assign_activate, sync0_cycle, sync0_shift, sync1_cycle, sync1_shift); no (0) cycle
+    # is the ecmc sample rate, see test_ecmc_dc_without_cycle_runs_at_the_ecmc_sample_rate
+    cfg = _config([], 1)
+    cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns = assign, cycle, shift
+    (back,) = import_bytes(export([cfg], "ecmc").encode(), "x.cmd")
+    assert (back.dc_assign_activate, back.dc_cycle_ns, back.dc_shift_ns) == (assign, cycle, shift)
+
+
 @given(commands(transitions=st.just("PS"), sizes=st.sampled_from([1, 2, 4, 8]), complete_access=st.just(False)))
 def test_ros2_round_trip(cmds):
     (back,) = import_bytes(export(_config(cmds), "ros2").encode(), "x.yaml")

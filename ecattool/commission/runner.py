@@ -286,15 +286,27 @@ def _set_mode(io: ProcessIo, mode: int) -> None:
     raise _Failed(Step("move", False, f"the drive did not switch to mode {mode} (6061h stays {io.read(0x6061, 0)})"))
 
 
+def _preselect_mode(io: ProcessIo, rd: ResolvedDrive) -> None:
+    """Write the move's mode before the enable sequence: Control Techniques refuses a change of 6060h in
+    OPERATION ENABLED (7.3.6, SDO abort 0800 0022h), so a mode chosen only for the move must be set first.
+    A drive that shows the mode only once enabled (Technosoft) is checked by the move itself."""
+    from ecattool.project.steps import move_mode
+
+    mode = move_mode(rd)
+    if mode is None or not io.has(0x6060):
+        return
+    io.write(0x6060, 0, 1 if mode == "pp" else 8)
+    io.cycle()
+
+
 def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
+    from ecattool.project.steps import move_mode
+
     move = rd.drive.move
-    if move is None:
+    mode = move_mode(rd)
+    if move is None or mode is None:
         return
     dist = Fraction(move.distance).limit_denominator(1)
-    modes = tuple(getattr(rd.rules, "supported_modes", ()) or ())
-    mode = move.mode
-    if mode == "pp" and modes and 1 not in modes and 8 in modes:
-        mode = "csp"
     internal = io.has(0x6063)
     p0 = io.read(0x6064, 0)
     i0 = io.read(0x6063, 0) if internal else None
@@ -412,6 +424,7 @@ def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
         io.seed_from_drive()
         _goto(slave, EcState.OP, report)
         if rd.drive.enable:
+            _sdo_step("mode", lambda: _preselect_mode(io, rd))
             passed = _sdo_step("enable", lambda: cia402.enable(lambda: io.read(0x6041, 0),
                                                                lambda v: io.write(0x6040, 0, v), io.cycle))
             report.steps.append(Step("enable", True, " -> ".join(passed)))

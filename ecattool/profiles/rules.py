@@ -43,6 +43,14 @@ class FamilyRules:
     supported_modes: tuple[int, ...] = ()
     #: modes that need distributed clocks (Control Techniques: CSP/CSV/CST …)
     dc_required_modes: tuple[int, ...] = ()
+    #: SYNC0 cycle times the drive accepts: n x step for n = 1..max_steps (Control Techniques 8.1.1:
+    #: 250 us, 1..60); None = no family rule
+    dc_sync0_step_ns: int | None = None
+    dc_sync0_max_steps: int | None = None
+    #: interpolation periods (60C2h) the drive accepts: these, and the multiples of ip_period_step_ns
+    #: (Control Techniques 7.4.3: 250 us, 500 us, k x 1 ms); () and None = no family rule
+    ip_periods_ns: tuple[int, ...] = ()
+    ip_period_step_ns: int | None = None
     #: positions / velocities: internal counts per motor revolution where fixed (HDT: 65536)
     counts_per_rev: int | None = None
     notes: tuple[str, ...] = field(default_factory=tuple)

@@ -31,11 +31,16 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ015": "a parameter value is not one of the object's documented values",
     "PRJ016": "the same object is written twice in the same transition",
     "PRJ017": "a mode of operation (6060h) the drive does not support",
+    "PRJ018": "the commissioning move needs an object the drive does not have (6060h, 607Ah, 6064h)",
+    "PRJ019": "the commissioning PP move runs at a profile velocity or acceleration of 0 (not set, no default)",
     "PRJ020": "two drives share a bus position",
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
     "PRJ032": "a .sw image was made for another Technosoft product or firmware than the drive's",
     "PRJ040": "the DC OpMode named does not exist in the ESI",
+    "PRJ041": "the drive runs a mode that needs distributed clocks, and DC is not configured",
+    "PRJ042": "a SYNC0 cycle time the drive does not accept",
+    "PRJ043": "a write to the interpolation period (60C2h) leaves a period the drive does not accept",
     "PRJ050": "the scaling section cannot be computed",
 }
 
@@ -88,6 +93,8 @@ def build_drive(lp: LoadedProject, i: int) -> ResolvedDrive:
     startup.extend(params)
     rd.startup = startup
     steps.check_sw(lp, i, rd)
+    steps.check_move(lp, i, rd)
+    steps.check_interpolation_period(lp, i, rd)
     steps.check_dc(lp, i, rd)
     if rd.device.source and not rd.device.source.startswith("profile:"):
         steps.check_esi(lp, i, rd)

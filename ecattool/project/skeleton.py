@@ -14,6 +14,7 @@ import re
 from pathlib import Path
 
 from ecattool.esi.model import Device
+from ecattool.profiles.rules import FamilyRules
 
 _PLAIN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-/]*")
 _YAML_WORDS = {"true", "false", "yes", "no", "on", "off", "null", "y", "n", "~"}
@@ -56,7 +57,7 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
         ref = f"      profile: {_scalar(profile)}\n" + (f"      product: {_scalar(product)}\n" if product else "")
     else:
         ref = f"      esi: {_scalar(str(esi))}\n" + (f"      select: {json.dumps(select)}\n" if select else "")
-    body = _motion(device, tuple(profiles.rules_for(device).supported_modes or ()))
+    body = _motion(device, profiles.rules_for(device))
     return ("# ecattool project file (format 1). Docs: docs/project.md\n"
             "ecattool: 1\n"
             "name: my-machine\n"
@@ -72,8 +73,9 @@ _PROFILE = ((0x6081, 10_000, "profile velocity, slow (drive units until a scalin
             (0x6083, 100_000, "profile acceleration"), (0x6084, 100_000, "profile deceleration"))
 
 
-def _motion(device: Device, modes: tuple[int, ...]) -> str:
+def _motion(device: Device, rules: FamilyRules) -> str:
     """The parameters: and move: lines (or a comment saying why there are none)."""
+    modes = tuple(rules.supported_modes or ())
     from ecattool.esi.model import Direction
     from ecattool.od.model import EcState
     from ecattool.pdo import default_mapping
@@ -83,9 +85,13 @@ def _motion(device: Device, modes: tuple[int, ...]) -> str:
         return "    # no modes of operation (6060h): not a CiA-402 drive; add parameters: as needed\n"
     if modes and 1 not in modes:
         listed = ", ".join(f"{m} ({MODE_NAMES.get(m, '?')})" for m in modes)
-        return (f"    # {_comment(device.type_name)} has no profile position mode; it supports {listed}.\n"
-                "    # For a CSP move: parameters 6060:00 = 8, an RxPDO with 607Ah, dc: where the drive needs\n"
-                "    # it, and move: {distance: 1, mode: csp} (docs/project.md, samples/controltechniques).\n")
+        head = f"    # {_comment(device.type_name)} has no profile position mode; it supports {listed}.\n"
+        if 8 not in modes:  # Commander SK, Affinity: no position mode a commissioning move could use
+            return head + "    # No position mode for a commissioning move: commission enables the drive without one.\n"
+        return (head + "    # For a CSP move: parameters 6060:00 = 8, an RxPDO with 607Ah, "
+                + ("dc: (this drive needs distributed\n    # clocks for CSP)"
+                   if 8 in rules.dc_required_modes else "dc: where the drive needs\n    # it")
+                + ", and move: {distance: 1, mode: csp} (docs/project.md, samples/controltechniques).\n")
     rx = {(e.index, e.subindex) for p in default_mapping(device).pdos(Direction.RX) for e in p.entries}
     for index, what in ((0x6060, "modes of operation"), (0x607A, "target position")):
         e = device.dictionary.entry(index, 0)

@@ -130,15 +130,129 @@ def check_sw_identification(rd: ResolvedDrive, file: str, loc: Location | None) 
                    "its setup table may not fit this drive", loc)
 
 
-def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
-    dc = rd.drive.dc
-    if dc is None or dc.opmode is None:
+def move_mode(rd: ResolvedDrive) -> str | None:
+    """The mode of the commissioning move (``pp`` or ``csp``; ``pp`` becomes ``csp`` on a drive that has CSP
+    but no PP, as commission runs it), None without a move."""
+    move = rd.drive.move
+    if move is None:
+        return None
+    modes = tuple(getattr(rd.rules, "supported_modes", ()) or ())
+    if move.mode == "pp" and modes and 1 not in modes and 8 in modes:
+        return "csp"
+    return move.mode
+
+
+def _modes_run(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[tuple[int, Any]]:
+    """The modes of operation the drive will run, with where the project sets them: the 6060h parameters
+    and the commissioning move (which commission sets through the PDO or by SDO)."""
+    out: list[tuple[int, Any]] = [(int.from_bytes(c.data, "little", signed=True), c.source or lp.drive_location(i))
+                                  for c in rd.startup if (c.index, c.subindex) == (0x6060, 0) and len(c.data) == 1]
+    mode = move_mode(rd) if rd.drive.enable else None
+    if mode is not None:
+        out.append((1 if mode == "pp" else 8, lp.drive_location(i, "move")))
+    return out
+
+
+def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """The commissioning move needs 6060h, 607Ah and 6064h, and a mode the drive has (a Commander SK has
+    neither pp nor csp: it aborts 6060h = 8 with 0609 0030h)."""
+    mode = move_mode(rd) if rd.drive.enable else None
+    if mode is None:
         return
     assert rd.device is not None
-    names = [m.name for m in rd.device.dc_opmodes]
-    if dc.opmode not in names:
-        rd.error("PRJ040", f"DC OpMode {dc.opmode!r} is not in the device's ESI (has: {', '.join(names) or 'none'})",
-                 lp.drive_location(i, "dc", "opmode"))
+    loc = lp.drive_location(i, "move")
+    lacking = [f"{index:04X}h" for index in (0x6060, 0x607A, 0x6064) if rd.device.dictionary.entry(index, 0) is None]
+    if lacking:
+        rd.error("PRJ018", f"the {mode} move needs {', '.join(lacking)}, which {rd.device.type_name} does not have "
+                           "(leave out move:)", loc)
+        return
+    code = 1 if mode == "pp" else 8
+    modes = tuple(getattr(rd.rules, "supported_modes", ()) or ())
+    if modes and code not in modes:
+        rd.error("PRJ017", f"the {mode} move needs mode {code}, which {rd.device.type_name} does not support "
+                           f"(supported: {', '.join(str(m) for m in modes)}); leave out move:", loc)
+        return
+    if mode != "pp" or rd.drive.sw_config is not None:  # a Technosoft setup image may hold them
+        return
+    from ecattool.esi.model import Direction
+
+    written = {(c.index, c.subindex) for c in rd.startup}
+    mapped = {(e.index, e.subindex) for p in (rd.mapping.pdos(Direction.RX) if rd.mapping is not None else ())
+              for e in p.entries}
+    for index, name in ((0x6081, "profile velocity"), (0x6083, "profile acceleration")):
+        e = rd.device.dictionary.entry(index, 0)
+        if e is None or (index, 0) in written or (index, 0) in mapped:
+            continue
+        default = e.default
+        if default is None or (not any(default) if isinstance(default, (bytes, bytearray)) else default == 0):
+            rd.warning("PRJ019", f"the pp move runs at {name} {index:04X}h, which the project does not set and "
+                                 f"{rd.device.type_name} leaves at 0 (or does not document): the drive would not "
+                                 f"move; add a parameter {index:04X}:00", loc)
+
+
+def check_interpolation_period(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """60C2h is sub1 x 10^sub2 s; a family that accepts only some periods (Control Techniques: 250 us, 500 us,
+    k x 1 ms) refuses each write that leaves another, so the order of the two writes matters: follow the
+    startup list from the device defaults."""
+    from fractions import Fraction
+
+    fixed = tuple(getattr(rd.rules, "ip_periods_ns", ()) or ())
+    step = getattr(rd.rules, "ip_period_step_ns", None)
+    assert rd.device is not None
+    if not fixed and not step:
+        return
+    state: dict[int, int] = {}
+    for sub in (1, 2):
+        e = rd.device.dictionary.entry(0x60C2, sub)
+        if e is None:
+            return
+        state[sub] = e.decode(e.default) if e.default else 0
+    for cmd in rd.startup:
+        if cmd.index != 0x60C2 or cmd.subindex not in (1, 2) or cmd.complete_access:
+            continue
+        state[cmd.subindex] = int.from_bytes(cmd.data, "little", signed=cmd.subindex == 2)
+        ns = Fraction(state[1]) * Fraction(10) ** (state[2] + 9)
+        if ns in fixed or (step and ns > 0 and ns % step == 0):
+            continue
+        allowed = ", ".join(f"{p // 1000} us" for p in fixed) + (f", k x {step // 1000} us" if step else "")
+        rd.error("PRJ043", f"after this write 60C2h = {state[1]} x 10^{state[2]} s = {float(ns) / 1000:g} us, which "
+                           f"{rd.device.type_name} refuses (it accepts {allowed}); write sub-index 2 first where "
+                           "the unit changes (e.g. 60C2:02 = -3, then 60C2:01 = 1 for 1 ms)",
+                 cmd.source or lp.drive_location(i, "parameters"))
+        return
+
+
+def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """DC OpMode names; modes the drive runs only with distributed clocks (Control Techniques 7.4/8.1: ip and
+    csp; without DC the drive stays in SAFE-OP, AL status 0x0030); SYNC0 cycle times the family accepts."""
+    dc = rd.drive.dc
+    assert rd.device is not None
+    if dc is not None and dc.opmode is not None:
+        names = [m.name for m in rd.device.dc_opmodes]
+        if dc.opmode not in names:
+            rd.error("PRJ040", f"DC OpMode {dc.opmode!r} is not in the device's ESI (has: {', '.join(names) or 'none'})",
+                     lp.drive_location(i, "dc", "opmode"))
+            return
+    rules = rd.rules
+    active = bool(dc_assign_activate(rd))
+    needs = tuple(getattr(rules, "dc_required_modes", ()) or ())
+    if not active:
+        for mode, loc in _modes_run(lp, i, rd):
+            if mode in needs:
+                rd.error("PRJ041", f"mode {mode} needs distributed clocks on {rd.device.type_name} (the drive stays in "
+                                   "SAFE-OP without them); add dc: {opmode: DC, cycle_ns: 1000000}", loc)
+                break
+        return
+    step = getattr(rules, "dc_sync0_step_ns", None)
+    most = getattr(rules, "dc_sync0_max_steps", None)
+    assert dc is not None
+    if step and most:
+        cycle = dc.cycle_ns or 0
+        if cycle <= 0 or cycle % step or not 1 <= cycle // step <= most:
+            what = f"SYNC0 cycle {cycle} ns" if dc.cycle_ns is not None else "dc: gives no SYNC0 cycle_ns"
+            rd.error("PRJ042", f"{what}: {rd.device.type_name} accepts n x {step} ns for n = 1..{most} "
+                               f"(e.g. cycle_ns: 1000000)",
+                     lp.drive_location(i, "dc", "cycle_ns") if dc.cycle_ns is not None else lp.drive_location(i, "dc"))
 
 
 def dc_assign_activate(rd: ResolvedDrive) -> int | None:

@@ -206,7 +206,7 @@ def compute(axis: Axis, family: str = "technosoft-ipos", *, firmware: str | None
     elif fs == "controltechniques":
         _controltechniques(b, ctx, vl is not False, vl_setpoint)
     else:
-        _generic(b, ctx, od)
+        _generic(b, ctx, od, device)
     if fam == "technosoft-ipos":
         _check_small_pairs(group, (0x6093, 0x6094, 0x6097, 0x2071) if fs == "obsolete" else (0x6093, 0x6094, 0x210F, 0x2110))
     return group
@@ -382,13 +382,41 @@ def _setpoint_object(index: int, sub: int, value: int) -> Any:
 # --- generic CiA-402-2 drives ---------------------------------------------------------------------------------
 
 
-def _generic(b: _Builder, ctx: _Ctx, od: Any) -> None:
+def _generic(b: _Builder, ctx: _Ctx, od: Any, device: Any = None) -> None:
     u = ctx.u
-    b.pair(0x608F, "Position encoder resolution", ("Encoder increments", "Motor revolutions"), ctx.ipr,
-           "encoder increments per motor revolution")
-    b.pair(0x6091, "Gear ratio", ("Motor revolutions", "Shaft revolutions"), ctx.axis.gear.ratio,
-           "motor revolutions per driving-shaft revolution")
-    b.pair(0x6092, "Feed constant", ("Feed", "Shaft revolutions"), ctx.feed, f"{u[0].text} per driving-shaft revolution")
+    enc, gear, feed = ctx.ipr, Exact.of(ctx.axis.gear.ratio), ctx.feed
+    meanings = {0x608F: "encoder increments per motor revolution",
+                0x6091: "motor revolutions per driving-shaft revolution",
+                0x6092: f"{u[0].text} per driving-shaft revolution"}
+    have = {i: od is None or od.get(i) is not None for i in (0x608F, 0x6091, 0x6092, 0x6093)}
+    missing = [i for i in (0x608F, 0x6092) if not have[i]]
+    if not have[0x6093] and missing:
+        # the drive computes its position factor from 608Fh x 6091h / 6092h alone and takes an object it lacks
+        # as 1 (Inovance SV660N: 6091h only): the ratio of a missing object goes into one it has, else the
+        # drive would move by the gear ratio alone
+        carrier = next((i for i in (0x6091, 0x608F, 0x6092) if have[i]), None)
+        if carrier is None:
+            source = str(getattr(device, "source", "") or "")
+            raise InputError("the device has none of the scaling objects that set user units (608Fh, 6091h, 6092h, "
+                             f"6093h): its positions stay in its own units, and 1 {u[0].text} = {_fmt(ctx.pf)} "
+                             "increments cannot be set (leave out the scaling, or use the drive's units)",
+                             Location(source) if source and not source.startswith("profile:") else b.loc)
+        else:
+            numerators = (enc if have[0x608F] and carrier != 0x608F else Exact.of(1)) \
+                * (gear if have[0x6091] and carrier != 0x6091 else Exact.of(1))
+            if carrier == 0x6092:
+                feed = numerators / ctx.pf
+            elif carrier == 0x6091:
+                gear = ctx.pf * (feed if have[0x6092] else Exact.of(1)) / numerators
+            else:
+                enc = ctx.pf * (feed if have[0x6092] else Exact.of(1)) / numerators
+            lacks = " and ".join(f"{i:04X}h" for i in missing if i != carrier)
+            meanings[carrier] = f"{_fmt(ctx.pf)} increments per {u[0].text} with {lacks} (not in the drive: taken as 1)"
+            b.g.notes.append(f"0x{carrier:04X} carries the ratio of {lacks}: the drive has no such object, and takes "
+                             "it as 1")
+    b.pair(0x608F, "Position encoder resolution", ("Encoder increments", "Motor revolutions"), enc, meanings[0x608F])
+    b.pair(0x6091, "Gear ratio", ("Motor revolutions", "Shaft revolutions"), gear, meanings[0x6091])
+    b.pair(0x6092, "Feed constant", ("Feed", "Shaft revolutions"), feed, meanings[0x6092])
     b.pair(0x6093, "Position factor", ("Numerator", "Divisor"), ctx.pf, f"increments per {u[0].text}")
     if od is not None and od.get(0x6094) is not None:
         b.pair(0x6094, "Velocity encoder factor", ("Numerator", "Divisor"), ctx.cps(1), f"increments/s per {u[1].text}")

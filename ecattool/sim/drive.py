@@ -952,6 +952,21 @@ class Drive:
             return True
         return check
 
+    def _check_interpolation_period(self, sub: int, data: bytes, value: int | None) -> bool:
+        """Control Techniques 7.4.3: the period sub1 x 10^sub2 s must be 250 us, 500 us or k x 1 ms; any other
+        value is refused (code not stated: 0609 0030h). Checked on each write, with the other sub-index as
+        stored."""
+        if sub not in (1, 2):
+            return True
+        base = (value or 0) if sub == 1 else (self._read_int(0x60C2, 1) or 0)
+        exp = (value or 0) if sub == 2 else (self._read_int(0x60C2, 2) or 0)
+        if not -9 <= exp <= 2:
+            return True  # the entry's own range check answers
+        ns = Fraction(base) * Fraction(10) ** (exp + 9)
+        if ns not in (250_000, 500_000) and not (ns > 0 and ns % 1_000_000 == 0):
+            raise _abort(0x60C2, sub, A.INVALID_VALUE)
+        return True
+
     def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0) -> None:
         """What the master writes to the ESC before SAFE-OP: DC activation (0x0981, e.g. 0x0300 = SYNC0)
         and the SYNC0 cycle time in ns. ``assign_activate = 0`` = free run."""
@@ -1128,6 +1143,7 @@ class Drive:
         if self.family == "controltechniques":
             self._handlers_down[0x604B] = self._nonzero(0x604B)
             self._handlers_down[0x604C] = self._nonzero(0x604C)
+            self._handlers_down[0x60C2] = self._check_interpolation_period
         if self.family != "technosoft-ipos":
             return
         m = self.memory
