@@ -57,15 +57,17 @@ Examples:
 @click.option("--name", default="axis1", show_default=True, help="Name of the first drive.")
 @output_option()
 def new(profile: str | None, product: str | None, esi_path: str | None, select: str | None, name: str, output: str | None) -> None:
-    """Write a minimal project file for one drive that lints clean: the device is resolved first (unknown
+    """Write a minimal project file for one drive that lints clean (a vendor ESI's own flaws aside, which it
+    points out with a commented-out disable_rules): the device is resolved first (unknown
     profile, product, ESI or selector: exit 1), and the PP move is only proposed where the drive has mode 1."""
     if (profile is None) == (esi_path is None):
         raise click.UsageError("give --profile or --esi")
     from pathlib import Path
 
-    from ecattool.project.skeleton import new_project, resolve
+    from ecattool.project.skeleton import esi_flaws, new_project, resolve
 
     base = Path(output).parent if output not in (None, "-") else Path(".")
     device = resolve(profile, product, esi_path, select, base)
+    findings = esi_flaws(esi_path, select, base) if esi_path is not None else []
     write_output(output, new_project(device, name=name, profile=profile, product=product, esi=esi_path,
-                                     select=select))
+                                     select=select, findings=findings))

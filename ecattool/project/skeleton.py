@@ -14,6 +14,7 @@ import re
 from pathlib import Path
 
 from ecattool.esi.model import Device
+from ecattool.findings import Finding
 from ecattool.profiles.rules import FamilyRules
 
 _PLAIN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-/]*")
@@ -48,16 +49,24 @@ def resolve(profile: str | None, product: str | None, esi: str | None, select: s
     return load_device_cached(path, select, "exact")
 
 
+def esi_flaws(esi: str, select: str | None, base_dir: Path) -> list[Finding]:
+    """The structural findings of the ESI device, as lint will report them."""
+    from ecattool.project.cache import esi_findings_cached
+
+    return esi_findings_cached(base_dir / esi, select, "exact")
+
+
 def new_project(device: Device, *, name: str = "axis1", profile: str | None = None, product: str | None = None,
-                esi: str | None = None, select: str | None = None) -> str:
-    """The text of a minimal project with one drive of ``device``, named as the user named it."""
+                esi: str | None = None, select: str | None = None, findings: list[Finding] | None = None) -> str:
+    """The text of a minimal project with one drive of ``device``, named as the user named it; ``findings``:
+    the ESI's structural findings (:func:`esi_flaws`), pointed out where they concern the PDOs in use."""
     from ecattool import profiles
 
     if profile is not None:
         ref = f"      profile: {_scalar(profile)}\n" + (f"      product: {_scalar(product)}\n" if product else "")
     else:
         ref = f"      esi: {_scalar(str(esi))}\n" + (f"      select: {json.dumps(select)}\n" if select else "")
-    body = _motion(device, profiles.rules_for(device))
+    body = _motion(device, profiles.rules_for(device)) + _accept_flaws(device, findings or [])
     return ("# ecattool project file (format 1). Docs: docs/project.md\n"
             "ecattool: 1\n"
             "name: my-machine\n"
@@ -65,6 +74,24 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
             f"  - name: {_scalar(name)}\n"
             "    device:\n"
             f"{ref}{body}")
+
+
+def _accept_flaws(device: Device, findings: list[Finding]) -> str:
+    """Commented-out ``disable_rules`` for the vendor ESI's own flaws in the PDOs this drive uses by default
+    (lint reports them as errors; only the user can say the drive has the objects the file leaves out)."""
+    from ecattool.findings import Severity
+    from ecattool.pdo import default_mapping
+
+    mapping = default_mapping(device)
+    used = {p.index for p in (*mapping.rx, *mapping.tx)}
+    rules = sorted({f.rule for f in findings if f.severity is Severity.ERROR and f.data.get("pdo") in used})
+    if not rules:
+        return ""
+    lines = [f"    # the vendor ESI has flaws in PDOs this drive uses ({', '.join(rules)}; `ecattool lint` shows where).",
+             "    # If the drive itself is right (the file's dictionary is incomplete), accept them knowingly:",
+             "    # disable_rules:"]
+    lines += [f"    #   - {{rule: {r}, reason: \"the vendor ESI is incomplete; the drive has the objects\"}}" for r in rules]
+    return "\n".join(lines) + "\n"
 
 
 #: profile velocity, acceleration, deceleration for a first move where the device leaves them at 0 or unknown
