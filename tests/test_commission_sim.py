@@ -93,7 +93,7 @@ def test_controltechniques_csp_move_without_a_mode_parameter_sets_the_mode_befor
     # mode is not a startup parameter must select it before the enable sequence, not after
     path = copy_sample("controltechniques", tmp_path)
     text = path.read_text()
-    path.write_text(text.replace("    parameters:\n      - {object: modes of operation, value: 8, "
+    path.write_text(text.replace("      - {object: modes of operation, value: 8, "
                                  "comment: cyclic synchronous position}\n", ""))
     assert "modes of operation" not in path.read_text()
     drives = sim_drives(path)

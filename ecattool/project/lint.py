@@ -41,6 +41,7 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ041": "the drive runs a mode that needs distributed clocks, and DC is not configured",
     "PRJ042": "a SYNC0 cycle time the drive does not accept",
     "PRJ043": "a write to the interpolation period (60C2h) leaves a period the drive does not accept",
+    "PRJ044": "the interpolation period (60C2h) differs from the SYNC0 cycle of an interpolated mode",
     "PRJ050": "the scaling section cannot be computed",
 }
 

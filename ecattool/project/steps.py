@@ -220,6 +220,18 @@ def check_interpolation_period(lp: LoadedProject, i: int, rd: ResolvedDrive) -> 
                            "the unit changes (e.g. 60C2:02 = -3, then 60C2:01 = 1 for 1 ms)",
                  cmd.source or lp.drive_location(i, "parameters"))
         return
+    # the guide expects the interpolation cycle to equal the sync interval (Control Techniques 8.1); a 1 ms
+    # SYNC0 with the 250 us default period interpolates each set-point as if it came four times as often
+    period = Fraction(state[1]) * Fraction(10) ** (state[2] + 9)
+    dc = rd.drive.dc
+    cycle = dc.cycle_ns if dc is not None and dc_assign_activate(rd) else None
+    needs = tuple(getattr(rd.rules, "dc_required_modes", ()) or ())
+    if cycle and period != cycle and any(mode in needs for mode, _ in _modes_run(lp, i, rd)):
+        hint = (f"60C2:02 = -3, then 60C2:01 = {cycle // 1_000_000}" if cycle % 1_000_000 == 0
+                else "a period equal to the cycle")
+        rd.warning("PRJ044", f"interpolation period 60C2h = {float(period) / 1000:g} us differs from the SYNC0 cycle "
+                             f"{cycle / 1000:g} us; {rd.device.type_name} expects the master's set-points once per "
+                             f"interpolation period: set {hint}", lp.drive_location(i, "dc", "cycle_ns"))
 
 
 def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
