@@ -71,6 +71,8 @@ def etree_text(el: Any) -> str:
     return " ".join(parts)[:500]
 _PROTOCOLS = ("AoE", "EoE", "CoE", "FoE", "SoE", "VoE")
 _BOOLEANS = {"1": True, "0": False, "true": True, "false": False}  # what Context.boolean reads them as
+_PDO_BOOLEAN_ATTRIBUTES = (("Fixed", "fixed"), ("Mandatory", "mandatory"), ("Virtual", "virtual"),
+                           ("OverwrittenByModule", "overwritten_by_module"))
 _PDO_NUMBER_ATTRIBUTES = (("Sm", "sm"), ("Su", "su"), ("PdoOrder", "pdo_order"), ("OSFac", "os_fac"),
                           ("OSMin", "os_min"), ("OSMax", "os_max"), ("OSIndexInc", "os_index_inc"))
 
@@ -395,21 +397,11 @@ class Reader:
         if len(el.attrib):
             # booleans and numbers spelled the common way are looked up (_BOOLEANS, the number memo), the rest
             # go through Context with its warnings and errors, in the same order as before
-            v = get("Fixed")
-            if v is not None:
-                b = _BOOLEANS.get(v)
-                pdo.fixed = ctx.boolean(v, el, "Fixed") if b is None else b
-            v = get("Mandatory")
-            if v is not None:
-                b = _BOOLEANS.get(v)
-                pdo.mandatory = ctx.boolean(v, el, "Mandatory") if b is None else b
-            v = get("Virtual")
-            if v is not None:
-                b = _BOOLEANS.get(v)
-                pdo.virtual = ctx.boolean(v, el, "Virtual") if b is None else b
-            v = get("OverwrittenByModule")
-            if v is not None:
-                pdo.overwritten_by_module = ctx.boolean(v, el, "OverwrittenByModule")
+            for attr, field in _PDO_BOOLEAN_ATTRIBUTES:
+                v = get(attr)
+                if v is not None:
+                    b = _BOOLEANS.get(v)
+                    setattr(pdo, field, ctx.boolean(v, el, attr) if b is None else b)
             for attr, name in _PDO_NUMBER_ATTRIBUTES:
                 v = get(attr)
                 if v is not None:
