@@ -131,3 +131,18 @@ def test_image_from_stdin() -> None:
     assert res.exit_code == 0 and json.loads(res.output)["source"] == "<stdin>"
     res = CliRunner().invoke(cli, ["sii", "check", str(corpus_path("sii", "ni9144.xml")), "-"], input=data)
     assert res.exit_code == 0 and res.output.startswith("OK")
+
+
+def test_build_warns_when_the_esis_own_categories_make_an_image_that_fails_check(capsys, tmp_path) -> None:
+    # Elmo's boot device gives its own GENERAL and a 9-byte SYNCM (Eeprom/Category 30, 41): the image is what
+    # the ESI says, and the build says it will not pass `sii check`
+    out = tmp_path / "boot.bin"
+    code, _, err = run(capsys, "sii", "build", str(corpus_path("esi", "elmo_Elmo_ECAT_00010420_V11.xml")),
+                       "--device", "0", "-o", str(out))
+    assert code == 0 and out.exists()
+    assert len(err.strip().splitlines()) == 1 and "warning" in err and "Eeprom/Category 30, 41" in err
+    assert run(capsys, "sii", "check", str(out))[0] == 1
+    good = tmp_path / "good.bin"  # an ESI whose image checks clean builds silently
+    code, _, err = run(capsys, "sii", "build", str(corpus_path("sii", "metalmusings_EaserCAT_2000.xml")),
+                       "-o", str(good))
+    assert code == 0 and err == "" and run(capsys, "sii", "check", str(good))[0] == 0

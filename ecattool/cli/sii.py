@@ -230,10 +230,21 @@ def build_cmd(esi: str, selector: str | None, no_pdo_categories: bool, size: str
     """Build an SII EEPROM image from an ESI device; unused space is filled with 0xFF."""
     from ecattool.sii.builder import build
 
+    from ecattool.findings import Severity
+    from ecattool.sii.checks import check
+
     device = _select(esi, selector, policy=policy)
     img = build(device, pdo_categories=not no_pdo_categories,
                 size=parse_int_arg(size, "EEPROM size") if size else None)
     _write_image(output, img, (esi,))
+    # the image is what the ESI says; where that does not pass `sii check` (a vendor's own Eeprom/Category
+    # replacing a generated one, as Elmo's boot devices give a 9-byte SyncM), say so rather than stay silent
+    errors = [f for f in check(img) if f.severity is Severity.ERROR]
+    if errors:
+        given = sorted({c.cat_no for c in device.eeprom.categories}) if device.eeprom else []
+        why = f"; the ESI's Eeprom/Category {', '.join(map(str, given))} replaces what ecattool generates" if given else ""
+        click.echo(f"ecattool: warning: {output}: the image fails `sii check` with {len(errors)} error(s), first: "
+                   f"{errors[0].message}{why}", err=True)
 
 
 @sii.command("diff", epilog="""\b
