@@ -464,6 +464,7 @@ CT_FIX: dict[tuple[int, int], dict[str, Any]] = {
     (0x6041, 0): {"access": "ro", "comment": "printed RW; CiA-402 RO (decision CT-4)"},
     (0x6099, 0): {"type": "USINT"},
     (0x60C1, 1): {"type": "DINT", "comment": "printed Unsigned 32; a signed position set-point (ambiguity A17)"},
+    (0x60C0, 0): {"min": 0, "max": 0, "comment": "range printed as the single value 0: only linear (decision CT-10)"},
 }
 CT_MAPPABLE_EXTRA = {0x6040, 0x6041, 0x6042, 0x6044, 0x6060, 0x6061, 0x6062, 0x6064, 0x2830, 0x2831}
 #: objects that are writable profile targets or readable actual values the manual lists as cyclic data;

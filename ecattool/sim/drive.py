@@ -943,6 +943,12 @@ class Drive:
             raise _abort(0x6046, sub, A.INVALID_VALUE)
         return True
 
+    def _copy_min_max_amount(self, sub: int, value: int | None) -> None:
+        """Control Techniques 7.5.4: writing 6046h sub 1 (sub 2) overwrites 6047h sub 1 and 3 (2 and 4)."""
+        if sub in (1, 2):
+            for target in (sub, sub + 2):
+                self._put(0x6047, target, value or 0)
+
     @staticmethod
     def _nonzero(index: int) -> Callable[[int, bytes, int | None], bool]:
         """Control Techniques 7.5.9/7.5.10: a 0 in 604Bh/604Ch is invalid (code not stated: 0609 0030h)."""
@@ -1144,6 +1150,7 @@ class Drive:
             self._handlers_down[0x604B] = self._nonzero(0x604B)
             self._handlers_down[0x604C] = self._nonzero(0x604C)
             self._handlers_down[0x60C2] = self._check_interpolation_period
+            self._after_write[0x6046] = self._copy_min_max_amount
         if self.family != "technosoft-ipos":
             return
         m = self.memory
