@@ -28,6 +28,7 @@ LOC = Location("p.yaml", 1, 1)
 #: (family, index) -> why lint cannot judge a single write of it
 RELATIONAL = {
     ("hdt", 0x6046): "min velocity must stay below max velocity (the other sub-index)",
+    ("hdt", 0x1010): "a store command: only the signature 'save' (65766173h) is accepted",
     ("controltechniques", 0x604B): "0 is refused; negative numerators give the direction (scaling decisions)",
     ("controltechniques", 0x604C): "0 is refused; negative numerators give the direction",
     ("controltechniques", 0x60C2): "the period is sub1 x 10^sub2: valid or not with the other sub-index",

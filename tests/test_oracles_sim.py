@@ -284,7 +284,8 @@ def test_ts42_csp_interpolation_period_4_ms():
 def test_hdt7_store_parameters_answers_and_accepts_save():
     d = at(HDT)
     for sub in (1, 2, 3):
-        w(d, 0x1010, sub, 0x65766173, 4)  # "save": bytes 73 61 76 65 on the wire
+        d.sdo_download(0x1010, sub, b"save")  # 65766173h: bytes 73 61 76 65 on the wire
+        assert code_of(w, d, 0x1010, sub, 0x73617665, 4) == 0x08000020  # the bytes as the doc shows them
 
 
 # --- Control Techniques ---------------------------------------------------------------------------------
@@ -359,3 +360,38 @@ def test_ct48_homing_source_range_1_to_8():
         assert r(d, 0x2803, 1) == v
     assert code_of(w, d, 0x2803, 1, 0, 1) == 0x06090032
     assert code_of(w, d, 0x2803, 1, 9, 1) == 0x06090031
+
+
+# --- Technosoft profile position (§7.3): the printed 607Ah/6081h values move the simulated motor ------
+def _pp_move(d: Drive, target: int, start: int, steps: int) -> None:
+    w(d, 0x607A, 0, target, 4)
+    w(d, 0x6040, 0, 0x000F, 2)  # bit 4 low: the next 0x1F/0x5F is a new set-point (oracle 22)
+    w(d, 0x6040, 0, start, 2)
+    d.step(steps)
+
+
+def _pp_drive() -> Drive:
+    d = at(TS)
+    w(d, 0x6060, 0, 1, 1)
+    w(d, 0x6081, 0, 0x0010AAAC, 4)  # 500 rpm of a 2000-count motor, as printed
+    d.request_state(SAFE)
+    d.request_state(OP)
+    for cw in (0x06, 0x07, 0x0F):
+        w(d, 0x6040, 0, cw, 2)
+    return d
+
+
+def test_ts22_35_absolute_trapezoid_4_then_16_rev():
+    d = _pp_drive()
+    _pp_move(d, 0x00001F40, 0x001F, 1000)
+    assert d.internal_position == 4 * 2000
+    _pp_move(d, 0x00007D00, 0x001F, 2000)
+    assert d.internal_position == 16 * 2000 and r(d, 0x6041) & 0x0400
+
+
+def test_ts22_34_relative_trapezoid_20_then_200_rev():
+    d = _pp_drive()
+    _pp_move(d, 0x00009C40, 0x005F, 3000)
+    assert d.internal_position == 20 * 2000
+    _pp_move(d, 0x00061A80, 0x005F, 25000)
+    assert d.internal_position == 220 * 2000 and r(d, 0x6041) & 0x0400

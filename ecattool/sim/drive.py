@@ -943,6 +943,13 @@ class Drive:
             raise _abort(0x6046, sub, A.INVALID_VALUE)
         return True
 
+    def _check_store_signature(self, sub: int, data: bytes, value: int | None) -> bool:
+        """CiA-301 1010h (HDT §2.08.1.a): a store command is the signature "save" (65766173h, bytes 73 61 76
+        65 on the wire); anything else is refused with 0800 0020h."""
+        if sub and value != 0x65766173:
+            raise _abort(0x1010, sub, A.DATA_CANNOT_BE_STORED)
+        return True
+
     def _copy_min_max_amount(self, sub: int, value: int | None) -> None:
         """Control Techniques 7.5.4: writing 6046h sub 1 (sub 2) overwrites 6047h sub 1 and 3 (2 and 4)."""
         if sub in (1, 2):
@@ -1142,6 +1149,7 @@ class Drive:
         }
         self._handlers_down[0x6060] = self._check_mode
         self._handlers_down[0x6098] = self._check_homing_method
+        self._handlers_down[0x1010] = self._check_store_signature
         if self.behaviour.home_offset_continuous:
             self._after_write[0x607C] = lambda sub, value: self._refresh_inputs()  # 6064h = sensor + 607Ch
         if self.family == "hdt":
