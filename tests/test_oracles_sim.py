@@ -395,3 +395,20 @@ def test_ts22_34_relative_trapezoid_20_then_200_rev():
     assert d.internal_position == 20 * 2000
     _pp_move(d, 0x00061A80, 0x005F, 25000)
     assert d.internal_position == 220 * 2000 and r(d, 0x6041) & 0x0400
+
+
+def test_ts32_50_iu_per_ms_is_0x00320000():
+    d = _pp_drive()
+    w(d, 0x6081, 0, 0x00320000, 4)  # 50.00 IU = 50 counts per 1-ms slow loop
+    _pp_move(d, 100000, 0x001F, 20)
+    assert d.internal_position == 20 * 50
+
+
+def test_hdt39_default_6093_position_equals_internal():
+    d = at(HDT, OP)
+    w(d, 0x6060, 0, 1, 1)
+    w(d, 0x607A, 0, -98304, 4)  # -1.5 turns of 65536
+    for cw in (0x06, 0x07, 0x0F, 0x1F):
+        w(d, 0x6040, 0, cw, 2)
+    d.step(20000)
+    assert r(d, 0x6064, signed=True) == r(d, 0x6063, signed=True) == d.internal_position == -98304
