@@ -412,3 +412,56 @@ def test_hdt39_default_6093_position_equals_internal():
         w(d, 0x6040, 0, cw, 2)
     d.step(20000)
     assert r(d, 0x6064, signed=True) == r(d, 0x6063, signed=True) == d.internal_position == -98304
+
+
+def test_ct20_mm04_follows_the_esm_in_both_menus():
+    """CT-20 (5.5, Table 5.6): Pr MM.04 = 1 INIT, 2 PRE-OP, 4 SAFE-OP, 8 OP (slot menu 15 and mirror menu 60)."""
+    d = Drive.from_profile("controltechniques", product="digitax-st")
+    seen = [(d.value(0x200F, 4), d.value(0x203C, 4))]  # in INIT there is no mailbox: read as the keypad does
+    for s in (EcState.PREOP, EcState.SAFEOP, EcState.OP, EcState.SAFEOP, EcState.INIT):
+        d.request_state(s)
+        seen.append((d.value(0x200F, 4), d.value(0x203C, 4)))
+    assert seen == [(1, 1), (2, 2), (4, 4), (8, 8), (4, 4), (1, 1)]
+    for s in (EcState.PREOP, EcState.SAFEOP, EcState.OP):
+        d.request_state(s)
+    assert r(d, 0x200F, 4) == 8  # over SDO too
+    d.lose_communication()  # the watchdog drops the module to SAFE-OP: MM.04 says so
+    assert r(d, 0x200F, 4) == 4
+
+
+def test_ct27_safeop_to_op_writes_the_drive_parameters_in_order():
+    """CT-27 (7.3.1): on SAFE-OP -> OP the module writes Pr 6.42 = 0, 6.43 = 1, 3.22 = 0, 3.23 = 1."""
+    d = at("controltechniques", EcState.SAFEOP, product="digitax-st")
+    for index, sub, junk in ((0x2006, 42, 7), (0x2006, 43, 7), (0x2003, 22, 7), (0x2003, 23, 7)):
+        w(d, index, sub, junk, 4)
+    d.request_state(EcState.OP)
+    assert [r(d, 0x2006, 42), r(d, 0x2006, 43), r(d, 0x2003, 22), r(d, 0x2003, 23)] == [0, 1, 0, 1]
+    writes = [e.data["parameter"] for e in d.events if e.kind == "drive_parameter"]
+    assert writes == ["6.42", "6.43", "3.22", "3.23"]
+
+
+def test_oracle_index_names_real_tests_and_its_counts_add_up():
+    """tests/ORACLES.md: every ``ABBR::test_name`` it cites exists in that file, and the counts are the rows'."""
+    import re
+    from collections import Counter
+    from pathlib import Path
+
+    here = Path(__file__).parent
+    text = (here / "ORACLES.md").read_text(encoding="utf-8")
+    files = dict(re.findall(r"^\| ([A-Z]+) \| (tests/\w+\.py) \|$", text, re.M))
+    sources = {abbr: (here.parent / path).read_text(encoding="utf-8") for abbr, path in files.items()}
+    # a name ending in * or … stands for the tests that start with it
+    cited = [(a, n + ("" if more else "(")) for a, n, more in re.findall(r"\b([A-Z]+)::(test_\w+)(\*|…)?", text)]
+    missing = [f"{a}::{n}" for a, n in cited if f"def {n}" not in sources.get(a, "")]
+    assert cited and not missing, missing
+    rows = re.findall(r"^\| (TS|HDT|CT)-\w+ \|.*\| ([^|]+?) *\|$", text, re.M)
+
+    def status(cell: str) -> str:  # "sim (new, partial)" counts as sim (new), "lib (file format)" as lib
+        return "sim (new)" if cell.startswith("sim (new") else re.split(r"[ :(]", cell)[0]
+
+    for family in ("TS", "HDT", "CT"):
+        counted = Counter(status(cell) for fam, cell in rows if fam == family)
+        line = re.search(rf"^- {family}: (.*) \(total (\d+)\)$", text, re.M)
+        assert line is not None
+        stated = {k: int(v) for v, k in (p.rsplit(" ", 1)[::-1] for p in line.group(1).split(", "))}
+        assert stated == dict(counted) and sum(counted.values()) == int(line.group(2)), (family, counted)

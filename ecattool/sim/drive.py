@@ -772,7 +772,30 @@ class Drive:
             self._cia_moves(self.cia.communication_lost(), "ESM left OP")
         self.esm = state
         self._log("state", previous=current.value, state=state.value)
+        self._esm_effects(current, state)
         self._refresh_inputs()
+
+    #: Control Techniques Pr MM.04 (5.5, Table 5.6): the ESM state as the module reports it in its menu
+    _CT_MM04 = {EcState.INIT: 1, EcState.PREOP: 2, EcState.SAFEOP: 4, EcState.OP: 8}
+    #: Control Techniques 7.3.1: the module writes these drive parameters, in this order, on SAFE-OP -> OP
+    #: (Pr 6.42 = 0, Pr 6.43 = 1: control word enable; Pr 3.22 = 0, Pr 3.23 = 1 where the drive has them)
+    _CT_TO_OP = ((0x2006, 42, 0), (0x2006, 43, 1), (0x2003, 22, 0), (0x2003, 23, 1))
+
+    def _esm_effects(self, previous: EcState, state: EcState) -> None:
+        """What a family's module does itself on an ESM change (Control Techniques: MM.04 follows the state in
+        the slot menu 0x200F and its mirror 0x203C; the SAFE-OP -> OP parameter writes)."""
+        if self.family != "controltechniques":
+            return
+        code = self._CT_MM04.get(state)
+        if code is not None:
+            for menu in (0x200F, 0x203C):
+                self._put(menu, 4, code)
+        if previous is EcState.SAFEOP and state is EcState.OP:
+            for index, sub, value in self._CT_TO_OP:
+                if (index, sub) in self._entries:
+                    self._put(index, sub, value)
+                    self._log("drive_parameter", parameter=f"{index - 0x2000}.{sub:02d}", value=value,
+                              reason="SAFE-OP -> OP (7.3.1)")
 
     def _refuse(self, state: EcState, code: int, why: str) -> None:
         self._log("state_refused", previous=self.esm.value, requested=state.value, al_status=code, reason=why)
@@ -1079,6 +1102,7 @@ class Drive:
         if self.esm is EcState.OP:
             self._log("state", previous="OP", state="SAFEOP", al_status=0x001B, reason="sync manager watchdog")
             self.esm = EcState.SAFEOP
+            self._esm_effects(EcState.OP, EcState.SAFEOP)
         if not self.has_cia402:
             return
         option = self._read_int(0x6007, 0)
