@@ -219,6 +219,15 @@ def test_hdt_d1_degrees_at_motor() -> None:
     assert 90 * g.ratio(0x6093) == 16384
 
 
+def test_hdt_64_1024_pulse_encoder_is_4096_counts_and_hdt_still_counts_65536() -> None:
+    # §5.03 feedback screen: 2032h "Impulsi/giro 1024" -> "Risoluzione/giro 4096" (x4 quadrature); the drive's
+    # position units stay 65536 per motor revolution whatever the encoder (§4.06.6), so the factor group is
+    # the same as for any other encoder
+    fb = Feedback.lines(1024)
+    assert fb.counts_per_rev == 4096
+    assert compute(Axis(fb, position="deg"), "hdt").pair(0x6093) == (8192, 45)
+
+
 def test_hdt_d2_screw_5mm_in_micrometres() -> None:
     for kind in (Transmission.ballscrew, Transmission.hollow_shaft):
         g = compute(Axis(Feedback.encoder(4096), kind(Exact(5 * MM)), position="um"), "hdt")
