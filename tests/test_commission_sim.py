@@ -137,9 +137,11 @@ def test_sdo_abort_on_a_startup_write_is_reported_and_the_drive_left_safe():
     assert "0x6093:01" in dr.error and "0x06090030" in dr.error
     assert dr.final_state == "PREOP" and drives[0].state() is EcState.PREOP
     assert drives[0].cia402_state.name.lower().replace("_", " ") != ENABLED
-    # nothing was sent after the failing command
-    last = drives[0].events[-1]
-    assert (last.kind, last.data["index"], last.data["subindex"]) == ("sdo_abort", 0x6093, 1)
+    # nothing was written after the failing command; only the drive's error code 603Fh was read for the report
+    events = drives[0].events
+    k = max(i for i, e in enumerate(events) if e.kind == "sdo_abort")
+    assert (events[k].data["index"], events[k].data["subindex"]) == (0x6093, 1)
+    assert [(e.kind, e.data.get("index")) for e in events[k + 1:]] == [("sdo_upload", 0x603F)]
     assert not any(s.name in ("state SAFEOP", "state OP", "move") for s in dr.steps)
 
 
@@ -313,3 +315,29 @@ def test_a_drive_in_fault_is_reset_through_the_state_machine():
     drives[0].inject_fault(0x2310)  # continuous over-current
     _, dr = run(path, drives)
     assert dr.ok and step(dr, "enable").detail.startswith("fault -> fault reset sent -> switch on disabled")
+
+
+def test_a_drive_fault_during_the_move_is_named_in_the_report(tmp_path):
+    """The report says what the drive says: 603Fh, named from the family's error table (HDT §2.08.2)."""
+    path = copy_sample("hdt", tmp_path)
+    (drive,) = sim_drives(path)
+    real_exchange, cycles = drive.exchange, [0]
+
+    def exchange(outputs: bytes) -> bytes:  # a following error trips the drive in the middle of the move
+        cycles[0] += 1
+        if cycles[0] == 40:
+            drive.inject_fault(0x8611)
+        return real_exchange(outputs)
+
+    drive.exchange = exchange  # type: ignore[method-assign]
+    _, dr = run(path, [drive])
+    assert not dr.ok
+    assert dr.error.endswith("; the drive reports error 603Fh = 0x8611 (following error: position error (FA_13))")
+
+
+def test_a_failure_without_a_drive_error_adds_nothing(tmp_path):
+    path = copy_sample("hdt", tmp_path)
+    (drive,) = sim_drives(path)
+    drive.faults.refuse_state(EcState.SAFEOP, 0x001D)  # refused by the ESM: no drive fault behind it
+    _, dr = run(path, [drive])
+    assert not dr.ok and "603Fh" not in dr.error

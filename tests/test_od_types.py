@@ -76,3 +76,18 @@ def test_bad_numbers_raise_input_error():
         parse_int("0xZZ")
     with pytest.raises(InputError):
         parse_address("hello")
+
+
+def test_error_code_tables_of_the_manuals():
+    """HDT oracle 18 (§2.08.2): every listed code with its alarm; Technosoft §3.1.3; classes for the rest."""
+    from ecattool.od.emcy import HDT, TECHNOSOFT, error_text
+
+    hdt_listed = [0x7600, 0xFF01, 0x2340, 0x3210, 0xFF0B, 0xFF08, 0x7120, 0x7110, 0x3220, 0x8611, 0xFF02, 0xFF03,
+                  0xFF04, 0xFF05, 0xFF09, 0x8130, 0xFF07, 0xFF0A, 0xFF0D, 0x4310, 0xFF0C, 0x8400]
+    assert list(HDT) == hdt_listed
+    assert error_text(0x3220, "hdt") == "DC bus undervoltage (FA_12)"
+    assert error_text(0xFF04, "hdt") == "warning I2t motor (FA_16)"
+    assert error_text(0xFF04, "technosoft-ipos") == "a wrong mode is set in 6060h"  # same code, other family
+    assert len(TECHNOSOFT) == 28 and error_text(0x5443, "technosoft-ipos") == "positive limit switch active"
+    assert error_text(0x2311, "controltechniques") == "current, device output side"  # CiA-301 class
+    assert error_text(0x8611) == "position control" and error_text(0xA001) == "unknown error code"

@@ -433,14 +433,32 @@ def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
         report.final_state = slave.state().value
     except _Failed as exc:
         report.steps.append(exc.step)
-        report.error = f"{exc.step.name}: {exc.step.detail}"
+        report.error = f"{exc.step.name}: {exc.step.detail}{_drive_error(slave, rd)}"
         _safe_stop(slave, io, report)
     except EcatToolError as exc:  # anything a target or the device model raised outside a named step
         step = Step("commission", False, str(exc))
         report.steps.append(step)
-        report.error = f"{step.name}: {step.detail}"
+        report.error = f"{step.name}: {step.detail}{_drive_error(slave, rd)}"
         _safe_stop(slave, io, report)
     return report
+
+
+def _drive_error(slave: SlaveTarget, rd: ResolvedDrive) -> str:
+    """What the drive itself says went wrong, for a failure report: its error code 603Fh (the last EMCY), named
+    from the family's table; "" where there is none, or it cannot be read (no mailbox, no 603Fh)."""
+    from ecattool.od.emcy import error_text
+
+    if rd.device is None or rd.device.dictionary.entry(0x603F, 0) is None:
+        return ""
+    try:
+        if slave.state() not in (EcState.PREOP, EcState.SAFEOP, EcState.OP):
+            return ""
+        code = int.from_bytes(bytes(slave.sdo_upload(0x603F, 0))[:2], "little")
+    except EcatToolError:
+        return ""
+    if not code:
+        return ""
+    return f"; the drive reports error 603Fh = 0x{code:04X} ({error_text(code, getattr(rd.rules, 'family', None))})"
 
 
 def open_target(spec: str, drives: list[ResolvedDrive]) -> tuple[Target, str]:
