@@ -228,6 +228,14 @@ def test_hdt_64_1024_pulse_encoder_is_4096_counts_and_hdt_still_counts_65536() -
     assert compute(Axis(fb, position="deg"), "hdt").pair(0x6093) == (8192, 45)
 
 
+def test_hdt_37_32_bit_positions_reach_32767_motor_turns() -> None:
+    # §4.06.6: a 32-bit signed position at 65536 per turn is "up to ±32767 motor turns"
+    g = compute(Axis(Feedback.encoder(65536), position="rev"), "hdt")
+    per_turn = g.ratio(0x6093)
+    assert per_turn == 65536
+    assert 32767 * per_turn <= 2**31 - 1 < 32768 * per_turn and -32768 * per_turn >= -(2**31)
+
+
 def test_hdt_d2_screw_5mm_in_micrometres() -> None:
     for kind in (Transmission.ballscrew, Transmission.hollow_shaft):
         g = compute(Axis(Feedback.encoder(4096), kind(Exact(5 * MM)), position="um"), "hdt")
