@@ -10,6 +10,7 @@ raise :class:`FakeMisuse` so that a test fails:
 - ``slave.output = data`` of another length than the slave's output image (pysoem ``memcpy``'s it);
 - ``dc_sync`` before ``Master.config_dc()`` (SYNC0 would start without propagation delays and offsets);
 - ``config_map`` while a slave is in SAFE-OP or OP (SOEM would reprogram its sync managers under it).
+Like a real drive, a slave asked for OP enters it only when a process data frame reaches it.
 """
 
 from __future__ import annotations
@@ -104,6 +105,7 @@ class CdefSlave:
         self._out = b""
         self._in = b""
         self._emcy_callbacks = []
+        self._pending_op = None
         self.pending_emergencies = []  # (error_code, error_reg) the next mailbox transfer pops
         self.dc = None  # what dc_sync wrote: (activation 0x0981, sync0 cycle, shift, sync1 cycle)
 
@@ -193,7 +195,11 @@ class CdefSlave:
 
     def write_state(self):
         self._master.check_context_is_initialized()
-        self._request(self._state)
+        value = self._state
+        if value & 0x0F == OP_STATE and self.drive.state() is EcState.SAFEOP and (value & STATE_ACK or not self._error):
+            self._pending_op = value  # the slave waits for valid outputs before it enters OP
+        else:
+            self._request(value)
         return 1
 
     def state_check(self, expected_state, timeout=2000):
@@ -310,6 +316,9 @@ def make_module(drives, interfaces=("eth0", "eth-test")):
             self.check_context_is_initialized()
             wkc = 0
             for s in self.slaves:
+                if s._pending_op is not None and (s._obytes or s._ibytes):
+                    s._request(s._pending_op)  # the outputs of this frame let the slave complete SAFE-OP -> OP
+                    s._pending_op = None
                 state = s.drive.state()
                 if state in (EcState.SAFEOP, EcState.OP) and (s._obytes or s._ibytes):
                     s._in = s.drive.exchange(s._out)

@@ -459,6 +459,7 @@ class _DriveRun:
         io.cycle()
         _startup(slave, rd, _SAFEOP_TRANSITIONS, report)
         io.seed_from_drive()
+        io.cycle()  # the image a real master keeps sending while the drive goes to OP holds the seeded values
         _goto(slave, EcState.OP, report)
         if rd.drive.enable:
             _sdo_step("mode", lambda: _preselect_mode(io, rd))

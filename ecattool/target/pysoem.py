@@ -16,12 +16,15 @@ What pysoem (1.1, over SOEM) requires, and how the adapter meets it:
 - ``config_dc()`` (propagation delays, system time offsets) runs once before the first ``dc_sync``.
 - A slave whose AL status shows the error indication ignores state requests until the master
   acknowledges it: the request carries ``STATE_ACK`` then.
+- On the way to OP the adapter keeps process data flowing while it waits (SOEM's examples do the same): a
+  drive takes SAFE-OP -> OP only once it receives outputs.
 - Emergency messages are collected through ``add_emergency_callback``; without a callback pysoem raises
   ``Emergency`` from the SDO call that happened to pop it and the SDO's own result is lost.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from types import ModuleType
 from typing import Any, TypeVar
@@ -35,6 +38,8 @@ from ecattool.target.base import SlaveTarget
 STATE_TIMEOUT_US = 2_000_000
 #: how long one process data cycle may take to come back, in microseconds (pysoem's default)
 PROCESSDATA_TIMEOUT_US = 2000
+#: how long one state check waits between two process data cycles on the way to OP, in microseconds
+OP_POLL_US = 10_000
 #: pysoem reads into a 256-byte buffer unless told otherwise; a larger object is read again with this size
 LARGE_SDO_BYTES = 65536
 _STATE_NAMES = {EcState.INIT: "INIT_STATE", EcState.PREOP: "PREOP_STATE", EcState.BOOT: "BOOT_STATE",
@@ -157,9 +162,21 @@ class PysoemSlave:
         ack = int(mod.STATE_ACK) if raw & int(mod.STATE_ERROR) else 0  # never on a slave without an error
         self._slave.state = code | ack
         self._slave.write_state()
-        reached = self._slave.state_check(code, STATE_TIMEOUT_US)
-        if int(reached) & 0x0F != code:
+        if int(reached := self._wait_for(code)) & 0x0F != code:
             raise StateChangeError(state.value, current.value, int(self._slave.al_status or 0))
+
+    def _wait_for(self, code: int) -> int:
+        """Wait for the requested state. On the way to OP the process data keeps flowing: a drive takes
+        SAFE-OP -> OP only once it has received outputs, and its sync manager watchdog is running."""
+        if code != int(self._mod.OP_STATE):
+            return int(self._slave.state_check(code, STATE_TIMEOUT_US))
+        deadline = time.monotonic() + STATE_TIMEOUT_US / 1e6
+        while True:
+            self._master.master.send_processdata()
+            self._master.master.receive_processdata(PROCESSDATA_TIMEOUT_US)
+            reached = int(self._slave.state_check(code, OP_POLL_US))
+            if reached & 0x0F == code or time.monotonic() >= deadline:
+                return reached
 
     def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0, sync0_shift_ns: int = 0) -> None:
         args = dc_sync_args(assign_activate, sync0_cycle_ns, sync0_shift_ns)
