@@ -228,6 +228,21 @@ class CdefSlave:
         return bits
 
 
+class VirtualClock:
+    """A clock for PysoemTarget(clock=, sleep=) that advances only when the adapter sleeps: the pacing of
+    process data is checked without real waiting (and without timed assertions)."""
+
+    def __init__(self):
+        self.t = 0.0
+
+    def now(self):
+        return self.t
+
+    def sleep(self, seconds):
+        assert seconds > 0
+        self.t += seconds
+
+
 def make_module(drives, interfaces=("eth0", "eth-test")):
     """A pysoem-like module whose bus (on any of ``interfaces``) holds ``drives`` in order."""
 
@@ -240,6 +255,8 @@ def make_module(drives, interfaces=("eth0", "eth-test")):
             self.map_calls = 0
             self.opened = None
             self._wkc = -1
+            self.clock = None  # a VirtualClock the test shares with the adapter, to record when frames go out
+            self.sent_at = []
 
         def check_context_is_initialized(self):
             if not self.context_initialized:
@@ -314,6 +331,7 @@ def make_module(drives, interfaces=("eth0", "eth-test")):
 
         def send_processdata(self, *, release_gil=None):
             self.check_context_is_initialized()
+            self.sent_at.append(self.clock.now() if self.clock else None)
             wkc = 0
             for s in self.slaves:
                 if s._pending_op is not None and (s._obytes or s._ibytes):

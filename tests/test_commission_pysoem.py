@@ -13,12 +13,13 @@ from ecattool.od.model import EcState
 from ecattool.project.lint import lint_project
 from ecattool.target.pysoem import PysoemTarget
 from tests.project_helpers import SAMPLES, copy_sample, sample
-from tests.fake_pysoem import make_module
+from tests.fake_pysoem import VirtualClock, make_module
 
 
 def pysoem_on(drives):
-    module = make_module(drives)
-    target = PysoemTarget("eth-test", pysoem_module=module)
+    clock = VirtualClock()
+    target = PysoemTarget("eth-test", pysoem_module=make_module(drives), clock=clock.now, sleep=clock.sleep)
+    target.master.clock = clock
     return target, target.master
 
 
@@ -45,6 +46,9 @@ def test_dc_reaches_the_slave_through_pysoem():
     target, master = pysoem_on(drives)
     assert commission(path, target=target).ok
     assert master.dc_configured and master.slaves[0].dc == (0x03, 1_000_000, 0, None)
+    # one frame per SYNC0 cycle (1 ms): a CSP set-point is never skipped (times on the virtual clock)
+    gaps = [b - a for a, b in zip(master.sent_at, master.sent_at[1:])]
+    assert len(gaps) > 100 and min(gaps) >= 0.001 - 1e-12
 
 
 def test_abort_through_pysoem_keeps_its_code():

@@ -11,7 +11,7 @@ from tests import fake_pysoem
 pysoem = pytest.importorskip("pysoem")
 
 #: attributes of the fake that exist only for the tests (the simulated drive behind a slave, call records)
-TEST_ONLY = {"drive", "pending_emergencies", "dc", "map_calls", "dc_configured", "opened"}
+TEST_ONLY = {"drive", "pending_emergencies", "dc", "map_calls", "dc_configured", "opened", "clock", "sent_at"}
 
 
 def params(fn):

@@ -7,12 +7,14 @@ from ecattool.errors import SdoAbort, SdoTimeout, StateChangeError, TargetError
 from ecattool.od.model import EcState
 from ecattool.sim import Drive
 from ecattool.target.pysoem import PysoemTarget, dc_sync_args
-from tests.fake_pysoem import STATE_ERROR, make_module
+from tests.fake_pysoem import STATE_ERROR, VirtualClock, make_module
 
 
 def bus(*profiles):
     drives = [Drive.from_profile(p) for p in profiles or ("technosoft-ipos",)]
-    target = PysoemTarget("eth0", pysoem_module=make_module(drives))
+    clock = VirtualClock()
+    target = PysoemTarget("eth0", pysoem_module=make_module(drives), clock=clock.now, sleep=clock.sleep)
+    target.master.clock = clock
     return target, drives
 
 
@@ -109,3 +111,14 @@ def test_open_failures_are_target_errors():
         PysoemTarget("nope", pysoem_module=make_module([Drive.from_profile("hdt")]))
     with pytest.raises(TargetError, match="no EtherCAT slaves"):
         PysoemTarget("eth0", pysoem_module=make_module([]))
+
+
+def test_process_data_is_paced_to_the_sync0_cycle():
+    t, _ = bus()
+    s = t.slaves()[0]
+    s.configure_dc(0x0300, 2_000_000)
+    s.request_state(EcState.SAFEOP)
+    for _ in range(3):
+        s.exchange(bytes(len(s._slave.output)))
+    sent = t.master.sent_at
+    assert [round(b - a, 9) for a, b in zip(sent, sent[1:])] == [0.002, 0.002]  # virtual clock, no real waiting

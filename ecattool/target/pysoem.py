@@ -18,12 +18,15 @@ What pysoem (1.1, over SOEM) requires, and how the adapter meets it:
   acknowledges it: the request carries ``STATE_ACK`` then.
 - On the way to OP the adapter keeps process data flowing while it waits (SOEM's examples do the same): a
   drive takes SAFE-OP -> OP only once it receives outputs.
+- Process data cycles are paced to the bus cycle (the SYNC0 cycle, else 1 ms): a drive in CSP takes one
+  set-point per cycle, and frames sent as fast as Python can would skip set-points.
 - Emergency messages are collected through ``add_emergency_callback``; without a callback pysoem raises
   ``Emergency`` from the SDO call that happened to pop it and the SDO's own result is lost.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from types import ModuleType
@@ -38,6 +41,8 @@ from ecattool.target.base import SlaveTarget
 STATE_TIMEOUT_US = 2_000_000
 #: how long one process data cycle may take to come back, in microseconds (pysoem's default)
 PROCESSDATA_TIMEOUT_US = 2000
+#: the process data cycle when no DC cycle is configured, in nanoseconds
+DEFAULT_CYCLE_NS = 1_000_000
 #: how long one state check waits between two process data cycles on the way to OP, in microseconds
 OP_POLL_US = 10_000
 #: pysoem reads into a 256-byte buffer unless told otherwise; a larger object is read again with this size
@@ -170,18 +175,20 @@ class PysoemSlave:
         SAFE-OP -> OP only once it has received outputs, and its sync manager watchdog is running."""
         if code != int(self._mod.OP_STATE):
             return int(self._slave.state_check(code, STATE_TIMEOUT_US))
-        deadline = time.monotonic() + STATE_TIMEOUT_US / 1e6
-        while True:
-            self._master.master.send_processdata()
-            self._master.master.receive_processdata(PROCESSDATA_TIMEOUT_US)
+        reached = 0
+        for _ in range(math.ceil(STATE_TIMEOUT_US / 1e6 / self._master.cycle_s)):  # each one paced: >= 2 s
+            self._master.cycle()
             reached = int(self._slave.state_check(code, OP_POLL_US))
-            if reached & 0x0F == code or time.monotonic() >= deadline:
-                return reached
+            if reached & 0x0F == code:
+                break
+        return reached
 
     def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0, sync0_shift_ns: int = 0) -> None:
         args = dc_sync_args(assign_activate, sync0_cycle_ns, sync0_shift_ns)
         if args[0]:
             self._master.configure_dc()
+            if sync0_cycle_ns > 0:
+                self._master.cycle_s = sync0_cycle_ns / 1e9
         self._slave.dc_sync(*args)
 
     def exchange(self, outputs: bytes) -> bytes:
@@ -190,8 +197,7 @@ class PysoemSlave:
             raise TargetError(f"slave {self.position}: {len(outputs)} output bytes for a {size}-byte output image "
                               "(the PDO mapping the master read differs from the project's)")
         self._slave.output = bytes(outputs)
-        self._master.master.send_processdata()
-        wkc = int(self._master.master.receive_processdata(PROCESSDATA_TIMEOUT_US))
+        wkc = self._master.cycle()
         if wkc <= 0:
             raise TargetError(f"slave {self.position}: no process data came back (working counter {wkc})")
         return bytes(self._slave.input)
@@ -200,8 +206,14 @@ class PysoemSlave:
 class PysoemTarget:
     """A pysoem master on a network interface, e.g. ``PysoemTarget("eth0")``."""
 
-    def __init__(self, ifname: str, pysoem_module: ModuleType | None = None) -> None:
+    def __init__(self, ifname: str, pysoem_module: ModuleType | None = None,
+                 clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep) -> None:
         self.pysoem = pysoem_module or _import_pysoem()
+        #: the bus cycle in seconds: the SYNC0 cycle once DC is configured, else 1 ms
+        self.cycle_s = DEFAULT_CYCLE_NS / 1e9
+        self.clock = clock
+        self._sleep = sleep
+        self._next_cycle = clock()
         self.master = self.pysoem.Master()
         try:
             self.master.open(ifname)
@@ -239,6 +251,18 @@ class PysoemTarget:
             if not self.master.config_dc():
                 raise TargetError("no slave with distributed clocks found on the bus")
             self.dc_configured = True
+
+    def cycle(self) -> int:
+        """One process data cycle of the bus, paced: it starts one bus cycle after the previous one (a drive
+        in CSP/CSV takes one set-point per SYNC0 cycle, faster frames would skip set-points). Returns the
+        working counter."""
+        now = self.clock()
+        if now < self._next_cycle:
+            self._sleep(self._next_cycle - now)
+            now = self._next_cycle
+        self._next_cycle = now + self.cycle_s
+        self.master.send_processdata()
+        return int(self.master.receive_processdata(PROCESSDATA_TIMEOUT_US))
 
     def slaves(self) -> list[SlaveTarget]:
         return list(self._slaves)
