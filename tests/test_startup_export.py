@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -519,15 +520,21 @@ def test_several_slaves_of_unknown_position_stay_apart():
         assert [[_key(c) for c in s.commands] for s in back] == [[_key(c) for c in s.commands] for s in configs], fmt
 
 
-def test_pysoem_tolerates_no_reply_writes():
+def test_pysoem_tolerates_no_reply_writes(monkeypatch):
+    """pysoem raises WkcError when the mailbox answer does not come; only that is tolerated (an abort is not)."""
+    from tests import fake_pysoem
+
+    monkeypatch.setitem(sys.modules, "pysoem", fake_pysoem.make_module([]))
     cfg = SlaveConfig(StartupList([StartupCommand("PS", 0x2080, 0, b"\x01\x00", expect_reply=False, comment="reset"),
                                    StartupCommand("PS", 0x6060, 0, b"\x08")]), position=0)
 
     class Resetting(FakeSlave):
+        error: Exception = fake_pysoem.WkcError(wkc=0)
+
         def sdo_write(self, index, subindex, data, ca=False):
             super().sdo_write(index, subindex, data, ca)
             if index == 0x2080:
-                raise TimeoutError("no reply")
+                raise self.error
 
     namespace: dict = {}
     exec(compile(export(cfg, "pysoem"), "m.py", "exec"), namespace)
@@ -535,3 +542,6 @@ def test_pysoem_tolerates_no_reply_writes():
     namespace["install"](FakeMaster([slave]))
     slave.config_func(0)
     assert [w[0] for w in slave.writes] == [0x2080, 0x6060]
+    slave.error = fake_pysoem.SdoError(1, 0x2080, 0, 0x06010002, "read only")
+    with pytest.raises(fake_pysoem.SdoError):
+        slave.config_func(0)

@@ -1,124 +1,124 @@
-"""The pysoem target, tested against a fake pysoem module that behaves like pysoem's API."""
-
-import types
+"""The pysoem target, tested against a fake pysoem module (tests/fake_pysoem.py) whose slaves are simulated
+drives; the fake follows pysoem's API (checked against the real module in test_pysoem_surface.py)."""
 
 import pytest
 
 from ecattool.errors import SdoAbort, SdoTimeout, StateChangeError, TargetError
 from ecattool.od.model import EcState
-from ecattool.target.pysoem import PysoemTarget
+from ecattool.sim import Drive
+from ecattool.target.pysoem import PysoemTarget, dc_sync_args
+from tests.fake_pysoem import STATE_ERROR, VirtualClock, make_module
 
 
-class SdoError(Exception):
-    def __init__(self, slave_pos, index, subindex, abort_code, desc):
-        super().__init__(desc)
-        self.abort_code = abort_code
-
-
-class WkcError(Exception):
-    pass
-
-
-class FakeSlave:
-    man, id, rev = 0x1A3, 0x019F418D, 0x0200
-    al_status = 0x001D
-
-    def __init__(self):
-        self.od = {(0x6060, 0): b"\x01"}
-        self.state = 1
-        self.refuse = set()
-        self.output = b""
-        self.input = b"\x27\x02"
-
-    def sdo_read(self, index, subindex, ca=False):
-        if (index, subindex) not in self.od:
-            raise SdoError(1, index, subindex, 0x06020000, "no object")
-        return self.od[(index, subindex)]
-
-    def sdo_write(self, index, subindex, data, ca=False):
-        if index == 0x2080:
-            raise WkcError()
-        if index == 0x6041:
-            raise SdoError(1, index, subindex, 0x06010002, "read only")
-        self.od[(index, subindex)] = data
-
-    def dc_sync(self, act, cycle):
-        self.dc = (act, cycle)
-
-    def write_state(self):
-        pass
-
-    def state_check(self, expected, timeout):
-        if expected in self.refuse:
-            self.state = 0x12  # PREOP + error flag
-            return self.state
-        self.state = expected
-        return expected
-
-
-class FakeMaster:
-    def __init__(self):
-        self.slaves = [FakeSlave()]
-        self.mapped = False
-
-    def open(self, ifname):
-        if ifname == "nope":
-            raise ConnectionError("no such device")
-
-    def config_init(self):
-        return len(self.slaves)
-
-    def config_map(self):
-        self.mapped = True
-
-    def read_state(self):
-        return 1
-
-    def send_processdata(self):
-        pass
-
-    def receive_processdata(self, timeout):
-        return 1
-
-    def close(self):
-        pass
-
-
-fake = types.SimpleNamespace(Master=FakeMaster, SdoError=SdoError, WkcError=WkcError)
+def bus(*profiles):
+    drives = [Drive.from_profile(p) for p in profiles or ("technosoft-ipos",)]
+    clock = VirtualClock()
+    target = PysoemTarget("eth0", pysoem_module=make_module(drives), clock=clock.now, sleep=clock.sleep)
+    target.master.clock = clock
+    return target, drives
 
 
 def test_sdo_and_aborts():
-    t = PysoemTarget("eth0", pysoem_module=fake)
+    t, (drive,) = bus()
     s = t.slaves()[0]
-    assert s.identity().vendor_id == 0x1A3
-    s.sdo_download(0x6060, 0, b"\x08")
-    assert s.sdo_upload(0x6060, 0) == b"\x08"
+    assert s.identity() == drive.identity()
+    assert s.state() is EcState.PREOP  # config_init requested PRE-OP
+    s.sdo_download(0x6060, 0, b"\x01")
+    assert s.sdo_upload(0x6060, 0) == b"\x01"
     with pytest.raises(SdoAbort) as ei:
         s.sdo_upload(0x1234, 0)
     assert ei.value.code == 0x06020000
     with pytest.raises(SdoAbort) as ei:
         s.sdo_download(0x6041, 0, b"\x00\x00")
     assert ei.value.code == 0x06010002
-    # the Technosoft reset gets no reply: fine when no reply is expected, a timeout otherwise
-    s.sdo_download(0x2080, 0, b"\x00\x00", expect_reply=False)
+    # the Technosoft reset gets no reply (pysoem: WkcError): fine when no reply is expected, a timeout otherwise
+    drive.faults.drop_reply(1, execute=False)
+    s.sdo_download(0x6060, 0, b"\x01", expect_reply=False)
+    drive.faults.drop_reply(1, execute=False)
     with pytest.raises(SdoTimeout):
-        s.sdo_download(0x2080, 0, b"\x00\x00")
+        s.sdo_download(0x6060, 0, b"\x01")
 
 
-def test_states_and_refusals():
-    t = PysoemTarget("eth0", pysoem_module=fake)
+def test_large_objects_are_read_with_a_larger_buffer():
+    t, (drive,) = bus()
     s = t.slaves()[0]
-    s.request_state(EcState.PREOP)
-    assert s.state() is EcState.PREOP
+    fake = s._slave
+    fake.drive = type("Big", (), {"sdo_upload": lambda self, i, sub, ca: b"x" * 300})()
+    assert s.sdo_upload(0x1008, 0) == b"x" * 300  # pysoem's 256-byte default buffer would not hold it
+
+
+def test_emergencies_do_not_break_sdo_transfers():
+    t, _ = bus()
+    s = t.slaves()[0]
+    s._slave.pending_emergencies.append((0x8611, 0x80))
+    assert s.sdo_upload(0x6060, 0) is not None
+    assert [e.error_code for e in s.emergencies] == [0x8611]
+
+
+def test_states_refusals_and_acknowledge():
+    t, (drive,) = bus()
+    s = t.slaves()[0]
     s.request_state(EcState.SAFEOP)
     assert t.mapped and s.state() is EcState.SAFEOP
-    s._slave.refuse.add(8)
+    drive.faults.refuse_state(EcState.OP, 0x001D)
     with pytest.raises(StateChangeError) as ei:
         s.request_state(EcState.OP)
     assert ei.value.al_status == 0x001D
-    assert s.exchange(b"\x0f\x00") == b"\x27\x02" and s._slave.output == b"\x0f\x00"
+    assert s._slave.state & STATE_ERROR  # the slave shows the error indication ...
+    s.request_state(EcState.PREOP)  # ... and takes the next request only because the master acknowledges it
+    assert s.state() is EcState.PREOP and not s._slave.state & STATE_ERROR
+
+
+def test_exchange_checks_the_image_and_the_working_counter():
+    t, (drive,) = bus()
+    s = t.slaves()[0]
+    s.request_state(EcState.SAFEOP)
+    size = len(s._slave.output)
+    assert size > 0  # the size config_map read from the drive's PDO assignment
+    assert len(s.exchange(bytes(size))) == len(s._slave.input) > 0
+    with pytest.raises(TargetError, match="output bytes"):
+        s.exchange(bytes(size + 1))  # pysoem would memcpy it past the slave's image
+    s.request_state(EcState.PREOP)
+    with pytest.raises(TargetError, match="working counter 0"):
+        s.exchange(bytes(size))
+
+
+def test_dc_is_configured_once_and_activation_is_mapped():
+    t, (drive,) = bus()
+    s = t.slaves()[0]
+    s.configure_dc(0x0300, 1_000_000, 250_000)
+    assert t.dc_configured and s._slave.dc == (0x03, 1_000_000, 250_000, None)
+    assert drive.dc == (0x0300, 1_000_000)
+    s.configure_dc(0x0730, 1_000_000)  # SYNC0 + SYNC1; the latch bits of the low byte are not pysoem's
+    assert s._slave.dc == (0x07, 1_000_000, 0, 0)
+    s.configure_dc(0, 0)
+    assert s._slave.dc[0] == 0
+    with pytest.raises(TargetError, match="0x0100"):
+        s.configure_dc(0x0100, 1_000_000)
+    assert dc_sync_args(0x0300, 2_000_000) == (True, 2_000_000, 0)
+
+
+def test_mapping_errors_are_target_errors():
+    t, (drive,) = bus()
+    s = t.slaves()[0]
+    drive.faults.abort_sdo(1, 0x06020000)  # the first CoE read of config_map
+    with pytest.raises(TargetError, match=r"PDO mappings .*slave 0, 0x1C12:00"):
+        s.request_state(EcState.SAFEOP)
 
 
 def test_open_failures_are_target_errors():
     with pytest.raises(TargetError, match="cannot open"):
-        PysoemTarget("nope", pysoem_module=fake)
+        PysoemTarget("nope", pysoem_module=make_module([Drive.from_profile("hdt")]))
+    with pytest.raises(TargetError, match="no EtherCAT slaves"):
+        PysoemTarget("eth0", pysoem_module=make_module([]))
+
+
+def test_process_data_is_paced_to_the_sync0_cycle():
+    t, _ = bus()
+    s = t.slaves()[0]
+    s.configure_dc(0x0300, 2_000_000)
+    s.request_state(EcState.SAFEOP)
+    for _ in range(3):
+        s.exchange(bytes(len(s._slave.output)))
+    sent = t.master.sent_at
+    assert [round(b - a, 9) for a, b in zip(sent, sent[1:])] == [0.002, 0.002]  # virtual clock, no real waiting

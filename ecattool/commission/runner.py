@@ -378,8 +378,10 @@ def _dc(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     if act is None or rd.drive.dc is None:
         return
     cycle = rd.drive.dc.cycle_ns or 0
-    _sdo_step("dc", lambda: slave.configure_dc(act, cycle))
-    report.steps.append(Step("dc", True, f"AssignActivate 0x{act:04X}, SYNC0 cycle {cycle} ns"))
+    shift = rd.drive.dc.shift_ns or 0
+    _sdo_step("dc", lambda: slave.configure_dc(act, cycle, shift))
+    report.steps.append(Step("dc", True, f"AssignActivate 0x{act:04X}, SYNC0 cycle {cycle} ns"
+                                         + (f", shift {shift} ns" if shift else "")))
 
 
 def _safe_stop(slave: SlaveTarget, io: ProcessIo | None, report: DriveReport) -> None:
@@ -401,10 +403,42 @@ def _safe_stop(slave: SlaveTarget, io: ProcessIo | None, report: DriveReport) ->
         report.final_state = "unknown"
 
 
-def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
-    report = DriveReport(rd.drive.name, rd.position)
-    io: ProcessIo | None = None
-    try:
+class _DriveRun:
+    """One drive's commissioning in two phases, so that a master with one IO map for the whole bus
+    (pysoem/SOEM ``config_map``) reads every drive's PDO mapping after all of them were written:
+    :meth:`prepare` does everything in PRE-OP (identity, .sw, startup list, read-backs, DC), :meth:`finish`
+    goes to SAFE-OP and OP, enables and moves. A failure in either stops the drive safely."""
+
+    def __init__(self, slave: SlaveTarget, rd: ResolvedDrive) -> None:
+        self.slave = slave
+        self.rd = rd
+        self.report = DriveReport(rd.drive.name, rd.position)
+        self.io: ProcessIo | None = None
+        self.failed = False
+
+    def _guarded(self, phase: Callable[[], None]) -> None:
+        try:
+            phase()
+        except _Failed as exc:
+            self._fail(exc.step)
+        except EcatToolError as exc:  # anything a target or the device model raised outside a named step
+            self._fail(Step("commission", False, str(exc)))
+
+    def _fail(self, step: Step) -> None:
+        self.report.steps.append(step)
+        self.report.error = f"{step.name}: {step.detail}{_drive_error(self.slave, self.rd)}"
+        self.failed = True
+        _safe_stop(self.slave, self.io, self.report)
+
+    def prepare(self) -> None:
+        self._guarded(self._prepare)
+
+    def finish(self) -> None:
+        if not self.failed:
+            self._guarded(self._finish)
+
+    def _prepare(self) -> None:
+        slave, rd, report = self.slave, self.rd, self.report
         if has_errors(rd.findings):
             first = next(f for f in rd.findings if f.severity.value == "error")
             raise _Failed(Step("lint", False, f"the project has errors for this drive, first: {first}"))
@@ -417,11 +451,15 @@ def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
         _startup(slave, rd, _PREOP_TRANSITIONS, report)
         _check_readbacks(slave, rd, report)
         _dc(slave, rd, report)
+
+    def _finish(self) -> None:
+        slave, rd, report = self.slave, self.rd, self.report
         _goto(slave, EcState.SAFEOP, report)
-        io = ProcessIo(slave, rd)
+        io = self.io = ProcessIo(slave, rd)
         io.cycle()
         _startup(slave, rd, _SAFEOP_TRANSITIONS, report)
         io.seed_from_drive()
+        io.cycle()  # the image a real master keeps sending while the drive goes to OP holds the seeded values
         _goto(slave, EcState.OP, report)
         if rd.drive.enable:
             _sdo_step("mode", lambda: _preselect_mode(io, rd))
@@ -431,16 +469,14 @@ def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
             _sdo_step("move", lambda: _move(io, rd, report))
         report.ok = True
         report.final_state = slave.state().value
-    except _Failed as exc:
-        report.steps.append(exc.step)
-        report.error = f"{exc.step.name}: {exc.step.detail}{_drive_error(slave, rd)}"
-        _safe_stop(slave, io, report)
-    except EcatToolError as exc:  # anything a target or the device model raised outside a named step
-        step = Step("commission", False, str(exc))
-        report.steps.append(step)
-        report.error = f"{step.name}: {step.detail}{_drive_error(slave, rd)}"
-        _safe_stop(slave, io, report)
-    return report
+
+
+def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
+    """Commission one drive on its own (both phases at once)."""
+    run = _DriveRun(slave, rd)
+    run.prepare()
+    run.finish()
+    return run.report
 
 
 def _drive_error(slave: SlaveTarget, rd: ResolvedDrive) -> str:
@@ -504,15 +540,23 @@ def commission(path: str | Path, target: str | Target | None = None,
     try:
         slaves = tgt.slaves()
         ordered = sorted(result.drives, key=lambda r: r.position)
-        for rd in ordered:
+        runs: list[_DriveRun | DriveReport] = []
+        for rd in ordered:  # every drive's PRE-OP work first, then SAFE-OP/OP drive by drive
             if rd.position >= len(slaves):
                 dr = DriveReport(rd.drive.name, rd.position, error=f"no slave at bus position {rd.position}")
                 dr.steps.append(Step("bus", False, dr.error or ""))
+                runs.append(dr)
             else:
-                dr = commission_drive(slaves[rd.position], rd)
-            report.drives.append(dr)
+                run = _DriveRun(slaves[rd.position], rd)
+                run.prepare()
+                runs.append(run)
+        for item in runs:
+            if isinstance(item, _DriveRun):
+                item.finish()
+                item = item.report
+            report.drives.append(item)
             if on_drive:
-                on_drive(dr)
+                on_drive(item)
     finally:
         if owned:
             tgt.close()

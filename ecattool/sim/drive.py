@@ -1003,11 +1003,12 @@ class Drive:
             raise _abort(0x60C2, sub, A.INVALID_VALUE)
         return True
 
-    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0) -> None:
+    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0, sync0_shift_ns: int = 0) -> None:
         """What the master writes to the ESC before SAFE-OP: DC activation (0x0981, e.g. 0x0300 = SYNC0)
-        and the SYNC0 cycle time in ns. ``assign_activate = 0`` = free run."""
+        and the SYNC0 cycle and shift times in ns. ``assign_activate = 0`` = free run."""
         self.dc = (assign_activate, sync0_cycle_ns)
-        self._log("dc", assign_activate=assign_activate, sync0_cycle_ns=sync0_cycle_ns)
+        self.dc_shift_ns = sync0_shift_ns
+        self._log("dc", assign_activate=assign_activate, sync0_cycle_ns=sync0_cycle_ns, sync0_shift_ns=sync0_shift_ns)
 
     def _check_dc(self) -> None:
         active, cycle = getattr(self, "dc", (0, 0))

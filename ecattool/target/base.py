@@ -35,8 +35,9 @@ class SlaveTarget(Protocol):
         """One process-data cycle: write the output image, return the input image."""
         ...
 
-    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0) -> None:
-        """Distributed clocks, set by the master before SAFE-OP (AssignActivate, e.g. 0x0300 = SYNC0)."""
+    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0, sync0_shift_ns: int = 0) -> None:
+        """Distributed clocks, set by the master before SAFE-OP (AssignActivate, e.g. 0x0300 = SYNC0), the
+        SYNC0 cycle and shift times in ns."""
         ...
 
 

@@ -3,37 +3,82 @@
 Implements the same :class:`~ecattool.target.base.SlaveTarget` interface as the simulator, translating
 pysoem's exceptions into ecattool's (SdoAbort with the abort code, StateChangeError with the AL status).
 The pysoem module is injectable so the adapter is tested with a fake in the test suite.
+
+What pysoem (1.1, over SOEM) requires, and how the adapter meets it:
+
+- ``Master.config_init()`` requests PRE-OP for every slave (automatic state change); afterwards the adapter
+  switches ``manual_state_change`` on so that ``config_map()`` does not also push every slave on the bus to
+  SAFE-OP (a drive that failed its PRE-OP steps stays in PRE-OP, a drive in OP is not knocked down).
+- ``config_map()`` reads every slave's PDO assignment over CoE and lays out the IO map; it runs once, at the
+  first SAFE-OP request, after the caller has written the PDO mappings (commission writes all drives'
+  PRE-OP startup lists before any SAFE-OP). ``slave.output`` is a plain ``memcpy`` into that map, so the
+  adapter checks the length before writing it.
+- ``config_dc()`` (propagation delays, system time offsets) runs once before the first ``dc_sync``.
+- A slave whose AL status shows the error indication ignores state requests until the master
+  acknowledges it: the request carries ``STATE_ACK`` then.
+- On the way to OP the adapter keeps process data flowing while it waits (SOEM's examples do the same): a
+  drive takes SAFE-OP -> OP only once it receives outputs.
+- Process data cycles are paced to the bus cycle (the SYNC0 cycle, else 1 ms): a drive in CSP takes one
+  set-point per cycle, and frames sent as fast as Python can would skip set-points.
+- Emergency messages are collected through ``add_emergency_callback``; without a callback pysoem raises
+  ``Emergency`` from the SDO call that happened to pop it and the SDO's own result is lost.
 """
 
 from __future__ import annotations
 
+import math
+import time
+from collections.abc import Callable
 from types import ModuleType
-from typing import Any, Protocol, cast
+from typing import Any, TypeVar
 
 from ecattool.errors import SdoAbort, SdoTimeout, StateChangeError, TargetError
 from ecattool.esi.model import Identity
 from ecattool.od.model import EcState
 from ecattool.target.base import SlaveTarget
 
-_STATE_CODES = {EcState.INIT: 1, EcState.PREOP: 2, EcState.BOOT: 3, EcState.SAFEOP: 4, EcState.OP: 8}
-_CODE_STATES = {v: k for k, v in _STATE_CODES.items()}
-#: how long a state change may take, in microseconds
+#: how long a state change may take, in microseconds (SOEM's own EC_TIMEOUTSTATE is 2 s)
 STATE_TIMEOUT_US = 2_000_000
-
-
-class _SdoError(Protocol):
-    """What ecattool reads from pysoem's ``SdoError``."""
-
-    abort_code: int
+#: how long one process data cycle may take to come back, in microseconds (pysoem's default)
+PROCESSDATA_TIMEOUT_US = 2000
+#: the process data cycle when no DC cycle is configured, in nanoseconds
+DEFAULT_CYCLE_NS = 1_000_000
+#: how long one state check waits between two process data cycles on the way to OP, in microseconds
+OP_POLL_US = 10_000
+#: pysoem reads into a 256-byte buffer unless told otherwise; a larger object is read again with this size
+LARGE_SDO_BYTES = 65536
+_STATE_NAMES = {EcState.INIT: "INIT_STATE", EcState.PREOP: "PREOP_STATE", EcState.BOOT: "BOOT_STATE",
+                EcState.SAFEOP: "SAFEOP_STATE", EcState.OP: "OP_STATE"}
+#: PacketError.error_code of SOEM: "data container too small for type"
+_PACKET_TOO_SMALL = 3
+_T = TypeVar("_T")
 
 
 def _import_pysoem() -> ModuleType:
     try:
-        import pysoem  # type: ignore[import-not-found]
+        # pysoem ships no stubs; without the extra it is not installed at all
+        import pysoem  # type: ignore[import-not-found, import-untyped, unused-ignore]
     except ImportError:
         raise TargetError("the pysoem target needs the optional extra: pip install 'ecattool[pysoem]'") from None
     module: ModuleType = pysoem
     return module
+
+
+def dc_sync_args(assign_activate: int, sync0_cycle_ns: int, sync0_shift_ns: int = 0) -> tuple[Any, ...]:
+    """The arguments of pysoem's ``slave.dc_sync`` for an ESI AssignActivate word.
+
+    pysoem writes 0x0980 = 0 and 0x0981 = 0x03 (cyclic unit + SYNC0) or 0x07 (+ SYNC1, when
+    ``sync1_cycle_time`` is given); the low byte of AssignActivate (latch unit assignment) is not written.
+    Any other activation cannot be expressed through pysoem."""
+    act = (assign_activate >> 8) & 0xFF
+    if act == 0:
+        return (False, 0)
+    if act == 0x03:
+        return (True, sync0_cycle_ns, sync0_shift_ns)
+    if act == 0x07:
+        return (True, sync0_cycle_ns, sync0_shift_ns, 0)  # SYNC1 fires with SYNC0
+    raise TargetError(f"AssignActivate 0x{assign_activate:04X}: pysoem can only activate SYNC0 (0x0300) or "
+                      "SYNC0 + SYNC1 (0x0700), or switch DC off (0x0000)")
 
 
 class PysoemSlave:
@@ -43,79 +88,181 @@ class PysoemSlave:
         self._master = master
         self._slave = slave
         self.position = position
+        #: emergency messages the slave sent (pysoem ``Emergency`` objects), oldest first
+        self.emergencies: list[Any] = []
+        slave.add_emergency_callback(self.emergencies.append)
+
+    @property
+    def _mod(self) -> ModuleType:
+        return self._master.pysoem
 
     def identity(self) -> Identity:
         return Identity(int(self._slave.man), int(self._slave.id), int(self._slave.rev))
 
-    def _translate(self, exc: Exception, index: int, subindex: int) -> Exception:
-        mod = self._master.pysoem
-        if isinstance(exc, getattr(mod, "SdoError", ())):
-            return SdoAbort(index, subindex, int(cast(_SdoError, exc).abort_code))
-        if isinstance(exc, (getattr(mod, "WkcError", ()), getattr(mod, "MailboxError", ()), getattr(mod, "PacketError", ()))):
-            return SdoTimeout(index, subindex)
-        return exc
+    def _where(self, index: int, subindex: int) -> str:
+        return f"slave {self.position}, 0x{index:04X}:{subindex:02X}"
+
+    def _sdo(self, fn: Callable[[], _T], index: int, subindex: int) -> _T:
+        """Run one pysoem SDO call, its exceptions translated into ecattool's."""
+        mod = self._mod
+        try:
+            return fn()
+        except mod.SdoError as exc:
+            raise SdoAbort(index, subindex, int(exc.abort_code)) from None
+        except mod.WkcError:  # the mailbox answer did not come (the working counter stayed 0)
+            raise SdoTimeout(index, subindex) from None
+        except mod.MailboxError as exc:
+            where = self._where(index, subindex)
+            raise TargetError(f"{where}: mailbox error {exc.error_code}: {exc.desc}") from None
+        except mod.PacketError as exc:
+            raise TargetError(f"{self._where(index, subindex)}: mailbox packet error {exc.error_code}") from None
+        except mod.Emergency as exc:  # only when no callback is registered; kept as a TargetError anyway
+            raise TargetError(f"{self._where(index, subindex)}: emergency {exc}") from None
 
     def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
-        try:
-            return bytes(self._slave.sdo_read(index, subindex, ca=complete_access))
-        except Exception as exc:  # noqa: BLE001 - translated below
-            raise self._translate(exc, index, subindex) from None
+        def read(size: int = 0) -> bytes:
+            return bytes(self._slave.sdo_read(index, subindex, size, ca=complete_access))
+
+        def read_any_size() -> bytes:
+            try:
+                return read()
+            except self._mod.PacketError as exc:
+                if exc.error_code != _PACKET_TOO_SMALL:
+                    raise
+                return read(LARGE_SDO_BYTES)
+
+        return self._sdo(read_any_size, index, subindex)
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None:
         try:
-            self._slave.sdo_write(index, subindex, bytes(data), ca=complete_access)
-        except Exception as exc:  # noqa: BLE001
-            err = self._translate(exc, index, subindex)
-            if not expect_reply and isinstance(err, SdoTimeout):
-                return  # e.g. Technosoft 2080h: the drive resets instead of answering
-            raise err from None
+            self._sdo(lambda: self._slave.sdo_write(index, subindex, bytes(data), ca=complete_access),
+                      index, subindex)
+        except SdoTimeout:
+            if expect_reply:
+                raise
+            # e.g. Technosoft 2080h: the drive resets instead of answering
+
+    def _al_status(self) -> int:
+        """The AL status register (state and error indication) as the master last read it."""
+        self._master.master.read_state()
+        return int(self._slave.state)
+
+    def _decode(self, raw: int) -> EcState:
+        for state, name in _STATE_NAMES.items():
+            if raw & 0x0F == getattr(self._mod, name):
+                return state
+        raise TargetError(f"slave {self.position} does not answer (AL status 0x{raw:04X})")
 
     def state(self) -> EcState:
-        self._master.master.read_state()
-        return _CODE_STATES.get(int(self._slave.state) & 0x0F, EcState.INIT)
+        return self._decode(self._al_status())
 
     def request_state(self, state: EcState) -> None:
-        current = self.state()
+        mod = self._mod
+        raw = self._al_status()
+        current = self._decode(raw)
         if state in (EcState.SAFEOP, EcState.OP) and not self._master.mapped:
             self._master.map()
-        self._slave.state = _STATE_CODES[state]
+        code = int(getattr(mod, _STATE_NAMES[state]))
+        ack = int(mod.STATE_ACK) if raw & int(mod.STATE_ERROR) else 0  # never on a slave without an error
+        self._slave.state = code | ack
         self._slave.write_state()
-        reached = self._slave.state_check(_STATE_CODES[state], STATE_TIMEOUT_US)
-        if int(reached) & 0x0F != _STATE_CODES[state]:
-            al = int(getattr(self._slave, "al_status", 0) or 0)
-            raise StateChangeError(state.value, current.value, al)
+        if int(reached := self._wait_for(code)) & 0x0F != code:
+            raise StateChangeError(state.value, current.value, int(self._slave.al_status or 0))
 
-    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0) -> None:
-        self._slave.dc_sync(bool(assign_activate), sync0_cycle_ns)
+    def _wait_for(self, code: int) -> int:
+        """Wait for the requested state. On the way to OP the process data keeps flowing: a drive takes
+        SAFE-OP -> OP only once it has received outputs, and its sync manager watchdog is running."""
+        if code != int(self._mod.OP_STATE):
+            return int(self._slave.state_check(code, STATE_TIMEOUT_US))
+        reached = 0
+        for _ in range(math.ceil(STATE_TIMEOUT_US / 1e6 / self._master.cycle_s)):  # each one paced: >= 2 s
+            self._master.cycle()
+            reached = int(self._slave.state_check(code, OP_POLL_US))
+            if reached & 0x0F == code:
+                break
+        return reached
+
+    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0, sync0_shift_ns: int = 0) -> None:
+        args = dc_sync_args(assign_activate, sync0_cycle_ns, sync0_shift_ns)
+        if args[0]:
+            self._master.configure_dc()
+            if sync0_cycle_ns > 0:
+                self._master.cycle_s = sync0_cycle_ns / 1e9
+        self._slave.dc_sync(*args)
 
     def exchange(self, outputs: bytes) -> bytes:
+        size = len(self._slave.output)
+        if len(outputs) != size:
+            raise TargetError(f"slave {self.position}: {len(outputs)} output bytes for a {size}-byte output image "
+                              "(the PDO mapping the master read differs from the project's)")
         self._slave.output = bytes(outputs)
-        self._master.master.send_processdata()
-        self._master.master.receive_processdata(2000)
+        wkc = self._master.cycle()
+        if wkc <= 0:
+            raise TargetError(f"slave {self.position}: no process data came back (working counter {wkc})")
         return bytes(self._slave.input)
 
 
 class PysoemTarget:
     """A pysoem master on a network interface, e.g. ``PysoemTarget("eth0")``."""
 
-    def __init__(self, ifname: str, pysoem_module: ModuleType | None = None) -> None:
+    def __init__(self, ifname: str, pysoem_module: ModuleType | None = None,
+                 clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep) -> None:
         self.pysoem = pysoem_module or _import_pysoem()
+        #: the bus cycle in seconds: the SYNC0 cycle once DC is configured, else 1 ms
+        self.cycle_s = DEFAULT_CYCLE_NS / 1e9
+        self.clock = clock
+        self._sleep = sleep
+        self._next_cycle = clock()
         self.master = self.pysoem.Master()
         try:
             self.master.open(ifname)
-        except Exception as exc:  # noqa: BLE001
+        except Exception as exc:  # noqa: BLE001 - ConnectionError, or an OS error on some platforms
             raise TargetError(f"cannot open EtherCAT interface {ifname!r}: {exc}") from None
         count = self.master.config_init()
         if count <= 0:
             self.master.close()
             raise TargetError(f"no EtherCAT slaves found on {ifname!r}")
+        # config_init has requested PRE-OP (without waiting for it); from here on ecattool requests every state
+        self.master.state_check(int(self.pysoem.PREOP_STATE), STATE_TIMEOUT_US)
+        self.master.manual_state_change = 1
         self._slaves = [PysoemSlave(self, i, s) for i, s in enumerate(self.master.slaves)]
         self.mapped = False
+        self.dc_configured = False
 
     def map(self) -> None:
-        self.master.config_map()
+        """Lay out the IO map from the PDO mappings the slaves report (pysoem ``config_map``)."""
+        try:
+            self.master.config_map()
+        except self.pysoem.ConfigMapError as exc:
+            first = exc.error_list[0] if exc.error_list else None
+            detail = str(first)
+            if isinstance(first, self.pysoem.SdoError):
+                detail = f"slave {first.slave_pos - 1}, 0x{first.index:04X}:{first.subindex:02X}: {first.desc}"
+            elif isinstance(first, self.pysoem.MailboxError):
+                detail = f"slave {first.slave_pos - 1}: mailbox error {first.error_code}: {first.desc}"
+            raise TargetError(f"reading the PDO mappings failed ({len(exc.error_list)} errors, "
+                              f"first: {detail})") from None
         self.mapped = True
+
+    def configure_dc(self) -> None:
+        """Locate the DC slaves and measure propagation delays (pysoem ``config_dc``), once."""
+        if not self.dc_configured:
+            if not self.master.config_dc():
+                raise TargetError("no slave with distributed clocks found on the bus")
+            self.dc_configured = True
+
+    def cycle(self) -> int:
+        """One process data cycle of the bus, paced: it starts one bus cycle after the previous one (a drive
+        in CSP/CSV takes one set-point per SYNC0 cycle, faster frames would skip set-points). Returns the
+        working counter."""
+        now = self.clock()
+        if now < self._next_cycle:
+            self._sleep(self._next_cycle - now)
+            now = self._next_cycle
+        self._next_cycle = now + self.cycle_s
+        self.master.send_processdata()
+        return int(self.master.receive_processdata(PROCESSDATA_TIMEOUT_US))
 
     def slaves(self) -> list[SlaveTarget]:
         return list(self._slaves)

@@ -50,7 +50,8 @@ class SimTarget:
 def open_target(spec: str, devices: Iterable[Device] = ()) -> SimTarget:
     """A target from a spec string. ``"sim"``: the embedded simulator with one drive per device.
 
-    Real masters (``"pysoem:eth0"``) are an optional extra and not available yet.
+    A real master is :class:`ecattool.target.pysoem.PysoemTarget` (an optional extra); ``commission``, ``sw``
+    and ``scale explain`` open it from ``"pysoem:<interface>"``, this function opens only the simulator.
     """
     kind = spec.split(":", 1)[0].strip().lower()
     if kind == "sim":

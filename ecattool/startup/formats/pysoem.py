@@ -26,7 +26,10 @@ def export(configs: list[SlaveConfig]) -> str:
     idents = unique_identifiers(configs)
     out = ['"""pysoem startup configuration written by ecattool.', "",
            "Call install(master) after master.config_init() and before master.config_map().", '"""', "",
-           "from __future__ import annotations", "", ""]
+           "from __future__ import annotations", ""]
+    if any(not cmd.expect_reply for c in configs for cmd in c.commands):
+        out += ["import pysoem", ""]  # its WkcError: the write that gets no reply
+    out.append("")
     installs = []
     for i, (ident, c) in enumerate(zip(idents, configs)):
         pos = c.position if c.position is not None else i
@@ -47,7 +50,7 @@ def export(configs: list[SlaveConfig]) -> str:
             else:
                 out.append("    try:")
                 out.append(f"        {call}" + (f"  # {note}" if note else ""))
-                out.append("    except Exception:  # the drive answers this write by resetting, not with a reply")
+                out.append("    except pysoem.WkcError:  # the drive answers this write by resetting, not with a reply")
                 out.append("        pass")
         for s in c.soe_commands:
             out.append(f"    # SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()}: not sent by pysoem")
