@@ -7,40 +7,13 @@ index of oracles to tests is tests/ORACLES.md.
 
 from __future__ import annotations
 
-from typing import Any
 
 import pytest
 
-from ecattool.errors import SdoAbort
 from ecattool.od.model import EcState
 from ecattool.sim import Drive
 from ecattool.sim.cia402 import State, decode_statusword
-
-PRE, SAFE, OP = EcState.PREOP, EcState.SAFEOP, EcState.OP
-
-
-def w(d: Drive, index: int, sub: int, value: int, size: int) -> None:
-    d.sdo_download(index, sub, value.to_bytes(size, "little", signed=value < 0))
-
-
-def r(d: Drive, index: int, sub: int = 0, signed: bool = False) -> int:
-    return int.from_bytes(d.sdo_upload(index, sub), "little", signed=signed)
-
-
-def code_of(fn: Any, *args: Any) -> int:
-    with pytest.raises(SdoAbort) as exc:
-        fn(*args)
-    return exc.value.code
-
-
-def at(name: str, state: EcState = PRE, **kw: Any) -> Drive:
-    d = Drive.from_profile(name, **kw)
-    for s in (PRE, SAFE, OP):
-        d.request_state(s)
-        if s is state:
-            break
-    return d
-
+from tests.sim_helpers import OP, PRE, SAFE, at, code_of, r, w  # noqa: F401
 
 TS, HDT, CT = "technosoft-ipos", "hdt", "controltechniques"
 

@@ -12,31 +12,7 @@ from ecattool.errors import EcatToolError, SdoAbort, SdoTimeout, StateChangeErro
 from ecattool.od.model import EcState
 from ecattool.sim import Drive
 from ecattool.target import SimTarget, SlaveTarget, open_target
-
-PRE, SAFE, OP = EcState.PREOP, EcState.SAFEOP, EcState.OP
-
-
-def w(d: Drive, index: int, sub: int, value: int, size: int) -> None:
-    d.sdo_download(index, sub, value.to_bytes(size, "little", signed=value < 0))
-
-
-def r(d: Drive, index: int, sub: int = 0) -> int:
-    return int.from_bytes(d.sdo_upload(index, sub), "little")
-
-
-def code_of(fn, *args) -> int:
-    with pytest.raises(SdoAbort) as exc:
-        fn(*args)
-    return exc.value.code
-
-
-def at(name: str, state: EcState = PRE, **kw) -> Drive:
-    d = Drive.from_profile(name, **kw)
-    for s in (PRE, SAFE, OP):
-        d.request_state(s)
-        if s is state:
-            break
-    return d
+from tests.sim_helpers import OP, PRE, SAFE, at, code_of, r, w  # noqa: F401
 
 
 # --- HDT ------------------------------------------------------------------------------------------
