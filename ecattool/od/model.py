@@ -167,6 +167,12 @@ class Entry(Record):
         return (self.bit_size + 7) // 8
 
     @property
+    def default_zero_or_unknown(self) -> bool:
+        """No documented default, or a default of all zero bytes (a profile velocity the drive would not
+        move at)."""
+        return self.default is None or not any(self.default)
+
+    @property
     def default_value(self) -> Any:
         if self.default is None or self.datatype is None:
             return None

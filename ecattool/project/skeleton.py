@@ -133,18 +133,10 @@ def _motion(device: Device, rules: FamilyRules) -> str:
         e = device.dictionary.entry(index, 0)
         if e is None or (index, 0) in rx or EcState.PREOP not in e.access.write:
             continue
-        if _zero_or_unknown(e.default):
+        if e.default_zero_or_unknown:
             params.append(f'{{object: "{index:04X}:00", value: {value}, comment: {_scalar(comment)}}}')
     lines = "".join(f"      - {p}\n" for p in params)
     return (f"    parameters:\n{lines}" if lines else "") + "    move: {distance: 1}\n"
-
-
-def _zero_or_unknown(default: object) -> bool:
-    if default is None:
-        return True
-    if isinstance(default, (bytes, bytearray)):
-        return not any(default)
-    return default == 0
 
 
 def _comment(text: str) -> str:

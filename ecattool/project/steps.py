@@ -183,8 +183,7 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         e = rd.device.dictionary.entry(index, 0)
         if e is None or (index, 0) in written or (index, 0) in mapped:
             continue
-        default = e.default
-        if default is None or (not any(default) if isinstance(default, (bytes, bytearray)) else default == 0):
+        if e.default_zero_or_unknown:
             rd.warning("PRJ019", f"the pp move runs at {name} {index:04X}h, which the project does not set and "
                                  f"{rd.device.type_name} leaves at 0 (or does not document): the drive would not "
                                  f"move; add a parameter {index:04X}:00", loc)
