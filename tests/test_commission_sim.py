@@ -341,3 +341,19 @@ def test_a_failure_without_a_drive_error_adds_nothing(tmp_path):
     drive.faults.refuse_state(EcState.SAFEOP, 0x001D)  # refused by the ESM: no drive fault behind it
     _, dr = run(path, [drive])
     assert not dr.ok and "603Fh" not in dr.error
+
+
+def test_csp_move_starts_where_the_axis_stands(tmp_path):
+    # an axis that does not stand at 0 (absolute encoder, a previous run): in CSP the drive follows 607Ah from
+    # the first enabled cycle, so the set-point it sees on enabling must be the actual position, not the 607Ah
+    # it held (0): otherwise the axis jumps to 0 before the commanded move
+    path = sample("controltechniques")
+    drives = sim_drives(path)
+    from fractions import Fraction
+
+    drives[0].cia.position = Fraction(196608)  # 2 x the move: 10 mm
+    drives[0]._refresh_inputs()
+    _, dr = run(path, drives)
+    assert dr.ok, dr.error
+    assert step(dr, "move").detail.startswith("CSP move of 5000 user units: position 10000 -> 15000")
+    assert drives[0].internal_position == 196608 + 98304

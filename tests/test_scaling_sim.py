@@ -184,3 +184,20 @@ def test_a_drive_without_factor_objects_cannot_take_user_units(esi: str) -> None
     device = load(corpus_path("esi", esi)).devices[0]
     with pytest.raises(InputError, match="none of the scaling objects that set user units"):
         compute(SCREW, "generic", device=device)
+
+
+@pytest.mark.parametrize("name,axis,cpu", AXES, ids=[a[0] for a in AXES])
+def test_generic_drive_without_gear_ratio_object_keeps_the_gear(name: str, axis: Axis, cpu: Fraction) -> None:
+    """A generic drive with 608Fh and 6092h but no 6091h (and no 6093h) takes the gear ratio as 1: the gear
+    must go into 608Fh, else the drive moves by the factor without the gear."""
+    from ecattool.esi import load
+    from ecattool.od.model import ObjectDictionary
+    from tests.conftest import corpus_path
+
+    device = load(corpus_path("esi", "copley_XE2_4.60.xml")).devices[0]
+    assert device.dictionary.get(0x6093) is None and device.dictionary.get(0x608F) is not None
+    device.dictionary = ObjectDictionary({o.index: o for o in device.dictionary if o.index != 0x6091})
+    d = Drive.from_device(device)
+    d.request_state(EcState.PREOP)
+    _apply(d, compute(axis, "generic", device=device))
+    assert d.units.position_to_internal(10) == 10 * cpu

@@ -122,3 +122,13 @@ def test_process_data_is_paced_to_the_sync0_cycle():
         s.exchange(bytes(len(s._slave.output)))
     sent = t.master.sent_at
     assert [round(b - a, 9) for a, b in zip(sent, sent[1:])] == [0.002, 0.002]  # virtual clock, no real waiting
+
+
+def test_dc_without_a_sync0_cycle_runs_sync0_at_the_bus_cycle():
+    # a SYNC0 cycle time of 0 is the ESC's single-shot mode (one pulse, then none): a project's dc: without
+    # cycle_ns must not switch a drive's SYNC0 off; it runs at the cycle the target exchanges process data
+    t, (drive,) = bus()
+    s = t.slaves()[0]
+    s.configure_dc(0x0300)
+    assert s._slave.dc == (0x03, 1_000_000, 0, None) and drive.dc == (0x0300, 1_000_000)
+    assert t.cycle_s == pytest.approx(0.001)

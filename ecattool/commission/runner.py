@@ -299,6 +299,14 @@ def _preselect_mode(io: ProcessIo, rd: ResolvedDrive) -> None:
     io.cycle()
 
 
+def _hold_position(io: ProcessIo) -> None:
+    """Set the mapped target position 607Ah to the actual position before the enable sequence: a drive in a
+    cyclic position mode follows 607Ah from its first enabled cycle, and the value it held (0 after power-on)
+    would make an axis that does not stand at 0 jump there."""
+    if (0x607A, 0) in io.out_pos and io.has(0x6064):
+        io.write(0x607A, 0, io.read(0x6064, 0))
+
+
 def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     from ecattool.project.steps import move_mode
 
@@ -463,6 +471,7 @@ class _DriveRun:
         _goto(slave, EcState.OP, report)
         if rd.drive.enable:
             _sdo_step("mode", lambda: _preselect_mode(io, rd))
+            _sdo_step("hold position", lambda: _hold_position(io))
             passed = _sdo_step("enable", lambda: cia402.enable(lambda: io.read(0x6041, 0),
                                                                lambda v: io.write(0x6040, 0, v), io.cycle))
             report.steps.append(Step("enable", True, " -> ".join(passed)))

@@ -389,7 +389,7 @@ def _generic(b: _Builder, ctx: _Ctx, od: Any, device: Any = None) -> None:
                 0x6091: "motor revolutions per driving-shaft revolution",
                 0x6092: f"{u[0].text} per driving-shaft revolution"}
     have = {i: od is None or od.get(i) is not None for i in (0x608F, 0x6091, 0x6092, 0x6093)}
-    missing = [i for i in (0x608F, 0x6092) if not have[i]]
+    missing = [i for i in (0x608F, 0x6091, 0x6092) if not have[i]]
     if not have[0x6093] and missing:
         # the drive computes its position factor from 608Fh x 6091h / 6092h alone and takes an object it lacks
         # as 1 (Inovance SV660N: 6091h only): the ratio of a missing object goes into one it has, else the

@@ -184,11 +184,12 @@ class PysoemSlave:
         return reached
 
     def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0, sync0_shift_ns: int = 0) -> None:
+        if sync0_cycle_ns <= 0:  # the ESC reads a SYNC0 cycle of 0 as one single pulse: SYNC0 runs at the bus cycle
+            sync0_cycle_ns = round(self._master.cycle_s * 1e9)
         args = dc_sync_args(assign_activate, sync0_cycle_ns, sync0_shift_ns)
         if args[0]:
             self._master.configure_dc()
-            if sync0_cycle_ns > 0:
-                self._master.cycle_s = sync0_cycle_ns / 1e9
+            self._master.cycle_s = sync0_cycle_ns / 1e9
         self._slave.dc_sync(*args)
 
     def exchange(self, outputs: bytes) -> bytes:
