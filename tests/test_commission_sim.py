@@ -357,3 +357,15 @@ def test_csp_move_starts_where_the_axis_stands(tmp_path):
     assert dr.ok, dr.error
     assert step(dr, "move").detail.startswith("CSP move of 5000 user units: position 10000 -> 15000")
     assert drives[0].internal_position == 196608 + 98304
+
+
+def test_a_set_point_the_drive_still_holds_is_not_fed_back_to_it(tmp_path):
+    # HDT maps the vl target velocity 6042h in its default RxPDO: a value left from an earlier run must not be
+    # what the first cycles send (it would act as soon as a velocity mode is enabled); profile values are kept
+    path = copy_sample("hdt", tmp_path)
+    (drive,) = sim_drives(path)
+    drive._put(0x6042, 0, 300)
+    drive._put(0x6084, 0, 777)  # a profile deceleration the drive holds: kept (HDT maps 6084h too)
+    _, dr = run(path, [drive])
+    assert dr.ok, dr.error
+    assert drive.value(0x6042, 0) == 0 and drive.value(0x6084, 0) == 777

@@ -82,6 +82,12 @@ class _Failed(Exception):
 # --------------------------------------------------------------------------------------------
 
 
+#: outputs that start at 0 (or the startup value), never at what the drive holds: the controlword and the
+#: set-points that move the axis as soon as it is enabled (vl 6042h, torque 6071h, velocity 60FFh, offsets
+#: 60B1h/60B2h)
+_NOT_SEEDED = frozenset({0x6040, 0x6042, 0x6071, 0x60FF, 0x60B1, 0x60B2})
+
+
 class ProcessIo:
     """Objects in the process image by (index, sub); SDO for objects that are not mapped."""
 
@@ -107,10 +113,13 @@ class ProcessIo:
         """Start every mapped output except the controlword from the value the drive holds (read by SDO in
         SAFE-OP, after the startup list): the first cycles must not write 0 over a profile velocity or an
         acceleration that the drive's defaults or the startup list set (HDT maps 6081h/6083h/6084h in its
-        default RxPDOs). The controlword starts at 0: the power stage stays off until the enable sequence.
-        An object the drive will not read out keeps its startup value (or 0)."""
+        default RxPDOs). The controlword starts at 0: the power stage stays off until the enable sequence;
+        velocity and torque set-points (and their offsets) keep their startup value or 0, so that a value a
+        drive still holds from an earlier run does not act the moment it is enabled in CSV/CST/PV/TQ (the
+        target position is set to the actual position before enabling, see ``_hold_position``). An object
+        the drive will not read out keeps its startup value (or 0)."""
         for (index, sub), pos in self.out_pos.items():
-            if index == 0x6040 or pos.bit_len % 8:
+            if index in _NOT_SEEDED or pos.bit_len % 8:
                 continue
             try:
                 raw = self.slave.sdo_upload(index, sub)
