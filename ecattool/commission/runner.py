@@ -397,8 +397,8 @@ def _dc(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     cycle = rd.drive.dc.cycle_ns or 0
     shift = rd.drive.dc.shift_ns or 0
     _sdo_step("dc", lambda: slave.configure_dc(act, cycle, shift))
-    report.steps.append(Step("dc", True, f"AssignActivate 0x{act:04X}, SYNC0 cycle {cycle} ns"
-                                         + (f", shift {shift} ns" if shift else "")))
+    what = f"SYNC0 cycle {cycle} ns" if cycle else "SYNC0 at the target's bus cycle (the project gives no cycle_ns)"
+    report.steps.append(Step("dc", True, f"AssignActivate 0x{act:04X}, {what}" + (f", shift {shift} ns" if shift else "")))
 
 
 def _safe_stop(slave: SlaveTarget, io: ProcessIo | None, report: DriveReport) -> None:
