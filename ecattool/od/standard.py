@@ -33,5 +33,13 @@ def standard_type(index: int, subindex: int, bit_len: int) -> str | None:
     return name
 
 
+def standard_bits(index: int, subindex: int) -> int | None:
+    """The CiA-402 bit size of ``index:subindex`` (8 for the count of an ARRAY/RECORD), None if not standard."""
+    name = CIA402_TYPES.get(index)
+    if name is None:
+        return None
+    return 8 if subindex == 0 and index in _ARRAYS else _BITS[name]
+
+
 #: the ARRAY/RECORD objects of the table (their sub-index 0 is a count, not of the element type)
 _ARRAYS = frozenset({0x607B, 0x607D, 0x6099, 0x60C1, 0x60FE})
