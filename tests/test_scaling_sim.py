@@ -184,3 +184,17 @@ def test_a_drive_without_factor_objects_cannot_take_user_units(esi: str) -> None
     device = load(corpus_path("esi", esi)).devices[0]
     with pytest.raises(InputError, match="none of the scaling objects that set user units"):
         compute(SCREW, "generic", device=device)
+
+
+@pytest.mark.parametrize("esi", ["etg_ETG2001_ModulesSlots_CiA402.xml", "ingenia_eve-xcr-e_esi.xml"])
+def test_a_drive_without_factor_objects_takes_its_own_increments(esi: str) -> None:
+    """Position unit = the drive's increment (counts) needs no factor object: it was refused with
+    '1 counts = 1 increments cannot be set' on the drives that have none."""
+    from ecattool.esi import load
+    from tests.conftest import corpus_path
+
+    device = load(corpus_path("esi", esi)).devices[0]
+    group = compute(Axis(Feedback.encoder(8388608), position="counts"), "generic", device=device)
+    assert group.objects == []
+    d = Drive.from_device(device)
+    assert d.units.position_to_internal(10) == 10

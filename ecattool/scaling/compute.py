@@ -395,7 +395,9 @@ def _generic(b: _Builder, ctx: _Ctx, od: Any, device: Any = None) -> None:
         # as 1 (Inovance SV660N: 6091h only): the ratio of a missing object goes into one it has, else the
         # drive would move by the gear ratio alone
         carrier = next((i for i in (0x6091, 0x608F, 0x6092) if have[i]), None)
-        if carrier is None:
+        if carrier is None and ctx.pf == 1:
+            pass  # the user's position unit is the drive's increment: nothing to set
+        elif carrier is None:
             source = str(getattr(device, "source", "") or "")
             raise InputError("the device has none of the scaling objects that set user units (608Fh, 6091h, 6092h, "
                              f"6093h): its positions stay in its own units, and 1 {u[0].text} = {_fmt(ctx.pf)} "
