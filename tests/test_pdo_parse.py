@@ -70,6 +70,32 @@ def test_parse_entry_errors_are_located(text: str, message: str) -> None:
     assert exc.value.location == loc
 
 
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        # Synapticon's ESI has no 60F4h: the hint said /16 for a 32-bit object and did not say it is missing
+        ("0x60F4:00", "no such object in the dictionary of Test Drive, so its bit length is unknown; "
+                      "write it as 0x60F4:00/32"),
+        ("0x607B:00", "write it as 0x607B:00/8"),     # the count of a standard ARRAY
+        ("0x607B:01", "write it as 0x607B:01/32"),
+        ("0x6060:00", "write it as 0x6060:00/8"),
+        ("0x5000:01", "write it as 0x5000:01/16"),    # not a standard object: any length, the user knows it
+    ],
+)
+def test_unknown_length_names_the_missing_object_and_the_standard_size(text: str, message: str) -> None:
+    from ecattool.esi.model import Device, Identity
+    from ecattool.od.model import ObjectDictionary
+
+    bare = Device(Identity(1, 2, 3), "Test Drive", dictionary=ObjectDictionary())
+    with pytest.raises(InputError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        parse_entry(text, bare)
+
+
+def test_unknown_sub_index_of_a_known_object_is_named() -> None:
+    with pytest.raises(InputError, match="no such sub-index in the dictionary"):
+        parse_entry("0x6040:07", DEV)
+
+
 def test_names_need_a_device() -> None:
     with pytest.raises(InputError, match="names need a device"):
         parse_entry("controlword")

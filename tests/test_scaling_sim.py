@@ -201,3 +201,56 @@ def test_generic_drive_without_gear_ratio_object_keeps_the_gear(name: str, axis:
     d.request_state(EcState.PREOP)
     _apply(d, compute(axis, "generic", device=device))
     assert d.units.position_to_internal(10) == 10 * cpu
+
+
+@pytest.mark.parametrize("esi", ["etg_ETG2001_ModulesSlots_CiA402.xml", "ingenia_eve-xcr-e_esi.xml"])
+def test_a_drive_without_factor_objects_takes_its_own_increments(esi: str) -> None:
+    """Position unit = the drive's increment (counts) needs no factor object: it was refused with
+    '1 counts = 1 increments cannot be set' on the drives that have none."""
+    from ecattool.esi import load
+    from tests.conftest import corpus_path
+
+    device = load(corpus_path("esi", esi)).devices[0]
+    group = compute(Axis(Feedback.encoder(8388608), position="counts"), "generic", device=device)
+    assert group.objects == []
+    d = Drive.from_device(device)
+    assert d.units.position_to_internal(10) == 10
+
+
+def test_generic_velocity_and_acceleration_units_go_through_6096_and_6097() -> None:
+    """Copley has 6096h/6097h: um positions with mm/s and mm/s^2 write 6096h = 1/1000; the simulated drive ignored
+    6096h/6097h, so the witness agreed with a group whatever those objects said."""
+    from ecattool.esi import load
+    from tests.conftest import corpus_path
+
+    device = load(corpus_path("esi", "copley_XE2_4.60.xml")).devices[0]
+    axis = Axis(Feedback.encoder(1 << 20), Transmission.ballscrew(Exact(5 * MM)), Gear(Fraction(3)), position="um",
+                velocity="mm/s", acceleration="m/s^2")
+    cpu = Fraction((1 << 20) * 3, 5000)  # increments per um
+    d = Drive.from_device(device)
+    d.request_state(EcState.PREOP)
+    _apply(d, compute(axis, "generic", device=device))
+    assert d.units.position_to_internal(10) == 10 * cpu
+    assert d.units.increments_per_second(d.units.velocity_to_internal(2)) == 2000 * cpu          # 2 mm/s
+    assert d.units.increments_per_second2(d.units.acceleration_to_internal(3)) == 3_000_000 * cpu  # 3 m/s^2
+
+
+@pytest.mark.parametrize("velocity,acceleration,missing", [("rpm", None, "6096h"), ("mm/s", "m/s^2", "6097h")])
+def test_a_drive_without_6096_or_6097_refuses_other_units(velocity: str, acceleration: str | None,
+                                                          missing: str) -> None:
+    """The Inovance SV660N ESI has 6091h only: rpm was accepted with a note and the drive then took 100 'rpm' as
+    100 mm/s (12x too fast on a 5 mm screw)."""
+    from ecattool.esi import load
+    from tests.conftest import corpus_path
+
+    device = load(corpus_path("esi", "inovance_SV660_EOE_1Axis_V9.12.xml")).devices[0]
+    axis = Axis(Feedback.encoder(8388608), Transmission.ballscrew(Exact(5 * MM)), Gear(Fraction(1)), position="mm",
+                velocity=velocity, **({"acceleration": acceleration} if acceleration else {}))
+    with pytest.raises(InputError, match=f"the device has no {missing}"):
+        compute(axis, "generic", device=device)
+    ok = Axis(Feedback.encoder(8388608), Transmission.ballscrew(Exact(5 * MM)), Gear(Fraction(1)), position="mm",
+              velocity="mm/s", acceleration="mm/s^2")
+    d = Drive.from_device(device)
+    d.request_state(EcState.PREOP)
+    _apply(d, compute(ok, "generic", device=device))
+    assert d.units.increments_per_second(d.units.velocity_to_internal(100)) == 100 * Fraction(8388608, 5)

@@ -95,3 +95,28 @@ def test_import_from_stdin(capsys, monkeypatch):
     assert code == 0
     doc = json.loads(out)
     assert doc["format"] == "twincat" and doc["slaves"][0]["commands"][0]["source"] == "<stdin>:1"
+
+
+def test_export_one_drive_of_a_project_for_the_one_slave_formats(capsys, tmp_path):
+    """TwinCAT lines and ros2 files hold one slave: a two-drive project could not be exported to them at all
+    (the error said 'export them one by one', and nothing selected a drive)."""
+    for name in ("inovance_SV660_EOE_1Axis_V9.12.xml", "copley_XE2_4.60.xml"):
+        (tmp_path / name).symlink_to(corpus_path("esi", name))
+    project = tmp_path / "m.yaml"
+    project.write_text("ecattool: 1\nname: m\ndrives:\n"
+                       "  - name: x\n    device: {esi: inovance_SV660_EOE_1Axis_V9.12.xml}\n"
+                       "    parameters: [{object: '6060:00', value: 8}]\n"
+                       "    dc: {opmode: DC, cycle_ns: 1000000}\n"
+                       "  - name: y\n    device: {esi: copley_XE2_4.60.xml}\n"
+                       "    parameters: [{object: '6060:00', value: 1}]\n", encoding="utf-8")
+    code, _, err = run(capsys, "startup", "export", "--project", str(project), "--format", "ros2")
+    assert code == 1 and "one by one: --drive" in err
+    code, out, _ = run(capsys, "startup", "export", "--project", str(project), "--format", "ros2", "--drive", "y")
+    assert code == 0 and "product_id: 0x000010b0" in out and "0x000c010d" not in out
+    code, out, _ = run(capsys, "startup", "export", "--project", str(project), "--format", "twincat", "--drive", "0")
+    assert (code, out) == (0, "<PS>,CoE,0x6060:00,0x08 (8),Modes of operation\n")
+    code, out, _ = run(capsys, "startup", "export", "--project", str(project), "--format", "json",
+                       "--drive", "y", "--drive", "x")
+    assert [s["name"] for s in json.loads(out)["slaves"]] == ["x", "y"]  # bus order
+    code, _, err = run(capsys, "startup", "export", "--project", str(project), "--format", "json", "--drive", "z")
+    assert code == 1 and "no slave named or at position 'z' (slaves: x at 0, y at 1)" in err

@@ -287,6 +287,52 @@ def test_pysoem_install_checks_identity():
         namespace["install"](FakeMaster([FakeSlave(0, 0)] * 3))
 
 
+
+def _run_pysoem_module(code: str, drives, **dc_kwargs):
+    """Execute an exported pysoem module the way its docstring says, on the fake pysoem bus of ``drives``."""
+    from tests.fake_pysoem import make_module
+
+    namespace: dict = {}
+    exec(compile(code, "startup_pysoem.py", "exec"), namespace)
+    master = make_module(drives).Master()
+    master.open("eth0")
+    master.config_init()
+    namespace["install"](master)
+    master.config_map()
+    namespace["configure_dc"](master, **dc_kwargs)
+    return master
+
+
+def test_pysoem_module_starts_the_distributed_clocks():
+    """A drive in CSP needs SYNC0: the pysoem module wrote no DC at all (IgH, ecmc, ros2 and ENI did)."""
+    from ecattool.sim import Drive
+
+    drives = [Drive.from_profile("hdt"), Drive.from_profile("hdt")]
+    ident = drives[1].identity()
+    cfg = SlaveConfig(StartupList([StartupCommand("PS", 0x6060, 0, b"\x08")]), name="x", position=1,
+                      identity=Identity(ident.vendor_id, ident.product_code),
+                      dc_assign_activate=0x0330, dc_cycle_ns=2_000_000, dc_shift_ns=500)
+    master = _run_pysoem_module(export(cfg, "pysoem"), drives)
+    assert master.dc_configured
+    assert master.slaves[0].dc is None
+    assert master.slaves[1].dc == (0x03, 2_000_000, 500, None)  # the latch bits 0x30 are not pysoem's
+
+
+def test_pysoem_module_dc_without_cycle_or_unsupported_activation():
+    from ecattool.sim import Drive
+
+    no_cycle = SlaveConfig(StartupList([]), name="ros2 drive", position=0, dc_assign_activate=0x0300)
+    code = export(no_cycle, "pysoem")
+    with pytest.raises(RuntimeError, match="give the SYNC0 cycle"):
+        _run_pysoem_module(code, [Drive.from_profile("hdt")])
+    master = _run_pysoem_module(code, [Drive.from_profile("hdt")], sync0_cycle_ns=1_000_000)
+    assert master.slaves[0].dc == (0x03, 1_000_000, 0, None)
+    odd = SlaveConfig(StartupList([]), name="odd", position=0, dc_assign_activate=0x0100)
+    with pytest.raises(RuntimeError, match="AssignActivate 0x0100"):
+        _run_pysoem_module(export(odd, "pysoem"), [Drive.from_profile("hdt")])
+    off = _run_pysoem_module(export(SlaveConfig(StartupList([]), position=0), "pysoem"), [Drive.from_profile("hdt")])
+    assert not off.dc_configured and off.slaves[0].dc is None
+
 # --- ros2 ----------------------------------------------------------------------------------------------
 
 ROS2 = ["ros2_beckhoff_el3104.yaml", "ros2_beckhoff_el5101.yaml", "ros2_elmo_gold.yaml",

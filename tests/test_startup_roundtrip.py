@@ -116,3 +116,30 @@ def test_line_parsers_answer_near_miss_text_with_input_errors(fmt, text):
         import_bytes((prefix + text).encode(), "near", fmt)
     except InputError:
         pass
+
+
+def test_sync_managers_survive_json_and_eni():
+    """A project's ENI carries the sync managers' StartAddress/ControlByte and the mailbox Send/Recv. JSON (documented
+    as lossless for SlaveConfig) dropped the sync managers and the ENI reader ignored them, so project -> json -> eni
+    and eni -> eni wrote an ENI without them (and PDOs lost their sync manager)."""
+    from ecattool import esi, pdo
+    from tests.conftest import corpus_path
+
+    device = esi.load_device(corpus_path("esi", "copley_XE2_4.60.xml"))
+    mapping = pdo.Mapping.from_text(rx="0x1600=0x6040:00/16,0x607A:00/32,0x6060:00/8,gap/8",
+                                    tx="0x1A00=0x6041:00/16,0x6064:00/32,0x60F4:00/32", device=device)
+    cfg = SlaveConfig.from_device(device, pdo.program(device, mapping), mapping=mapping, position=0,
+                                  dc_opmode="DcSync", dc_cycle_ns=1_000_000)
+    eni = export(cfg, "eni")
+    assert "<StartAddress>4608</StartAddress>" in eni and "<Send>" in eni
+    (via_json,) = import_bytes(export(cfg, "json").encode(), "x.json")
+    def fields(sms):
+        return [{k: v for k, v in s.as_dict().items() if k != "location"} for s in sms]
+
+    assert fields(via_json.sync_managers) == fields(cfg.sync_managers)
+    assert export(via_json, "eni") == eni
+    (via_eni,) = import_bytes(eni.encode(), "x.xml", "eni")
+    assert export(via_eni, "eni") == eni
+    assert [(p.index, p.sm) for p in via_eni.rx_pdos + via_eni.tx_pdos] == [(0x1600, 2), (0x1A00, 3)]
+    assert [(s.number, s.kind, s.start_address) for s in via_eni.sync_managers] == [
+        (0, "MBoxOut", 0x1000), (1, "MBoxIn", 0x1100), (2, "Outputs", 0x1200), (3, "Inputs", 0x1800)]

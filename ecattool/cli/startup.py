@@ -57,7 +57,8 @@ Examples:
   ecattool startup export --from drive.json --format twincat
   ecattool startup export --from ecmciPOSXXXX.cmd --format igh -o ipos.c
   ecattool startup export --from test_eni.xml --format pysoem -o startup_pysoem.py
-  ecattool startup export --project samples/technosoft_ipos/project.yaml --format eni -o x.xml""")
+  ecattool startup export --project samples/technosoft_ipos/project.yaml --format eni -o x.xml
+  ecattool startup export --project machine.yaml --drive y_axis --format ros2 -o y_axis.yaml""")
 @click.option("--from", "source", type=InputFile(allow_dash=True),
               help="Startup configuration to read (ecattool JSON or any importable format, detected from "
                    "content; '-' = stdin).")
@@ -66,11 +67,16 @@ Examples:
                    "(refused when the project has lint errors).")
 @click.option("--from-format", type=click.Choice(_READ_FORMATS), help="Format of --from (default: detect).")
 @click.option("--format", "fmt", required=True, type=click.Choice(_FORMAT_NAMES[:-1]), help="Format to write.")
+@click.option("--drive", "drives", multiple=True,
+              help="Only this drive of the project (or slave of --from): name or bus position; repeatable. "
+                   "TwinCAT and ros2 files hold one slave.")
 @output_option()
-def export_cmd(source: str | None, project: str | None, from_format: str | None, fmt: str,
+def export_cmd(source: str | None, project: str | None, from_format: str | None, fmt: str, drives: tuple[str, ...],
                output: str | None) -> None:
     """Write the startup list of FILE (--from) or of a project (--project) in a master's format (stdout
     unless -o)."""
+    from ecattool.startup import select_slaves
+
     if (source is None) == (project is None):
         raise click.UsageError("give exactly one of --from FILE or --project PROJECT")
     if project is not None:
@@ -79,10 +85,10 @@ def export_cmd(source: str | None, project: str | None, from_format: str | None,
         from ecattool.project.export import slave_configs
         from ecattool.project.loader import project_inputs
 
-        _write(slave_configs(project), fmt, output, tuple(project_inputs([project])))
+        _write(select_slaves(slave_configs(project), drives), fmt, output, tuple(project_inputs([project])))
         return
     assert source is not None
-    _write(_read(source, from_format), fmt, output, (source,))
+    _write(select_slaves(_read(source, from_format), drives), fmt, output, (source,))
 
 
 @startup.command("convert", epilog="""\b

@@ -8,6 +8,7 @@ from enum import Enum
 from typing import Any
 
 from ecattool.errors import Location
+from ecattool.od.standard import CIA402_NAMES
 from ecattool.od.types import DataType, Kind
 from ecattool.record import FrozenRecord, Record, set_field
 
@@ -264,8 +265,9 @@ class ObjectDictionary:
     def find(self, name: str) -> tuple[int, int] | None:
         """Find an object or entry by name: ``controlword``, ``Modes of operation``, ``1C12 …``.
 
-        A VAR object's name gives (index, 0); ``object name/entry name`` or ``object.entry`` addresses a
-        sub-entry. Returns None when nothing matches.
+        The device's own names first; then the CiA 402-2 name of a standard VAR object the device has (a
+        vendor may call 6040h "Axis A Control word"). A VAR object's name gives (index, 0); ``object
+        name/entry name`` or ``object.entry`` addresses a sub-entry. Returns None when nothing matches.
         """
         if self._names is None:
             names: dict[str, tuple[int, int]] = {}
@@ -282,7 +284,13 @@ class ObjectDictionary:
         if "/" in n:
             a, _, b = n.partition("/")
             return self._names.get(normalize_name(a) + "/" + normalize_name(b))
-        return self._names.get(normalize_name(n))
+        key = normalize_name(n)
+        found = self._names.get(key)
+        if found is None and key in CIA402_NAMES:  # the standard name of an object the ESI names otherwise
+            std = self._objects.get(CIA402_NAMES[key])
+            if std is not None and (std.object_code is ObjectCode.VAR or len(std.entries) == 1):
+                found = (std.index, min(std.entries) if std.entries else 0)
+        return found
 
     def __contains__(self, index: object) -> bool:
         return index in self._objects

@@ -33,5 +33,33 @@ def standard_type(index: int, subindex: int, bit_len: int) -> str | None:
     return name
 
 
+def standard_bits(index: int, subindex: int) -> int | None:
+    """The CiA-402 bit size of ``index:subindex`` (8 for the count of an ARRAY/RECORD), None if not standard."""
+    name = CIA402_TYPES.get(index)
+    if name is None:
+        return None
+    return 8 if subindex == 0 and index in _ARRAYS else _BITS[name]
+
+
 #: the ARRAY/RECORD objects of the table (their sub-index 0 is a count, not of the element type)
 _ARRAYS = frozenset({0x607B, 0x607D, 0x6099, 0x60C1, 0x60FE})
+
+
+#: CiA 402-2 names of the standard VAR objects, for lookups by name where a vendor ESI names them its own way
+#: (Copley "Axis A Control word", Ingenia "Position set-point", Synapticon "Op Mode"); normalised as
+#: ``od.model.normalize_name`` does (lower case, letters and digits only)
+CIA402_NAMES: dict[str, int] = {
+    "errorcode": 0x603F, "controlword": 0x6040, "statusword": 0x6041, "quickstopoptioncode": 0x605A,
+    "shutdownoptioncode": 0x605B, "disableoperationoptioncode": 0x605C, "haltoptioncode": 0x605D,
+    "faultreactionoptioncode": 0x605E, "modesofoperation": 0x6060, "modesofoperationdisplay": 0x6061,
+    "positiondemandvalue": 0x6062, "positionactualinternalvalue": 0x6063, "positionactualvalue": 0x6064,
+    "followingerrorwindow": 0x6065, "followingerrortimeout": 0x6066, "positionwindow": 0x6067,
+    "positionwindowtime": 0x6068, "velocitydemandvalue": 0x606B, "velocityactualvalue": 0x606C,
+    "targettorque": 0x6071, "maxtorque": 0x6072, "torquedemand": 0x6074, "torqueactualvalue": 0x6077,
+    "targetposition": 0x607A, "homeoffset": 0x607C, "polarity": 0x607E, "maxprofilevelocity": 0x607F,
+    "maxmotorspeed": 0x6080, "profilevelocity": 0x6081, "profileacceleration": 0x6083,
+    "profiledeceleration": 0x6084, "quickstopdeceleration": 0x6085, "motionprofiletype": 0x6086,
+    "homingmethod": 0x6098, "homingacceleration": 0x609A, "touchprobefunction": 0x60B8,
+    "touchprobestatus": 0x60B9, "followingerroractualvalue": 0x60F4, "digitalinputs": 0x60FD,
+    "targetvelocity": 0x60FF, "supporteddrivemodes": 0x6502,
+}

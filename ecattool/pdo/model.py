@@ -30,6 +30,7 @@ from typing import Any
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device, Direction, Pdo, PdoEntry
 from ecattool.od.numbers import parse_int
+from ecattool.od.standard import standard_bits
 
 #: where mapping objects live (CiA-301): RxPDO mapping 0x1600-0x17FF, TxPDO mapping 0x1A00-0x1BFF
 RX_RANGE = range(0x1600, 0x1800)
@@ -270,6 +271,16 @@ def _from_dictionary(device: Device | None, index: int, sub: int) -> tuple[int |
     return None, "", ""
 
 
+def _unknown_length(index: int, sub: int, device: Device | None, text: str) -> str:
+    """Why ``text`` has no bit length, and the length to write: the CiA-402 one for a standard object."""
+    example = f"0x{index:04X}:{sub:02X}/{standard_bits(index, sub) or 16}"
+    if device is not None and device.dictionary.entry(index, sub) is None:
+        what = "object" if index not in device.dictionary else "sub-index"
+        return (f"{text!r}: no such {what} in the dictionary of {device.type_name or 'the device'}, so its bit length "
+                f"is unknown; write it as {example} to check the mapping")
+    return f"{text!r}: the bit length is unknown, write it as {example}"
+
+
 def parse_entry(text: str | int, device: Device | None = None, location: Location | None = None) -> PdoEntry:
     """Parse one entry (see the module docstring). Unknown objects parse (the checker reports them);
     a name that the device dictionary does not know, or an address without length for an unknown object,
@@ -323,7 +334,7 @@ def _with_bits(index: int, sub: int, bits: int | None, device: Device | None, lo
     size, name, type_name = _from_dictionary(device, index, sub)
     if bits is None:
         if size is None or size == 0:
-            raise InputError(f"{text!r}: the bit length is unknown, write it as 0x{index:04X}:{sub:02X}/16", location)
+            raise InputError(_unknown_length(index, sub, device, text), location)
         bits = size
     if bits > 255:
         raise InputError(f"{text!r}: {bits} bits do not fit a mapping entry (at most 255)", location)

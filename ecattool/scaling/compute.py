@@ -395,7 +395,9 @@ def _generic(b: _Builder, ctx: _Ctx, od: Any, device: Any = None) -> None:
         # as 1 (Inovance SV660N: 6091h only): the ratio of a missing object goes into one it has, else the
         # drive would move by the gear ratio alone
         carrier = next((i for i in (0x6091, 0x608F, 0x6092) if have[i]), None)
-        if carrier is None:
+        if carrier is None and ctx.pf == 1:
+            pass  # the user's position unit is the drive's increment: nothing to set
+        elif carrier is None:
             source = str(getattr(device, "source", "") or "")
             raise InputError("the device has none of the scaling objects that set user units (608Fh, 6091h, 6092h, "
                              f"6093h): its positions stay in its own units, and 1 {u[0].text} = {_fmt(ctx.pf)} "
@@ -414,6 +416,15 @@ def _generic(b: _Builder, ctx: _Ctx, od: Any, device: Any = None) -> None:
             meanings[carrier] = f"{_fmt(ctx.pf)} increments per {u[0].text} with {lacks} (not in the drive: taken as 1)"
             b.g.notes.append(f"0x{carrier:04X} carries the ratio of {lacks}: the drive has no such object, and takes "
                              "it as 1")
+    if od is not None:
+        # without 6096h/6097h the drive takes velocities in position units per second and accelerations in
+        # velocity units per second: another unit would be off by the factor nobody writes (rpm on an Inovance)
+        for index, factor, unit, natural in ((0x6096, ctx.pf / ctx.cps(1), u[1], f"{u[0].text}/s"),
+                                             (0x6097, ctx.cps(1) / ctx.cps(2), u[2], f"{u[1].text}/s")):
+            absent = od.get(index) is None and (index != 0x6096 or od.get(0x6094) is None)
+            if absent and factor != 1:
+                raise InputError(f"the device has no {index:04X}h: it takes {unit.text} as {natural}, which is not "
+                                 f"the same unit (write {natural}, or use a drive with {index:04X}h)", b.loc)
     b.pair(0x608F, "Position encoder resolution", ("Encoder increments", "Motor revolutions"), enc, meanings[0x608F])
     b.pair(0x6091, "Gear ratio", ("Motor revolutions", "Shaft revolutions"), gear, meanings[0x6091])
     b.pair(0x6092, "Feed constant", ("Feed", "Shaft revolutions"), feed, meanings[0x6092])

@@ -38,7 +38,8 @@ def _ratio(read: Reader, index: int, default: Fraction = Fraction(1)) -> Fractio
 
 
 class Units:
-    """Generic CiA-402 (and Control Techniques): increments per user unit = 608Fh × 6091h / 6092h."""
+    """Generic CiA-402 (and Control Techniques): increments per user unit = 608Fh × 6091h / 6092h; velocities
+    and accelerations through 6096h and 6097h where the drive has them."""
 
     #: physical meaning of one internal velocity unit, in increments per second
     family = "generic"
@@ -57,10 +58,13 @@ class Units:
         return enc * gear / feed if feed else enc * gear
 
     def velocity_factor(self) -> Fraction:
-        return self.position_factor()
+        """Position units per second per velocity unit: 6096h is velocity units per (position unit/s),
+        1 where the drive has no 6096h (Control Techniques, Inovance)."""
+        return self.position_factor() / _ratio(self.read, 0x6096)
 
     def acceleration_factor(self) -> Fraction:
-        return self.velocity_factor()
+        """6097h is acceleration units per (velocity unit/s), 1 where the drive has none."""
+        return self.velocity_factor() / _ratio(self.read, 0x6097)
 
     # --- conversions --------------------------------------------------------------------------
     def position_to_internal(self, user: int | Fraction) -> Fraction:

@@ -6,10 +6,10 @@
 <PS>,CoE,0x1C12:00,0x00 (0),clear sm pdos
 """
 
-from ecattool.startup.api import as_configs, detect_format, export, import_bytes, import_file
+from ecattool.startup.api import as_configs, detect_format, export, import_bytes, import_file, select_slaves
 from ecattool.startup.config import SlaveConfig, SoeCommand
 from ecattool.startup.formats import FORMATS, Format
 from ecattool.startup.model import TRANSITIONS, StartupCommand, StartupList
 
 __all__ = ["FORMATS", "Format", "SlaveConfig", "SoeCommand", "StartupCommand", "StartupList", "TRANSITIONS",
-           "as_configs", "detect_format", "export", "import_bytes", "import_file"]
+           "as_configs", "detect_format", "export", "import_bytes", "import_file", "select_slaves"]

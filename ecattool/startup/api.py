@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from ecattool.errors import InputError, Location
+from ecattool.errors import InputError, Location, SelectionError
 from ecattool.startup.config import SlaveConfig
 from ecattool.startup.formats import FORMATS, Format
 from ecattool.startup.model import StartupList
@@ -94,3 +94,23 @@ def import_file(path: str | Path, fmt: str | None = None) -> list[SlaveConfig]:
     from ecattool.fileio import read_bytes
 
     return import_bytes(read_bytes(path), str(path), fmt)
+
+
+def select_slaves(configs: Sequence[SlaveConfig], selectors: Sequence[str]) -> list[SlaveConfig]:
+    """The slaves ``selectors`` name, in bus order: a slave (project drive) name, else a bus position.
+
+    For the formats that hold one slave (TwinCAT lines, ros2): pick a drive of a project or a slave of an ENI.
+    No selectors: every slave. A selector that matches nothing raises :class:`SelectionError` listing them."""
+    if not selectors:
+        return list(configs)
+    chosen: list[SlaveConfig] = []
+    for sel in selectors:
+        found = [c for c in configs if c.name == sel] or [
+            c for i, c in enumerate(configs)
+            if sel.strip().isdigit() and (c.position if c.position is not None else i) == int(sel)]
+        if not found:
+            known = ", ".join(f"{c.name or '(no name)'} at {c.position if c.position is not None else i}"
+                              for i, c in enumerate(configs)) or "none"
+            raise SelectionError(f"no slave named or at position {sel!r} (slaves: {known})")
+        chosen += [c for c in found if all(c is not x for x in chosen)]
+    return [c for c in configs if any(c is x for x in chosen)]

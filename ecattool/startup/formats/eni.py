@@ -18,7 +18,7 @@ from typing import Any
 from lxml import etree
 
 from ecattool.errors import InputError, Location
-from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
+from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry, SyncManager
 from ecattool.findings import Severity
 from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig, SoeCommand
@@ -277,6 +277,11 @@ def _read_process_data(pd: Any, cfg: SlaveConfig, source: str) -> None:
         target = cfg.pdos(direction)
         if sm is None:
             continue
+        start = _int(sm, "StartAddress", source)
+        if start:  # what the writer needs to write the sync manager again
+            cfg.sync_managers.append(SyncManager(number, direction.sm_kind, start,
+                                                 control_byte=_int(sm, "ControlByte", source, 0) or 0,
+                                                 location=_loc(source, sm)))
         for ref in sm.findall("Pdo"):
             idx = parse_int((ref.text or "").strip(), _loc(source, ref), "Pdo")
             assigned = defined[direction].get(idx)
@@ -284,6 +289,7 @@ def _read_process_data(pd: Any, cfg: SlaveConfig, source: str) -> None:
                 cfg.note("startup.eni.pdo", f"Sm{number} assigns PDO 0x{idx:04X} that ProcessData does not define",
                          _loc(source, ref))
                 assigned = Pdo(direction, idx)
+            assigned.sm = number
             target.append(assigned)
 
 
@@ -310,10 +316,17 @@ def _read_slave(slave: Any, source: str, i: int) -> SlaveConfig:
         _read_process_data(pd, cfg, source)
     mb = slave.find("Mailbox")
     if mb is not None:
+        for number, (kind, tag) in enumerate((("MBoxOut", "Send"), ("MBoxIn", "Recv"))):
+            box = mb.find(tag)
+            start = None if box is None else _int(box, "Start", source)
+            if box is not None and start:
+                cfg.sync_managers.append(SyncManager(number, kind, start, default_size=_int(box, "Length", source),
+                                                     location=_loc(source, box)))
         for child in mb.findall("CoE"):
             _coe_initcmds(child, cfg, source)
         for child in mb.findall("SoE"):
             _soe_initcmds(child, cfg, source)
+    cfg.sync_managers.sort(key=lambda m: m.number)
     for ic in slave.findall("InitCmds/InitCmd"):
         if _int(ic, "Ado", source) == DC_ACTIVATION_REGISTER and "PS" in [t.text for t in ic.findall("Transition")]:
             raw = _text(ic, "Data")

@@ -10,7 +10,7 @@ import json
 from typing import Any
 
 from ecattool.errors import InputError, Location
-from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
+from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry, SyncManager
 from ecattool.startup.config import SlaveConfig, SoeCommand
 from ecattool.startup.formats._common import as_list, check_transition, decode_text, parse_hex
 from ecattool.startup.model import StartupCommand, StartupList
@@ -66,6 +66,19 @@ def _soe(s: SoeCommand) -> dict[str, Any]:
             "timeout_ms": s.timeout_ms, "fixed": s.fixed}
 
 
+def _sm(s: SyncManager) -> dict[str, Any]:
+    d: dict[str, Any] = {"number": s.number, "kind": s.kind, "start_address": s.start_address,
+                         "control_byte": s.control_byte, "enable": s.enable}
+    for key in ("default_size", "min_size", "max_size"):
+        if getattr(s, key) is not None:
+            d[key] = getattr(s, key)
+    if s.virtual:
+        d["virtual"] = True
+    if s.op_only:
+        d["op_only"] = True
+    return d
+
+
 def slave_to_json(c: SlaveConfig) -> dict[str, Any]:
     d: dict[str, Any] = {"name": c.name, "position": c.position}
     if c.identity is not None:
@@ -80,6 +93,8 @@ def slave_to_json(c: SlaveConfig) -> dict[str, Any]:
         d["rx_pdos"] = [_pdo(p) for p in c.rx_pdos]
     if c.tx_pdos:
         d["tx_pdos"] = [_pdo(p) for p in c.tx_pdos]
+    if c.sync_managers:
+        d["sync_managers"] = [_sm(s) for s in c.sync_managers]
     if c.soe_commands:
         d["soe_commands"] = [_soe(s) for s in c.soe_commands]
     if c.channel_info:
@@ -179,6 +194,14 @@ def _read_slave(s: Any, doc: _Doc, i: int) -> SlaveConfig:
                                             name=str(e.get("name", "")), data_type=str(e.get("data_type", "")),
                                             location=eloc))
             cfg.pdos(direction).append(pdo)
+    for j, m in enumerate(as_list(s.get("sync_managers"), doc.loc(*base, "sync_managers"), "sync_managers")):
+        mloc = doc.loc(*base, "sync_managers", j)
+        _obj(m, mloc, "sync manager")
+        sizes = {k: None if m.get(k) is None else _int(m[k], mloc, k) for k in ("default_size", "min_size", "max_size")}
+        cfg.sync_managers.append(SyncManager(
+            _int(_need(m, "number", mloc), mloc, "number"), str(m.get("kind", "")), _opt(m, "start_address", 0, mloc),
+            control_byte=_opt(m, "control_byte", 0, mloc), enable=bool(m.get("enable", True)),
+            virtual=bool(m.get("virtual", False)), op_only=bool(m.get("op_only", False)), location=mloc, **sizes))
     for j, x in enumerate(as_list(s.get("soe_commands"), doc.loc(*base, "soe_commands"), "soe_commands")):
         loc = doc.loc(*base, "soe_commands", j)
         cfg.soe_commands.append(SoeCommand(

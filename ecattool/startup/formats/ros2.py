@@ -109,7 +109,7 @@ def export(configs: list[SlaveConfig]) -> str:
     import yaml
 
     if len(configs) != 1:
-        raise EncodeError(f"an ethercat_driver_ros2 slave file describes one slave; got {len(configs)}")
+        raise EncodeError(f"an ethercat_driver_ros2 slave file describes one slave; got {len(configs)} (export them one by one: --drive)")
     c = configs[0]
     title = f": {one_line(c.name)}" if c.name else ""
     lines = [f"# ethercat_driver_ros2 slave configuration written by ecattool{title}"]

@@ -48,7 +48,7 @@ def format_line(cmd: StartupCommand) -> str:
 
 def export(configs: list[SlaveConfig]) -> str:
     if len(configs) != 1:
-        raise EncodeError(f"a TwinCAT startup list holds one slave; got {len(configs)} (export them one by one)")
+        raise EncodeError(f"a TwinCAT startup list holds one slave; got {len(configs)} (export them one by one: --drive)")
     c = configs[0]
     lines = [format_line(cmd) for cmd in c.commands]
     for s in c.soe_commands:
