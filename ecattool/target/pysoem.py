@@ -176,7 +176,9 @@ class PysoemSlave:
         if code != int(self._mod.OP_STATE):
             return int(self._slave.state_check(code, STATE_TIMEOUT_US))
         reached = 0
-        for _ in range(math.ceil(STATE_TIMEOUT_US / 1e6 / self._master.cycle_s)):  # each one paced: >= 2 s
+        # as many paced cycles as STATE_TIMEOUT_US holds (>= 2 s); each state check may add up to OP_POLL_US, so
+        # a drive that never reaches OP is given up after 2 s + cycles x OP_POLL_US at the most (~22 s at 1 ms)
+        for _ in range(math.ceil(STATE_TIMEOUT_US / 1e6 / self._master.cycle_s)):
             self._master.cycle()
             reached = int(self._slave.state_check(code, OP_POLL_US))
             if reached & 0x0F == code:
