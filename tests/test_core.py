@@ -146,3 +146,13 @@ def test_write_atomic_respects_umask_and_replaces(tmp_path):
 def test_write_atomic_into_missing_directory_is_an_input_error(tmp_path):
     with pytest.raises(InputError, match="cannot write file"):
         write_atomic(tmp_path / "nope" / "o.bin", b"x")
+
+
+def test_the_suite_collects_from_any_directory(tmp_path):
+    """The tests import their helpers as `tests.…`: started from elsewhere (a CI runner's own directory, the bare
+    `pytest` script), the repository root must still be importable (pyproject: pythonpath)."""
+    from tests.conftest import ROOT
+
+    out = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:xdist",
+                          str(ROOT / "tests" / "test_startup_device.py")], cwd=tmp_path, capture_output=True, text=True)
+    assert out.returncode == 0 and "error" not in out.stdout.lower(), out.stdout[-2000:]
