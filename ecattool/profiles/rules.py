@@ -8,6 +8,12 @@ rules of a device's family (by vendor id / product) or rules synthesised from it
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
+
+
+def interpolation_period_ns(base: int, exponent: int) -> Fraction:
+    """The interpolation period 60C2h in ns: sub-index 1 x 10^(sub-index 2) s."""
+    return Fraction(base) * Fraction(10) ** (exponent + 9)
 
 
 @dataclass(frozen=True, slots=True)
@@ -78,3 +84,10 @@ class FamilyRules:
     factor_group: str = ""
     #: device type (1000h) the family documents, for cross-checks; None = unknown
     device_type: int | None = None
+
+    def accepts_ip_period(self, ns: Fraction | int) -> bool:
+        """Whether the drive takes this interpolation period (60C2h); True where the family has no rule."""
+        if not self.ip_periods_ns and not self.ip_period_step_ns:
+            return True
+        step = self.ip_period_step_ns
+        return ns in self.ip_periods_ns or bool(step and ns > 0 and ns % step == 0)

@@ -193,12 +193,11 @@ def check_interpolation_period(lp: LoadedProject, i: int, rd: ResolvedDrive) -> 
     """60C2h is sub1 x 10^sub2 s; a family that accepts only some periods (Control Techniques: 250 us, 500 us,
     k x 1 ms) refuses each write that leaves another, so the order of the two writes matters: follow the
     startup list from the device defaults."""
-    from fractions import Fraction
+    from ecattool.profiles.rules import interpolation_period_ns
 
-    fixed = tuple(getattr(rd.rules, "ip_periods_ns", ()) or ())
-    step = getattr(rd.rules, "ip_period_step_ns", None)
+    rules = rd.rules
     assert rd.device is not None
-    if not fixed and not step:
+    if rules is None or (not rules.ip_periods_ns and not rules.ip_period_step_ns):
         return
     state: dict[int, int] = {}
     for sub in (1, 2):
@@ -210,10 +209,11 @@ def check_interpolation_period(lp: LoadedProject, i: int, rd: ResolvedDrive) -> 
         if cmd.index != 0x60C2 or cmd.subindex not in (1, 2) or cmd.complete_access:
             continue
         state[cmd.subindex] = int.from_bytes(cmd.data, "little", signed=cmd.subindex == 2)
-        ns = Fraction(state[1]) * Fraction(10) ** (state[2] + 9)
-        if ns in fixed or (step and ns > 0 and ns % step == 0):
+        ns = interpolation_period_ns(state[1], state[2])
+        if rules.accepts_ip_period(ns):
             continue
-        allowed = ", ".join(f"{p // 1000} us" for p in fixed) + (f", k x {step // 1000} us" if step else "")
+        step = rules.ip_period_step_ns
+        allowed = ", ".join(f"{p // 1000} us" for p in rules.ip_periods_ns) + (f", k x {step // 1000} us" if step else "")
         rd.error("PRJ043", f"after this write 60C2h = {state[1]} x 10^{state[2]} s = {float(ns) / 1000:g} us, which "
                            f"{rd.device.type_name} refuses (it accepts {allowed}); write sub-index 2 first where "
                            "the unit changes (e.g. 60C2:02 = -3, then 60C2:01 = 1 for 1 ms)",
@@ -221,10 +221,10 @@ def check_interpolation_period(lp: LoadedProject, i: int, rd: ResolvedDrive) -> 
         return
     # the guide expects the interpolation cycle to equal the sync interval (Control Techniques 8.1); a 1 ms
     # SYNC0 with the 250 us default period interpolates each set-point as if it came four times as often
-    period = Fraction(state[1]) * Fraction(10) ** (state[2] + 9)
+    period = interpolation_period_ns(state[1], state[2])
     dc = rd.drive.dc
     cycle = dc.cycle_ns if dc is not None and dc_assign_activate(rd) else None
-    needs = tuple(getattr(rd.rules, "dc_required_modes", ()) or ())
+    needs = rules.dc_required_modes
     if cycle and period != cycle and any(mode in needs for mode, _ in _modes_run(lp, i, rd)):
         hint = (f"60C2:02 = -3, then 60C2:01 = {cycle // 1_000_000}" if cycle % 1_000_000 == 0
                 else "a period equal to the cycle")

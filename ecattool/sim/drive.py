@@ -19,7 +19,7 @@ from ecattool.esi.model import Device, Direction, Identity, PdoEntry
 from ecattool.od import abort as A
 from ecattool.od.model import MAILBOX_STATES, EcState, Entry, ObjectCode
 from ecattool.od.types import Kind, lookup
-from ecattool.profiles.rules import FamilyRules
+from ecattool.profiles.rules import FamilyRules, interpolation_period_ns
 from ecattool.sim import eeprom as ee
 from ecattool.sim import halt_homing as hh
 from ecattool.sim.cia402 import CSP, HOMING, PP, Cia402, Homing, State
@@ -378,7 +378,7 @@ class Drive:
         if hasattr(self, "_store"):
             base, exp = self._read_int(0x60C2, 1), self._read_int(0x60C2, 2)
             if base and exp is not None and -9 <= exp <= 2:
-                return Fraction(base) * Fraction(10) ** exp
+                return interpolation_period_ns(base, exp) / 10**9
         return Fraction(1, 1000)
 
     # ------------------------------------------------------------------------------------------
@@ -989,17 +989,16 @@ class Drive:
         return check
 
     def _check_interpolation_period(self, sub: int, data: bytes, value: int | None) -> bool:
-        """Control Techniques 7.4.3: the period sub1 x 10^sub2 s must be 250 us, 500 us or k x 1 ms; any other
-        value is refused (code not stated: 0609 0030h). Checked on each write, with the other sub-index as
-        stored."""
+        """The family's interpolation periods (``FamilyRules.accepts_ip_period``; Control Techniques 7.4.3:
+        250 us, 500 us or k x 1 ms); any other value is refused (code not stated: 0609 0030h). Checked on each
+        write, with the other sub-index as stored."""
         if sub not in (1, 2):
             return True
         base = (value or 0) if sub == 1 else (self._read_int(0x60C2, 1) or 0)
         exp = (value or 0) if sub == 2 else (self._read_int(0x60C2, 2) or 0)
         if not -9 <= exp <= 2:
             return True  # the entry's own range check answers
-        ns = Fraction(base) * Fraction(10) ** (exp + 9)
-        if ns not in (250_000, 500_000) and not (ns > 0 and ns % 1_000_000 == 0):
+        if not self.rules.accepts_ip_period(interpolation_period_ns(base, exp)):
             raise _abort(0x60C2, sub, A.INVALID_VALUE)
         return True
 
@@ -1179,10 +1178,11 @@ class Drive:
             self._after_write[0x607C] = lambda sub, value: self._refresh_inputs()  # 6064h = sensor + 607Ch
         if self.family == "hdt":
             self._handlers_down[0x6046] = self._check_min_max
+        if self.rules.ip_periods_ns or self.rules.ip_period_step_ns:
+            self._handlers_down[0x60C2] = self._check_interpolation_period
         if self.family == "controltechniques":
             self._handlers_down[0x604B] = self._nonzero(0x604B)
             self._handlers_down[0x604C] = self._nonzero(0x604C)
-            self._handlers_down[0x60C2] = self._check_interpolation_period
             self._after_write[0x6046] = self._copy_min_max_amount
         if self.family != "technosoft-ipos":
             return
