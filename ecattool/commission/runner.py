@@ -299,12 +299,12 @@ def _preselect_mode(io: ProcessIo, rd: ResolvedDrive) -> None:
     """Write the move's mode before the enable sequence: Control Techniques refuses a change of 6060h in
     OPERATION ENABLED (7.3.6, SDO abort 0800 0022h), so a mode chosen only for the move must be set first.
     A drive that shows the mode only once enabled (Technosoft) is checked by the move itself."""
-    from ecattool.project.steps import move_mode
+    from ecattool.project.steps import MOVE_MODE_CODES, move_mode
 
     mode = move_mode(rd)
     if mode is None or not io.has(0x6060):
         return
-    io.write(0x6060, 0, 1 if mode == "pp" else 8)
+    io.write(0x6060, 0, MOVE_MODE_CODES[mode])
     io.cycle()
 
 
@@ -317,7 +317,7 @@ def _hold_position(io: ProcessIo) -> None:
 
 
 def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
-    from ecattool.project.steps import move_mode
+    from ecattool.project.steps import MOVE_MODE_CODES, move_mode
 
     move = rd.drive.move
     mode = move_mode(rd)
@@ -328,7 +328,7 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     p0 = io.read(0x6064, 0)
     i0 = io.read(0x6063, 0) if internal else None
     target = int(p0 + dist)
-    _set_mode(io, 1 if mode == "pp" else 8)
+    _set_mode(io, MOVE_MODE_CODES[mode])
     if mode == "pp":
         io.write(0x607A, 0, target)
         io.write(0x6040, 0, cia402.ENABLE_OPERATION | cia402.NEW_SETPOINT)

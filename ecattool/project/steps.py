@@ -130,6 +130,10 @@ def check_sw_identification(rd: ResolvedDrive, file: str, loc: Location | None) 
                    "its setup table may not fit this drive", loc)
 
 
+#: modes of operation (6060h) of the commissioning move's modes
+MOVE_MODE_CODES = {"pp": 1, "csp": 8}
+
+
 def move_mode(rd: ResolvedDrive) -> str | None:
     """The mode of the commissioning move (``pp`` or ``csp``; ``pp`` becomes ``csp`` on a drive that has CSP
     but no PP, as commission runs it), None without a move."""
@@ -149,7 +153,7 @@ def _modes_run(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[tuple[int, 
                                   for c in rd.startup if (c.index, c.subindex) == (0x6060, 0) and len(c.data) == 1]
     mode = move_mode(rd) if rd.drive.enable else None
     if mode is not None:
-        out.append((1 if mode == "pp" else 8, lp.drive_location(i, "move")))
+        out.append((MOVE_MODE_CODES[mode], lp.drive_location(i, "move")))
     return out
 
 
@@ -166,7 +170,7 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         rd.error("PRJ018", f"the {mode} move needs {', '.join(lacking)}, which {rd.device.type_name} does not have "
                            "(leave out move:)", loc)
         return
-    code = 1 if mode == "pp" else 8
+    code = MOVE_MODE_CODES[mode]
     modes = tuple(getattr(rd.rules, "supported_modes", ()) or ())
     if modes and code not in modes:
         rd.error("PRJ017", f"the {mode} move needs mode {code}, which {rd.device.type_name} does not support "
