@@ -321,12 +321,12 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     """What one user unit is in counts, and what velocity and acceleration units mean, from object values."""
     from fractions import Fraction
 
-    _html_prerequisites(html, as_json)
-
     from ecattool.errors import InputError
     from ecattool.od.numbers import parse_address, parse_int
     from ecattool.scaling import explain
     from ecattool.scaling.units import time_seconds
+
+    _html_prerequisites(html, as_json)
 
     values = _values_from_file(source) if source else {}
     if target:

@@ -233,7 +233,7 @@ def _check_identity(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) 
 
 
 def _send(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, trace: DriveTrace) -> None:
-    assert rd.device is not None
+    """Write one startup command and read it back, recording both in the trace."""
     sent = trace.startup_write(cmd)
     try:
         _send_verified(slave, rd, cmd, sent)
