@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from ecattool.errors import EcatToolError, SdoAbort, SdoTimeout
-from ecattool.od import abort as A
+from ecattool import abort as A
 from ecattool.sim.mailbox.header import HEADER_SIZE, MailboxError, MailboxRefused
 
 if TYPE_CHECKING:

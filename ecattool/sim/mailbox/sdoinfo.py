@@ -12,7 +12,7 @@ import struct
 from typing import TYPE_CHECKING
 
 from ecattool.errors import EcatToolError
-from ecattool.od import abort as A
+from ecattool import abort as A
 from ecattool.od.model import EcState, Entry, ObjectCode, OdObject
 from ecattool.od.types import Kind
 from ecattool.sim.mailbox.coe import SERVICE_SDO_INFO, coe_header
