@@ -173,11 +173,12 @@ def test_the_documented_layers_match_the_code() -> None:
     row_of = {name: i for i, names in enumerate(rows) for name in names}
     graph = import_graph()
     missing = sorted({room(m) for m in graph} - set(row_of))
-    assert not missing, f"docs/architecture.md's layer diagram has no row for {missing}"
+    assert not missing, f"docs/architecture.md's layer diagram (## Layers) has no row for {missing}: add one"
     upward = sorted(f"{m} imports {t}" for m, ts in graph.items() for t in ts
                     if room(m) != room(t) and row_of[room(t)] <= row_of[room(m)])
-    assert not upward, "imports that do not go down the documented layers (docs/architecture.md, Layers):\n" + \
-        "\n".join(upward)
+    assert not upward, ("imports that do not go down the documented layers: move the importing package's row above "
+                        "the imported one in docs/architecture.md (## Layers) where that is the design, or import "
+                        "downward:\n" + "\n".join(upward))
 
 
 def test_the_walk_sees_lazy_and_type_only_imports() -> None:
