@@ -350,3 +350,115 @@ def test_ecmc_reports_every_line_it_does_not_use():
              b'ecmcConfigOrDie "Cfg.EcSomethingNew(0,1)"\nepicsThreadSleep(0.1)\n'
     (cfg,) = import_bytes(script, "x.cmd")
     assert [(n.location.line, n.rule) for n in cfg.notes] == [(2, "startup.ecmc.unused"), (3, "startup.ecmc.unused")]
+
+
+# --- 5. pysoem: PDO tables programmed, SAFE-OP only after DC ------------------------------------------------
+
+def _technosoft_from_ros2() -> SlaveConfig:
+    """The Technosoft sample through a ros2 file: its PDO mapping is now only the rpdo/tpdo tables."""
+    (cfg,) = _sample_configs("technosoft_ipos")
+    (back,) = import_bytes(export(cfg, "ros2").encode(), "ipos.yaml")
+    assert back.has_pdo_info and not any(is_pdo_programming(c.index) for c in back.commands)
+    back.position = 0
+    return back
+
+
+def _run_module(code: str, drives, **kwargs):
+    from tests.fake_pysoem import make_module
+
+    namespace: dict = {}
+    exec(compile(code, "startup_pysoem.py", "exec"), namespace)
+    master = make_module(drives).Master()
+    master.open("eth0")
+    master.config_init()
+    namespace["install"](master)
+    master.config_map()
+    states_at_dc = []
+    for s in master.slaves:
+        original = s.dc_sync
+        s.dc_sync = lambda *a, _s=s, _o=original: (states_at_dc.append(_s.state & 0x0F), _o(*a))[1]
+    namespace["to_safe_op"](master, **kwargs)
+    return master, states_at_dc
+
+
+def test_pysoem_programs_a_mapping_given_only_as_tables():
+    from ecattool.sim import Drive
+
+    cfg = _technosoft_from_ros2()
+    drive = Drive.from_profile("technosoft-ipos", product="ipos4808-bx-cat-sto", revision="F515K")
+    master, _ = _run_module(export(cfg, "pysoem"), [drive])
+    slave = master.slaves[0]
+
+    def read(index):
+        n = slave.sdo_read(index, 0)[0]
+        return [int.from_bytes(slave.sdo_read(index, k)[:2 if index < 0x1600 else 4], "little") for k in range(1, n + 1)]
+
+    assert read(0x1C12) == [p.index for p in cfg.rx_pdos] and read(0x1C13) == [p.index for p in cfg.tx_pdos]
+    for p in (*cfg.rx_pdos, *cfg.tx_pdos):
+        assert read(p.index) == [(e.index << 16) | (e.subindex << 8) | e.bit_len for e in p.entries]
+    # the IO map config_map laid out is the tables' size, and the slave reached SAFE-OP
+    assert len(slave.output) * 8 >= sum(p.bit_size for p in cfg.rx_pdos)
+    assert slave.state & 0x0F == 4
+
+
+def test_pysoem_writes_nothing_where_the_slave_already_holds_the_tables():
+    from ecattool.sim import Drive
+
+    cfg = _technosoft_from_ros2()
+    drive = Drive.from_profile("technosoft-ipos", product="ipos4808-bx-cat-sto", revision="F515K")
+    code = export(cfg, "pysoem")
+    _run_module(code, [drive])  # programs the drive
+    writes = []
+    original = drive.sdo_download
+    drive.sdo_download = lambda i, s, d, *a, **k: (writes.append(i), original(i, s, d, *a, **k))[1]
+    from tests.fake_pysoem import make_module
+
+    namespace: dict = {}
+    exec(compile(code, "m.py", "exec"), namespace)
+    master = make_module([drive]).Master()
+    master.open("eth0")
+    master.config_init()
+    namespace["install"](master)
+    master.config_map()
+    assert not [i for i in writes if is_pdo_programming(i)]
+
+
+def test_pysoem_starts_dc_before_safe_op():
+    from ecattool.sim import Drive
+
+    drives = [Drive.from_profile("hdt")]
+    ident = drives[0].identity()
+    cfg = SlaveConfig(StartupList([StartupCommand("PS", 0x6060, 0, b"\x08")]), name="x", position=0,
+                      identity=Identity(ident.vendor_id, ident.product_code), dc_assign_activate=0x0300,
+                      dc_cycle_ns=1_000_000)
+    master, states_at_dc = _run_module(export(cfg, "pysoem"), drives)
+    assert states_at_dc == [2]  # dc_sync while the slave was still in PRE-OP: config_map requested nothing
+    assert master.slaves[0].state & 0x0F == 4 and master.slaves[0].dc == (0x03, 1_000_000, 0, None)
+
+
+def test_pysoem_module_uses_only_names_pysoem_has(monkeypatch):
+    """Every pysoem attribute the generated module touches is in the fake's surface, which
+    tests/test_pysoem_surface.py holds against the real module; with pysoem installed, checked here too."""
+    import sys
+
+    from tests import fake_pysoem
+
+    try:
+        import pysoem
+    except ImportError:
+        pysoem = None
+        monkeypatch.setitem(sys.modules, "pysoem", fake_pysoem.make_module([]))
+    code = export([_technosoft_from_ros2(), _with_reset()], "pysoem")
+    used = set(re.findall(r"(?:slave|master)\.(\w+)", code)) - {"slaves"}
+    fake_master = fake_pysoem.make_module([]).Master()
+    fake_slave_attrs = set(dir(fake_pysoem.CdefSlave)) | {"config_func"}
+    for name in used:
+        assert hasattr(fake_master, name) or name in fake_slave_attrs, name
+    namespace: dict = {}
+    exec(compile(code, "m.py", "exec"), namespace)
+    assert namespace["SAFEOP_STATE"] == fake_pysoem.SAFEOP_STATE
+    if pysoem is None:
+        return
+    assert namespace["SAFEOP_STATE"] == pysoem.SAFEOP_STATE
+    for name in used:
+        assert hasattr(pysoem.Master(), name) or hasattr(pysoem.CdefSlave, name), name

@@ -313,8 +313,9 @@ def _run_pysoem_module(code: str, drives, **dc_kwargs):
     master.open("eth0")
     master.config_init()
     namespace["install"](master)
+    assert master.manual_state_change == 1  # config_map() must not request SAFE-OP before DC runs
     master.config_map()
-    namespace["configure_dc"](master, **dc_kwargs)
+    namespace["to_safe_op"](master, **dc_kwargs)
     return master
 
 
