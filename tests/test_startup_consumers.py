@@ -462,3 +462,33 @@ def test_pysoem_module_uses_only_names_pysoem_has(monkeypatch):
     assert namespace["SAFEOP_STATE"] == pysoem.SAFEOP_STATE
     for name in used:
         assert hasattr(pysoem.Master(), name) or hasattr(pysoem.CdefSlave, name), name
+
+
+# --- 6 (lcec) and issue 14 item 5: lcec and ENI say what they did not use ------------------------------------
+
+def test_lcec_keeps_the_app_period_cycle_and_reports_sync1_watchdog_and_the_rest(tmp_path):
+    configs = import_file(corpus_path("configs", "lcec_generic-complex_ethercat-conf.xml"))
+    el7342 = [c for c in configs if c.extra.get("lcec_type") == "EL7342"]
+    assert [c.dc_cycle_ns for c in el7342] == [1_000_000, 1_000_000]  # sync0Cycle="*1" x appTimePeriod 1 ms
+    assert all(any("<watchdog divider=\"2498\"" in n.message for n in c.notes) for c in el7342)
+    configs = import_file(corpus_path("configs", "lcec_initcmds_ethercat-conf.xml"))
+    ax = next(c for c in configs if c.identity is not None)
+    assert ax.dc_cycle_ns == 250_000 and any(n.rule == "startup.lcec.sync1" for n in ax.notes)
+    conf = tmp_path / "conf.xml"
+    conf.write_text('<masters><master idx="0" appTimePeriod="500000"><slave idx="0" type="generic" vid="2" pid="3">'
+                    '<dcConf assignActivate="300" sync0Cycle="*2"/><modParam name="enableFB2" value="true"/>'
+                    '<idnConfig drive="0" idn="S-0-0015" state="PREOP"><idnDataRaw data="0700"/></idnConfig>'
+                    '</slave></master></masters>')
+    (c,) = import_file(conf)
+    assert c.dc_cycle_ns == 1_000_000
+    assert sorted(n.message.split(" ")[0] for n in c.notes if n.rule == "startup.lcec.unused") == \
+        ["<idnConfig", "<modParam"]
+
+
+def test_eni_reports_every_element_it_does_not_convert():
+    configs = import_file(corpus_path("configs", "eni_kpierczy_test_eni.xml"))
+    notes = [n for c in configs for n in c.notes]
+    text = "\n".join(n.message for n in notes)
+    for part in ("<Physics>", "<BootStrap>", "<PreviousPort>", "<Master>", "<Cyclic>", "<ProcessImage>"):
+        assert part in text, part
+    assert all(any(n.rule == "startup.eni.register" for n in c.notes) for c in configs)
