@@ -492,3 +492,53 @@ def test_eni_reports_every_element_it_does_not_convert():
     for part in ("<Physics>", "<BootStrap>", "<PreviousPort>", "<Master>", "<Cyclic>", "<ProcessImage>"):
         assert part in text, part
     assert all(any(n.rule == "startup.eni.register" for n in c.notes) for c in configs)
+
+
+# --- 10. an ESI that offers only DC: DC in the project and in every export --------------------------------------
+
+def _dc_in_every_export(configs: list[SlaveConfig]) -> None:
+    (c,) = configs
+    assert c.dc_assign_activate == 0x0300 and c.dc_cycle_ns == 1_000_000
+    assert "ecrt_slave_config_dc(sc, 0x0300, 1000000U, 0, 0U, 0);" in export(c, "igh")
+    assert yaml.safe_load(export(c, "ros2"))["assign_activate"] == 0x0300
+    slave = etree.fromstring(export(c, "eni").encode()).find("Config/Slave")
+    assert slave.findtext("DC/CycleTime0") == "1000000"
+    assert re.search(r'Cfg\.EcSlaveConfigDC\(\w+,0x300,1000000,0,0,0\)', export(c, "ecmc"))
+    assert "(True, 1000000, 0)" in export(c, "pysoem")
+    (back,) = import_bytes(export(c, "json").encode(), "x.json")
+    assert (back.dc_assign_activate, back.dc_cycle_ns) == (0x0300, 1_000_000)
+
+
+def test_generic_esi_sample_has_dc_in_every_export():
+    _dc_in_every_export(_sample_configs("generic_esi"))
+
+
+def test_project_new_gives_a_dc_only_esi_dc_and_lint_is_clean(tmp_path, capsys):
+    import shutil
+
+    from ecattool.project.lint import lint_project
+
+    esi = tmp_path / "sv660.xml"
+    shutil.copy(ROOT / "samples" / "generic_esi" / "inovance_SV660_EOE_1Axis_V9.12.xml", esi)
+    out = tmp_path / "machine.yaml"
+    code, _, err = run(capsys, "project", "new", "--esi", "sv660.xml", "--select", "InoSV660N", "-o", str(out))
+    assert code == 0, err
+    text = out.read_text()
+    assert "dc: {opmode: DC, cycle_ns: 1000000}" in text
+    # the same drive with a csp move: DC is there, so no PRJ045; without it, the warning
+    with_move = text.replace("move: {distance: 1}", "move: {distance: 100, mode: csp}")
+    assert "mode: csp" in with_move
+    out.write_text(with_move)
+    assert "PRJ045" not in {f.rule for f in lint_project(out).findings}
+    out.write_text(with_move.replace("    dc: {opmode: DC, cycle_ns: 1000000}\n", ""))
+    assert "PRJ045" in {f.rule for f in lint_project(out).findings}
+
+
+def test_project_new_leaves_dc_to_the_user_where_the_esi_offers_free_run(tmp_path):
+    from ecattool import esi
+    from ecattool.project.skeleton import dc_only_mode
+
+    everest = esi.load_device(str(corpus_path("esi", "ingenia_eve-xcr-e_esi.xml")))  # Synchron (0) and DCSync
+    assert [m.assign_activate for m in everest.dc_opmodes] == [0, 0x0300] and dc_only_mode(everest) is None
+    sv660 = esi.load_device(str(ROOT / "samples" / "generic_esi" / "inovance_SV660_EOE_1Axis_V9.12.xml"))
+    assert dc_only_mode(sv660) == "DC"
