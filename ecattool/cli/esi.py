@@ -35,7 +35,8 @@ def esi() -> None:
     """Read, show and validate ESI (EtherCAT Slave Information) XML files.
 
     Reads EtherCATInfo, EtherCATModule and EtherCATDict files as vendors ship them (UTF-8 or
-    ISO-8859-1, BOM, #x/decimal numbers, many devices and revisions in one file).
+    ISO-8859-1, BOM, #x/decimal numbers, many devices and revisions in one file), and CANopen
+    EDS/DCF files (told apart by content) into the same device model.
     """
 
 
@@ -66,6 +67,7 @@ def device_summary(dev: Any, index: int) -> dict[str, Any]:
 Examples:
   ecattool esi devices samples/esi/etg2001_cia402.xml
   ecattool esi devices beckhoff_EL1xxx.xml --json
+  ecattool esi devices technosoft_iPOS.D.v1.04.eds
   curl -s https://example.com/drive.xml | ecattool esi devices -""")
 @_FILE
 @json_option
@@ -79,7 +81,9 @@ def devices_cmd(file: str, as_json: bool) -> None:
     con = console()
     name = "<stdin>" if file == "-" else file
     title = f"{name}: {len(rows)} device(s), vendor {_hex(doc.vendor_id)} {doc.vendor_name}".rstrip()
-    if doc.root != "EtherCATInfo":
+    if doc.root in ("EDS", "DCF"):
+        title += f" [CANopen {doc.root}]"
+    elif doc.root != "EtherCATInfo":
         title += f" [{doc.root}: {len(doc.modules)} module(s)"
         title += f", {len(doc.dictionary)} object(s)]" if doc.dictionary is not None else "]"
     t = table(title, ["#", "type", "product", "revision", "RxPDO", "TxPDO", "objects", "mailbox", "name"])
