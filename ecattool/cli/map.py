@@ -75,7 +75,7 @@ def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping
         if rx or tx:
             raise click.UsageError("give the mapping either with --rx/--tx or with --mapping, not both")
         from ecattool.fileio import read_bytes
-        from ecattool.project.yamlloc import load_yaml
+        from ecattool.yamlloc import load_yaml
 
         raw = sys.stdin.buffer.read() if mapping_file == "-" else read_bytes(mapping_file)
         source = "<stdin>" if mapping_file == "-" else mapping_file
