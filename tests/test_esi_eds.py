@@ -62,9 +62,9 @@ def test_pdos_derived_from_the_default_mapping_and_cob_id_validity(doc):
     sm2, sm3 = dev.process_sm(Direction.RX), dev.process_sm(Direction.TX)
     assert (sm2.start_address, sm2.default_size, sm2.max_size) == (0x1100, 6, 32)
     assert (sm3.start_address, sm3.default_size, sm3.max_size) == (0x1400, 3, 32)
-    # the built-in family of vendor 0x1A3 gives mailbox and DC
-    assert "CoE" in dev.mailbox.protocols and dev.mailbox.coe.pdo_assign
-    assert [m.name for m in dev.dc_opmodes] == ["FreeRun", "DC"]
+    # CoE with writable assignment and mapping; SYNC (1005h) on CANopen gives the DC SYNC0 op mode
+    assert dev.mailbox.protocols == ["CoE"] and dev.mailbox.coe.pdo_assign and dev.mailbox.coe.pdo_config
+    assert [(m.name, m.assign_activate) for m in dev.dc_opmodes] == [("FreeRun", 0), ("DC", 0x0300)]
 
 
 def _mini(extra: str = "", vendor: str = "0x12345678") -> str:
@@ -135,7 +135,7 @@ DefaultValue=0x1601
     assert (dev.vendor_id, dev.product_code, dev.revision) == (0x12345678, 0x42, 7)
     assert [p.index for p in dev.rx_pdos if p.sm == 2] == [0x1601]
     assert dev.pdo(0x1600).fixed and not dev.pdo(0x1601).fixed  # 1600h sub 0 read-only
-    # no built-in family: CoE only, free run only
+    # no 1005h (SYNC): free run only
     assert dev.mailbox.protocols == ["CoE"] and [m.name for m in dev.dc_opmodes] == ["FreeRun"]
     assert not dev.mailbox.coe.pdo_assign and dev.mailbox.coe.pdo_config  # 1C12h read-only, 1601h writable
 

@@ -13,8 +13,8 @@ lacks compared to an ESI is derived (docs/esi.md, "CANopen EDS and DCF files"):
   it maps at least one object;
 - sync managers: the standard layout of the built-in families (SM0/SM1 mailbox, SM2 outputs, SM3 inputs at the
   usual addresses), SM2/SM3 default size = the assigned PDOs, maximum = 8 bytes (a CAN frame) per mapping object;
-- mailbox and DC: the built-in family's (by the EDS's vendor number) where there is one, else CoE only and
-  free run only.
+- mailbox: CoE (PdoAssign/PdoConfig where the mapping objects are writable); DC op modes: free run, and DC
+  SYNC0 where the EDS has 1005h (the device consumes SYNC on CANopen).
 
 The file is untrusted input: bounded in size, and every malformed line is a one-line :class:`InputError`
 naming the file and line. python-canopen's own complaints and anything it leaves unread become located
@@ -32,6 +32,7 @@ from types import TracebackType
 from typing import Any
 
 from ecattool.errors import InputError, Location
+from ecattool.esi.derive import DC_FREERUN, DC_SYNC0, STANDARD_FMMUS, pdos_from_dictionary, standard_sync_managers
 from ecattool.esi.model import (
     CoeDetails,
     DcOpMode,
@@ -357,19 +358,7 @@ def _assign_valid_pdos(cod: Any, pdos: list[Pdo], direction: Direction, conv: _C
         taken.update(dict.fromkeys(objects, p.index))
 
 
-def _family_facts(vendor_id: int) -> Device | None:
-    """The built-in family device of this vendor (its mailbox and DC op modes), or None."""
-    from ecattool import profiles
-
-    for info in profiles.list_profiles():
-        if info.vendor_id == vendor_id:
-            return profiles.load(info.name)
-    return None
-
-
 def _device(cod: Any, od: ObjectDictionary, lines: _Lines, source: str, conv: _Convert) -> Device:
-    from ecattool.profiles._common import STANDARD_FMMUS, pdos_from_dictionary, standard_sync_managers
-
     info = cod.device_information
     e1018 = {s: od.entry(0x1018, s) for s in (1, 2, 3)}
 
@@ -400,16 +389,11 @@ def _device(cod: Any, od: ObjectDictionary, lines: _Lines, source: str, conv: _C
             _assign_valid_pdos(cod, pdos, direction, conv)
     writable = any(not p.fixed for p in (*rx, *tx))
     assign_writable = all(e is None or e.access.writable() for e in (od.entry(0x1C12, 0), od.entry(0x1C13, 0)))
-    family = _family_facts(identity.vendor_id)
-    if family is not None and family.mailbox is not None:
-        mailbox = Mailbox(protocols=list(family.mailbox.protocols), coe=family.mailbox.coe)
-        dc = list(family.dc_opmodes)
-        group = (family.group_type, family.group_name)
-    else:
-        mailbox = Mailbox(protocols=["CoE"], coe=CoeDetails(pdo_assign=writable and assign_writable,
-                                                             pdo_config=writable, segmented_sdo=True))
-        dc = [DcOpMode("FreeRun", "Free Run (SM-synchronous / no DC)", 0)]
-        group = ("Drive", "Drives") if profile_no == 402 else ("", "")
+    mailbox = Mailbox(protocols=["CoE"], coe=CoeDetails(pdo_assign=writable and assign_writable, pdo_config=writable,
+                                                         segmented_sdo=True))
+    # SYNC consumer (1005h) on CANopen ~ SYNC0-synchronous operation on EtherCAT
+    dc = [DcOpMode(*DC_FREERUN), *([DcOpMode(*DC_SYNC0)] if 0x1005 in od else [])]
+    group = ("Drive", "Drives") if profile_no == 402 else ("", "")
     rx_bytes = (sum(p.bit_size for p in rx if p.sm is not None) + 7) // 8
     tx_bytes = (sum(p.bit_size for p in tx if p.sm is not None) + 7) // 8
     # a CANopen PDO is one CAN frame: at most 8 bytes per mapping object
