@@ -175,3 +175,49 @@ def run_cmd(target: str, script: str, product: str | None, revision: str | None,
         code = f" 0x{failure.code:08X}" if failure.code is not None else ""
         raise TargetError(f"step {failure.step} ({failure.op} {failure.target}) ended with {failure.result}{code}"
                           + (f": {failure.detail}" if failure.detail else ""), Location(script, failure.line))
+
+
+@sim.command("serve", epilog="""\b
+Examples:
+  ecattool sim serve samples/hdt/project.yaml --iface ecat1
+  ecattool sim serve hdt --product tomcat technosoft-ipos --iface ecat1 --json
+  ecattool sim serve drive.xml --device 2 --iface ecat1
+\b
+Run it inside a private network namespace with a veth pair (never on the host's network):
+  unshare -n sh -c 'ip link add ecat0 type veth peer name ecat1 &&
+    ip link set ecat0 up && ip link set ecat1 up &&
+    (ecattool sim serve machine.yaml --iface ecat1 &) && sleep 2 &&
+    ecattool commission machine.yaml --target pysoem:ecat0'""")
+@click.argument("sources", nargs=-1, required=True)
+@click.option("--iface", required=True, help="Network interface to serve on (raw Ethernet, EtherType 0x88A4).")
+@click.option("--product", help="Model of a built-in family named as a SOURCE.")
+@click.option("--revision", help="Firmware revision of a built-in family named as a SOURCE.")
+@click.option("--device", "selector", help="Device selector when a SOURCE is an ESI file with several devices.")
+@click.option("--frames", type=click.IntRange(min=1), default=None,
+              help="Stop after this many frames (default: until SIGINT/SIGTERM).")
+@json_option
+def serve_cmd(sources: tuple[str, ...], iface: str, product: str | None, revision: str | None,
+              selector: str | None, frames: int | None, as_json: bool) -> None:
+    """Serve simulated drives as EtherCAT slaves on a network interface, for a real master (SOEM/pysoem).
+
+    SOURCES, in bus order: a project file (every drive of the project, in its bus order), a built-in profile
+    name, or an ESI file. Each drive sits behind an ESC model whose SII is what 'ecattool sii build' makes. Prints
+    one line when the slaves are ready; stops cleanly on SIGINT/SIGTERM. See docs/virtual-bus.md.
+    """
+    import sys
+
+    from ecattool.sim.bus.serve import load_sources, serve
+
+    served = load_sources(list(sources), product=product, revision=revision, selector=selector)
+
+    def ready() -> None:
+        if as_json:
+            import json
+
+            click.echo(json.dumps({"iface": iface, "slaves": [s.describe() for s in served]}))
+        else:
+            names = ", ".join(f"{i}: {s.name}" for i, s in enumerate(served))
+            click.echo(f"serving {len(served)} slave{'s' if len(served) != 1 else ''} on {iface} ({names})")
+        sys.stdout.flush()
+
+    serve(served, iface, ready, frames)

@@ -451,6 +451,13 @@ class Esc:
     # ------------------------------------------------------------------------------------------
     # the PDI side (the slave application)
     # ------------------------------------------------------------------------------------------
+    def sm_full(self, sm: int) -> bool:
+        """Mailbox SM ``sm`` holds a frame not yet read (by the master for SM1, by the application for SM0)."""
+        return self._sm_full[sm]
+
+    def sm_deactivated(self, sm: int) -> bool:
+        return self._sm_pdi_off[sm]
+
     def pdi_deactivate(self, sm: int, off: bool) -> None:
         """PDI control bit 0 of ``sm``: a deactivated SM refuses the master's accesses to its area."""
         if self._sm_pdi_off[sm] != off:
