@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ecattool.errors import StateChangeError, TargetError
+from ecattool.esi.model import Device
 from ecattool.od.model import EcState
 from ecattool.sim.drive import Drive
 from ecattool.sim.esc import Clock, Esc, EscApplication
@@ -239,6 +240,17 @@ class VirtualSlave(EscApplication):
         if self.drive.state().code != esc.al_state:
             self._sync_state()  # the drive changed state by itself (power loss, communication lost)
         self._push_mailbox()
+
+
+def drive_for_device(device: Device) -> Drive:
+    """The simulated drive of ``device`` (a built-in profile device, or an ESI device, which gets its default
+    modules plugged in and the communication objects its ESI leaves out, as :meth:`Drive.from_esi` does)."""
+    from ecattool.profiles import complete_generic, family_of
+    from ecattool.sim.drive import expand_default_modules
+
+    if family_of(device) == "generic":
+        device = complete_generic(expand_default_modules(device))
+    return Drive.from_device(device)
 
 
 def sii_image(drive: Drive, esi: str | Path | None = None, selector: str | None = None) -> bytes:

@@ -15,7 +15,7 @@ from ecattool.errors import InputError
 from ecattool.esi.model import Device
 from ecattool.sim.bus.engine import Bus
 from ecattool.sim.esc import Clock
-from ecattool.sim.slave import VirtualSlave
+from ecattool.sim.slave import VirtualSlave, drive_for_device
 
 #: each slave's local clock starts this far from the previous one's (the master's DC offsets matter)
 CLOCK_SPREAD_NS = 1_000_000_007
@@ -34,62 +34,33 @@ class Served:
                 "revision": ident.revision}
 
 
-def _slaves_for_devices(devices: list[Device]) -> list[VirtualSlave]:
-    """The simulated drives ``commission --target sim`` uses for ``devices``, each behind an ESC whose SII is
-    what ``ecattool sii build`` makes of the device."""
-    from ecattool.sii.builder import build
-    from ecattool.sim.drive import Drive
-    from ecattool.target.sim import SimTarget
-
-    out = []
-    for device, drive in zip(devices, SimTarget.from_devices(devices).slaves()):
-        assert isinstance(drive, Drive)
-        out.append(VirtualSlave(drive, build(device).to_bytes()))
-    return out
-
-
-def _project(path: Path) -> list[tuple[str, Device]]:
-    from ecattool.project.lint import lint_project
-
-    result = lint_project(path)
-    if result.loaded is None:
-        first = result.findings[0]
-        raise InputError(first.message, first.location)
-    out = []
-    for rd in sorted(result.drives, key=lambda r: r.position):
-        if rd.device is None:
-            why = next((f for f in rd.findings if f.severity.value == "error"), None)
-            raise InputError(f"drive {rd.drive.name!r} cannot be served: its device did not resolve"
-                             + (f": {why.message} [{why.rule}]" if why else ""), why.location if why else None)
-        out.append((rd.drive.name, rd.device))
-    return out
-
-
-def load_sources(sources: list[str], *, product: str | None = None, revision: str | None = None,
-                 selector: str | None = None) -> list[Served]:
-    """The slaves of ``sources`` in bus order: a project file (every drive, in its bus order), a built-in
-    profile name (``product``/``revision`` choose the model), or an ESI file (``selector`` the device)."""
+def device_source(source: str, *, product: str | None = None, revision: str | None = None,
+                  selector: str | None = None) -> tuple[str, Device]:
+    """(name, device) of a built-in profile name (``product``/``revision`` choose the model) or an ESI file
+    (``selector`` the device)."""
     from ecattool import esi, profiles
 
-    named: list[tuple[str, Device]] = []
-    for src in sources:
-        path = Path(src)
-        if path.suffix.lower() in (".yaml", ".yml"):
-            if not path.is_file():
-                raise InputError(f"{src}: no such project file")
-            named += _project(path)
-        elif path.suffix.lower() == ".xml" or path.is_file():
-            device = esi.load_device(path, selector)
-            named.append((device.type_name or path.name, device))
-        else:
-            device = profiles.load(src, product=product, revision=revision)
-            named.append((src if product is None else f"{src} {product}", device))
+    path = Path(source)
+    if path.suffix.lower() == ".xml" or path.is_file():
+        device = esi.load_device(path, selector)
+        return device.type_name or path.name, device
+    device = profiles.load(source, product=product, revision=revision)
+    return (source if product is None else f"{source} {product}"), device
+
+
+def virtual_slaves(named: list[tuple[str, Device]]) -> list[Served]:
+    """One virtual slave per device, in bus order: the drive ``commission --target sim`` would simulate for
+    it, behind an ESC whose SII is what ``ecattool sii build`` makes of the device."""
+    from ecattool.sii.builder import build
+
     if not named:
         raise InputError("nothing to serve: name a project file, a profile or an ESI file")
-    slaves = _slaves_for_devices([d for _, d in named])
-    for i, s in enumerate(slaves):
-        s.esc.clock = Clock(offset_ns=i * CLOCK_SPREAD_NS)
-    return [Served(name, slave) for (name, _), slave in zip(named, slaves)]
+    out = []
+    for i, (name, device) in enumerate(named):
+        slave = VirtualSlave(drive_for_device(device), build(device).to_bytes(),
+                             clock=Clock(offset_ns=i * CLOCK_SPREAD_NS))
+        out.append(Served(name, slave))
+    return out
 
 
 def bus_of(served: list[Served]) -> Bus:
