@@ -88,7 +88,9 @@ def _check_commission(out: dict[str, Any]) -> None:
     runs = out["runs"]
     assert [r["project"] for r in runs] == SAMPLES
     for r in runs:
-        assert r["returncode"] == 0, (r["project"], r["stdout"][-3000:], r["stderr"])
+        failed = [f"{s['name']}: {s['detail']}" for p in json.loads(r["stdout"] or '{"projects": []}')["projects"]
+                  for d in p["drives"] for s in d["steps"] if not s["ok"]]
+        assert r["returncode"] == 0, (r["project"], failed or r["stdout"][-2000:], r["stderr"])
         report = json.loads(r["stdout"])
         assert report["ok"] is True, report
         (project,) = report["projects"]

@@ -193,9 +193,13 @@ class Esc:
 
     def _sync_sm_registers(self) -> None:
         for n in range(self.sm_count):
-            a = R.SM + R.SM_SIZE * n
-            self.mem[a + 5] = self._sm_status(n)
-            self.mem[a + 7] = (self.mem[a + 7] & 0xFE) | (1 if self._sm_pdi_off[n] else 0)
+            self._sync_sm(n)
+
+    def _sync_sm(self, n: int) -> None:
+        """Status (offset 5) and PDI control (offset 7) of SM ``n`` from the SM's state."""
+        a = R.SM + R.SM_SIZE * n
+        self.mem[a + 5] = self._sm_status(n)
+        self.mem[a + 7] = (self.mem[a + 7] & 0xFE) | (1 if self._sm_pdi_off[n] else 0)
 
     def _sm_reset(self, n: int) -> None:
         self._sm_full[n] = False
@@ -253,7 +257,7 @@ class Esc:
             if hi == sm.end and not sm.ecat_writes:
                 if sm.mailbox:
                     self._sm_full[smn] = False
-                    self._sync_sm_registers()
+                    self._sync_sm(smn)
                     self.app.mailbox_read(self, smn)
                 else:
                     self.app.buffer_read(self, smn)
@@ -309,7 +313,7 @@ class Esc:
             buffer = bytes(self.mem[sm.start:sm.end])
             if mailbox:
                 self._sm_full[smn] = True
-                self._sync_sm_registers()
+                self._sync_sm(smn)
                 self.app.mailbox_written(self, smn, buffer)
             else:
                 self._sm_full[smn] = True
@@ -436,6 +440,8 @@ class Esc:
 
     def irq(self) -> int:
         """The bits this slave ORs into a datagram's IRQ field: event requests under the event mask."""
+        if not self.mem[R.ECAT_EVENT_MASK] and not self.mem[R.ECAT_EVENT_MASK + 1]:
+            return 0
         self._sync_events()
         return self.u16(R.ECAT_EVENT_REQUEST) & self.u16(R.ECAT_EVENT_MASK)
 
@@ -473,13 +479,13 @@ class Esc:
             return False
         self.mem[s.start:s.start + min(len(data), s.length)] = data[:s.length]
         self._sm_full[sm] = True
-        self._sync_sm_registers()
+        self._sync_sm(sm)
         return True
 
     def pdi_mailbox_take(self, sm: int) -> None:
         """The application has read write mailbox ``sm``: it is empty for the master again."""
         self._sm_full[sm] = False
-        self._sync_sm_registers()
+        self._sync_sm(sm)
 
     def pdi_repeat_ack(self, sm: int) -> None:
         """Set the repeat acknowledge (PDI control bit 1) equal to the master's repeat request."""
