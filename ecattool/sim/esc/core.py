@@ -287,6 +287,8 @@ class Esc:
             self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = self.system_time().to_bytes(8, "little")
         if addr < R.ECAT_EVENT_REQUEST + 4 and end > R.ECAT_EVENT_REQUEST:
             self._sync_events()
+        if addr < R.DC_SYNC1_CYCLE and end > R.DC_ACTIVATION_STATUS:
+            self._sync_dc_status()
 
     def ecat_write(self, addr: int, data: bytes) -> bool:
         """The master writes ``data`` at ``addr``; False when the ESC refuses (no working counter)."""
@@ -562,6 +564,21 @@ class Esc:
         self.mem[R.DC_SYSTEM_DIFFERENCE:R.DC_SYSTEM_DIFFERENCE + 4] = struct.pack(
             "<I", (min(abs(signed), 0x7FFFFFFF)) | (0x80000000 if signed < 0 else 0))
         self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = local.to_bytes(8, "little")
+
+    def _sync_dc_status(self) -> None:
+        """0x0984 activation status, 0x098E/0x098F SYNC0/1 status and, while SYNC0 runs, 0x0990 = the next
+        SYNC0 pulse (the first one at or after the system time) and 0x0998 the next SYNC1 pulse."""
+        act, cycle, start = self.dc_sync0()
+        running = bool(act & 0x01) and bool(act & 0x02)
+        now = self.system_time()
+        self.mem[R.DC_ACTIVATION_STATUS] = (0x01 if running else 0) | (0x02 if running and act & 0x04 else 0)
+        pulsed = running and now >= start
+        self.mem[R.DC_SYNC0_STATUS] = 0x01 if pulsed else 0
+        self.mem[R.DC_SYNC1_STATUS] = 0x01 if pulsed and act & 0x04 else 0
+        if running and cycle:
+            nxt = start if now <= start else start + -(-(now - start) // cycle) * cycle
+            self.mem[R.DC_START_TIME:R.DC_START_TIME + 8] = nxt.to_bytes(8, "little")
+            self.mem[R.DC_NEXT_SYNC1:R.DC_NEXT_SYNC1 + 8] = nxt.to_bytes(8, "little")
 
     def dc_sync0(self) -> tuple[int, int, int]:
         """(activation 0x0981, SYNC0 cycle ns, start time) as the master wrote them."""
