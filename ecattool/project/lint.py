@@ -14,13 +14,17 @@ from ecattool.project.model import RuleOff
 from ecattool.project.resolve import ResolvedDrive, resolve_device, resolve_parameters
 from ecattool.startup.model import StartupList
 
-_RULE_ID = re.compile(r"^[A-Z]{2,5}\d{3}$")
+#: the forms of rule ids: PRJ012 and PDO011 (catalogued in :func:`rule_descriptions`), esi-pdo-object-missing
+#: (catalogued), scaling.small-pair (notes of the factor-group computation lint runs)
+_RULE_ID = re.compile(r"^(?:[A-Z]{2,5}\d{3}|esi-[a-z0-9-]+|scaling\.[a-z0-9-]+)$")
+#: families whose every rule is in :func:`rule_descriptions`: an id of theirs that is not there is a typo
+_CATALOGUED = re.compile(r"^(?:PRJ|PDO)\d{3}$")
 
 #: project-level rule catalogue (other packages document their own rules)
 PROJECT_RULES: dict[str, str] = {
     "PRJ001": "the project file does not match the project schema",
     "PRJ002": "a file named in the project does not exist",
-    "PRJ003": "a disabled rule id is not a known rule id form",
+    "PRJ003": "a disabled rule id is not a rule lint reports",
     "PRJ004": "a rule is disabled without a reason",
     "PRJ005": "the device of a drive cannot be resolved (ESI error, selector or profile unknown)",
     "PRJ010": "a parameter names an object that does not exist",
@@ -65,10 +69,17 @@ class ProjectResult:
 def _disable(findings: list[Finding], offs: list[RuleOff], lp: LoadedProject, path: tuple[str | int, ...]) -> list[Finding]:
     out: list[Finding] = []
     disabled = set()
+    known = rule_descriptions()
     for k, off in enumerate(offs):
         loc = lp.yaml.locate((*path, k, "rule"))
-        if not _RULE_ID.match(off.rule):
-            out.append(Finding("PRJ003", Severity.WARNING, f"{off.rule!r} is not a rule id (like PDO011)", loc))
+        if off.rule in known:
+            pass
+        elif not _RULE_ID.match(off.rule):
+            out.append(Finding("PRJ003", Severity.WARNING, f"{off.rule!r} is not a rule id (like PDO011, "
+                                                           "esi-pdo-object-missing or scaling.small-pair)", loc))
+        elif _CATALOGUED.match(off.rule):
+            out.append(Finding("PRJ003", Severity.WARNING, f"lint has no rule {off.rule} (the rules: "
+                                                           "docs/project.md, docs/pdo-mapping.md)", loc))
         if not off.reason.strip():
             out.append(Finding("PRJ004", Severity.ERROR, f"rule {off.rule} is disabled without a reason",
                                lp.yaml.locate((*path, k, "reason"))))

@@ -32,7 +32,7 @@ def _scalar(text: str) -> str:
 
 
 def resolve(profile: str | None, product: str | None, esi: str | None, select: str | None,
-            base_dir: Path) -> Device:
+            base_dir: Path, policy: str = "exact") -> Device:
     """The device a skeleton is for (raises the usual located errors for unknown names and files)."""
     if profile is not None:
         from ecattool.project.cache import load_profile_cached
@@ -46,18 +46,19 @@ def resolve(profile: str | None, product: str | None, esi: str | None, select: s
         from ecattool.errors import InputError
 
         raise InputError(f"ESI file {esi!r} not found (looked in {path}; --esi is relative to the project file)")
-    return load_device_cached(path, select, "exact")
+    return load_device_cached(path, select, policy)
 
 
-def esi_flaws(esi: str, select: str | None, base_dir: Path) -> list[Finding]:
+def esi_flaws(esi: str, select: str | None, base_dir: Path, policy: str = "exact") -> list[Finding]:
     """The structural findings of the ESI device, as lint will report them."""
     from ecattool.project.cache import esi_findings_cached
 
-    return esi_findings_cached(base_dir / esi, select, "exact")
+    return esi_findings_cached(base_dir / esi, select, policy)
 
 
 def new_project(device: Device, *, name: str = "axis1", profile: str | None = None, product: str | None = None,
-                esi: str | None = None, select: str | None = None, findings: list[Finding] | None = None) -> str:
+                esi: str | None = None, select: str | None = None, policy: str = "exact",
+                findings: list[Finding] | None = None) -> str:
     """The text of a minimal project with one drive of ``device``, named as the user named it; ``findings``:
     the ESI's structural findings (:func:`esi_flaws`), pointed out where they concern the PDOs in use."""
     from ecattool import profiles
@@ -65,7 +66,8 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
     if profile is not None:
         ref = f"      profile: {_scalar(profile)}\n" + (f"      product: {_scalar(product)}\n" if product else "")
     else:
-        ref = f"      esi: {_scalar(str(esi))}\n" + (f"      select: {json.dumps(select)}\n" if select else "")
+        ref = (f"      esi: {_scalar(str(esi))}\n" + (f"      select: {json.dumps(select)}\n" if select else "")
+               + (f"      policy: {policy}\n" if policy != "exact" else ""))
     body = _motion(device, profiles.rules_for(device)) + _accept_flaws(device, findings or [])
     return ("# ecattool project file (format 1). Docs: docs/project.md\n"
             "ecattool: 1\n"
