@@ -28,7 +28,7 @@ name (controlword, "modes of operation"), a raw value 0x60400010, or gap/8. A PD
 
 
 def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
-    opts = [
+    opts: list[Callable[..., Any]] = [
         click.option("--esi", type=InputFile(), help="ESI file of the device."),
         click.option("--device", "selector", help="Device in the ESI (type, product[:revision]); "
                      "without --esi: a built-in profile name."),
