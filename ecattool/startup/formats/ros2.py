@@ -201,7 +201,7 @@ def load_located(text: str, source: str) -> Any:
     """YAML with locations; errors PyYAML raises before parsing (bad characters) become InputErrors too."""
     import yaml
 
-    from ecattool.project.yamlloc import load_yaml
+    from ecattool.yamlloc import load_yaml
 
     try:
         return load_yaml(text, source)
