@@ -1,6 +1,7 @@
 """Advice ecattool prints is advice it accepts (issue 14, item 5).
 
-* every ``--option`` named anywhere in ecattool's messages and help texts is an option of an ecattool command,
+* every ``--option`` named in ecattool's messages and help texts (every string of its source but the
+  docstrings of modules, classes and functions that are not commands) is an option of an ecattool command,
   and every option an error of a command suggests is an option of *that* command (the ambiguous-selector
   advice ``--policy newest`` is given by each command that takes a device selector, and each accepts it);
 * in a project file the same advice reads ``policy: newest``, and the project file accepts it;
@@ -46,10 +47,24 @@ def _tree(cmd: click.Command) -> list[click.Command]:
 ALL_OPTIONS = set().union(*(_options(c) for c in _tree(cli))) | set(FOREIGN)
 
 
+def _is_command(node: ast.AST) -> bool:
+    """A click command or group callback: its docstring is the help text users read."""
+    decorators = getattr(node, "decorator_list", [])
+    return any(w in ast.unparse(d) for d in decorators for w in (".command", ".group", "click.group"))
+
+
 def _strings(path: Path) -> list[tuple[int, str]]:
-    """Every string constant of a module (f-string parts too), with its line."""
+    """Every string constant of a module (f-string parts too) with its line, except the docstrings of modules,
+    classes and functions other than click commands (those are for programmers, not printed)."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    return [(n.lineno, n.value) for n in ast.walk(tree) if isinstance(n, ast.Constant) and isinstance(n.value, str)]
+    private = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and not _is_command(node):
+            body = node.body
+            if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
+                private.add(id(body[0].value))
+    return [(n.lineno, n.value) for n in ast.walk(tree)
+            if isinstance(n, ast.Constant) and isinstance(n.value, str) and id(n) not in private]
 
 
 def test_every_option_ecattool_mentions_exists() -> None:
