@@ -11,7 +11,7 @@ from __future__ import annotations
 import copy
 
 from ecattool.errors import Location
-from ecattool.esi.model import Device, Direction, Pdo
+from ecattool.esi.model import Device, Direction, InitCmd, Pdo
 from ecattool.od.model import RO, Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import STRING, UDINT, UINT, USINT, DataType
 from ecattool.profiles.rules import FamilyRules
@@ -269,3 +269,26 @@ def generic_rules(device: Device) -> FamilyRules:
 
 
 __all__ = ["MODE_BITS", "SM_TYPE", "complete_generic", "generic_rules", "supported_modes_of"]
+
+
+def init_cmds(device: Device) -> list[InitCmd]:
+    """The device's mailbox init commands and those of each slot's default module, as the device runs.
+
+    Slot k (0-based) moves the index of a module command whose ``Index`` has ``DependOnSlot`` by
+    k × SlotIndexIncrement (Copley's XE2: 6060h of the axis-B module is 6860h); a device command marked
+    ``OverwrittenByModule`` gives way where a module command writes the same object (ETG.2000).
+    """
+    from_modules: list[InitCmd] = []
+    by_ident = {m.ident: m for m in device.modules if m.ident is not None}
+    for k, slot in enumerate(device.slots):
+        module = by_ident.get(slot.default_module) if slot.default_module is not None else None
+        if module is None:
+            continue
+        for c in module.init_cmds:
+            q = copy.deepcopy(c)
+            if c.depend_on_slot:
+                q.index = _shift(c.index, k * (slot.slot_index_increment or 0))
+            from_modules.append(q)
+    own = list(device.mailbox.init_cmds) if device.mailbox is not None else []
+    written = {(c.index, c.subindex) for c in from_modules}
+    return [c for c in own if not (c.overwritten_by_module and (c.index, c.subindex) in written)] + from_modules

@@ -38,6 +38,8 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ018": "the commissioning move needs an object the drive does not have (6060h, 607Ah, 6064h)",
     "PRJ019": "the commissioning PP move runs at a profile velocity or acceleration of 0 (not set, no default)",
     "PRJ020": "two drives share a bus position",
+    "PRJ021": "an init command of the ESI writes an object the ESI's dictionary says the drive refuses",
+    "PRJ022": "an esi_init_cmds entry matches none of the ESI's init commands",
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
     "PRJ032": "a .sw image was made for another Technosoft product or firmware than the drive's",
@@ -101,6 +103,10 @@ def build_drive(lp: LoadedProject, i: int) -> ResolvedDrive:
                           product_code=rd.device.product_code, revision=rd.device.revision)
     params = resolve_parameters(lp, i, rd)
     startup.extend(steps.pdo_commands(lp, i, rd, params))
+    if drive.device.esi is not None:  # the ESI's init commands, as TwinCAT sends them: after the PDO assignment
+        from ecattool.project.initcmds import resolve_esi_init
+
+        startup.extend(resolve_esi_init(lp, i, rd))
     startup.extend(steps.scaling_commands(lp, i, rd))
     startup.extend(params)
     rd.startup = startup

@@ -68,7 +68,8 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
     else:
         ref = (f"      esi: {_scalar(str(esi))}\n" + (f"      select: {json.dumps(select)}\n" if select else "")
                + (f"      policy: {policy}\n" if policy != "exact" else ""))
-    body = _motion(device, profiles.rules_for(device)) + _accept_flaws(device, findings or [])
+    body = ((_esi_init(device) if esi is not None else "") + _motion(device, profiles.rules_for(device))
+            + _accept_flaws(device, findings or []))
     return ("# ecattool project file (format 1). Docs: docs/project.md\n"
             "ecattool: 1\n"
             "name: my-machine\n"
@@ -76,6 +77,29 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
             f"  - name: {_scalar(name)}\n"
             "    device:\n"
             f"{ref}{body}")
+
+
+def _esi_init(device: Device) -> str:
+    """The ESI's init commands as comments (commission sends them; lint checks them), and a commented-out
+    ``esi_init_cmds`` that skips those the ESI's own dictionary says the drive refuses (PRJ021)."""
+    from ecattool.project.initcmds import esi_startup, refusal, skip_hint
+
+    cmds = esi_startup(device)
+    if not cmds:
+        return ""
+    lines = ["    # The ESI's init commands, sent after the PDO assignment and before the parameters (as TwinCAT does):"]
+    for c in cmds:
+        where = f", ESI line {c.source.line}" if c.source is not None and c.source.line else ""
+        value = f"hex:{c.data.hex()}" if c.value is None else c.value
+        lines.append(f"    #   {c.transition} {c.index:04X}:{c.subindex:02X} = {value} ({_comment(c.comment)}{where})")
+    lines.append('    # Change one with esi_init_cmds: [{object: "6060:00", value: 1}], or leave it out with skip: true.')
+    refused = [c for c in cmds if refusal(device, c) is not None]
+    if refused:
+        lines += ["    # The ESI's own dictionary says the drive refuses some of them (PRJ021; `ecattool lint` says why).",
+                  "    # If the drive refuses them too, skip them:",
+                  "    # esi_init_cmds:"]
+        lines += [f"    #   - {skip_hint(c)}" for c in refused]
+    return "\n".join(lines) + "\n"
 
 
 def _accept_flaws(device: Device, findings: list[Finding]) -> str:
