@@ -40,6 +40,7 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ020": "two drives share a bus position",
     "PRJ021": "an init command of the ESI writes an object the ESI's dictionary says the drive refuses",
     "PRJ022": "an esi_init_cmds entry matches none of the ESI's init commands",
+    "PRJ023": "a zero part of the position factor (608Fh, 6091h, 6092h) makes positions impossible to convert",
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
     "PRJ032": "a .sw image was made for another Technosoft product or firmware than the drive's",
@@ -112,6 +113,7 @@ def build_drive(lp: LoadedProject, i: int) -> ResolvedDrive:
     rd.startup = startup
     steps.check_sw(lp, i, rd)
     steps.check_move(lp, i, rd)
+    steps.check_factor_defaults(lp, i, rd)
     steps.check_interpolation_period(lp, i, rd)
     steps.check_dc(lp, i, rd)
     if rd.device.source and not rd.device.source.startswith("profile:"):

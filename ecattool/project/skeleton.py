@@ -161,8 +161,44 @@ def _motion(device: Device, rules: FamilyRules) -> str:
             continue
         if e.default_zero_or_unknown:
             params.append(f'{{object: "{index:04X}:00", value: {value}, comment: {_scalar(comment)}}}')
+    factor, asked = _factor_parts(device, rx, rules)
+    params += factor
     lines = "".join(f"      - {p}\n" for p in params)
-    return (f"    parameters:\n{lines}" if lines else "") + "    move: {distance: 1}\n"
+    return (f"    parameters:\n{lines}" if lines else "") + asked + "    move: {distance: 1}\n"
+
+
+#: the parts of the position factor a skeleton can set: revolution counts, 1 (a pair of 1:1 is the CiA-402
+#: default); the encoder increments (608Fh:01) and the feed (6092h:01) are the machine's, so it asks for them
+_ONE = {(0x608F, 2), (0x6091, 1), (0x6091, 2), (0x6092, 2)}
+
+
+def _factor_parts(device: Device, rx: set[tuple[int, int]], rules: FamilyRules) -> tuple[list[str], str]:
+    """Parameters for the zero parts of the position factor the ESI's defaults leave (lint PRJ023) that the
+    skeleton can set, and a comment asking for those it cannot."""
+    from ecattool.project.steps import zero_factor_parts
+
+    if rules.family not in ("generic", "controltechniques"):
+        return [], ""
+
+    def read(index: int, sub: int) -> int | None:
+        e = device.dictionary.entry(index, sub)
+        if e is None or not e.access.writable() or (index, sub) in rx or not e.default or e.datatype is None:
+            return None
+        return int(e.decode(e.default))
+
+    params, asked = [], ""
+    for index, sub in zero_factor_parts(read):
+        e = device.dictionary.entry(index, sub)
+        assert e is not None
+        line = e.location.line if e.location is not None else None
+        if (index, sub) in _ONE:
+            params.append(f'{{object: "{index:04X}:{sub:02X}", value: 1, comment: '
+                          f'{_scalar(f"{_comment(e.name)}: the ESI leaves 0 (line {line}), the factor would be 0")}}}')
+        else:
+            asked += (f"    # {index:04X}:{sub:02X} ({_comment(e.name)}) is 0 in the ESI (line {line}): the drive cannot convert\n"
+                      f"    # positions. Add your drive's value under parameters:, e.g. {{object: \"{index:04X}:{sub:02X}\", "
+                      "value: 4096}, or a scaling: section.\n")
+    return params, asked
 
 
 def _comment(text: str) -> str:
