@@ -175,3 +175,17 @@ def test_commission_writes_them_in_pre_op_before_the_parameters(drive_projects):
         assert firsts == sorted(firsts)
         params = [(c.index, c.subindex, c.data.hex()) for c in rd.startup if c.source.file == str(path)]
         assert all(writes.index(p) > max(firsts) for p in params)
+
+
+def test_the_pysoem_target_sends_them_too():
+    """The same startup list through the pysoem target (a fake pysoem whose slave is a simulated drive): the
+    generic ESI sample's SV660N gets its ESI's PS 6060h := 8 as the first SDO download."""
+    from tests.project_helpers import sample
+    from tests.test_commission_pysoem import pysoem_on, sim_drives
+
+    path = sample("generic_esi")
+    drives = sim_drives(path)
+    target, _ = pysoem_on(drives)
+    assert commission(path, target=target).ok
+    writes = [(e.data["index"], e.data["subindex"], e.data["data"]) for e in drives[0].events if e.kind == "sdo_download"]
+    assert writes[0] == (0x6060, 0, "08")
