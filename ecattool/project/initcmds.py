@@ -12,9 +12,8 @@ and (PRJ022) an ``esi_init_cmds`` entry that matches none of them.
 
 from __future__ import annotations
 
-from ecattool.errors import InputError
+from ecattool.errors import EcatToolError, InputError
 from ecattool.esi.model import Device
-from ecattool.findings import Severity
 from ecattool.od.model import EcState
 from ecattool.project.loader import LoadedProject
 from ecattool.project.model import Parameter
@@ -42,7 +41,7 @@ def esi_startup(device: Device) -> list[StartupCommand]:
                 and len(cmd.data) == entry.byte_size:
             try:
                 value = entry.decode(cmd.data)
-            except Exception:  # noqa: BLE001 - a value the type cannot show stays hex
+            except (EcatToolError, ValueError):  # a value the type cannot show: the data says it
                 pass
         for t in cmd.transitions:
             out.append(StartupCommand(
@@ -106,7 +105,8 @@ def resolve_esi_init(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[Start
             if o.skip:
                 cmds[k] = None
                 continue
-            p = Parameter(object=f"{index:04X}:{sub:02X}", value=o.value, transition=old.transition,  # type: ignore[arg-type]
+            assert o.value is not None  # the model requires a value where it does not skip
+            p = Parameter(object=f"{index:04X}:{sub:02X}", value=o.value, transition=old.transition,
                           comment=o.comment or old.comment)
             new, findings = encode_parameter(rd.device, p, loc, lp.drive_location(i, "esi_init_cmds", j, "value"),
                                              rd.rules)
