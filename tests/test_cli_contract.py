@@ -139,7 +139,7 @@ TS = ("--profile", "technosoft-ipos")
 #: One or more valid invocations per command that reads or writes files; together they name every file
 #: parameter (checked by test_every_file_parameter_is_swept).
 HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
-    ("commission",): [(PROJECT, "-o", Out("report.json"))],
+    ("commission",): [(PROJECT, "-o", Out("report.json"), "--report", Out("report.html"))],
     ("lint",): [(PROJECT, "-o", Out("lint.txt"))],
     ("esi", "devices"): [(ESI,)],
     ("esi", "show"): [(ESI, "--pdos")],
@@ -155,11 +155,11 @@ HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
                      (*TS, "--product", "ipos4808-bx-cat", "--startup", In("startup", "corpus:configs/ecmc_ecmciPOSXXXX.cmd"))],
     ("project", "new"): [(*TS, "-o", Out("machine.yaml"))],
     ("project", "schema"): [("-o", Out("schema.json")), ("--check", In("schema", "schemas/project.schema.json"))],
-    ("scale", "compute"): [(SPEC, "-o", Out("factors.json")),
+    ("scale", "compute"): [(SPEC, "-o", Out("factors.json"), "--html", Out("scaling.html")),
                            (In("spec", "samples/scaling/rotary_table.yaml"), "--esi", COPLEY, "-o", Out("factors.json"))],
     ("scale", "startup"): [(SPEC, "--format", "json", "-o", Out("startup.json")),
                            (In("spec", "samples/scaling/rotary_table.yaml"), "--esi", COPLEY, "-o", Out("startup.txt"))],
-    ("scale", "explain"): [("--from", In("startup", "gen:factors.csv"))],
+    ("scale", "explain"): [("--from", In("startup", "gen:factors.csv"), "--html", Out("scaling.html"))],
     ("sim", "run"): [("technosoft-ipos", In("script", "gen:steps.yaml"), "-o", Out("transcript.txt")),
                      (In("esi", "corpus:esi/elmo_Elmo_ECAT_00010420_V11.xml"), In("script", "gen:steps.yaml"), "--device", "2")],
     ("sii", "info"): [(SII,)],
