@@ -175,6 +175,7 @@ _ONE = {(0x608F, 2), (0x6091, 1), (0x6091, 2), (0x6092, 2)}
 def _factor_parts(device: Device, rx: set[tuple[int, int]], rules: FamilyRules) -> tuple[list[str], str]:
     """Parameters for the zero parts of the position factor the ESI's defaults leave (lint PRJ023) that the
     skeleton can set, and a comment asking for those it cannot."""
+    from ecattool.errors import EcatToolError
     from ecattool.project.steps import zero_factor_parts
 
     if rules.family not in ("generic", "controltechniques"):
@@ -184,7 +185,10 @@ def _factor_parts(device: Device, rx: set[tuple[int, int]], rules: FamilyRules) 
         e = device.dictionary.entry(index, sub)
         if e is None or not e.access.writable() or (index, sub) in rx or not e.default or e.datatype is None:
             return None
-        return int(e.decode(e.default))
+        try:
+            return int(e.decode(e.default))
+        except (EcatToolError, TypeError, ValueError):
+            return None
 
     params, asked = [], ""
     for index, sub in zero_factor_parts(read):

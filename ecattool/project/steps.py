@@ -133,10 +133,6 @@ def check_sw_identification(rd: ResolvedDrive, file: str, loc: Location | None) 
 
 #: modes of operation (6060h) of the commissioning move's modes
 MOVE_MODE_CODES = {"pp": 1, "csp": 8}
-#: the parts of the CiA-402 position factor 608Fh (encoder increments / motor revolutions) x 6091h (gear:
-#: motor / shaft revolutions) / 6092h (feed / shaft revolutions): a 0 in any makes positions in user units
-#: impossible to convert (lint PRJ023; commission names them when a move fails)
-FACTOR_PARTS = ((0x608F, 1), (0x608F, 2), (0x6091, 1), (0x6091, 2), (0x6092, 1), (0x6092, 2))
 #: what a profile position move runs at: profile velocity and acceleration (lint PRJ019)
 PP_PROFILE = ((0x6081, 0), (0x6083, 0))
 
@@ -204,10 +200,11 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
 
 
 def zero_factor_parts(read: Callable[[int, int], int | None]) -> list[tuple[int, int]]:
-    """The parts of the position factor that make it 0 or undefined: a 0 beside a non-zero partner in 608Fh,
-    6091h or 6092h (``read(index, sub)``: the value, None where unknown). 0:0 reads as not configured (the
-    simulator takes it as 1:1, as a drive's unset pair), so it is not reported (decision "Defaults that break
-    a drive")."""
+    """The parts of the CiA-402 position factor 608Fh (encoder increments / motor revolutions) x 6091h (gear)
+    / 6092h (feed) that make it 0 or undefined: a 0 beside a non-zero partner (``read(index, sub)``: the value,
+    None where unknown). Used by lint (PRJ023), ``project new`` and commission's report of a failed move. 0:0
+    reads as not configured (the simulator takes it as 1:1), so it is not reported (docs/decisions.md, "ESI init
+    commands and defaults that break a drive")."""
     out = []
     for index in (0x608F, 0x6091, 0x6092):
         a, b = read(index, 1), read(index, 2)
