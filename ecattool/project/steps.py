@@ -150,14 +150,17 @@ def move_mode(rd: ResolvedDrive) -> str | None:
 
 
 def _modes_run(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[tuple[int, Any]]:
-    """The modes of operation the drive will run, with where the project sets them: the 6060h parameters
-    and the commissioning move (which commission sets through the PDO or by SDO)."""
+    """The modes of operation the drive will run, with where the project sets them: the last 6060h write of
+    the startup list (a parameter after the ESI's init command wins: the Elmo ESI's PS 6060h := 8 does not
+    make a PP project a CSP one) and the commissioning move (which commission sets through the PDO or by SDO)."""
+    writes = [c for c in rd.startup if (c.index, c.subindex) == (0x6060, 0) and len(c.data) == 1]
     out: list[tuple[int, Any]] = [(int.from_bytes(c.data, "little", signed=True), c.source or lp.drive_location(i))
-                                  for c in rd.startup if (c.index, c.subindex) == (0x6060, 0) and len(c.data) == 1]
+                                  for c in writes[-1:]]
     mode = move_mode(rd) if rd.drive.enable else None
     if mode is not None:
         out.append((MOVE_MODE_CODES[mode], lp.drive_location(i, "move")))
-    return out
+    here = lp.drive_location(i).file  # what the project sets first: a finding points where the user can change it
+    return sorted(out, key=lambda m: getattr(m[1], "file", here) != here)
 
 
 def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
