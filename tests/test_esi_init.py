@@ -23,9 +23,10 @@ from tests.conftest import corpus_path, run
 #: (ESI, selector, device index in the file) of every corpus ESI whose device has CoE init commands
 WITH_INIT = [("elmo_Elmo_ECAT_00010420_V11.xml", "2", 2), ("inovance_SV660_EOE_1Axis_V9.12.xml", None, 0),
              ("beckhoff_AX2xxx.xml", None, 0), ("weidmueller_UR20_FBC.xml", "0", 0)]
-#: drives whose skeleton commissions (AX2000: its dictionary contradicts its init commands, see below)
-DRIVES = [("elmo_Elmo_ECAT_00010420_V11.xml", "2"), ("inovance_SV660_EOE_1Axis_V9.12.xml", None),
-          ("copley_XE2_4.60.xml", None)]
+#: drives whose skeleton commissions with ESI commands left in it (AX2000: its dictionary contradicts its init
+#: commands, see below; the SV660N's one command, 6060h := 8, gives way to the skeleton's PP mode parameter, so
+#: its project is the generic ESI sample, a CSP move)
+DRIVES = [("elmo_Elmo_ECAT_00010420_V11.xml", "2"), ("copley_XE2_4.60.xml", None)]
 
 
 def _expected(name: str, device_no: int) -> list[tuple[str, int, int, bytes, int]]:
@@ -67,13 +68,16 @@ def test_module_init_commands_follow_their_slot(tmp_path):
 
 
 def test_order_pdo_programming_then_esi_then_parameters(tmp_path):
+    """PDO programming, the ESI's commands, the parameters; a parameter for the same object and transition
+    replaces the ESI's command (the project's value, written once)."""
     body = ("    pdo: {rx: [{index: 0x1600}], tx: [{index: 0x1A00}]}\n"
             "    parameters:\n      - {object: \"6060:00\", value: 1}\n")
     (rd,) = lint_project(_project(tmp_path, "elmo_Elmo_ECAT_00010420_V11.xml", "2", body)).drives
     addrs = [(c.index, c.subindex) for c in rd.startup]
-    esi = addrs.index((0x6060, 0))
+    esi = addrs.index((0x60C2, 1))
     assert all(a[0] in (0x1C12, 0x1C13, 0x1600, 0x1A00) for a in addrs[:esi]) and esi > 0
-    assert addrs[esi:] == [(0x6060, 0), (0x60C2, 1), (0x6060, 0)]  # the parameter last: it wins
+    # the parameter writes 6060h in PS too: it replaces the ESI's command (one write, the project's value)
+    assert addrs[esi:] == [(0x60C2, 1), (0x6060, 0)] and rd.startup.commands[-1].data == b"\x01"
 
 
 def test_esi_init_cmds_change_or_skip_one(tmp_path):
@@ -138,7 +142,9 @@ def drive_projects(tmp_path_factory):
         except SystemExit as exc:
             assert not exc.code
         out.append(tmp / "m.yaml")
-    return out
+    from tests.project_helpers import sample
+
+    return [*out, sample("generic_esi")]
 
 
 def _esi_commands(path: Path) -> list[tuple[str, int, int, bytes]]:

@@ -4,8 +4,9 @@ A vendor ESI carries ``Mailbox/CoE/InitCmd`` elements (the device's, and those o
 SDO downloads the configuration tool sends in the transitions they name, e.g. an Inovance SV660N's
 ``PS 6060:00 := 8``. TwinCAT lists them in the slave's startup list after the PDO assignment and before what
 the user adds; ecattool does the same: after the PDO programming, in transition order, before the scaling
-objects and the project's ``parameters:``. The drive's ``esi_init_cmds:`` entries change the value of one or
-skip it (``project new`` lists them). ``ecattool lint`` reports (PRJ021) an ESI init command that the ESI's own
+objects and the project's ``parameters:`` (a parameter writing the same object in the same transition
+replaces the ESI's command). The drive's ``esi_init_cmds:`` entries change the value of one or skip it
+(``project new`` lists them). ``ecattool lint`` reports (PRJ021) an ESI init command that the ESI's own
 dictionary says the drive refuses (an object it lacks, read-only, or data of another size), at the ESI's line,
 and (PRJ022) an ``esi_init_cmds`` entry that matches none of them.
 """
@@ -78,11 +79,15 @@ def skip_hint(cmd: StartupCommand) -> str:
     return f'{{object: "{cmd.index:04X}:{cmd.subindex:02X}", transition: {cmd.transition}, skip: true}}'
 
 
-def resolve_esi_init(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[StartupCommand]:
-    """The ESI's init commands of drive ``i`` as its project changes them (``esi_init_cmds:``), with findings."""
+def resolve_esi_init(lp: LoadedProject, i: int, rd: ResolvedDrive,
+                     params: list[StartupCommand] | None = None) -> list[StartupCommand]:
+    """The ESI's init commands of drive ``i`` as its project changes them (``esi_init_cmds:``), with findings.
+    A command whose object a parameter writes in the same transition gives way to it (``params``: the
+    drive's parameters): the parameter is the project's value, and the drive gets one write, not two."""
     assert rd.device is not None
     cmds: list[StartupCommand | None] = list(esi_startup(rd.device))
     changed: set[int] = set()
+    written = {(c.index, c.subindex, c.transition) for c in params or ()}
     for j, o in enumerate(rd.drive.esi_init_cmds):
         loc = lp.drive_location(i, "esi_init_cmds", j, "object")
         try:
@@ -113,7 +118,9 @@ def resolve_esi_init(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[Start
             rd.findings.extend(findings)
             cmds[k] = new
     for k, c in enumerate(cmds):
-        if c is None or k in changed:
+        if c is not None and k not in changed and (c.index, c.subindex, c.transition) in written:
+            cmds[k] = None
+        if c is None or k in changed or cmds[k] is None:
             continue
         why = refusal(rd.device, c)
         if why is not None:

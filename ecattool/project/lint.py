@@ -108,7 +108,7 @@ def build_drive(lp: LoadedProject, i: int) -> ResolvedDrive:
     if drive.device.esi is not None:  # the ESI's init commands, as TwinCAT sends them: after the PDO assignment
         from ecattool.project.initcmds import resolve_esi_init
 
-        startup.extend(resolve_esi_init(lp, i, rd))
+        startup.extend(resolve_esi_init(lp, i, rd, params))
     startup.extend(steps.scaling_commands(lp, i, rd))
     startup.extend(params)
     rd.startup = startup

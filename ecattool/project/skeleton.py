@@ -68,7 +68,10 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
     else:
         ref = (f"      esi: {_scalar(str(esi))}\n" + (f"      select: {json.dumps(select)}\n" if select else "")
                + (f"      policy: {policy}\n" if policy != "exact" else ""))
-    body = (_dc(device) + (_esi_init(device) if esi is not None else "") + _motion(device, profiles.rules_for(device))
+    motion = _motion(device, profiles.rules_for(device))
+    # the skeleton's parameters are written in PS: an ESI command for the same object gives way to them
+    replaced = {(int(a, 16), int(b, 16)) for a, b in re.findall(r'\{object: "([0-9A-F]{4}):([0-9A-F]{2})"', motion)}
+    body = (_dc(device) + (_esi_init(device, replaced) if esi is not None else "") + motion
             + _accept_flaws(device, findings or []))
     return ("# ecattool project file (format 1). Docs: docs/project.md\n"
             "ecattool: 1\n"
@@ -79,7 +82,7 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
             f"{ref}{body}")
 
 
-def _esi_init(device: Device) -> str:
+def _esi_init(device: Device, replaced: set[tuple[int, int]]) -> str:
     """The ESI's init commands as comments (commission sends them; lint checks them), and a commented-out
     ``esi_init_cmds`` that skips those the ESI's own dictionary says the drive refuses (PRJ021)."""
     from ecattool.project.initcmds import esi_startup, refusal, skip_hint
@@ -91,7 +94,8 @@ def _esi_init(device: Device) -> str:
     for c in cmds:
         where = f", ESI line {c.source.line}" if c.source is not None and c.source.line else ""
         value = f"hex:{c.data.hex()}" if c.value is None else c.value
-        lines.append(f"    #   {c.transition} {c.index:04X}:{c.subindex:02X} = {value} ({_comment(c.comment)}{where})")
+        gone = "; the PS parameter below replaces it" if c.transition == "PS" and (c.index, c.subindex) in replaced else ""
+        lines.append(f"    #   {c.transition} {c.index:04X}:{c.subindex:02X} = {value} ({_comment(c.comment)}{where}{gone})")
     lines.append('    # Change one with esi_init_cmds: [{object: "6060:00", value: 1}], or leave it out with skip: true.')
     refused = [c for c in cmds if refusal(device, c) is not None]
     if refused:
