@@ -6,12 +6,15 @@ dictionary (data types declared, objects with defaults, limits, access and PDO m
 against the ETG.2000 schemas v1.14 and v1.17 and reads back (``ecattool.esi.load``) to the same model, up to
 what ESI cannot say (docs/esi.md, "Writing an ESI"):
 
-- an ARRAY object whose elements differ in type or flags (not an ARRAY in CiA 301's sense) becomes a RECORD;
+- an ARRAY object whose elements differ in type or flags, or whose sub-indices have gaps (``ArrayInfo`` states
+  one element type and one ``Flags`` for sub-indices 1..n), becomes a RECORD;
 - entry comments and units, ``Entry.category`` values other than ``m``/``o``/``c`` (the Control Techniques
   "slow" mark: the family rules carry it by vendor id), per-object source locations and ``Device.extra`` are
-  not written; access ``const`` is written ``ro``; bit offsets inside records are laid out here;
+  not written; access ``const`` is written ``ro``; bit offsets inside records are laid out here; a limit
+  outside the entry's type is not written;
 - a VAR object's entry takes the object's name; a device without ``Physics`` (which the schema requires) is
-  written ``YY``; characters XML cannot hold are dropped from texts.
+  written ``YY``, one without a group in the group ``Devices``; characters XML cannot hold are dropped from
+  texts (a string default holding them is written as ``DefaultData``).
 """
 
 from __future__ import annotations
