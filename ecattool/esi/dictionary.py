@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from ecattool.errors import EcatToolError
-from ecattool.esi.values import Context, fast_number, lc_text, name_step
+from ecattool.esi.values import Context, fast_number, is_english, lc_text, name_step
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import BY_CODE, DataType, Kind, lookup, parse_array_name
@@ -508,7 +508,7 @@ class DictionaryBuilder:
                 if tag == "Name":
                     if not final:
                         lcid = c.get("LcId")
-                        if lcid is not None and lcid.strip() == "1033":
+                        if lcid == "1033" or (lcid is not None and is_english(lcid)):
                             n_opt, final = (c.text or "").strip(), True
                         elif n_opt is None:
                             n_opt = (c.text or "").strip()
