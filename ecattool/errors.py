@@ -7,6 +7,7 @@ with status 1; library users catch :class:`EcatToolError`.
 
 from __future__ import annotations
 
+from ecattool.abort import abort_text, al_status_text
 from ecattool.record import FrozenRecord, set_field
 
 
@@ -76,8 +77,6 @@ class SdoAbort(TargetError):
         self.index = index
         self.subindex = subindex
         self.code = code
-        from ecattool.od.abort import abort_text
-
         text = message or abort_text(code)
         super().__init__(f"SDO abort 0x{code:08X} on 0x{index:04X}:{subindex:02X}: {text}")
 
@@ -98,8 +97,6 @@ class StateChangeError(TargetError):
         self.requested = requested
         self.current = current
         self.al_status = al_status
-        from ecattool.od.abort import al_status_text
-
         text = message or al_status_text(al_status)
         super().__init__(
             f"state change {current} -> {requested} refused with AL status 0x{al_status:04X}: {text}"

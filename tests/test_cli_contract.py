@@ -148,7 +148,7 @@ HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
                        ("--esi", ESI),
                        (*TS, "--product", "ipos4808-bx-cat", "--startup", In("startup", "corpus:configs/ecmc_ecmciPOSXXXX.cmd"))],
     ("map", "layout"): [(*TS, "--mapping", In("mapping", "gen:mapping.yaml"), "-o", Out("layout.json")),
-                        ("--esi", ESI, "-o", Out("layout.json")),
+                        ("--esi", ESI, "-o", Out("layout.json"), "--svg", Out("layout.svg")),
                         (*TS, "--product", "ipos4808-bx-cat", "--startup", In("startup", "corpus:configs/ecmc_ecmciPOSXXXX.cmd"))],
     ("map", "sdo"): [(*TS, "--mapping", In("mapping", "gen:mapping.yaml"), "-o", Out("sdo.json")),
                      ("--esi", ESI, "-o", Out("sdo.json")),
@@ -240,8 +240,12 @@ def argv(inv: tuple[object, ...], gen: Path, out_dir: Path, swap: dict[int, Path
     return args
 
 
+#: parameters naming a file a command writes (besides -o): written atomically and swept like -o
+OUTPUT_PARAMS = {"output", "svg", "report", "html"}
+
+
 def _is_read_path(p: click.Parameter) -> bool:
-    return isinstance(p.type, click.Path) and bool(p.type.file_okay) and p.name != "output"
+    return isinstance(p.type, click.Path) and bool(p.type.file_okay) and p.name not in OUTPUT_PARAMS
 
 
 def params_at(cmd: tuple[str, ...], inv: tuple[object, ...]) -> dict[int, click.Parameter]:
@@ -263,7 +267,7 @@ def test_every_file_parameter_is_swept() -> None:
     """Every file a command reads and every -o appears in some valid invocation, so the matrix covers it."""
     assert set(HAPPY) <= set(LEAVES), set(HAPPY) - set(LEAVES)
     for cmd, command in LEAVES.items():
-        wanted = {p.name for p in command.params if _is_read_path(p) or p.name == "output"}
+        wanted = {p.name for p in command.params if _is_read_path(p) or p.name in OUTPUT_PARAMS}
         covered = {p.name for inv in HAPPY.get(cmd, []) for p in params_at(cmd, inv).values()}
         assert wanted <= covered, f"{_name(cmd)}: no valid invocation gives {sorted(wanted - covered)}"
 

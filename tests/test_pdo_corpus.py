@@ -15,7 +15,7 @@ from ecattool.od.model import EcState
 from ecattool.od.numbers import parse_int
 from ecattool.pdo import Mapping, check, layout, mapping_from_startup, program
 from ecattool.profiles.rules import FamilyRules
-from ecattool.project.yamlloc import load_yaml
+from ecattool.yamlloc import load_yaml
 from ecattool.sim import Drive
 from ecattool.startup.formats import ecmc, ros2
 from tests.conftest import corpus_path

@@ -196,7 +196,7 @@ def test_from_data_errors_point_at_the_value(data: dict, path: tuple, message: s
 
 
 def test_from_yaml_file_with_line_numbers(tmp_path) -> None:
-    from ecattool.project.yamlloc import load_yaml
+    from ecattool.yamlloc import load_yaml
 
     text = "rx:\n  - index: 0x1600\n    entries:\n      - controlword\n      - 6060:00/8\n"
     doc = load_yaml(text, "map.yaml")

@@ -22,7 +22,7 @@ from ecattool import esi, profiles
 from ecattool.errors import SdoAbort, StateChangeError
 from ecattool.esi.model import Device, Direction
 from ecattool.findings import Severity
-from ecattool.od import abort as A
+from ecattool import abort as A
 from ecattool.od.model import EcState
 from ecattool.pdo import Mapping, check, layout, program
 from ecattool.pdo.model import RX_RANGE, TX_RANGE

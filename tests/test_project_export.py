@@ -68,7 +68,7 @@ drives:
   - name: a
     position: 0
     device: {{esi: {root}/generic_esi/inovance_SV660_EOE_1Axis_V9.12.xml, select: InoSV660N}}
-    dc: {{opmode: DC}}
+    dc: {{opmode: DC, cycle_ns: 1000000}}
 """)
     cfgs = slave_configs(p)
     assert [(c.name, c.position) for c in cfgs] == [("a", 0), ("b", 1)]

@@ -136,7 +136,7 @@ def test_random_bytes_never_crash_the_loader(data):
 def test_an_unknown_yaml_tag_is_one_located_line(tmp_path):
     """PyYAML's constructor message repeats the position on a second line; the error stays one line."""
     from ecattool.errors import InputError
-    from ecattool.project.yamlloc import load_yaml
+    from ecattool.yamlloc import load_yaml
 
     with pytest.raises(InputError) as exc:
         load_yaml(b"ecattool: 1\ndrives:\n  - name: !!python/object:os.system a\n", "t.yaml")

@@ -50,8 +50,12 @@ def test_convert_writes_file_and_round_trips(tmp_path, capsys):
     (again,) = import_file(out_file)
     (orig,) = import_file(src)
     assert [(c.index, c.subindex, c.data) for c in again.commands] == [(c.index, c.subindex, c.data) for c in orig.commands]
-    code, _, _ = run(capsys, "startup", "export", "--from", str(out_file), "--format", "igh", "-o", str(tmp_path / "x.c"))
-    assert code == 0 and "ecrt_slave_config_sdo8" in (tmp_path / "x.c").read_text()
+    code, _, _ = run(capsys, "startup", "export", "--from", str(out_file), "--format", "ecmc", "-o", str(tmp_path / "x.cmd"))
+    assert code == 0 and "Cfg.EcAddSdo(" in (tmp_path / "x.cmd").read_text()
+    # the script leaves vendor and product to the device script that includes it: IgH needs them, so it is
+    # refused with a one-line error, and nothing is written
+    code, _, err = run(capsys, "startup", "export", "--from", str(out_file), "--format", "igh", "-o", str(tmp_path / "x.c"))
+    assert code == 1 and "no vendor id/product code" in err and not (tmp_path / "x.c").exists()
 
 
 def test_convert_never_overwrites_its_input(tmp_path, capsys):

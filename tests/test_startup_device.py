@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from ecattool.errors import EncodeError
+
 from ecattool.startup.model import is_pdo_programming
 
 from ecattool import esi, pdo
@@ -22,10 +24,11 @@ def everest():
     return esi.load_device(corpus_path("esi", "ingenia_eve-xcr-e_esi.xml"))
 
 
-def _config(device, complete_access: bool) -> SlaveConfig:
+def _config(device, complete_access: bool, cycle_ns: int | None = None) -> SlaveConfig:
     mapping = pdo.Mapping.from_text(rx=RX, tx=TX, device=device)
     startup = pdo.program(device, mapping, complete_access=complete_access)
-    return SlaveConfig.from_device(device, startup, mapping=mapping, position=1, dc_opmode="DCSync")
+    return SlaveConfig.from_device(device, startup, mapping=mapping, position=1, dc_opmode="DCSync",
+                                   dc_cycle_ns=cycle_ns)
 
 
 def test_from_device_takes_identity_pdos_sync_managers_and_dc(everest):
@@ -52,10 +55,12 @@ def test_unknown_dc_opmode_names_the_choices(everest):
 @pytest.mark.parametrize("complete_access", [False, True])
 def test_programmed_mapping_exports_to_every_format(everest, complete_access, tmp_path):
     cfg = _config(everest, complete_access)
+    with pytest.raises(EncodeError, match="no SYNC0"):  # the ESI's DCSync gives no cycle; ENI never writes 0
+        export(cfg, "eni")
     for name, fmt in FORMATS.items():
         if not fmt.can_export:
             continue
-        text = export(cfg, name)
+        text = export(cfg, name) if name != "eni" else export(_config(everest, complete_access, 1_000_000), name)
         if fmt.can_import:
             back = [c for s in import_bytes(text.encode(), f"x.{name}", name) for c in s.commands]
             # ros2 carries the mapping in rpdo/tpdo (the driver programs it), not as sdo writes

@@ -228,6 +228,7 @@ def test_ecmc_tolerated_reset_write_expects_no_reply():
     from ecattool.startup import export
 
     text = export(c, "ecmc")
-    assert 'ecmcConfig "Cfg.EcAddSdo(${ECMC_EC_SLAVE_NUM},0x2080,0x0,0x1,2)"' in text
+    # a one-shot write: written once when the script runs (EcWriteSdo), not added to the startup list
+    assert 'ecmcConfig "Cfg.EcWriteSdo(${ECMC_EC_SLAVE_NUM},0x2080,0x0,0x1,2)"' in text
     (back,) = import_bytes(text.encode(), "again.cmd")
     assert [x.expect_reply for x in back.commands] == [x.expect_reply for x in c.commands]

@@ -21,6 +21,12 @@ def output_option(required: bool = False, help: str = "Write to FILE (atomically
     return click.option("-o", "--output", "output", type=click.Path(dir_okay=False, allow_dash=True), required=required, help=help)
 
 
+def file_output_option(flag: str, name: str, help: str) -> Callable[..., Any]:
+    """An option naming a file to write besides the main output (``--svg``, ``--report``, ``--html``): written
+    atomically, never over an input, like ``-o``; '-' is stdout."""
+    return click.option(flag, name, type=click.Path(dir_okay=False, allow_dash=True), metavar="FILE", help=help)
+
+
 def _plain(v: Any) -> Any:
     """``dataclasses.asdict`` for JSON, for trees that mix dataclasses and records: both become dicts of their
     fields, nested ones too (a record's ``to_json`` is used only where the encoder meets it, as before)."""

@@ -8,7 +8,8 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.common import (console, file_output_option, json_option, output_option, print_json, table,
+                                 write_output)
 from ecattool.cli.paths import InputFile
 
 _EXAMPLES = """\b
@@ -75,7 +76,7 @@ def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping
         if rx or tx:
             raise click.UsageError("give the mapping either with --rx/--tx or with --mapping, not both")
         from ecattool.fileio import read_bytes
-        from ecattool.project.yamlloc import load_yaml
+        from ecattool.yamlloc import load_yaml
 
         raw = sys.stdin.buffer.read() if mapping_file == "-" else read_bytes(mapping_file)
         source = "<stdin>" if mapping_file == "-" else mapping_file
@@ -172,20 +173,35 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
         raise SystemExit(1)
 
 
-@map_.command(epilog=_EXAMPLES.format(cmd="layout"))
+@map_.command(epilog=_EXAMPLES.format(cmd="layout") + """
+  ecattool map layout --profile technosoft-ipos --rx "0x1600=controlword,0x607A:00/32" --svg layout.svg""")
 @_device_options
 @json_option
 @output_option()
+@file_output_option("--svg", "svg", help="Also draw the process image as an SVG diagram into FILE (one box per "
+                    "entry with object, name and byte.bit; gaps shown). Needs: pip install 'ecattool[report]'.")
 def layout(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
            rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
-           slave: int | None, as_json: bool, output: str | None) -> None:
+           slave: int | None, as_json: bool, output: str | None, svg: str | None) -> None:
     """Show the process image per sync manager: byte.bit offsets, sizes, names and types."""
     from ecattool import pdo
     from ecattool.cli.common import dump_json
 
+    if svg:
+        from ecattool.report import require
+
+        if svg == "-" and (as_json or output == "-"):
+            raise click.UsageError("--svg - and the JSON layout cannot both go to stdout")
+        require("jinja2")  # before any work: a missing extra is one line, not a half-done run
     device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, slave)
     lay = pdo.layout(device, mapping)
     inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
+    if svg:
+        from ecattool.report import process_image_svg
+
+        write_output(svg, process_image_svg(lay, device.type_name), inputs)
+        if not as_json and output is None:
+            return
     if as_json or output not in (None, "-"):
         write_output(output, dump_json(lay.to_json()) + "\n", inputs)
         return

@@ -244,7 +244,7 @@ def _values_from_file(path: str) -> dict[tuple[int, int], int]:
     if isinstance(doc, dict) and "objects" in doc and "factor_set" in doc:
         return {(parse_int(o["index"]), int(o["subindex"])): int(o["value"]) for o in doc["objects"]}
     if doc is None and raw.lstrip()[:1] not in (b"<",):
-        from ecattool.project.yamlloc import load_yaml
+        from ecattool.yamlloc import load_yaml
 
         try:
             y = load_yaml(raw, path)  # bytes: load_yaml decodes (BOM, invalid UTF-8 as an InputError)

@@ -189,7 +189,7 @@ Example:
 @output_option(required=True)
 def fix_crc_cmd(image: str, output: str) -> None:
     """Recompute the checksum (word 7) over bytes 0-13 and write the repaired image."""
-    from ecattool.sii.checks import fix_crc
+    from ecattool.sii.model import fix_crc
 
     img = _load(image)
     old = img.header.checksum & 0xFF

@@ -46,10 +46,43 @@ def _read(path: str, fmt: str | None) -> list[Any]:
     return _read_with_format(path, fmt)[0]
 
 
+def _report_import(configs: list[Any], source: str) -> None:
+    """Every note the import made goes to stderr (what was skipped or reinterpreted); a source that gives
+    nothing to convert is an error, not an empty file and exit 0."""
+    from ecattool.errors import InputError, Location
+    from ecattool.findings import Severity
+
+    notes = [n for c in configs for n in c.notes]
+    for n in notes:
+        click.echo(str(n), err=True)
+    if not any(c.commands or c.has_pdo_info or c.dc_assign_activate or c.soe_commands for c in configs):
+        raise InputError("nothing to convert: no startup command, PDO or DC setting was read"
+                         + (f" ({len(notes)} note(s) above say what was skipped)" if notes else ""),
+                         Location(source))
+    skipped = [n for n in notes if n.severity is not Severity.INFO]
+    if skipped:
+        click.echo(f"{source}: {len(skipped)} part(s) of the source were not converted (warnings above)", err=True)
+
+
+def _with_cycle(configs: list[Any], sync0_cycle: int | None) -> list[Any]:
+    """``--sync0-cycle``: the SYNC0 cycle of slaves that activate DC without giving one (a ros2 file)."""
+    if sync0_cycle is not None:
+        for c in configs:
+            if c.dc_assign_activate and not c.dc_cycle_ns:
+                c.dc_cycle_ns = sync0_cycle
+    return configs
+
+
 def _write(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, ...]) -> None:
     from ecattool.startup import export
 
     write_output(output, export(configs, fmt), inputs)
+
+
+def _sync0_option(f: Any) -> Any:
+    return click.option("--sync0-cycle", type=click.IntRange(min=1), metavar="NS",
+                        help="SYNC0 cycle in ns for slaves that activate DC without giving a cycle (ros2 files); "
+                             "an ENI needs it.")(f)
 
 
 @startup.command("export", epilog="""\b
@@ -70,9 +103,10 @@ Examples:
 @click.option("--drive", "drives", multiple=True,
               help="Only this drive of the project (or slave of --from): name or bus position; repeatable. "
                    "TwinCAT and ros2 files hold one slave.")
+@_sync0_option
 @output_option()
 def export_cmd(source: str | None, project: str | None, from_format: str | None, fmt: str, drives: tuple[str, ...],
-               output: str | None) -> None:
+               sync0_cycle: int | None, output: str | None) -> None:
     """Write the startup list of FILE (--from) or of a project (--project) in a master's format (stdout
     unless -o)."""
     from ecattool.startup import select_slaves
@@ -85,23 +119,33 @@ def export_cmd(source: str | None, project: str | None, from_format: str | None,
         from ecattool.project.export import slave_configs
         from ecattool.project.loader import project_inputs
 
-        _write(select_slaves(slave_configs(project), drives), fmt, output, tuple(project_inputs([project])))
+        _write(_with_cycle(select_slaves(slave_configs(project), drives), sync0_cycle), fmt, output,
+               tuple(project_inputs([project])))
         return
     assert source is not None
-    _write(select_slaves(_read(source, from_format), drives), fmt, output, (source,))
+    configs = select_slaves(_read(source, from_format), drives)
+    _report_import(configs, source)
+    _write(_with_cycle(configs, sync0_cycle), fmt, output, (source,))
 
 
 @startup.command("convert", epilog="""\b
 Examples:
-  ecattool startup convert ros2_elmo_gold.yaml --format eni -o elmo.eni.xml
+  ecattool startup convert ros2_elmo_gold.yaml --format eni --sync0-cycle 1000000 -o elmo.eni.xml
   ecattool startup convert AX5206-AM8032-async.xml --format json -o ax5206.json""")
 @click.argument("input_file", type=InputFile())
 @click.option("--format", "fmt", required=True, type=click.Choice(_FORMAT_NAMES[:-1]), help="Format to write.")
 @click.option("--from-format", type=click.Choice(_READ_FORMATS), help="Format of INPUT_FILE (default: detect).")
+@_sync0_option
 @output_option(required=True)
-def convert_cmd(input_file: str, fmt: str, from_format: str | None, output: str) -> None:
-    """Convert INPUT_FILE into another startup format, written to -o OUT."""
-    _write(_read(input_file, from_format), fmt, output, (input_file,))
+def convert_cmd(input_file: str, fmt: str, from_format: str | None, sync0_cycle: int | None, output: str) -> None:
+    """Convert INPUT_FILE into another startup format, written to -o OUT.
+
+    Every note of the import (what the source holds that was not converted) is printed to stderr; a
+    source with nothing to convert is an error (exit 1).
+    """
+    configs = _read(input_file, from_format)
+    _report_import(configs, input_file)
+    _write(_with_cycle(configs, sync0_cycle), fmt, output, (input_file,))
 
 
 @startup.command("import", epilog="""\b

@@ -1,6 +1,6 @@
 """CoE data types and the object dictionary model (the shared core of ecattool)."""
 
-from ecattool.od.abort import abort_text, al_status_text
+from ecattool.abort import abort_text, al_status_text
 from ecattool.od.model import (
     RO,
     RW,

@@ -14,7 +14,7 @@ from ecattool.errors import EcatToolError, InputError, Location
 from ecattool.fileio import read_bytes
 from ecattool.findings import Finding, Severity
 from ecattool.project.model import Project
-from ecattool.project.yamlloc import LocatedYaml, load_yaml
+from ecattool.yamlloc import LocatedYaml, load_yaml
 
 
 @dataclass(slots=True)

@@ -38,7 +38,7 @@ def spec_from_dict(data: Any, locate: Any = None, source: Location | None = None
 
 def load_spec(path: str | Path, text: str | bytes | None = None) -> Spec:
     """Read a scaling spec YAML file (see docs/scaling.md)."""
-    from ecattool.project.yamlloc import load_yaml
+    from ecattool.yamlloc import load_yaml
 
     src = str(path)
     if text is None:

@@ -11,13 +11,14 @@ from typing import Any
 
 _WHERE = {
     "ecattool.sii.builder": ("assemble", "build"),
-    "ecattool.sii.checks": ("check", "check_against", "check_file", "fix_crc", "set_alias"),
+    "ecattool.sii.checks": ("check", "check_against", "check_file", "set_alias"),
     "ecattool.sii.crc": ("crc8", "preamble_crc"),
     "ecattool.sii.compare": ("Difference", "diff", "flatten"),
-    "ecattool.sii.image": ("load", "parse", "serialize", "write_intel_hex"),
+    "ecattool.sii.image": ("load", "parse", "write_intel_hex"),
     "ecattool.sii.model": ("Category", "CategoryType", "DcCategory", "FmmuCategory", "GeneralCategory",
                            "PdoCategory", "RawCategory", "SiiDcOpMode", "SiiHeader", "SiiImage", "SiiPdo",
-                           "SiiPdoEntry", "SiiSyncManager", "StringsCategory", "SyncMCategory", "category_name"),
+                           "SiiPdoEntry", "SiiSyncManager", "StringsCategory", "SyncMCategory", "category_name",
+                           "fix_crc", "serialize"),
 }
 _MODULE_OF = {name: module for module, names in _WHERE.items() for name in names}
 

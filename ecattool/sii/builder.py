@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device, Pdo, SyncManager
-from ecattool.sii.checks import fix_crc
-from ecattool.sii.image import HEADER_BYTES, category_body, parse, parse_category, strings_content
+from ecattool.sii.image import parse, parse_category
 from ecattool.sii.model import (
+    HEADER_BYTES,
     MAILBOX_PROTOCOLS,
     PDO_FLAGS,
     Category,
@@ -28,6 +28,9 @@ from ecattool.sii.model import (
     SiiPdoEntry,
     SiiSyncManager,
     StringsCategory,
+    category_body,
+    fix_crc,
+    strings_content,
     SyncMCategory,
 )
 

@@ -14,9 +14,10 @@ from typing import TYPE_CHECKING, Any
 from ecattool.errors import InputError, Location
 from ecattool.findings import Finding, Severity
 from ecattool.sii.crc import preamble_crc
-from ecattool.sii.image import HEADER_BYTES, category_body, header_bytes, load
+from ecattool.sii.image import load
 from ecattool.sii.model import (
     FMMU_USAGE,
+    HEADER_BYTES,
     SM_TYPES,
     CategoryType,
     DcCategory,
@@ -24,7 +25,9 @@ from ecattool.sii.model import (
     PdoCategory,
     RawCategory,
     SiiImage,
+    category_body,
     category_name,
+    fix_crc,
 )
 
 if TYPE_CHECKING:
@@ -41,13 +44,6 @@ def category_offsets(image: SiiImage) -> list[int]:
         out.append(pos)
         pos += 4 + len(category_body(c))
     return out
-
-
-def fix_crc(image: SiiImage) -> SiiImage:
-    """Set the checksum (word 7 low byte) to the CRC of bytes 0-13; the high byte is kept."""
-    crc = preamble_crc(header_bytes(image.header))
-    image.header.checksum = (image.header.checksum & 0xFF00) | crc
-    return image
 
 
 def set_alias(image: SiiImage, alias: int) -> SiiImage:

@@ -1,4 +1,4 @@
-"""Reading and writing SII images: binary and Intel HEX in, binary out.
+"""Reading SII images: binary and Intel HEX in (the writer, ``serialize``, is in :mod:`ecattool.sii.model`).
 
 The parser stops at the 0xFFFF end marker or at the end of the data. A category whose declared
 length runs past the data, or a header cut short, is an :class:`~ecattool.errors.InputError` located
@@ -13,6 +13,13 @@ from pathlib import Path
 
 from ecattool.errors import InputError, Location
 from ecattool.sii.model import (
+    DC_LAYOUT,
+    ENTRY_LAYOUT,
+    GENERAL_LAYOUT,
+    HEADER_BYTES,
+    HEADER_LAYOUT,
+    PDO_LAYOUT,
+    SM_LAYOUT,
     Category,
     CategoryType,
     DcCategory,
@@ -30,12 +37,8 @@ from ecattool.sii.model import (
     SyncMCategory,
 )
 
-HEADER_BYTES = 128
 #: Largest image accepted (the largest SII EEPROMs are 64 KiB; the spec allows up to 4 MiBit).
 MAX_IMAGE_BYTES = 4 * 1024 * 1024 // 8 * 2
-
-_HDR = struct.Struct("<8H4I8s8HH66sHH")  # words 0x00-0x3F
-assert _HDR.size == HEADER_BYTES
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -157,44 +160,11 @@ def _parse_strings(body: bytes) -> Category:
     return StringsCategory(strings, _split_pad(pos, body))
 
 
-def strings_content(c: StringsCategory) -> bytes:
-    if len(c.strings) > 255:
-        raise InputError(f"{len(c.strings)} strings; the STRINGS category holds at most 255")
-    out = bytearray([len(c.strings)])
-    for s in c.strings:
-        try:
-            raw = s.encode("latin-1")
-        except UnicodeEncodeError:
-            raise InputError(f"string {s!r} cannot be written in Latin-1") from None
-        if len(raw) > 255:
-            raise InputError(f"string {s[:30]!r}… is {len(raw)} bytes; SII strings hold at most 255")
-        out += bytes([len(raw)]) + raw
-    return bytes(out)
-
-
-_GEN = struct.Struct("<12BhBBHH12s")
-assert _GEN.size == 32
-
-
 def _parse_general(body: bytes) -> Category:
     if len(body) < 32:
         raise ValueError(f"GENERAL body is {len(body)} bytes, 32 expected")
-    v = _GEN.unpack_from(body)
+    v = GENERAL_LAYOUT.unpack_from(body)
     return GeneralCategory(*v, extra=body[32:])  # type: ignore[misc]
-
-
-def _general_content(c: GeneralCategory) -> bytes:
-    return _GEN.pack(c.group_idx, c.image_idx, c.order_idx, c.name_idx, c.physical_layer, c.coe_details,
-                     c.foe_details, c.eoe_details, c.soe_channels, c.ds402_channels, c.sysman_class, c.flags,
-                     c.current_on_ebus, c.group_name_idx, c.reserved_0f, c.physical_port,
-                     c.physical_memory_address, c.reserved_14)
-
-
-_SM = struct.Struct("<HHBBBB")
-_PDO = struct.Struct("<HBBBBH")
-_ENTRY = struct.Struct("<HBBBBH")
-_DC = struct.Struct("<IIIhHhBB4s")
-assert _SM.size == _PDO.size == _ENTRY.size == 8 and _DC.size == 24
 
 
 def _parse_fmmu(body: bytes) -> Category:
@@ -207,7 +177,7 @@ def _parse_fmmu(body: bytes) -> Category:
 
 def _parse_syncm(body: bytes) -> Category:
     n = len(body) // 8
-    sms = [SiiSyncManager(*_SM.unpack_from(body, 8 * i)) for i in range(n)]
+    sms = [SiiSyncManager(*SM_LAYOUT.unpack_from(body, 8 * i)) for i in range(n)]
     return SyncMCategory(sms, body[8 * n:])
 
 
@@ -216,10 +186,10 @@ def _parse_pdos(cat_type: int) -> Callable[[bytes], Category]:
         pos = 0
         pdos = []
         while pos + 8 <= len(body):
-            index, n, sm, dc, name, flags = _PDO.unpack_from(body, pos)
+            index, n, sm, dc, name, flags = PDO_LAYOUT.unpack_from(body, pos)
             if pos + 8 + 8 * n > len(body):
                 raise ValueError(f"PDO 0x{index:04X} declares {n} entries but the category ends first")
-            entries = [SiiPdoEntry(*_ENTRY.unpack_from(body, pos + 8 + 8 * k)) for k in range(n)]
+            entries = [SiiPdoEntry(*ENTRY_LAYOUT.unpack_from(body, pos + 8 + 8 * k)) for k in range(n)]
             pdos.append(SiiPdo(index, sm, dc, name, flags, entries))
             pos += 8 + 8 * n
         return PdoCategory(cat_type, pdos, body[pos:])
@@ -227,20 +197,9 @@ def _parse_pdos(cat_type: int) -> Callable[[bytes], Category]:
     return parse
 
 
-def _pdo_content(c: PdoCategory) -> bytes:
-    out = bytearray()
-    for p in c.pdos:
-        if len(p.entries) > 255:
-            raise InputError(f"PDO 0x{p.index:04X} has {len(p.entries)} entries; SII allows 255")
-        out += _PDO.pack(p.index, len(p.entries), p.sm, p.dc_sync, p.name_idx, p.flags)
-        for e in p.entries:
-            out += _ENTRY.pack(e.index, e.subindex, e.name_idx, e.data_type, e.bit_len, e.flags)
-    return bytes(out)
-
-
 def _parse_dc(body: bytes) -> Category:
     n = len(body) // 24
-    ops = [SiiDcOpMode(*_DC.unpack_from(body, 24 * i)) for i in range(n)]
+    ops = [SiiDcOpMode(*DC_LAYOUT.unpack_from(body, 24 * i)) for i in range(n)]
     return DcCategory(ops, body[24 * n:])
 
 
@@ -266,49 +225,11 @@ def parse_category(cat_type: int, body: bytes) -> Category:
         return RawCategory(cat_type, bytes(body), problem=str(exc))
 
 
-def category_body(c: Category) -> bytes:
-    """The body bytes of a category, padded to a whole number of words."""
-    if isinstance(c, RawCategory):
-        body = c.data
-    elif isinstance(c, StringsCategory):
-        body = strings_content(c) + c.extra
-    elif isinstance(c, GeneralCategory):
-        body = _general_content(c) + c.extra
-    elif isinstance(c, FmmuCategory):
-        body = bytes(c.usages)
-    elif isinstance(c, SyncMCategory):
-        body = b"".join(_SM.pack(s.start, s.length, s.control, s.status, s.enable, s.type)
-                        for s in c.sync_managers) + c.extra
-    elif isinstance(c, PdoCategory):
-        body = _pdo_content(c) + c.extra
-    elif isinstance(c, DcCategory):
-        body = b"".join(_DC.pack(o.cycle_time0, o.shift_time0, o.shift_time1, o.sync1_cycle_factor,
-                                 o.assign_activate, o.sync0_cycle_factor, o.name_idx, o.desc_idx, o.reserved)
-                        for o in c.opmodes) + c.extra
-    else:  # pragma: no cover - the model has no other kinds
-        raise TypeError(type(c).__name__)
-    if len(body) % 2:
-        body += b"\x00"
-    return body
-
-
 # ---------------------------------------------------------------------------------------------------
 # Whole images
 # ---------------------------------------------------------------------------------------------------
 def parse_header(data: bytes) -> SiiHeader:
-    return SiiHeader(*_HDR.unpack_from(data))
-
-
-def header_bytes(h: SiiHeader) -> bytes:
-    try:
-        return _HDR.pack(h.pdi_control, h.pdi_config, h.sync_impulse_len, h.pdi_config2, h.station_alias,
-                         h.reserved_05, h.reserved_06, h.checksum, h.vendor_id, h.product_code, h.revision,
-                         h.serial, h.reserved_10, h.bootstrap_rx_offset, h.bootstrap_rx_size,
-                         h.bootstrap_tx_offset, h.bootstrap_tx_size, h.std_rx_offset, h.std_rx_size,
-                         h.std_tx_offset, h.std_tx_size, h.mailbox_protocols, h.reserved_1d, h.size_word,
-                         h.version)
-    except struct.error as exc:
-        raise InputError(f"SII header field out of range: {exc}") from None
+    return SiiHeader(*HEADER_LAYOUT.unpack_from(data))
 
 
 def parse(data: bytes, source: str | None = None, locate: ByteLocator | None = None) -> SiiImage:
@@ -344,22 +265,6 @@ def parse(data: bytes, source: str | None = None, locate: ByteLocator | None = N
         cats.append(parse_category(cat_type, data[pos + 4:end]))
         pos = end
     return SiiImage(header, cats, end_marker, bytes(data[pos:]), source or "")
-
-
-def serialize(image: SiiImage) -> bytes:
-    out = bytearray(header_bytes(image.header))
-    for c in image.categories:
-        try:
-            body = category_body(c)
-        except struct.error as exc:
-            raise InputError(f"{type(c).__name__} field out of range: {exc}") from None
-        if len(body) // 2 > 0xFFFF:
-            raise InputError(f"category {c.cat_type} is {len(body)} bytes, more than a length word can hold")
-        out += struct.pack("<HH", c.cat_type, len(body) // 2) + body
-    if image.end_marker:
-        out += b"\xff\xff"
-    out += image.tail
-    return bytes(out)
 
 
 def load(path: str | Path, data: bytes | None = None) -> SiiImage:

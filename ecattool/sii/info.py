@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Any
 
 from ecattool.sii.checks import category_offsets
-from ecattool.sii.image import category_body
 from ecattool.sii.model import (
     FMMU_USAGE,
     PDO_FLAGS,
@@ -13,6 +12,7 @@ from ecattool.sii.model import (
     RawCategory,
     SiiImage,
     SiiPdo,
+    category_body,
     category_name,
 )
 

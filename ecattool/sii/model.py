@@ -2,15 +2,19 @@
 
 Every byte of a parsed image has a home in this model (reserved words, padding, bytes after the end
 marker), so ``parse(image.to_bytes()) == image`` and ``parse(data).to_bytes() == data``.
-Serialization lives in :mod:`ecattool.sii.image` beside the parser.
+The writer (:func:`serialize` and the struct layouts of the binary form) lives here beside the model and
+the parser in :mod:`ecattool.sii.image`, so that the model never imports its reader.
 """
 
 from __future__ import annotations
 
+import struct
 from enum import IntEnum
 from typing import ClassVar
 
+from ecattool.errors import InputError
 from ecattool.record import Record
+from ecattool.sii.crc import preamble_crc
 
 
 class CategoryType(IntEnum):
@@ -383,8 +387,6 @@ class SiiImage(Record):
 
     # -- convenience ---------------------------------------------------------------------------
     def to_bytes(self) -> bytes:
-        from ecattool.sii.image import serialize
-
         return serialize(self)
 
     def first(self, cat_cls: type, cat_type: int | None = None) -> Category | None:
@@ -435,7 +437,115 @@ class SiiImage(Record):
 
     @property
     def crc_ok(self) -> bool:
-        from ecattool.sii.crc import preamble_crc
-
         raw = self.to_bytes()
         return len(raw) >= 15 and raw[14] == preamble_crc(raw)
+
+
+# ---------------------------------------------------------------------------------------------------
+# The binary form: struct layouts and the writer (the parser is ecattool.sii.image)
+# ---------------------------------------------------------------------------------------------------
+HEADER_BYTES = 128
+
+HEADER_LAYOUT = struct.Struct("<8H4I8s8HH66sHH")  # words 0x00-0x3F
+assert HEADER_LAYOUT.size == HEADER_BYTES
+GENERAL_LAYOUT = struct.Struct("<12BhBBHH12s")
+assert GENERAL_LAYOUT.size == 32
+SM_LAYOUT = struct.Struct("<HHBBBB")
+PDO_LAYOUT = struct.Struct("<HBBBBH")
+ENTRY_LAYOUT = struct.Struct("<HBBBBH")
+DC_LAYOUT = struct.Struct("<IIIhHhBB4s")
+assert SM_LAYOUT.size == PDO_LAYOUT.size == ENTRY_LAYOUT.size == 8 and DC_LAYOUT.size == 24
+
+
+def header_bytes(h: SiiHeader) -> bytes:
+    try:
+        return HEADER_LAYOUT.pack(h.pdi_control, h.pdi_config, h.sync_impulse_len, h.pdi_config2,
+                                  h.station_alias, h.reserved_05, h.reserved_06, h.checksum, h.vendor_id,
+                                  h.product_code, h.revision, h.serial, h.reserved_10, h.bootstrap_rx_offset,
+                                  h.bootstrap_rx_size, h.bootstrap_tx_offset, h.bootstrap_tx_size, h.std_rx_offset,
+                                  h.std_rx_size, h.std_tx_offset, h.std_tx_size, h.mailbox_protocols,
+                                  h.reserved_1d, h.size_word, h.version)
+    except struct.error as exc:
+        raise InputError(f"SII header field out of range: {exc}") from None
+
+
+def strings_content(c: StringsCategory) -> bytes:
+    if len(c.strings) > 255:
+        raise InputError(f"{len(c.strings)} strings; the STRINGS category holds at most 255")
+    out = bytearray([len(c.strings)])
+    for s in c.strings:
+        try:
+            raw = s.encode("latin-1")
+        except UnicodeEncodeError:
+            raise InputError(f"string {s!r} cannot be written in Latin-1") from None
+        if len(raw) > 255:
+            raise InputError(f"string {s[:30]!r}… is {len(raw)} bytes; SII strings hold at most 255")
+        out += bytes([len(raw)]) + raw
+    return bytes(out)
+
+
+def _general_content(c: GeneralCategory) -> bytes:
+    return GENERAL_LAYOUT.pack(c.group_idx, c.image_idx, c.order_idx, c.name_idx, c.physical_layer,
+                               c.coe_details, c.foe_details, c.eoe_details, c.soe_channels, c.ds402_channels,
+                               c.sysman_class, c.flags, c.current_on_ebus, c.group_name_idx, c.reserved_0f,
+                               c.physical_port, c.physical_memory_address, c.reserved_14)
+
+
+def _pdo_content(c: PdoCategory) -> bytes:
+    out = bytearray()
+    for p in c.pdos:
+        if len(p.entries) > 255:
+            raise InputError(f"PDO 0x{p.index:04X} has {len(p.entries)} entries; SII allows 255")
+        out += PDO_LAYOUT.pack(p.index, len(p.entries), p.sm, p.dc_sync, p.name_idx, p.flags)
+        for e in p.entries:
+            out += ENTRY_LAYOUT.pack(e.index, e.subindex, e.name_idx, e.data_type, e.bit_len, e.flags)
+    return bytes(out)
+
+
+def category_body(c: Category) -> bytes:
+    """The body bytes of a category, padded to a whole number of words."""
+    if isinstance(c, RawCategory):
+        body = c.data
+    elif isinstance(c, StringsCategory):
+        body = strings_content(c) + c.extra
+    elif isinstance(c, GeneralCategory):
+        body = _general_content(c) + c.extra
+    elif isinstance(c, FmmuCategory):
+        body = bytes(c.usages)
+    elif isinstance(c, SyncMCategory):
+        body = b"".join(SM_LAYOUT.pack(s.start, s.length, s.control, s.status, s.enable, s.type)
+                        for s in c.sync_managers) + c.extra
+    elif isinstance(c, PdoCategory):
+        body = _pdo_content(c) + c.extra
+    elif isinstance(c, DcCategory):
+        body = b"".join(DC_LAYOUT.pack(o.cycle_time0, o.shift_time0, o.shift_time1, o.sync1_cycle_factor,
+                                       o.assign_activate, o.sync0_cycle_factor, o.name_idx, o.desc_idx, o.reserved)
+                        for o in c.opmodes) + c.extra
+    else:  # pragma: no cover - the model has no other kinds
+        raise TypeError(type(c).__name__)
+    if len(body) % 2:
+        body += b"\x00"
+    return body
+
+
+def serialize(image: SiiImage) -> bytes:
+    out = bytearray(header_bytes(image.header))
+    for c in image.categories:
+        try:
+            body = category_body(c)
+        except struct.error as exc:
+            raise InputError(f"{type(c).__name__} field out of range: {exc}") from None
+        if len(body) // 2 > 0xFFFF:
+            raise InputError(f"category {c.cat_type} is {len(body)} bytes, more than a length word can hold")
+        out += struct.pack("<HH", c.cat_type, len(body) // 2) + body
+    if image.end_marker:
+        out += b"\xff\xff"
+    out += image.tail
+    return bytes(out)
+
+
+def fix_crc(image: SiiImage) -> SiiImage:
+    """Set the checksum (word 7 low byte) to the CRC of bytes 0-13; the high byte is kept."""
+    crc = preamble_crc(header_bytes(image.header))
+    image.header.checksum = (image.header.checksum & 0xFF00) | crc
+    return image

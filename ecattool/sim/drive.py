@@ -16,7 +16,7 @@ from typing import Any
 
 from ecattool.errors import SdoAbort, SdoTimeout, StateChangeError, TargetError
 from ecattool.esi.model import Device, Direction, Identity, PdoEntry
-from ecattool.od import abort as A
+from ecattool import abort as A
 from ecattool.od.model import MAILBOX_STATES, EcState, Entry, ObjectCode
 from ecattool.od.types import Kind, lookup
 from ecattool.profiles.rules import FamilyRules, interpolation_period_ns

@@ -27,7 +27,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from ecattool.errors import SdoAbort
-from ecattool.od import abort as A
+from ecattool import abort as A
 from ecattool.sim.cia402 import HALT, HOMING, PV, Homing, State
 
 if TYPE_CHECKING:

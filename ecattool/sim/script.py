@@ -82,7 +82,7 @@ class Transcript:
 def load_script(path: str | Path) -> tuple[list[dict[str, Any]], list[Location]]:
     """The steps of a JSON/YAML script file and the location of each step."""
     from ecattool.fileio import read_bytes
-    from ecattool.project.yamlloc import load_yaml
+    from ecattool.yamlloc import load_yaml
 
     doc = load_yaml(read_bytes(path), str(path))
     return parse_steps(doc.data, [doc.locate((i,)) for i in range(len(doc.data or []))], str(path))

@@ -46,6 +46,13 @@ class StartupCommand:
         return f"0x{self.index:04X}:{self.subindex:02X}"
 
     @property
+    def one_shot(self) -> bool:
+        """A write to send once, never as part of a startup list: the drive answers it by resetting (no reply),
+        and masters re-send startup lists at every reconfiguration (a reset in the list would reset the drive
+        each time, and abort the configuration that follows it)."""
+        return not self.expect_reply
+
+    @property
     def int_value(self) -> int:
         """The data as an unsigned little-endian integer (what TwinCAT prints as the value)."""
         return int.from_bytes(self.data, "little") if self.data else 0

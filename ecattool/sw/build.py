@@ -45,7 +45,7 @@ def load_image(path: Path) -> SwImage:
 def build(spec_path: str | Path, read: list[Path] | None = None) -> SwImage:
     """The image a build spec describes; ``read`` (when given) collects the files the spec names."""
     from ecattool.fileio import read_bytes
-    from ecattool.project.yamlloc import load_yaml
+    from ecattool.yamlloc import load_yaml
 
     spec_path = Path(spec_path)
     doc = load_yaml(read_bytes(spec_path, 4 * 1024 * 1024), str(spec_path))

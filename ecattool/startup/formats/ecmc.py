@@ -29,7 +29,14 @@ from ecattool.od.standard import standard_type
 from ecattool.findings import Severity
 from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import decode_text, encode_sized, one_line, parse_hex, unsigned_type
+from ecattool.startup.formats._common import (
+    decode_text,
+    encode_sized,
+    one_line,
+    parse_hex,
+    pdo_sm,
+    unsigned_type,
+)
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "ecmc"
@@ -38,11 +45,23 @@ DESCRIPTION = "ecmc/EPICS startup script (Cfg.EcAddSdo lines; reads EcWriteSdo a
 
 SLAVE_MACRO = "${ECMC_EC_SLAVE_NUM}"
 _CALL = re.compile(r"Cfg\.(Ec\w+)\s*\((.*)\)")
+#: a command given to ecmcConfig without the ``Cfg.`` prefix (ecmccfg writes ``ecmcConfig "EcReadSdo(...)"``)
+_BARE_CALL = re.compile(r'^ecmcConfig(?:OrDie)?\s+"\s*(Ec\w+)\s*\((.*)\)')
+#: iocsh lines with no effect on the slave configuration
+_NO_EFFECT = re.compile(r"^(epicsThreadSleep|ecmcFileExist|iocshLoad\s*\(\s*\$\{?ecmccfg_DIR)\b")
+#: ecmc data type names (``EcAddSdoDT``, ``EcAddEntryDT``) -> CoE type
+ECMC_TYPES = {"B1": "BOOL", "B2": "BIT2", "B3": "BIT3", "B4": "BIT4", "U8": "USINT", "S8": "SINT", "U16": "UINT",
+              "S16": "INT", "U32": "UDINT", "S32": "DINT", "U64": "ULINT", "S64": "LINT", "F32": "REAL",
+              "F64": "LREAL", "S8_TO_U8": "SINT", "S16_TO_U16": "INT", "S32_TO_U32": "DINT", "S64_TO_U64": "LINT"}
 _ENVSET = re.compile(r'^\s*epicsEnvSet\s*\(\s*"?([A-Za-z_]\w*)"?\s*,?\s*"([^"]*)"\s*\)')
 _MACRO = re.compile(r"\$[({]([A-Za-z_]\w*)(?:=([^)}]*))?[)}]")
 _SDO_WRITES = {"EcAddSdo", "EcWriteSdo"}
 _BUFFER_WRITES = {"EcAddSdoBuffer", "EcAddSdoComplete", "EcWriteSdoComplete"}
 _REPORTED = {"EcReadSdo", "EcVerifySdo", "EcAddSdoAsync"}
+#: understood and without a startup-list meaning (process-image access, master selection, diagnostics)
+_NOT_STARTUP = {"EcSetMaster", "EcAddMemMap", "EcAddMemMapDT", "EcAddDataDT", "EcSetDiagnostics",
+                "EcEnablePrintouts", "EcSetDomainFailedCyclesLimit", "EcSelectReferenceDC", "EcSetEntryUpdateInRealtime",
+                "EcApplyConfig", "EcSetDelayECOkAtStartup", "EcSetSlaveNeedSDOSettings"}
 
 
 def _slave_ref(c: SlaveConfig, i: int, many: bool) -> str:
@@ -53,9 +72,15 @@ def _slave_ref(c: SlaveConfig, i: int, many: bool) -> str:
 
 
 def _command_line(slave: str, cmd: StartupCommand) -> str:
-    """The ecmc call; ``ecmcConfig`` instead of ``ecmcConfigOrDie`` for writes the drive answers by resetting."""
+    """The ecmc call. A one-shot write (the drive answers it by resetting) is not added to the startup list
+    (``EcAddSdo``, re-sent at every reconfiguration) but written once when the script runs, as ecmccfg does:
+    ``ecmcConfig "Cfg.EcWriteSdo(...)"``, whose failure (no reply) does not stop the IOC."""
     line = _call(slave, cmd)
-    return line if cmd.expect_reply else line.replace("ecmcConfigOrDie ", "ecmcConfig ", 1)
+    if not cmd.one_shot:
+        return line
+    if cmd.complete_access or len(cmd.data) not in (1, 2, 4):
+        raise EncodeError(f"{cmd.address}: a one-shot write of {len(cmd.data)} bytes has no ecmc EcWriteSdo form")
+    return line.replace("ecmcConfigOrDie ", "ecmcConfig ", 1).replace("Cfg.EcAddSdo(", "Cfg.EcWriteSdo(", 1)
 
 
 def _call(slave: str, cmd: StartupCommand) -> str:
@@ -87,16 +112,11 @@ def export(configs: list[SlaveConfig]) -> str:
             if notes:
                 out.append(f"# {'; '.join(notes)}")
             out.append(_command_line(slave, cmd))
-        if c.identity is not None:
-            v, p = "${ECMC_EC_VENDOR_ID}", "${ECMC_EC_PRODUCT_ID}"
-            for direction, sm, pdos in (("1", 2, c.rx_pdos), ("2", 3, c.tx_pdos)):
-                for pdo in pdos:
-                    for k, e in enumerate(pdo.entries):
-                        name = re.sub(r"\W+", "_", e.name).strip("_")[:40] or f"entry_{pdo.index:04x}_{k}"
-                        signed = _signed(e.data_type)  # given where the type is known, as ecmccfg scripts do
-                        flag = "" if signed is None else f"{int(signed)},"
-                        out.append(f'ecmcConfigOrDie "Cfg.EcAddEntryComplete({slave},{v},{p},{direction},{sm},'
-                                   f'0x{pdo.index:04x},0x{e.index:04x},0x{e.subindex:x},{e.bit_len},{flag}{name})"')
+        if c.has_pdo_info:
+            if c.identity is None:  # as in ecmccfg's shared scripts: the including hardware script sets them
+                out.append("#- ECMC_EC_VENDOR_ID and ECMC_EC_PRODUCT_ID are not known here: the script that runs "
+                           "this one must set them")
+            out += _entry_lines(c, slave)
         if c.dc_assign_activate:
             if c.dc_cycle_ns:
                 cycle = str(c.dc_cycle_ns)
@@ -109,6 +129,57 @@ def export(configs: list[SlaveConfig]) -> str:
             out.append(f"#- SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()}: "
                        "not representable in ecmc")
     return "\n".join(out) + "\n"
+
+
+#: the entry sizes ecmc maps (``ecmcEcEntry``: B1..B4 and whole 8/16/32/64-bit values); others map as 0 bits
+ECMC_BITS = (64, 32, 16, 8, 4, 3, 2, 1)
+
+
+def _pieces(bits: int) -> list[int]:
+    """A gap of ``bits`` as gaps of sizes ecmc maps, largest first (a 5-bit gap: 4 + 1)."""
+    out = []
+    for size in ECMC_BITS:
+        while bits >= size:
+            out.append(size)
+            bits -= size
+    return out
+
+
+def _entry_lines(c: SlaveConfig, slave: str) -> list[str]:
+    """``Cfg.EcAddEntryComplete`` per PDO entry, with the sync manager of the source, names unique within the
+    slave (ecmc stops the IOC on a duplicate) and gaps split into sizes ecmc maps; an entry of another size
+    (ecmc would map it as 0 bits) is refused."""
+    v, p = "${ECMC_EC_VENDOR_ID}", "${ECMC_EC_PRODUCT_ID}"
+    out: list[str] = []
+    used: set[str] = set()
+
+    def unique(base: str) -> str:
+        name, n = base, 1
+        while name.lower() in used:
+            n += 1
+            name = f"{base}_{n}"
+        used.add(name.lower())
+        return name
+
+    for direction, pdos in (("1", c.rx_pdos), ("2", c.tx_pdos)):
+        for pdo in pdos:
+            sm = pdo_sm(c, pdo)
+            for k, e in enumerate(pdo.entries):
+                base = re.sub(r"\W+", "_", e.name).strip("_")[:40] or f"entry_{pdo.index:04x}_{k}"
+                if e.bit_len in ECMC_BITS:
+                    sizes = [e.bit_len]
+                elif e.index == 0:
+                    sizes = _pieces(e.bit_len)
+                else:
+                    raise EncodeError(f"{c.label}: PDO 0x{pdo.index:04X} entry 0x{e.index:04X}:{e.subindex:02X} has "
+                                      f"{e.bit_len} bits; ecmc maps entries of 1-4, 8, 16, 32 or 64 bits (it would "
+                                      "map this one as 0 bits)", e.location or c.source)
+                signed = _signed(e.data_type)  # given where the type is known, as ecmccfg scripts do
+                flag = "" if signed is None or len(sizes) > 1 else f"{int(signed)},"
+                for bits in sizes:
+                    out.append(f'ecmcConfigOrDie "Cfg.EcAddEntryComplete({slave},{v},{p},{direction},{sm},'
+                               f'0x{pdo.index:04x},0x{e.index:04x},0x{e.subindex:x},{bits},{flag}{unique(base)})"')
+    return out
 
 
 # --- reading -----------------------------------------------------------------------------------------
@@ -140,6 +211,16 @@ class _Reader:
         self.pending_comment = ""
         self.pdos: dict[tuple[str, int], Pdo] = {}
         self.tolerant = False  # `ecmcConfig` (not OrDie): a failure is tolerated, e.g. a reset with no reply
+        self.unused: list[tuple[str, str, Location, Severity]] = []  # notes for lines no slave owns yet
+
+    def skip(self, rule: str, message: str, loc: Location, severity: Severity = Severity.WARNING,
+             slave: str | None = None) -> None:
+        """Report a line or command that is not used: on the slave it names, else on the script's slaves."""
+        cfg = self.slaves.get(slave.strip()) if slave else None
+        if cfg is not None:
+            cfg.note(rule, message, loc, severity)
+        else:
+            self.unused.append((rule, message, loc, severity))
 
     def expand(self, text: str) -> str:
         def repl(m: re.Match[str]) -> str:
@@ -192,7 +273,7 @@ class _Reader:
             cfg.startup.commands.append(StartupCommand(
                 "PS", self.number(args[1], loc, "index"), self.number(args[2], loc, "subindex"), data,
                 comment=self.pending_comment, type_name=unsigned_type(size), value=value,
-                expect_reply=not self.tolerant, source=loc))
+                expect_reply=not (self.tolerant and func == "EcWriteSdo"), source=loc))
         elif func in _BUFFER_WRITES:
             complete = "Complete" in func
             if len(args) != (4 if complete else 5):
@@ -208,17 +289,62 @@ class _Reader:
             self.entry(args, loc)
         elif func == "EcSlaveConfigDC":
             self.dc(args, loc)
+        elif func == "EcAddSdoDT":
+            self.sdo_dt(args, loc)
+        elif func == "EcAddEntryDT":
+            self.entry(args, loc, typed=True)
+        elif func == "EcSlaveVerify" and len(args) == 4:
+            cfg = self.slave(args[1], loc)
+            if cfg.identity is None and not _MACRO.search(args[2] + args[3]):
+                cfg.identity = Identity(self.number(args[2], loc, "vendor id"), self.number(args[3], loc, "product code"))
         elif func in _REPORTED:
-            reader = self.slave(args[0], loc) if args else None
-            if reader is not None:
-                reader.note("startup.ecmc.read", f"Cfg.{func} reads or verifies; not a startup write", loc,
-                            Severity.INFO)
+            self.skip("startup.ecmc.read", f"{func}({','.join(args)}) reads or verifies; not a startup write", loc,
+                      Severity.INFO, args[0] if args else None)
+        elif func in _NOT_STARTUP:
+            self.skip("startup.ecmc.unused", f"{func}(...) is not part of a slave's startup configuration; not "
+                      "converted", loc, Severity.INFO)
+        else:
+            self.skip("startup.ecmc.unused", f"{func}({','.join(args)}) is not understood; not converted", loc,
+                      slave=args[0] if args else None)
         self.pending_comment = ""
 
-    def entry(self, args: list[str], loc: Location) -> None:
-        if len(args) < 10:
-            raise InputError("Cfg.EcAddEntryComplete takes "
-                             "(slave,vendor,product,dir,sm,pdo,index,sub,bits,[signed,]name)", loc)
+    def sdo_dt(self, args: list[str], loc: Location) -> None:
+        """``Cfg.EcAddSdoDT(slave,index,subindex,value,dataType)``: a startup SDO of an ecmc data type."""
+        from ecattool.od import types as dt
+
+        if len(args) != 5:
+            raise InputError(f"Cfg.EcAddSdoDT takes (slave,index,subindex,value,dataType); got {len(args)} arguments",
+                             loc)
+        coe = ECMC_TYPES.get(args[4].strip().upper())
+        if coe is None or coe.startswith("B"):
+            raise InputError(f"Cfg.EcAddSdoDT: data type {args[4]!r} is not one of U8..U64, S8..S64, F32, F64", loc)
+        if _MACRO.search(args[3]):
+            raise InputError(f"value {args[3]!r} uses a macro that the script does not define", loc)
+        t = dt.require(coe)
+        text = args[3].strip()
+        try:
+            value: object = float(text) if t.kind is dt.Kind.REAL else parse_int(text, loc, "value")
+        except ValueError:
+            raise InputError(f"value {text!r} is not a number", loc) from None
+        if t.kind is not dt.Kind.REAL and isinstance(value, float):
+            value = int(value)
+        try:
+            data = t.encode(value)
+        except EncodeError as exc:
+            raise EncodeError(exc.message, loc) from None
+        cfg = self.slave(args[0], loc)
+        cfg.startup.commands.append(StartupCommand(
+            "PS", self.number(args[1], loc, "index"), self.number(args[2], loc, "subindex"), data,
+            comment=self.pending_comment, type_name=t.name, value=value, source=loc))
+
+    def entry(self, args: list[str], loc: Location, typed: bool = False) -> None:
+        """``Cfg.EcAddEntryComplete(slave,vendor,product,dir,sm,pdo,index,sub,bits,[signed,]name)``, its older
+        ``...,bits,name,updateInRealtime)`` form, and ``Cfg.EcAddEntryDT(...,sub,dataType,name[,updateInRealtime])``."""
+        func = "EcAddEntryDT" if typed else "EcAddEntryComplete"
+        if len(args) < 10 or len(args) > 12:
+            raise InputError(f"Cfg.{func} takes (slave,vendor,product,dir,sm,pdo,index,sub,"
+                             f"{'dataType,name[,updateInRealtime]' if typed else 'bits,[signed,]name'}); "
+                             f"got {len(args)} arguments", loc)
         cfg = self.slave(args[0], loc)
         vendor, product = args[1], args[2]
         if not _MACRO.search(vendor + product) and cfg.identity is None:
@@ -231,12 +357,26 @@ class _Reader:
             self.pdos[(args[0], pdo_index)] = pdo
             cfg.pdos(direction).append(pdo)
         index, sub = self.number(args[6], loc, "entry index"), self.number(args[7], loc, "entry sub")
-        bits = self.number(args[8], loc, "bit length")
-        if len(args) >= 11:  # ...,bits,signed,name: the sign is given
-            data_type = _INT_TYPES.get((bits, self.number(args[9], loc, "signed flag") != 0))
-        else:  # no sign in the 10-argument form: a standard CiA-402 object has its standard type
-            data_type = standard_type(index, sub, bits)
-        pdo.entries.append(PdoEntry(index, sub, bits, name=args[-1], data_type=data_type or "", location=loc))
+        rest = args[9:]
+        if typed:
+            from ecattool.od import types as dt
+
+            coe = ECMC_TYPES.get(args[8].strip().upper())
+            if coe is None:
+                raise InputError(f"Cfg.EcAddEntryDT: data type {args[8]!r} is not an ecmc type (B1..B4, U8..U64, "
+                                 "S8..S64, F32, F64)", loc)
+            data_type: str | None = coe
+            bits = dt.require(coe).bits or 1
+            name = rest[0]
+        else:
+            bits = self.number(args[8], loc, "bit length")
+            if len(rest) >= 2 and _is_int(rest[0]) and not _is_int(rest[1]):  # ...,bits,signed,name[,rt]
+                data_type = _INT_TYPES.get((bits, self.number(rest[0], loc, "signed flag") != 0))
+                name = rest[1]
+            else:  # ...,bits,name[,updateInRealtime]: a standard CiA-402 object has its standard type
+                data_type = standard_type(index, sub, bits)
+                name = rest[0]
+        pdo.entries.append(PdoEntry(index, sub, bits, name=name, data_type=data_type or "", location=loc))
 
     def dc(self, args: list[str], loc: Location) -> None:
         """``Cfg.EcSlaveConfigDC(slave,assign_activate,sync0_cycle,sync0_shift,sync1_cycle,sync1_shift)``; a cycle
@@ -265,19 +405,22 @@ class _Reader:
         if m:
             self.env[m.group(1)] = self.expand(m.group(2))
             return
-        m = _CALL.search(s)
+        m = _CALL.search(s) or _BARE_CALL.match(s)
         if m:
             self.tolerant = not s.startswith("ecmcConfigOrDie")
             self.call(m.group(1), _split_args(self.expand(m.group(2))), loc)
             return
+        m = re.match(r"^epicsEnvUnset\s*\(\s*\"?(\w+)\"?\s*\)", s)
+        if m:
+            self.env.pop(m.group(1), None)
+            return
+        if _NO_EFFECT.match(s):
+            return
         if "SCRIPTEXEC" in s or s.startswith("<"):
-            target = self.slaves.get(SLAVE_MACRO)
-            msg = f"included script not followed: {self.expand(s)}"
-            if target is not None:
-                target.note("startup.ecmc.include", msg, loc, Severity.INFO)
-            else:
-                self.env.setdefault("__includes__", "")
-                self.env["__includes__"] += f"{n}:{msg}\n"
+            self.skip("startup.ecmc.include", f"included script not followed: {self.expand(s)}", loc, Severity.INFO,
+                      SLAVE_MACRO)
+            return
+        self.skip("startup.ecmc.unused", f"line not used: {s[:120]}", loc)
 
     def result(self) -> list[SlaveConfig]:
         vendor, product = self.env.get("ECMC_EC_VENDOR_ID"), self.env.get("ECMC_EC_PRODUCT_ID")
@@ -290,13 +433,22 @@ class _Reader:
                 cfg.identity = Identity(parse_int(vendor, loc), parse_int(product, loc))
             if cfg.identity is not None:
                 cfg.startup.vendor_id, cfg.startup.product_code = cfg.identity.vendor_id, cfg.identity.product_code
-            for entry in self.env.get("__includes__", "").splitlines():
-                n, _, msg = entry.partition(":")
-                cfg.note("startup.ecmc.include", msg, Location(self.source, int(n)), Severity.INFO)
             if not cfg.name:
                 cfg.name = self.env.get("ECMC_EC_HWTYPE") or Path(self.source).stem
             cfg.startup.name = cfg.name
-        return list(self.slaves.values())
+        out = list(self.slaves.values())
+        for rule, msg, loc, severity in self.unused:  # lines no slave owns: reported once, on the first slave
+            out[0].note(rule, msg, loc, severity)
+        out[0].notes.sort(key=lambda f: (f.location.line or 0) if f.location else 0)
+        return out
+
+
+def _is_int(text: str) -> bool:
+    try:
+        parse_int(text.strip())
+    except (InputError, ValueError):
+        return False
+    return True
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:

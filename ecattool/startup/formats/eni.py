@@ -17,12 +17,12 @@ from typing import Any
 
 from lxml import etree
 
-from ecattool.errors import InputError, Location
+from ecattool.errors import EncodeError, InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry, SyncManager
 from ecattool.findings import Severity
 from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig, SoeCommand
-from ecattool.startup.formats._common import check_transition, parse_hex, unsigned_type
+from ecattool.startup.formats._common import check_transition, one_shot_text, parse_hex, pdo_sm, sync_plan, unsigned_type
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "eni"
@@ -41,6 +41,9 @@ ENTRY_ORDER = ("Index", "SubIndex", "BitLen", "Name", "DataType")
 
 #: ESC register of the DC cyclic unit activation (AssignActivate)
 DC_ACTIVATION_REGISTER = 0x0980
+#: SYNC0 cycle time (4 bytes) followed by the SYNC1 cycle time, and the SYNC0 start time (8 bytes)
+DC_CYCLE_REGISTER = 0x09A0
+DC_START_REGISTER = 0x0990
 _FPWR = 5  # configured-address physical write
 _FIRST_PHYS_ADDR = 1001
 
@@ -74,22 +77,23 @@ def _pdo_element(parent: Any, tag: str, pdo: Pdo, sm: int) -> None:
 def _process_data(slave: Any, c: SlaveConfig) -> None:
     pd = _sub(slave, "ProcessData")
     sms = {s.number: s for s in c.sync_managers}
-    for number, direction, pdos in ((2, Direction.RX, c.rx_pdos), (3, Direction.TX, c.tx_pdos)):
-        if not pdos:
+    for plan in sync_plan(c):
+        if plan.mailbox or not plan.pdos:
             continue
-        sm = _sub(pd, f"Sm{number}")
+        direction = Direction.RX if plan.output else Direction.TX
+        sm = _sub(pd, f"Sm{plan.number}")
         _sub(sm, "Type", direction.sm_kind)
-        known = sms.get(number)
+        known = sms.get(plan.number)
         if known is not None and known.start_address:
             _sub(sm, "StartAddress", known.start_address)
             _sub(sm, "ControlByte", known.control_byte)
         _sub(sm, "Enable", 1)
-        for p in pdos:
+        for p in plan.pdos:
             _sub(sm, "Pdo", p.index)
     for p in c.tx_pdos:
-        _pdo_element(pd, "TxPdo", p, 3)
+        _pdo_element(pd, "TxPdo", p, pdo_sm(c, p))
     for p in c.rx_pdos:
-        _pdo_element(pd, "RxPdo", p, 2)
+        _pdo_element(pd, "RxPdo", p, pdo_sm(c, p))
 
 
 def _mailbox_cmd(parent: Any, attrs: dict[str, str], transition: str, comment: str,
@@ -116,6 +120,9 @@ def _mailbox(slave: Any, c: SlaveConfig) -> None:
         _sub(mb, "Protocol", "SoE")
     cmds = _sub(_sub(mb, "CoE"), "InitCmds")
     for cmd in c.commands:
+        if cmd.one_shot:  # a master re-sends InitCmds at every transition: not one of them
+            cmds.append(etree.Comment(f" not an InitCmd: {one_shot_text(cmd).replace('--', '- -')} "))
+            continue
         _mailbox_cmd(cmds, {"CompleteAccess": "true"} if cmd.complete_access else {}, cmd.transition, cmd.comment,
                      (("Timeout", cmd.timeout_ms), ("Ccs", 1), ("Index", cmd.index), ("SubIndex", cmd.subindex),
                       ("Data", cmd.data.hex())))
@@ -127,24 +134,40 @@ def _mailbox(slave: Any, c: SlaveConfig) -> None:
                           ("Elements", s.elements), ("Attribute", s.attribute), ("Data", s.data.hex())))
 
 
+def _ecat_cmd(cmds: Any, transitions: tuple[str, ...], comment: str, phys_addr: int, ado: int, data: bytes) -> None:
+    ic = _sub(cmds, "InitCmd")
+    for t in transitions:
+        _sub(ic, "Transition", t)
+    _sub(ic, "Comment", comment, cdata=True)
+    _sub(ic, "Requires", "cycle")
+    _sub(ic, "Cmd", _FPWR)
+    _sub(ic, "Adp", phys_addr)
+    _sub(ic, "Ado", ado)
+    _sub(ic, "Data", data.hex())
+    _sub(ic, "Retries", 3)
+
+
 def _dc(slave: Any, c: SlaveConfig, phys_addr: int) -> None:
-    if c.dc_assign_activate:
-        cmds = _sub(slave, "InitCmds")
-        for transition, value, comment in (("PS", c.dc_assign_activate, "set DC activation"),
-                                           ("IP", 0, "clear DC activation")):
-            ic = _sub(cmds, "InitCmd")
-            _sub(ic, "Transition", transition)
-            _sub(ic, "Comment", comment, cdata=True)
-            _sub(ic, "Requires", "cycle")
-            _sub(ic, "Cmd", _FPWR)
-            _sub(ic, "Adp", phys_addr)
-            _sub(ic, "Ado", DC_ACTIVATION_REGISTER)
-            _sub(ic, "Data", value.to_bytes(2, "little").hex())
-            _sub(ic, "Retries", 3)
-    if c.dc_assign_activate or c.dc_cycle_ns:
-        dc = _sub(slave, "DC")
-        _sub(dc, "CycleTime0", c.dc_cycle_ns or 0)
-        _sub(dc, "ShiftTime", c.dc_shift_ns or 0)
+    """DC as TwinCAT writes it: in PS the SYNC0/SYNC1 cycle times (0x09A0), the start time (0x0990, 0 here:
+    the master sets it from the system time when it sends the command) and the activation (0x0980); cleared
+    in IP. A SYNC0 cycle the source does not give is refused, never written as 0."""
+    if not c.dc_assign_activate:
+        return
+    if not c.dc_cycle_ns:
+        raise EncodeError(f"{c.label}: DC is activated (0x{c.dc_assign_activate:04X}) but the source gives no SYNC0 "
+                          "cycle, and an ENI needs it (a cycle of 0 stops the slave in SAFE-OP); give it with "
+                          "--sync0-cycle NS", c.source)
+    cmds = _sub(slave, "InitCmds")
+    cycles = c.dc_cycle_ns.to_bytes(4, "little") + bytes(4)
+    _ecat_cmd(cmds, ("PS",), "set DC cycle time", phys_addr, DC_CYCLE_REGISTER, cycles)
+    _ecat_cmd(cmds, ("PS",), "set DC start time", phys_addr, DC_START_REGISTER, bytes(8))
+    _ecat_cmd(cmds, ("PS",), "set DC activation", phys_addr, DC_ACTIVATION_REGISTER,
+              c.dc_assign_activate.to_bytes(2, "little"))
+    _ecat_cmd(cmds, ("IP",), "clear DC activation", phys_addr, DC_ACTIVATION_REGISTER, bytes(2))
+    dc = _sub(slave, "DC")
+    _sub(dc, "CycleTime0", c.dc_cycle_ns)
+    _sub(dc, "CycleTime1", 0)
+    _sub(dc, "ShiftTime", c.dc_shift_ns or 0)
 
 
 def export(configs: list[SlaveConfig]) -> str:

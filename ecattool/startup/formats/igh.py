@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from ecattool.errors import EncodeError
 from ecattool.startup.config import SlaveConfig, SoeCommand
-from ecattool.startup.formats._common import unique_identifiers
+from ecattool.startup.formats._common import require_identity, sync_plan, unique_identifiers
 from ecattool.startup.model import StartupCommand, is_pdo_programming
 
 NAME = "igh"
@@ -69,11 +69,16 @@ def _idn_call(ident: str, n: int, s: SoeCommand, body: list[str]) -> None:
                 f"sizeof({ident}_idn{n}))) return -1;{_c_comment(s.comment)}")
 
 
+_WD = {True: "EC_WD_ENABLE", False: "EC_WD_DISABLE", None: "EC_WD_DEFAULT"}
+
+
 def _tables(ident: str, c: SlaveConfig) -> list[str]:
+    plans = sync_plan(c)
+    pdos = [p for plan in plans for p in plan.pdos]
     out = [f"static ec_pdo_entry_info_t {ident}_pdo_entries[] = {{"]
     offsets: list[tuple[int, int, int, str]] = []
     k = 0
-    for p in (*c.rx_pdos, *c.tx_pdos):
+    for p in pdos:
         offsets.append((p.index, len(p.entries), k, p.name))
         for e in p.entries:
             out.append(f"    {{0x{e.index:04x}, 0x{e.subindex:02x}, {e.bit_len}}},{_c_comment(e.name)}")
@@ -87,15 +92,31 @@ def _tables(ident: str, c: SlaveConfig) -> list[str]:
     if not offsets:
         out.append("    {0x0000, 0, NULL},")
     out.append("};")
-    n_rx = len(c.rx_pdos)
+    # sync manager numbers and watchdogs as the source gives them (EC_WD_DEFAULT: the slave's own setting)
     out.append(f"static ec_sync_info_t {ident}_syncs[] = {{")
-    out.append("    {0, EC_DIR_OUTPUT, 0, NULL, EC_WD_DISABLE},")
-    out.append("    {1, EC_DIR_INPUT, 0, NULL, EC_WD_DISABLE},")
-    out.append(f"    {{2, EC_DIR_OUTPUT, {n_rx}, {f'{ident}_pdos + 0' if n_rx else 'NULL'}, EC_WD_ENABLE}},")
-    n_tx = len(c.tx_pdos)
-    out.append(f"    {{3, EC_DIR_INPUT, {n_tx}, {f'{ident}_pdos + {n_rx}' if n_tx else 'NULL'}, EC_WD_DISABLE}},")
+    first = 0
+    for plan in plans:
+        d = "EC_DIR_OUTPUT" if plan.output else "EC_DIR_INPUT"
+        table = f"{ident}_pdos + {first}" if plan.pdos else "NULL"
+        wd = "EC_WD_DISABLE" if plan.mailbox else _WD[plan.watchdog]
+        out.append(f"    {{{plan.number}, {d}, {len(plan.pdos)}, {table}, {wd}}},")
+        first += len(plan.pdos)
     out.append("    {0xff}")
     out.append("};")
+    return out
+
+
+def _once(ident: str, pos: int, once: list[StartupCommand]) -> list[str]:
+    """One-shot writes: not startup configuration (IgH re-sends that at every reconfiguration) but a function
+    the application calls once, with ``ecrt_master_sdo_download``."""
+    out = [f"/* One-shot writes of {ident}: call once, before ecrt_master_activate(), never at reconfiguration.",
+           " * The drive answers them by resetting, so their error return (no SDO reply) is expected. */",
+           f"void {ident}_once(ec_master_t *master)", "{", "    uint32_t abort_code = 0;"]
+    for n, cmd in enumerate(once):
+        out.append(f"    static const uint8_t {ident}_once{n}[] = {{{_c_bytes(cmd.data)}}};")
+        out.append(f"    (void)ecrt_master_sdo_download(master, {pos}, 0x{cmd.index:04x}, 0x{cmd.subindex:02x}, "
+                   f"{ident}_once{n}, sizeof({ident}_once{n}), &abort_code);{_c_comment(cmd.comment)}")
+    out += ["}", ""]
     return out
 
 
@@ -104,21 +125,26 @@ def export(configs: list[SlaveConfig]) -> str:
            "#include <stdint.h>", "#include <ecrt.h>", ""]
     for i, (ident, c) in enumerate(zip(unique_identifiers(configs), configs)):
         pos = c.position if c.position is not None else i
-        vendor = c.identity.vendor_id if c.identity else 0
-        product = c.identity.product_code if c.identity else 0
+        ident_ = require_identity(c, "IgH's ecrt_master_slave_config() (vendor 0 matches no slave)")
+        vendor, product = ident_.vendor_id, ident_.product_code
         out.append(f"/* {c.label}: position {pos}, vendor 0x{vendor:08x}, product 0x{product:08x} */")
         out.append(f"#define {ident.upper()}_POS 0, {pos}")
         out.append(f"#define {ident.upper()}_ID 0x{vendor:08x}, 0x{product:08x}")
         if c.has_pdo_info:
             out += _tables(ident, c)
         out.append("")
+        once = [cmd for cmd in c.commands if cmd.one_shot]
+        if once:
+            out += _once(ident, pos, once)
         out.append(f"int {ident}_configure(ec_master_t *master)")
         out.append("{")
         out.append(f"    ec_slave_config_t *sc = ecrt_master_slave_config(master, {ident.upper()}_POS, "
                    f"{ident.upper()}_ID);")
         out.append("    if (!sc) return -1;")
         body: list[str] = []
-        commands = list(c.commands)
+        commands = [cmd for cmd in c.commands if not cmd.one_shot]
+        if once:
+            body.append(f"    /* {len(once)} one-shot write(s) are in {ident}_once(), not in the startup configuration */")
         if c.has_pdo_info:
             body.append(f"    if (ecrt_slave_config_pdos(sc, EC_END, {ident}_syncs)) return -1;")
             # IgH writes the assignment (1C12h/1C13h) and the mapping objects itself from the tables above;

@@ -118,7 +118,7 @@ class _Doc:
         self.source = source
         self.located: Any = None
         try:
-            from ecattool.project.yamlloc import load_yaml
+            from ecattool.yamlloc import load_yaml
 
             self.located = load_yaml(text, source)
         except InputError:

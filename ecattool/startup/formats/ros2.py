@@ -19,7 +19,7 @@ from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.od import types as dt
 from ecattool.od.standard import standard_type
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import as_list, decode_text, one_line
+from ecattool.startup.formats._common import as_list, decode_text, one_line, one_shot_text, require_identity
 from ecattool.startup.model import StartupCommand, StartupList, is_pdo_programming
 
 NAME = "ros2"
@@ -71,6 +71,20 @@ def _ros_type_of_entry(e: PdoEntry) -> str:
     return _BY_SIZE.get(e.bit_len // 8, f"bit{e.bit_len}")
 
 
+#: the integer types ethercat_driver_ros2's SdoConfigEntry writes, by byte size (float/double/bool it does not)
+DRIVER_SDO_TYPES = {"int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4, "uint32": 4, "int64": 8, "uint64": 8}
+INT32_MIN, INT32_MAX = -(1 << 31), (1 << 31) - 1
+
+
+def driver_value(data: bytes) -> int | None:
+    """The ``value`` the driver turns into ``data``: it reads every sdo value as a C ``int`` (yaml-cpp
+    ``as<int>()``, which throws above INT32_MAX) and writes ``static_cast<type>(value)``; so the value is the
+    signed reading of the bytes, which must fit 32 bits (always true up to 4 bytes; 8-byte data only when its
+    upper half is the sign extension). None: no int writes these bytes."""
+    v = int.from_bytes(data, "little", signed=True)
+    return v if INT32_MIN <= v <= INT32_MAX else None
+
+
 def _sdo_line(cmd: StartupCommand) -> str:
     where = f"0x{cmd.index:04X}:{cmd.subindex:02X}{f' ({cmd.source})' if cmd.source else ''}"
     if cmd.complete_access:
@@ -78,15 +92,27 @@ def _sdo_line(cmd: StartupCommand) -> str:
     coe = (cmd.type_name or standard_type(cmd.index, cmd.subindex, 8 * len(cmd.data)) or "").upper()
     ros = COE_TO_ROS.get(coe) if coe else None
     t = dt.lookup(ROS_TO_COE[ros]) if ros else None
-    if ros is None or t is None or t.bits is None or t.bits // 8 != len(cmd.data):
-        ros = _BY_SIZE.get(len(cmd.data))
+    notes = [one_line(cmd.comment)] if cmd.comment else []
+    if ros is None or t is None or t.bits is None or t.bits // 8 != len(cmd.data) or ros not in DRIVER_SDO_TYPES:
+        if ros in ("float", "double") and t is not None and t.bits == 8 * len(cmd.data):
+            notes.append(f"{ros} {t.decode(cmd.data)!r} written as its bytes: the driver writes integer types only")
+            ros = "int32" if len(cmd.data) == 4 else "int64"
+        else:
+            ros = _BY_SIZE.get(len(cmd.data))
         if ros is None:
             raise EncodeError(f"{where}: {len(cmd.data)} data bytes have no ethercat_driver_ros2 sdo type")
         t = dt.require(ROS_TO_COE[ros])
     value = t.decode(cmd.data)
+    if not (isinstance(value, int) and INT32_MIN <= value <= INT32_MAX):
+        # the driver reads the value as a signed 32-bit int and casts it to the type: the same bytes as a
+        # negative number (3221225472 = 0xC0000000 -> -1073741824 for a uint32)
+        value = driver_value(cmd.data)
+        if value is None:
+            raise EncodeError(f"{where}: 0x{int.from_bytes(cmd.data, 'little'):X} does not fit the 32-bit int "
+                              "ethercat_driver_ros2 reads every sdo value as; write this object with another master "
+                              "format or from the application")
     line = "  - " + _flow([("index", _Raw(f"0x{cmd.index:04X}")), ("sub_index", cmd.subindex), ("type", ros),
                            ("value", value)])
-    notes = [one_line(cmd.comment)] if cmd.comment else []
     if cmd.transition != "PS":
         notes.append(f"transition {cmd.transition} (ros2 sends every sdo in PRE-OP)")
     return line + (f"  # {'; '.join(notes)}" if notes else "")
@@ -113,8 +139,8 @@ def export(configs: list[SlaveConfig]) -> str:
     c = configs[0]
     title = f": {one_line(c.name)}" if c.name else ""
     lines = [f"# ethercat_driver_ros2 slave configuration written by ecattool{title}"]
-    if c.identity is not None:
-        lines += [f"vendor_id: 0x{c.identity.vendor_id:08x}", f"product_id: 0x{c.identity.product_code:08x}"]
+    ident = require_identity(c, "ethercat_driver_ros2 (it configures the slave by vendor_id/product_id)")
+    lines += [f"vendor_id: 0x{ident.vendor_id:08x}", f"product_id: 0x{ident.product_code:08x}"]
     if c.dc_assign_activate is not None:
         lines.append(f"assign_activate: 0x{c.dc_assign_activate:04x}  # DC Synch register")
     for key, value in c.extra.items():
@@ -132,6 +158,9 @@ def export(configs: list[SlaveConfig]) -> str:
         if skipped:
             lines.append(f"# {len(skipped)} PDO assignment/mapping writes of the startup list are done by the driver "
                          "from rpdo/tpdo")
+    once = [cmd for cmd in commands if cmd.one_shot]
+    commands = [cmd for cmd in commands if not cmd.one_shot]
+    lines += [f"# not an sdo entry: {one_shot_text(cmd)}" for cmd in once]
     if commands:
         lines.append("sdo:  # sdo data to be transferred at drive startup")
         lines += [_sdo_line(cmd) for cmd in commands]
@@ -189,19 +218,35 @@ def _sdo(item: Any, loc: Location, comment: str) -> StartupCommand:
     coe, _bits = _ros_type(item["type"], loc)
     t = dt.require(coe)
     value = item["value"]
-    try:
-        data = t.encode(value)
-    except EncodeError as exc:
-        raise EncodeError(exc.message, loc) from None
+    if isinstance(value, int) and not isinstance(value, bool) and t.kind in (dt.Kind.UNSIGNED, dt.Kind.SIGNED) \
+            and t.bits and INT32_MIN <= value <= INT32_MAX:
+        data = (value & ((1 << t.bits) - 1)).to_bytes(t.bits // 8, "little")  # the driver's static_cast<type>
+        value = t.decode(data)
+    else:
+        try:
+            data = t.encode(value)
+        except EncodeError as exc:
+            raise EncodeError(exc.message, loc) from None
     return StartupCommand("PS", _int(item["index"], loc, "index"), _int(item["sub_index"], loc, "sub_index"), data,
                           comment=comment, type_name=t.name, value=value, source=loc)
+
+
+def _driver_notes(cfg: SlaveConfig, item: Any, loc: Location) -> None:
+    """What ethercat_driver_ros2 itself would refuse in an sdo entry (it reads values with ``as<int>()``)."""
+    value, kind = item.get("value"), str(item.get("type", "")).strip().lower()
+    if kind not in DRIVER_SDO_TYPES:
+        cfg.note("startup.ros2.driver", f"sdo type {kind!r}: ethercat_driver_ros2 writes only "
+                 f"{', '.join(DRIVER_SDO_TYPES)} (it would send no data for this entry)", loc)
+    elif not (isinstance(value, int) and not isinstance(value, bool) and INT32_MIN <= value <= INT32_MAX):
+        cfg.note("startup.ros2.driver", f"sdo value {value!r}: ethercat_driver_ros2 reads every value as a signed "
+                 "32-bit int and stops on this one (write the same bytes as the signed value)", loc)
 
 
 def load_located(text: str, source: str) -> Any:
     """YAML with locations; errors PyYAML raises before parsing (bad characters) become InputErrors too."""
     import yaml
 
-    from ecattool.project.yamlloc import load_yaml
+    from ecattool.yamlloc import load_yaml
 
     try:
         return load_yaml(text, source)
@@ -231,6 +276,8 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
     for i, item in enumerate(as_list(top.get("sdo"), doc.locate(("sdo",)), "sdo")):
         loc = doc.locate(("sdo", i))
         cfg.startup.commands.append(_sdo(item, loc, _comment_at(lines, loc)))
+        if isinstance(item, dict):
+            _driver_notes(cfg, item, loc)
     for key, direction in (("rpdo", Direction.RX), ("tpdo", Direction.TX)):
         for i, p in enumerate(as_list(top.get(key), doc.locate((key,)), key)):
             ploc = doc.locate((key, i))

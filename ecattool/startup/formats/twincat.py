@@ -18,6 +18,7 @@ from ecattool.startup.formats._common import (
     decode_text,
     int_in_range,
     one_line,
+    one_shot_text,
     parse_hex,
     unsigned_type,
 )
@@ -50,7 +51,9 @@ def export(configs: list[SlaveConfig]) -> str:
     if len(configs) != 1:
         raise EncodeError(f"a TwinCAT startup list holds one slave; got {len(configs)} (export them one by one: --drive)")
     c = configs[0]
-    lines = [format_line(cmd) for cmd in c.commands]
+    # a one-shot write (a reset the drive answers by resetting) is no startup line: TwinCAT sends the list at
+    # every transition; it stays visible as a comment line (skipped when read back)
+    lines = [f"# not a startup line: {one_shot_text(cmd)}" if cmd.one_shot else format_line(cmd) for cmd in c.commands]
     for s in c.soe_commands:
         lines.append(f"<{s.transition}>,SoE,IDN {s.idn} drive {s.drive_no},{s.data.hex()},{one_line(s.comment)}")
     return "".join(line + "\n" for line in lines)

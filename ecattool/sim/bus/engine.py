@@ -1,0 +1,119 @@
+"""The datagram engine: a chain of ESCs processing EtherCAT frames as they pass (ETG.1000.4 §5.4).
+
+Addressing: position (APxx, ARMW: the slave that sees ADP 0 is addressed; every slave increments ADP), node
+(FPxx, FRMW: ADP = station address or, when enabled, alias), broadcast (Bxx: every slave, ADP incremented),
+logical (LRD/LWR/LRW through the FMMUs). Working counter per slave: a read +1, a write +1; a read-write command
++1 for the read and +2 for the write (+3 where both happen); ARMW/FRMW: the addressed slave reads (+1), every
+other slave writes (+1). Every slave ORs its event requests (under the event mask) into each datagram's IRQ.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+
+from ecattool.sim.bus.frame import Cmd, Datagram, Frame, FrameError, parse_frame
+from ecattool.sim.esc import Esc
+
+#: cable + processing delay of one slave, in ns (a forwarding ESC with 100BASE-TX PHYs: some hundred ns)
+HOP_NS = 600
+
+_AUTO = {Cmd.APRD, Cmd.APWR, Cmd.APRW}
+_FIXED = {Cmd.FPRD, Cmd.FPWR, Cmd.FPRW}
+_BROADCAST = {Cmd.BRD, Cmd.BWR, Cmd.BRW}
+_READS = {Cmd.APRD, Cmd.FPRD, Cmd.BRD, Cmd.APRW, Cmd.FPRW, Cmd.BRW}
+_WRITES = {Cmd.APWR, Cmd.FPWR, Cmd.BWR, Cmd.APRW, Cmd.FPRW, Cmd.BRW}
+_READ_WRITE = {Cmd.APRW, Cmd.FPRW, Cmd.BRW}
+
+
+class Bus:
+    """A line of slaves behind one master port (slave 0 first). ``process`` takes a frame as the master sent
+    it and returns it as it comes back, or None when it is not an EtherCAT frame."""
+
+    def __init__(self, escs: Sequence[Esc], *, hop_ns: int = HOP_NS,
+                 clock: Callable[[], int] = time.monotonic_ns) -> None:
+        self.escs = list(escs)
+        self.hop_ns = hop_ns
+        self.clock = clock
+        for i, esc in enumerate(self.escs):
+            esc.link[0] = True
+            esc.link[1] = i < len(self.escs) - 1
+        self.frames = 0
+
+    def _reach(self) -> int:
+        """How many slaves a frame passes (it turns back at a slave whose port 1 is closed)."""
+        for i, esc in enumerate(self.escs):
+            if not esc.port_open(1):
+                return i + 1
+        return len(self.escs)
+
+    def process(self, raw: bytes, *, fcs_ok: bool = True) -> bytes | None:
+        try:
+            frame = parse_frame(raw)
+        except FrameError:
+            frame = None
+            fcs_ok = False
+        if frame is None and fcs_ok:
+            return None
+        reach = self._reach()
+        if not fcs_ok or frame is None:
+            # a slave that sees a bad frame counts it and spoils the frame further (the master drops it)
+            for esc in self.escs[:reach]:
+                esc.count_rx_error(0)
+            return None
+        self.frames += 1
+        t0 = self.clock()
+        for k, esc in enumerate(self.escs[:reach]):
+            arrive = t0 + (k + 1) * self.hop_ns
+            back = arrive + 2 * (reach - 1 - k) * self.hop_ns if k < reach - 1 else None
+            esc.begin_frame([arrive, back, None, None])
+            for d in frame.datagrams:
+                self._datagram(esc, d)
+            esc.end_frame()
+        # the first slave marks the frame as processed: bit 1 of the source MAC (locally administered)
+        src = bytes([frame.src[0] | 0x02]) + frame.src[1:]
+        return Frame(frame.dst, src, frame.datagrams).to_bytes()
+
+    @staticmethod
+    def _datagram(esc: Esc, d: Datagram) -> None:
+        c = d.cmd
+        if c == Cmd.NOP:
+            return
+        d.irq |= esc.irq()
+        if c in (Cmd.LRD, Cmd.LWR, Cmd.LRW):
+            did_read, did_write = esc.logical(d.address, d.data, c != Cmd.LWR, c != Cmd.LRD)
+            if c == Cmd.LRW:
+                d.wkc += (1 if did_read else 0) + (2 if did_write else 0)
+            else:
+                d.wkc += 1 if did_read or did_write else 0
+            return
+        adp, ado = d.adp, d.ado
+        if c in _AUTO or c in _BROADCAST or c == Cmd.ARMW:
+            addressed = adp == 0 or c in _BROADCAST
+            d.address = (d.address & 0xFFFF0000) | ((adp + 1) & 0xFFFF)
+        elif c in _FIXED or c == Cmd.FRMW:
+            addressed = esc.addressed_fixed(adp)
+        else:
+            return  # an unknown command passes untouched
+        if c in (Cmd.ARMW, Cmd.FRMW):
+            if addressed:
+                data, ok = esc.ecat_read(ado, len(d.data))
+                if ok:
+                    d.data[:] = data
+                    d.wkc += 1
+            elif esc.ecat_write(ado, bytes(d.data)):
+                d.wkc += 1
+            return
+        if not addressed:
+            return
+        incoming = bytes(d.data)
+        if c in _READS:
+            data, ok = esc.ecat_read(ado, len(d.data))
+            if ok:
+                if c in _BROADCAST:
+                    d.data[:] = bytes(a | b for a, b in zip(d.data, data))
+                else:
+                    d.data[:] = data
+                d.wkc += 1
+        if c in _WRITES and esc.ecat_write(ado, incoming):
+            d.wkc += 2 if c in _READ_WRITE else 1

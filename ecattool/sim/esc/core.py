@@ -1,0 +1,556 @@
+"""The EtherCAT slave controller: the register file and process RAM a master reads and writes with datagrams.
+
+:class:`Esc` answers the *ECAT* side (``ecat_read`` / ``ecat_write`` / ``logical``: what the datagram engine
+calls) and offers the *PDI* side to the slave application (``pdi_*`` methods; the application is told what the
+master did through :class:`EscApplication`). Sync managers, FMMUs, the SII EEPROM interface and the distributed
+clock are modelled as the ET1100 data sheet describes them; see docs/virtual-bus.md for what is left out.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+
+from ecattool.sim.esc import registers as R
+from ecattool.sim.esc.dc import Clock
+from ecattool.sim.esc.eeprom import SiiEeprom
+
+_WRITABLE = R.writable_mask()
+
+#: SM control register: operation mode (bits 0..1) and direction (bits 2..3)
+SM_MODE_BUFFERED, SM_MODE_MAILBOX = 0x0, 0x2
+SM_DIR_READ, SM_DIR_WRITE = 0x0, 0x1  # ECAT reads (inputs, SM1/SM3) / ECAT writes (outputs, SM0/SM2)
+SM_WATCHDOG_TRIGGER = 0x40
+
+
+class EscApplication:
+    """What the slave application behind the PDI is told. The default does what an ESC in device emulation
+    does without a microcontroller: the AL status follows the AL control."""
+
+    def al_control(self, esc: "Esc", control: int) -> None:
+        esc.set_al_status(control & 0x0F, error=False, code=0)
+
+    def mailbox_written(self, esc: "Esc", sm: int, data: bytes) -> None:
+        """The master completed a write of mailbox SM ``sm`` (its whole buffer is ``data``)."""
+
+    def mailbox_read(self, esc: "Esc", sm: int) -> None:
+        """The master read mailbox SM ``sm`` to its last byte: the buffer is empty again."""
+
+    def mailbox_repeat(self, esc: "Esc", sm: int) -> None:
+        """The master toggled the repeat request of SM ``sm``."""
+
+    def buffer_written(self, esc: "Esc", sm: int, data: bytes) -> None:
+        """The master completed a write of buffered (3-buffer) SM ``sm``."""
+
+    def buffer_read(self, esc: "Esc", sm: int) -> None:
+        """The master read buffered SM ``sm`` to its last byte."""
+
+    def dc_activation(self, esc: "Esc", activation: int) -> None:
+        """The master wrote the DC activation register 0x0981."""
+
+    def frame_done(self, esc: "Esc") -> None:
+        """A frame has passed this slave."""
+
+
+@dataclass(slots=True)
+class _Sm:
+    start: int
+    length: int
+    control: int
+    enabled: bool
+
+    @property
+    def end(self) -> int:
+        return self.start + self.length
+
+    @property
+    def mailbox(self) -> bool:
+        return self.control & 0x3 == SM_MODE_MAILBOX
+
+    @property
+    def ecat_writes(self) -> bool:
+        return (self.control >> 2) & 0x3 == SM_DIR_WRITE
+
+
+@dataclass(slots=True)
+class _Fmmu:
+    logical: int
+    length: int
+    start_bit: int
+    stop_bit: int
+    physical: int
+    physical_bit: int
+    read: bool
+    write: bool
+
+    def bit_range(self) -> tuple[int, int]:
+        """The logical bits [first, end) the FMMU maps."""
+        return self.logical * 8 + self.start_bit, (self.logical + self.length - 1) * 8 + self.stop_bit + 1
+
+
+class Esc:
+    """One EtherCAT slave controller. ``eeprom``: the SII image; ``clock``: the local clock (ns)."""
+
+    def __init__(self, eeprom: bytes, *, app: EscApplication | None = None, ram_bytes: int = 8192,
+                 sms: int = 8, fmmus: int = 8, read_8: bool = True, clock: Clock | None = None,
+                 esc_type: int = 0x11, revision: int = 0x00, build: int = 0x0003) -> None:
+        self.app = app or EscApplication()
+        self.mem = bytearray(R.PROCESS_RAM + ram_bytes)
+        self.sm_count, self.fmmu_count = min(sms, 16), min(fmmus, 16)
+        self.eeprom = SiiEeprom(eeprom, read_8=read_8)
+        self.clock = clock or Clock()
+        #: physical link per port (set by the bus: port 0 to the master side, port 1 to the next slave)
+        self.link = [True, False, False, False]
+        self._sm_full = [False] * 16
+        self._sm_pdi_off = [False] * 16
+        self._sms: list[_Sm] | None = None
+        self._fmmus: list[_Fmmu] | None = None
+        self._al_event = False
+        self.frame_ns = 0
+        m = self.mem
+        m[R.TYPE], m[R.REVISION] = esc_type, revision
+        m[R.BUILD:R.BUILD + 2] = build.to_bytes(2, "little")
+        m[R.FMMUS_SUPPORTED], m[R.SMS_SUPPORTED] = self.fmmu_count, self.sm_count
+        m[R.RAM_SIZE] = ram_bytes // 1024
+        m[R.PORT_DESCRIPTOR] = 0x0F  # ports 0 and 1 MII, 2 and 3 not implemented
+        # features: FMMU bit operation, DC, 64-bit DC, enhanced link detection; LRW and xRW supported
+        self._put16(R.FEATURES, 0x000C | 0x0040 | 0x0100)
+        self._put16(R.PDI_CONTROL, 0x0005 if app else 0x0105)  # SPI; device emulation without an application
+        self._put16(R.WD_DIVIDER, 0x09C2)  # 100 us
+        self._put16(R.WD_TIME_PDI, 1000)
+        self._put16(R.WD_TIME_PD, 1000)
+        self._put16(R.WD_STATUS_PD, 0x0001)
+        self._put16(R.DC_SPEED_START, 0x1000)
+        self._put16(R.DC_FILTER_DEPTH, 0x0C04)
+        self._put16(R.ECAT_EVENT_MASK, 0x0000)
+        self._sync_eeprom_status()
+        self.set_al_status(1, error=False, code=0)
+        self._al_event = False
+        self._load_eeprom_config()
+
+    # ------------------------------------------------------------------------------------------
+    # small helpers
+    # ------------------------------------------------------------------------------------------
+    def _put16(self, addr: int, v: int) -> None:
+        self.mem[addr:addr + 2] = (v & 0xFFFF).to_bytes(2, "little")
+
+    def u16(self, addr: int) -> int:
+        return int.from_bytes(self.mem[addr:addr + 2], "little")
+
+    def u32(self, addr: int) -> int:
+        return int.from_bytes(self.mem[addr:addr + 4], "little")
+
+    def u64(self, addr: int) -> int:
+        return int.from_bytes(self.mem[addr:addr + 8], "little")
+
+    @property
+    def station_address(self) -> int:
+        return self.u16(R.STATION_ADDRESS)
+
+    @property
+    def alias(self) -> int:
+        return self.u16(R.STATION_ALIAS)
+
+    def addressed_fixed(self, adp: int) -> bool:
+        """Node addressing: the station address, or the alias when DL control bit 24 enables it."""
+        if adp == self.station_address:
+            return True
+        return bool(self.mem[R.DL_CONTROL + 3] & 0x01) and self.alias != 0 and adp == self.alias
+
+    # ------------------------------------------------------------------------------------------
+    # sync managers and FMMUs (parsed from their registers, cached until they are written)
+    # ------------------------------------------------------------------------------------------
+    def sms(self) -> list[_Sm]:
+        if self._sms is None:
+            out = []
+            for n in range(self.sm_count):
+                a = R.SM + R.SM_SIZE * n
+                out.append(_Sm(self.u16(a), self.u16(a + 2), self.mem[a + 4], bool(self.mem[a + 6] & 1)))
+            self._sms = out
+        return self._sms
+
+    def sm(self, n: int) -> _Sm:
+        return self.sms()[n]
+
+    def fmmus(self) -> list[_Fmmu]:
+        if self._fmmus is None:
+            out = []
+            for n in range(self.fmmu_count):
+                a = R.FMMU + R.FMMU_SIZE * n
+                if not self.mem[a + 12] & 1 or not self.u16(a + 4):
+                    continue
+                t = self.mem[a + 11]
+                out.append(_Fmmu(self.u32(a), self.u16(a + 4), self.mem[a + 6] & 7, self.mem[a + 7] & 7,
+                                 self.u16(a + 8), self.mem[a + 10] & 7, bool(t & 1), bool(t & 2)))
+            self._fmmus = out
+        return self._fmmus
+
+    def _sm_status(self, n: int) -> int:
+        sm = self.sm(n)
+        if sm.mailbox:
+            return (0x08 if self._sm_full[n] else 0) | (0x01 if self._sm_full[n] and not sm.ecat_writes else 0)
+        return 0x30 if not self._sm_full[n] else 0x00  # buffered: 11 = no buffer written yet, 00 = buffer 0
+
+    def _sync_sm_registers(self) -> None:
+        for n in range(self.sm_count):
+            a = R.SM + R.SM_SIZE * n
+            self.mem[a + 5] = self._sm_status(n)
+            self.mem[a + 7] = (self.mem[a + 7] & 0xFE) | (1 if self._sm_pdi_off[n] else 0)
+
+    def _sm_reset(self, n: int) -> None:
+        self._sm_full[n] = False
+
+    # ------------------------------------------------------------------------------------------
+    # the ECAT side (datagram engine)
+    # ------------------------------------------------------------------------------------------
+    def begin_frame(self, arrival_ns: list[int | None]) -> None:
+        """A frame arrives; ``arrival_ns`` per port (host time in ns, None where it does not pass)."""
+        self._arrival = arrival_ns
+        self.frame_ns = arrival_ns[0] if arrival_ns[0] is not None else self.clock.host_ns()
+
+    def end_frame(self) -> None:
+        self.app.frame_done(self)
+
+    def _segments(self, addr: int, n: int) -> list[tuple[int, int, int | None]]:
+        """Split [addr, addr+n) into pieces outside (None) and inside an enabled sync manager's area."""
+        cuts: list[tuple[int, int, int | None]] = []
+        end = addr + n
+        pos = addr
+        active = sorted(((sm.start, sm.end, i) for i, sm in enumerate(self.sms()) if sm.enabled and sm.length),
+                        key=lambda t: t[0])
+        for start, stop, i in active:
+            if stop <= pos or start >= end:
+                continue
+            if start > pos:
+                cuts.append((pos, start, None))
+            lo = max(pos, start)
+            hi = min(end, stop)
+            cuts.append((lo, hi, i))
+            pos = hi
+        if pos < end:
+            cuts.append((pos, end, None))
+        return cuts
+
+    def ecat_read(self, addr: int, n: int) -> tuple[bytes, bool]:
+        """The master reads ``n`` bytes at ``addr``; False when the ESC refuses (no working counter)."""
+        out = bytearray()
+        ok = True
+        for lo, hi, smn in self._segments(addr, n):
+            if smn is None:
+                out += self._read_plain(lo, hi - lo)
+                continue
+            sm = self.sm(smn)
+            if self._sm_pdi_off[smn]:
+                ok = False
+                out += bytes(hi - lo)
+                continue
+            if sm.mailbox and not sm.ecat_writes:
+                if not self._sm_full[smn]:
+                    ok = False
+                    out += bytes(hi - lo)
+                    continue
+            out += self.mem[lo:hi]
+            if hi == sm.end and not sm.ecat_writes:
+                if sm.mailbox:
+                    self._sm_full[smn] = False
+                    self._sync_sm_registers()
+                    self.app.mailbox_read(self, smn)
+                else:
+                    self.app.buffer_read(self, smn)
+        return bytes(out), ok
+
+    def _read_plain(self, addr: int, n: int) -> bytes:
+        end = addr + n
+        if addr < R.PROCESS_RAM:
+            self._refresh(addr, end)
+        if addr >= len(self.mem):
+            return bytes(n)
+        data = bytes(self.mem[addr:min(end, len(self.mem))])
+        if addr < R.EEPROM_CONTROL + 2 and end > R.EEPROM_CONTROL:
+            self.eeprom_poll()  # a busy EEPROM finishes after the status has been read busy
+        if addr <= R.AL_STATUS < end:
+            self._al_event = False
+            self._sync_events()
+        return data + bytes(n - len(data))
+
+    def _refresh(self, addr: int, end: int) -> None:
+        """Registers whose value is computed when they are read."""
+        if addr < R.DL_STATUS + 2 and end > R.DL_STATUS:
+            self._put16(R.DL_STATUS, self._dl_status())
+        if addr < R.SM + R.SM_SIZE * 16 and end > R.SM:
+            self._sync_sm_registers()
+        if addr < R.DC_SYSTEM_TIME + 8 and end > R.DC_SYSTEM_TIME:
+            self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = self.system_time().to_bytes(8, "little")
+        if addr < R.ECAT_EVENT_REQUEST + 4 and end > R.ECAT_EVENT_REQUEST:
+            self._sync_events()
+
+    def ecat_write(self, addr: int, data: bytes) -> bool:
+        """The master writes ``data`` at ``addr``; False when the ESC refuses (no working counter)."""
+        ok = True
+        touched_registers = False
+        done: list[tuple[int, bool]] = []
+        for lo, hi, smn in self._segments(addr, len(data)):
+            chunk = data[lo - addr:hi - addr]
+            if smn is None:
+                self._write_plain(lo, chunk)
+                touched_registers = touched_registers or lo < R.PROCESS_RAM
+                continue
+            sm = self.sm(smn)
+            if self._sm_pdi_off[smn] or not sm.ecat_writes or (sm.mailbox and self._sm_full[smn]):
+                ok = False
+                continue
+            self.mem[lo:hi] = chunk
+            if hi == sm.end:
+                done.append((smn, sm.mailbox))
+        if touched_registers:
+            self._after_register_write(addr, addr + len(data), data)
+        for smn, mailbox in done:
+            sm = self.sm(smn)
+            buffer = bytes(self.mem[sm.start:sm.end])
+            if mailbox:
+                self._sm_full[smn] = True
+                self._sync_sm_registers()
+                self.app.mailbox_written(self, smn, buffer)
+            else:
+                self._sm_full[smn] = True
+                if sm.control & SM_WATCHDOG_TRIGGER:
+                    self._put16(R.WD_STATUS_PD, 1)
+                self.app.buffer_written(self, smn, buffer)
+        return ok
+
+    def _write_plain(self, addr: int, data: bytes) -> None:
+        end = min(addr + len(data), len(self.mem))
+        for a in range(addr, end):
+            if a >= R.PROCESS_RAM or _WRITABLE[a]:
+                self.mem[a] = data[a - addr]
+
+    def _after_register_write(self, addr: int, end: int, data: bytes) -> None:
+        def hit(first: int, size: int) -> bool:
+            return addr < first + size and end > first
+
+        old_sms = list(self.sms())
+        if hit(R.SM, R.SM_SIZE * 16):
+            self._sms = None
+            for n, old in enumerate(old_sms):
+                new = self.sm(n)
+                if (old.enabled, old.start, old.length, old.control) != (new.enabled, new.start, new.length,
+                                                                          new.control):
+                    self._sm_reset(n)
+                a = R.SM + R.SM_SIZE * n + 6
+                if hit(a, 1):
+                    request = bool(self.mem[a] & 0x02)
+                    if request != bool(self.mem[a + 1] & 0x02):
+                        self.app.mailbox_repeat(self, n)
+        if hit(R.FMMU, R.FMMU_SIZE * 16):
+            self._fmmus = None
+        if hit(R.RX_ERROR_COUNTER, 0x14):
+            # writing an error counter clears it
+            for a in range(max(addr, R.RX_ERROR_COUNTER), min(end, R.RX_ERROR_COUNTER + 0x14)):
+                self.mem[a] = 0
+        if hit(R.EEPROM_CONTROL, 2):
+            self._eeprom_command()
+        if hit(R.DC_RECEIVE_TIME, 4):
+            self._latch_receive_times()
+        if hit(R.DC_SYSTEM_TIME, 8):
+            self._compare_system_time(addr, data)
+        if hit(R.DC_ACTIVATION, 1):
+            self.app.dc_activation(self, self.mem[R.DC_ACTIVATION])
+        if hit(R.AL_CONTROL, 2):
+            self.app.al_control(self, self.u16(R.AL_CONTROL))
+
+    # ------------------------------------------------------------------------------------------
+    # logical addressing (LRD / LWR / LRW) through the FMMUs, bit granular
+    # ------------------------------------------------------------------------------------------
+    def logical(self, address: int, data: bytearray, read: bool, write: bool) -> tuple[bool, bool]:
+        """Map the datagram bytes at logical ``address``: FMMUs of read type copy physical bits into
+        ``data`` (when ``read``), those of write type copy ``data`` bits into the ESC (when ``write``).
+        Returns (read happened, write happened) for the working counter."""
+        incoming = int.from_bytes(data, "little")
+        d0, d1 = address * 8, (address + len(data)) * 8
+        did_read = did_write = False
+        value = incoming
+        for f in self.fmmus():
+            lb0, lb1 = f.bit_range()
+            o0, o1 = max(lb0, d0), min(lb1, d1)
+            if o0 >= o1:
+                continue
+            nbits, mask = o1 - o0, (1 << (o1 - o0)) - 1
+            pbit = f.physical * 8 + f.physical_bit + (o0 - lb0)
+            pbyte0, pbyte1 = pbit // 8, (pbit + nbits + 7) // 8
+            pshift, dshift = pbit - pbyte0 * 8, o0 - d0
+            if write and f.write:
+                bits = (incoming >> dshift) & mask
+                current = int.from_bytes(self.mem[pbyte0:pbyte1], "little")
+                merged = (current & ~(mask << pshift)) | (bits << pshift)
+                if self.ecat_write(pbyte0, merged.to_bytes(pbyte1 - pbyte0, "little")):
+                    did_write = True
+            if read and f.read:
+                raw, ok = self.ecat_read(pbyte0, pbyte1 - pbyte0)
+                if ok:
+                    bits = (int.from_bytes(raw, "little") >> pshift) & mask
+                    value = (value & ~(mask << dshift)) | (bits << dshift)
+                    did_read = True
+        if did_read:
+            data[:] = value.to_bytes(len(data), "little")
+        return did_read, did_write
+
+    # ------------------------------------------------------------------------------------------
+    # AL, DL, events
+    # ------------------------------------------------------------------------------------------
+    def set_al_status(self, state: int, *, error: bool, code: int) -> None:
+        """PDI: the application reports its state, the error indication and the AL status code."""
+        value = (state & 0x0F) | (R.AL_ERROR if error else 0)
+        if value != self.u16(R.AL_STATUS):
+            self._al_event = True
+        self._put16(R.AL_STATUS, value)
+        self._put16(R.AL_STATUS_CODE, code)
+
+    @property
+    def al_state(self) -> int:
+        return self.mem[R.AL_STATUS] & 0x0F
+
+    def _dl_status(self) -> int:
+        v = 0x0001 | 0x0002  # PDI operational (EEPROM loaded), PDI watchdog reloaded
+        loop = self.u16(R.DL_CONTROL) >> 8
+        for port in range(4):
+            linked = self.link[port]
+            setting = (loop >> (2 * port)) & 0x3
+            # loop setting: 0 auto, 1 auto close (closed without a link), 2 always open, 3 always closed
+            closed = setting == 3 or (setting in (0, 1) and not linked)
+            v |= (0x10 << port) if linked else 0
+            v |= (1 << (8 + 2 * port)) if closed else 0
+            v |= (1 << (9 + 2 * port)) if linked and not closed else 0
+        return v
+
+    def port_open(self, port: int) -> bool:
+        """Whether frames leave through ``port`` (the loop is open and a link is there)."""
+        return bool(self._dl_status() & (1 << (9 + 2 * port)))
+
+    def _sync_events(self) -> None:
+        req = 0x08 if self._al_event else 0
+        for n in range(self.sm_count):
+            sm = self.sm(n)
+            if sm.enabled and sm.mailbox and not sm.ecat_writes and self._sm_full[n]:
+                req |= 0x10 << n
+        self._put16(R.ECAT_EVENT_REQUEST, req)
+
+    def irq(self) -> int:
+        """The bits this slave ORs into a datagram's IRQ field: event requests under the event mask."""
+        self._sync_events()
+        return self.u16(R.ECAT_EVENT_REQUEST) & self.u16(R.ECAT_EVENT_MASK)
+
+    def count_rx_error(self, port: int = 0) -> None:
+        """A frame with a bad FCS arrived on ``port``: the invalid frame counter counts it (saturates)."""
+        a = R.RX_ERROR_COUNTER + 2 * port
+        self.mem[a] = min(0xFF, self.mem[a] + 1)
+
+    def count_lost_link(self, port: int) -> None:
+        a = R.LOST_LINK + port
+        self.mem[a] = min(0xFF, self.mem[a] + 1)
+
+    # ------------------------------------------------------------------------------------------
+    # the PDI side (the slave application)
+    # ------------------------------------------------------------------------------------------
+    def pdi_deactivate(self, sm: int, off: bool) -> None:
+        """PDI control bit 0 of ``sm``: a deactivated SM refuses the master's accesses to its area."""
+        if self._sm_pdi_off[sm] != off:
+            self._sm_pdi_off[sm] = off
+            self._sm_reset(sm)
+            self._sync_sm_registers()
+
+    def pdi_mailbox_put(self, sm: int, data: bytes, *, force: bool = False) -> bool:
+        """Write one mailbox frame into read mailbox ``sm``; False when it is still full (unless ``force``:
+        a repeat overwrites it)."""
+        s = self.sm(sm)
+        if not s.enabled or self._sm_pdi_off[sm] or (self._sm_full[sm] and not force):
+            return False
+        self.mem[s.start:s.start + min(len(data), s.length)] = data[:s.length]
+        self._sm_full[sm] = True
+        self._sync_sm_registers()
+        return True
+
+    def pdi_mailbox_take(self, sm: int) -> None:
+        """The application has read write mailbox ``sm``: it is empty for the master again."""
+        self._sm_full[sm] = False
+        self._sync_sm_registers()
+
+    def pdi_repeat_ack(self, sm: int) -> None:
+        """Set the repeat acknowledge (PDI control bit 1) equal to the master's repeat request."""
+        a = R.SM + R.SM_SIZE * sm
+        self.mem[a + 7] = (self.mem[a + 7] & ~0x02 & 0xFF) | (self.mem[a + 6] & 0x02)
+
+    def pdi_write(self, addr: int, data: bytes) -> None:
+        """The application writes process RAM (the input buffer of a buffered SM)."""
+        self.mem[addr:addr + len(data)] = data
+
+    def pdi_read(self, addr: int, n: int) -> bytes:
+        return bytes(self.mem[addr:addr + n])
+
+    # ------------------------------------------------------------------------------------------
+    # SII EEPROM interface 0x0500-0x050F
+    # ------------------------------------------------------------------------------------------
+    def _eeprom_command(self) -> None:
+        control = self.u16(R.EEPROM_CONTROL)
+        cmd = control & R.EE_CMD_MASK
+        address = self.u32(R.EEPROM_ADDRESS)
+        data = self.u16(R.EEPROM_DATA)
+        result = self.eeprom.command(cmd, bool(control & R.EE_WRITE_ENABLE), address, data)
+        if result.data is not None:
+            self.mem[R.EEPROM_DATA:R.EEPROM_DATA + len(result.data)] = result.data
+        if cmd == R.EE_CMD_RELOAD and not result.error:
+            self._load_eeprom_config()
+        self._sync_eeprom_status(cmd if result.busy else 0)
+
+    def _sync_eeprom_status(self, running: int = 0) -> None:
+        status = self.eeprom.status_bits() | running
+        self._put16(R.EEPROM_CONTROL, status)
+
+    def eeprom_poll(self) -> None:
+        """Reads of the status register advance a busy EEPROM (called by the engine before a read)."""
+        if self.eeprom.busy:
+            self.eeprom.tick()
+            self._sync_eeprom_status(self.u16(R.EEPROM_CONTROL) & R.EE_CMD_MASK if self.eeprom.busy else 0)
+
+    def _load_eeprom_config(self) -> None:
+        """Words 0..7 (the ESC configuration area): PDI control and the station alias."""
+        words = self.eeprom.words(0, 8)
+        self._put16(R.STATION_ALIAS, words[4])
+        self._sync_eeprom_status()
+
+    # ------------------------------------------------------------------------------------------
+    # distributed clocks 0x0900-0x09FF
+    # ------------------------------------------------------------------------------------------
+    def local_time(self, host_ns: int | None = None) -> int:
+        return self.clock.local_ns(self.frame_ns if host_ns is None else host_ns)
+
+    def system_time(self) -> int:
+        return (self.local_time() + self.u64(R.DC_SYSTEM_OFFSET)) & 0xFFFFFFFFFFFFFFFF
+
+    def _latch_receive_times(self) -> None:
+        for port, t in enumerate(self._arrival):
+            if t is not None:
+                local = self.local_time(t)
+                self.mem[R.DC_RECEIVE_TIME + 4 * port:R.DC_RECEIVE_TIME + 4 * port + 4] = \
+                    (local & 0xFFFFFFFF).to_bytes(4, "little")
+        self.mem[R.DC_RECEIVE_TIME_PU:R.DC_RECEIVE_TIME_PU + 8] = self.local_time().to_bytes(8, "little")
+
+    def _compare_system_time(self, addr: int, data: bytes) -> None:
+        """A write of the system time is compared with the local copy (drift control input); the register
+        keeps the local system time."""
+        first = max(addr, R.DC_SYSTEM_TIME)
+        written = bytearray(self.system_time().to_bytes(8, "little"))
+        for a in range(first, min(addr + len(data), R.DC_SYSTEM_TIME + 8)):
+            written[a - R.DC_SYSTEM_TIME] = data[a - addr]
+        received = int.from_bytes(written, "little")
+        local = self.system_time()
+        diff = (received - local + self.u32(R.DC_SYSTEM_DELAY)) & 0xFFFFFFFF
+        # 0x092C: bits 0..30 the difference's magnitude, bit 31 set when the local copy is ahead
+        signed = diff - (1 << 32) if diff & 0x80000000 else diff
+        self.mem[R.DC_SYSTEM_DIFFERENCE:R.DC_SYSTEM_DIFFERENCE + 4] = struct.pack(
+            "<I", (min(abs(signed), 0x7FFFFFFF)) | (0x80000000 if signed < 0 else 0))
+        self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = local.to_bytes(8, "little")
+
+    def dc_sync0(self) -> tuple[int, int, int]:
+        """(activation 0x0981, SYNC0 cycle ns, start time) as the master wrote them."""
+        return self.mem[R.DC_ACTIVATION], self.u32(R.DC_SYNC0_CYCLE), self.u64(R.DC_START_TIME)
+

@@ -1,0 +1,352 @@
+"""Issue 17: every export fed to its consumer's own rules.
+
+- ethercat_driver_ros2 reads an sdo entry with yaml-cpp ``value.as<int>()`` into a C ``int`` and writes
+  ``static_cast<type>(value)`` (ethercat_interface/ec_sdo_manager.hpp): emulated by :func:`ros2_driver_bytes`.
+- IgH: the C file is compiled with gcc against an ecrt.h-shaped header (the prototypes of ecrt.h 1.5/1.6).
+- ENI: element structure (no ENI XSD is in the corpus; ETG.2100 element names and TwinCAT's DC commands).
+- ecmc: the command patterns of ecmc's ``Cfg.Ec…`` parser (argument counts and forms).
+- pysoem: the generated module executed against tests/fake_pysoem.py and checked against pysoem's surface.
+"""
+
+from __future__ import annotations
+
+import re
+import struct
+
+import pytest
+import yaml
+from lxml import etree
+
+from ecattool.errors import EncodeError
+from ecattool.esi.model import Identity
+from ecattool.startup import SlaveConfig, StartupCommand, StartupList, export, import_bytes, import_file
+from ecattool.startup.model import is_pdo_programming
+from tests.conftest import ROOT, corpus_path, run
+from tests.test_startup_export import ECRT_H, _gcc
+
+SAMPLES = sorted(p.parent.name for p in (ROOT / "samples").glob("*/project.yaml"))
+ROS2_SIZES = {"int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4, "uint32": 4, "int64": 8, "uint64": 8}
+CORPUS_CONFIGS = sorted(p.name for p in corpus_path("configs").iterdir()
+                        if p.suffix in (".yaml", ".xml", ".cmd") and not p.name.startswith("hwdevmgr")
+                        and p.name != "lcec_initcmds_AX5206-AM8032-async.xml")
+
+
+def _sample_configs(name: str) -> list[SlaveConfig]:
+    from ecattool.project.export import slave_configs
+
+    return slave_configs(ROOT / "samples" / name / "project.yaml")
+
+
+def ros2_driver_bytes(entry: dict) -> bytes:
+    """What ethercat_driver_ros2 sends for one ``sdo`` entry, by its own rules: ``as<int>()`` throws for a
+    non-integer or a value outside int32; ``buffer_write`` knows the eight integer types only."""
+    kind, value = entry["type"], entry["value"]
+    assert kind in ROS2_SIZES, f"the driver has no sdo type {kind!r}"
+    assert isinstance(value, int) and not isinstance(value, bool), f"as<int>() throws for {value!r}"
+    assert -(1 << 31) <= value < (1 << 31), f"as<int>() throws for {value} (above INT32_MAX)"
+    size = ROS2_SIZES[kind]
+    return (value & ((1 << (8 * size)) - 1)).to_bytes(size, "little")  # static_cast<type>(int), little-endian
+
+
+def _ros2_sent(cfg: SlaveConfig) -> list[StartupCommand]:
+    return [c for c in cfg.commands if not c.one_shot and not (cfg.has_pdo_info and is_pdo_programming(c.index))]
+
+
+def _check_ros2(cfg: SlaveConfig) -> str:
+    text = export(cfg, "ros2")
+    doc = yaml.safe_load(text)
+    assert isinstance(doc["vendor_id"], int) and isinstance(doc["product_id"], int)
+    sent = [(int(e["index"]), int(e["sub_index"]), ros2_driver_bytes(e)) for e in doc.get("sdo") or []]
+    assert sent == [(c.index, c.subindex, c.data) for c in _ros2_sent(cfg)]
+    return text
+
+
+# --- 1. ros2 values the driver can read ------------------------------------------------------------------
+
+@pytest.mark.parametrize("sample", SAMPLES)
+def test_ros2_export_of_every_sample_is_what_the_driver_sends(sample):
+    for cfg in _sample_configs(sample):
+        _check_ros2(cfg)
+
+
+def test_ros2_technosoft_factor_above_int32_max_is_written_as_its_signed_value():
+    (cfg,) = _sample_configs("technosoft_ipos")
+    text = _check_ros2(cfg)
+    # 6093h:01 = 0xC0000000 = 3221225472 would stop the driver; the same four bytes as a signed int
+    assert "{index: 0x6093, sub_index: 1, type: uint32, value: -1073741824}" in text
+    assert "3221225472" not in text
+    (back,) = import_bytes(text.encode(), "again.yaml")
+    assert [c.data for c in back.commands] == [c.data for c in _ros2_sent(cfg)]
+    assert not back.notes  # nothing in the file the driver would refuse
+
+
+@pytest.mark.parametrize("name", CORPUS_CONFIGS)
+def test_ros2_export_of_every_corpus_config_is_what_the_driver_sends(name):
+    for cfg in import_file(corpus_path("configs", name)):
+        if cfg.identity is None:
+            with pytest.raises(EncodeError, match="no vendor id/product code"):
+                export(cfg, "ros2")
+            continue
+        try:
+            _check_ros2(cfg)
+        except EncodeError as exc:  # only what ros2 has no form for, said with the command named
+            assert re.search(r"complete-access|data bytes have no|does not fit the 32-bit int", exc.message), exc
+
+
+def test_ros2_floats_and_64_bit_values_are_written_as_their_bytes():
+    cmds = [StartupCommand("PS", 0x2000, 1, struct.pack("<f", 2.5), type_name="REAL", value=2.5),
+            StartupCommand("PS", 0x2000, 2, struct.pack("<d", 0.0), type_name="LREAL", value=0.0),
+            StartupCommand("PS", 0x2000, 3, (2**64 - 2).to_bytes(8, "little"), type_name="ULINT", value=2**64 - 2),
+            StartupCommand("PS", 0x2000, 4, (7).to_bytes(8, "little"), type_name="LINT", value=7)]
+    cfg = SlaveConfig(StartupList(cmds), identity=Identity(0x1A3, 1))
+    text = _check_ros2(cfg)
+    assert "type: int32, value: 1075838976}" in text and "written as its bytes" in text
+    big = SlaveConfig(StartupList([StartupCommand("PS", 0x2000, 5, (1 << 40).to_bytes(8, "little"))]),
+                      identity=Identity(0x1A3, 1))
+    with pytest.raises(EncodeError, match=r"0x2000:05.*32-bit int"):
+        export(big, "ros2")
+
+
+def test_ros2_import_reports_values_the_driver_would_stop_on():
+    text = b"vendor_id: 0x1a3\nproduct_id: 0x1\nsdo:\n  - {index: 0x6093, sub_index: 1, type: uint32, value: 3221225472}\n"
+    (cfg,) = import_bytes(text, "old.yaml")
+    assert cfg.commands[0].data == (3221225472).to_bytes(4, "little")
+    assert [n.rule for n in cfg.notes] == ["startup.ros2.driver"] and "old.yaml:4" in str(cfg.notes[0])
+
+
+# --- 2. one-shot writes are no startup writes ------------------------------------------------------------
+
+def _with_reset() -> SlaveConfig:
+    from ecattool.sw.plan import reset_command
+
+    cmds = [StartupCommand("PS", 0x6060, 0, b"\x08", type_name="SINT", value=8, comment="csp"), reset_command()]
+    return SlaveConfig(StartupList(cmds, name="ipos"), name="ipos", position=0, identity=Identity(0x1A3, 0x019F418D))
+
+
+ONCE_H = ECRT_H + ("int ecrt_master_sdo_download(ec_master_t *master, uint16_t slave_position, uint16_t index, "
+                   "uint8_t subindex, const uint8_t *data, size_t data_size, uint32_t *abort_code);\n")
+
+
+def test_one_shot_reset_is_no_igh_startup_sdo(tmp_path):
+    text = export(_with_reset(), "igh")
+    configure = text[text.index("int ipos_configure("):]
+    assert "0x2080" not in configure and "ecrt_slave_config_sdo8(sc, 0x6060" in configure
+    once = text[text.index("void ipos_once("):text.index("int ipos_configure(")]
+    assert "ecrt_master_sdo_download(master, 0, 0x2080, 0x00," in once
+    (tmp_path / "ecrt.h").write_text(ONCE_H)
+    c = tmp_path / "config.c"
+    c.write_text(text)
+    import shutil
+    import subprocess
+
+    result = subprocess.run([shutil.which("gcc") or "gcc", "-std=c99", "-Wall", "-Wextra", "-Werror",
+                             "-fsyntax-only", "-I", str(tmp_path), str(c)], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+
+
+def test_one_shot_reset_is_no_ros2_eni_twincat_or_ecmc_startup_write():
+    cfg = _with_reset()
+    ros = yaml.safe_load(export(cfg, "ros2"))
+    assert [e["index"] for e in ros["sdo"]] == [0x6060]
+    assert "0x2080:00 := 0x1" in export(cfg, "ros2")  # named in a comment, not dropped silently
+    root = etree.fromstring(export(cfg, "eni").encode())
+    assert [ic.findtext("Index") for ic in root.iter("InitCmd") if ic.find("Index") is not None] == ["24672"]
+    assert any("2080" in str(c.text) for c in root.iter(etree.Comment))
+    tc = export(cfg, "twincat")
+    (back,) = import_bytes(tc.encode(), "x.txt", "twincat")
+    assert [c.index for c in back.commands] == [0x6060] and "# not a startup line: 0x2080:00" in tc
+    ecmc = export(cfg, "ecmc")
+    startup = re.findall(r'ecmcConfigOrDie "Cfg\.EcAddSdo\((\w+),(0x[0-9A-F]+),', ecmc)
+    assert startup == [("0", "0x6060")]
+    # written once when the script runs, its failure (no reply) tolerated: as ecmccfg's EEPROM scripts do
+    assert 'ecmcConfig "Cfg.EcWriteSdo(0,0x2080,0x0,0x1,2)"' in ecmc
+    (back,) = import_bytes(ecmc.encode(), "x.cmd")
+    assert [(c.index, c.one_shot) for c in back.commands] == [(0x6060, False), (0x2080, True)]
+
+
+def test_one_shot_from_the_ecmc_eeprom_script_stays_one_shot_everywhere(tmp_path):
+    (cfg,) = import_file(corpus_path("configs", "ecmc_ecmciPOS4808-EEPROM-BaseConfig-StepperOpenLoopCSV.cmd"))
+    cfg.identity = Identity(0x1A3, 0x019F418D)  # set by the device script ecmccfg runs before it
+    assert [c.index for c in cfg.commands if c.one_shot] == [0x2080]
+    text = export(cfg, "igh")
+    assert text.count("ecrt_master_sdo_download(") == 1
+    assert "0x2080" not in text[text.index("int ecmc_ecmcipos4808"):]
+
+
+# --- 7. identity ---------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("fmt", ["igh", "ros2"])
+def test_unknown_identity_is_refused_not_written_as_zero(fmt):
+    cfg = SlaveConfig(StartupList([StartupCommand("PS", 0x6060, 0, b"\x08")]), name="x")
+    with pytest.raises(EncodeError, match="x: no vendor id/product code"):
+        export(cfg, fmt)
+
+
+def test_cli_refuses_identity_less_igh_with_one_line(tmp_path, capsys):
+    src = tmp_path / "list.txt"
+    src.write_text("<PS>,CoE,0x6060:00,0x08 (8),csp\n")
+    code, out, err = run(capsys, "startup", "convert", str(src), "--format", "igh", "-o", str(tmp_path / "x.c"))
+    assert code == 1 and "no vendor id/product code" in err and err.strip().count("\n") == 0
+    assert not (tmp_path / "x.c").exists()
+
+
+# --- 8. sync managers and watchdog from the source ----------------------------------------------------
+
+def _syncs(text: str) -> list[str]:
+    block = text[text.index("_syncs[] = {"):]
+    return re.findall(r"\{(\d+, EC_DIR_\w+, \d+, [^,]+, EC_WD_\w+)\}", block[:block.index("{0xff}")])
+
+
+def test_igh_sync_managers_follow_the_ros2_sm_section(tmp_path):
+    (cfg,) = import_file(corpus_path("configs", "ros2_beckhoff_el3104.yaml"))  # sm: {index: 3, input, watchdog: enable}
+    text = export(cfg, "igh")
+    assert _syncs(text) == ["0, EC_DIR_OUTPUT, 0, NULL, EC_WD_DISABLE", "1, EC_DIR_INPUT, 0, NULL, EC_WD_DISABLE",
+                            "3, EC_DIR_INPUT, 4, ros2_beckhoff_el3104_pdos + 0, EC_WD_ENABLE"]
+    assert _gcc(text, tmp_path).returncode == 0
+
+
+def test_igh_sync_managers_follow_lcec_and_esi(tmp_path, everest):
+    configs = import_file(corpus_path("configs", "lcec_generic-complex_ethercat-conf.xml"))
+    el6751 = next(c for c in configs if c.identity is not None)
+    assert [s.split(",")[0] for s in _syncs(export(el6751, "igh"))] == ["0", "1", "2", "3"]
+    cfg = SlaveConfig.from_device(everest, position=0)
+    text = export(cfg, "igh")
+    by_number = {sm.number: sm for sm in everest.sync_managers}
+    for line in _syncs(text):
+        n = int(line.split(",")[0])
+        if by_number[n].kind in ("Outputs", "Inputs"):
+            assert line.endswith("EC_WD_ENABLE" if by_number[n].control_byte & 0x40 else "EC_WD_DISABLE"), line
+    assert _gcc(text, tmp_path).returncode == 0
+
+
+# --- 6. ENI distributed clocks ---------------------------------------------------------------------------
+
+def test_eni_dc_is_cycle_start_and_activation_never_cycle_zero():
+    (cfg,) = import_file(corpus_path("configs", "ros2_elmo_gold.yaml"))
+    with pytest.raises(EncodeError, match="no SYNC0 cycle"):
+        export(cfg, "eni")
+    cfg.dc_cycle_ns = 2_000_000
+    slave = etree.fromstring(export(cfg, "eni").encode()).find("Config/Slave")
+    ados = [(ic.findtext("Transition"), int(ic.findtext("Ado"))) for ic in slave.findall("InitCmds/InitCmd")]
+    assert ados == [("PS", 0x09A0), ("PS", 0x0990), ("PS", 0x0980), ("IP", 0x0980)]
+    assert slave.findtext("DC/CycleTime0") == "2000000"
+    (back,) = import_bytes(etree.tostring(slave.getroottree()), "x.xml", "eni")
+    assert (back.dc_assign_activate, back.dc_cycle_ns) == (0x0300, 2_000_000)
+
+
+def test_cli_sync0_cycle_option_fills_the_missing_cycle(tmp_path, capsys):
+    out = tmp_path / "elmo.xml"
+    src = str(corpus_path("configs", "ros2_elmo_gold.yaml"))
+    code, _, err = run(capsys, "startup", "convert", src, "--format", "eni", "-o", str(out))
+    assert code == 1 and "--sync0-cycle" in err
+    code, _, _ = run(capsys, "startup", "convert", src, "--format", "eni", "--sync0-cycle", "1000000", "-o", str(out))
+    assert code == 0 and "<CycleTime0>1000000</CycleTime0>" in out.read_text()
+
+
+# --- 9. convert/export say what the import did not use ----------------------------------------------------
+
+def test_convert_prints_every_import_note(tmp_path, capsys):
+    src = corpus_path("configs", "ecmc_ecmciPOS4808-EEPROM-BaseConfig-StepperOpenLoopCSV.cmd")
+    configs = import_file(src)
+    notes = [str(n) for c in configs for n in c.notes]
+    assert notes
+    code, _, err = run(capsys, "startup", "convert", str(src), "--format", "json", "-o", str(tmp_path / "x.json"))
+    assert code == 0
+    for n in notes:
+        assert n in err
+    code, _, err2 = run(capsys, "startup", "export", "--from", str(src), "--format", "twincat")
+    assert code == 0 and all(n in err2 for n in notes)
+
+
+def test_convert_of_an_empty_result_is_an_error(tmp_path, capsys):
+    src = tmp_path / "empty.cmd"
+    src.write_text('epicsEnvSet("ECMC_EC_HWTYPE" "nothing")\nsomethingElse()\n')
+    out = tmp_path / "x.json"
+    code, _, err = run(capsys, "startup", "convert", str(src), "--format", "json", "-o", str(out))
+    assert code == 1 and "nothing to convert" in err and not out.exists()
+    assert "somethingElse()" in err  # the line that was not used is named
+
+
+@pytest.fixture(scope="module")
+def everest():
+    from ecattool import esi
+
+    return esi.load_device(str(corpus_path("esi", "ingenia_eve-xcr-e_esi.xml")))
+
+
+
+# --- 3/4. ecmc: entry sizes, unique names, the command forms ecmc's parser takes ---------------------------
+
+#: ecmcCmdParser's forms of the commands ecattool writes (sscanf patterns as regexes)
+ECMC_ENTRY = re.compile(r'^ecmcConfigOrDie "Cfg\.EcAddEntryComplete\((\w+|\$\{\w+\}),(\$\{\w+\}|0x[0-9a-f]+),'
+                        r'(\$\{\w+\}|0x[0-9a-f]+),([12]),(\d+),0x([0-9a-f]+),0x([0-9a-f]+),0x([0-9a-f]+),(\d+),'
+                        r'(?:([01]),)?([^,)]+)\)"$')
+
+
+def _ecmc_entries(text: str) -> list[tuple]:
+    out = []
+    for line in text.splitlines():
+        if "EcAddEntryComplete" in line:
+            m = ECMC_ENTRY.match(line)
+            assert m, f"not a form ecmc parses: {line}"
+            out.append(m.groups())
+    return out
+
+
+def test_ecmc_entries_are_sizes_ecmc_maps_with_unique_names():
+    (cfg,) = import_file(corpus_path("configs", "ros2_beckhoff_el3104.yaml"))  # 5-bit gaps, names repeat
+    text = export(cfg, "ecmc")
+    entries = _ecmc_entries(text)
+    assert {int(e[8]) for e in entries} <= {1, 2, 3, 4, 8, 16, 32, 64}
+    names = [e[10].lower() for e in entries]
+    assert len(names) == len(set(names))  # a duplicate name stops the IOC
+    # same bits per PDO as the source (the 5-bit gap is a 4-bit and a 1-bit gap), sync manager 3 from sm:
+    for p in cfg.tx_pdos:
+        assert sum(int(e[8]) for e in entries if int(e[5], 16) == p.index) == p.bit_size
+    assert {e[4] for e in entries} == {"3"}
+    (back,) = import_bytes(text.encode(), "x.cmd")
+    assert [p.bit_size for p in back.tx_pdos] == [p.bit_size for p in cfg.tx_pdos]
+
+
+def test_ecmc_refuses_an_object_entry_of_a_size_it_cannot_map():
+    from ecattool.esi.model import Direction, Pdo, PdoEntry
+
+    cfg = SlaveConfig(identity=Identity(2, 3), tx_pdos=[Pdo(Direction.TX, 0x1A00, entries=[PdoEntry(0x6000, 1, 6)])])
+    with pytest.raises(EncodeError, match="0x6000:01 has 6 bits"):
+        export(cfg, "ecmc")
+
+
+def test_ecmc_reads_the_dt_forms_and_the_realtime_flag_form():
+    script = b"""epicsEnvSet("ECMC_EC_VENDOR_ID" "0x2")
+epicsEnvSet("ECMC_EC_PRODUCT_ID" "0x4eb3052")
+ecmcConfigOrDie "Cfg.EcAddEntryDT(3,${ECMC_EC_VENDOR_ID},${ECMC_EC_PRODUCT_ID},1,2,0x1603,0x7001,0x1,B4,BO01_Ctrl)"
+ecmcConfigOrDie "Cfg.EcAddEntryDT(3,${ECMC_EC_VENDOR_ID},${ECMC_EC_PRODUCT_ID},1,2,0x1603,0x7001,0x9,S16,BO01_Cnt,1)"
+ecmcConfigOrDie "Cfg.EcAddEntryComplete(3,0x2,0x4eb3052,2,3,0x1a00,0x6000,0x11,16,position,1)"
+ecmcConfigOrDie "Cfg.EcAddEntryComplete(3,0x2,0x4eb3052,2,3,0x1a00,0x6064,0x0,32,1,pos)"
+ecmcConfigOrDie "Cfg.EcAddSdoDT(3,0x8010,0x1,1000.0,F32)"
+ecmcConfigOrDie "Cfg.EcAddSdoDT(3,0x8030,0x8,-1234,S64)"
+"""
+    (cfg,) = import_bytes(script, "el.cmd")
+    assert [(e.index, e.bit_len, e.data_type, e.name) for e in cfg.rx_pdos[0].entries] == [
+        (0x7001, 4, "BIT4", "BO01_Ctrl"), (0x7001, 16, "INT", "BO01_Cnt")]
+    # ...,bits,name,updateInRealtime): the last number is the realtime flag, not a sign
+    assert [(e.subindex, e.name, e.data_type) for e in cfg.tx_pdos[0].entries] == [
+        (0x11, "position", ""), (0, "pos", "DINT")]
+    assert [(c.index, c.data) for c in cfg.commands] == [(0x8010, struct.pack("<f", 1000.0)),
+                                                         (0x8030, (-1234).to_bytes(8, "little", signed=True))]
+    assert not cfg.notes
+
+
+# --- issue 14 item 5: nothing dropped silently -------------------------------------------------------
+
+def test_ecmc_reports_every_line_it_does_not_use():
+    src = corpus_path("configs", "ecmc_ecmciPOS4808-EEPROM-BaseConfig-StepperOpenLoopCSV.cmd")
+    (cfg,) = import_file(src)
+    lines = {n.location.line: n for n in cfg.notes}
+    # ecmcConfig "EcReadSdo(...)" (no Cfg. prefix) and the verify after it are named, not skipped silently
+    assert "EcReadSdo(${ECMC_EC_SLAVE_NUM},0x206A,0x0,2)" in lines[2185].message
+    assert "EcVerifySdo" in lines[2186].message
+    script = b'ecmcConfigOrDie "Cfg.EcAddSdo(0,0x6060,0x0,8,1)"\nsomeIocCommand(1,2)\n' \
+             b'ecmcConfigOrDie "Cfg.EcSomethingNew(0,1)"\nepicsThreadSleep(0.1)\n'
+    (cfg,) = import_bytes(script, "x.cmd")
+    assert [(n.location.line, n.rule) for n in cfg.notes] == [(2, "startup.ecmc.unused"), (3, "startup.ecmc.unused")]
