@@ -234,3 +234,23 @@ def test_esi_devices_and_show_surface_warnings_and_skipped_devices(tmp_path: Any
     data = json.loads(res.stdout)
     assert data["sync_managers"][0]["enable_byte"] == 0xFF
     assert {w["rule"] for w in data["warnings"]} == {"esi-number-range", "esi-device-skipped"}
+
+
+@pytest.mark.parametrize("lcid", ["1033", "+1033", "01033", " 1033 "])
+def test_the_english_name_is_found_by_its_lcid_in_every_integer_form(lcid: str) -> None:
+    tree = variant("etg_ETG2001_ModulesSlots_CiA402.xml")
+    root = tree.getroot()
+    obj = root.find(".//Device/Profile/Dictionary/Objects/Object")
+    named = [root.find(".//Device"), root.find(".//Descriptions/Modules/Module/RxPdo"),
+             root.find(".//Descriptions/Modules/Module/RxPdo/Entry"), obj]
+    for el in named:
+        first = el.find("Name")
+        first.set("LcId", "1031")  # the first name is another language; the English one follows
+        english = etree.Element("Name", LcId=lcid)
+        english.text = "English"
+        first.addnext(english)
+    assert_schema_valid(tree)
+    esi = read(tree)
+    pdo = esi.modules[0].rx_pdos[0]
+    index = int(obj.findtext("Index")[2:], 16)
+    assert esi.devices[0].name == pdo.name == pdo.entries[0].name == esi.devices[0].dictionary.get(index).name == "English"

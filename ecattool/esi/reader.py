@@ -42,6 +42,7 @@ from ecattool.od.model import ObjectDictionary, OdObject
 from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
 
 ROOTS = ("EtherCATInfo", "EtherCATModule", "EtherCATDict")
+_NO_INDEX = -(1 << 200)  # a PDO without an Index element (a schema-valid Index is never this)
 _T = TypeVar("_T")
 
 
@@ -428,7 +429,7 @@ class Reader:
     def pdo(self, el: Any, direction: Direction) -> Pdo:
         ctx = self.ctx
         get = el.get
-        pdo = Pdo(direction, -1)
+        pdo = Pdo(direction, _NO_INDEX)
         pdo.at_line(self.source, el.sourceline)
         name: str | None = None
         final = False
@@ -451,8 +452,10 @@ class Reader:
             elif tag == "Name":
                 name, final = name_step(child, name, final)
         pdo.name = name or ""
-        if pdo.index < 0:
-            raise InputError(f"{el.tag} has no Index", ctx.loc(el))
+        if not 0 <= pdo.index <= 0xFFFF:
+            if pdo.index == _NO_INDEX:
+                raise InputError(f"{el.tag} has no Index", ctx.loc(el))
+            pdo.index = self._in_range(pdo.index, 16, f"{el.tag}/Index", el)
         if len(el.attrib):
             # booleans and numbers spelled the common way are looked up (_BOOLEANS, the number memo), the rest
             # go through Context with its warnings and errors, in the same order as before
@@ -476,6 +479,14 @@ class Reader:
         if len(self._numbers) < 65536:
             self._numbers[text] = v  # type: ignore[index]
         return v
+
+    def _in_range(self, v: int, bits: int, what: str, el: Any) -> int:
+        """``v`` kept to ``bits`` bits (two's complement when negative), with a warning when it did not fit."""
+        if 0 <= v < 1 << bits:
+            return v
+        masked = v & ((1 << bits) - 1)
+        self.ctx.warn("esi-number-range", f"{what} {v} does not fit {bits} bits; read as {masked:#x}", el)
+        return masked
 
     def entry(self, en: Any) -> PdoEntry:
         # the hot loop of a large file (one call per PDO entry): numbers seen before are a dict look-up, and
@@ -517,6 +528,12 @@ class Reader:
             raise InputError("PDO Entry has no Index", self.ctx.loc(en))
         if bits is None:
             raise InputError(f"PDO Entry 0x{index:04X}:{sub or 0:02X} has no BitLen", self.ctx.loc(en))
+        if not (0 <= index <= 0xFFFF and 0 <= (sub or 0) <= 0xFF and bits >= 0):  # schema-valid, out of range
+            index = self._in_range(index, 16, "Entry/Index", en)
+            sub = self._in_range(sub or 0, 8, "Entry/SubIndex", en)
+            if bits < 0:
+                self.ctx.warn("esi-number-range", f"Entry/BitLen {bits} is negative; read as 0", en)
+                bits = 0
         e = PdoEntry(index, sub or 0, bits, name or "", dtype)
         e.at_line(self.source, en.sourceline)
         if dep is not None:
@@ -787,7 +804,9 @@ class Reader:
             elif tag == "URL":
                 if not dev.url or is_english(child.get("LcId")):
                     dev.url = (child.text or "").strip()
-            elif tag in ("ImageData16x14", "Image16x14"):
+            elif tag == "ImageData16x14":  # xs:hexBinary: kept in its canonical form (lower case, no blanks)
+                dev.image = "".join((child.text or "").split()).lower()
+            elif tag == "Image16x14":  # a file name
                 dev.image = (child.text or "").strip()
             elif tag == "Info":
                 cur = child.find("Electrical/EBusCurrent")
