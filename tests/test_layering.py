@@ -20,10 +20,6 @@ from pathlib import Path
 
 PKG = Path(__file__).resolve().parent.parent / "ecattool"
 
-#: Cycles allowed for now, each a set of modules (add one only with the issue that will remove it).
-#: sim/drive <-> sim/halt_homing goes when the drive application is split into pieces (issue 13, item 8).
-KNOWN_CYCLES: list[frozenset[str]] = [frozenset({"ecattool.sim.drive", "ecattool.sim.halt_homing"})]
-
 
 def _modules() -> dict[str, Path | None]:
     """Dotted module name → file (None for a namespace package directory without ``__init__.py``)."""
@@ -139,7 +135,7 @@ def room(module: str) -> str:
 
 
 def test_no_module_imports_itself_back() -> None:
-    found = [c for c in cycles(import_graph()) if frozenset(c[:-1]) not in KNOWN_CYCLES]
+    found = cycles(import_graph())
     assert not found, "import cycles inside ecattool/:\n" + "\n".join(" -> ".join(c) for c in found)
 
 
@@ -147,8 +143,6 @@ def test_packages_import_only_downward() -> None:
     graph = import_graph()
     rooms: dict[str, set[str]] = {}
     for module, targets in graph.items():
-        if any(frozenset(c) >= {module} for c in KNOWN_CYCLES):
-            continue
         for target in targets:
             if room(target) != room(module):
                 rooms.setdefault(room(module), set()).add(room(target))

@@ -9,8 +9,8 @@ Table 4.1.1, HDT §4.03.1, Control Techniques Table 7.2); the family differences
   transition 16 back to OPERATION ENABLED).
 
 Halt (controlword bit 8) and homing (mode 6) keep their state here; what the option codes and homing methods
-mean per family is decided by the drive (``drive.py``), which reads the dictionary. The motion model has no
-ramps in the position modes, so a halt stops PP, CSP, CSV and a homing search within the cycle; profile
+mean per family is decided by the drive application (``ecattool.sim.drive``), which reads the dictionary. The
+motion model has no ramps in the position modes, so a halt stops PP, CSP, CSV and a homing search within the cycle; profile
 velocity ramps down with the deceleration the drive passes in (increments per second²).
 """
 

@@ -31,7 +31,7 @@ from ecattool import abort as A
 from ecattool.sim.cia402 import HALT, HOMING, PV, Homing, State
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive import Drive
+    from ecattool.sim.drive.core import DriveCore
 
 HOMING_START = 0x0010  # controlword bit 4 in homing mode
 
@@ -86,13 +86,13 @@ def search_direction(method: int) -> tuple[int, int]:
 
 
 # --- halt ---------------------------------------------------------------------------------------------
-def halt_option(drive: Drive) -> int:
+def halt_option(drive: DriveCore) -> int:
     """605Dh, or the CiA-402 default 1 where the drive has no such object."""
     value = drive._read_int(0x605D, 0) if (0x605D, 0) in drive._entries else None
     return 1 if value is None else value
 
 
-def halt_deceleration(drive: Drive) -> Fraction | None:
+def halt_deceleration(drive: DriveCore) -> Fraction | None:
     """The ramp a halt uses in profile velocity, in increments per second² (None: stop within the cycle)."""
     option = halt_option(drive)
     read = drive._read_int
@@ -113,7 +113,7 @@ def halt_deceleration(drive: Drive) -> Fraction | None:
 
 
 # --- controlword and mode reactions -------------------------------------------------------------------
-def on_controlword(drive: Drive, cw: int, prev: int) -> None:
+def on_controlword(drive: DriveCore, cw: int, prev: int) -> None:
     """Halt and homing reactions to a controlword, after the state machine has moved."""
     cia = drive.cia
     if (cw ^ prev) & HALT:
@@ -134,13 +134,13 @@ def on_controlword(drive: Drive, cw: int, prev: int) -> None:
         drive._log("homing", event="interrupted", reason="controlword bit 4 cleared")
 
 
-def on_mode(drive: Drive) -> None:
+def on_mode(drive: DriveCore) -> None:
     if drive.cia.homing is Homing.IN_PROGRESS and drive.mode() != HOMING:
         drive.cia.interrupt_homing()
         drive._log("homing", event="interrupted", reason=f"mode changed to {drive.mode()}")
 
 
-def start_homing(drive: Drive) -> None:
+def start_homing(drive: DriveCore) -> None:
     cia = drive.cia
     method = drive._read_int(0x6098, 0) if (0x6098, 0) in drive._entries else 0
     method = method or 0
@@ -179,19 +179,19 @@ def start_homing(drive: Drive) -> None:
     drive._log("homing", event="attained", method=method, position=drive._user_position())
 
 
-def _speed(drive: Drive, sub: int) -> Fraction:
+def _speed(drive: DriveCore, sub: int) -> Fraction:
     """Homing speed 6099h:``sub`` (1 switch search, 2 zero search) in internal velocity units."""
     return abs(drive.units.velocity_to_internal(drive._read_int(0x6099, sub) or 0))
 
 
-def _on_its_switch(drive: Drive, method: int) -> bool:
+def _on_its_switch(drive: DriveCore, method: int) -> bool:
     negative = LIMIT_SWITCH_METHODS.get(method)
     if negative is None:
         return False
     return drive.limit_switches[0 if negative else 1]
 
 
-def on_limit_switches(drive: Drive) -> None:
+def on_limit_switches(drive: DriveCore) -> None:
     """The limit-switch inputs changed: a limit-switch homing search finds the switch, leaves it at the zero
     search speed, and homes where it becomes inactive (17/18) or then looks for an index pulse (1/2)."""
     cia = drive.cia
@@ -212,7 +212,7 @@ def on_limit_switches(drive: Drive) -> None:
             drive._log("homing", event="limit switch left", method=method, position=drive._user_position())
 
 
-def home_position(drive: Drive) -> Fraction | None:
+def home_position(drive: DriveCore) -> Fraction | None:
     """The internal position the home gets: HDT resets the sensor to 0 (6064h = 0 + 607Ch); the others set
     6064h to 607Ch, except Technosoft with 210Bh bit 12 = 1 (position kept, §6.3.3)."""
     if drive.behaviour.home_offset_continuous:
@@ -223,7 +223,7 @@ def home_position(drive: Drive) -> Fraction | None:
     return drive.units.position_to_internal(offset or 0)
 
 
-def after_step(drive: Drive, before: Homing) -> None:
+def after_step(drive: DriveCore, before: Homing) -> None:
     """Log and signal a homing search that ended in this step (no switch or index pulse was found)."""
     if before is Homing.IN_PROGRESS and drive.cia.homing is Homing.ERROR:
         drive._log("homing", event="error", method=drive._read_int(0x6098, 0),
@@ -233,12 +233,12 @@ def after_step(drive: Drive, before: Homing) -> None:
             drive.emcy(code, drive.behaviour.homing_error_emcy_data)
 
 
-def check_method(drive: Drive, sub: int, value: int) -> None:
+def check_method(drive: DriveCore, sub: int, value: int) -> None:
     if reserved_method(drive.family, value):
         raise SdoAbort(0x6098, sub, A.INVALID_VALUE)
 
 
-def halt_decel_for_step(drive: Drive, mode: int) -> Fraction | None:
+def halt_decel_for_step(drive: DriveCore, mode: int) -> Fraction | None:
     """Only profile velocity ramps a halt in this motion model."""
     if mode != PV or not drive.cia.controlword & HALT:
         return None

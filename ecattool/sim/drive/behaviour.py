@@ -1,0 +1,63 @@
+"""Where the families differ: the choices each family's drive makes where the manuals leave one open (see
+docs/decisions.md, "Simulator"), as data the pieces of the drive read."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ecattool import abort as A
+
+
+@dataclass(frozen=True, slots=True)
+class Behaviour:
+    """How a family reacts where the manuals leave a choice (see docs/decisions.md, "Simulator")."""
+
+    #: mapping entry (16xx/1Axx sub n) written while the mapping's sub-index 0 is not 0
+    mapping_busy: int = A.SUBINDEX_CANNOT_BE_WRITTEN_SI0_NONZERO
+    #: assignment entry (1C12/1C13 sub n) written while sub-index 0 is not 0
+    assign_busy: int = A.SUBINDEX_CANNOT_BE_WRITTEN_SI0_NONZERO
+    #: any write to a mapping object whose PDO is assigned (None: allowed in PRE-OP; the Control Techniques
+    #: quick start rewrites 1A05h while the default 1C13h assigns it, ambiguity A4b)
+    mapping_assigned: int | None = A.DATA_CANNOT_BE_STORED_STATE
+    #: CiA-402 Shutdown only leaves SWITCH ON DISABLED in OP (Control Techniques 7.3.1)
+    enable_needs_op: bool = False
+    #: 6060h cannot change in OPERATION ENABLED / QUICK STOP ACTIVE (Control Techniques 7.3.6)
+    mode_locked_when_enabled: bool = False
+    #: an unsupported mode is accepted and reported with this EMCY (Technosoft 0xFF04) instead of an abort
+    unsupported_mode_emcy: int | None = None
+    #: 6061h follows 6060h only once OPERATION ENABLED is reached (Technosoft §4.2.3)
+    mode_display_on_enable: bool = False
+    #: EMCY sent when an over-long PDO is found at PRE-OP -> SAFE-OP (Technosoft 0x8220)
+    pdo_length_emcy: int | None = None
+    #: controlword bit 4 1 -> 0 stops a homing search (HDT §4.08.1 "1->0 stop"; CT/CiA-402 "1 = start or
+    #: continue"); Technosoft only reacts to the 0 -> 1 edge (§6.3.1)
+    homing_stop_on_bit4_clear: bool = True
+    #: homing on the current position (35) also outside OPERATION ENABLED (Control Techniques 7.7.1, CiA-402)
+    homing_current_outside_enabled: bool = False
+    #: EMCY when a homing search fails (HDT FF02h, alarm FA_14 = bit 13 of the alarm bitmap) and its data
+    homing_error_emcy: int | None = None
+    homing_error_emcy_data: bytes = b""
+    #: EMCY when a homing start names a method the drive does not have (Technosoft FF03h)
+    homing_unavailable_emcy: int | None = None
+    #: 6064h = sensor position + 607Ch at all times (HDT §4.06.6), not only when homing ends
+    home_offset_continuous: bool = False
+    #: a homing start while a search runs is ignored with statusword bit 7 (warning) set (Technosoft §4.2.2)
+    homing_busy_warning: bool = False
+
+
+BEHAVIOURS: dict[str, Behaviour] = {
+    "technosoft-ipos": Behaviour(
+        mapping_busy=A.DATA_CANNOT_BE_STORED_STATE, assign_busy=A.DATA_CANNOT_BE_STORED_STATE,
+        unsupported_mode_emcy=0xFF04, mode_display_on_enable=True, pdo_length_emcy=0x8220,
+        homing_stop_on_bit4_clear=False, homing_unavailable_emcy=0xFF03, homing_busy_warning=True,
+    ),
+    "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
+                     home_offset_continuous=True),
+    "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
+                                   homing_current_outside_enabled=True),
+    "generic": Behaviour(homing_current_outside_enabled=True),
+}
+
+#: Control Techniques trip number -> 603Fh error code (SM-EtherCAT Table 9.17)
+CT_TRIP_CODES = {0: 0x0000, 1: 0x3200, 3: 0x2300, 6: 0x9000, 30: 0x7510, 31: 0x5530, 33: 0x7200, 38: 0x6200,
+                 106: 0x3210, 199: 0x6320, 202: 0x5000}

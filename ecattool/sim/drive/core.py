@@ -1,0 +1,214 @@
+"""What the pieces of the drive application share: the object store, the event log, the two ways the drive
+reports (emergencies, refused state changes), and the methods one piece offers the others.
+
+Each piece (:mod:`.sdo`, :mod:`.pdo`, :mod:`.process_data`, :mod:`.esm`, :mod:`.motion`, :mod:`.injection`,
+:mod:`.family`, :mod:`.memory`) is a class over :class:`DriveCore`; :class:`~ecattool.sim.drive.facade.Drive`
+combines them. A piece calls another only through a method declared here (or by subclassing the piece it
+builds on), so every module imports downward: core <- pieces <- facade.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any
+
+from ecattool.errors import SdoAbort, StateChangeError
+from ecattool.esi.model import Device, Direction
+from ecattool.od.model import EcState, Entry
+from ecattool.od.types import Kind
+from ecattool.profiles.rules import FamilyRules
+from ecattool.sim import eeprom as ee
+from ecattool.sim.cia402 import Cia402, State
+from ecattool.sim.drive.behaviour import Behaviour
+from ecattool.sim.faults import Faults
+from ecattool.sim.units import Units
+
+RX, TX = Direction.RX, Direction.TX
+
+
+@dataclass(frozen=True, slots=True)
+class Event:
+    """One thing the drive did. ``kind``: sdo_upload, sdo_download, sdo_abort, sdo_timeout, state,
+    state_refused, cia402, emcy, reset, power_loss, eeprom, foe, halt, homing."""
+
+    seq: int
+    kind: str
+    data: dict[str, Any]
+
+
+@dataclass(frozen=True, slots=True)
+class Emergency:
+    code: int
+    register: int
+    data: bytes = b"\x00" * 5
+
+    def to_bytes(self) -> bytes:
+        """The 8-byte EMCY message: code (LE), error register, 5 manufacturer bytes."""
+        return self.code.to_bytes(2, "little") + bytes([self.register & 0xFF]) + self.data[:5].ljust(5, b"\x00")
+
+
+@dataclass
+class Layout:
+    bits: int = 0
+    #: (index, subindex, bit offset, bit length); index 0 = gap or dummy
+    entries: list[tuple[int, int, int, int]] = field(default_factory=list)
+
+    @property
+    def size(self) -> int:
+        return (self.bits + 7) // 8
+
+
+def sdo_abort(index: int, sub: int, code: int) -> SdoAbort:
+    return SdoAbort(index, sub, code)
+
+
+def decode_int(e: Entry | None, raw: bytes) -> int:
+    """An integer entry's value from its bytes (the entry's bit size wins over a disagreeing type name)."""
+    v = int.from_bytes(raw, "little")
+    if e is None or e.datatype is None:
+        return v
+    bits = e.bit_size or 8 * len(raw)
+    v &= (1 << bits) - 1
+    if e.datatype.kind is Kind.SIGNED and v >= 1 << (bits - 1):
+        v -= 1 << bits
+    return v
+
+
+class DriveCore:
+    """The state every piece of the drive reads, the store helpers, and the methods pieces offer each other."""
+
+    #: seconds a homing method searches for its switch or index pulse before it reports a homing error
+    #: (the simulated axis has none connected; docs/decisions.md)
+    homing_search_s = Fraction(1)
+
+    # -- set at construction (facade) ------------------------------------------------------------
+    device: Device
+    rules: FamilyRules
+    family: str
+    behaviour: Behaviour
+    position: int
+    strict_pdo_length: bool
+    record_events: bool
+    faults: Faults
+    events: list[Event]
+    emergencies: list[Emergency]
+    memory: ee.Memory
+    _seq: int
+    _pdo_known: dict[Direction, set[tuple[int, int, int]]]
+    _fixed: set[int]
+    _pdo_only_set: frozenset[int]
+    _read_only_set: frozenset[int]
+    #: SDO download handlers: True to store the value, False to skip storing it, None when the drive does
+    #: not reply; upload handlers return the bytes; after-write reactions run once the value is stored
+    _handlers_down: dict[int, Callable[[int, bytes, int | None], bool | None]]
+    _handlers_up: dict[int, Callable[[int], bytes]]
+    _after_write: dict[int, Callable[[int, int | None], None]]
+    # -- set at power-on / reset -------------------------------------------------------------------
+    esm: EcState
+    _store: dict[tuple[int, int], bytes]
+    _entries: dict[tuple[int, int], Entry]
+    layout: dict[Direction, Layout]
+    cia: Cia402
+    limit_active: bool
+    limit_switches: tuple[bool, bool]
+    homing_warning: bool
+    has_cia402: bool
+    units: Units
+
+    # ------------------------------------------------------------------------------------------
+    # helpers on the store
+    # ------------------------------------------------------------------------------------------
+    def _read_int(self, index: int, sub: int) -> int | None:
+        e = self._entries.get((index, sub))
+        raw = self._store.get((index, sub))
+        if raw is None:
+            return None
+        return decode_int(e, raw)
+
+    def _put(self, index: int, sub: int, value: int) -> None:
+        e = self._entries.get((index, sub))
+        if e is None:
+            return
+        size = e.byte_size
+        signed = e.datatype is not None and e.datatype.kind is Kind.SIGNED
+        mask = (1 << (8 * size)) - 1
+        self._store[(index, sub)] = (value & mask).to_bytes(size, "little", signed=False) if signed else \
+            (value & mask).to_bytes(size, "little")
+
+    def value(self, index: int, sub: int = 0) -> Any:
+        """The decoded value of an entry (no SDO rules, no side effects): for tests and inspection."""
+        e = self._entries.get((index, sub))
+        raw = self._store[(index, sub)]
+        return e.decode(raw) if e is not None and e.datatype is not None else raw
+
+    def _log(self, kind: str, **data: Any) -> None:
+        if self.record_events:
+            self._seq += 1
+            self.events.append(Event(self._seq, kind, data))
+
+    # ------------------------------------------------------------------------------------------
+    # what the drive reports
+    # ------------------------------------------------------------------------------------------
+    def emcy(self, code: int, data: bytes = b"") -> Emergency:
+        """Send an emergency message (and log it). Also sets 603Fh/1001h where the drive has them."""
+        register = self._read_int(0x1001, 0) or 0
+        if code:
+            register |= 0x01
+            register |= {0x2: 0x02, 0x3: 0x04, 0x4: 0x08, 0x8: 0x10}.get(code >> 12, 0)
+            self._put(0x1001, 0, register)
+        if code and (0x1003, 1) in self._entries:
+            self._push_error_history(code)
+        m = Emergency(code, register, bytes(data))
+        self.emergencies.append(m)
+        self._log("emcy", code=code, register=register, data=bytes(data).hex())
+        return m
+
+    def _push_error_history(self, code: int) -> None:
+        """1003h: newest error in sub-index 1, older ones shifted down, sub-index 0 = count (CiA-301)."""
+        subs = sorted(s for (i, s) in self._entries if i == 0x1003 and s > 0)
+        for s in reversed(subs[1:]):
+            self._store[(0x1003, s)] = self._store[(0x1003, s - 1)]
+        self._put(0x1003, 1, code)
+        self._put(0x1003, 0, min(len(subs), (self._read_int(0x1003, 0) or 0) + 1))
+
+    def _refuse(self, state: EcState, code: int, why: str) -> None:
+        self._log("state_refused", previous=self.esm.value, requested=state.value, al_status=code, reason=why)
+        raise StateChangeError(state.value, self.esm.value, code)
+
+    # ------------------------------------------------------------------------------------------
+    # what the pieces offer each other (implemented by the piece named)
+    # ------------------------------------------------------------------------------------------
+    def mode(self) -> int:  # motion
+        raise NotImplementedError
+
+    def step(self, cycles: int = 1) -> None:  # motion
+        raise NotImplementedError
+
+    def _cia_moves(self, moves: list[tuple[State, State]], why: str) -> None:  # motion
+        raise NotImplementedError
+
+    def _refresh_inputs(self) -> None:  # motion
+        raise NotImplementedError
+
+    def _user_position(self) -> int:  # motion
+        raise NotImplementedError
+
+    def option_end_state(self, index: int, option: int, default: str) -> str:  # injection
+        raise NotImplementedError
+
+    def _esm_effects(self, previous: EcState, state: EcState) -> None:  # family
+        raise NotImplementedError
+
+    def _check_sm(self, d: Direction) -> Layout:  # process_data
+        raise NotImplementedError
+
+    def _power_loss(self) -> None:  # memory
+        raise NotImplementedError
+
+    def _power_on(self) -> None:  # facade
+        raise NotImplementedError
+
+    def _reset_application(self) -> None:  # facade
+        raise NotImplementedError

@@ -1,0 +1,109 @@
+"""Family behaviour beyond storing values: objects that check or react to what is written (HDT 6046h, Control
+Techniques 604Bh/604Ch/6046h, interpolation periods 60C2h, the CiA-301 store signature 1010h), what a family's
+module does itself on an ESM change, and the encoder resolution it reports. The choices as data are
+:mod:`.behaviour`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ecattool import abort as A
+from ecattool.od.model import EcState
+from ecattool.profiles.rules import interpolation_period_ns
+from ecattool.sim.drive.core import DriveCore, sdo_abort
+
+
+class FamilyQuirks(DriveCore):
+    """The family's object handlers and ESM reactions."""
+
+    def _encoder_resolution(self) -> None:
+        """Control Techniques 608Fh is read-only and "read from the drive's encoder configuration" (A24):
+        the drive reports its position resolution, 65536 increments per revolution (the drive's 1/2^16-turn
+        position format), not the table default 1/1. :meth:`set_encoder_resolution` changes it."""
+        if self.family == "controltechniques" and (0x608F, 1) in self._entries:
+            self._put(0x608F, 1, self.rules.counts_per_rev or 65536)
+            self._put(0x608F, 2, 1)
+
+    def set_encoder_resolution(self, increments: int, revolutions: int = 1) -> None:
+        """The drive's feedback configuration changes (what 608Fh reports; also writable where 608Fh is RW)."""
+        self._put(0x608F, 1, increments)
+        self._put(0x608F, 2, revolutions)
+
+    #: Control Techniques Pr MM.04 (5.5, Table 5.6): the ESM state as the module reports it in its menu
+    _CT_MM04 = {EcState.INIT: 1, EcState.PREOP: 2, EcState.SAFEOP: 4, EcState.OP: 8}
+    #: Control Techniques 7.3.1: the module writes these drive parameters, in this order, on SAFE-OP -> OP
+    #: (Pr 6.42 = 0, Pr 6.43 = 1: control word enable; Pr 3.22 = 0, Pr 3.23 = 1 where the drive has them)
+    _CT_TO_OP = ((0x2006, 42, 0), (0x2006, 43, 1), (0x2003, 22, 0), (0x2003, 23, 1))
+
+    def _esm_effects(self, previous: EcState, state: EcState) -> None:
+        """What a family's module does itself on an ESM change (Control Techniques: MM.04 follows the state in
+        the slot menu 0x200F and its mirror 0x203C; the SAFE-OP -> OP parameter writes)."""
+        if self.family != "controltechniques":
+            return
+        code = self._CT_MM04.get(state)
+        if code is not None:
+            for menu in (0x200F, 0x203C):
+                self._put(menu, 4, code)
+        if previous is EcState.SAFEOP and state is EcState.OP:
+            for index, sub, value in self._CT_TO_OP:
+                if (index, sub) in self._entries:
+                    self._put(index, sub, value)
+                    self._log("drive_parameter", parameter=f"{index - 0x2000}.{sub:02d}", value=value,
+                              reason="SAFE-OP -> OP (7.3.1)")
+
+    def _check_min_max(self, sub: int, data: bytes, value: int | None) -> bool:
+        """HDT §4.11.6: 6046h max <= min is refused with 0609 0030h."""
+        other = self._read_int(0x6046, 2 if sub == 1 else 1) or 0
+        lo, hi = (value or 0, other) if sub == 1 else (other, value or 0)
+        if sub in (1, 2) and hi <= lo:
+            raise sdo_abort(0x6046, sub, A.INVALID_VALUE)
+        return True
+
+    def _check_store_signature(self, sub: int, data: bytes, value: int | None) -> bool:
+        """CiA-301 1010h (HDT §2.08.1.a): a store command is the signature "save" (65766173h, bytes 73 61 76
+        65 on the wire); anything else is refused with 0800 0020h."""
+        if sub and value != 0x65766173:
+            raise sdo_abort(0x1010, sub, A.DATA_CANNOT_BE_STORED)
+        return True
+
+    def _copy_min_max_amount(self, sub: int, value: int | None) -> None:
+        """Control Techniques 7.5.4: writing 6046h sub 1 (sub 2) overwrites 6047h sub 1 and 3 (2 and 4)."""
+        if sub in (1, 2):
+            for target in (sub, sub + 2):
+                self._put(0x6047, target, value or 0)
+
+    @staticmethod
+    def _nonzero(index: int) -> Callable[[int, bytes, int | None], bool]:
+        """Control Techniques 7.5.9/7.5.10: a 0 in 604Bh/604Ch is invalid (code not stated: 0609 0030h)."""
+        def check(sub: int, data: bytes, value: int | None) -> bool:
+            if sub and not value:
+                raise sdo_abort(index, sub, A.INVALID_VALUE)
+            return True
+        return check
+
+    def _check_interpolation_period(self, sub: int, data: bytes, value: int | None) -> bool:
+        """The family's interpolation periods (``FamilyRules.accepts_ip_period``; Control Techniques 7.4.3:
+        250 us, 500 us or k x 1 ms); any other value is refused (code not stated: 0609 0030h). Checked on each
+        write, with the other sub-index as stored."""
+        if sub not in (1, 2):
+            return True
+        base = (value or 0) if sub == 1 else (self._read_int(0x60C2, 1) or 0)
+        exp = (value or 0) if sub == 2 else (self._read_int(0x60C2, 2) or 0)
+        if not -9 <= exp <= 2:
+            return True  # the entry's own range check answers
+        if not self.rules.accepts_ip_period(interpolation_period_ns(base, exp)):
+            raise sdo_abort(0x60C2, sub, A.INVALID_VALUE)
+        return True
+
+    def _install_family_handlers(self) -> None:
+        self._handlers_down[0x1010] = self._check_store_signature
+        if self.behaviour.home_offset_continuous:
+            self._after_write[0x607C] = lambda sub, value: self._refresh_inputs()  # 6064h = sensor + 607Ch
+        if self.family == "hdt":
+            self._handlers_down[0x6046] = self._check_min_max
+        if self.rules.ip_periods_ns or self.rules.ip_period_step_ns:
+            self._handlers_down[0x60C2] = self._check_interpolation_period
+        if self.family == "controltechniques":
+            self._handlers_down[0x604B] = self._nonzero(0x604B)
+            self._handlers_down[0x604C] = self._nonzero(0x604C)
+            self._after_write[0x6046] = self._copy_min_max_amount

@@ -1,0 +1,92 @@
+"""What the outside world does to a drive, for tests and scripts: faults (and the family's alarms and trips),
+lost communication, limit-switch inputs."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+from ecattool.od.model import EcState
+from ecattool.sim.cia402 import State
+from ecattool.sim.drive import halt_homing as hh
+from ecattool.sim.drive.behaviour import CT_TRIP_CODES
+from ecattool.sim.drive.core import DriveCore
+
+
+class Injection(DriveCore):
+    """Faults, communication loss and inputs, with the reactions the family's rules give them."""
+
+    def inject_fault(self, code: int, data: bytes = b"") -> None:
+        """A drive fault: FAULT REACTION ACTIVE -> FAULT, 603Fh = code, EMCY with the code."""
+        self._cia_moves(self.cia.fault(code), f"fault 0x{code:04X}")
+        self.emcy(code, data)
+        self._refresh_inputs()
+
+    def lose_communication(self) -> None:
+        """Fault injection: the process data stops (cable pulled, SM watchdog). The ESM drops from OP to
+        SAFE-OP (AL status 0x001B) and the drive reacts with its abort connection option code 6007h:
+        0 no action, 1 fault (EMCY 0x8100), 2 disable voltage, 3 quick stop, unless the family's
+        rules say otherwise (HDT 3: quick-stop ramp and stay enabled); Control Techniques always ends in
+        SWITCH ON DISABLED (7.3.1)."""
+        if self.esm is EcState.OP:
+            self._log("state", previous="OP", state="SAFEOP", al_status=0x001B, reason="sync manager watchdog")
+            self.esm = EcState.SAFEOP
+            self._esm_effects(EcState.OP, EcState.SAFEOP)
+        if not self.has_cia402:
+            return
+        option = self._read_int(0x6007, 0)
+        option = 1 if option is None else option
+        end = self.option_end_state(0x6007, option,
+                                    {0: "NO_ACTION", 1: "FAULT", 2: "SWITCH_ON_DISABLED"}.get(option, "QUICK_STOP"))
+        if self.family == "controltechniques":
+            end = "SWITCH_ON_DISABLED"
+        self._log("cia402", reason=f"communication lost, 6007h = {option}", reaction=end)
+        if end == "FAULT":
+            self.inject_fault(0x8100)
+        elif end == "SWITCH_ON_DISABLED":
+            self._cia_moves(self.cia.communication_lost(), "communication lost")
+        elif end == "QUICK_STOP" and self.cia.state is State.OPERATION_ENABLED:
+            self._cia_moves(self.cia.controlword_written(self.cia.controlword & ~0x04 | 0x02, ecat_op=False,
+                                                        quick_stop_option=self._read_int(0x605A, 0) or 2),
+                            "communication lost: quick stop")
+        elif end == "OPERATION_ENABLED":
+            self.cia.velocity = Fraction(0)
+            self.cia.target = None
+            self.cia.interrupt_homing()
+        self._refresh_inputs()
+
+    def option_end_state(self, index: int, option: int, default: str) -> str:
+        """The end state the family rules give an option code (``option_code_end_states``), else ``default``."""
+        for i, v, end in getattr(self.rules, "option_code_end_states", ()):
+            if i == index and v == option:
+                return str(end)
+        return default
+
+    def set_limit_switches(self, *, negative: bool = False, positive: bool = False) -> None:
+        """The limit-switch inputs change: 60FDh bits per the family (HDT swaps them: bit 0 = CW =
+        positive); Technosoft sends EMCY 0x5442/0x5443 when one becomes active and 0x0000 when it clears
+        (§3.1.3), and statusword bit 11 (internal limit active) follows."""
+        neg_bit, pos_bit = self.rules.limit_switch_bits
+        old = self._read_int(0x60FD, 0) or 0
+        new = old & ~((1 << neg_bit) | (1 << pos_bit))
+        new |= (negative << neg_bit) | (positive << pos_bit)
+        self._put(0x60FD, 0, new)
+        was_neg, was_pos = bool(old >> neg_bit & 1), bool(old >> pos_bit & 1)
+        self.limit_active = negative or positive
+        self.limit_switches = (negative, positive)
+        self._log("inputs", digital_inputs=new)
+        if self.family == "technosoft-ipos":
+            for was, now, code in ((was_neg, negative, 0x5442), (was_pos, positive, 0x5443)):
+                if now and not was:
+                    self.emcy(code)
+                elif was and not now:
+                    self.emcy(0x0000)
+        hh.on_limit_switches(self)
+        self._refresh_inputs()
+
+    def inject_hdt_alarm(self, alarm: int, code: int) -> None:
+        """HDT: alarm FA_n with EMCY ``code``; EMCY bytes 3..6 carry the alarm bitmap (bit n-1)."""
+        self.inject_fault(code, (1 << (alarm - 1)).to_bytes(4, "little") + b"\x00")
+
+    def inject_trip(self, trip: int) -> None:
+        """Control Techniques: drive trip number -> 603Fh per Table 9.17 (unlisted trips 0x1000)."""
+        self.inject_fault(CT_TRIP_CODES.get(trip, 0x1000))

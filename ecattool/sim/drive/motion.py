@@ -1,0 +1,147 @@
+"""CiA-402 on the drive: controlword and mode reactions, the motion model stepped per process-data cycle,
+and the actual values it reports (statusword, positions, velocity, error code). Halt and homing per family
+are :mod:`.halt_homing`."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+from ecattool import abort as A
+from ecattool.od.model import EcState
+from ecattool.profiles.rules import interpolation_period_ns
+from ecattool.sim.cia402 import CSP, HOMING, PP, Homing, State
+from ecattool.sim.drive import halt_homing as hh
+from ecattool.sim.drive.core import DriveCore, sdo_abort
+from ecattool.sim.units import to_int
+
+
+class Motion(DriveCore):
+    """The CiA-402 device control and the motion it produces."""
+
+    def cycle_time(self) -> Fraction:
+        """The process-data cycle in seconds: 60C2h (sub1 × 10^sub2) where present, else 1 ms."""
+        if hasattr(self, "_store"):
+            base, exp = self._read_int(0x60C2, 1), self._read_int(0x60C2, 2)
+            if base and exp is not None and -9 <= exp <= 2:
+                return interpolation_period_ns(base, exp) / 10**9
+        return Fraction(1, 1000)
+
+    def _cia_moves(self, moves: list[tuple[State, State]], why: str) -> None:
+        for old, new in moves:
+            self._log("cia402", previous=old.value, state=new.value, reason=why)
+            if new is State.OPERATION_ENABLED and self.behaviour.mode_display_on_enable:
+                self._put(0x6061, 0, self._read_int(0x6060, 0) or 0)
+
+    def _on_controlword(self, sub: int, value: int | None) -> None:
+        cw = value or 0
+        prev = self.cia.controlword
+        moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP,
+                                             quick_stop_option=self._read_int(0x605A, 0) or 2)
+        self._cia_moves(moves, f"controlword 0x{cw:04X}")
+        if self.cia.state is State.OPERATION_ENABLED and self.mode() == PP:
+            if cw & 0x10 and not prev & 0x10:
+                relative = bool(cw & 0x40)
+                target = (self._read_int(0x607A, 0) or 0) - (0 if relative else self._home_offset())
+                self.cia.new_setpoint(self.units.position_to_internal(target), relative=relative)
+            elif not cw & 0x10:
+                self.cia.setpoint_ack = False
+        hh.on_controlword(self, cw, prev)
+        self._refresh_inputs()
+
+    def _on_mode(self, sub: int, value: int | None) -> None:
+        if not self.behaviour.mode_display_on_enable or self.cia.state is State.OPERATION_ENABLED:
+            self._put(0x6061, 0, value or 0)
+        hh.on_mode(self)
+        self._refresh_inputs()
+
+    def _check_mode(self, sub: int, data: bytes, value: int | None) -> bool:
+        mode = value or 0
+        if self.behaviour.mode_locked_when_enabled and self.cia.state in (State.OPERATION_ENABLED, State.QUICK_STOP) \
+                and mode != self.mode():
+            raise sdo_abort(0x6060, sub, A.DATA_CANNOT_BE_STORED_STATE)
+        supported = self.rules.supported_modes
+        if supported and mode not in supported and mode != 0:
+            if self.behaviour.unsupported_mode_emcy is not None:
+                self.emcy(self.behaviour.unsupported_mode_emcy)
+            else:
+                raise sdo_abort(0x6060, sub, A.INVALID_VALUE)
+        return True
+
+    def _check_homing_method(self, sub: int, data: bytes, value: int | None) -> bool:
+        hh.check_method(self, sub, value or 0)
+        return True
+
+    def mode(self) -> int:
+        # every dictionary entry has a stored value, so 6061h reads as an int whenever the drive has it
+        index = 0x6061 if (0x6061, 0) in self._entries else 0x6060
+        return self._read_int(index, 0) or 0
+
+    def step(self, cycles: int = 1) -> None:
+        """Advance the motion model by ``cycles`` process-data cycles (see :meth:`cycle_time`)."""
+        if not self.has_cia402:
+            return
+        dt = self.cycle_time()
+        u = self.units
+        for _ in range(cycles):
+            mode = self.mode()
+            homing_before = self.cia.homing
+            self.cia.step(
+                mode, dt,
+                target_position=u.position_to_internal((self._read_int(0x607A, 0) or 0) - self._home_offset()
+                                                       if mode == CSP else 0),
+                target_velocity=u.velocity_to_internal(self._read_int(0x60FF, 0) or 0),
+                profile_velocity=u.velocity_to_internal(self._read_int(0x6081, 0) or 0),
+                acceleration=u.acceleration_to_internal(self._read_int(0x6083, 0) or 0),
+                inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
+                inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
+            )
+            if homing_before is not self.cia.homing:
+                hh.after_step(self, homing_before)
+        self._refresh_inputs()
+
+    def _refresh_inputs(self) -> None:
+        """Actual values from the state: 6041h, 6063h/6064h, 606Ch, 603Fh."""
+        if not getattr(self, "has_cia402", False):
+            return
+        mode = self.mode()
+        sw = self.cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
+        if self.family == "technosoft-ipos" and mode == HOMING and self.cia.homing is Homing.IN_PROGRESS:
+            sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
+        self._put(0x6041, 0, sw)
+        u = self.units
+        self._put(0x6063, 0, to_int(self.cia.position))
+        user_position = self._user_position()
+        self._put(0x6064, 0, user_position)
+        self._put(0x6062, 0, user_position)
+        self._put(0x606C, 0, to_int(u.velocity_to_user(self.cia.velocity)))
+        self._put(0x603F, 0, self.cia.fault_code)
+
+    def _home_offset(self) -> int:
+        """607Ch where the family adds it to the measured position at all times (HDT), else 0."""
+        if not self.behaviour.home_offset_continuous:
+            return 0
+        return self._read_int(0x607C, 0) or 0
+
+    def _user_position(self) -> int:
+        """6064h: the position in user units (HDT: sensor position + home offset 607Ch, §4.06.6)."""
+        return to_int(self.units.position_to_user(self.cia.position)) + self._home_offset()
+
+    @property
+    def internal_position(self) -> int:
+        """Position in the drive's internal units (increments), truncated as the drive stores it."""
+        return to_int(self.cia.position)
+
+    @property
+    def internal_velocity(self) -> int:
+        """Velocity in internal units (Technosoft: 16.16 increments per slow-loop sample)."""
+        return to_int(self.cia.velocity)
+
+    @property
+    def cia402_state(self) -> State:
+        return self.cia.state
+
+    def _install_motion_handlers(self) -> None:
+        self._after_write[0x6040] = self._on_controlword
+        self._after_write[0x6060] = self._on_mode
+        self._handlers_down[0x6060] = self._check_mode
+        self._handlers_down[0x6098] = self._check_homing_method

@@ -1,0 +1,113 @@
+"""Process data: the SAFE-OP check of the assigned PDOs that yields the process image layout, and the cyclic
+exchange of the output and input images."""
+
+from __future__ import annotations
+
+from ecattool.errors import SdoAbort, TargetError
+from ecattool.esi.model import Direction
+from ecattool.od.model import EcState
+from ecattool.sim import eeprom as ee
+from ecattool.sim.drive.core import RX, TX, Layout
+from ecattool.sim.drive.esm import AL_INVALID_INPUT_CONFIG, AL_INVALID_OUTPUT_CONFIG
+from ecattool.sim.drive.pdo import PdoConfig
+
+
+class ProcessData(PdoConfig):
+    """The process image: built from the assignment at PRE-OP -> SAFE-OP, exchanged each cycle."""
+
+    def _check_sm(self, d: Direction) -> Layout:
+        """The SAFE-OP check of one direction's assigned PDOs; returns the process image layout."""
+        code = AL_INVALID_OUTPUT_CONFIG if d is RX else AL_INVALID_INPUT_CONFIG
+        layout = Layout()
+        assigned = self._assigned(d)
+        limit = self.rules.max_assigned_rx if d is RX else self.rules.max_assigned_tx
+        if limit is not None and len(assigned) > limit:
+            self._refuse(EcState.SAFEOP, code, f"{len(assigned)} PDOs assigned, at most {limit}")
+        if self._slow_in_first(d, assigned):
+            self._refuse(EcState.SAFEOP, code, "a slow parameter is mapped in the first (high priority) PDO")
+        for pdo in assigned:
+            entries = self._pdo_entries(d, pdo)
+            if entries is None:
+                self._refuse(EcState.SAFEOP, code, f"assigned PDO 0x{pdo:04X} does not exist")
+            assert entries is not None
+            bits = 0
+            for e in entries:
+                if e.index == 0 and e.bit_len == 0:
+                    continue  # an empty gap some ESI PDO lists carry
+                try:
+                    self._mapping_entry_bits(d, pdo, 0, e.mapping_value)
+                except SdoAbort:
+                    self._refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} maps an invalid entry 0x{e.mapping_value:08X}")
+                is_pad = e.index == 0 or e.index in self.rules.dummy_indices or e.index < 0x20
+                layout.entries.append((0 if is_pad else e.index, e.subindex, layout.bits + bits, e.bit_len))
+                bits += e.bit_len
+            if self.rules.max_pdo_bits is not None and bits > self.rules.max_pdo_bits:
+                if self.behaviour.pdo_length_emcy is not None:
+                    self.emcy(self.behaviour.pdo_length_emcy)
+                self._refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} is {bits} bits, at most {self.rules.max_pdo_bits}")
+            if self.rules.max_pdo_entries is not None and len(entries) > self.rules.max_pdo_entries:
+                self._refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} has {len(entries)} entries")
+            layout.bits += bits
+        if layout.bits % 8:
+            self._refuse(EcState.SAFEOP, code, f"{layout.bits} bits of process data is not a whole number of bytes")
+        sm = self.device.process_sm(d)
+        if sm is not None and sm.max_size is not None and layout.size > sm.max_size:
+            self._refuse(EcState.SAFEOP, code, f"{layout.size} bytes exceed SM{sm.number} maximum {sm.max_size}")
+        return layout
+
+    def process_image_sizes(self) -> tuple[int, int]:
+        """(output bytes, input bytes) of the current layout (valid from SAFE-OP on)."""
+        return self.layout[RX].size, self.layout[TX].size
+
+    def exchange(self, outputs: bytes) -> bytes:
+        """One cycle: in OP the outputs are written into the mapped objects and the motion advances one
+        cycle; in SAFE-OP outputs are ignored. Returns the input image."""
+        if self.esm not in (EcState.SAFEOP, EcState.OP):
+            raise TargetError(f"no process data in {self.esm.value} (request SAFEOP or OP first)")
+        rx = self.layout[RX]
+        if len(outputs) != rx.size:
+            raise TargetError(f"output image is {len(outputs)} bytes, the drive expects {rx.size}")
+        if self.esm is EcState.OP:
+            # A drive latches the whole RxPDO image first and only then reacts to it (a new set-point in
+            # the controlword must see the target position of the same cycle).
+            image = int.from_bytes(outputs, "little")
+            reactions: list[tuple[int, int, bytes]] = []
+            try:
+                for index, sub, offset, bits in rx.entries:
+                    if index == 0:
+                        continue
+                    raw = ((image >> offset) & ((1 << bits) - 1)).to_bytes((bits + 7) // 8, "little")
+                    if self._pdo_write(index, sub, raw):
+                        reactions.append((index, sub, raw))
+            except ee.PowerLost:
+                # the drive drops off the bus; it comes back in INIT with the EEPROM as far as it was written
+                self._power_loss()
+                raise TargetError("the drive lost power during an EEPROM write (it is back in INIT)") from None
+            for index, sub, raw in reactions:
+                self._after_write[index](sub, int.from_bytes(raw, "little"))
+            self.step()
+        return self._pack_inputs()
+
+    def _pdo_write(self, index: int, sub: int, raw: bytes) -> bool:
+        """Store one mapped output; True when the object has a reaction to run once the image is latched."""
+        old = self._store.get((index, sub))
+        handler = self._handlers_down.get(index)
+        if index in (0x2065, 0x2067) and handler is not None:
+            if old == raw:
+                return False
+            try:
+                handler(sub, raw, int.from_bytes(raw, "little"))
+            except SdoAbort:
+                return False
+        self._store[(index, sub)] = raw
+        return index in self._after_write and old != raw
+
+    def _pack_inputs(self) -> bytes:
+        tx = self.layout[TX]
+        image = 0
+        for index, sub, offset, bits in tx.entries:
+            if index == 0:
+                continue
+            raw = self._store.get((index, sub), b"")
+            image |= (int.from_bytes(raw, "little") & ((1 << bits) - 1)) << offset
+        return image.to_bytes(tx.size, "little")

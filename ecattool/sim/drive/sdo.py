@@ -1,0 +1,204 @@
+"""The SDO server side of the object dictionary: uploads and downloads with the drive's access, state, length
+and range rules and abort codes, complete access, and the SDO faults a test plans (:class:`~ecattool.sim.Faults`)."""
+
+from __future__ import annotations
+
+from ecattool import abort as A
+from ecattool.errors import SdoAbort, SdoTimeout
+from ecattool.od.model import MAILBOX_STATES, Entry, ObjectCode
+from ecattool.od.types import Kind
+from ecattool.sim import eeprom as ee
+from ecattool.sim.drive.core import decode_int, sdo_abort
+from ecattool.sim.drive.pdo import PdoConfig, is_assign, is_mapping
+
+
+class SdoServer(PdoConfig):
+    """SDO upload/download (mapping and assignment writes go through :class:`PdoConfig`'s rules)."""
+
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
+        planned = self.faults.next_sdo()
+        if self.esm not in MAILBOX_STATES:
+            self._log("sdo_timeout", index=index, subindex=subindex, reason=f"no mailbox in {self.esm.value}")
+            raise SdoTimeout(index, subindex)
+        if planned is not None:
+            self._planned(planned, index, subindex)
+        try:
+            data = self._ca_upload(index, subindex) if complete_access else self._upload(index, subindex)
+        except SdoAbort as exc:
+            self._log("sdo_abort", op="upload", index=index, subindex=subindex, code=exc.code)
+            raise
+        if planned is not None and planned[0] == "drop":
+            self._log("sdo_timeout", index=index, subindex=subindex, reason="reply dropped (fault injection)")
+            raise SdoTimeout(index, subindex)
+        self._log("sdo_upload", index=index, subindex=subindex, data=data.hex())
+        return data
+
+    def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
+                     expect_reply: bool = True) -> None:
+        planned = self.faults.next_sdo()
+        if self.esm not in MAILBOX_STATES:
+            self._log("sdo_timeout", index=index, subindex=subindex, reason=f"no mailbox in {self.esm.value}")
+            raise SdoTimeout(index, subindex)
+        if planned is not None:
+            if planned[0] == "drop" and not planned[1]:
+                self._log("sdo_timeout", index=index, subindex=subindex, reason="request lost (fault injection)")
+                raise SdoTimeout(index, subindex)
+            self._planned(planned, index, subindex)
+        data = bytes(data)
+        try:
+            if complete_access:
+                self._ca_download(index, subindex, data)
+                no_reply = False
+            else:
+                no_reply = self._download(index, subindex, data)
+        except SdoAbort as exc:
+            self._log("sdo_abort", op="download", index=index, subindex=subindex, data=data.hex(), code=exc.code)
+            raise
+        except ee.PowerLost:
+            self._power_loss()
+            raise SdoTimeout(index, subindex) from None
+        self._log("sdo_download", index=index, subindex=subindex, data=data.hex())
+        if no_reply or (planned is not None and planned[0] == "drop"):
+            if expect_reply:
+                self._log("sdo_timeout", index=index, subindex=subindex, reason="the drive sends no reply")
+                raise SdoTimeout(index, subindex)
+
+    def _planned(self, planned: tuple[str, int], index: int, subindex: int) -> None:
+        if planned[0] == "abort":
+            self._log("sdo_abort", op="injected", index=index, subindex=subindex, code=planned[1])
+            raise sdo_abort(index, subindex, planned[1])
+
+    def _entry(self, index: int, sub: int) -> Entry:
+        e = self._entries.get((index, sub))
+        if e is None:
+            if index not in self.device.dictionary:
+                raise sdo_abort(index, sub, A.OBJECT_DOES_NOT_EXIST)
+            raise sdo_abort(index, sub, A.SUBINDEX_DOES_NOT_EXIST)
+        return e
+
+    def _pdo_only(self, index: int, sub: int) -> None:
+        if index in self._pdo_only_set:
+            raise sdo_abort(index, sub, A.UNSUPPORTED_ACCESS)  # Control Techniques 8.5: 2830h/2831h cyclic only
+
+    def _upload(self, index: int, sub: int) -> bytes:
+        e = self._entry(index, sub)
+        self._pdo_only(index, sub)
+        if not e.access.read:
+            raise sdo_abort(index, sub, A.WRITE_ONLY)
+        if self.esm not in e.access.read:
+            raise sdo_abort(index, sub, A.DATA_CANNOT_BE_STORED_STATE)
+        handler = self._handlers_up.get(index)
+        if handler is not None:
+            return handler(sub)
+        return self._store[(index, sub)]
+
+    def _ca_supported(self, index: int, sub: int) -> None:
+        mb = self.device.mailbox
+        if mb is None or mb.coe is None or not mb.coe.complete_access:
+            raise sdo_abort(index, sub, A.COMPLETE_ACCESS_NOT_SUPPORTED)
+        obj = self.device.dictionary.get(index)
+        if obj is None:
+            raise sdo_abort(index, sub, A.OBJECT_DOES_NOT_EXIST)
+        if obj.object_code is ObjectCode.VAR or sub > 1:
+            raise sdo_abort(index, sub, A.UNSUPPORTED_ACCESS)
+
+    def _ca_subs(self, index: int, first: int) -> list[int]:
+        return sorted(s for (i, s) in self._entries if i == index and s >= first)
+
+    def _ca_upload(self, index: int, sub: int) -> bytes:
+        """Complete access: sub-index 0 padded to 16 bits, then every entry bit-packed (ETG.1000.6)."""
+        self._ca_supported(index, sub)
+        acc = 0
+        nbits = 0
+        for s in self._ca_subs(index, sub):
+            raw = self._upload(index, s)
+            e = self._entries[(index, s)]
+            bits = 16 if s == 0 else (e.bit_size or 8 * len(raw))
+            acc |= (int.from_bytes(raw, "little") & ((1 << bits) - 1)) << nbits
+            nbits += bits
+        return acc.to_bytes((nbits + 7) // 8, "little")
+
+    def _download(self, index: int, sub: int, data: bytes) -> bool:
+        """Check and apply one download; returns True when the drive sends no reply (2080h reset)."""
+        e = self._entry(index, sub)
+        self._pdo_only(index, sub)
+        if not e.access.write or (sub and index in self._read_only_set):
+            raise sdo_abort(index, sub, A.READ_ONLY)
+        if self.esm not in e.access.write:
+            raise sdo_abort(index, sub, A.DATA_CANNOT_BE_STORED_STATE)
+        size = e.byte_size
+        dt = e.datatype
+        variable = dt is not None and dt.bits is None
+        if variable:
+            if size and len(data) > size:
+                raise sdo_abort(index, sub, A.LENGTH_TOO_HIGH)
+        elif len(data) != size:
+            raise sdo_abort(index, sub, A.LENGTH_TOO_HIGH if len(data) > size else A.LENGTH_TOO_LOW)
+        value: int | None = None
+        if dt is not None and dt.kind in (Kind.SIGNED, Kind.UNSIGNED, Kind.BITS, Kind.BOOL):
+            value = decode_int(e, data)
+            if e.minimum is not None and value < e.minimum:
+                raise sdo_abort(index, sub, A.VALUE_TOO_LOW)
+            if e.maximum is not None and value > e.maximum:
+                raise sdo_abort(index, sub, A.VALUE_TOO_HIGH)
+        elif dt is not None and dt.kind is Kind.REAL:
+            f = dt.decode(data)
+            if e.minimum is not None and f < e.minimum:
+                raise sdo_abort(index, sub, A.VALUE_TOO_LOW)
+            if e.maximum is not None and f > e.maximum:
+                raise sdo_abort(index, sub, A.VALUE_TOO_HIGH)
+        if variable and size:
+            data = data.ljust(size, b"\x00")
+        d = is_mapping(index)
+        if d is not None:
+            self._mapping_write(d, index, sub, value if value is not None else 0)
+        else:
+            d = is_assign(index)
+            if d is not None:
+                self._assign_write(d, index, sub, value if value is not None else 0)
+        handler = self._handlers_down.get(index)
+        if handler is not None:
+            result = handler(sub, data, value)
+            if result is None:
+                return True  # no reply (reset)
+            if not result:
+                return False
+        self._store[(index, sub)] = data
+        if index in self._after_write:
+            self._after_write[index](sub, value)
+        return False
+
+    def _ca_download(self, index: int, sub: int, data: bytes) -> None:
+        """Complete access download: applied as the single writes a master would make, all or nothing."""
+        self._ca_supported(index, sub)
+        subs = self._ca_subs(index, sub)
+        pos = 0
+        writes: list[tuple[int, bytes]] = []
+        for s in subs:
+            e = self._entries[(index, s)]
+            nbytes = 2 if s == 0 else max(1, e.byte_size)
+            if pos + nbytes > len(data):
+                break
+            chunk = data[pos:pos + nbytes]
+            writes.append((s, chunk[:1] if s == 0 else chunk))
+            pos += nbytes
+        if pos != len(data) or not writes:
+            raise sdo_abort(index, sub, A.LENGTH_MISMATCH if writes else A.LENGTH_TOO_LOW)
+        snapshot = dict(self._store)
+        try:
+            if writes[0][0] == 0:
+                count = writes[0][1]
+                e0 = self._entries[(index, 0)]
+                if e0.access.write:
+                    self._download(index, 0, b"\x00")
+                for s, chunk in writes[1:]:
+                    if self._entries[(index, s)].access.write:
+                        self._download(index, s, chunk)
+                if e0.access.write:
+                    self._download(index, 0, count)
+            else:
+                for s, chunk in writes:
+                    self._download(index, s, chunk)
+        except SdoAbort:
+            self._store = snapshot
+            raise
