@@ -378,7 +378,9 @@ class DictionaryBuilder:
             raise InputError(f"Object/Index {index} is not an object index (0 … 0xFFFF)", ctx.loc(idx_el))
         type_name = type_name or ""
         name = name or ""
-        bits = _not_negative(self._opt_number(bits_t, el, "Object/BitSize"), el, "Object/BitSize", ctx)
+        bits = self._opt_number(bits_t, el, "Object/BitSize")
+        if bits is not None and bits < 0:
+            _not_negative(bits, el, "Object/BitSize", ctx)
         flags = _flags(flags_el, ctx)
         t = self.types.resolve(type_name, el)
         if t.kind == "record":
@@ -455,8 +457,11 @@ class DictionaryBuilder:
             sidx = self._number(sidx_t, si, "SubItem/SubIdx") if sidx_t is not None and sidx_t.strip() else None
             if sidx is not None and not 0 <= sidx <= 0xFF:
                 raise InputError(f"SubItem/SubIdx {sidx} is not a sub-index (0 … 255)", ctx.loc(si))
-            bits = _not_negative(self._opt_number(bits_t, si, "SubItem/BitSize"), si, "SubItem/BitSize", ctx)
-            offs = _not_negative(self._opt_number(offs_t, si, "SubItem/BitOffs"), si, "SubItem/BitOffs", ctx) or 0
+            bits = self._opt_number(bits_t, si, "SubItem/BitSize")
+            offs = self._opt_number(offs_t, si, "SubItem/BitOffs") or 0
+            if (bits or 0) < 0 or offs < 0:
+                _not_negative(bits, si, "SubItem/BitSize", ctx)
+                _not_negative(offs, si, "SubItem/BitOffs", ctx)
             if flags_el is not None:
                 access, mapping, backup, setting, category = _flags(flags_el, ctx)
             else:
@@ -519,7 +524,7 @@ class DictionaryBuilder:
                 if tag == "Name":
                     if not final:
                         lcid = c.get("LcId")
-                        if lcid == "1033" or (lcid is not None and is_english(lcid)):
+                        if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
                             n_opt, final = (c.text or "").strip(), True
                         elif n_opt is None:
                             n_opt = (c.text or "").strip()

@@ -42,6 +42,7 @@ from ecattool.od.model import ObjectDictionary, OdObject
 from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
 
 ROOTS = ("EtherCATInfo", "EtherCATModule", "EtherCATDict")
+_BIT = {"0": 0, "1": 1}
 _NO_INDEX = -(1 << 200)  # a PDO without an Index element (a schema-valid Index is never this)
 _T = TypeVar("_T")
 
@@ -518,7 +519,7 @@ class Reader:
             elif tag == "Name":
                 if not final:
                     lcid = c.get("LcId")
-                    if lcid == "1033" or (lcid is not None and is_english(lcid)):
+                    if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
                         name, final = (c.text or "").strip(), True
                     elif name is None:
                         name = (c.text or "").strip()
@@ -528,7 +529,7 @@ class Reader:
             raise InputError("PDO Entry has no Index", self.ctx.loc(en))
         if bits is None:
             raise InputError(f"PDO Entry 0x{index:04X}:{sub or 0:02X} has no BitLen", self.ctx.loc(en))
-        if not (0 <= index <= 0xFFFF and 0 <= (sub or 0) <= 0xFF and bits >= 0):  # schema-valid, out of range
+        if index >> 16 or (sub or 0) >> 8 or bits < 0:  # schema-valid, out of range (a negative >> n is -1)
             index = self._in_range(index, 16, "Entry/Index", en)
             sub = self._in_range(sub or 0, 8, "Entry/SubIndex", en)
             if bits < 0:
@@ -593,18 +594,25 @@ class Reader:
         # Enable and ControlByte are HexDecValue (the SII enable and control bytes), not booleans: Enable="9"
         # is enable | OP only
         text = g("Enable")
-        if text is not None and text.strip().lower() in ("true", "false"):
-            ctx.warn("esi-sm-enable-boolean", f"Sm Enable {text.strip()!r} is a boolean word; the schema's type is "
-                     "the enable byte (HexDecValue); read as " + ("1" if text.strip().lower() == "true" else "0"), el)
-            text = "1" if text.strip().lower() == "true" else "0"
-        enable = ctx.unsigned(text, el, "Sm Enable", 8)
+        enable = _BIT.get(text)  # "0" and "1", the common spellings
+        if enable is None and text is not None:
+            word = text.strip().lower()
+            if word in ("true", "false"):
+                ctx.warn("esi-sm-enable-boolean", f"Sm Enable {text.strip()!r} is a boolean word; the schema's type "
+                         "is the enable byte (HexDecValue); read as " + ("1" if word == "true" else "0"), el)
+                text = "1" if word == "true" else "0"
+            enable = ctx.unsigned(text, el, "Sm Enable", 8)
+        text = g("ControlByte")
+        control = self._numbers.get(text) if text is not None else 0
+        if control is None or control > 0xFF:
+            control = ctx.unsigned(text, el, "Sm ControlByte", 8)
         return SyncManager(
             number, (el.text or "").strip(),
             start_address=ctx.opt_number(g("StartAddress"), el, "Sm StartAddress") or 0,
             default_size=ctx.opt_number(g("DefaultSize"), el, "Sm DefaultSize"),
             min_size=ctx.opt_number(g("MinSize"), el, "Sm MinSize"),
             max_size=ctx.opt_number(g("MaxSize"), el, "Sm MaxSize"),
-            control_byte=ctx.unsigned(g("ControlByte"), el, "Sm ControlByte", 8) or 0,
+            control_byte=control or 0,
             enable=True if enable is None else bool(enable & 1),
             virtual=ctx.boolean(g("Virtual"), el, "Sm Virtual"),
             location=ctx.loc(el),

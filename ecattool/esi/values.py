@@ -155,7 +155,8 @@ def lc_text(parent: Any, tag: str) -> str:
     for el in parent.iterchildren(tag):
         if first is None:
             first = el
-        if is_english(el.get("LcId")):
+        lcid = el.get("LcId")
+        if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
             return (el.text or "").strip()
     return (first.text or "").strip() if first is not None else ""
 
@@ -164,7 +165,8 @@ def name_step(c: Any, name: str | None, final: bool) -> tuple[str | None, bool]:
     """One ``Name`` element seen, by the rule of :func:`lc_text` (LcId 1033, else the first): (name, final)."""
     if final:
         return name, True
-    if is_english(c.get("LcId")):
+    lcid = c.get("LcId")
+    if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
         return (c.text or "").strip(), True
     if name is None:
         return (c.text or "").strip(), False
