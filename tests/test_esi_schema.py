@@ -254,3 +254,14 @@ def test_the_english_name_is_found_by_its_lcid_in_every_integer_form(lcid: str) 
     pdo = esi.modules[0].rx_pdos[0]
     index = int(obj.findtext("Index")[2:], 16)
     assert esi.devices[0].name == pdo.name == pdo.entries[0].name == esi.devices[0].dictionary.get(index).name == "English"
+
+
+def test_a_module_the_reader_cannot_use_is_skipped_and_the_device_and_other_modules_load() -> None:
+    tree = variant("etg_ETG2001_ModulesSlots_CiA402.xml")
+    modules = tree.getroot().findall("Descriptions/Modules/Module")
+    bad = modules[1].find("RxPdo/Index")
+    bad.text = "#xZZ"  # not schema-valid
+    esi = read(tree)
+    assert len(esi.devices) == 1 and len(esi.modules) == len(modules) - 1
+    [err] = [w for w in esi.warnings if w.severity.value == "error"]
+    assert (err.rule, err.location.line) == ("esi-module-skipped", bad.sourceline)

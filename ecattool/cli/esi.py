@@ -82,7 +82,7 @@ def devices_cmd(file: str, as_json: bool) -> None:
     rows = [device_summary(d, i) for i, d in enumerate(doc.devices)]
     for r, d in zip(rows, doc.devices):
         r["warnings"] = [w.to_json() for w in device_findings(doc, d)]
-    skipped = any(w.rule == "esi-device-skipped" for w in doc.warnings)
+    skipped = any(w.rule in ("esi-device-skipped", "esi-module-skipped") for w in doc.warnings)
     if as_json:
         print_json(rows)
         for w in file_findings(doc):

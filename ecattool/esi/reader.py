@@ -118,7 +118,7 @@ class LazyEsiFile(EsiFile):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self.device_heads: list[DeviceHead] = []
         self._build: Callable[[DeviceHead], Device] | None = None
-        self._skip: Callable[[Any, int | None, DeviceHead, InputError], None] | None = None
+        self._skip: Callable[[Any, DeviceHead, InputError], None] | None = None
         self._built: dict[int, Device] = {}
         super().__init__(*args, **kwargs)
 
@@ -136,7 +136,7 @@ class LazyEsiFile(EsiFile):
                     except InputError as exc:  # left out with an error finding, as a complete load does
                         first = first or exc
                         if self._skip is not None:
-                            self._skip(h.element, None, h, exc)
+                            self._skip(h.element, h, exc)
                         continue
                 out.append(dev)
             self._built.clear()
@@ -156,7 +156,7 @@ class LazyEsiFile(EsiFile):
         return self._build is not None
 
     def defer(self, heads: list[DeviceHead], build: Callable[[DeviceHead], Device],
-              skip: Callable[[Any, int | None, DeviceHead, InputError], None] | None = None) -> None:
+              skip: Callable[[Any, DeviceHead, InputError], None] | None = None) -> None:
         self.device_heads = heads
         self._build = build
         self._skip = skip
@@ -286,7 +286,7 @@ class Reader:
         self._vendor(root, esi)
         if tag == "EtherCATModule":
             mods = root.find("Modules")
-            esi.modules = [self.module(m) for m in (mods.iterchildren("Module") if mods is not None else ())]
+            esi.modules = self._modules(mods)
             return esi
         for ref in root.iterchildren("InfoReference"):
             esi.info_references.append((ref.text or "").strip())
@@ -297,9 +297,7 @@ class Reader:
         if groups is not None:
             for g in groups.iterchildren("Group"):
                 esi.groups[(g.findtext("Type") or "").strip()] = lc_text(g, "Name")
-        mods = desc.find("Modules")
-        if mods is not None:
-            esi.modules = [self.module(m) for m in mods.iterchildren("Module")]
+        esi.modules = self._modules(desc.find("Modules"))
         if self.follow_references:
             for ref_el in root.iterchildren("InfoReference"):
                 esi.modules.extend(self._referenced_modules(ref_el))
@@ -315,7 +313,7 @@ class Reader:
         heads: list[DeviceHead] = []
         built: list[Device] = []
         lazy = isinstance(esi, LazyEsiFile)
-        for pos, el in enumerate(devices_el.iterchildren("Device")):
+        for el in devices_el.iterchildren("Device"):
             head = None
             try:
                 head = self.head(el, esi, len(heads))
@@ -325,7 +323,7 @@ class Reader:
                     built.append(self.device(el, esi, head))
             except InputError as exc:
                 first = first or exc
-                self.skip_device(el, pos, head, exc)
+                self.skip_device(el, head, exc)
         if first is not None and not heads and not built:
             raise first
         if isinstance(esi, LazyEsiFile):
@@ -333,7 +331,22 @@ class Reader:
         else:
             esi.devices = built
 
-    def skip_device(self, el: Any, pos: int | None, head: DeviceHead | None, exc: InputError) -> None:
+    def _modules(self, modules_el: Any) -> list[Module]:
+        """Every ``Module`` of a ``Modules`` element; one that cannot be read is left out with an error finding
+        ``esi-module-skipped`` (the devices and the other modules still load)."""
+        out: list[Module] = []
+        for el in (modules_el.iterchildren("Module") if modules_el is not None else ()):
+            try:
+                out.append(self.module(el))
+            except InputError as exc:
+                t = el.find("Type")
+                what = repr((t.text or "").strip()) if t is not None else f"at line {el.sourceline}"
+                self.ctx.warnings.append(Finding("esi-module-skipped", Severity.ERROR, f"module {what} skipped: "
+                                                 f"{exc.message}", exc.location or self.ctx.loc(el),
+                                                 {"module_line": el.sourceline}))
+        return out
+
+    def skip_device(self, el: Any, head: DeviceHead | None, exc: InputError) -> None:
         """Record that the device at ``el`` is left out: an error finding at the value that could not be read."""
         what = (f"{head.type_name} (product 0x{head.product_code:08X} revision 0x{head.revision:08X})"
                 if head is not None else f"at line {el.sourceline}")
