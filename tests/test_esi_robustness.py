@@ -24,7 +24,7 @@ def esi_doc(devices: str = "", datatypes: str = "", objects: str = "", vendor: s
                    f'<Sm StartAddress="#x1000" DefaultSize="128" ControlByte="#x26" Enable="1">MBoxOut</Sm>'
                    f'<Sm StartAddress="#x1080" DefaultSize="128" ControlByte="#x22" Enable="1">MBoxIn</Sm>'
                    f'<Sm StartAddress="#x1100" ControlByte="#x64" Enable="1" MaxSize="8">Outputs</Sm>'
-                   f'<Sm StartAddress="#x1400" ControlByte="#x20" Enable="true">Inputs</Sm>'
+                   f'<Sm StartAddress="#x1400" ControlByte="#x20" Enable="#x1">Inputs</Sm>'
                    f"{extra_device}{dictionary}</Device>")
     mods = f"<Modules>{modules}</Modules>" if modules else ""
     return (f"{head}<EtherCATInfo Version=\"1.6\"><Vendor>{vendor}</Vendor><Descriptions><Groups/>"

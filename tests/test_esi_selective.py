@@ -113,16 +113,26 @@ def test_multi_revision_policies_match_the_full_load() -> None:
             assert str(lazy_err.value) == str(full_err.value)
 
 
-def test_a_bad_type_in_any_device_still_fails_the_selective_load() -> None:
+def test_a_bad_type_in_one_device_skips_that_device_in_both_loads() -> None:
     data = b"""<?xml version="1.0"?>
 <EtherCATInfo><Vendor><Id>1</Id><Name>V</Name></Vendor><Descriptions><Devices>
 <Device><Type ProductCode="#x1" RevisionNo="1">A</Type></Device>
 <Device><Type ProductCode="#xZZ" RevisionNo="1">B</Type></Device>
 </Devices></Descriptions></EtherCATInfo>"""
+    full = load_bytes(data, "t.xml")
+    lazy = load_bytes(data, "t.xml", lazy=True)
+    assert select(lazy, "A").type_name == select(full, "A").type_name == "A"
+    for esi in (full, lazy):
+        [skipped] = [w for w in esi.warnings if w.rule == "esi-device-skipped"]
+        assert skipped.location.line == 4 and "'#xZZ' is not a number" in skipped.message
+        assert [d.type_name for d in esi.devices] == ["A"]
+        with pytest.raises(SelectionError, match=r"1 device\(s\) of the file could not be read: t\.xml:4"):
+            select(esi, "B")
+    bad_only = data.replace(b'<Device><Type ProductCode="#x1" RevisionNo="1">A</Type></Device>', b"")
     with pytest.raises(EcatToolError) as full_err:
-        load_bytes(data, "t.xml")
+        load_bytes(bad_only, "t.xml")  # no device can be read: the read fails, as before
     with pytest.raises(EcatToolError) as lazy_err:
-        select(load_bytes(data, "t.xml", lazy=True), "A")
+        load_bytes(bad_only, "t.xml", lazy=True)
     assert str(lazy_err.value) == str(full_err.value) and lazy_err.value.location.line == 4
 
 

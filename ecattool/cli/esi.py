@@ -73,11 +73,25 @@ Examples:
 @_FILE
 @json_option
 def devices_cmd(file: str, as_json: bool) -> None:
-    """List the devices of FILE: type, product code, revision, PDO and object counts."""
+    """List the devices of FILE: type, product code, revision, PDO and object counts.
+
+    A device that cannot be read is left out with a one-line error naming its file and line (exit status 1);
+    the other devices are listed. Warnings go to standard error; with --json each device also lists its own
+    under "warnings".
+    """
+    from ecattool.esi import device_findings, file_findings
+
     doc = _load(file)
     rows = [device_summary(d, i) for i, d in enumerate(doc.devices)]
+    for r, d in zip(rows, doc.devices):
+        r["warnings"] = [w.to_json() for w in device_findings(doc, d)]
+    skipped = any(w.rule in ("esi-device-skipped", "esi-module-skipped") for w in doc.warnings)
     if as_json:
         print_json(rows)
+        for w in file_findings(doc):
+            click.echo(str(w), err=True)
+        if skipped:
+            raise click.exceptions.Exit(1)
         return
     con = console()
     name = "<stdin>" if file == "-" else file
@@ -96,6 +110,8 @@ def devices_cmd(file: str, as_json: bool) -> None:
         click.echo(str(w), err=True)
     if len(doc.warnings) > 20:
         click.echo(f"… and {len(doc.warnings) - 20} more warnings (ecattool esi validate lists all)", err=True)
+    if skipped:
+        raise click.exceptions.Exit(1)
 
 
 # --------------------------------------------------------------------------------------------
@@ -128,7 +144,8 @@ def _objects_json(od: Any) -> list[dict[str, Any]]:
 
 def _sm_json(dev: Any) -> list[dict[str, Any]]:
     return [{"number": s.number, "kind": s.kind, "start_address": s.start_address, "default_size": s.default_size,
-             "min_size": s.min_size, "max_size": s.max_size, "control_byte": s.control_byte, "enable": s.enable}
+             "min_size": s.min_size, "max_size": s.max_size, "control_byte": s.control_byte, "enable": s.enable,
+             "enable_byte": s.enable_byte}
             for s in dev.sync_managers]
 
 
@@ -190,7 +207,8 @@ def _render_sm(con: Any, dev: Any) -> None:
     t = table("Sync managers", ["SM", "kind", "start", "default", "min", "max", "control", "enable"])
     for s in dev.sync_managers:
         t.add_row(str(s.number), s.kind or "(unused)", _hex(s.start_address, 4), str(s.default_size or ""),
-                  str(s.min_size or ""), str(s.max_size or ""), _hex(s.control_byte, 2), "yes" if s.enable else "no")
+                  str(s.min_size or ""), str(s.max_size or ""), _hex(s.control_byte, 2),
+                  ("yes" if s.enable else "no") + (f" ({_hex(s.enable_byte, 2)})" if (s.enable_byte or 0) > 1 else ""))
     con.print(t)
     if dev.fmmus:
         con.print("FMMUs: " + ", ".join(f.kind or "(unused)" for f in dev.fmmus))
@@ -237,10 +255,15 @@ def show_cmd(file: str, selector: str | None, policy: str, pdos: bool, objects: 
     """Show one device of FILE: identity and summary, or the chosen tables."""
     from ecattool.esi import select_index
 
-    index, dev = select_index(_load(file, lazy=True), selector, policy)
+    doc = _load(file, lazy=True)
+    index, dev = select_index(doc, selector, policy)
     any_section = pdos or objects or sm or dc or init_cmds
+    len(dev.dictionary)  # the summary counts the objects: built now, so that its warnings are listed
+    # a lazy load built only this device: the file's findings are its own and the file-level ones
+    warnings = list(doc.warnings)
     if as_json:
         data: dict[str, Any] = device_summary(dev, index)
+        data["warnings"] = [w.to_json() for w in warnings]
         data.update({"physics": dev.physics, "profile_no": dev.profile_no, "group_name": dev.group_name,
                      "url": dev.url, "ebus_current_ma": dev.ebus_current_ma, "source": dev.source})
         if pdos or not any_section:
@@ -259,6 +282,10 @@ def show_cmd(file: str, selector: str | None, policy: str, pdos: bool, objects: 
             data["init_cmds"] = _init_json(dev)
         print_json(data)
         return
+    for w in warnings[:20]:
+        click.echo(str(w), err=True)
+    if len(warnings) > 20:
+        click.echo(f"… and {len(warnings) - 20} more warnings (ecattool esi validate lists all)", err=True)
     con = console()
     con.print(f"{dev.type_name}  {dev.name}")
     con.print(f"  {dev.identity}   group {dev.group_type or '-'}   profile {dev.profile_no or '-'}")

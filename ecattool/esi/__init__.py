@@ -10,6 +10,7 @@ Public API::
     load_device(path, selector=None, policy="exact") -> Device   # builds only the selected device
     validate(path, schema_dir=None) -> list[Finding]
     check_structure(esi) -> list[Finding]
+    device_findings(esi, device) / file_findings(esi) -> list[Finding]   # reader findings by where they are
 
 Selectors: a type name (``EL1008``), ``product[:revision]`` in any number notation (``#x03f03052:0x00110000``,
 ``0x03f03052``, decimal), ``vendor:product:revision``, or a list index (``0``). Policies: ``exact``,
@@ -61,6 +62,23 @@ def check_structure(esi: EsiFile) -> list[Finding]:
 _validate = validate
 
 
+def device_findings(esi: EsiFile, device: Device) -> list[Finding]:
+    """The reader findings of ``esi`` located inside ``device``'s element (its lines, in its file)."""
+    loc = device.location
+    if loc is None or loc.line is None:
+        return []
+    start, end = loc.line, device.end_line
+    return [w for w in esi.warnings
+            if w.location is not None and w.location.file == loc.file and w.location.line is not None
+            and start <= w.location.line and (end is None or w.location.line < end)]
+
+
+def file_findings(esi: EsiFile) -> list[Finding]:
+    """The reader findings of ``esi`` not inside any of its (loaded) devices: file-level ones, skipped devices."""
+    inside = {id(w) for d in esi.devices for w in device_findings(esi, d)}
+    return [w for w in esi.warnings if id(w) not in inside]
+
+
 def _is_eds(data: bytes) -> bool:
     from ecattool.esi.eds import looks_like_eds
 
@@ -104,6 +122,8 @@ __all__ = [
     "Device",
     "EsiFile",
     "check_structure",
+    "device_findings",
+    "file_findings",
     "load",
     "load_bytes",
     "load_device",

@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ecattool.errors import EcatToolError
-from ecattool.esi.values import Context, fast_number, lc_text, name_step
+from ecattool.errors import EcatToolError, InputError
+from ecattool.esi.values import Context, fast_number, is_english, lc_text, name_step
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import BY_CODE, DataType, Kind, lookup, parse_array_name
@@ -90,7 +90,7 @@ class TypeResolver:
 
     def _bitsize(self, el: Any, what: str) -> int | None:
         t = el.findtext("BitSize")
-        return self.ctx.opt_number(t, el, what) if t is not None else None
+        return _not_negative(self.ctx.opt_number(t, el, what), el, what, self.ctx) if t is not None else None
 
     def _resolve(self, name: str, where: Any, depth: int) -> ResolvedType:
         ctx = self.ctx
@@ -201,6 +201,13 @@ def _make_clone() -> Any:
 
 
 _clone = _make_clone()
+
+
+def _not_negative(v: int | None, el: Any, what: str, ctx: Context) -> int | None:
+    """A size or offset: the schema allows any integer; a negative one makes its object unreadable (skipped)."""
+    if v is not None and v < 0:
+        raise InputError(f"{what} {v} is negative", ctx.loc(el))
+    return v
 
 
 def _signed_fix(value: int, dt: DataType | None, bits: int) -> int:
@@ -367,9 +374,13 @@ class DictionaryBuilder:
             elif tag == "Comment" and not comment:
                 comment = (c.text or "").strip()
         index = self._number(index_t, idx_el, "Object/Index")
+        if not 0 <= index <= 0xFFFF:  # schema-valid (any integer), not an object index: the object is skipped
+            raise InputError(f"Object/Index {index} is not an object index (0 … 0xFFFF)", ctx.loc(idx_el))
         type_name = type_name or ""
         name = name or ""
         bits = self._opt_number(bits_t, el, "Object/BitSize")
+        if bits is not None and bits < 0:
+            _not_negative(bits, el, "Object/BitSize", ctx)
         flags = _flags(flags_el, ctx)
         t = self.types.resolve(type_name, el)
         if t.kind == "record":
@@ -444,8 +455,13 @@ class DictionaryBuilder:
             si_name = si_name or ""
             st = self.types.resolve(si_type, si)
             sidx = self._number(sidx_t, si, "SubItem/SubIdx") if sidx_t is not None and sidx_t.strip() else None
+            if sidx is not None and not 0 <= sidx <= 0xFF:
+                raise InputError(f"SubItem/SubIdx {sidx} is not a sub-index (0 … 255)", ctx.loc(si))
             bits = self._opt_number(bits_t, si, "SubItem/BitSize")
             offs = self._opt_number(offs_t, si, "SubItem/BitOffs") or 0
+            if (bits or 0) < 0 or offs < 0:
+                _not_negative(bits, si, "SubItem/BitSize", ctx)
+                _not_negative(offs, si, "SubItem/BitOffs", ctx)
             if flags_el is not None:
                 access, mapping, backup, setting, category = _flags(flags_el, ctx)
             else:
@@ -508,7 +524,7 @@ class DictionaryBuilder:
                 if tag == "Name":
                     if not final:
                         lcid = c.get("LcId")
-                        if lcid is not None and lcid.strip() == "1033":
+                        if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
                             n_opt, final = (c.text or "").strip(), True
                         elif n_opt is None:
                             n_opt = (c.text or "").strip()

@@ -51,7 +51,7 @@ class Direction(str, Enum):
 
 class SyncManager(Record):
     __slots__ = ("number", "kind", "start_address", "default_size", "min_size", "max_size", "control_byte",
-                 "enable", "virtual", "location", "op_only")
+                 "enable", "virtual", "location", "op_only", "enable_byte")
     number: int
     kind: str  # "MBoxOut", "MBoxIn", "Outputs", "Inputs" or "" (unused)
     start_address: int
@@ -64,11 +64,14 @@ class SyncManager(Record):
     location: Location | None
     #: ``Sm@OpOnly``: the SyncManager is enabled only in OP (SII SyncM enable byte bit 3)
     op_only: bool
+    #: ``Sm@Enable`` as the file gives it (HexDecValue: the SII SyncM enable byte, e.g. 9 = enable | OP only);
+    #: None when the attribute is absent. :attr:`enable` is its bit 0.
+    enable_byte: int | None
 
     def __init__(self, number: int, kind: str, start_address: int = 0, default_size: int | None = None,
                  min_size: int | None = None, max_size: int | None = None, control_byte: int = 0,
                  enable: bool = True, virtual: bool = False, location: Location | None = None,
-                 op_only: bool = False) -> None:
+                 op_only: bool = False, enable_byte: int | None = None) -> None:
         self.number = number
         self.kind = kind
         self.start_address = start_address
@@ -80,6 +83,7 @@ class SyncManager(Record):
         self.virtual = virtual
         self.location = location
         self.op_only = op_only
+        self.enable_byte = enable_byte
 
     @property
     def direction(self) -> Direction | None:
@@ -449,7 +453,7 @@ class Device(IdentityView, Record):
     __slots__ = ("identity", "type_name", "name", "group_type", "group_name", "physics", "image", "url",
                  "profile_no", "sync_managers", "fmmus", "rx_pdos", "tx_pdos", "dictionary", "mailbox",
                  "dc_opmodes", "eeprom", "slots", "modules", "ebus_current_ma", "source", "location", "extra",
-                 "alternative_sm_mappings")
+                 "alternative_sm_mappings", "end_line")
     identity: Identity
     type_name: str
     name: str
@@ -471,6 +475,9 @@ class Device(IdentityView, Record):
     modules: list[Module]  # modules usable in this device's slots
     ebus_current_ma: int | None
     source: str  # file the device came from, or "profile:<name>"
+    #: the line where the next element after the device's ``<Device>`` starts (None: the file's end); with
+    #: ``location.line``, the lines of the device (``ecattool.esi.device_findings`` attributes warnings by them)
+    end_line: int | None
     location: Location | None
     #: free-form facts the reader could keep but the model has no field for (never silently dropped)
     extra: dict[str, str]
@@ -485,7 +492,8 @@ class Device(IdentityView, Record):
                  eeprom: Eeprom | None = None, slots: list[Slot] | None = None,
                  modules: list[Module] | None = None, ebus_current_ma: int | None = None, source: str = "",
                  location: Location | None = None, extra: dict[str, str] | None = None,
-                 alternative_sm_mappings: list[AlternativeSmMapping] | None = None) -> None:
+                 alternative_sm_mappings: list[AlternativeSmMapping] | None = None,
+                 end_line: int | None = None) -> None:
         self.identity = identity
         self.type_name = type_name
         self.name = name
@@ -510,6 +518,7 @@ class Device(IdentityView, Record):
         self.location = location
         self.extra = {} if extra is None else extra
         self.alternative_sm_mappings = [] if alternative_sm_mappings is None else alternative_sm_mappings
+        self.end_line = end_line
 
     def pdos(self, direction: Direction) -> list[Pdo]:
         return self.rx_pdos if direction is Direction.RX else self.tx_pdos

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from ecattool.errors import EcatToolError, InputError, Location
+from ecattool.findings import Finding, Severity
 from ecattool.esi.model import (
     AlternativeSmMapping,
     CoeDetails,
@@ -35,12 +36,14 @@ from ecattool.esi.model import (
     Slot,
     SyncManager,
 )
-from ecattool.esi.values import Context, lc_text, name_step
+from ecattool.esi.values import Context, is_english, lc_text, name_step
 from ecattool.esi.values import fast_number as _fast_number  # the name it had here (tests use it)
 from ecattool.od.model import ObjectDictionary, OdObject
 from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
 
 ROOTS = ("EtherCATInfo", "EtherCATModule", "EtherCATDict")
+_BIT = {"0": 0, "1": 1}
+_NO_INDEX = -(1 << 200)  # a PDO without an Index element (a schema-valid Index is never this)
 _T = TypeVar("_T")
 
 
@@ -60,6 +63,14 @@ def without_gc(build: Callable[[], _T]) -> _T:
     finally:
         gc.enable()
 _MODELLED = frozenset({"Type", "Name", "Profile"})
+
+
+def _element_note(el: Any) -> str:
+    """``Tag attr=value … text`` of a vendor-specific element, for ``Device.extra``."""
+    attrs = " ".join(f"{k}={v}" for k, v in el.attrib.items())
+    inner = (el.text or "").strip() if len(el) == 0 else etree_text(el)
+    tag = el.tag.split("}", 1)[-1]
+    return " ".join(p for p in (tag, attrs, inner) if p)
 
 
 def etree_text(el: Any) -> str:
@@ -107,6 +118,7 @@ class LazyEsiFile(EsiFile):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self.device_heads: list[DeviceHead] = []
         self._build: Callable[[DeviceHead], Device] | None = None
+        self._skip: Callable[[Any, DeviceHead, InputError], None] | None = None
         self._built: dict[int, Device] = {}
         super().__init__(*args, **kwargs)
 
@@ -114,8 +126,23 @@ class LazyEsiFile(EsiFile):
     def devices(self) -> list[Device]:
         if self._build is not None:
             build, self._build = self._build, None
-            self._devices = [self._built.get(h.index) or build(h) for h in self.device_heads]
+            out = []
+            first: InputError | None = None
+            for h in self.device_heads:
+                dev = self._built.get(h.index)
+                if dev is None:
+                    try:
+                        dev = build(h)
+                    except InputError as exc:  # left out with an error finding, as a complete load does
+                        first = first or exc
+                        if self._skip is not None:
+                            self._skip(h.element, h, exc)
+                        continue
+                out.append(dev)
             self._built.clear()
+            if first is not None and not out:
+                raise first
+            self._devices = out
         return self._devices
 
     @devices.setter
@@ -128,9 +155,11 @@ class LazyEsiFile(EsiFile):
         """True while some devices are still unbuilt."""
         return self._build is not None
 
-    def defer(self, heads: list[DeviceHead], build: Callable[[DeviceHead], Device]) -> None:
+    def defer(self, heads: list[DeviceHead], build: Callable[[DeviceHead], Device],
+              skip: Callable[[Any, DeviceHead, InputError], None] | None = None) -> None:
         self.device_heads = heads
         self._build = build
+        self._skip = skip
 
     def device_at(self, index: int) -> Device:
         """The device at ``index`` in document order, building only that one if the rest are still pending."""
@@ -257,7 +286,7 @@ class Reader:
         self._vendor(root, esi)
         if tag == "EtherCATModule":
             mods = root.find("Modules")
-            esi.modules = [self.module(m) for m in (mods.iterchildren("Module") if mods is not None else ())]
+            esi.modules = self._modules(mods)
             return esi
         for ref in root.iterchildren("InfoReference"):
             esi.info_references.append((ref.text or "").strip())
@@ -268,20 +297,65 @@ class Reader:
         if groups is not None:
             for g in groups.iterchildren("Group"):
                 esi.groups[(g.findtext("Type") or "").strip()] = lc_text(g, "Name")
-        mods = desc.find("Modules")
-        if mods is not None:
-            esi.modules = [self.module(m) for m in mods.iterchildren("Module")]
+        esi.modules = self._modules(desc.find("Modules"))
         if self.follow_references:
             for ref_el in root.iterchildren("InfoReference"):
                 esi.modules.extend(self._referenced_modules(ref_el))
         devices = desc.find("Devices")
         if devices is not None:
-            if isinstance(esi, LazyEsiFile):
-                heads = [self.head(el, esi, i) for i, el in enumerate(devices.iterchildren("Device"))]
-                esi.defer(heads, lambda h: self.device(h.element, esi, h))
-            else:
-                esi.devices = [self.device(el, esi) for el in devices.iterchildren("Device")]
+            self._devices(devices, esi)
         return esi
+
+    def _devices(self, devices_el: Any, esi: EsiFile) -> None:
+        """Read every ``Device``; one that cannot be read is skipped with an ``esi-device-skipped`` error finding
+        (its file and line) and never blocks the others. The read fails only when no device can be read."""
+        first: InputError | None = None
+        heads: list[DeviceHead] = []
+        built: list[Device] = []
+        lazy = isinstance(esi, LazyEsiFile)
+        for el in devices_el.iterchildren("Device"):
+            head = None
+            try:
+                head = self.head(el, esi, len(heads))
+                if lazy:
+                    heads.append(head)
+                else:
+                    built.append(self.device(el, esi, head))
+            except InputError as exc:
+                first = first or exc
+                self.skip_device(el, head, exc)
+        if first is not None and not heads and not built:
+            raise first
+        if isinstance(esi, LazyEsiFile):
+            esi.defer(heads, lambda h: self.device(h.element, esi, h), self.skip_device)
+        else:
+            esi.devices = built
+
+    def _modules(self, modules_el: Any) -> list[Module]:
+        """Every ``Module`` of a ``Modules`` element; one that cannot be read is left out with an error finding
+        ``esi-module-skipped`` (the devices and the other modules still load)."""
+        out: list[Module] = []
+        for el in (modules_el.iterchildren("Module") if modules_el is not None else ()):
+            try:
+                out.append(self.module(el))
+            except InputError as exc:
+                t = el.find("Type")
+                what = repr((t.text or "").strip()) if t is not None else f"at line {el.sourceline}"
+                self.ctx.warnings.append(Finding("esi-module-skipped", Severity.ERROR, f"module {what} skipped: "
+                                                 f"{exc.message}", exc.location or self.ctx.loc(el),
+                                                 {"module_line": el.sourceline}))
+        return out
+
+    def skip_device(self, el: Any, head: DeviceHead | None, exc: InputError) -> None:
+        """Record that the device at ``el`` is left out: an error finding at the value that could not be read."""
+        what = (f"{head.type_name} (product 0x{head.product_code:08X} revision 0x{head.revision:08X})"
+                if head is not None else f"at line {el.sourceline}")
+        data: dict[str, Any] = {"device_line": el.sourceline}
+        if head is not None:
+            data.update(type=head.type_name, product_code=head.product_code, revision=head.revision)
+        self.ctx.warnings.append(Finding("esi-device-skipped", Severity.ERROR,
+                                         f"device {what} skipped: {exc.message}", exc.location or self.ctx.loc(el),
+                                         data))
 
     # --- parts ------------------------------------------------------------------------------------
     def _vendor(self, root: Any, esi: EsiFile) -> None:
@@ -369,7 +443,7 @@ class Reader:
     def pdo(self, el: Any, direction: Direction) -> Pdo:
         ctx = self.ctx
         get = el.get
-        pdo = Pdo(direction, -1)
+        pdo = Pdo(direction, _NO_INDEX)
         pdo.at_line(self.source, el.sourceline)
         name: str | None = None
         final = False
@@ -392,8 +466,10 @@ class Reader:
             elif tag == "Name":
                 name, final = name_step(child, name, final)
         pdo.name = name or ""
-        if pdo.index < 0:
-            raise InputError(f"{el.tag} has no Index", ctx.loc(el))
+        if not 0 <= pdo.index <= 0xFFFF:
+            if pdo.index == _NO_INDEX:
+                raise InputError(f"{el.tag} has no Index", ctx.loc(el))
+            pdo.index = self._in_range(pdo.index, 16, f"{el.tag}/Index", el)
         if len(el.attrib):
             # booleans and numbers spelled the common way are looked up (_BOOLEANS, the number memo), the rest
             # go through Context with its warnings and errors, in the same order as before
@@ -417,6 +493,14 @@ class Reader:
         if len(self._numbers) < 65536:
             self._numbers[text] = v  # type: ignore[index]
         return v
+
+    def _in_range(self, v: int, bits: int, what: str, el: Any) -> int:
+        """``v`` kept to ``bits`` bits (two's complement when negative), with a warning when it did not fit."""
+        if 0 <= v < 1 << bits:
+            return v
+        masked = v & ((1 << bits) - 1)
+        self.ctx.warn("esi-number-range", f"{what} {v} does not fit {bits} bits; read as {masked:#x}", el)
+        return masked
 
     def entry(self, en: Any) -> PdoEntry:
         # the hot loop of a large file (one call per PDO entry): numbers seen before are a dict look-up, and
@@ -448,7 +532,7 @@ class Reader:
             elif tag == "Name":
                 if not final:
                     lcid = c.get("LcId")
-                    if lcid is not None and lcid.strip() == "1033":
+                    if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
                         name, final = (c.text or "").strip(), True
                     elif name is None:
                         name = (c.text or "").strip()
@@ -458,6 +542,12 @@ class Reader:
             raise InputError("PDO Entry has no Index", self.ctx.loc(en))
         if bits is None:
             raise InputError(f"PDO Entry 0x{index:04X}:{sub or 0:02X} has no BitLen", self.ctx.loc(en))
+        if index >> 16 or (sub or 0) >> 8 or bits < 0:  # schema-valid, out of range (a negative >> n is -1)
+            index = self._in_range(index, 16, "Entry/Index", en)
+            sub = self._in_range(sub or 0, 8, "Entry/SubIndex", en)
+            if bits < 0:
+                self.ctx.warn("esi-number-range", f"Entry/BitLen {bits} is negative; read as 0", en)
+                bits = 0
         e = PdoEntry(index, sub or 0, bits, name or "", dtype)
         e.at_line(self.source, en.sourceline)
         if dep is not None:
@@ -514,17 +604,33 @@ class Reader:
     def sync_manager(self, el: Any, number: int) -> SyncManager:
         ctx = self.ctx
         g = el.get
+        # Enable and ControlByte are HexDecValue (the SII enable and control bytes), not booleans: Enable="9"
+        # is enable | OP only
+        text = g("Enable")
+        enable = _BIT.get(text)  # "0" and "1", the common spellings
+        if enable is None and text is not None:
+            word = text.strip().lower()
+            if word in ("true", "false"):
+                ctx.warn("esi-sm-enable-boolean", f"Sm Enable {text.strip()!r} is a boolean word; the schema's type "
+                         "is the enable byte (HexDecValue); read as " + ("1" if word == "true" else "0"), el)
+                text = "1" if word == "true" else "0"
+            enable = ctx.unsigned(text, el, "Sm Enable", 8)
+        text = g("ControlByte")
+        control = self._numbers.get(text) if text is not None else 0
+        if control is None or control > 0xFF:
+            control = ctx.unsigned(text, el, "Sm ControlByte", 8)
         return SyncManager(
             number, (el.text or "").strip(),
             start_address=ctx.opt_number(g("StartAddress"), el, "Sm StartAddress") or 0,
             default_size=ctx.opt_number(g("DefaultSize"), el, "Sm DefaultSize"),
             min_size=ctx.opt_number(g("MinSize"), el, "Sm MinSize"),
             max_size=ctx.opt_number(g("MaxSize"), el, "Sm MaxSize"),
-            control_byte=ctx.opt_number(g("ControlByte"), el, "Sm ControlByte") or 0,
-            enable=ctx.boolean(g("Enable"), el, "Sm Enable", default=True),
+            control_byte=control or 0,
+            enable=True if enable is None else bool(enable & 1),
             virtual=ctx.boolean(g("Virtual"), el, "Sm Virtual"),
             location=ctx.loc(el),
             op_only=ctx.boolean(g("OpOnly"), el, "Sm OpOnly"),
+            enable_byte=enable,
         )
 
     def dc(self, el: Any) -> list[DcOpMode]:
@@ -590,7 +696,7 @@ class Reader:
             for mi in s.iterchildren("ModuleIdent"):
                 v = ctx.number(mi.text, mi, "ModuleIdent")
                 slot.module_idents.append(v)
-                if mi.get("Default") is not None and ctx.boolean(mi.get("Default"), mi, "Default"):
+                if ctx.flag(mi.get("Default"), mi, "ModuleIdent Default"):  # HexDecValue, non-zero = default
                     slot.default_module = v
             for mc in s.iterchildren("ModuleClass"):
                 cls = mc.findtext("Class")  # <ModuleClass><Class>Di</Class><Name>…</Name></ModuleClass>
@@ -622,13 +728,51 @@ class Reader:
         return mod
 
     def _vendor_specific(self, el: Any, dev: Device) -> None:
+        """``VendorSpecific`` (schema: ``xs:any``, not validated): TwinCAT's ``AlternativeSmMapping`` is read; other
+        content is kept as text in ``Device.extra["VendorSpecific"]``; a part that cannot be read is skipped with a
+        located warning ``esi-vendor-specific``, never an error."""
+        kept = []
+        for vendor in el.iterchildren():
+            if not isinstance(vendor.tag, str):
+                continue
+            if vendor.tag != "TwinCAT":
+                kept.append(_element_note(vendor))
+                continue
+            attrs = " ".join(f"{k}={v}" for k, v in vendor.attrib.items())
+            for item in vendor.iterchildren():
+                if item.tag == "AlternativeSmMapping":
+                    m = self._alternative_sm_mapping(item)
+                    if m is not None:
+                        dev.alternative_sm_mappings.append(m)
+                elif isinstance(item.tag, str):
+                    kept.append("TwinCAT/" + _element_note(item))
+            if attrs:
+                kept.append(f"TwinCAT {attrs}")
+        if kept:
+            note = "; ".join(kept)[:500]
+            old = dev.extra.get("VendorSpecific")
+            dev.extra["VendorSpecific"] = f"{old}; {note}" if old else note
+
+    def _alternative_sm_mapping(self, el: Any) -> AlternativeSmMapping | None:
+        """One TwinCAT ``AlternativeSmMapping``: SM number → PDO indices (an empty ``<Pdo/>``: no PDO on that SM);
+        None, with a located warning, when a part of it is not a number or a boolean."""
         ctx = self.ctx
-        for alt in el.iterfind("TwinCAT/AlternativeSmMapping"):
-            m = AlternativeSmMapping(lc_text(alt, "Name"), ctx.boolean(alt.get("Default"), alt, "Default"))
-            for sm in alt.iterchildren("Sm"):
+        name = lc_text(el, "Name")
+        try:
+            m = AlternativeSmMapping(name, ctx.boolean(el.get("Default"), el, "Default"))
+            for sm in el.iterchildren("Sm"):
                 no = ctx.number(sm.get("No"), sm, "AlternativeSmMapping/Sm No")
-                m.sms[no] = [ctx.number(p.text, p, "AlternativeSmMapping Pdo") for p in sm.iterchildren("Pdo")]
-            dev.alternative_sm_mappings.append(m)
+                pdos = m.sms.setdefault(no, [])
+                for p in sm.iterchildren("Pdo"):
+                    if p.text is not None and p.text.strip():
+                        pdos.append(ctx.number(p.text, p, "AlternativeSmMapping/Sm/Pdo"))
+        except InputError as exc:
+            ctx.warnings.append(Finding(
+                "esi-vendor-specific", Severity.WARNING,
+                f"TwinCAT AlternativeSmMapping {name!r} skipped (vendor-specific content): {exc.message}",
+                exc.location or ctx.loc(el)))
+            return None
+        return m
 
     def head(self, el: Any, esi: EsiFile, index: int) -> DeviceHead:
         """The device's ``Type``: all that selection needs."""
@@ -679,9 +823,11 @@ class Reader:
             elif tag == "Slots":
                 dev.slots = self.slots(child)
             elif tag == "URL":
-                if not dev.url or child.get("LcId") == "1033":
+                if not dev.url or is_english(child.get("LcId")):
                     dev.url = (child.text or "").strip()
-            elif tag in ("ImageData16x14", "Image16x14"):
+            elif tag == "ImageData16x14":  # xs:hexBinary: kept in its canonical form (lower case, no blanks)
+                dev.image = "".join((child.text or "").split()).lower()
+            elif tag == "Image16x14":  # a file name
                 dev.image = (child.text or "").strip()
             elif tag == "Info":
                 cur = child.find("Electrical/EBusCurrent")
@@ -702,12 +848,23 @@ class Reader:
                 text = (child.text or "").strip()
                 note = " ".join(p for p in (attrs, text if len(child) == 0 else "") if p) or etree_text(child)
                 dev.extra[tag] = f"{dev.extra[tag]}; {note}" if tag in dev.extra else note
+        dev.end_line = _next_line(el)
         dev.group_name = esi.groups.get(dev.group_type, "")
         if dev.slots and esi.modules:
             idents = {i for s in dev.slots for i in s.module_idents}
             classes = {c for s in dev.slots for c in s.module_classes if c}
             dev.modules = [m for m in esi.modules if m.ident in idents or (m.module_class and m.module_class in classes)]
         return dev
+
+
+def _next_line(el: Any) -> int | None:
+    """The line of whatever follows ``el`` in the document (its next sibling, else its parent's, …); None at the end."""
+    while el is not None:
+        nxt = el.getnext()
+        if nxt is not None:
+            return nxt.sourceline  # type: ignore[no-any-return]
+        el = el.getparent()
+    return None
 
 
 def _read(path: Path) -> bytes:

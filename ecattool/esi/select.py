@@ -83,21 +83,29 @@ def select(esi: EsiFile | list[Device], selector: str | int | None = None, polic
     """Pick one device. Raises :class:`SelectionError` listing the candidates when nothing (or too much) matches.
 
     On a lazily loaded file (``load(path, lazy=True)``) only the chosen device is built."""
-    if isinstance(esi, LazyEsiFile) and esi.pending:
-        return esi.device_at(_choose(esi.device_heads, esi.source, selector, policy).index)
     if isinstance(esi, EsiFile):
-        return _choose(list(esi.devices), esi.source, selector, policy)
+        return select_index(esi, selector, policy)[1]
     return _choose(list(esi), "", selector, policy)
 
 
 def select_index(esi: EsiFile, selector: str | int | None = None, policy: str = "exact") -> tuple[int, Device]:
-    """:func:`select`, also giving the device's position in the file (without building the others if lazy)."""
-    if isinstance(esi, LazyEsiFile) and esi.pending:
-        head = _choose(esi.device_heads, esi.source, selector, policy)
-        return head.index, esi.device_at(head.index)
-    devices = list(esi.devices)
-    dev = _choose(devices, esi.source, selector, policy)
-    return next(i for i, d in enumerate(devices) if d is dev), dev
+    """:func:`select`, also giving the device's position in the file (without building the others if lazy).
+
+    When the file had devices that could not be read (``esi-device-skipped`` findings), a failed selection
+    names them: the device asked for may be one of them."""
+    try:
+        if isinstance(esi, LazyEsiFile) and esi.pending:
+            head = _choose(esi.device_heads, esi.source, selector, policy)
+            return head.index, esi.device_at(head.index)
+        devices = list(esi.devices)
+        dev = _choose(devices, esi.source, selector, policy)
+        return next(i for i, d in enumerate(devices) if d is dev), dev
+    except SelectionError as exc:
+        skipped = [w for w in esi.warnings if w.rule == "esi-device-skipped"]
+        if not skipped:
+            raise
+        raise SelectionError(f"{exc.message}; {len(skipped)} device(s) of the file could not be read: "
+                             f"{skipped[0]}") from None
 
 
 def _choose(devices: list[_D], source: str, selector: str | int | None, policy: str) -> _D:

@@ -34,7 +34,12 @@ class Context(Record):
 
     # --- numbers -----------------------------------------------------------------------------
     def number(self, text: str | None, el: Any, what: str) -> int:
-        """HexDecValue: ``#x1A00`` or decimal (``-5`` allowed); ``0x1A00`` is tolerated with a warning."""
+        """HexDecValue (``#x1A00``, or decimal with an optional sign) and xs:int/xs:integer (decimal, surrounding
+        blanks allowed); ``0x1A00`` is tolerated with a warning.
+
+        The schema's hex pattern is ``#x[0-9|a-f|A-F]{1,}``: inside a character class ``|`` is a literal, so
+        ``#x1|2`` is schema-valid; such a value is read without the bars, with a warning ``esi-number-bar``.
+        """
         if text is None:
             raise InputError(f"{what} is missing (expected #x… hex or decimal)", self.loc(el))
         s = text.strip()
@@ -43,7 +48,12 @@ class Context(Record):
             if head == "#x" or head == "#X":
                 if s[2:4] in ("0x", "0X"):
                     self.warn("esi-number-0x", f"{what} {s!r} has both #x and 0x prefixes (read as hex)", el)
-                return int(s[2:], 16)
+                digits = s[2:]
+                if "|" in digits and digits.replace("|", ""):
+                    self.warn("esi-number-bar", f"{what} {s!r} has '|' among its hex digits (the schema's pattern "
+                              "allows it); read without it", el)
+                    digits = digits.replace("|", "")
+                return int(digits, 16)
             if head == "0x" or head == "0X":
                 self.warn("esi-number-0x", f"{what} {s!r} uses 0x; ESI HexDecValue is #x… (read as hex)", el)
                 return int(s[2:], 16)
@@ -57,6 +67,31 @@ class Context(Record):
         if text is None or not text.strip():
             return None
         return self.number(text, el, what)
+
+    def unsigned(self, text: str | None, el: Any, what: str, bits: int) -> int | None:
+        """An optional HexDecValue that fills a ``bits``-wide register field (an SM's control or enable byte).
+
+        The schema allows any integer there; a value outside ``0 … 2**bits-1`` is kept to its low ``bits`` bits
+        (two's complement for a negative one) with a warning ``esi-number-range``."""
+        if text is None or not text.strip():
+            return None
+        v = self.number(text, el, what)
+        if 0 <= v < 1 << bits:
+            return v
+        masked = v & ((1 << bits) - 1)
+        self.warn("esi-number-range", f"{what} {text.strip()!r} does not fit {bits} bits; read as {masked:#x}", el)
+        return masked
+
+    def flag(self, text: str | None, el: Any, what: str) -> bool:
+        """A HexDecValue that the schema uses as a yes/no mark (``Slot/ModuleIdent@Default``): non-zero is yes.
+
+        ``true``/``false`` (not schema-valid there, but written by tools) are read as booleans."""
+        if text is None:
+            return False
+        t = text.strip().lower()
+        if t in _TRUE or t in _FALSE:
+            return t in _TRUE
+        return self.number(text, el, what) != 0
 
     def boolean(self, text: str | None, el: Any, what: str, default: bool = False) -> bool:
         if text is None:
@@ -104,13 +139,24 @@ def fast_number(t: str | None) -> int | None:
     return None
 
 
+def is_english(lcid: str | None) -> bool:
+    """``LcId`` (xs:integer: sign, leading zeros and blanks allowed) is 1033, English (United States)."""
+    if lcid is None:
+        return False
+    if lcid == "1033":
+        return True
+    t = lcid.strip()
+    return t[:1] == "+" and t[1:].lstrip("0") == "1033" or t.lstrip("0") == "1033"
+
+
 def lc_text(parent: Any, tag: str) -> str:
     """Text of the ``tag`` child with LcId 1033 (English), else the first one; '' when absent."""
     first = None
     for el in parent.iterchildren(tag):
         if first is None:
             first = el
-        if (el.get("LcId") or "").strip() == "1033":
+        lcid = el.get("LcId")
+        if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
             return (el.text or "").strip()
     return (first.text or "").strip() if first is not None else ""
 
@@ -120,11 +166,11 @@ def name_step(c: Any, name: str | None, final: bool) -> tuple[str | None, bool]:
     if final:
         return name, True
     lcid = c.get("LcId")
-    if lcid is not None and lcid.strip() == "1033":
+    if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
         return (c.text or "").strip(), True
     if name is None:
         return (c.text or "").strip(), False
     return name, False
 
 
-__all__ = ["Context", "fast_number", "lc_text", "name_step"]
+__all__ = ["Context", "fast_number", "is_english", "lc_text", "name_step"]

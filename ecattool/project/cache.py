@@ -47,8 +47,24 @@ def cache_dir() -> Path:
     return Path(base) / "ecattool"
 
 
+def _model_layout() -> bytes:
+    """The field names of every model record a cache entry pickles: an entry written by a build whose model had
+    other fields (a development checkout between versions) gets another key instead of unpickling into objects
+    that lack a field."""
+    from ecattool.esi import model as esi_model
+    from ecattool.od import model as od_model
+    from ecattool.record import Record
+
+    classes = [c for m in (esi_model, od_model) for c in vars(m).values()
+               if isinstance(c, type) and issubclass(c, Record) and c.__module__ == m.__name__]
+    return repr(sorted((c.__qualname__, c._fields) for c in classes)).encode()
+
+
+_LAYOUT = hashlib.sha256(_model_layout()).digest()
+
+
 def _key(*parts: bytes) -> str:
-    return hashlib.sha256(b"\0".join((*parts, b"ecattool " + __version__.encode()))).hexdigest()
+    return hashlib.sha256(b"\0".join((*parts, b"ecattool " + __version__.encode(), _LAYOUT))).hexdigest()
 
 
 def _disk_get(kind: str, key: str, cls: type) -> object | None:
@@ -109,14 +125,16 @@ def _esi(path: str | Path) -> EsiFile:
     from ecattool import esi
 
     key, data = _content_key(path)
-    hit = _MEMORY.get(key)
+    # by path too: the file's locations (and the device and check entries derived from it) name its path; the
+    # same content at another path (a copy) is another file
+    hit = _MEMORY.get(f"{key}\0{path}")
     if hit is not None:
         return hit
     if data is None:
         data = read_bytes(path)
         key = _key(data, _references_signature(path, data))
     # lazy: a selected device is built alone
-    obj = _MEMORY[key] = esi.load_bytes(data, str(path), base_dir=Path(path).parent, lazy=True)
+    obj = _MEMORY[f"{key}\0{path}"] = esi.load_bytes(data, str(path), base_dir=Path(path).parent, lazy=True)
     return obj
 
 

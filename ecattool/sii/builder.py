@@ -8,7 +8,7 @@ Kollmorgen dumps quoted in the field notes); every such choice is listed in docs
 from __future__ import annotations
 
 from ecattool.errors import InputError, Location
-from ecattool.esi.model import Device, Pdo
+from ecattool.esi.model import Device, Pdo, SyncManager
 from ecattool.sii.image import parse, parse_category
 from ecattool.sii.model import (
     HEADER_BYTES,
@@ -86,6 +86,14 @@ def physical_port(physics: str) -> int:
 
 def _u32(v: int | None) -> int:
     return (v or 0) & 0xFFFFFFFF
+
+
+def _enable_byte(sm: SyncManager) -> int:
+    """The SII SyncM enable byte: ``Sm@Enable`` as the ESI gives it (bit 0 enable, bit 1 fixed content, bit 2
+    virtual, bit 3 OP only), with the bits that ``Sm@Virtual`` and ``Sm@OpOnly`` state; without an ``Enable``
+    attribute, 1 (enabled)."""
+    given = sm.enable_byte if sm.enable_byte is not None else (1 if sm.enable else 0)
+    return given | (4 if sm.virtual else 0) | (8 if sm.op_only else 0)
 
 
 def _pdo(p: Pdo, strings: StringTable) -> SiiPdo:
@@ -202,7 +210,7 @@ def assemble(device: Device, *, pdo_categories: bool = True) -> SiiImage:
     if device.sync_managers:
         generated.append(SyncMCategory([
             SiiSyncManager(sm.start_address, sm.default_size or 0, sm.control_byte & 0xFF, 0,
-                           (1 if sm.enable else 0) | (4 if sm.virtual else 0) | (8 if sm.op_only else 0),
+                           _enable_byte(sm),
                            SM_TYPE_CODES.get(sm.kind, 0))
             for sm in device.sync_managers]))
     if any(f.sm is not None for f in device.fmmus):

@@ -69,7 +69,7 @@ def _soe(s: SoeCommand) -> dict[str, Any]:
 def _sm(s: SyncManager) -> dict[str, Any]:
     d: dict[str, Any] = {"number": s.number, "kind": s.kind, "start_address": s.start_address,
                          "control_byte": s.control_byte, "enable": s.enable}
-    for key in ("default_size", "min_size", "max_size"):
+    for key in ("default_size", "min_size", "max_size", "enable_byte"):
         if getattr(s, key) is not None:
             d[key] = getattr(s, key)
     if s.virtual:
@@ -197,7 +197,8 @@ def _read_slave(s: Any, doc: _Doc, i: int) -> SlaveConfig:
     for j, m in enumerate(as_list(s.get("sync_managers"), doc.loc(*base, "sync_managers"), "sync_managers")):
         mloc = doc.loc(*base, "sync_managers", j)
         _obj(m, mloc, "sync manager")
-        sizes = {k: None if m.get(k) is None else _int(m[k], mloc, k) for k in ("default_size", "min_size", "max_size")}
+        sizes = {k: None if m.get(k) is None else _int(m[k], mloc, k)
+                 for k in ("default_size", "min_size", "max_size", "enable_byte")}
         cfg.sync_managers.append(SyncManager(
             _int(_need(m, "number", mloc), mloc, "number"), str(m.get("kind", "")), _opt(m, "start_address", 0, mloc),
             control_byte=_opt(m, "control_byte", 0, mloc), enable=bool(m.get("enable", True)),
