@@ -32,19 +32,15 @@ def bench_canopen(seconds: float) -> float:
     import canopen
     from canopen.objectdictionary import ODVariable
 
+    from bench_sim import canopen_remote  # benchmarks/ is on sys.path as the script's folder
+
     od = canopen.ObjectDictionary()
     var = ODVariable("Vendor ID", 0x1018, 1)
     var.data_type = canopen.objectdictionary.UNSIGNED32
     var.access_type = "ro"
     var.default = 0x289
     od.add_object(var)
-    server, client = canopen.Network(), canopen.Network()
-    server.connect(interface="virtual", channel="ecattool-bench-wire", receive_own_messages=False)
-    client.connect(interface="virtual", channel="ecattool-bench-wire", receive_own_messages=False)
-    try:
-        server.add_node(canopen.LocalNode(1, od))
-        remote = canopen.RemoteNode(1, od)
-        client.add_node(remote)
+    with canopen_remote(od, "ecattool-bench-wire") as remote:
         for _ in range(20):
             remote.sdo.upload(0x1018, 1)
         n, start = 0, time.perf_counter()
@@ -52,9 +48,6 @@ def bench_canopen(seconds: float) -> float:
             remote.sdo.upload(0x1018, 1)
             n += 1
         return n / (time.perf_counter() - start)
-    finally:
-        client.disconnect()
-        server.disconnect()
 
 
 def _drive():  # type: ignore[no-untyped-def]
