@@ -1,6 +1,7 @@
-"""Proof by a second real master (issue 13, item 6): KickCAT's Python master (the ``kickcat`` package, 2.5)
-against the virtual bus over raw Ethernet, and the mailbox's faults over the wire with SOEM (pysoem): both
-inside a private network namespace with a veth pair the test makes itself (never the host's interfaces).
+"""The mailbox over the wire (issue 13, items 3 and 6): KickCAT's Python master (the ``kickcat`` package, 2.5)
+commissions the virtual bus over raw Ethernet; SOEM (pysoem) reads the object dictionary through SDO
+information and meets an SDO abort; all inside a private network namespace with a veth pair the test makes
+itself (never the host's interfaces).
 Skipped, with the reason printed, only where a master is missing or the kernel refuses the namespace.
 
 Each test is one subprocess with a timeout; every loop inside it is bounded."""
@@ -15,7 +16,7 @@ from typing import Any
 
 import pytest
 
-from ecattool.od.model import EcState
+from ecattool.od.model import MAILBOX_STATES, EcState, ObjectCode
 from ecattool.project.export import slave_configs
 from ecattool.sim.bus import netns
 from ecattool.sim.bus.serve import load_sources
@@ -92,7 +93,7 @@ def test_kickcat_is_refused_op_where_the_project_needs_dc() -> None:
 def test_sdo_abort_over_the_wire_fails_commission_and_a_second_run_converges() -> None:
     """The served drive answers one startup write with abort 0609 0030h: SOEM reports it, ``ecattool
     commission`` names the object and the code and does not say OK; the next run against the same bus passes."""
-    out = _scenario("wire_mailbox_faults_scenario.py", "samples/hdt/project.yaml", "12", "0x06090030",
+    out = _scenario("wire_mailbox_scenario.py", "faults", "samples/hdt/project.yaml", "12", "0x06090030",
                     timeout=400, module="pysoem")
     first, second = out["runs"]
     assert first["returncode"] == 1, first
@@ -101,4 +102,30 @@ def test_sdo_abort_over_the_wire_fails_commission_and_a_second_run_converges() -
     steps = report["projects"][0]["drives"][0]["steps"]
     assert any(s.get("abort_code") == "0x06090030" and not s["ok"] for s in steps), steps
     assert second["returncode"] == 0 and json.loads(second["stdout"])["ok"] is True, second
+    assert out["server"] == {"returncode": 0, "stderr": ""}
+
+
+def test_soem_reads_the_object_dictionary_through_sdo_information() -> None:
+    """pysoem's ``slave.od`` (ecx_readODlist, ecx_readODdescription, ecx_readOE) against the ETG.2001 sample
+    drive, which declares SdoInfo: every object, its name, object code and data type, and every entry of the
+    ARRAY/RECORD objects with its name, data type, bit length and access word (ETG.1000.6: bits 0-2 readable
+    in PRE-OP/SAFE-OP/OP, 3-5 writable, 6/7 RxPDO/TxPDO mappable)."""
+    esi = "samples/esi/etg2001_cia402.xml"
+    out = _scenario("wire_mailbox_scenario.py", "od", esi, timeout=200, module="pysoem")
+    dictionary = load_sources([esi])[0].slave.drive.device.dictionary
+    assert [row[0] for row in out["od"]] == [o.index for o in dictionary]
+    states = sorted(MAILBOX_STATES, key=lambda s: s.code)  # PRE-OP, SAFE-OP, OP
+    codes = {ObjectCode.VAR: 7, ObjectCode.ARRAY: 8, ObjectCode.RECORD: 9}
+    for (index, name, code, dtype, entries), obj in zip(out["od"], dictionary):
+        assert (name, code) == (obj.name, codes[obj.object_code]), hex(index)
+        if obj.object_code is ObjectCode.VAR:
+            assert dtype == obj.entries[0].datatype.code and entries == []  # pysoem lists entries of VARs not
+            continue
+        want = []
+        for e in obj:
+            access = sum(1 << i for i, s in enumerate(states) if s in e.access.read)
+            access |= sum(1 << (3 + i) for i, s in enumerate(states) if s in e.access.write)
+            access |= (0x40 if e.rx_mappable else 0) | (0x80 if e.tx_mappable else 0)
+            want.append([e.name, e.datatype.code, e.bit_size, access])
+        assert entries == want, hex(index)
     assert out["server"] == {"returncode": 0, "stderr": ""}
