@@ -105,7 +105,7 @@ def test_sdo_abort_over_the_wire_fails_commission_and_a_second_run_converges() -
     assert out["server"] == {"returncode": 0, "stderr": ""}
 
 
-def test_soem_reads_the_object_dictionary_through_sdo_information() -> None:
+def test_soem_reads_the_object_dictionary_through_sdo_information_and_maps_by_complete_access() -> None:
     """pysoem's ``slave.od`` (ecx_readODlist, ecx_readODdescription, ecx_readOE) against the ETG.2001 sample
     drive, which declares SdoInfo: every object, its name, object code and data type, and every entry of the
     ARRAY/RECORD objects with its name, data type, bit length and access word (ETG.1000.6: bits 0-2 readable
@@ -128,4 +128,8 @@ def test_soem_reads_the_object_dictionary_through_sdo_information() -> None:
             access |= (0x40 if e.rx_mappable else 0) | (0x80 if e.tx_mappable else 0)
             want.append([e.name, e.datatype.code, e.bit_size, access])
         assert entries == want, hex(index)
+    drive = load_sources([esi])[0].slave.drive
+    drive.request_state(EcState.PREOP)
+    drive.request_state(EcState.SAFEOP)
+    assert out["sizes"] == list(drive.process_image_sizes())  # config_map read 1C12h/1C13h by complete access
     assert out["server"] == {"returncode": 0, "stderr": ""}

@@ -1,7 +1,7 @@
 """Run inside a private network namespace (tests/test_wire_mailbox.py starts it through ecattool.sim.bus.netns):
 the mailbox over the wire with SOEM (pysoem) as the master.
 
-    python wire_mailbox_scenario.py od SOURCE                  # pysoem's slave.od: SDO information
+    python wire_mailbox_scenario.py od SOURCE                  # pysoem's slave.od, then config_map
     python wire_mailbox_scenario.py faults PROJECT NTH CODE    # two commission runs against a faulty bus
     python wire_mailbox_scenario.py serve PROJECT NTH CODE     # the faulty bus (started by 'faults')
 
@@ -39,6 +39,8 @@ def od(source: str) -> dict[str, Any]:
         out["od"] = [[o.index, _text(o.name), o.object_code, o.data_type,
                       [[_text(e.name), e.data_type, e.bit_length, e.obj_access] for e in o.entries]]
                      for o in master.slaves[0].od]
+        master.config_map()  # SOEM reads the PDO assignment by complete access where the SII says it may
+        out["sizes"] = [len(master.slaves[0].output), len(master.slaves[0].input)]
         master.close()
     finally:
         out["server"] = stop_server(server)
