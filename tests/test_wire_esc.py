@@ -253,3 +253,18 @@ def test_mailbox_sync_managers_refuse_when_full_or_empty() -> None:
     d = loop.one(Datagram.make(Cmd.FPRD, 0x1001, 0x1080, 128))
     assert d.wkc == 1 and d.data[:5] == b"reply"
     assert loop.one(Datagram.make(Cmd.FPRD, 0x1001, 0x1080, 128)).wkc == 0  # read to the end: empty again
+
+
+def test_sync0_next_pulse_and_activation_status() -> None:
+    loop = _loop(1)
+    _configure_addresses(loop)
+    now = int.from_bytes(loop.one(Datagram.make(Cmd.FPRD, 0x1001, R.DC_SYSTEM_TIME, 8)).data, "little")
+    start = now - 3_500_000  # already past: the next pulse is the first cycle boundary after the system time
+    loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_SYNC0_CYCLE, struct.pack("<I", 1_000_000)))
+    loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_START_TIME, struct.pack("<Q", start)))
+    assert loop.one(Datagram.make(Cmd.FPRD, 0x1001, R.DC_ACTIVATION_STATUS, 1)).data == b"\x00"
+    loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_ACTIVATION, b"\x03"))
+    back = loop.one(Datagram.make(Cmd.FPRD, 0x1001, R.DC_ACTIVATION_STATUS, 0x14))
+    assert back.data[0] == 0x01 and back.data[R.DC_SYNC0_STATUS - R.DC_ACTIVATION_STATUS] == 0x01
+    nxt = int.from_bytes(back.data[R.DC_START_TIME - R.DC_ACTIVATION_STATUS:][:8], "little")
+    assert (nxt - start) % 1_000_000 == 0 and nxt > now
