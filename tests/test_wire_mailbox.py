@@ -19,7 +19,8 @@ import pytest
 from ecattool.od.model import MAILBOX_STATES, EcState, ObjectCode
 from ecattool.project.export import slave_configs
 from ecattool.sim.bus import netns
-from ecattool.sim.bus.serve import load_sources
+from ecattool.project.bus import devices_in_bus_order
+from ecattool.sim.bus.serve import Served, device_source, virtual_slaves
 from tests.conftest import ROOT
 
 HERE = Path(__file__).parent
@@ -45,6 +46,12 @@ def _scenario(script: str, *args: str, timeout: int, module: str) -> dict[str, A
     assert done.returncode == 0, done.stderr[-3000:]
     result: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
     return result
+
+
+def load_sources(sources: list[str]) -> list[Served]:
+    """The slaves ``ecattool sim serve SOURCES`` serves, in process."""
+    return virtual_slaves([d for src in sources for d in (
+        devices_in_bus_order(src) if src.endswith(".yaml") else [device_source(src)])])
 
 
 def _expected(projects: list[str]) -> tuple[list[list[int]], list[list[int]]]:

@@ -48,9 +48,11 @@ def od(source: str) -> dict[str, Any]:
 
 
 def serve(project: str, nth: int, code: int) -> None:
-    from ecattool.sim.bus.serve import load_sources, serve as serve_bus
+    from ecattool.project.bus import devices_in_bus_order
+    from ecattool.sim.bus.serve import serve as serve_bus
+    from ecattool.sim.bus.serve import virtual_slaves
 
-    served = load_sources([project])
+    served = virtual_slaves(devices_in_bus_order(project))
     served[0].slave.drive.faults.abort_sdo(nth, code)
 
     def ready() -> None:
