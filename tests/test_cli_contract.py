@@ -54,6 +54,7 @@ def _name(cmd: tuple[str, ...]) -> str:
 # ------------------------------------------------------------------------------------------- --help, --json
 #: Commands that print no data of their own, so have no --json (each says why). Everything else must.
 NO_JSON: dict[tuple[str, ...], str] = {
+    ("esi", "export"): "writes an ESI file (-o required; '-' = stdout)",
     ("project", "new"): "writes a project skeleton (YAML) to -o or stdout",
     ("project", "schema"): "prints the JSON Schema itself (JSON already) or checks a checked-in copy",
     ("scale", "startup"): "writes a startup list in the master format chosen with --format (json is one)",
@@ -139,10 +140,11 @@ TS = ("--profile", "technosoft-ipos")
 #: One or more valid invocations per command that reads or writes files; together they name every file
 #: parameter (checked by test_every_file_parameter_is_swept).
 HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
-    ("commission",): [(PROJECT, "-o", Out("report.json"))],
+    ("commission",): [(PROJECT, "-o", Out("report.json"), "--report", Out("report.html"))],
     ("lint",): [(PROJECT, "-o", Out("lint.txt"))],
     ("esi", "devices"): [(ESI,)],
-    ("esi", "show"): [(ESI, "--pdos")],
+    ("esi", "show"): [(ESI, "--pdos"), (In("eds", "corpus:eds/technosoft_iPOS.D.v1.04.eds"), "--pdos")],
+    ("esi", "export"): [("technosoft-ipos", "--revision", "F515I", "-o", Out("drive.xml"))],
     ("esi", "validate"): [(ESI,)],
     ("map", "check"): [(*TS, "--mapping", In("mapping", "gen:mapping.yaml")),
                        ("--esi", ESI),
@@ -155,11 +157,11 @@ HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
                      (*TS, "--product", "ipos4808-bx-cat", "--startup", In("startup", "corpus:configs/ecmc_ecmciPOSXXXX.cmd"))],
     ("project", "new"): [(*TS, "-o", Out("machine.yaml"))],
     ("project", "schema"): [("-o", Out("schema.json")), ("--check", In("schema", "schemas/project.schema.json"))],
-    ("scale", "compute"): [(SPEC, "-o", Out("factors.json")),
+    ("scale", "compute"): [(SPEC, "-o", Out("factors.json"), "--html", Out("scaling.html")),
                            (In("spec", "samples/scaling/rotary_table.yaml"), "--esi", COPLEY, "-o", Out("factors.json"))],
     ("scale", "startup"): [(SPEC, "--format", "json", "-o", Out("startup.json")),
                            (In("spec", "samples/scaling/rotary_table.yaml"), "--esi", COPLEY, "-o", Out("startup.txt"))],
-    ("scale", "explain"): [("--from", In("startup", "gen:factors.csv"))],
+    ("scale", "explain"): [("--from", In("startup", "gen:factors.csv"), "--html", Out("scaling.html"))],
     ("sim", "run"): [("technosoft-ipos", In("script", "gen:steps.yaml"), "-o", Out("transcript.txt")),
                      (In("esi", "corpus:esi/elmo_Elmo_ECAT_00010420_V11.xml"), In("script", "gen:steps.yaml"), "--device", "2")],
     ("sii", "info"): [(SII,)],
@@ -347,12 +349,16 @@ def _bad_cases() -> list[tuple[tuple[str, ...], int, int, str]]:
                     if kind == "bad-utf8" and a.kind in BINARY_KINDS:
                         continue
                     if kind == "other":
-                        cases += [(cmd, n, i, f"other:{k}") for k in sorted(KIND_FILES) if k != a.kind]
+                        cases += [(cmd, n, i, f"other:{k}") for k in sorted(KIND_FILES)
+                                  if k != a.kind and frozenset({k, a.kind}) not in INTERCHANGEABLE]
                     else:
                         cases.append((cmd, n, i, kind))
     return cases
 
 
+#: Input kinds each command that takes one also takes as the other (not "bad" there): a CANopen EDS is accepted
+#: wherever an ESI is (docs/esi.md, "CANopen EDS and DCF files").
+INTERCHANGEABLE = {frozenset({"esi", "eds"})}
 BAD_CASES = _bad_cases()
 
 

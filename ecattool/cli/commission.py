@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from ecattool.cli.common import console, dump_json, output_option, write_output
+from ecattool.cli.common import console, dump_json, file_output_option, output_option, write_output
 from ecattool.cli.paths import InputFile
 
 if TYPE_CHECKING:
@@ -20,6 +20,7 @@ Examples:
   ecattool commission samples/technosoft_ipos/project.yaml          # on the embedded simulator
   ecattool commission --json machine.yaml > report.json
   ecattool commission --target pysoem:eth0 machine.yaml             # a real bus (pip install 'ecattool[pysoem]')
+  ecattool commission samples/hdt/project.yaml --report report.html  # + an HTML report (pip install 'ecattool[report]')
 \b
 Exit codes: 0 every drive commissioned, 1 a drive failed or the project is invalid, 2 usage error.""",
 )
@@ -27,7 +28,12 @@ Exit codes: 0 every drive commissioned, 1 a drive failed or the project is inval
 @click.option("--target", default=None, help="'sim' (default: the project's target) or 'pysoem:<interface>'.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @output_option(help="Also write the JSON report to FILE.")
-def commission(projects: tuple[str, ...], target: str | None, as_json: bool, output: str | None) -> None:
+@file_output_option("--report", "report", help="Also write a self-contained HTML report to FILE: per drive the result, "
+                    "the process image, the startup list as sent and read back, the .sw blocks, the state timeline "
+                    "and plots of the move, and the lint findings (docs/report.md). Needs "
+                    "pip install 'ecattool[report]'.")
+def commission(projects: tuple[str, ...], target: str | None, as_json: bool, output: str | None,
+               report: str | None) -> None:
     """Commission the drives of project files.
 
     For each drive: INIT -> PRE-OP, identity check, .sw verify/download, the startup list with every write
@@ -37,14 +43,21 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, out
     from ecattool.commission import commission as run
 
     inputs: list[str] = []
-    if output not in (None, "-"):  # refused before the drives are touched, not after
-        from ecattool.fileio import refuse_input
-        from ecattool.project.loader import project_inputs
+    if report:
+        from ecattool.report import require
 
-        inputs = project_inputs(projects)  # the projects and the ESI/.sw files they name
-        refuse_input(output, inputs)
+        require()  # a missing extra is one line before any drive is touched
+        if report == "-" and (as_json or output == "-"):
+            raise click.UsageError("--report - and the JSON report cannot both go to stdout")
+    for out in (output, report):
+        if out not in (None, "-"):  # refused before the drives are touched, not after
+            from ecattool.fileio import refuse_input
+            from ecattool.project.loader import project_inputs
+
+            inputs = inputs or project_inputs(projects)  # the projects and the ESI/.sw files they name
+            refuse_input(out, inputs)
     reports = []
-    con = None if as_json else console()
+    con = None if as_json or report == "-" else console()
     for path in projects:
         def show(dr: DriveReport, path: str = path) -> None:
             if con is None:
@@ -65,4 +78,8 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, out
                   style="green" if not bad else "red")
     if output:
         write_output(output, dump_json(data) + "\n", inputs)
+    if report:
+        from ecattool.report import commission_html
+
+        write_output(report, commission_html(reports), inputs)
     raise SystemExit(0 if data["ok"] else 1)

@@ -200,7 +200,7 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
         from ecattool.report import process_image_svg
 
         write_output(svg, process_image_svg(lay, device.type_name), inputs)
-        if not as_json and output is None:
+        if svg == "-":
             return
     if as_json or output not in (None, "-"):
         write_output(output, dump_json(lay.to_json()) + "\n", inputs)

@@ -6,7 +6,8 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.common import (console, file_output_option, json_option, output_option, print_json, table,
+                                 write_output)
 from ecattool.cli.paths import InputFile
 
 _FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
@@ -126,6 +127,22 @@ def _compute(kwargs: dict[str, Any]) -> Any:
                    device=device)
 
 
+_HTML_HELP = ("Also write the factor-group derivation as a page to FILE: encoder -> gear -> transmission -> user "
+              "unit as a chain, what the units mean, the values and findings (docs/report.md). Needs "
+              "pip install 'ecattool[report]'.")
+
+
+def _html_prerequisites(html: str | None, json_to_stdout: bool) -> None:
+    """Before any work: the report extra is there, and the page and JSON do not both go to stdout."""
+    if not html:
+        return
+    from ecattool.report import require
+
+    require("jinja2")
+    if html == "-" and json_to_stdout:
+        raise click.UsageError("--html - and the JSON output cannot both go to stdout")
+
+
 def _render(group: Any) -> None:
     con = console()
     t = table(f"Factor group — {group.family} ({group.factor_set})", ["object", "name", "part", "value", "hex", "exact", "meaning"])
@@ -171,17 +188,31 @@ Examples:
   ecattool scale compute --counts 4096 --gear 3:1 --transmission 'ballscrew pitch=10mm' \\
       --position mm --family controltechniques
   ecattool scale compute --lines 500 --position rad --firmware F515I   # 4294967295 / 13493038
-  ecattool scale compute samples/scaling/rotary_table.yaml --esi copley_XE2_4.60.xml""")
+  ecattool scale compute samples/scaling/rotary_table.yaml --esi copley_XE2_4.60.xml
+  ecattool scale compute samples/scaling/ballscrew.yaml --html scaling.html   # the chain as a page""")
 @_mechanics_options
 @click.option("--startup", "with_startup", is_flag=True, help="Also print the startup list (transition PS).")
 @json_option
 @output_option()
-def compute_cmd(with_startup: bool, as_json: bool, output: str | None, **kwargs: Any) -> None:
+@file_output_option("--html", "html", help=_HTML_HELP)
+def compute_cmd(with_startup: bool, as_json: bool, output: str | None, html: str | None, **kwargs: Any) -> None:
     """Table of scaling objects: value (decimal, hex), meaning, exactness; approximations with ppm error."""
     from ecattool.cli.common import dump_json
 
+    _html_prerequisites(html, as_json or output == "-")
     inputs = tuple(kwargs[k] for k in ("spec", "esi") if kwargs.get(k) not in (None, "-"))
     group = _compute(kwargs)
+    if html:
+        from ecattool.report import scaling_html
+        from ecattool.scaling import explain
+
+        e = explain(group.values, group.family,
+                    factor_set=group.factor_set if group.family == "technosoft-ipos" else None)
+        mechanics = {k: str(v) for k, v in group.summary.items()
+                     if k in ("feedback", "gear (motor:load)", "transmission", "position unit", "velocity unit")}
+        write_output(html, scaling_html(e, group.values, mechanics, title=str(kwargs.get("spec") or "")), inputs)
+        if html == "-":
+            return
     if as_json or output:
         data = group.to_json()
         if with_startup:
@@ -271,7 +302,8 @@ Examples:
   ecattool scale explain --family controltechniques 608F:01=4096 6091:01=3 6092:01=10 604C:01=60
   ecattool scale explain --family technosoft-ipos --from drive_startup.xml --json
   ecattool scale explain --family hdt --target sim
-  ecattool scale explain --family technosoft-ipos --target pysoem:eth0 --slave 2""")
+  ecattool scale explain --family technosoft-ipos --target pysoem:eth0 --slave 2
+  ecattool scale explain --family hdt 6093:01=16384 6093:02=25 --html scaling.html""")
 @click.argument("assignments", nargs=-1)
 @click.option("--family", type=click.Choice(_FAMILIES), default="technosoft-ipos", show_default=True)
 @click.option("--from", "source", type=InputFile(),
@@ -282,8 +314,10 @@ Examples:
 @click.option("--slow-loop", default="1ms", show_default=True, help="Technosoft slow-loop period.")
 @click.option("--counts-per-rev", help="Increments per motor revolution, to express velocities in rpm.")
 @json_option
+@file_output_option("--html", "html", help=_HTML_HELP)
 def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, target: str | None, slave: int,
-                firmware: str | None, slow_loop: str, counts_per_rev: str | None, as_json: bool) -> None:
+                firmware: str | None, slow_loop: str, counts_per_rev: str | None, as_json: bool,
+                html: str | None) -> None:
     """What one user unit is in counts, and what velocity and acceleration units mean, from object values."""
     from fractions import Fraction
 
@@ -291,6 +325,8 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     from ecattool.od.numbers import parse_address, parse_int
     from ecattool.scaling import explain
     from ecattool.scaling.units import time_seconds
+
+    _html_prerequisites(html, as_json)
 
     values = _values_from_file(source) if source else {}
     if target:
@@ -306,6 +342,12 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
         raise InputError("give object values (6093:01=… 6093:02=…) or --from FILE")
     cpr = Fraction(parse_int(counts_per_rev)) if counts_per_rev else None
     e = explain(values, family, slow_loop=time_seconds(slow_loop), counts_per_rev=cpr, firmware=firmware)
+    if html:
+        from ecattool.report import scaling_html
+
+        write_output(html, scaling_html(e, values, title=source or ""), (source,) if source else ())
+        if html == "-":
+            return
     if as_json:
         print_json(e.to_json())
         return

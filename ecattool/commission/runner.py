@@ -10,8 +10,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ecattool.commission import cia402
+from ecattool.commission.trace import DriveTrace, StartupWrite
 from ecattool.errors import EcatToolError, InputError, SdoAbort, StateChangeError, TargetError
-from ecattool.findings import has_errors
+from ecattool.findings import Finding, has_errors
 from ecattool.od.model import EcState
 from ecattool.project.resolve import TRANSITION_STATE, ResolvedDrive
 from ecattool.startup.model import StartupCommand
@@ -50,6 +51,8 @@ class DriveReport:
     steps: list[Step] = field(default_factory=list)
     error: str | None = None
     final_state: str = ""
+    #: what the run did, for the HTML report (not part of the JSON report)
+    trace: DriveTrace = field(default_factory=DriveTrace)
 
     def to_json(self) -> dict[str, Any]:
         return {"name": self.name, "position": self.position, "ok": self.ok, "error": self.error,
@@ -61,6 +64,8 @@ class CommissionReport:
     project: str
     target: str
     drives: list[DriveReport] = field(default_factory=list)
+    #: the project's lint findings (file and line), for the HTML report (not part of the JSON report)
+    findings: list[Finding] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -91,11 +96,12 @@ _NOT_SEEDED = frozenset({0x6040, 0x6042, 0x6071, 0x60FF, 0x60B1, 0x60B2})
 class ProcessIo:
     """Objects in the process image by (index, sub); SDO for objects that are not mapped."""
 
-    def __init__(self, slave: SlaveTarget, rd: ResolvedDrive) -> None:
+    def __init__(self, slave: SlaveTarget, rd: ResolvedDrive, trace: DriveTrace | None = None) -> None:
         from ecattool import pdo
 
         self.slave = slave
         self.rd = rd
+        self.trace = trace
         assert rd.device is not None and rd.mapping is not None
         self.layout = pdo.layout(rd.device, rd.mapping)
         self.out_pos = {(v.index, v.subindex): v for v in self.layout.outputs.entries if not v.is_gap}
@@ -137,8 +143,12 @@ class ProcessIo:
 
     def cycle(self) -> None:
         self.inputs = self.slave.exchange(bytes(self.outputs))
+        if self.trace is not None:
+            self.trace.on_cycle(self)
 
     def write(self, index: int, sub: int, value: int) -> None:
+        if self.trace is not None:
+            self.trace.written(index, sub, value)
         entry = self._entry(index, sub)
         raw = entry.encode(value)
         pos = self.out_pos.get((index, sub))
@@ -192,6 +202,7 @@ def _sdo_step(name: str, fn: Callable[[], Any]) -> Any:
 def _goto(slave: SlaveTarget, state: EcState, report: DriveReport) -> None:
     _sdo_step(f"state {state.value}", lambda: slave.request_state(state))
     report.steps.append(Step(f"state {state.value}", True, f"reached {state.value}"))
+    report.trace.ec_state(state.value)
 
 
 def _check_identity(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
@@ -221,7 +232,17 @@ def _check_identity(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) 
                                                 f"revision 0x{revision:08X} ({how})"))
 
 
-def _send(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand) -> None:
+def _send(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, trace: DriveTrace) -> None:
+    """Write one startup command and read it back, recording both in the trace."""
+    sent = trace.startup_write(cmd)
+    try:
+        _send_verified(slave, rd, cmd, sent)
+    except _Failed as exc:
+        sent.ok, sent.result = False, exc.step.detail
+        raise
+
+
+def _send_verified(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, sent: StartupWrite) -> None:
     assert rd.device is not None
 
     def write() -> None:
@@ -235,6 +256,7 @@ def _send(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand) -> None:
     if entry is None or not entry.access.readable(state) or cmd.complete_access:
         return
     back = _sdo_step(f"read back {cmd.address}", lambda: slave.sdo_upload(cmd.index, cmd.subindex))
+    sent.read_back, sent.verified = bytes(back), bytes(back) == cmd.data
     if bytes(back) != cmd.data:
         raise _Failed(Step(f"verify {cmd.address}", False,
                            f"read back {bytes(back).hex()} after writing {cmd.data.hex()} ({cmd.comment})"))
@@ -243,7 +265,7 @@ def _send(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand) -> None:
 def _startup(slave: SlaveTarget, rd: ResolvedDrive, transitions: tuple[str, ...], report: DriveReport) -> None:
     cmds = [c for c in rd.startup if c.transition in transitions]
     for c in cmds:
-        _send(slave, rd, c)
+        _send(slave, rd, c, report.trace)
     if cmds:
         report.steps.append(Step(f"startup {'/'.join(transitions)}", True, f"{len(cmds)} write(s) verified"))
 
@@ -255,6 +277,7 @@ def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     if rd.sw_image is None or cfg is None:
         return
     diff = _sdo_step("sw verify", lambda: sw.verify(rd.sw_image, slave))
+    report.trace.sw_checked(diff, cfg.file)
     bad = [b for b in diff if not b.ok]
     if not bad:
         report.steps.append(Step("sw verify", True, f"{len(diff)} block(s) match {cfg.file}"))
@@ -263,6 +286,7 @@ def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
         raise _Failed(Step("sw verify", False, f"{len(bad)} block(s) differ from {cfg.file}: "
                            + ", ".join(f"0x{b.start:04X}" for b in bad) + " (download disabled)"))
     result = _sdo_step("sw download", lambda: sw.download(rd.sw_image, slave, mode=cfg.mode))
+    report.trace.sw_downloaded(result, result.after)
     if not result.ok:
         starts = dict.fromkeys([*(c.start for c in result.failed), *result.write_errors])
         why = [f"0x{k:04X}" + (f" ({result.write_errors[k]})" if k in result.write_errors else "") for k in starts]
@@ -270,7 +294,11 @@ def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     # the drive resets after the download (2080h); bring it back to PRE-OP and check once more
     _sdo_step("sw reset", lambda: slave.request_state(EcState.INIT) if slave.state() is not EcState.INIT else None)
     _sdo_step("sw reset", lambda: slave.request_state(EcState.PREOP))
-    still = [b for b in _sdo_step("sw verify", lambda: sw.verify(rd.sw_image, slave)) if not b.ok]
+    report.trace.ec_state(EcState.INIT.value)  # the reset, as the timeline shows it
+    report.trace.ec_state(EcState.PREOP.value)
+    after = _sdo_step("sw verify", lambda: sw.verify(rd.sw_image, slave))
+    report.trace.sw_downloaded(result, after)
+    still = [b for b in after if not b.ok]
     if still:
         raise _Failed(Step("sw verify", False, "after reset, block(s) differ: "
                            + ", ".join(f"0x{b.start:04X}" for b in still)))
@@ -327,23 +355,12 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     internal = io.has(0x6063)
     p0 = io.read(0x6064, 0)
     i0 = io.read(0x6063, 0) if internal else None
-    target = int(p0 + dist)
     _set_mode(io, MOVE_MODE_CODES[mode])
-    if mode == "pp":
-        io.write(0x607A, 0, target)
-        io.write(0x6040, 0, cia402.ENABLE_OPERATION | cia402.NEW_SETPOINT)
-        if not _cycle_until(io, lambda sw: bool(sw & 0x1000), 1000):
-            raise _Failed(Step("move", False, "the drive did not acknowledge the new set-point (statusword bit 12)"))
-        io.write(0x6040, 0, cia402.ENABLE_OPERATION)
-        if not _cycle_until(io, lambda sw: bool(sw & 0x0400) and not sw & 0x1000, 200_000):
-            raise _Failed(Step("move", False, f"profile position move to {target} did not reach its target "
-                                              "(statusword bit 10)"))
-    else:
-        steps = 100
-        for k in range(1, steps + 1):
-            io.write(0x607A, 0, int(p0 + dist * k / steps))
-            io.cycle()
-        _cycle_until(io, lambda sw: False, 50)
+    report.trace.begin_move(io, f"{mode.upper()} move of {dist} user units")
+    try:
+        _run_move(io, mode, p0, dist)
+    finally:
+        report.trace.end_move(io)
     p1 = io.read(0x6064, 0)
     if p1 - p0 != dist:
         raise _Failed(Step("move", False, f"position moved {p1 - p0} user units, commanded {dist}"))
@@ -360,6 +377,26 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
         else:
             detail += f"; internal {i0} -> {i1} counts"
     report.steps.append(Step("move", True, detail))
+
+
+def _run_move(io: ProcessIo, mode: str, p0: int, dist: Fraction) -> None:
+    """The motion: one profile-position set-point (pp), or 100 cyclic set-points then 50 cycles (csp)."""
+    target = int(p0 + dist)
+    if mode == "pp":
+        io.write(0x607A, 0, target)
+        io.write(0x6040, 0, cia402.ENABLE_OPERATION | cia402.NEW_SETPOINT)
+        if not _cycle_until(io, lambda sw: bool(sw & 0x1000), 1000):
+            raise _Failed(Step("move", False, "the drive did not acknowledge the new set-point (statusword bit 12)"))
+        io.write(0x6040, 0, cia402.ENABLE_OPERATION)
+        if not _cycle_until(io, lambda sw: bool(sw & 0x0400) and not sw & 0x1000, 200_000):
+            raise _Failed(Step("move", False, f"profile position move to {target} did not reach its target "
+                                              "(statusword bit 10)"))
+    else:
+        steps = 100
+        for k in range(1, steps + 1):
+            io.write(0x607A, 0, int(p0 + dist * k / steps))
+            io.cycle()
+        _cycle_until(io, lambda sw: False, 50)
 
 
 def _expected_readbacks(rd: ResolvedDrive) -> list[FactorObject]:
@@ -429,7 +466,7 @@ class _DriveRun:
     def __init__(self, slave: SlaveTarget, rd: ResolvedDrive) -> None:
         self.slave = slave
         self.rd = rd
-        self.report = DriveReport(rd.drive.name, rd.position)
+        self.report = DriveReport(rd.drive.name, rd.position, trace=DriveTrace.for_drive(rd))
         self.io: ProcessIo | None = None
         self.failed = False
 
@@ -460,8 +497,10 @@ class _DriveRun:
             first = next(f for f in rd.findings if f.severity.value == "error")
             raise _Failed(Step("lint", False, f"the project has errors for this drive, first: {first}"))
         current = _sdo_step("state", slave.state)
+        report.trace.ec_state(current.value)
         if current is not EcState.INIT:
             _sdo_step("state INIT", lambda: slave.request_state(EcState.INIT))
+            report.trace.ec_state(EcState.INIT.value)
         _goto(slave, EcState.PREOP, report)
         _check_identity(slave, rd, report)
         _sw(slave, rd, report)
@@ -472,7 +511,7 @@ class _DriveRun:
     def _finish(self) -> None:
         slave, rd, report = self.slave, self.rd, self.report
         _goto(slave, EcState.SAFEOP, report)
-        io = self.io = ProcessIo(slave, rd)
+        io = self.io = ProcessIo(slave, rd, report.trace)
         io.cycle()
         _startup(slave, rd, _SAFEOP_TRANSITIONS, report)
         io.seed_from_drive()
@@ -554,7 +593,7 @@ def commission(path: str | Path, target: str | Target | None = None,
         tgt, name = open_target(target or result.loaded.project.target, result.drives)
     else:
         tgt, name = target, type(target).__name__
-    report = CommissionReport(str(path), name)
+    report = CommissionReport(str(path), name, findings=list(result.findings))
     try:
         slaves = tgt.slaves()
         ordered = sorted(result.drives, key=lambda r: r.position)

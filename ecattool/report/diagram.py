@@ -133,9 +133,9 @@ def section_of(img: SmImage, y: float) -> Section:
     return sec
 
 
-def sections(layout: Layout) -> list[Section]:
+def sections(layout: Layout, top: float = 40.0) -> list[Section]:
     out: list[Section] = []
-    y = 40.0
+    y = top
     for img in (layout.outputs, layout.inputs):
         sec = section_of(img, y)
         out.append(sec)
@@ -148,8 +148,8 @@ def process_image_svg(layout: Layout, title: str = "", standalone: bool = True, 
     prefixes the ids inside (several diagrams inline in one page must not share ids)."""
     from ecattool.report.extra import environment
 
-    secs = sections(layout)
-    height = (secs[-1].y + secs[-1].height if secs else 40) + 8
+    secs = sections(layout, 40.0 if title else 4.0)
+    height = secs[-1].y + secs[-1].height + 8
     return str(environment().get_template("process_image.svg.j2").render(
         title=title, sections=secs, width=WIDTH, height=height, standalone=standalone, uid=uid, X0=X0,
         BIT_WIDTH=BIT_WIDTH, BITS_PER_ROW=BITS_PER_ROW, SECTION_HEAD=SECTION_HEAD, ROW_HEIGHT=ROW_HEIGHT,
