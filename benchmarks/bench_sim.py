@@ -13,27 +13,6 @@ from __future__ import annotations
 
 import argparse
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
-from typing import Any
-
-
-@contextmanager
-def canopen_remote(od: Any, channel: str) -> Iterator[Any]:
-    """A python-canopen RemoteNode talking to a LocalNode serving ``od`` over python-can's virtual bus."""
-    import canopen
-
-    server, client = canopen.Network(), canopen.Network()
-    server.connect(interface="virtual", channel=channel, receive_own_messages=False)
-    client.connect(interface="virtual", channel=channel, receive_own_messages=False)
-    try:
-        server.add_node(canopen.LocalNode(1, od))
-        remote = canopen.RemoteNode(1, od)
-        client.add_node(remote)
-        yield remote
-    finally:
-        client.disconnect()
-        server.disconnect()
 
 
 def bench_canopen(seconds: float) -> float:
@@ -45,7 +24,13 @@ def bench_canopen(seconds: float) -> float:
     var.data_type = canopen.objectdictionary.INTEGER32
     var.access_type = "rw"
     od.add_object(var)
-    with canopen_remote(od, "ecattool-bench") as remote:
+    server, client = canopen.Network(), canopen.Network()
+    server.connect(interface="virtual", channel="ecattool-bench", receive_own_messages=False)
+    client.connect(interface="virtual", channel="ecattool-bench", receive_own_messages=False)
+    try:
+        server.add_node(canopen.LocalNode(1, od))
+        remote = canopen.RemoteNode(1, od)
+        client.add_node(remote)
         for i in range(20):  # warm up
             remote.sdo.download(0x607A, 0, i.to_bytes(4, "little"))
         n = 0
@@ -54,6 +39,9 @@ def bench_canopen(seconds: float) -> float:
             remote.sdo.download(0x607A, 0, (n & 0x7FFFFFFF).to_bytes(4, "little"))
             n += 1
         return n / (time.perf_counter() - start)
+    finally:
+        client.disconnect()
+        server.disconnect()
 
 
 def bench_sim(seconds: float) -> float:
