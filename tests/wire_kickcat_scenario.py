@@ -1,4 +1,4 @@
-"""Run inside a private network namespace (tests/test_wire_kickcat.py starts it through ecattool.sim.bus.netns):
+"""Run inside a private network namespace (tests/test_wire_mailbox.py starts it through ecattool.sim.bus.netns):
 ``ecattool sim serve PROJECT...`` on one end of the veth pair, KickCAT's Python master (the ``kickcat``
 package) on the other: bus init, identity by SDO reads of 1018h, the projects' PRE-OP -> SAFE-OP startup SDOs
 (their PDO mappings) written through KickCAT's mailbox, the mapping KickCAT reads back over SDO, SAFE-OP, OP
