@@ -35,10 +35,10 @@ def _realtime() -> None:
         pass  # not permitted: it keeps the scenario's raised priority
 
 
-def start_server(sources: list[str]) -> tuple[subprocess.Popen[str], dict[str, Any]]:
-    server = subprocess.Popen([sys.executable, "-m", "ecattool", "sim", "serve", *sources, "--iface", SLAVE_IF,
-                               "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              preexec_fn=_realtime)
+def start_server(sources: list[str], argv: list[str] | None = None) -> tuple[subprocess.Popen[str], dict[str, Any]]:
+    """``ecattool sim serve SOURCES`` on the slave end, or ``argv``: a server that prints the same ready line."""
+    argv = argv or [sys.executable, "-m", "ecattool", "sim", "serve", *sources, "--iface", SLAVE_IF, "--json"]
+    server = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_realtime)
     assert server.stdout is not None
     ready, _, _ = select.select([server.stdout], [], [], 60)
     line = server.stdout.readline() if ready else ""

@@ -11,8 +11,9 @@ indicated (initiate) or last segment (segment).
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from ecattool.errors import EcatToolError, SdoAbort, SdoTimeout
 from ecattool import abort as A
@@ -20,6 +21,8 @@ from ecattool.sim.mailbox.header import HEADER_SIZE, MailboxError, MailboxRefuse
 
 if TYPE_CHECKING:
     from ecattool.sim.drive import Drive, Emergency
+
+_T = TypeVar("_T")
 
 SERVICE_EMERGENCY = 1
 SERVICE_SDO_REQUEST = 2
@@ -110,9 +113,12 @@ class SdoServer:
         return [sdo_abort_data(index, subindex, A.COMMAND_INVALID)]  # block transfers (5, 6) and 7
 
     # ------------------------------------------------------------------------------------------
-    def _call_upload(self, index: int, subindex: int, ca: bool) -> bytes | list[bytes]:
+    @staticmethod
+    def _ask(index: int, subindex: int, call: Callable[[], _T]) -> _T | list[bytes]:
+        """The drive's answer to one request, or its refusal as the frames to send instead: an abort with its
+        code, or nothing at all where the drive sends no reply."""
         try:
-            return self.drive.sdo_upload(index, subindex, complete_access=ca)
+            return call()
         except SdoTimeout:
             return []
         except SdoAbort as exc:
@@ -122,18 +128,12 @@ class SdoServer:
 
     def _call_download(self, index: int, subindex: int, value: bytes, ca: bool) -> list[bytes] | None:
         """None when the drive accepted the download, else the replies to send instead of the confirmation."""
-        try:
-            self.drive.sdo_download(index, subindex, value, complete_access=ca)
-        except SdoTimeout:
-            return []
-        except SdoAbort as exc:
-            return [sdo_abort_data(index, subindex, exc.code)]
-        except EcatToolError:
-            return [sdo_abort_data(index, subindex, A.GENERAL_ERROR)]
-        return None
+        refused = self._ask(index, subindex,
+                            lambda: self.drive.sdo_download(index, subindex, value, complete_access=ca))
+        return refused if isinstance(refused, list) else None
 
     def _upload(self, index: int, subindex: int, ca: bool) -> list[bytes]:
-        value = self._call_upload(index, subindex, ca)
+        value = self._ask(index, subindex, lambda: self.drive.sdo_upload(index, subindex, complete_access=ca))
         if isinstance(value, list):
             return value
         ca_bit = 0x10 if ca else 0
