@@ -54,6 +54,7 @@ def _name(cmd: tuple[str, ...]) -> str:
 # ------------------------------------------------------------------------------------------- --help, --json
 #: Commands that print no data of their own, so have no --json (each says why). Everything else must.
 NO_JSON: dict[tuple[str, ...], str] = {
+    ("esi", "export"): "writes an ESI file (-o required; '-' = stdout)",
     ("project", "new"): "writes a project skeleton (YAML) to -o or stdout",
     ("project", "schema"): "prints the JSON Schema itself (JSON already) or checks a checked-in copy",
     ("scale", "startup"): "writes a startup list in the master format chosen with --format (json is one)",
@@ -142,7 +143,8 @@ HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
     ("commission",): [(PROJECT, "-o", Out("report.json"), "--report", Out("report.html"))],
     ("lint",): [(PROJECT, "-o", Out("lint.txt"))],
     ("esi", "devices"): [(ESI,)],
-    ("esi", "show"): [(ESI, "--pdos")],
+    ("esi", "show"): [(ESI, "--pdos"), (In("eds", "corpus:eds/technosoft_iPOS.D.v1.04.eds"), "--pdos")],
+    ("esi", "export"): [("technosoft-ipos", "--revision", "F515I", "-o", Out("drive.xml"))],
     ("esi", "validate"): [(ESI,)],
     ("map", "check"): [(*TS, "--mapping", In("mapping", "gen:mapping.yaml")),
                        ("--esi", ESI),
@@ -347,12 +349,16 @@ def _bad_cases() -> list[tuple[tuple[str, ...], int, int, str]]:
                     if kind == "bad-utf8" and a.kind in BINARY_KINDS:
                         continue
                     if kind == "other":
-                        cases += [(cmd, n, i, f"other:{k}") for k in sorted(KIND_FILES) if k != a.kind]
+                        cases += [(cmd, n, i, f"other:{k}") for k in sorted(KIND_FILES)
+                                  if k != a.kind and frozenset({k, a.kind}) not in INTERCHANGEABLE]
                     else:
                         cases.append((cmd, n, i, kind))
     return cases
 
 
+#: Input kinds each command that takes one also takes as the other (not "bad" there): a CANopen EDS is accepted
+#: wherever an ESI is (docs/esi.md, "CANopen EDS and DCF files").
+INTERCHANGEABLE = {frozenset({"esi", "eds"})}
 BAD_CASES = _bad_cases()
 
 

@@ -342,47 +342,55 @@ def test_ambiguity_78_6063_heading_name(dev):
     assert dev.dictionary.get(0x6063).name == "Position actual internal value"
 
 
-# --- cross-check with Technosoft's own CANopen EDS of the iPOS (corpus/eds) ------------------------------
-#: CANopen data type codes of the EDS -> ecattool type names
-_EDS_TYPES = {0x1: "BOOL", 0x2: "SINT", 0x3: "INT", 0x4: "DINT", 0x5: "USINT", 0x6: "UINT", 0x7: "UDINT",
-              0x9: "STRING"}
+# --- cross-check with Technosoft's own CANopen EDS of the iPOS (corpus/eds), read by ecattool.esi.eds -----------
 #: where the EtherCAT manual prints another type than the EDS (docs/decisions.md, "Cross-check with the EDS")
 _MANUAL_TYPE = {(0x2083, 0), (0x2084, 0), (0x2092, 1), (0x2092, 2), (0x2092, 3), (0x2092, 4), (0x206B, 0),
                 (0x206C, 0), (0x2060, 0)}
+#: where the EDS and the manual's tables disagree on PDO mapping; the profile follows the manual (decision TS-9):
+#: (index, sub) -> mappable in the EDS
+_MANUAL_MAPPING = {(0x2050, 0): True, (0x2066, 0): True, (0x2051, 0): False, (0x2058, 0): False,
+                   (0x2086, 0): False, (0x6007, 0): False}
 
 
-def _eds_entries() -> dict[tuple[int, int], tuple[int, str]]:
-    """(index, sub) -> (CANopen data type code, AccessType) of every VAR and sub-entry in the EDS."""
-    import configparser
-    import re
+@pytest.fixture(scope="module")
+def eds_device():
+    from ecattool import esi
+    from tests.conftest import corpus_path
 
-    from tests.conftest import CORPUS
-
-    cp = configparser.ConfigParser(strict=False, interpolation=None)
-    cp.optionxform = str  # type: ignore[assignment,method-assign]
-    cp.read(CORPUS / "eds" / "technosoft_iPOS.D.v1.04.eds", encoding="latin-1")
-    out = {}
-    for sec in cp.sections():
-        m = re.fullmatch(r"([0-9A-Fa-f]{4})(?:sub([0-9A-Fa-f]+))?", sec)
-        if m and "DataType" in cp[sec]:
-            out[(int(m.group(1), 16), int(m.group(2) or "0", 16))] = (int(cp[sec]["DataType"], 0),
-                                                                      cp[sec].get("AccessType", "").lower())
-    return out
+    return esi.load_device(corpus_path("eds", "technosoft_iPOS.D.v1.04.eds"))
 
 
 @pytest.mark.parametrize("revision", ["F515I", "F515K"])
-def test_profile_agrees_with_technosoft_eds_on_types_and_writability(revision):
-    eds = _eds_entries()
-    assert len(eds) > 250  # the file was read
+def test_profile_agrees_with_technosoft_eds_on_types_writability_and_mapping(eds_device, revision):
+    eds = {(o.index, e.subindex): e for o in eds_device.dictionary for e in o}
+    assert len(eds) > 300  # the file was read
     od = profiles.load("technosoft-ipos", revision=revision).dictionary
-    compared, wrong = 0, []
-    for (index, sub), (code, access) in sorted(eds.items()):
+    compared, wrong, mapping = 0, [], {}
+    for (index, sub), x in sorted(eds.items()):
         e = od.entry(index, sub)
-        if e is None or e.datatype is None or code not in _EDS_TYPES:
+        if e is None or e.datatype is None or x.datatype is None:
             continue
         compared += 1
-        if (index, sub) not in _MANUAL_TYPE and e.type_name != _EDS_TYPES[code]:
-            wrong.append(f"{index:04X}:{sub} type {e.type_name}, EDS {_EDS_TYPES[code]}")
-        if (access in ("ro", "const")) is e.access.writable():
-            wrong.append(f"{index:04X}:{sub} access {e.access.text}, EDS {access}")
-    assert compared > 150 and wrong == []
+        if (index, sub) not in _MANUAL_TYPE and e.type_name != x.type_name:
+            wrong.append(f"{index:04X}:{sub} type {e.type_name}, EDS {x.type_name}")
+        if x.access.writable() is not e.access.writable():
+            wrong.append(f"{index:04X}:{sub} access {e.access.text}, EDS {x.access.text}")
+        if bool(x.pdo_mapping) is not bool(e.pdo_mapping):
+            mapping[(index, sub)] = bool(x.pdo_mapping)
+        elif x.pdo_mapping and not set(x.pdo_mapping) <= set(e.pdo_mapping):
+            wrong.append(f"{index:04X}:{sub} mappable {e.pdo_mapping}, EDS {x.pdo_mapping} ({x.access.text})")
+    assert compared > 240 and wrong == []
+    assert mapping == _MANUAL_MAPPING
+
+
+def test_eds_2050h_2066h_mappable_but_the_profile_follows_the_manual(eds_device):
+    """Decision TS-9: 2050h is a protection setting and 2066h advances 2064h's address on every read (§17.2.3):
+    the manual's "PDO mapping No" wins over the EDS's PDOMapping=1; map check refuses both."""
+    from ecattool import pdo
+
+    assert eds_device.dictionary.entry(0x2050, 0).pdo_mapping == "R"
+    assert eds_device.dictionary.entry(0x2066, 0).pdo_mapping == "T"
+    dev = profiles.load("technosoft-ipos")
+    for rx, tx in (("0x1600=controlword,0x2050:00/16", None), (None, "0x1A00=statusword,0x2066:00/32")):
+        findings = pdo.check(dev, pdo.Mapping.from_text(rx=rx, tx=tx, device=dev))
+        assert [f.rule for f in findings] == ["PDO006"]

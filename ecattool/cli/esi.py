@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import console, json_option, print_json, table
+from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
 from ecattool.cli.paths import InputFile
 
 _FILE = click.argument("file", type=InputFile(allow_dash=True))
@@ -30,12 +30,14 @@ def _hex(v: int | None, width: int = 8) -> str:
 Examples:
   ecattool esi devices samples/esi/etg2001_cia402.xml
   ecattool esi show beckhoff_EL1xxx.xml --device EL1008 --pdos
-  ecattool esi validate drive.xml --schema-dir ETG/EtherCATInfo_v1.17""")
+  ecattool esi validate drive.xml --schema-dir ETG/EtherCATInfo_v1.17
+  ecattool esi export technosoft-ipos --revision F515K -o ipos.xml""")
 def esi() -> None:
-    """Read, show and validate ESI (EtherCAT Slave Information) XML files.
+    """Read, show, validate and write ESI (EtherCAT Slave Information) XML files.
 
     Reads EtherCATInfo, EtherCATModule and EtherCATDict files as vendors ship them (UTF-8 or
-    ISO-8859-1, BOM, #x/decimal numbers, many devices and revisions in one file).
+    ISO-8859-1, BOM, #x/decimal numbers, many devices and revisions in one file), and CANopen
+    EDS/DCF files (told apart by content) into the same device model.
     """
 
 
@@ -66,6 +68,7 @@ def device_summary(dev: Any, index: int) -> dict[str, Any]:
 Examples:
   ecattool esi devices samples/esi/etg2001_cia402.xml
   ecattool esi devices beckhoff_EL1xxx.xml --json
+  ecattool esi devices technosoft_iPOS.D.v1.04.eds
   curl -s https://example.com/drive.xml | ecattool esi devices -""")
 @_FILE
 @json_option
@@ -79,7 +82,9 @@ def devices_cmd(file: str, as_json: bool) -> None:
     con = console()
     name = "<stdin>" if file == "-" else file
     title = f"{name}: {len(rows)} device(s), vendor {_hex(doc.vendor_id)} {doc.vendor_name}".rstrip()
-    if doc.root != "EtherCATInfo":
+    if doc.root in ("EDS", "DCF"):
+        title += f" [CANopen {doc.root}]"
+    elif doc.root != "EtherCATInfo":
         title += f" [{doc.root}: {len(doc.modules)} module(s)"
         title += f", {len(doc.dictionary)} object(s)]" if doc.dictionary is not None else "]"
     t = table(title, ["#", "type", "product", "revision", "RxPDO", "TxPDO", "objects", "mailbox", "name"])
@@ -315,3 +320,31 @@ def validate_cmd(file: str, schema_dir: str | None, strict: bool, as_json: bool)
         click.echo(f"{file}: {checked}: {n_err} error(s), {n_warn} warning(s)")
     if failed:
         raise click.exceptions.Exit(1)
+
+
+# --------------------------------------------------------------------------------------------
+# export
+# --------------------------------------------------------------------------------------------
+@esi.command("export", epilog="""\b
+Examples:
+  ecattool esi export technosoft-ipos -o ipos.xml
+  ecattool esi export technosoft-ipos --product ipos4808-bx-cat --revision F515I -o ipos4808.xml
+  ecattool esi export controltechniques --product digitax-st --revision 01.02.00 -o digitax.xml
+  ecattool esi export hdt --product dgfox -o - | ecattool esi devices -
+
+\b
+The ESI validates against the ETG.2000 schemas v1.14 and v1.17 and reads back to the same device model
+(docs/esi.md, "Writing an ESI"); `ecattool sii build ipos.xml -o ipos.bin` makes its EEPROM image.""")
+@click.argument("profile")
+@click.option("--product", help="Model of the family (ecattool sim profiles lists them; default the first).")
+@click.option("--revision", help="Firmware revision: Technosoft F515K/0x3531354B, Control Techniques 01.02.00.")
+@output_option(required=True)
+def export_cmd(profile: str, product: str | None, revision: str | None, output: str) -> None:
+    """Write an ESI file for a built-in drive family (PROFILE: technosoft-ipos, hdt, controltechniques)."""
+    from ecattool import profiles
+    from ecattool.esi.export import device_to_esi
+
+    device = profiles.load(profile, product=product, revision=revision)
+    family = profiles.family_of(device)
+    vendor = next((i.vendor_name for i in profiles.list_profiles() if i.name == family), "")
+    write_output(output, device_to_esi(device, vendor_name=vendor))

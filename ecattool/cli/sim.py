@@ -140,7 +140,7 @@ def run_cmd(target: str, script: str, product: str | None, revision: str | None,
             output: str | None, as_json: bool) -> None:
     """Run SCRIPT (SDO reads/writes, state requests, cycles) on a simulated drive and print the transcript.
 
-    TARGET is a built-in profile name or an ESI file. Exits 1 at the first unexpected abort, timeout or
+    TARGET is a built-in profile name or an ESI (or CANopen EDS) file. Exits 1 at the first unexpected abort, timeout or
     refused state change.
     """
     from ecattool.sim import Drive

@@ -3,6 +3,7 @@
 Public API::
 
     load(path) -> EsiFile                       # every device, module, PDO, SM, DC, EEPROM, dictionary
+                                                # (a CANopen EDS/DCF too: ecattool.esi.eds)
     load(path, lazy=True) -> EsiFile            # same content; devices built when selected or listed
     load_bytes(data, source, lazy=False) -> EsiFile
     select(esi_or_devices, selector=None, policy="exact") -> Device
@@ -22,7 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ecattool.esi.model import Device, EsiFile
-from ecattool.esi.reader import load
+from ecattool.esi.reader import load as _load
 from ecattool.esi.reader import load_bytes as _load_bytes
 from ecattool.esi.select import POLICIES, select, select_index
 
@@ -60,10 +61,36 @@ def check_structure(esi: EsiFile) -> list[Finding]:
 _validate = validate
 
 
+def _is_eds(data: bytes) -> bool:
+    from ecattool.esi.eds import looks_like_eds
+
+    return looks_like_eds(data)
+
+
+def load(path: str | Path, lazy: bool = False) -> EsiFile:
+    """Read an ESI file (EtherCATInfo, EtherCATModule or EtherCATDict root), or a CANopen EDS/DCF file (told
+    apart by content: see :mod:`ecattool.esi.eds`); ``lazy`` as in :func:`load_bytes`."""
+    p = Path(path)
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(4096)
+    except OSError:
+        head = b""  # the reader reports the file error
+    if _is_eds(head):
+        from ecattool.esi.eds import load_eds
+
+        return load_eds(p)
+    return _load(p, lazy)
+
+
 def load_bytes(data: bytes, source: str = "<bytes>", base_dir: str | Path | None = None,
                lazy: bool = False) -> EsiFile:
-    """Read an ESI document from bytes; ``source`` names it in locations, ``base_dir`` resolves referenced files,
-    ``lazy`` builds devices only when selected or listed."""
+    """Read an ESI (or CANopen EDS/DCF) document from bytes; ``source`` names it in locations, ``base_dir``
+    resolves referenced files, ``lazy`` builds devices only when selected or listed."""
+    if _is_eds(data):
+        from ecattool.esi.eds import load_eds_bytes
+
+        return load_eds_bytes(data, source)
     return _load_bytes(data, source, base_dir, lazy)
 
 

@@ -63,6 +63,14 @@ def validate(path: str | Path, schema_dir: str | Path | None = None) -> list[Fin
     p = Path(path)
     data = _read(p)
     findings: list[Finding] = []
+    from ecattool.esi.eds import load_eds_bytes, looks_like_eds
+
+    if looks_like_eds(data):  # a CANopen EDS/DCF: read by python-canopen, no ETG schema applies
+        eds = load_eds_bytes(data, str(p))
+        if schema_dir is not None:
+            findings.append(Finding("esi-xsd", Severity.INFO, "a CANopen EDS/DCF has no ETG schema: XSD not checked",
+                                    Location(str(p))))
+        return [*findings, *eds.warnings, *check_structure(eds)]
     esi = None
     try:
         esi = load_bytes(data, str(p), p.parent)
