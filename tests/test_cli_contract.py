@@ -680,6 +680,7 @@ def test_sw_build_output_over_its_base_image_is_refused(capsys: pytest.CaptureFi
 BASE: dict[tuple[str, ...], tuple[object, ...]] = {
     ("sim", "profiles"): (),
     ("sim", "show"): ("technosoft-ipos",),
+    ("sim", "serve"): ("hdt", "--list"),  # --list: no interface is opened (tests never touch the host's network)
     ("scale", "si"): ("mm", "rpm"),
 }
 #: Odd values for every option that takes text or a number (not a file, not a choice: click checks those).

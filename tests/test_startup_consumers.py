@@ -22,7 +22,7 @@ from ecattool.esi.model import Identity
 from ecattool.startup import SlaveConfig, StartupCommand, StartupList, export, import_bytes, import_file
 from ecattool.startup.model import is_pdo_programming
 from tests.conftest import ROOT, corpus_path, run
-from tests.test_startup_export import ECRT_H, _gcc
+from tests.test_startup_export import ECRT_H, _gcc, _run_pysoem_module
 
 SAMPLES = sorted(p.parent.name for p in (ROOT / "samples").glob("*/project.yaml"))
 ROS2_SIZES = {"int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4, "uint32": 4, "int64": 8, "uint64": 8}
@@ -219,6 +219,21 @@ def test_igh_sync_managers_follow_lcec_and_esi(tmp_path, everest):
     assert _gcc(text, tmp_path).returncode == 0
 
 
+def test_ros2_sm_section_says_what_the_source_does(everest):
+    # SMConfig::load_from_config: index (uint8), type input/output, pdo rpdo/tpdo, watchdog enable/disable
+    cfg = SlaveConfig.from_device(everest, position=0)
+    sms = yaml.safe_load(export(cfg, "ros2"))["sm"]
+    by_number = {sm.number: sm for sm in everest.sync_managers}
+    for entry in sms:
+        sm = by_number[entry["index"]]
+        assert entry["type"] == {"Outputs": "output", "Inputs": "input"}[sm.kind]
+        assert entry["pdo"] == {"output": "rpdo", "input": "tpdo"}[entry["type"]]
+        assert entry["watchdog"] == ("enable" if sm.control_byte & 0x40 else "disable")
+    # a source that says nothing about sync managers keeps the driver's defaults: no sm section
+    (elmo,) = import_file(corpus_path("configs", "ros2_elmo_gold.yaml"))
+    assert "sm" not in yaml.safe_load(export(elmo, "ros2"))
+
+
 # --- 6. ENI distributed clocks ---------------------------------------------------------------------------
 
 def test_eni_dc_is_cycle_start_and_activation_never_cycle_zero():
@@ -364,21 +379,16 @@ def _technosoft_from_ros2() -> SlaveConfig:
 
 
 def _run_module(code: str, drives, **kwargs):
-    from tests.fake_pysoem import make_module
+    """The module run as its docstring says (tests.test_startup_export), recording each slave's AL state at
+    the moment dc_sync starts its SYNC0."""
+    states_at_dc: list[int] = []
 
-    namespace: dict = {}
-    exec(compile(code, "startup_pysoem.py", "exec"), namespace)
-    master = make_module(drives).Master()
-    master.open("eth0")
-    master.config_init()
-    namespace["install"](master)
-    master.config_map()
-    states_at_dc = []
-    for s in master.slaves:
-        original = s.dc_sync
-        s.dc_sync = lambda *a, _s=s, _o=original: (states_at_dc.append(_s.state & 0x0F), _o(*a))[1]
-    namespace["to_safe_op"](master, **kwargs)
-    return master, states_at_dc
+    def watch_dc(master) -> None:
+        for s in master.slaves:
+            original = s.dc_sync
+            s.dc_sync = lambda *a, _s=s, _o=original: (states_at_dc.append(_s.state & 0x0F), _o(*a))[1]
+
+    return _run_pysoem_module(code, drives, before_safe_op=watch_dc, **kwargs), states_at_dc
 
 
 def test_pysoem_programs_a_mapping_given_only_as_tables():

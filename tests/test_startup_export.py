@@ -318,8 +318,9 @@ def test_pysoem_install_checks_identity():
 
 
 
-def _run_pysoem_module(code: str, drives, **dc_kwargs):
-    """Execute an exported pysoem module the way its docstring says, on the fake pysoem bus of ``drives``."""
+def _run_pysoem_module(code: str, drives, before_safe_op=None, **dc_kwargs):
+    """Execute an exported pysoem module the way its docstring says, on the fake pysoem bus of ``drives``;
+    ``before_safe_op(master)`` runs between config_map() and to_safe_op()."""
     from tests.fake_pysoem import make_module
 
     namespace: dict = {}
@@ -330,6 +331,8 @@ def _run_pysoem_module(code: str, drives, **dc_kwargs):
     namespace["install"](master)
     assert master.manual_state_change == 1  # config_map() must not request SAFE-OP before DC runs
     master.config_map()
+    if before_safe_op is not None:
+        before_safe_op(master)
     namespace["to_safe_op"](master, **dc_kwargs)
     return master
 

@@ -253,3 +253,33 @@ def test_mailbox_sync_managers_refuse_when_full_or_empty() -> None:
     d = loop.one(Datagram.make(Cmd.FPRD, 0x1001, 0x1080, 128))
     assert d.wkc == 1 and d.data[:5] == b"reply"
     assert loop.one(Datagram.make(Cmd.FPRD, 0x1001, 0x1080, 128)).wkc == 0  # read to the end: empty again
+
+
+def test_sync0_next_pulse_and_activation_status() -> None:
+    loop = _loop(1)
+    _configure_addresses(loop)
+    now = int.from_bytes(loop.one(Datagram.make(Cmd.FPRD, 0x1001, R.DC_SYSTEM_TIME, 8)).data, "little")
+    start = now - 3_500_000  # already past: the next pulse is the first cycle boundary after the system time
+    loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_SYNC0_CYCLE, struct.pack("<I", 1_000_000)))
+    loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_START_TIME, struct.pack("<Q", start)))
+    assert loop.one(Datagram.make(Cmd.FPRD, 0x1001, R.DC_ACTIVATION_STATUS, 1)).data == b"\x00"
+    loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_ACTIVATION, b"\x03"))
+    back = loop.one(Datagram.make(Cmd.FPRD, 0x1001, R.DC_ACTIVATION_STATUS, 0x14))
+    assert back.data[0] == 0x01 and back.data[R.DC_SYNC0_STATUS - R.DC_ACTIVATION_STATUS] == 0x01
+    nxt = int.from_bytes(back.data[R.DC_START_TIME - R.DC_ACTIVATION_STATUS:][:8], "little")
+    assert (nxt - start) % 1_000_000 == 0 and nxt > now
+
+
+def test_loop_faults_lose_or_spoil_frames() -> None:
+    """The in-process transport's fault hooks: a lost frame never reaches the slaves; a frame with a bad
+    checksum is counted by every slave it passes (invalid frame counter 0x0300) and not answered."""
+    loop = _loop(2)
+    loop.faults.append(lambda raw: (None, True))
+    assert loop.transact([Datagram.make(Cmd.BWR, 0, R.ECAT_EVENT_MASK, b"\x04\x00")]) is None
+    assert [e.u16(R.ECAT_EVENT_MASK) for e in loop.bus.escs] == [0, 0]  # lost on the way: nothing written
+    loop.faults.append(lambda raw: (raw, False))
+    assert loop.transact([Datagram.make(Cmd.BWR, 0, R.ECAT_EVENT_MASK, b"\x04\x00")]) is None
+    assert [e.mem[R.RX_ERROR_COUNTER] for e in loop.bus.escs] == [1, 1]
+    assert [e.u16(R.ECAT_EVENT_MASK) for e in loop.bus.escs] == [0, 0]
+    d = loop.one(Datagram.make(Cmd.BWR, 0, R.RX_ERROR_COUNTER, b"\x00"))  # writing a counter clears it
+    assert d.wkc == 2 and [e.mem[R.RX_ERROR_COUNTER] for e in loop.bus.escs] == [0, 0]

@@ -175,3 +175,73 @@ def run_cmd(target: str, script: str, product: str | None, revision: str | None,
         code = f" 0x{failure.code:08X}" if failure.code is not None else ""
         raise TargetError(f"step {failure.step} ({failure.op} {failure.target}) ended with {failure.result}{code}"
                           + (f": {failure.detail}" if failure.detail else ""), Location(script, failure.line))
+
+
+@sim.command("serve", epilog="""\b
+Examples:
+  ecattool sim serve samples/hdt/project.yaml --iface ecat1
+  ecattool sim serve hdt --product tomcat technosoft-ipos --iface ecat1 --json
+  ecattool sim serve drive.xml --device 2 --iface ecat1
+  ecattool sim serve samples/hdt/project.yaml --list --json
+\b
+Run it inside a private network namespace with a veth pair (never on the host's network):
+  unshare -n sh -c 'ip link add ecat0 type veth peer name ecat1 &&
+    ip link set ecat0 up && ip link set ecat1 up &&
+    (ecattool sim serve machine.yaml --iface ecat1 &) && sleep 2 &&
+    ecattool commission machine.yaml --target pysoem:ecat0'""")
+@click.argument("sources", nargs=-1, required=True)
+@click.option("--iface", help="Network interface to serve on (raw Ethernet, EtherType 0x88A4).")
+@click.option("--product", help="Model of a built-in family named as a SOURCE.")
+@click.option("--revision", help="Firmware revision of a built-in family named as a SOURCE.")
+@click.option("--device", "selector", help="Device selector when a SOURCE is an ESI file with several devices.")
+@click.option("--frames", type=click.IntRange(min=1), default=None,
+              help="Stop after this many frames (default: until SIGINT/SIGTERM).")
+@click.option("--list", "list_only", is_flag=True, help="Print the slaves in bus order and exit (no interface).")
+@json_option
+def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, revision: str | None,
+              selector: str | None, frames: int | None, list_only: bool, as_json: bool) -> None:
+    """Serve simulated drives as EtherCAT slaves on a network interface, for a real master (SOEM/pysoem).
+
+    SOURCES, in bus order: a project file (every drive of the project, in its bus order), a built-in profile
+    name, or an ESI file. Each drive sits behind an ESC model whose SII is what 'ecattool sii build' makes. Prints
+    one line when the slaves are ready; stops cleanly on SIGINT/SIGTERM. See docs/virtual-bus.md.
+    """
+    import sys
+
+    from ecattool.project.bus import devices_in_bus_order
+    from ecattool.sim.bus.serve import device_source, serve, virtual_slaves
+
+
+    if iface is None and not list_only:
+        raise click.UsageError("--iface is required (or --list to only show the slaves)")
+    named = []
+    for src in sources:  # a project file: its drives in bus order; anything else: a profile or an ESI file
+        if src.lower().endswith((".yaml", ".yml")):
+            named += devices_in_bus_order(src)
+        else:
+            named.append(device_source(src, product=product, revision=revision, selector=selector))
+    slaves = virtual_slaves(named)
+    if list_only:
+        if as_json:
+            print_json([s.describe() for s in slaves])
+            return
+        t = table(None, ["position", "name", "vendor", "product code", "revision"])
+        for i, s in enumerate(slaves):
+            d = s.describe()
+            t.add_row(str(i), s.name, f"0x{d['vendor_id']:08X}", f"0x{d['product_code']:08X}", f"0x{d['revision']:08X}")
+        console().print(t)
+        return
+    assert iface is not None
+
+    def ready() -> None:
+        # one line, flushed: whoever started the server waits for it
+        if as_json:
+            import json
+
+            click.echo(json.dumps({"iface": iface, "slaves": [s.describe() for s in slaves]}))
+        else:
+            names = ", ".join(f"{i}: {s.name}" for i, s in enumerate(slaves))
+            click.echo(f"serving {len(slaves)} slave{'s' if len(slaves) != 1 else ''} on {iface} ({names})")
+        sys.stdout.flush()
+
+    serve(slaves, iface, ready, frames)

@@ -23,16 +23,9 @@ class SimTarget:
 
         ESI devices get their default modules plugged in and the communication objects their ESI leaves
         out (``profiles.complete_generic``), as :meth:`Drive.from_esi` does."""
-        from ecattool.profiles import complete_generic, family_of
-        from ecattool.sim import Drive
-        from ecattool.sim.drive import expand_default_modules
+        from ecattool.sim.slave import drive_for_device
 
-        drives = []
-        for d in devices:
-            if family_of(d) == "generic":
-                d = complete_generic(expand_default_modules(d))
-            drives.append(Drive.from_device(d))
-        return cls(drives)
+        return cls([drive_for_device(d) for d in devices])
 
     def slaves(self) -> list[SlaveTarget]:
         return list(self._drives)

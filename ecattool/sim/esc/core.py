@@ -193,9 +193,13 @@ class Esc:
 
     def _sync_sm_registers(self) -> None:
         for n in range(self.sm_count):
-            a = R.SM + R.SM_SIZE * n
-            self.mem[a + 5] = self._sm_status(n)
-            self.mem[a + 7] = (self.mem[a + 7] & 0xFE) | (1 if self._sm_pdi_off[n] else 0)
+            self._sync_sm(n)
+
+    def _sync_sm(self, n: int) -> None:
+        """Status (offset 5) and PDI control (offset 7) of SM ``n`` from the SM's state."""
+        a = R.SM + R.SM_SIZE * n
+        self.mem[a + 5] = self._sm_status(n)
+        self.mem[a + 7] = (self.mem[a + 7] & 0xFE) | (1 if self._sm_pdi_off[n] else 0)
 
     def _sm_reset(self, n: int) -> None:
         self._sm_full[n] = False
@@ -253,7 +257,7 @@ class Esc:
             if hi == sm.end and not sm.ecat_writes:
                 if sm.mailbox:
                     self._sm_full[smn] = False
-                    self._sync_sm_registers()
+                    self._sync_sm(smn)
                     self.app.mailbox_read(self, smn)
                 else:
                     self.app.buffer_read(self, smn)
@@ -283,6 +287,8 @@ class Esc:
             self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = self.system_time().to_bytes(8, "little")
         if addr < R.ECAT_EVENT_REQUEST + 4 and end > R.ECAT_EVENT_REQUEST:
             self._sync_events()
+        if addr < R.DC_SYNC1_CYCLE and end > R.DC_ACTIVATION_STATUS:
+            self._sync_dc_status()
 
     def ecat_write(self, addr: int, data: bytes) -> bool:
         """The master writes ``data`` at ``addr``; False when the ESC refuses (no working counter)."""
@@ -309,7 +315,7 @@ class Esc:
             buffer = bytes(self.mem[sm.start:sm.end])
             if mailbox:
                 self._sm_full[smn] = True
-                self._sync_sm_registers()
+                self._sync_sm(smn)
                 self.app.mailbox_written(self, smn, buffer)
             else:
                 self._sm_full[smn] = True
@@ -436,6 +442,8 @@ class Esc:
 
     def irq(self) -> int:
         """The bits this slave ORs into a datagram's IRQ field: event requests under the event mask."""
+        if not self.mem[R.ECAT_EVENT_MASK] and not self.mem[R.ECAT_EVENT_MASK + 1]:
+            return 0
         self._sync_events()
         return self.u16(R.ECAT_EVENT_REQUEST) & self.u16(R.ECAT_EVENT_MASK)
 
@@ -451,6 +459,13 @@ class Esc:
     # ------------------------------------------------------------------------------------------
     # the PDI side (the slave application)
     # ------------------------------------------------------------------------------------------
+    def sm_full(self, sm: int) -> bool:
+        """Mailbox SM ``sm`` holds a frame not yet read (by the master for SM1, by the application for SM0)."""
+        return self._sm_full[sm]
+
+    def sm_deactivated(self, sm: int) -> bool:
+        return self._sm_pdi_off[sm]
+
     def pdi_deactivate(self, sm: int, off: bool) -> None:
         """PDI control bit 0 of ``sm``: a deactivated SM refuses the master's accesses to its area."""
         if self._sm_pdi_off[sm] != off:
@@ -466,13 +481,13 @@ class Esc:
             return False
         self.mem[s.start:s.start + min(len(data), s.length)] = data[:s.length]
         self._sm_full[sm] = True
-        self._sync_sm_registers()
+        self._sync_sm(sm)
         return True
 
     def pdi_mailbox_take(self, sm: int) -> None:
         """The application has read write mailbox ``sm``: it is empty for the master again."""
         self._sm_full[sm] = False
-        self._sync_sm_registers()
+        self._sync_sm(sm)
 
     def pdi_repeat_ack(self, sm: int) -> None:
         """Set the repeat acknowledge (PDI control bit 1) equal to the master's repeat request."""
@@ -549,6 +564,21 @@ class Esc:
         self.mem[R.DC_SYSTEM_DIFFERENCE:R.DC_SYSTEM_DIFFERENCE + 4] = struct.pack(
             "<I", (min(abs(signed), 0x7FFFFFFF)) | (0x80000000 if signed < 0 else 0))
         self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = local.to_bytes(8, "little")
+
+    def _sync_dc_status(self) -> None:
+        """0x0984 activation status, 0x098E/0x098F SYNC0/1 status and, while SYNC0 runs, 0x0990 = the next
+        SYNC0 pulse (the first one at or after the system time) and 0x0998 the next SYNC1 pulse."""
+        act, cycle, start = self.dc_sync0()
+        running = bool(act & 0x01) and bool(act & 0x02)
+        now = self.system_time()
+        self.mem[R.DC_ACTIVATION_STATUS] = (0x01 if running else 0) | (0x02 if running and act & 0x04 else 0)
+        pulsed = running and now >= start
+        self.mem[R.DC_SYNC0_STATUS] = 0x01 if pulsed else 0
+        self.mem[R.DC_SYNC1_STATUS] = 0x01 if pulsed and act & 0x04 else 0
+        if running and cycle:
+            nxt = start if now <= start else start + -(-(now - start) // cycle) * cycle
+            self.mem[R.DC_START_TIME:R.DC_START_TIME + 8] = nxt.to_bytes(8, "little")
+            self.mem[R.DC_NEXT_SYNC1:R.DC_NEXT_SYNC1 + 8] = nxt.to_bytes(8, "little")
 
     def dc_sync0(self) -> tuple[int, int, int]:
         """(activation 0x0981, SYNC0 cycle ns, start time) as the master wrote them."""

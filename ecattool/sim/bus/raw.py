@@ -1,0 +1,70 @@
+"""Raw Ethernet on a Linux interface (AF_PACKET, EtherType 0x88A4): the transport real masters talk through.
+
+Frames are served one at a time: each EtherCAT frame received on the interface passes the :class:`Bus` and
+goes back out of the same interface, as it would come back from the last slave of a line. Run it only on an
+interface of a private network namespace (see :mod:`ecattool.sim.bus.netns`), never on the host's network.
+"""
+
+from __future__ import annotations
+
+import select
+import socket
+from collections.abc import Callable
+
+from ecattool.errors import TargetError
+from ecattool.sim.bus.engine import Bus
+from ecattool.sim.bus.frame import ETHERTYPE_ECAT
+
+#: the largest Ethernet frame (without FCS) the socket reads
+MAX_FRAME = 1514
+#: how long one wait for a frame lasts before the stop condition is checked again, in seconds
+POLL_S = 0.2
+
+
+def open_raw(ifname: str) -> socket.socket:
+    """A raw socket bound to ``ifname`` receiving EtherCAT frames. One-line TargetError where raw sockets are
+    not permitted or the interface does not exist."""
+    if not hasattr(socket, "AF_PACKET"):
+        raise TargetError("raw Ethernet needs Linux (AF_PACKET sockets)")
+    try:
+        sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(ETHERTYPE_ECAT))
+    except PermissionError:
+        raise TargetError("raw sockets are not permitted here: run as root or with CAP_NET_RAW, e.g. in a "
+                          "private network namespace ('unshare -rn', see docs/virtual-bus.md)") from None
+    try:
+        sock.bind((ifname, ETHERTYPE_ECAT))
+    except OSError as exc:
+        sock.close()
+        raise TargetError(f"cannot open interface {ifname!r}: {exc.strerror or exc}") from None
+    return sock
+
+
+class RawTransport:
+    """Serves ``bus`` on ``ifname``."""
+
+    def __init__(self, bus: Bus, ifname: str) -> None:
+        self.bus = bus
+        self.ifname = ifname
+        self.sock = open_raw(ifname)
+        self.received = 0
+        self.answered = 0
+
+    def serve(self, stop: Callable[[], bool], max_frames: int | None = None) -> None:
+        """Answer frames until ``stop()`` is true (checked at least every POLL_S) or ``max_frames`` frames
+        were received."""
+        sock = self.sock
+        while not stop() and (max_frames is None or self.received < max_frames):
+            ready, _, _ = select.select([sock], [], [], POLL_S)
+            if not ready:
+                continue
+            raw, addr = sock.recvfrom(MAX_FRAME + 4)
+            if len(addr) > 2 and addr[2] == socket.PACKET_OUTGOING:
+                continue  # a frame this interface sent (our own answer seen by another tap)
+            self.received += 1
+            reply = self.bus.process(raw)
+            if reply is not None:
+                sock.send(reply)
+                self.answered += 1
+
+    def close(self) -> None:
+        self.sock.close()

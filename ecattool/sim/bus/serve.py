@@ -1,0 +1,98 @@
+"""``ecattool sim serve``: the drives of a project (or profiles, or ESI devices) as virtual slaves on a network
+interface, in bus order."""
+
+from __future__ import annotations
+
+import signal
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+from ecattool.errors import InputError
+from ecattool.esi.model import Device
+from ecattool.sim.bus.engine import Bus
+from ecattool.sim.esc import Clock
+from ecattool.sim.slave import VirtualSlave, drive_for_device
+
+#: each slave's local clock starts this far from the previous one's (the master's DC offsets matter)
+CLOCK_SPREAD_NS = 1_000_000_007
+
+
+@dataclass(frozen=True, slots=True)
+class Served:
+    """One slave of the served bus: its name (project drive name, profile or ESI device) and the slave."""
+
+    name: str
+    slave: VirtualSlave
+
+    def describe(self) -> dict[str, Any]:
+        ident = self.slave.drive.identity()
+        return {"name": self.name, "vendor_id": ident.vendor_id, "product_code": ident.product_code,
+                "revision": ident.revision}
+
+
+def device_source(source: str, *, product: str | None = None, revision: str | None = None,
+                  selector: str | None = None) -> tuple[str, Device]:
+    """(name, device) of a built-in profile name (``product``/``revision`` choose the model) or an ESI file
+    (``selector`` the device)."""
+    from ecattool import esi, profiles
+
+    path = Path(source)
+    if path.suffix.lower() == ".xml" or path.is_file():
+        device = esi.load_device(path, selector)
+        return device.type_name or path.name, device
+    device = profiles.load(source, product=product, revision=revision)
+    return (source if product is None else f"{source} {product}"), device
+
+
+def virtual_slaves(named: list[tuple[str, Device]]) -> list[Served]:
+    """One virtual slave per device, in bus order: the drive ``commission --target sim`` would simulate for
+    it, behind an ESC whose SII is what ``ecattool sii build`` makes of the device."""
+    from ecattool.sii.builder import build
+
+    if not named:
+        raise InputError("nothing to serve: name a project file, a profile or an ESI file")
+    out = []
+    for i, (name, device) in enumerate(named):
+        slave = VirtualSlave(drive_for_device(device), build(device).to_bytes(),
+                             clock=Clock(offset_ns=i * CLOCK_SPREAD_NS))
+        out.append(Served(name, slave))
+    return out
+
+
+def bus_of(served: list[Served]) -> Bus:
+    return Bus([s.slave.esc for s in served])
+
+
+@contextmanager
+def stop_on_signals() -> Iterator[Callable[[], bool]]:
+    """A stop condition that becomes true on SIGINT or SIGTERM (the previous handlers come back after)."""
+    stopped = [False]
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        stopped[0] = True
+
+    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield lambda: stopped[0]
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+def serve(served: list[Served], ifname: str, on_ready: Callable[[], None],
+          max_frames: int | None = None) -> int:
+    """Serve the slaves on ``ifname`` until SIGINT/SIGTERM (or ``max_frames``); returns the frames answered."""
+    from ecattool.sim.bus.raw import RawTransport
+
+    transport = RawTransport(bus_of(served), ifname)
+    try:
+        with stop_on_signals() as stop:
+            on_ready()
+            transport.serve(stop, max_frames)
+    finally:
+        transport.close()
+    return transport.answered

@@ -1,0 +1,265 @@
+"""A virtual EtherCAT slave: one drive of the simulator behind an ESC model and a mailbox.
+
+:class:`VirtualSlave` is the slave application behind the ESC's PDI. It turns what a master writes into calls
+of the drive's public API, so the in-process :class:`~ecattool.sim.Drive` and the wire serve the same drive:
+
+- AL control -> ``drive.request_state``; a refusal sets the error indication and the drive's AL status code,
+  which stays until the master acknowledges it (AL control bit 4);
+- the sync managers the master configured are checked against the state it asks for: the mailbox SMs at
+  INIT -> PRE-OP (0x0016; 0x0015 for BOOT), the process data SMs and FMMUs at PRE-OP -> SAFE-OP against the
+  drive's PDO assignment (0x001D outputs, 0x001E inputs); SMs not valid in a state are deactivated;
+- SM0 -> mailbox server -> SM1 (with the repeat request), SM2 outputs -> ``drive.exchange`` -> SM3 inputs;
+- DC activation (0x0981, SYNC0 cycle 0x09A0, start time 0x0990) -> ``drive.configure_dc``.
+
+The SII image is the one ``ecattool sii build`` makes: from the drive's ESI, or from the built-in profile's
+device model (the three manual families have no public ESI).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ecattool.errors import StateChangeError, TargetError
+from ecattool.esi.model import Device
+from ecattool.od.model import EcState
+from ecattool.sim.drive import Drive
+from ecattool.sim.esc import Clock, Esc, EscApplication
+from ecattool.sim.esc import registers as R
+from ecattool.sim.esc.core import SM_DIR_READ, SM_DIR_WRITE, SM_MODE_BUFFERED, SM_MODE_MAILBOX
+from ecattool.sim.mailbox import MailboxServer
+
+AL_UNKNOWN_STATE = 0x0012
+AL_INVALID_STATE_CHANGE = 0x0011
+AL_INVALID_MAILBOX_BOOT = 0x0015
+AL_INVALID_MAILBOX = 0x0016
+AL_INVALID_SM = 0x0017
+AL_INVALID_OUTPUTS = 0x001D
+AL_INVALID_INPUTS = 0x001E
+
+_BY_CODE = {s.code: s for s in EcState}
+MBX_OUT, MBX_IN, PD_OUT, PD_IN = 0, 1, 2, 3
+
+
+class ConfigRefused(Exception):
+    def __init__(self, code: int, why: str) -> None:
+        super().__init__(why)
+        self.code = code
+
+
+@dataclass(frozen=True, slots=True)
+class Refusal:
+    """The last state change the slave refused: AL status code and why (for logs and tests)."""
+
+    requested: str
+    code: int
+    reason: str
+
+
+class VirtualSlave(EscApplication):
+    """``drive`` behind an ESC serving ``sii`` (bytes of an SII image)."""
+
+    def __init__(self, drive: Drive, sii: bytes, *, clock: Clock | None = None) -> None:
+        self.drive = drive
+        self.esc = Esc(sii, app=self, clock=clock)
+        mbx = self._mailbox_defaults()
+        self.mailbox = MailboxServer(drive, mbx[0], mbx[1])
+        self.refusals: list[Refusal] = []
+        self._sync_state()
+
+    # ------------------------------------------------------------------------------------------
+    @classmethod
+    def from_drive(cls, drive: Drive, *, esi: str | Path | None = None, selector: str | None = None,
+                   clock: Clock | None = None) -> "VirtualSlave":
+        """The slave of ``drive``; its SII is built from ``esi`` (the file the drive came from) when given,
+        else from the drive's device model (a built-in profile)."""
+        return cls(drive, sii_image(drive, esi, selector), clock=clock)
+
+    def _mailbox_defaults(self) -> tuple[int, int]:
+        words = self.esc.eeprom.words(0x18, 4)  # standard receive / send mailbox offset and size
+        return (words[1] or 128, words[3] or 128)
+
+    # ------------------------------------------------------------------------------------------
+    # ESM
+    # ------------------------------------------------------------------------------------------
+    def _sync_state(self, error: bool = False, code: int = 0) -> None:
+        state = self.drive.state()
+        self.esc.set_al_status(state.code, error=error, code=code)
+        mailbox_on = state in (EcState.PREOP, EcState.SAFEOP, EcState.OP, EcState.BOOT)
+        pd_on = state in (EcState.SAFEOP, EcState.OP)
+        for n in range(self.esc.sm_count):
+            sm = self.esc.sm(n)
+            if n in (MBX_OUT, MBX_IN) or (sm.mailbox and n < 2):
+                self.esc.pdi_deactivate(n, not mailbox_on)
+            else:
+                self.esc.pdi_deactivate(n, not pd_on)
+
+    def al_control(self, esc: Esc, control: int) -> None:
+        status = esc.u16(R.AL_STATUS)
+        ack = bool(control & R.AL_ERROR)
+        if status & R.AL_ERROR and not ack:
+            return  # an error indication ignores requests until the master acknowledges it
+        requested = _BY_CODE.get(control & 0x0F)
+        current = self.drive.state()
+        if requested is None:
+            self._refuse(f"0x{control & 0x0F:X}", AL_UNKNOWN_STATE, "unknown requested state")
+            return
+        if requested is current:
+            self._sync_state()  # acknowledged (or nothing to do)
+            return
+        try:
+            self._check_config(current, requested)
+            self.drive.request_state(requested)
+            if current is EcState.PREOP and requested is EcState.SAFEOP:
+                try:
+                    self._check_process_data()
+                except ConfigRefused:
+                    self.drive.request_state(EcState.PREOP)
+                    raise
+        except ConfigRefused as exc:
+            self._refuse(requested.value, exc.code, str(exc))
+            return
+        except StateChangeError as exc:
+            self._refuse(requested.value, exc.al_status, str(exc))
+            return
+        if requested in (EcState.PREOP, EcState.BOOT) and current is EcState.INIT:
+            self.mailbox.resize(esc.sm(MBX_OUT).length, esc.sm(MBX_IN).length)
+        self._sync_state()
+        if requested in (EcState.SAFEOP, EcState.OP):
+            self._exchange(None)
+
+    def _refuse(self, requested: str, code: int, why: str) -> None:
+        self.refusals.append(Refusal(requested, code, why))
+        self._sync_state(error=True, code=code)
+
+    def _check_config(self, current: EcState, requested: EcState) -> None:
+        if current is EcState.INIT and requested in (EcState.PREOP, EcState.BOOT):
+            code = AL_INVALID_MAILBOX_BOOT if requested is EcState.BOOT else AL_INVALID_MAILBOX
+            out, inp = self.esc.sm(MBX_OUT), self.esc.sm(MBX_IN)
+            for n, sm, direction in ((MBX_OUT, out, SM_DIR_WRITE), (MBX_IN, inp, SM_DIR_READ)):
+                if not sm.enabled or sm.control & 0x3 != SM_MODE_MAILBOX or (sm.control >> 2) & 3 != direction:
+                    raise ConfigRefused(code, f"SM{n} is not an enabled mailbox of the right direction")
+                if sm.length < 8 or sm.start < R.PROCESS_RAM or sm.end > len(self.esc.mem):
+                    raise ConfigRefused(code, f"SM{n} at 0x{sm.start:04X} length {sm.length} is not usable")
+            if out.start < inp.end and inp.start < out.end:
+                raise ConfigRefused(code, "the mailbox sync managers overlap")
+
+    def _check_process_data(self) -> None:
+        """PRE-OP -> SAFE-OP: SM2/SM3 and their FMMUs against the process image the drive's PDO assignment
+        gives (the drive has accepted the assignment itself)."""
+        out_size, in_size = self.drive.process_image_sizes()
+        fmmus = self.esc.fmmus()
+        for n, size, direction, code, what in ((PD_OUT, out_size, SM_DIR_WRITE, AL_INVALID_OUTPUTS, "output"),
+                                               (PD_IN, in_size, SM_DIR_READ, AL_INVALID_INPUTS, "input")):
+            sm = self.esc.sm(n)
+            if size == 0:
+                if sm.enabled and sm.length:
+                    raise ConfigRefused(code, f"SM{n} is enabled with {sm.length} bytes, the drive has no {what}s")
+                continue
+            if not sm.enabled:
+                raise ConfigRefused(code, f"SM{n} is not enabled ({size} {what} bytes assigned)")
+            if sm.control & 0x3 != SM_MODE_BUFFERED or (sm.control >> 2) & 3 != direction:
+                raise ConfigRefused(code, f"SM{n} control 0x{sm.control:02X} is not a buffered {what} SM")
+            if sm.length != size:
+                raise ConfigRefused(code, f"SM{n} length {sm.length} differs from the {size} {what} bytes "
+                                          "of the PDO assignment")
+            if sm.start < R.PROCESS_RAM or sm.end > len(self.esc.mem):
+                raise ConfigRefused(code, f"SM{n} at 0x{sm.start:04X} is outside the process RAM")
+            mapped = [f for f in fmmus if (f.write if direction == SM_DIR_WRITE else f.read)
+                      and f.physical < sm.end and f.physical + f.length > sm.start]
+            if not mapped:
+                raise ConfigRefused(code, f"no {'write' if direction == SM_DIR_WRITE else 'read'} FMMU maps SM{n}")
+
+    # ------------------------------------------------------------------------------------------
+    # mailbox
+    # ------------------------------------------------------------------------------------------
+    def mailbox_written(self, esc: Esc, sm: int, data: bytes) -> None:
+        esc.pdi_mailbox_take(sm)
+        self.mailbox.handle(data)
+        self._push_mailbox()
+
+    def mailbox_read(self, esc: Esc, sm: int) -> None:
+        self._push_mailbox()
+
+    def mailbox_repeat(self, esc: Esc, sm: int) -> None:
+        last = self.mailbox.repeat()
+        if last is not None:
+            esc.pdi_mailbox_put(sm, last, force=True)
+        esc.pdi_repeat_ack(sm)
+
+    def _push_mailbox(self) -> None:
+        esc = self.esc
+        sm = esc.sm(MBX_IN)
+        if not sm.enabled or esc.sm_full(MBX_IN) or esc.sm_deactivated(MBX_IN):
+            return
+        reply = self.mailbox.pending()
+        if reply is not None:
+            esc.pdi_mailbox_put(MBX_IN, reply)
+
+    # ------------------------------------------------------------------------------------------
+    # process data
+    # ------------------------------------------------------------------------------------------
+    def buffer_written(self, esc: Esc, sm: int, data: bytes) -> None:
+        if sm == PD_OUT:
+            self._exchange(data)
+
+    def buffer_read(self, esc: Esc, sm: int) -> None:
+        if sm == PD_IN and self._out_size() == 0:
+            self._exchange(b"")
+
+    def _out_size(self) -> int:
+        return self.drive.process_image_sizes()[0] if self.drive.state() in (EcState.SAFEOP, EcState.OP) else 0
+
+    def _exchange(self, outputs: bytes | None) -> None:
+        """One process data cycle: outputs to the drive (None: the first inputs at SAFE-OP), inputs to SM3."""
+        if self.drive.state() not in (EcState.SAFEOP, EcState.OP):
+            return
+        out_size, in_size = self.drive.process_image_sizes()
+        try:
+            inputs = self.drive.exchange(bytes(out_size) if outputs is None or self.drive.state() is not EcState.OP
+                                         else outputs)
+        except TargetError:
+            self._sync_state()  # e.g. power lost during an EEPROM write: the drive is back in INIT
+            return
+        sm = self.esc.sm(PD_IN)
+        if in_size and sm.enabled:
+            self.esc.pdi_write(sm.start, inputs[:sm.length])
+
+    # ------------------------------------------------------------------------------------------
+    # distributed clocks, frames
+    # ------------------------------------------------------------------------------------------
+    def dc_activation(self, esc: Esc, activation: int) -> None:
+        act, cycle, start = esc.dc_sync0()
+        if act & 0x01 and act & 0x06:
+            shift = start % cycle if cycle else 0
+            self.drive.configure_dc(act << 8, cycle, shift)
+        else:
+            self.drive.configure_dc(0, 0, 0)
+
+    def frame_done(self, esc: Esc) -> None:
+        if self.drive.state().code != esc.al_state:
+            self._sync_state()  # the drive changed state by itself (power loss, communication lost)
+        self._push_mailbox()
+
+
+def drive_for_device(device: Device) -> Drive:
+    """The simulated drive of ``device`` (a built-in profile device, or an ESI device, which gets its default
+    modules plugged in and the communication objects its ESI leaves out, as :meth:`Drive.from_esi` does)."""
+    from ecattool.profiles import complete_generic, family_of
+    from ecattool.sim.drive import expand_default_modules
+
+    if family_of(device) == "generic":
+        device = complete_generic(expand_default_modules(device))
+    return Drive.from_device(device)
+
+
+def sii_image(drive: Drive, esi: str | Path | None = None, selector: str | None = None) -> bytes:
+    """The SII ``ecattool sii build`` makes for ``drive``: from its ESI file when given, else from the
+    drive's device model (built-in profiles)."""
+    from ecattool.sii.builder import build
+
+    if esi is not None:
+        from ecattool import esi as esi_pkg
+
+        return build(esi_pkg.load_device(esi, selector)).to_bytes()
+    return build(drive.device).to_bytes()

@@ -1,0 +1,132 @@
+"""Run inside a private network namespace (tests/test_wire_pysoem.py starts it through ecattool.sim.bus.netns):
+``ecattool sim serve`` on one end of the veth pair, a real master (SOEM through pysoem) on the other.
+
+    python wire_pysoem_scenario.py SOURCE... -- PROJECT...
+
+first a bus of SOURCEs brought up by pysoem (config_init, identities, SDO reads, config_map, OP, INIT), then
+``ecattool commission PROJECT --target pysoem`` for each PROJECT on a bus of its own.
+
+Prints one JSON document on stdout. Every wait is bounded."""
+
+from __future__ import annotations
+
+import json
+import os
+import select
+import signal
+import subprocess
+import sys
+import time
+from typing import Any
+
+MASTER_IF, SLAVE_IF = "ecat0", "ecat1"
+#: objects read over SDO in PRE-OP (compared with the in-process drive by the test)
+SDO_READS = [(0x1018, 1), (0x1018, 2), (0x1018, 3), (0x1018, 4), (0x1C12, 0), (0x1C13, 0), (0x1C12, 1),
+             (0x1C13, 1), (0x1600, 0), (0x1A00, 0), (0x1A00, 1), (0x6041, 0), (0x6060, 0), (0x6064, 0)]
+
+
+def _realtime() -> None:
+    """The server sleeps in select() until a frame comes and then needs the CPU at once: SOEM gives a frame
+    2 ms to come back (EC_TIMEOUTRET) and a mailbox write no second chance. A real-time priority (where it is
+    permitted) wakes it before the rest of a busy machine; its work per frame is some hundred microseconds."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(10))
+    except (OSError, AttributeError):
+        pass  # not permitted: it keeps the scenario's raised priority
+
+
+def start_server(sources: list[str]) -> tuple[subprocess.Popen[str], dict[str, Any]]:
+    server = subprocess.Popen([sys.executable, "-m", "ecattool", "sim", "serve", *sources, "--iface", SLAVE_IF,
+                               "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              preexec_fn=_realtime)
+    assert server.stdout is not None
+    ready, _, _ = select.select([server.stdout], [], [], 60)
+    line = server.stdout.readline() if ready else ""
+    if not line:
+        server.kill()
+        raise SystemExit(f"the server did not get ready: {server.communicate(timeout=10)[1][-2000:]}")
+    return server, json.loads(line)
+
+
+def stop_server(server: subprocess.Popen[str]) -> dict[str, Any]:
+    server.send_signal(signal.SIGTERM)
+    try:
+        _, err = server.communicate(timeout=20)
+    except subprocess.TimeoutExpired:
+        server.kill()
+        _, err = server.communicate()
+    return {"returncode": server.returncode, "stderr": err[-2000:]}
+
+
+def bringup(sources: list[str]) -> dict[str, Any]:
+    import pysoem
+
+    server, ready = start_server(sources)
+    out: dict[str, Any] = {"ready": ready}
+    try:
+        master = pysoem.Master()
+        master.open(MASTER_IF)
+        out["found"] = master.config_init()
+        master.state_check(pysoem.PREOP_STATE, 2_000_000)
+        out["identity"] = [[s.man, s.id, s.rev] for s in master.slaves]
+        out["names"] = [s.name for s in master.slaves]
+        reads = []
+        for s in master.slaves:
+            row = {}
+            for index, sub in SDO_READS:
+                try:
+                    row[f"{index:04X}:{sub:02X}"] = bytes(s.sdo_read(index, sub)).hex()
+                except pysoem.SdoError as exc:
+                    row[f"{index:04X}:{sub:02X}"] = f"abort:{exc.abort_code:08X}"
+            reads.append(row)
+        out["sdo"] = reads
+        master.config_map()
+        out["sizes"] = [[len(s.output), len(s.input)] for s in master.slaves]
+        out["safeop"] = master.state_check(pysoem.SAFEOP_STATE, 2_000_000)
+        master.state = pysoem.OP_STATE
+        master.write_state()
+        wkc, cycles = 0, 0
+        for cycles in range(1, 2001):  # bounded: at most 2000 cycles of 1 ms
+            master.send_processdata()
+            wkc = master.receive_processdata(2000)
+            if master.state_check(pysoem.OP_STATE, 1000) == pysoem.OP_STATE:
+                break
+            time.sleep(0.001)
+        out["op"] = master.read_state() == pysoem.OP_STATE
+        out["states"] = [s.state for s in master.slaves]
+        out["wkc"], out["expected_wkc"], out["cycles"] = wkc, master.expected_wkc, cycles
+        master.state = pysoem.INIT_STATE
+        master.write_state()
+        out["init"] = master.state_check(pysoem.INIT_STATE, 2_000_000) == pysoem.INIT_STATE
+        master.close()
+    finally:
+        out["server"] = stop_server(server)
+    return out
+
+
+def commission(projects: list[str]) -> dict[str, Any]:
+    runs = []
+    for project in projects:
+        server, ready = start_server([project])
+        try:
+            done = subprocess.run([sys.executable, "-m", "ecattool", "commission", project, "--target",
+                                   f"pysoem:{MASTER_IF}", "--json"], capture_output=True, text=True, timeout=240)
+        finally:
+            stopped = stop_server(server)
+        runs.append({"project": project, "returncode": done.returncode, "stdout": done.stdout,
+                     "stderr": done.stderr[-2000:], "server": stopped})
+    return {"runs": runs}
+
+
+if __name__ == "__main__":
+    # SOEM gives each frame 2 ms to come back (EC_TIMEOUTRET) and a mailbox send no second chance: both the
+    # master and the server must get the CPU when a frame is on its way. On a loaded machine (the rest of the
+    # test suite runs beside this) a raised priority gives them that; the server inherits it.
+    try:
+        os.nice(-10)
+    except OSError:
+        pass  # not permitted: normal priority (may time out on a busy machine)
+    # "bringup SOURCE... -- PROJECT...": one after the other (never two buses at once on a small machine)
+    args = sys.argv[1:]
+    split = args.index("--") if "--" in args else len(args)
+    print(json.dumps({"bringup": bringup(args[:split]), "commission": commission(args[split + 1:])}))
