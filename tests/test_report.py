@@ -209,7 +209,7 @@ def test_trace_through_the_pysoem_target() -> None:
     target, _ = pysoem_on(drives)
     (dr,) = commission(path, target=target).drives
     assert dr.ok and dr.trace.startup and dr.trace.events[-1].state == "operation enabled"
-    assert dr.trace.samples[-1].values["actual"] == 5000 and dr.trace.cycle_s == 0.001  # the project's DC cycle
+    assert dr.trace.samples[-1].values["actual"] == 5000 and dr.trace.cycle_s == 0.001  # 60C2h as the project sets it
 
 
 def test_long_moves_are_thinned_not_cut() -> None:
@@ -306,3 +306,24 @@ def test_report_ids_are_unique(sample_report: tuple[Path, str]) -> None:
 
     ids = Counter(re.findall(r'\bid="([^"]+)"', sample_report[1]))
     assert ids and not [i for i, n in ids.items() if n > 1]
+
+
+def test_time_base_is_the_drives_interpolation_period() -> None:
+    """The HDT TomCat's default 60C2h is 2 ms: its 90 deg at 90 deg/s take 500 cycles, i.e. one second."""
+    from ecattool.commission import commission
+
+    (dr,) = commission(ROOT / "samples" / "hdt" / "project.yaml").drives
+    t = dr.trace
+    assert t.cycle_s == 0.002 and t.samples[-1].cycle - t.samples[0].cycle == 500
+    assert all(s.values["velocity"] in (0, 90) for s in t.samples)
+
+
+def test_velocity_from_integer_positions_is_steady() -> None:
+    """One unit every 11 cycles (HDT's whole degrees at 90 deg/s, 1 ms) is a steady 90.9 units/s, not spikes."""
+    from ecattool.report.plots import derivative
+
+    cycles = list(range(1000))
+    positions = [c // 11 for c in cycles]
+    v, window = derivative(cycles, positions, 0.001)
+    assert window > 11 and all(abs(x - 1000 / 11) < 1000 / 11 * 0.05 for x in v[window:-window])
+    assert derivative([0, 1, 2], [0, 5, 10], 0.5)[0] == [10.0, 10.0, 10.0]

@@ -127,7 +127,7 @@ class DriveTrace:
     findings: list[Finding] = field(default_factory=list)
     units: dict[str, str] = field(default_factory=dict)  # "position"/"velocity" -> unit name
     counts_per_unit: Fraction | None = None
-    cycle_s: float = 0.001
+    cycle_s: float = 0.001  # one process-data cycle: the drive's 60C2h, else the project's DC cycle, else 1 ms
     startup: list[StartupWrite] = field(default_factory=list)
     sw_file: str = ""
     sw_blocks: list[SwBlock] = field(default_factory=list)
@@ -210,9 +210,24 @@ class DriveTrace:
     def begin_move(self, io: ProcessImage, what: str) -> None:
         self.move = what
         self.channels = [c for c in CHANNELS if io.has(c.index, c.subindex)]
+        self.cycle_s = self._drive_period(io) or self.cycle_s
         self._move_start = self.cycles
         self._sampling = True
         self._sample(io)
+
+    @staticmethod
+    def _drive_period(io: ProcessImage) -> float | None:
+        """The drive's interpolation period 60C2h in seconds (the time of one cycle as the drive counts it),
+        None where it has none or will not tell."""
+        if not io.has(0x60C2, 1):
+            return None
+        from ecattool.profiles.rules import interpolation_period_ns
+
+        try:
+            base, exponent = io.read(0x60C2, 1), io.read(0x60C2, 2)
+        except EcatToolError:
+            return None
+        return float(interpolation_period_ns(base, exponent)) / 1e9 if base > 0 and -9 <= exponent <= 2 else None
 
     def end_move(self, io: ProcessImage) -> None:
         if self._sampling and (not self.samples or self.samples[-1].cycle != self.cycles):

@@ -88,13 +88,47 @@ def timeline_svg(trace: DriveTrace, uid: str) -> str | None:
     return _svg(fig, uid)
 
 
-def _derivative(cycles: list[int], values: list[int], cycle_s: float) -> list[float]:
-    """Velocity from positions: the difference quotient between samples, per second."""
-    out = [0.0]
-    for i in range(1, len(values)):
-        dt = (cycles[i] - cycles[i - 1]) * cycle_s
-        out.append((values[i] - values[i - 1]) / dt if dt else 0.0)
-    return out
+#: a velocity from integer positions is fitted over a window spanning at least this many position steps
+#: (quanta), so that 1 unit every 11 cycles reads as a steady velocity, not as spikes of one unit per cycle
+QUANTA_PER_WINDOW = 10
+
+
+def derivative(cycles: list[int], values: list[int], cycle_s: float) -> tuple[list[float], int]:
+    """Velocity from sampled integer positions, per second: the least-squares slope over a centred window of
+    samples wide enough to span :data:`QUANTA_PER_WINDOW` position steps on average (at most a quarter of the
+    samples; narrower at the ends). Returns the velocities and the window in samples."""
+    n = len(values)
+    travel = abs(values[-1] - values[0]) if n else 0
+    window = min(max(1, -(-QUANTA_PER_WINDOW * n // travel) if travel else 1), max(1, n // 4))
+    half = max(1, window // 2)
+    ts = [c * cycle_s for c in cycles]
+    # prefix sums of t, x, t·t, t·x: each window's slope in constant time
+    st, sx, stt, stx = [0.0], [0.0], [0.0], [0.0]
+    for t, x in zip(ts, values):
+        st.append(st[-1] + t)
+        sx.append(sx[-1] + x)
+        stt.append(stt[-1] + t * t)
+        stx.append(stx[-1] + t * x)
+    out = []
+    for i in range(n):
+        a, b = max(i - half, 0), min(i + half, n - 1) + 1
+        k = b - a
+        t_sum, x_sum = st[b] - st[a], sx[b] - sx[a]
+        var = (stt[b] - stt[a]) - t_sum * t_sum / k
+        out.append(((stx[b] - stx[a]) - t_sum * x_sum / k) / var if k > 1 and var > 0 else 0.0)
+    return out, window
+
+
+def _from_zero(ax: Any) -> None:
+    """Let a velocity axis include 0 (a steady velocity then reads as a flat line, not as its own noise)."""
+    lo, hi = ax.get_ylim()
+    lo, hi = min(lo, 0.0), max(hi, 0.0)
+    ax.set_ylim(lo - 0.04 * (hi - lo) * (lo < 0), hi + 0.06 * (hi - lo))
+
+
+def _window_note(window: int, ms: float, cycles: list[int]) -> str:
+    span = (cycles[min(window, len(cycles) - 1)] - cycles[0]) * ms if window > 1 else 0
+    return f", over {span:g} ms" if span else ""
 
 
 def move_svgs(trace: DriveTrace, uid: str) -> list[tuple[str, str]]:
@@ -137,8 +171,9 @@ def move_svgs(trace: DriveTrace, uid: str) -> list[tuple[str, str]]:
         lines = []
         if "demand" in channels:
             x, c, y = series("demand")
-            lines += ax.plot(x, _derivative(c, y, trace.cycle_s), color="#1f77b4",
-                             label=f"demand velocity (from 6062h) [{pu}/s]")
+            v, window = derivative(c, y, trace.cycle_s)
+            lines += ax.plot(x, v, color="#1f77b4",
+                             label=f"demand velocity (from 6062h{_window_note(window, ms, c)}) [{pu}/s]")
         ax.set_ylabel(f"velocity [{pu}/s]")
         if "velocity" in channels:
             vax = ax.twinx() if own and "demand" in channels else ax
@@ -146,6 +181,8 @@ def move_svgs(trace: DriveTrace, uid: str) -> list[tuple[str, str]]:
             lines += vax.plot(x, y, color="#d62728", ls=":", lw=2, label=f"{channels['velocity'].label} [{vu}]")
             vax.set_ylabel(f"velocity [{vu}]")
             vax.grid(vax is ax)
+        for a in {ax, *(ln.axes for ln in lines)}:
+            _from_zero(a)
         ax.set_xlabel(xlabel)
         ax.set_title(f"Velocity (user units, {vu})", loc="left", fontsize=10, fontweight="bold")
         ax.legend(lines, [str(ln.get_label()) for ln in lines], fontsize=7.5, frameon=False)
@@ -158,9 +195,11 @@ def move_svgs(trace: DriveTrace, uid: str) -> list[tuple[str, str]]:
             ax.plot(x, y, color="#2ca02c", label="6063h position actual [counts]")
             ax.set_ylabel("position [counts]")
             ax2 = ax.twinx()
-            ax2.plot(x, _derivative(c, y, trace.cycle_s), color="#9467bd", ls="--",
-                     label="velocity (from 6063h) [counts/s]")
+            v, window = derivative(c, y, trace.cycle_s)
+            ax2.plot(x, v, color="#9467bd", ls="--",
+                     label=f"velocity (from 6063h{_window_note(window, ms, c)}) [counts/s]")
             ax2.set_ylabel("velocity [counts/s]")
+            _from_zero(ax2)
             ax2.grid(False)
             ax.set_xlabel(xlabel)
             ax.set_title("Internal units (counts)", loc="left", fontsize=10, fontweight="bold")
