@@ -108,6 +108,7 @@ class CdefSlave:
         self._pending_op = None
         self.pending_emergencies = []  # (error_code, error_reg) the next mailbox transfer pops
         self.dc = None  # what dc_sync wrote: (activation 0x0981, sync0 cycle, shift, sync1 cycle)
+        self.config_func = None  # pysoem: called by config_map() with the 0-based position (SOEM's PO2SOconfig)
 
     # -- identity and images (read-only properties, as in pysoem) --
     man = property(lambda self: self._man)
@@ -292,6 +293,8 @@ def make_module(drives, interfaces=("eth0", "eth-test")):
                     raise FakeMisuse(f"config_map reprograms slave {s._pos}, which runs in AL state 0x{s._state:02X}")
                 if s._state & 0x0F != PREOP_STATE:
                     continue  # SOEM waits for PRE-OP, then finds no CoE mapping (the SII fallback is not modelled)
+                if s.config_func is not None:  # SOEM calls PO2SOconfig before it reads the PDO mapping
+                    s.config_func(s._pos - 1)
                 try:
                     obits, ibits = s._read_mapping_bits(0x1C12), s._read_mapping_bits(0x1C13)
                 except (SdoError, MailboxError) as exc:

@@ -10,6 +10,8 @@ import re
 import shutil
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from ecattool import esi
 from ecattool.errors import InputError
@@ -201,7 +203,7 @@ def test_size_is_bounded(monkeypatch, tmp_path):
         esi.load_bytes(TEXT.encode("latin-1"), "big.eds")
     big = tmp_path / "big.eds"
     big.write_bytes(TEXT.encode("latin-1"))
-    with pytest.raises(InputError, match="larger than the 1000 byte limit"):
+    with pytest.raises(InputError, match="larger than 1000 bytes"):
         esi.load(big)
 
 
@@ -257,3 +259,34 @@ def test_stdin_and_xml_sniffing(capsys, monkeypatch):
     assert code == 0 and json.loads(out)[0]["type"] == "iPOS"
     assert esi.load_bytes(b"\xef\xbb\xbf; comment first\n" + EDS.read_bytes(), "x.eds").root == "EDS"
     assert esi.load(ROOT / "samples" / "esi" / "etg2001_cia402.xml").root == "EtherCATInfo"
+
+
+_JUNK = ["x", "[", "]", "[1000sub9]", "DataType=0x9999", "ObjectType=0x8", "CompactSubObj=300", "DefaultValue=-1",
+         "AccessType=zz", "PDOMapping=x", "[1C12]", "SubNumber=", "DefaultValue=$NODEID+0x80000000"]
+_VALUES = ["", "0x", "-5", "99999999999999", "1.5", "$NODEID", "abc", "0x80000000", "#x10"]
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["del", "dup", "junk", "value"]), st.floats(0, 1, exclude_max=True),
+                          st.integers(0, 1000)), min_size=1, max_size=4))
+def test_mutated_eds_loads_or_is_one_located_line(ops):
+    """Untrusted input: lines deleted, repeated, replaced or given odd values never escape as another exception."""
+    from ecattool.profiles import complete_generic
+
+    lines = TEXT.splitlines()
+    for op, where, k in ops:
+        i = int(where * len(lines))
+        if op == "del":
+            del lines[i]
+        elif op == "dup":
+            lines.insert(i, lines[k % len(lines)])
+        elif op == "junk":
+            lines.insert(i, _JUNK[k % len(_JUNK)])
+        elif "=" in lines[i]:
+            lines[i] = lines[i].split("=")[0] + "=" + _VALUES[k % len(_VALUES)]
+    try:
+        doc = esi.load_bytes("\n".join(lines).encode("latin-1"), "m.eds")
+    except InputError as exc:
+        assert "\n" not in str(exc) and str(exc).startswith("m.eds:")
+        return
+    complete_generic(doc.devices[0])  # what map/sim/project do with it next

@@ -157,6 +157,30 @@ def test_packages_import_only_downward() -> None:
         " -> ".join(c) for c in found) + "\n" + "\n".join(witnesses)
 
 
+def _diagram_rows() -> list[list[str]]:
+    """The rows of the layer diagram in docs/architecture.md ("## Layers"), top first, as room names."""
+    text = (PKG.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    block = text.split("## Layers", 1)[1].split("```", 2)[1]
+    rows = []
+    for line in block.strip().splitlines():
+        names = line.split("(", 1)[0].split("·")
+        rows.append([n.strip() if n.strip() == "ecattool" else f"ecattool.{n.strip()}" for n in names])
+    return rows
+
+
+def test_the_documented_layers_match_the_code() -> None:
+    rows = _diagram_rows()
+    row_of = {name: i for i, names in enumerate(rows) for name in names}
+    graph = import_graph()
+    missing = sorted({room(m) for m in graph} - set(row_of))
+    assert not missing, f"docs/architecture.md's layer diagram (## Layers) has no row for {missing}: add one"
+    upward = sorted(f"{m} imports {t}" for m, ts in graph.items() for t in ts
+                    if room(m) != room(t) and row_of[room(t)] <= row_of[room(m)])
+    assert not upward, ("imports that do not go down the documented layers: move the importing package's row above "
+                        "the imported one in docs/architecture.md (## Layers) where that is the design, or import "
+                        "downward:\n" + "\n".join(upward))
+
+
 def test_the_walk_sees_lazy_and_type_only_imports() -> None:
     # the graph must include imports inside functions and under TYPE_CHECKING, or cycles through them hide
     graph = import_graph()

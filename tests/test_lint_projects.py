@@ -45,6 +45,7 @@ EXPECTED: dict[str, set[tuple[str, Severity, int, int | None]]] = {
     "prj042_sync0.yaml": {("PRJ042", E, 6, 45)},
     "prj043_interpolation_period.yaml": {("PRJ043", E, 7, 36)},
     "prj044_period_vs_sync0.yaml": {("PRJ044", W, 6, 45)},
+    "prj045_csp_without_dc.yaml": {("PRJ045", W, 7, 11)},
     "prj050_scaling.yaml": {("PRJ050", E, 7, 7)},
     "pdo003_twice.yaml": {("PDO003", E, 10, 18)},
     "pdo006_direction.yaml": {("PDO006", E, 9, 34)},

@@ -132,11 +132,12 @@ def test_pysoem_module_compiles_and_writes_every_command(configs):
     code = export(cfgs, "pysoem")
     namespace: dict = {}
     exec(compile(code, "startup_pysoem.py", "exec"), namespace)
-    slaves = [FakeSlave(c.identity.vendor_id, c.identity.product_code) for c in cfgs]
+    # the slaves hold the device's default mapping: where the project maps nothing itself, the module's
+    # program_pdos() reads it, finds it equal and writes nothing of it
+    slaves = [FakeSlave(c.identity.vendor_id, c.identity.product_code).holding(c) for c in cfgs]
     namespace["install"](FakeMaster(slaves))
     for s, c in zip(slaves, cfgs):
-        if c.commands:
-            s.config_func(c.position)
+        s.config_func(c.position)
         assert s.writes == [(x.index, x.subindex, x.data, x.complete_access) for x in c.commands]
 
 

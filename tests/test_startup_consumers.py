@@ -22,7 +22,7 @@ from ecattool.esi.model import Identity
 from ecattool.startup import SlaveConfig, StartupCommand, StartupList, export, import_bytes, import_file
 from ecattool.startup.model import is_pdo_programming
 from tests.conftest import ROOT, corpus_path, run
-from tests.test_startup_export import ECRT_H, _gcc
+from tests.test_startup_export import ECRT_H, _gcc, _run_pysoem_module
 
 SAMPLES = sorted(p.parent.name for p in (ROOT / "samples").glob("*/project.yaml"))
 ROS2_SIZES = {"int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4, "uint32": 4, "int64": 8, "uint64": 8}
@@ -219,6 +219,21 @@ def test_igh_sync_managers_follow_lcec_and_esi(tmp_path, everest):
     assert _gcc(text, tmp_path).returncode == 0
 
 
+def test_ros2_sm_section_says_what_the_source_does(everest):
+    # SMConfig::load_from_config: index (uint8), type input/output, pdo rpdo/tpdo, watchdog enable/disable
+    cfg = SlaveConfig.from_device(everest, position=0)
+    sms = yaml.safe_load(export(cfg, "ros2"))["sm"]
+    by_number = {sm.number: sm for sm in everest.sync_managers}
+    for entry in sms:
+        sm = by_number[entry["index"]]
+        assert entry["type"] == {"Outputs": "output", "Inputs": "input"}[sm.kind]
+        assert entry["pdo"] == {"output": "rpdo", "input": "tpdo"}[entry["type"]]
+        assert entry["watchdog"] == ("enable" if sm.control_byte & 0x40 else "disable")
+    # a source that says nothing about sync managers keeps the driver's defaults: no sm section
+    (elmo,) = import_file(corpus_path("configs", "ros2_elmo_gold.yaml"))
+    assert "sm" not in yaml.safe_load(export(elmo, "ros2"))
+
+
 # --- 6. ENI distributed clocks ---------------------------------------------------------------------------
 
 def test_eni_dc_is_cycle_start_and_activation_never_cycle_zero():
@@ -350,3 +365,190 @@ def test_ecmc_reports_every_line_it_does_not_use():
              b'ecmcConfigOrDie "Cfg.EcSomethingNew(0,1)"\nepicsThreadSleep(0.1)\n'
     (cfg,) = import_bytes(script, "x.cmd")
     assert [(n.location.line, n.rule) for n in cfg.notes] == [(2, "startup.ecmc.unused"), (3, "startup.ecmc.unused")]
+
+
+# --- 5. pysoem: PDO tables programmed, SAFE-OP only after DC ------------------------------------------------
+
+def _technosoft_from_ros2() -> SlaveConfig:
+    """The Technosoft sample through a ros2 file: its PDO mapping is now only the rpdo/tpdo tables."""
+    (cfg,) = _sample_configs("technosoft_ipos")
+    (back,) = import_bytes(export(cfg, "ros2").encode(), "ipos.yaml")
+    assert back.has_pdo_info and not any(is_pdo_programming(c.index) for c in back.commands)
+    back.position = 0
+    return back
+
+
+def _run_module(code: str, drives, **kwargs):
+    """The module run as its docstring says (tests.test_startup_export), recording each slave's AL state at
+    the moment dc_sync starts its SYNC0."""
+    states_at_dc: list[int] = []
+
+    def watch_dc(master) -> None:
+        for s in master.slaves:
+            original = s.dc_sync
+            s.dc_sync = lambda *a, _s=s, _o=original: (states_at_dc.append(_s.state & 0x0F), _o(*a))[1]
+
+    return _run_pysoem_module(code, drives, before_safe_op=watch_dc, **kwargs), states_at_dc
+
+
+def test_pysoem_programs_a_mapping_given_only_as_tables():
+    from ecattool.sim import Drive
+
+    cfg = _technosoft_from_ros2()
+    drive = Drive.from_profile("technosoft-ipos", product="ipos4808-bx-cat-sto", revision="F515K")
+    master, _ = _run_module(export(cfg, "pysoem"), [drive])
+    slave = master.slaves[0]
+
+    def read(index):
+        n = slave.sdo_read(index, 0)[0]
+        return [int.from_bytes(slave.sdo_read(index, k)[:2 if index < 0x1600 else 4], "little") for k in range(1, n + 1)]
+
+    assert read(0x1C12) == [p.index for p in cfg.rx_pdos] and read(0x1C13) == [p.index for p in cfg.tx_pdos]
+    for p in (*cfg.rx_pdos, *cfg.tx_pdos):
+        assert read(p.index) == [(e.index << 16) | (e.subindex << 8) | e.bit_len for e in p.entries]
+    # the IO map config_map laid out is the tables' size, and the slave reached SAFE-OP
+    assert len(slave.output) * 8 >= sum(p.bit_size for p in cfg.rx_pdos)
+    assert slave.state & 0x0F == 4
+
+
+def test_pysoem_writes_nothing_where_the_slave_already_holds_the_tables():
+    from ecattool.sim import Drive
+
+    cfg = _technosoft_from_ros2()
+    drive = Drive.from_profile("technosoft-ipos", product="ipos4808-bx-cat-sto", revision="F515K")
+    code = export(cfg, "pysoem")
+    _run_module(code, [drive])  # programs the drive
+    writes = []
+    original = drive.sdo_download
+    drive.sdo_download = lambda i, s, d, *a, **k: (writes.append(i), original(i, s, d, *a, **k))[1]
+    from tests.fake_pysoem import make_module
+
+    namespace: dict = {}
+    exec(compile(code, "m.py", "exec"), namespace)
+    master = make_module([drive]).Master()
+    master.open("eth0")
+    master.config_init()
+    namespace["install"](master)
+    master.config_map()
+    assert not [i for i in writes if is_pdo_programming(i)]
+
+
+def test_pysoem_starts_dc_before_safe_op():
+    from ecattool.sim import Drive
+
+    drives = [Drive.from_profile("hdt")]
+    ident = drives[0].identity()
+    cfg = SlaveConfig(StartupList([StartupCommand("PS", 0x6060, 0, b"\x08")]), name="x", position=0,
+                      identity=Identity(ident.vendor_id, ident.product_code), dc_assign_activate=0x0300,
+                      dc_cycle_ns=1_000_000)
+    master, states_at_dc = _run_module(export(cfg, "pysoem"), drives)
+    assert states_at_dc == [2]  # dc_sync while the slave was still in PRE-OP: config_map requested nothing
+    assert master.slaves[0].state & 0x0F == 4 and master.slaves[0].dc == (0x03, 1_000_000, 0, None)
+
+
+def test_pysoem_module_uses_only_names_pysoem_has(monkeypatch):
+    """Every pysoem attribute the generated module touches is in the fake's surface, which
+    tests/test_pysoem_surface.py holds against the real module; with pysoem installed, checked here too."""
+    import sys
+
+    from tests import fake_pysoem
+
+    try:
+        import pysoem
+    except ImportError:
+        pysoem = None
+        monkeypatch.setitem(sys.modules, "pysoem", fake_pysoem.make_module([]))
+    code = export([_technosoft_from_ros2(), _with_reset()], "pysoem")
+    used = set(re.findall(r"(?:slave|master)\.(\w+)", code)) - {"slaves"}
+    fake_master = fake_pysoem.make_module([]).Master()
+    fake_slave_attrs = set(dir(fake_pysoem.CdefSlave)) | {"config_func"}
+    for name in used:
+        assert hasattr(fake_master, name) or name in fake_slave_attrs, name
+    namespace: dict = {}
+    exec(compile(code, "m.py", "exec"), namespace)
+    assert namespace["SAFEOP_STATE"] == fake_pysoem.SAFEOP_STATE
+    if pysoem is None:
+        return
+    assert namespace["SAFEOP_STATE"] == pysoem.SAFEOP_STATE
+    for name in used:
+        assert hasattr(pysoem.Master(), name) or hasattr(pysoem.CdefSlave, name), name
+
+
+# --- 6 (lcec) and issue 14 item 5: lcec and ENI say what they did not use ------------------------------------
+
+def test_lcec_keeps_the_app_period_cycle_and_reports_sync1_watchdog_and_the_rest(tmp_path):
+    configs = import_file(corpus_path("configs", "lcec_generic-complex_ethercat-conf.xml"))
+    el7342 = [c for c in configs if c.extra.get("lcec_type") == "EL7342"]
+    assert [c.dc_cycle_ns for c in el7342] == [1_000_000, 1_000_000]  # sync0Cycle="*1" x appTimePeriod 1 ms
+    assert all(any("<watchdog divider=\"2498\"" in n.message for n in c.notes) for c in el7342)
+    configs = import_file(corpus_path("configs", "lcec_initcmds_ethercat-conf.xml"))
+    ax = next(c for c in configs if c.identity is not None)
+    assert ax.dc_cycle_ns == 250_000 and any(n.rule == "startup.lcec.sync1" for n in ax.notes)
+    conf = tmp_path / "conf.xml"
+    conf.write_text('<masters><master idx="0" appTimePeriod="500000"><slave idx="0" type="generic" vid="2" pid="3">'
+                    '<dcConf assignActivate="300" sync0Cycle="*2"/><modParam name="enableFB2" value="true"/>'
+                    '<idnConfig drive="0" idn="S-0-0015" state="PREOP"><idnDataRaw data="0700"/></idnConfig>'
+                    '</slave></master></masters>')
+    (c,) = import_file(conf)
+    assert c.dc_cycle_ns == 1_000_000
+    assert sorted(n.message.split(" ")[0] for n in c.notes if n.rule == "startup.lcec.unused") == \
+        ["<idnConfig", "<modParam"]
+
+
+def test_eni_reports_every_element_it_does_not_convert():
+    configs = import_file(corpus_path("configs", "eni_kpierczy_test_eni.xml"))
+    notes = [n for c in configs for n in c.notes]
+    text = "\n".join(n.message for n in notes)
+    for part in ("<Physics>", "<BootStrap>", "<PreviousPort>", "<Master>", "<Cyclic>", "<ProcessImage>"):
+        assert part in text, part
+    assert all(any(n.rule == "startup.eni.register" for n in c.notes) for c in configs)
+
+
+# --- 10. an ESI that offers only DC: DC in the project and in every export --------------------------------------
+
+def _dc_in_every_export(configs: list[SlaveConfig]) -> None:
+    (c,) = configs
+    assert c.dc_assign_activate == 0x0300 and c.dc_cycle_ns == 1_000_000
+    assert "ecrt_slave_config_dc(sc, 0x0300, 1000000U, 0, 0U, 0);" in export(c, "igh")
+    assert yaml.safe_load(export(c, "ros2"))["assign_activate"] == 0x0300
+    slave = etree.fromstring(export(c, "eni").encode()).find("Config/Slave")
+    assert slave.findtext("DC/CycleTime0") == "1000000"
+    assert re.search(r'Cfg\.EcSlaveConfigDC\(\w+,0x300,1000000,0,0,0\)', export(c, "ecmc"))
+    assert "(True, 1000000, 0)" in export(c, "pysoem")
+    (back,) = import_bytes(export(c, "json").encode(), "x.json")
+    assert (back.dc_assign_activate, back.dc_cycle_ns) == (0x0300, 1_000_000)
+
+
+def test_generic_esi_sample_has_dc_in_every_export():
+    _dc_in_every_export(_sample_configs("generic_esi"))
+
+
+def test_project_new_gives_a_dc_only_esi_dc_and_lint_is_clean(tmp_path, capsys):
+    import shutil
+
+    from ecattool.project.lint import lint_project
+
+    esi = tmp_path / "sv660.xml"
+    shutil.copy(ROOT / "samples" / "generic_esi" / "inovance_SV660_EOE_1Axis_V9.12.xml", esi)
+    out = tmp_path / "machine.yaml"
+    code, _, err = run(capsys, "project", "new", "--esi", "sv660.xml", "--select", "InoSV660N", "-o", str(out))
+    assert code == 0, err
+    text = out.read_text()
+    assert "dc: {opmode: DC, cycle_ns: 1000000}" in text
+    # the same drive with a csp move: DC is there, so no PRJ045; without it, the warning
+    with_move = text.replace("move: {distance: 1}", "move: {distance: 100, mode: csp}")
+    assert "mode: csp" in with_move
+    out.write_text(with_move)
+    assert "PRJ045" not in {f.rule for f in lint_project(out).findings}
+    out.write_text(with_move.replace("    dc: {opmode: DC, cycle_ns: 1000000}\n", ""))
+    assert "PRJ045" in {f.rule for f in lint_project(out).findings}
+
+
+def test_project_new_leaves_dc_to_the_user_where_the_esi_offers_free_run(tmp_path):
+    from ecattool import esi
+    from ecattool.project.skeleton import dc_only_mode
+
+    everest = esi.load_device(str(corpus_path("esi", "ingenia_eve-xcr-e_esi.xml")))  # Synchron (0) and DCSync
+    assert [m.assign_activate for m in everest.dc_opmodes] == [0, 0x0300] and dc_only_mode(everest) is None
+    sv660 = esi.load_device(str(ROOT / "samples" / "generic_esi" / "inovance_SV660_EOE_1Axis_V9.12.xml"))
+    assert dc_only_mode(sv660) == "DC"

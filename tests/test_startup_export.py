@@ -273,9 +273,24 @@ class FakeSlave:
         self.man, self.id = man, ident
         self.writes: list[tuple] = []
         self.config_func = None
+        self.od: dict[tuple[int, int], bytes] = {}  # what sdo_read answers (unset: 0)
 
     def sdo_write(self, index, subindex, data, ca=False):
         self.writes.append((index, subindex, bytes(data), ca))
+
+    def sdo_read(self, index, subindex, size=0, ca=False):
+        return self.od.get((index, subindex), bytes(4))
+
+    def holding(self, cfg: SlaveConfig) -> "FakeSlave":
+        """The slave already holds the PDO assignment and mapping of ``cfg`` (SM2 outputs, SM3 inputs)."""
+        for assign, pdos in ((0x1C12, cfg.rx_pdos), (0x1C13, cfg.tx_pdos)):
+            self.od[(assign, 0)] = bytes([len(pdos)])
+            for k, p in enumerate(pdos, 1):
+                self.od[(assign, k)] = p.index.to_bytes(2, "little")
+                self.od[(p.index, 0)] = bytes([len(p.entries)])
+                for j, e in enumerate(p.entries, 1):
+                    self.od[(p.index, j)] = ((e.index << 16) | (e.subindex << 8) | e.bit_len).to_bytes(4, "little")
+        return self
 
 
 class FakeMaster:
@@ -303,8 +318,9 @@ def test_pysoem_install_checks_identity():
 
 
 
-def _run_pysoem_module(code: str, drives, **dc_kwargs):
-    """Execute an exported pysoem module the way its docstring says, on the fake pysoem bus of ``drives``."""
+def _run_pysoem_module(code: str, drives, before_safe_op=None, **dc_kwargs):
+    """Execute an exported pysoem module the way its docstring says, on the fake pysoem bus of ``drives``;
+    ``before_safe_op(master)`` runs between config_map() and to_safe_op()."""
     from tests.fake_pysoem import make_module
 
     namespace: dict = {}
@@ -313,8 +329,11 @@ def _run_pysoem_module(code: str, drives, **dc_kwargs):
     master.open("eth0")
     master.config_init()
     namespace["install"](master)
+    assert master.manual_state_change == 1  # config_map() must not request SAFE-OP before DC runs
     master.config_map()
-    namespace["configure_dc"](master, **dc_kwargs)
+    if before_safe_op is not None:
+        before_safe_op(master)
+    namespace["to_safe_op"](master, **dc_kwargs)
     return master
 
 

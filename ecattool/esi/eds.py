@@ -67,16 +67,9 @@ def looks_like_eds(data: bytes) -> bool:
 
 def load_eds(path: str | Path) -> EsiFile:
     """Read an EDS or DCF file (see :func:`load_eds_bytes`)."""
-    p = Path(path)
-    try:
-        size = p.stat().st_size
-        if size > MAX_EDS_BYTES:
-            raise InputError(f"file is {size} bytes, larger than the {MAX_EDS_BYTES} byte limit of an EDS",
-                             Location(str(p)))
-        data = p.read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read file: {exc.strerror or exc}", Location(str(p))) from None
-    return load_eds_bytes(data, str(p))
+    from ecattool.fileio import read_bytes
+
+    return load_eds_bytes(read_bytes(path, MAX_EDS_BYTES), str(path))
 
 
 class _Lines:

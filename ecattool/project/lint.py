@@ -42,6 +42,7 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ042": "a SYNC0 cycle time the drive does not accept",
     "PRJ043": "a write to the interpolation period (60C2h) leaves a period the drive does not accept",
     "PRJ044": "the interpolation period (60C2h) differs from the SYNC0 cycle of an interpolated mode",
+    "PRJ045": "the drive runs cyclic synchronous position (csp) without distributed clocks",
     "PRJ050": "the scaling section cannot be computed",
 }
 

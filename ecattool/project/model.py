@@ -22,7 +22,7 @@ class _Strict(BaseModel):
 class DeviceRef(_Strict):
     """Which device a drive is: a vendor ESI file plus a selector, or a built-in family profile."""
 
-    esi: str | None = Field(default=None, description="ESI file, relative to the project file")
+    esi: str | None = Field(default=None, description="ESI file (or CANopen EDS/DCF file), relative to the project file")
     select: str | int | None = Field(
         default=None, description="Device in the ESI: type name, product_code[:revision] or list index"
     )

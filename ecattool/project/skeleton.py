@@ -66,7 +66,7 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
         ref = f"      profile: {_scalar(profile)}\n" + (f"      product: {_scalar(product)}\n" if product else "")
     else:
         ref = f"      esi: {_scalar(str(esi))}\n" + (f"      select: {json.dumps(select)}\n" if select else "")
-    body = _motion(device, profiles.rules_for(device)) + _accept_flaws(device, findings or [])
+    body = _dc(device) + _motion(device, profiles.rules_for(device)) + _accept_flaws(device, findings or [])
     return ("# ecattool project file (format 1). Docs: docs/project.md\n"
             "ecattool: 1\n"
             "name: my-machine\n"
@@ -74,6 +74,24 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
             f"  - name: {_scalar(name)}\n"
             "    device:\n"
             f"{ref}{body}")
+
+
+def dc_only_mode(device: Device) -> str | None:
+    """The DC OpMode of an ESI that offers no other synchronisation (no free-run or SM-synchronous mode, whose
+    AssignActivate is 0): such a drive runs only with distributed clocks. None where there is a choice."""
+    modes = list(device.dc_opmodes)
+    if modes and all(m.assign_activate for m in modes):
+        return modes[0].name
+    return None
+
+
+def _dc(device: Device) -> str:
+    """``dc:`` for a drive whose ESI offers only DC modes: the first of them, at a 1 ms SYNC0 cycle."""
+    mode = dc_only_mode(device)
+    if mode is None:
+        return ""
+    return (f"    # the ESI offers only distributed-clock synchronisation ({_comment(mode)}); set cycle_ns to your bus cycle\n"
+            f"    dc: {{opmode: {_scalar(mode)}, cycle_ns: 1000000}}\n")
 
 
 def _accept_flaws(device: Device, findings: list[Finding]) -> str:

@@ -257,6 +257,15 @@ def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
                 rd.error("PRJ041", f"mode {mode} needs distributed clocks on {rd.device.type_name} (the drive stays in "
                                    "SAFE-OP without them); add dc: {opmode: DC, cycle_ns: 1000000}", loc)
                 break
+            supported = tuple(getattr(rules, "supported_modes", ()) or ())
+            if mode == 8 and (not supported or 8 in supported):  # csp: set-points taken on SYNC0 each cycle
+                names = [m.name for m in rd.device.dc_opmodes if m.assign_activate]
+                hint = (f"dc: {{opmode: {names[0]}, cycle_ns: 1000000}} (the ESI's DC modes: {', '.join(names)})"
+                        if names else "dc: {assign_activate: 0x0300, cycle_ns: 1000000}")
+                rd.warning("PRJ045", f"cyclic synchronous position (csp) without distributed clocks: "
+                                     f"{rd.device.type_name} would take the set-points unsynchronised (or refuse "
+                                     f"SAFE-OP where it needs SYNC0); add {hint}", loc)
+                break
         return
     step = getattr(rules, "dc_sync0_step_ns", None)
     most = getattr(rules, "dc_sync0_max_steps", None)

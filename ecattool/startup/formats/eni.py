@@ -350,18 +350,54 @@ def _read_slave(slave: Any, source: str, i: int) -> SlaveConfig:
         for child in mb.findall("SoE"):
             _soe_initcmds(child, cfg, source)
     cfg.sync_managers.sort(key=lambda m: m.number)
+    register_cmds = []
     for ic in slave.findall("InitCmds/InitCmd"):
-        if _int(ic, "Ado", source) == DC_ACTIVATION_REGISTER and "PS" in [t.text for t in ic.findall("Transition")]:
+        ado = _int(ic, "Ado", source)
+        if ado == DC_ACTIVATION_REGISTER and "PS" in [t.text for t in ic.findall("Transition")]:
             raw = _text(ic, "Data")
             if raw:
                 value = int.from_bytes(parse_hex(raw, _loc(source, ic)), "little")
                 if value:
                     cfg.dc_assign_activate = value
+        elif ado not in (DC_ACTIVATION_REGISTER, DC_CYCLE_REGISTER, DC_START_REGISTER):  # DC: from the DC element
+            register_cmds.append(ic)
+    if register_cmds:
+        lines = ", ".join(str(ic.sourceline) for ic in register_cmds)
+        cfg.note("startup.eni.register", f"{len(register_cmds)} ECAT register init command(s) (lines {lines}: sync "
+                 "manager, FMMU, state and watchdog setup) are the master's own work from the ESI, not startup "
+                 "commands; not converted", _loc(source, register_cmds[0]), Severity.INFO)
     dc = slave.find("DC")
     if dc is not None:
         cfg.dc_cycle_ns = _int(dc, "CycleTime0", source) or None
         cfg.dc_shift_ns = _int(dc, "ShiftTime", source)
+        if _int(dc, "CycleTime1", source):
+            cfg.note("startup.eni.sync1", f"SYNC1 (CycleTime1 {_int(dc, 'CycleTime1', source)} ns) is not converted: "
+                     "the startup model holds SYNC0 only", _loc(source, dc))
+    _report_unused(slave, cfg, source)
     return cfg
+
+
+#: the elements the reader uses, per parent; everything else in a slave is reported
+_USED = {"Slave": {"Info", "ProcessData", "Mailbox", "InitCmds", "DC"},
+         "Info": set(INFO_ORDER),
+         "ProcessData": {"TxPdo", "RxPdo", *(f"Sm{n}" for n in range(16))},
+         "Mailbox": {"Send", "Recv", "Protocol", "CoE", "SoE"},
+         "DC": {"CycleTime0", "CycleTime1", "ShiftTime"}}
+
+
+def _report_unused(slave: Any, cfg: SlaveConfig, source: str) -> None:
+    """One note per element of the slave that the import does not use (by parent, with the lines)."""
+    for parent_tag, used in _USED.items():
+        parents = [slave] if parent_tag == "Slave" else slave.findall(parent_tag)
+        for parent in parents:
+            unused = [el for el in parent if isinstance(el.tag, str) and el.tag not in used]
+            if parent_tag == "Mailbox":
+                for coe in parent.findall("CoE"):
+                    unused += [el for el in coe if isinstance(el.tag, str) and el.tag != "InitCmds"]
+            if unused:
+                names = ", ".join(f"<{el.tag}> (line {el.sourceline})" for el in unused)
+                cfg.note("startup.eni.unused", f"not converted from <{parent_tag}>: {names}", _loc(source, unused[0]),
+                         Severity.INFO)
 
 
 def load_tree(tree: Any, source: str, name: str = "") -> list[SlaveConfig]:
@@ -381,7 +417,14 @@ def load_tree(tree: Any, source: str, name: str = "") -> list[SlaveConfig]:
         raise InputError(f"root element is <{root.tag}>, expected <EtherCATConfig> (ENI) or <EtherCATMailbox>",
                          _loc(source, root))
     slaves = root.findall("Config/Slave")
-    return [_read_slave(s, source, i) for i, s in enumerate(slaves)]
+    configs = [_read_slave(s, source, i) for i, s in enumerate(slaves)]
+    master_parts = [el for el in root.iter() if isinstance(el.tag, str) and el.getparent() is not None
+                    and el.getparent().tag in ("EtherCATConfig", "Config") and el.tag not in ("Config", "Slave")]
+    if configs and master_parts:
+        names = ", ".join(f"<{el.tag}> (line {el.sourceline})" for el in master_parts)
+        configs[0].note("startup.eni.master", f"master-level parts not converted (the master's, not a slave's startup "
+                        f"list): {names}", _loc(source, master_parts[0]), Severity.INFO)
+    return configs
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:

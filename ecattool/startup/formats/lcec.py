@@ -140,16 +140,70 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
             _pdos(slave, cfg, source)
             dc = slave.find("dcConf")
             if dc is not None:
-                cfg.dc_assign_activate = _hex(dc, "assignActivate", source)
-                for attr in ("sync0Cycle", "sync0Shift", "sync1Cycle", "sync1Shift"):
-                    if dc.get(attr) is not None:
-                        cfg.extra[attr] = dc.get(attr)
-                cyc, shift = dc.get("sync0Cycle") or "", dc.get("sync0Shift") or ""
-                cfg.dc_cycle_ns = int(cyc) if cyc.lstrip("-").isdigit() else None
-                cfg.dc_shift_ns = int(shift) if shift.lstrip("-").isdigit() else None
+                _dc(dc, cfg, source, _app_period(master, source))
             _init_cmds(slave, cfg, source)
+            _report_unused(master, slave, cfg, source)
             out.append(cfg)
     return out
+
+
+def _app_period(master: Any, source: str) -> int | None:
+    text = (master.get("appTimePeriod") or "").strip()
+    if not text:
+        return None
+    return parse_int(text, Location(source, master.sourceline), "appTimePeriod")
+
+
+def _cycle(text: str, app_period: int | None) -> int | None:
+    """An lcec cycle: ns, or ``*N`` = N application periods (lcec's ``parseSyncCycle``)."""
+    t = text.strip()
+    if t.startswith("*") and t[1:].isdigit():
+        return int(t[1:]) * app_period if app_period else None
+    return int(t) if t.lstrip("-").isdigit() else None
+
+
+def _dc(dc: Any, cfg: SlaveConfig, source: str, app_period: int | None) -> None:
+    loc = Location(source, dc.sourceline)
+    cfg.dc_assign_activate = _hex(dc, "assignActivate", source)
+    for attr in ("sync0Cycle", "sync0Shift", "sync1Cycle", "sync1Shift"):
+        if dc.get(attr) is not None:
+            cfg.extra[attr] = dc.get(attr)
+    cfg.dc_cycle_ns = _cycle(dc.get("sync0Cycle") or "", app_period)
+    shift = dc.get("sync0Shift") or ""
+    cfg.dc_shift_ns = int(shift) if shift.lstrip("-").isdigit() else None
+    if (dc.get("sync0Cycle") or "").startswith("*") and cfg.dc_cycle_ns is None:
+        cfg.note("startup.lcec.dc", f"sync0Cycle={dc.get('sync0Cycle')!r} is a multiple of the master's "
+                 "appTimePeriod, which the file does not give: the SYNC0 cycle is unknown", loc)
+    if dc.get("sync1Cycle") is not None:
+        cfg.note("startup.lcec.sync1", f"SYNC1 (sync1Cycle={dc.get('sync1Cycle')!r}, sync1Shift="
+                 f"{dc.get('sync1Shift')!r}) is not converted: the startup model holds SYNC0 only", loc)
+
+
+#: what the reader uses; every other element or attribute is reported
+_USED_SLAVE_ATTRS = {"idx", "type", "name", "vid", "pid", "configPdos"}
+_USED_SLAVE_CHILDREN = {"sdoConfig", "syncManager", "dcConf", "initCmds"}
+_WHY = {"watchdog": "the ESC watchdog timing (divider, intervals) has no place in a startup list",
+        "idnConfig": "SoE IDN configuration of lcec is not read (TwinCAT initCmds files are)",
+        "modParam": "lcec module parameters are lcec driver settings, not startup writes"}
+
+
+def _report_unused(master: Any, slave: Any, cfg: SlaveConfig, source: str) -> None:
+    """A note for each element and attribute of the slave (and its master) that the import does not use."""
+    for name in sorted(set(slave.attrib) - _USED_SLAVE_ATTRS):
+        cfg.note("startup.lcec.unused", f"slave attribute {name}={slave.get(name)!r} is not converted",
+                 Location(source, slave.sourceline))
+    for child in slave:
+        if not isinstance(child.tag, str) or child.tag in _USED_SLAVE_CHILDREN:
+            continue
+        attrs = " ".join(f'{k}="{v}"' for k, v in child.attrib.items())
+        why = _WHY.get(child.tag, "not an lcec element this reader knows")
+        cfg.note("startup.lcec.unused", f"<{child.tag} {attrs}> is not converted: {why}",
+                 Location(source, child.sourceline))
+    extra = sorted(set(master.attrib) - {"idx", "appTimePeriod"})
+    if extra and cfg is not None and slave is master.find("slave"):
+        cfg.note("startup.lcec.master", "master attributes " + ", ".join(f"{k}={master.get(k)!r}" for k in extra)
+                 + " belong to the master, not to a slave's startup list", Location(source, master.sourceline),
+                 Severity.INFO)
 
 
 def detect(data: bytes) -> bool:

@@ -2,15 +2,19 @@
 
 pysoem calls ``slave.config_func(slave_pos)`` from ``master.config_map()`` while the slave is in PRE-OP,
 i.e. in the PS transition, so every command is written there; commands of other transitions are kept and
-marked with a comment. Distributed clocks go to ``configure_dc(master)``, to be called after ``config_map()``
-(SOEM's order: ``config_dc()`` once, then ``dc_sync`` per slave, before SAFE-OP); the ``DC`` table holds the
-``dc_sync`` arguments the ESI ``AssignActivate`` stands for. Usage::
+marked with a comment. A PDO mapping the source gives only as PDO tables (ros2 ``rpdo``/``tpdo``, lcec
+``syncManager``, ecmc entries, ENI ``ProcessData``) is programmed by the config function as IgH does it from
+its tables: the assignment and mapping objects are read, and written only where they differ.
+``install(master)`` sets ``manual_state_change`` so that ``config_map()`` does not request SAFE-OP before the
+distributed clocks run; ``to_safe_op(master)`` starts them (``config_dc()`` once, then ``dc_sync`` per slave,
+SOEM's order; the ``DC`` table holds the ``dc_sync`` arguments the ESI ``AssignActivate`` stands for) and then
+requests SAFE-OP. Usage::
 
     import pysoem, startup_pysoem
     master = pysoem.Master(); master.open("eth0"); master.config_init()
     startup_pysoem.install(master)
     master.config_map()
-    startup_pysoem.configure_dc(master)
+    startup_pysoem.to_safe_op(master)
 
 Export only.
 """
@@ -19,7 +23,8 @@ from __future__ import annotations
 
 from ecattool.errors import TargetError
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import one_line, unique_identifiers
+from ecattool.startup.formats._common import one_line, sync_plan, unique_identifiers
+from ecattool.startup.model import is_pdo_programming
 from ecattool.target.pysoem import dc_sync_args
 
 NAME = "pysoem"
@@ -30,11 +35,14 @@ DESCRIPTION = "pysoem Python module with one config_func per slave (sdo_write ca
 def export(configs: list[SlaveConfig]) -> str:
     idents = unique_identifiers(configs)
     out = ['"""pysoem startup configuration written by ecattool.', "",
-           "Call install(master) after master.config_init() and before master.config_map(),",
-           "and configure_dc(master) after master.config_map() and before requesting SAFE-OP.", '"""', "",
-           "from __future__ import annotations", ""]
+           "Call install(master) after master.config_init() and before master.config_map(), and",
+           "to_safe_op(master) after master.config_map(): it starts the distributed clocks, then requests SAFE-OP.",
+           '"""', "", "from __future__ import annotations", ""]
     if any(not cmd.expect_reply for c in configs for cmd in c.commands):
         out += ["import pysoem", ""]  # its WkcError: the write that gets no reply
+    tables = {id(c): _pdo_tables(c) for c in configs}
+    if any(tables.values()):
+        out += ["", *_PROGRAM_PDOS]
     out.append("")
     installs = []
     for i, (ident, c) in enumerate(zip(idents, configs)):
@@ -43,7 +51,11 @@ def export(configs: list[SlaveConfig]) -> str:
         product = f"0x{c.identity.product_code:08X}" if c.identity else "None"
         out.append(f"def config_{ident}(slave) -> None:")
         out.append(f'    """{one_line(c.label).replace(chr(34), chr(39))}: {len(c.commands)} startup SDO write(s)."""')
-        if not c.commands:
+        pdo_tables = tables[id(c)]
+        if pdo_tables:
+            out.append("    # the source gives the PDO mapping as tables only: program it (where the slave differs)")
+            out.append(f"    program_pdos(slave, {pdo_tables!r})")
+        elif not c.commands:
             out.append("    return None")
         for cmd in c.commands:
             note = one_line(cmd.comment)
@@ -80,8 +92,70 @@ def export(configs: list[SlaveConfig]) -> str:
     out.append('                f"expected 0x{vendor_id:08X}/0x{product_code:08X}"')
     out.append("            )")
     out.append("        slave.config_func = lambda pos, _func=func: _func(master.slaves[pos])")
-    out += ["", ""] + _dc_lines(configs)
+    out.append("    # config_map() must not request SAFE-OP: to_safe_op() does, once the distributed clocks run")
+    out.append("    master.manual_state_change = 1")
+    out += ["", ""] + _dc_lines(configs) + ["", ""] + _SAFE_OP
     return "\n".join(out) + "\n"
+
+
+def _pdo_tables(c: SlaveConfig) -> list[tuple[int, list[tuple[int, list[int]]]]]:
+    """``[(assignment object, [(PDO, [mapping entry words])])]`` for a slave whose startup list does not program
+    its PDO tables itself; empty where it does (or there are no tables)."""
+    if not c.has_pdo_info or any(is_pdo_programming(cmd.index) for cmd in c.commands):
+        return []
+    return [(0x1C10 + plan.number, [(p.index, [(e.index << 16) | (e.subindex << 8) | e.bit_len for e in p.entries])
+                                    for p in plan.pdos])
+            for plan in sync_plan(c) if not plan.mailbox and 2 <= plan.number <= 15]
+
+
+_PROGRAM_PDOS = [
+    "def _entries(slave, index):",
+    '    """The mapping words (or PDO indices) the slave holds in ``index`` (sub-index 0 = count)."""',
+    "    count = slave.sdo_read(index, 0)[0]",
+    "    width = 2 if index < 0x1600 else 4",
+    '    return [int.from_bytes(slave.sdo_read(index, k)[:width], "little") for k in range(1, count + 1)]',
+    "",
+    "",
+    "def program_pdos(slave, tables) -> None:",
+    '    """Assign and map the PDOs of ``tables`` as IgH does from its PDO tables: only what differs is written',
+    "    (a fixed PDO that already holds the mapping is left alone; one that differs aborts with its SdoError).",
+    '    """',
+    "    for assign, pdos in tables:",
+    "        wanted = [index for index, _ in pdos]",
+    "        differs = [(index, words) for index, words in pdos if _entries(slave, index) != words]",
+    "        if _entries(slave, assign) == wanted and not differs:",
+    "            continue",
+    "        slave.sdo_write(assign, 0, bytes(1))",
+    "        for index, words in differs:",
+    "            slave.sdo_write(index, 0, bytes(1))",
+    "            for k, word in enumerate(words, 1):",
+    '                slave.sdo_write(index, k, word.to_bytes(4, "little"))',
+    "            slave.sdo_write(index, 0, bytes([len(words)]))",
+    "        for k, index in enumerate(wanted, 1):",
+    '            slave.sdo_write(assign, k, index.to_bytes(2, "little"))',
+    "        slave.sdo_write(assign, 0, bytes([len(wanted)]))",
+    "",
+]
+
+_SAFE_OP = [
+    "#: pysoem.SAFEOP_STATE (SOEM's EC_STATE_SAFE_OP)",
+    "SAFEOP_STATE = 4",
+    "",
+    "",
+    "def to_safe_op(master, sync0_cycle_ns=None, timeout_us=2_000_000) -> None:",
+    '    """After master.config_map(): start the distributed clocks (configure_dc), then request SAFE-OP and wait.',
+    "",
+    "    install() set manual_state_change, so config_map() did not request SAFE-OP before SYNC0 ran (a drive",
+    "    that needs SYNC0 refuses SAFE-OP without it).",
+    '    """',
+    "    configure_dc(master, sync0_cycle_ns)",
+    "    for slave in master.slaves:",
+    "        slave.state = SAFEOP_STATE",
+    "        slave.write_state()",
+    "    for position, slave in enumerate(master.slaves):",
+    "        if slave.state_check(SAFEOP_STATE, timeout_us) != SAFEOP_STATE:",
+    '            raise RuntimeError(f"slave {position} did not reach SAFE-OP (AL status code 0x{slave.al_status:04X})")',
+]
 
 
 def _dc_lines(configs: list[SlaveConfig]) -> list[str]:

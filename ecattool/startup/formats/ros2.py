@@ -168,10 +168,30 @@ def export(configs: list[SlaveConfig]) -> str:
         if pdos:
             lines.append(f"{key}:")
             lines += _pdo_lines(c, pdos)
-    if "sm" in c.extra:
-        lines.append("sm:")
-        lines += ["  - " + _flow(list(s.items())) for s in c.extra["sm"]]
+    sms = c.extra.get("sm") if "sm" in c.extra else _sm_section(c)
+    if sms:
+        lines.append("sm:  # Sync Manager")
+        lines += ["  - " + _flow(list(s.items())) for s in sms]
     return "\n".join(lines) + "\n"
+
+
+def _sm_section(c: SlaveConfig) -> list[dict[str, Any]]:
+    """The driver's ``sm`` entries where the source assigns the PDOs to other sync managers than its default
+    (SM2 rpdo, SM3 tpdo) or says how their watchdogs are set; nothing where the default holds."""
+    from ecattool.startup.formats._common import sync_plan
+
+    plans = [p for p in sync_plan(c) if not p.mailbox and p.pdos]
+    default = all(p.number == (2 if p.output else 3) and p.watchdog is None for p in plans)
+    if default or len({p.output for p in plans}) != len(plans):  # the driver puts all rpdo (tpdo) on one SM
+        return []
+    out = []
+    for p in plans:
+        entry: dict[str, Any] = {"index": p.number, "type": "output" if p.output else "input",
+                                 "pdo": "rpdo" if p.output else "tpdo"}
+        if p.watchdog is not None:
+            entry["watchdog"] = "enable" if p.watchdog else "disable"
+        out.append(entry)
+    return out
 
 
 # --- reading -----------------------------------------------------------------------------------------
