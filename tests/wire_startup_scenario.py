@@ -37,7 +37,7 @@ def run_module(project: str, module_path: str) -> dict[str, Any]:
         out["found"] = master.config_init()
         module.install(master)
         master.config_map()
-        module.configure_dc(master)
+        module.to_safe_op(master)  # starts the distributed clocks, then requests SAFE-OP
         out["safeop"] = master.state_check(pysoem.SAFEOP_STATE, 2_000_000) == pysoem.SAFEOP_STATE
         # every value the module wrote, as the drive holds it in SAFE-OP (the last write of each
         # entry; in OP the outputs would overwrite the objects mapped to the RxPDOs)
