@@ -53,7 +53,7 @@ def facts(d, as_record=frozenset()):
         "pdos": [(p.direction, p.index, p.name, p.sm, p.fixed, p.mandatory, p.excludes,
                   [(e.index, e.subindex, e.bit_len, e.name, e.data_type) for e in p.entries])
                  for p in (*d.rx_pdos, *d.tx_pdos)],
-        "mailbox": (sorted(mb.protocols), mb.coe, mb.data_link_layer,
+        "mailbox": None if mb is None else (sorted(mb.protocols), mb.coe, mb.data_link_layer,
                     [(c.protocol, c.transitions, c.index, c.subindex, c.data, c.comment, c.fixed, c.complete_access)
                      for c in mb.init_cmds]),
         "objects": {o.index: (o.name, "RECORD" if o.index in as_record else o.object_code.value,
@@ -123,3 +123,48 @@ def test_cli_export_to_stdout_and_errors(capsys, tmp_path):
         code, stdout, err = run(capsys, "esi", "export", *args, "-o", str(out))
         assert code == 1 and stdout == "" and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert out.read_bytes() == b"before" and sorted(p.name for p in tmp_path.iterdir()) == ["x.xml"]
+
+
+#: vendor files re-exported: (file, facts that differ from the source and why)
+VENDOR_FILES = {
+    "esi/elmo_Elmo_ECAT_00010420_V11.xml": {},
+    "esi/copley_XE2_4.60.xml": {},  # octet-string blobs (arrays of records), enums, Eeprom
+    "esi/inovance_SV660_EOE_1Axis_V9.12.xml": {"objects": "2002h.6 MinValue -3 is no UINT value: not written"},
+    "esi/synapticon_Somanet_CiA402-single.xml": {},  # ARRAYs with sub-index 0 only (1C10h, 1C11h)
+    "esi/weidmueller_UR20_FBC.xml": {},  # a STRING default padded with NULs (DefaultData, byte-exact)
+    "esi/weidmueller_UR20_FBC_from_IgH.xml": {"group": "no group in the IgH file: 'Devices'",
+                                              "physics": "no Physics in the IgH file (the schema requires it): YY"},
+    "eds/technosoft_iPOS.D.v1.04.eds": {},
+}
+
+
+@pytest.mark.parametrize("path", sorted(VENDOR_FILES))
+def test_vendor_devices_and_an_eds_export_to_a_valid_esi_that_reads_back(schemas, path):
+    from tests.conftest import corpus_path
+
+    doc = esi.load(corpus_path(*path.split("/")))
+    device = doc.devices[0]
+    data = device_to_esi(device, vendor_name=doc.vendor_name)
+    parsed = etree.fromstring(data)
+    for version, schema in schemas.items():
+        assert schema.validate(parsed), f"{version}: {schema.error_log.last_error}"
+    back = esi.load_bytes(data, "x.xml")
+    assert back.warnings == []
+    source, read = facts(device), facts(back.devices[0])
+    assert {k for k in source if source[k] != read[k]} == set(VENDOR_FILES[path])
+
+
+def test_cli_export_of_an_eds_and_option_misuse(capsys, tmp_path):
+    from tests.conftest import corpus_path
+
+    eds = corpus_path("eds", "technosoft_iPOS.D.v1.04.eds")
+    out = tmp_path / "ipos.xml"
+    code, _, err = run(capsys, "esi", "export", str(eds), "-o", str(out))
+    assert code == 0, err
+    assert facts(esi.load(out).devices[0]) == facts(esi.load(eds).devices[0])
+    code, _, err = run(capsys, "esi", "export", str(eds), "--revision", "F515K", "-o", str(tmp_path / "a.xml"))
+    assert code == 2 and "--device" in err and not (tmp_path / "a.xml").exists()
+    code, _, err = run(capsys, "esi", "export", "hdt", "--device", "0", "-o", str(tmp_path / "b.xml"))
+    assert code == 2 and not (tmp_path / "b.xml").exists()
+    code, _, err = run(capsys, "esi", "export", str(out), "-o", str(out))  # never over its input
+    assert code == 1 and "input" in err

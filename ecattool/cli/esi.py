@@ -331,20 +331,38 @@ Examples:
   ecattool esi export technosoft-ipos --product ipos4808-bx-cat --revision F515I -o ipos4808.xml
   ecattool esi export controltechniques --product digitax-st --revision 01.02.00 -o digitax.xml
   ecattool esi export hdt --product dgfox -o - | ecattool esi devices -
+  ecattool esi export technosoft_iPOS.D.v1.04.eds -o ipos_from_eds.xml
 
 \b
-The ESI validates against the ETG.2000 schemas v1.14 and v1.17 and reads back to the same device model
-(docs/esi.md, "Writing an ESI"); `ecattool sii build ipos.xml -o ipos.bin` makes its EEPROM image.""")
-@click.argument("profile")
+SOURCE is a built-in profile name, or a device file (a CANopen EDS/DCF, or an ESI with --device) when a
+file of that name exists. The ESI validates against the ETG.2000 schemas v1.14 and v1.17 and reads back to
+the same device model (docs/esi.md, "Writing an ESI"); `ecattool sii build ipos.xml -o ipos.bin` makes its
+EEPROM image.""")
+@click.argument("source", metavar="SOURCE")
 @click.option("--product", help="Model of the family (ecattool sim profiles lists them; default the first).")
 @click.option("--revision", help="Firmware revision: Technosoft F515K/0x3531354B, Control Techniques 01.02.00.")
+@click.option("--device", "selector", help="Device of a SOURCE file with several: type name, product[:revision] "
+              "or list index.")
 @output_option(required=True)
-def export_cmd(profile: str, product: str | None, revision: str | None, output: str) -> None:
-    """Write an ESI file for a built-in drive family (PROFILE: technosoft-ipos, hdt, controltechniques)."""
+def export_cmd(source: str, product: str | None, revision: str | None, selector: str | None, output: str) -> None:
+    """Write an ESI file for a built-in drive family (technosoft-ipos, hdt, controltechniques) or an EDS."""
+    import os
+
     from ecattool import profiles
     from ecattool.esi.export import device_to_esi
 
-    device = profiles.load(profile, product=product, revision=revision)
+    if os.path.isfile(source):
+        if product or revision:
+            raise click.UsageError("--product/--revision choose a built-in profile's model; for a file use --device")
+        from ecattool.esi import load, select
+
+        doc = load(source, lazy=True)
+        device = select(doc, selector)
+        write_output(output, device_to_esi(device, vendor_name=doc.vendor_name), (source,))
+        return
+    if selector:
+        raise click.UsageError(f"--device selects a device of a file, and there is no file {source!r}")
+    device = profiles.load(source, product=product, revision=revision)
     family = profiles.family_of(device)
     vendor = next((i.vendor_name for i in profiles.list_profiles() if i.name == family), "")
     write_output(output, device_to_esi(device, vendor_name=vendor))

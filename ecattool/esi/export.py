@@ -10,18 +10,20 @@ what ESI cannot say (docs/esi.md, "Writing an ESI"):
 - entry comments and units, ``Entry.category`` values other than ``m``/``o``/``c`` (the Control Techniques
   "slow" mark: the family rules carry it by vendor id), per-object source locations and ``Device.extra`` are
   not written; access ``const`` is written ``ro``; bit offsets inside records are laid out here;
-- a VAR object's entry takes the object's name.
+- a VAR object's entry takes the object's name; a device without ``Physics`` (which the schema requires) is
+  written ``YY``; characters XML cannot hold are dropped from texts.
 """
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from lxml import etree
 
 from ecattool.esi.model import Device, Pdo
 from ecattool.od.model import MAILBOX_STATES, EcState, Entry, ObjectCode, OdObject
-from ecattool.od.types import Kind
+from ecattool.od.types import BY_CODE, Kind, lookup
 
 #: per-state access → the ESI Read/WriteRestrictions value
 _RESTRICTIONS = {
@@ -45,11 +47,36 @@ def _bool(value: bool) -> str:
     return "true" if value else "false"
 
 
+#: characters XML 1.0 cannot hold (a vendor name with a control character, read from another ESI)
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff]")
+
+
 def _sub(parent: Any, tag: str, text: str | None = None, **attrs: str) -> Any:
-    el = etree.SubElement(parent, tag, {k: v for k, v in attrs.items()})
+    el = etree.SubElement(parent, tag, {k: _NOT_XML.sub("", v) for k, v in attrs.items()})
     if text is not None:
-        el.text = text
+        el.text = _NOT_XML.sub("", text)
     return el
+
+
+_UNIT_BITS = {Kind.STRING: 8, Kind.UNICODE: 16, Kind.OCTETS: 8}
+_SIZED = {Kind.STRING: "STRING", Kind.UNICODE: "UNICODE_STRING", Kind.OCTETS: "OCTET_STRING"}
+
+
+def _type_name(entry: Entry) -> str:
+    """A type name the reader resolves to the entry's type: the entry's own name where it is a standard one
+    (``UDINT``, ``UNSIGNED32``, ``BIT2``), ``STRING(n)``/``OCTET_STRING(n)`` for sized strings and octet
+    blobs, else the standard name of its type (a vendor alias such as ``DT0800`` says nothing by itself here);
+    an entry of unknown type keeps its name."""
+    dt = entry.datatype
+    name = entry.type_name or (dt.name if dt is not None else f"BIT{entry.bit_size}")
+    if dt is None:
+        return name
+    if dt.kind in _SIZED and dt.code != 0x000F:  # DOMAIN keeps its name: its size is the object's
+        return f"{_SIZED[dt.kind]}({entry.bit_size // _UNIT_BITS[dt.kind]})"
+    own = lookup(name)
+    if own is not None and (own.code, own.kind, own.bits) == (dt.code, dt.kind, dt.bits):
+        return name
+    return BY_CODE[dt.code].name if dt.code in BY_CODE else name
 
 
 class _Types:
@@ -60,13 +87,8 @@ class _Types:
         self.parent = etree.Element("DataTypes")
 
     def base(self, entry: Entry) -> str:
-        """The declared type of one entry: its own type name, ``STRING(n)`` for strings, an enum type for an
-        entry with value names."""
-        dt = entry.datatype
-        name = entry.type_name or (dt.name if dt is not None else f"BIT{entry.bit_size}")
-        if dt is not None and dt.kind in (Kind.STRING, Kind.UNICODE, Kind.OCTETS) and dt.bits is None:
-            chars = entry.bit_size // (16 if dt.kind is Kind.UNICODE else 8)
-            name = f"{dt.name}({chars})"
+        """The declared type of one entry (see :func:`_type_name`), declared on first use."""
+        name = _type_name(entry)
         if name not in self.declared:
             el = _sub(self.parent, "DataType")
             _sub(el, "Name", name)
@@ -121,8 +143,10 @@ def _values(parent: Any, entry: Entry) -> None:
     so floats and every integer size read back exactly)."""
     dt = entry.datatype
     if dt is not None and dt.kind is Kind.STRING and entry.default is not None:
-        _sub(parent, "DefaultString", entry.default.decode("latin-1"))
-        return
+        text = entry.default.decode("latin-1")
+        if not _NOT_XML.search(text):  # else (NUL padding …) as DefaultData, byte-exact
+            _sub(parent, "DefaultString", text)
+            return
     for tag, value in (("MinData", entry.minimum), ("MaxData", entry.maximum)):
         if value is None or dt is None or not dt.is_numeric:
             continue
@@ -140,8 +164,10 @@ def _uniform_array(obj: OdObject) -> bool:
     if obj.object_code is not ObjectCode.ARRAY or 0 not in obj.entries:
         return False
     elements = [e for e in obj if e.subindex > 0]
-    if not elements or [e.subindex for e in elements] != list(range(1, len(elements) + 1)):
+    if [e.subindex for e in elements] != list(range(1, len(elements) + 1)):
         return False
+    if not elements:
+        return True  # sub-index 0 only (an SM assignment with no PDO): ArrayInfo with no elements
     first = elements[0]
     key = (first.type_name, first.datatype, first.bit_size, first.access, first.pdo_mapping, first.enum,
            first.category, first.backup, first.setting)
@@ -163,15 +189,15 @@ def _record_type(types: _Types, obj: OdObject) -> tuple[str, int]:
     entries = list(obj)
     if _uniform_array(obj):
         sub0, elements = entries[0], entries[1:]
-        item_type = types.of(elements[0], f"{name}E")
+        first = elements[0] if elements else sub0  # no elements: any type, none is used
         arr = f"{name}ARR"
-        arr_el = types.add(arr, item_type)
-        _sub(arr_el, "BitSize", str(elements[0].bit_size * len(elements)))
+        arr_el = types.add(arr, types.of(first, f"{name}E"))
+        _sub(arr_el, "BitSize", str(first.bit_size * len(elements)))
         info = _sub(arr_el, "ArrayInfo")
         _sub(info, "LBound", "1")
         _sub(info, "Elements", str(len(elements)))
         layout: list[tuple[Entry, str, str | None]] = [(sub0, types.of(sub0, f"{name}S00"), "0"),
-                                                        (elements[0], arr, None)]
+                                                        (first, arr, None)]
     else:
         layout = [(e, types.of(e, f"{name}S{e.subindex:02X}"), str(e.subindex)) for e in entries]
     for e, type_name, subidx in layout:
@@ -225,7 +251,7 @@ def _pdo(parent: Any, tag: str, pdo: Pdo) -> None:
         attrs["Sm"] = str(pdo.sm)
     el = _sub(parent, tag, **attrs)
     _sub(el, "Index", _hexdec(pdo.index))
-    _sub(el, "Name", pdo.name or f"PDO {pdo.index:04X}h")
+    _sub(el, "Name", pdo.name)
     for x in pdo.excludes:
         _sub(el, "Exclude", _hexdec(x))
     for e in pdo.entries:
@@ -313,6 +339,10 @@ def _eeprom(parent: Any, device: Device) -> None:
     _sub(el, "ConfigData", (ee.config_data or bytes(14)).hex().upper())
     if ee.bootstrap:
         _sub(el, "BootStrap", ee.bootstrap.hex().upper())
+    for cat in ee.categories:
+        c = _sub(el, "Category")
+        _sub(c, "CatNo", str(cat.cat_no))
+        _sub(c, "Data", cat.data.hex().upper())
 
 
 def device_to_esi(device: Device, *, vendor_name: str = "") -> bytes:
@@ -327,7 +357,8 @@ def device_to_esi(device: Device, *, vendor_name: str = "") -> bytes:
     g = _sub(groups, "Group")
     _sub(g, "Type", group_type)
     _sub(g, "Name", device.group_name or group_type)
-    dev = _sub(_sub(desc, "Devices"), "Device", **({"Physics": device.physics} if device.physics else {}))
+    # Physics is required; a device without one (an IgH-made ESI) gets the usual two EBUS/MII ports
+    dev = _sub(_sub(desc, "Devices"), "Device", Physics=device.physics or "YY")
     _sub(dev, "Type", device.type_name, ProductCode=_hexdec(device.product_code),
          RevisionNo=_hexdec(device.revision))
     _sub(dev, "Name", device.name or device.type_name, LcId="1033")
