@@ -120,7 +120,8 @@ def test_generic_esi_default_mapping_csp():
     drives = sim_drives(path)
     _, dr = run(path, drives)
     assert dr.ok and drives[0].internal_position == 10000
-    assert not any(s.name.startswith("startup") for s in dr.steps)  # default mapping: nothing to write
+    # default mapping: nothing to program; the one write is the ESI's init command (PS 6060h := 8)
+    assert [s.detail for s in dr.steps if s.name.startswith("startup")] == ["1 write(s) verified"]
 
 
 # --- faults ---------------------------------------------------------------------------------------------------

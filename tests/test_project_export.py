@@ -52,9 +52,10 @@ def test_explicit_dc_values_are_exported():
     assert (c.dc_assign_activate, c.dc_cycle_ns) == (0x0300, 1_000_000)
 
 
-def test_default_mapping_is_exported_without_commands():
+def test_default_mapping_is_exported_without_pdo_commands():
     (c,) = slave_configs(sample("generic_esi"))
-    assert c.commands == [] and _pdos(c.rx_pdos) and _pdos(c.tx_pdos)
+    # only the ESI's init command (Inovance: PS 6060h := 8, CSP) is sent: the default mapping needs no programming
+    assert [_key(x) for x in c.commands] == [("PS", 0x6060, 0, b"\x08", False)] and _pdos(c.rx_pdos) and _pdos(c.tx_pdos)
     assert [p.index for p in c.rx_pdos] == [0x1701] and [p.index for p in c.tx_pdos] == [0x1B01]
 
 

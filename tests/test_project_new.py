@@ -18,10 +18,11 @@ from tests.conftest import corpus_path, run
 PRODUCTS = [(p.name, prod.name) for p in profiles.list_profiles() for prod in p.products]
 #: (file, selector, flaws) of every CoE drive ESI of the corpus; Elmo's file starts with boot devices. flaws:
 #: PDO entries of the default mapping whose object the ESI's own dictionary lacks (Synapticon 607A:04 and
-#: 60FF:05 where 607Ah/60FFh are VARs; AX2000's fixed 1702h/1B03h map 606Bh/6077h, never listed)
+#: 60FF:05 where 607Ah/60FFh are VARs; AX2000's fixed 1702h/1B03h map 606Bh/6077h, never listed) and init commands
+#: the ESI's own dictionary refuses (AX2000: 6060h read-only, 60C2h:01/02 not listed)
 ESIS = [("elmo_Elmo_ECAT_00010420_V11.xml", "2", 0), ("inovance_SV660_EOE_1Axis_V9.12.xml", None, 0),
         ("ingenia_eve-xcr-e_esi.xml", None, 0), ("copley_XE2_4.60.xml", None, 0),
-        ("synapticon_Somanet_CiA402-single.xml", None, 2), ("beckhoff_AX2xxx.xml", None, 2),
+        ("synapticon_Somanet_CiA402-single.xml", None, 2), ("beckhoff_AX2xxx.xml", None, 5),
         ("etg_ETG2001_ModulesSlots_CiA402.xml", None, 0)]
 
 
@@ -33,12 +34,16 @@ def _check(capsys, path: Path, *args: str, flaws: int = 0) -> dict:
     code, _, err = run(capsys, "project", "new", *args, "-o", str(path))
     assert code == 0, err
     errors = _errors(path)
-    assert len(errors) == flaws and all("[esi-pdo-object-missing]" in e for e in errors), errors
+    # the vendor file's flaws, each at its ESI line: PDO entries its dictionary lacks, init commands it refuses
+    assert len(errors) == flaws and all("[esi-pdo-object-missing]" in e or ".xml:" in e and "[PRJ021]" in e
+                                        for e in errors), errors
     text = path.read_text()
     assert ("    # disable_rules:\n" in text) is bool(flaws)  # the skeleton points the vendor file's flaws out
+    assert ("    # esi_init_cmds:\n" in text) is any("[PRJ021]" in e for e in errors)
     if flaws:  # refused until the flaw is accepted knowingly: uncomment what the skeleton proposes
         assert not commission(path).ok
-        path.write_text(text.replace("    # disable_rules:", "    disable_rules:").replace("    #   - {rule", "      - {rule"))
+        path.write_text(text.replace("    # disable_rules:", "    disable_rules:").replace("    #   - {rule", "      - {rule")
+                        .replace("    # esi_init_cmds:", "    esi_init_cmds:").replace("    #   - {object", "      - {object"))
         assert _errors(path) == []
     report = commission(path)
     assert report.ok, [s.detail for d in report.drives for s in d.steps if not s.ok]

@@ -17,6 +17,17 @@ def json_option(f: Callable[..., Any]) -> Callable[..., Any]:
     return click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON instead of tables.")(f)
 
 
+#: revision selection policies of an ESI device selector (``ecattool.esi.select``)
+POLICIES = ("exact", "newest-not-newer", "newest")
+
+
+def policy_option(f: Callable[..., Any]) -> Callable[..., Any]:
+    """``--policy``: how an ESI device selector picks a revision when several devices match it."""
+    return click.option("--policy", type=click.Choice(POLICIES), default="exact", show_default=True,
+                        help="How the device selector picks a revision when several match: exact, "
+                             "newest-not-newer (the newest not newer than the one named) or newest.")(f)
+
+
 def output_option(required: bool = False, help: str = "Write to FILE (atomically; never over an input). '-' = stdout.") -> Callable[..., Any]:
     return click.option("-o", "--output", "output", type=click.Path(dir_okay=False, allow_dash=True), required=required, help=help)
 

@@ -8,8 +8,8 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import (console, file_output_option, json_option, output_option, print_json, table,
-                                 write_output)
+from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
+                                 table, write_output)
 from ecattool.cli.paths import InputFile
 
 _EXAMPLES = """\b
@@ -29,13 +29,14 @@ name (controlword, "modes of operation"), a raw value 0x60400010, or gap/8. A PD
 
 
 def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
-    opts = [
+    opts: list[Callable[..., Any]] = [
         click.option("--esi", type=InputFile(), help="ESI file of the device."),
         click.option("--device", "selector", help="Device in the ESI (type, product[:revision]); "
                      "without --esi: a built-in profile name."),
         click.option("--profile", help="Built-in drive family (technosoft-ipos, hdt, controltechniques)."),
         click.option("--product", help="Model of the built-in family."),
         click.option("--revision", help="Revision/firmware of the built-in family or ESI device."),
+        policy_option,
         click.option("--rx", multiple=True, help="RxPDO assignment and mapping (outputs, SM2, 1C12h)."),
         click.option("--tx", multiple=True, help="TxPDO assignment and mapping (inputs, SM3, 1C13h)."),
         click.option("--mapping", "mapping_file", type=InputFile(allow_dash=True),
@@ -51,7 +52,7 @@ def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
 
 
 def _load_device(esi: str | None, selector: str | None, profile: str | None, product: str | None,
-                 revision: str | None) -> Any:
+                 revision: str | None, policy: str = "exact") -> Any:
     if esi:
         if profile:
             raise click.UsageError("give either --esi or --profile, not both")
@@ -60,7 +61,7 @@ def _load_device(esi: str | None, selector: str | None, profile: str | None, pro
 
         sel = selector if not revision else f"{selector}:{revision}" if selector else None
         # the device as it runs (default modules in its slots, mapping objects), as lint and the simulator see it
-        return complete_generic(load_device(esi, sel))
+        return complete_generic(load_device(esi, sel, policy))
     name = profile or selector
     if not name:
         raise click.UsageError("name the device: --esi FILE [--device SEL] or --profile NAME")
@@ -111,9 +112,9 @@ def _load_config(startup_file: str, slave: int | None) -> Any:
 
 def _setup(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
            rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None = None,
-           slave: int | None = None, device: Any = None) -> tuple[Any, Any, Any]:
+           slave: int | None = None, device: Any = None, policy: str = "exact") -> tuple[Any, Any, Any]:
     """(device, mapping, master configuration or None)."""
-    device = device if device is not None else _load_device(esi, selector, profile, product, revision)
+    device = device if device is not None else _load_device(esi, selector, profile, product, revision, policy)
     if startup_file:
         if rx or tx or mapping_file:
             raise click.UsageError("give the mapping with one of --rx/--tx, --mapping or --startup")
@@ -138,7 +139,7 @@ def map_() -> None:
 @click.option("--strict", is_flag=True, help="Exit 1 on warnings too.")
 @json_option
 def check(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
-          rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
+          policy: str, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
           slave: int | None, strict: bool, as_json: bool) -> None:
     """Check a PDO mapping statically; exit 1 when an error-level finding exists."""
     from ecattool import pdo
@@ -146,7 +147,7 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
 
     from ecattool.errors import InputError
 
-    device = _load_device(esi, selector, profile, product, revision)
+    device = _load_device(esi, selector, profile, product, revision, policy)
     try:
         _, mapping, config = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file,
                                     slave, device)
@@ -181,7 +182,7 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
 @file_output_option("--svg", "svg", help="Also draw the process image as an SVG diagram into FILE (one box per "
                     "entry with object, name and byte.bit; gaps shown). Needs: pip install 'ecattool[report]'.")
 def layout(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
-           rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
+           policy: str, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
            slave: int | None, as_json: bool, output: str | None, svg: str | None) -> None:
     """Show the process image per sync manager: byte.bit offsets, sizes, names and types."""
     from ecattool import pdo
@@ -193,7 +194,8 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
         if svg == "-" and (as_json or output == "-"):
             raise click.UsageError("--svg - and the JSON layout cannot both go to stdout")
         require("jinja2")  # before any work: a missing extra is one line, not a half-done run
-    device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, slave)
+    device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, slave,
+                                policy=policy)
     lay = pdo.layout(device, mapping)
     inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
     if svg:
@@ -229,7 +231,7 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
 @json_option
 @output_option()
 def sdo(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
-        rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
+        policy: str, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
         slave: int | None, complete_access: bool, order: str, transition: str, force: bool, fmt: str | None,
         as_json: bool, output: str | None) -> None:
     """Print the SDO writes that program the mapping, in the order drives require, with exact sizes."""
@@ -237,7 +239,8 @@ def sdo(esi: str | None, selector: str | None, profile: str | None, product: str
     from ecattool.cli.common import dump_json
     from ecattool.findings import has_errors
 
-    device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, slave)
+    device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, slave,
+                                policy=policy)
     findings = pdo.check(device, mapping)
     if has_errors(findings) and not force:
         for f in findings:

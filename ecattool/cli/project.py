@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ecattool.cli.common import dump_json, output_option, write_output
+from ecattool.cli.common import dump_json, output_option, policy_option, write_output
 from ecattool.cli.paths import InputFile
 
 
@@ -48,15 +48,18 @@ def schema(output: str | None, check: str | None) -> None:
     epilog="""\b
 Examples:
   ecattool project new --profile technosoft-ipos -o machine.yaml
-  ecattool project new --esi drives/elmo.xml --select 0x00030924:1 -o machine.yaml""",
+  ecattool project new --esi drives/elmo.xml --select 0x00030924:1 -o machine.yaml
+  ecattool project new --esi beckhoff_EL1xxx.xml --select EL1008 --policy newest -o io.yaml""",
 )
 @click.option("--profile", help="Built-in drive family (technosoft-ipos, hdt, controltechniques).")
 @click.option("--product", help="Product of the family.")
 @click.option("--esi", "esi_path", help="ESI file of the drive (relative to where the project will be).")
 @click.option("--select", help="Device selector in the ESI.")
+@policy_option
 @click.option("--name", default="axis1", show_default=True, help="Name of the first drive.")
 @output_option()
-def new(profile: str | None, product: str | None, esi_path: str | None, select: str | None, name: str, output: str | None) -> None:
+def new(profile: str | None, product: str | None, esi_path: str | None, select: str | None, policy: str, name: str,
+        output: str | None) -> None:
     """Write a minimal project file for one drive that lints clean (a vendor ESI's own flaws aside, which it
     points out with a commented-out disable_rules): the device is resolved first (unknown
     profile, product, ESI or selector: exit 1), and the PP move is only proposed where the drive has mode 1."""
@@ -67,7 +70,9 @@ def new(profile: str | None, product: str | None, esi_path: str | None, select: 
     from ecattool.project.skeleton import esi_flaws, new_project, resolve
 
     base = Path(output).parent if output not in (None, "-") else Path(".")
-    device = resolve(profile, product, esi_path, select, base)
-    findings = esi_flaws(esi_path, select, base) if esi_path is not None else []
+    if profile is not None and policy != "exact":
+        raise click.UsageError("--policy selects among the revisions of an ESI device: give it with --esi")
+    device = resolve(profile, product, esi_path, select, base, policy)
+    findings = esi_flaws(esi_path, select, base, policy) if esi_path is not None else []
     write_output(output, new_project(device, name=name, profile=profile, product=product, esi=esi_path,
-                                     select=select, findings=findings))
+                                     select=select, policy=policy, findings=findings))

@@ -6,8 +6,8 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import (console, file_output_option, json_option, output_option, print_json, table,
-                                 write_output)
+from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
+                                 table, write_output)
 from ecattool.cli.paths import InputFile
 
 _FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
@@ -39,6 +39,7 @@ def _mechanics_options(f: Any) -> Any:
                      help="ESI file of the drive: object types from its dictionary, objects it lacks left out."),
         click.option("--device", "--select", "selector",
                      help="Device in the ESI (type name, product[:revision] or list index) when it has several."),
+        policy_option,
     ]
     for o in reversed(opts):
         f = o(f)
@@ -113,13 +114,13 @@ def _compute(kwargs: dict[str, Any]) -> Any:
     from ecattool.scaling import compute
 
     vl = kwargs.pop("vl")
-    esi, selector = kwargs.pop("esi"), kwargs.pop("selector")
+    esi, selector, policy = kwargs.pop("esi"), kwargs.pop("selector"), kwargs.pop("policy")
     device = None
     if esi:
         from ecattool.esi import load_device
         from ecattool.profiles import family_of
 
-        device = load_device(esi, selector)
+        device = load_device(esi, selector, policy)
         if not kwargs.get("family"):
             kwargs["family"] = family_of(device)
     spec, family, firmware, approximation = _spec(**kwargs)

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.common import console, json_option, output_option, policy_option, print_json, table, write_output
 from ecattool.cli.paths import InputFile
 
 
@@ -134,9 +134,10 @@ Script (YAML or JSON list):
 @click.option("--product", help="Model of a built-in family.")
 @click.option("--revision", help="Firmware revision of a built-in family.")
 @click.option("--device", "selector", help="Device selector when TARGET is an ESI file with several devices.")
+@policy_option
 @output_option()
 @json_option
-def run_cmd(target: str, script: str, product: str | None, revision: str | None, selector: str | None,
+def run_cmd(target: str, script: str, product: str | None, revision: str | None, selector: str | None, policy: str,
             output: str | None, as_json: bool) -> None:
     """Run SCRIPT (SDO reads/writes, state requests, cycles) on a simulated drive and print the transcript.
 
@@ -147,7 +148,7 @@ def run_cmd(target: str, script: str, product: str | None, revision: str | None,
     from ecattool.sim.script import load_script, run_script
 
     if Path(target).is_file():
-        drive = Drive.from_esi(target, selector)
+        drive = Drive.from_esi(target, selector, policy=policy)
     else:
         drive = Drive.from_profile(target, product=product, revision=revision)
     steps, locations = load_script(script)

@@ -344,6 +344,31 @@ def _hold_position(io: ProcessIo) -> None:
         io.write(0x607A, 0, io.read(0x6064, 0))
 
 
+def _zero_objects(io: ProcessIo, rd: ResolvedDrive, mode: str) -> str:
+    """Why a move failed, where the drive shows it: a PP move's profile velocity or acceleration at 0, or a
+    zero part of the position factor (``steps.zero_factor_parts``), as the drive holds them (the process image
+    for mapped outputs, else SDO)."""
+    from ecattool.project.steps import PP_PROFILE, zero_factor_parts
+
+    assert rd.device is not None
+    device = rd.device
+
+    def read(index: int, sub: int) -> int | None:
+        pos = io.out_pos.get((index, sub))
+        if device.dictionary.entry(index, sub) is None:
+            return None
+        try:
+            if pos is not None:
+                return _get_bits(bytes(io.outputs), pos.bit_offset, pos.bit_len)
+            return int.from_bytes(bytes(io.slave.sdo_upload(index, sub)), "little")
+        except EcatToolError:
+            return None
+
+    zero = [(i, s) for i, s in (PP_PROFILE if mode == "pp" else ()) if read(i, s) == 0] + zero_factor_parts(read)
+    names = [f"{i:04X}:{s:02X} ({getattr(device.dictionary.entry(i, s), 'name', '')})" for i, s in zero]
+    return f": the drive holds 0 in {', '.join(names)}, which the move needs non-zero" if names else ""
+
+
 def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     from ecattool.project.steps import MOVE_MODE_CODES, move_mode
 
@@ -358,12 +383,13 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     _set_mode(io, MOVE_MODE_CODES[mode])
     report.trace.begin_move(io, f"{mode.upper()} move of {dist} user units")
     try:
-        _run_move(io, mode, p0, dist)
+        _run_move(io, rd, mode, p0, dist)
     finally:
         report.trace.end_move(io)
     p1 = io.read(0x6064, 0)
     if p1 - p0 != dist:
-        raise _Failed(Step("move", False, f"position moved {p1 - p0} user units, commanded {dist}"))
+        raise _Failed(Step("move", False, f"position moved {p1 - p0} user units, commanded {dist}"
+                                          + _zero_objects(io, rd, mode)))
     detail = f"{mode.upper()} move of {dist} user units: position {p0} -> {p1}"
     if internal and i0 is not None:
         i1 = io.read(0x6063, 0)
@@ -379,18 +405,22 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     report.steps.append(Step("move", True, detail))
 
 
-def _run_move(io: ProcessIo, mode: str, p0: int, dist: Fraction) -> None:
+def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fraction) -> None:
     """The motion: one profile-position set-point (pp), or 100 cyclic set-points then 50 cycles (csp)."""
     target = int(p0 + dist)
     if mode == "pp":
         io.write(0x607A, 0, target)
         io.write(0x6040, 0, cia402.ENABLE_OPERATION | cia402.NEW_SETPOINT)
         if not _cycle_until(io, lambda sw: bool(sw & 0x1000), 1000):
-            raise _Failed(Step("move", False, "the drive did not acknowledge the new set-point (statusword bit 12)"))
+            raise _Failed(Step("move", False, "the drive did not acknowledge the new set-point (statusword bit 12)"
+                                              + _zero_objects(io, rd, mode)))
         io.write(0x6040, 0, cia402.ENABLE_OPERATION)
+        blocked = _zero_objects(io, rd, mode)
+        if blocked:  # it would stand still: say why now rather than after the wait for target reached
+            raise _Failed(Step("move", False, f"profile position move to {target} cannot happen{blocked}"))
         if not _cycle_until(io, lambda sw: bool(sw & 0x0400) and not sw & 0x1000, 200_000):
             raise _Failed(Step("move", False, f"profile position move to {target} did not reach its target "
-                                              "(statusword bit 10)"))
+                                              "(statusword bit 10)" + _zero_objects(io, rd, mode)))
     else:
         steps = 100
         for k in range(1, steps + 1):

@@ -71,7 +71,7 @@ def _by_revision(pool: list[_D], revision: int | None, policy: str, what: str, a
         if len(pool) == 1:
             return pool[0]
         raise SelectionError(
-            f"{what} matches {len(pool)} devices; give a revision (product:revision) or --policy newest; "
+            f"{what} matches {len(pool)} devices; give a revision (product:revision) or --policy newest (in a project file: policy: newest under device:); "
             f"candidates: {candidates_text(pool, all_devices)}")
     exact = [d for d in pool if d.revision == revision]
     if not exact:

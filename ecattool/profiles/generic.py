@@ -11,7 +11,7 @@ from __future__ import annotations
 import copy
 
 from ecattool.errors import Location
-from ecattool.esi.model import Device, Direction, Pdo
+from ecattool.esi.model import Device, Direction, InitCmd, Module, Pdo, Slot
 from ecattool.od.model import RO, Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import STRING, UDINT, UINT, USINT, DataType
 from ecattool.profiles.rules import FamilyRules
@@ -38,6 +38,17 @@ def _shift(index: int, offset: int) -> int:
     return index + offset if index >= 0x2000 else index
 
 
+def _default_modules(device: Device) -> list[tuple[int, Slot, Module]]:
+    """(slot number k, slot, its default module) of each slot that has a default module the device knows."""
+    by_ident = {m.ident: m for m in device.modules if m.ident is not None}
+    out = []
+    for k, slot in enumerate(device.slots):
+        module = by_ident.get(slot.default_module) if slot.default_module is not None else None
+        if module is not None:
+            out.append((k, slot, module))
+    return out
+
+
 def expand_default_modules(device: Device) -> tuple[list[Pdo], list[OdObject]]:
     """PDOs and objects of each slot's default module, with the slot increments applied.
 
@@ -47,11 +58,7 @@ def expand_default_modules(device: Device) -> tuple[list[Pdo], list[OdObject]]:
     """
     pdos: list[Pdo] = []
     objects: list[OdObject] = []
-    by_ident = {m.ident: m for m in device.modules if m.ident is not None}
-    for k, slot in enumerate(device.slots):
-        module = by_ident.get(slot.default_module) if slot.default_module is not None else None
-        if module is None:
-            continue
+    for k, slot, module in _default_modules(device):
         obj_off = k * (slot.slot_index_increment or 0)
         for p in (*module.rx_pdos, *module.tx_pdos):
             q = copy.deepcopy(p)
@@ -268,4 +275,23 @@ def generic_rules(device: Device) -> FamilyRules:
     )
 
 
-__all__ = ["MODE_BITS", "SM_TYPE", "complete_generic", "generic_rules", "supported_modes_of"]
+__all__ = ["MODE_BITS", "SM_TYPE", "complete_generic", "generic_rules", "init_cmds", "supported_modes_of"]
+
+
+def init_cmds(device: Device) -> list[InitCmd]:
+    """The device's mailbox init commands and those of each slot's default module, as the device runs.
+
+    Slot k (0-based) moves the index of a module command whose ``Index`` has ``DependOnSlot`` by
+    k × SlotIndexIncrement (Copley's XE2: 6060h of the axis-B module is 6860h); a device command marked
+    ``OverwrittenByModule`` gives way where a module command writes the same object (ETG.2000).
+    """
+    from_modules: list[InitCmd] = []
+    for k, slot, module in _default_modules(device):
+        for c in module.init_cmds:
+            q = copy.deepcopy(c)
+            if c.depend_on_slot:
+                q.index = _shift(c.index, k * (slot.slot_index_increment or 0))
+            from_modules.append(q)
+    own = list(device.mailbox.init_cmds) if device.mailbox is not None else []
+    written = {(c.index, c.subindex) for c in from_modules}
+    return [c for c in own if not (c.overwritten_by_module and (c.index, c.subindex) in written)] + from_modules

@@ -14,13 +14,17 @@ from ecattool.project.model import RuleOff
 from ecattool.project.resolve import ResolvedDrive, resolve_device, resolve_parameters
 from ecattool.startup.model import StartupList
 
-_RULE_ID = re.compile(r"^[A-Z]{2,5}\d{3}$")
+#: the forms of rule ids: PRJ012 and PDO011 (catalogued in :func:`rule_descriptions`), esi-pdo-object-missing
+#: (catalogued), scaling.small-pair (notes of the factor-group computation lint runs)
+_RULE_ID = re.compile(r"^(?:[A-Z]{2,5}\d{3}|esi-[a-z0-9-]+|scaling\.[a-z0-9-]+)$")
+#: families whose every rule is in :func:`rule_descriptions`: an id of theirs that is not there is a typo
+_CATALOGUED = re.compile(r"^(?:PRJ|PDO)\d{3}$")
 
 #: project-level rule catalogue (other packages document their own rules)
 PROJECT_RULES: dict[str, str] = {
     "PRJ001": "the project file does not match the project schema",
     "PRJ002": "a file named in the project does not exist",
-    "PRJ003": "a disabled rule id is not a known rule id form",
+    "PRJ003": "a disabled rule id is not a rule lint reports",
     "PRJ004": "a rule is disabled without a reason",
     "PRJ005": "the device of a drive cannot be resolved (ESI error, selector or profile unknown)",
     "PRJ010": "a parameter names an object that does not exist",
@@ -34,6 +38,9 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ018": "the commissioning move needs an object the drive does not have (6060h, 607Ah, 6064h)",
     "PRJ019": "the commissioning PP move runs at a profile velocity or acceleration of 0 (not set, no default)",
     "PRJ020": "two drives share a bus position",
+    "PRJ021": "an init command of the ESI writes an object the ESI's dictionary says the drive refuses",
+    "PRJ022": "an esi_init_cmds entry matches none of the ESI's init commands",
+    "PRJ023": "a zero part of the position factor (608Fh, 6091h, 6092h) makes positions impossible to convert",
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
     "PRJ032": "a .sw image was made for another Technosoft product or firmware than the drive's",
@@ -66,10 +73,17 @@ class ProjectResult:
 def _disable(findings: list[Finding], offs: list[RuleOff], lp: LoadedProject, path: tuple[str | int, ...]) -> list[Finding]:
     out: list[Finding] = []
     disabled = set()
+    known = rule_descriptions()
     for k, off in enumerate(offs):
         loc = lp.yaml.locate((*path, k, "rule"))
-        if not _RULE_ID.match(off.rule):
-            out.append(Finding("PRJ003", Severity.WARNING, f"{off.rule!r} is not a rule id (like PDO011)", loc))
+        if off.rule in known:
+            pass
+        elif not _RULE_ID.match(off.rule):
+            out.append(Finding("PRJ003", Severity.WARNING, f"{off.rule!r} is not a rule id (like PDO011, "
+                                                           "esi-pdo-object-missing or scaling.small-pair)", loc))
+        elif _CATALOGUED.match(off.rule):
+            out.append(Finding("PRJ003", Severity.WARNING, f"lint has no rule {off.rule} (the rules: "
+                                                           "docs/project.md, docs/pdo-mapping.md)", loc))
         if not off.reason.strip():
             out.append(Finding("PRJ004", Severity.ERROR, f"rule {off.rule} is disabled without a reason",
                                lp.yaml.locate((*path, k, "reason"))))
@@ -91,11 +105,16 @@ def build_drive(lp: LoadedProject, i: int) -> ResolvedDrive:
                           product_code=rd.device.product_code, revision=rd.device.revision)
     params = resolve_parameters(lp, i, rd)
     startup.extend(steps.pdo_commands(lp, i, rd, params))
+    if drive.device.esi is not None:  # the ESI's init commands, as TwinCAT sends them: after the PDO assignment
+        from ecattool.project.initcmds import resolve_esi_init
+
+        startup.extend(resolve_esi_init(lp, i, rd, params))
     startup.extend(steps.scaling_commands(lp, i, rd))
     startup.extend(params)
     rd.startup = startup
     steps.check_sw(lp, i, rd)
     steps.check_move(lp, i, rd)
+    steps.check_factor_defaults(lp, i, rd)
     steps.check_interpolation_period(lp, i, rd)
     steps.check_dc(lp, i, rd)
     if rd.device.source and not rd.device.source.startswith("profile:"):

@@ -98,6 +98,32 @@ class Parameter(_Strict):
         return t
 
 
+class EsiInitCmd(_Strict):
+    """A change to one of the init commands the drive's ESI sends (``Mailbox/CoE/InitCmd``): a new value, or
+    not sent at all. ``project new`` lists the ESI's init commands; docs/project.md, "ESI init commands"."""
+
+    object: str | int = Field(description="Object the ESI's init command writes, e.g. 6060:00")
+    transition: str | None = Field(
+        default=None, description="Only the command of this transition (default: every transition it names)"
+    )
+    value: int | float | str | bool | list[int] | None = Field(
+        default=None, description="Value to write instead of the ESI's (engineering form, as in parameters)"
+    )
+    skip: bool = Field(default=False, description="Do not send the command")
+    comment: str = ""
+
+    @field_validator("transition")
+    @classmethod
+    def _transition(cls, v: str | None) -> str | None:
+        return None if v is None else Parameter._transition(v)
+
+    @model_validator(mode="after")
+    def _one_change(self) -> "EsiInitCmd":
+        if (self.value is None) == (not self.skip):
+            raise ValueError("give either 'value' (the value to write instead) or 'skip: true'")
+        return self
+
+
 class DcConfig(_Strict):
     """Distributed clocks: an OpMode of the ESI by name, or explicit values."""
 
@@ -141,6 +167,9 @@ class Drive(_Strict):
         default=None, description="Mechanics and units for the factor group (see docs/scaling.md)"
     )
     parameters: list[Parameter] = Field(default_factory=list)
+    esi_init_cmds: list[EsiInitCmd] = Field(
+        default_factory=list, description="Changes to the init commands of the drive's ESI (sent before parameters)"
+    )
     sw: SwConfig | str | None = Field(
         default=None, description="Technosoft .sw image (file name or settings)"
     )

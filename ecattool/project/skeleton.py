@@ -32,7 +32,7 @@ def _scalar(text: str) -> str:
 
 
 def resolve(profile: str | None, product: str | None, esi: str | None, select: str | None,
-            base_dir: Path) -> Device:
+            base_dir: Path, policy: str = "exact") -> Device:
     """The device a skeleton is for (raises the usual located errors for unknown names and files)."""
     if profile is not None:
         from ecattool.project.cache import load_profile_cached
@@ -46,18 +46,19 @@ def resolve(profile: str | None, product: str | None, esi: str | None, select: s
         from ecattool.errors import InputError
 
         raise InputError(f"ESI file {esi!r} not found (looked in {path}; --esi is relative to the project file)")
-    return load_device_cached(path, select, "exact")
+    return load_device_cached(path, select, policy)
 
 
-def esi_flaws(esi: str, select: str | None, base_dir: Path) -> list[Finding]:
+def esi_flaws(esi: str, select: str | None, base_dir: Path, policy: str = "exact") -> list[Finding]:
     """The structural findings of the ESI device, as lint will report them."""
     from ecattool.project.cache import esi_findings_cached
 
-    return esi_findings_cached(base_dir / esi, select, "exact")
+    return esi_findings_cached(base_dir / esi, select, policy)
 
 
 def new_project(device: Device, *, name: str = "axis1", profile: str | None = None, product: str | None = None,
-                esi: str | None = None, select: str | None = None, findings: list[Finding] | None = None) -> str:
+                esi: str | None = None, select: str | None = None, policy: str = "exact",
+                findings: list[Finding] | None = None) -> str:
     """The text of a minimal project with one drive of ``device``, named as the user named it; ``findings``:
     the ESI's structural findings (:func:`esi_flaws`), pointed out where they concern the PDOs in use."""
     from ecattool import profiles
@@ -65,8 +66,13 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
     if profile is not None:
         ref = f"      profile: {_scalar(profile)}\n" + (f"      product: {_scalar(product)}\n" if product else "")
     else:
-        ref = f"      esi: {_scalar(str(esi))}\n" + (f"      select: {json.dumps(select)}\n" if select else "")
-    body = _dc(device) + _motion(device, profiles.rules_for(device)) + _accept_flaws(device, findings or [])
+        ref = (f"      esi: {_scalar(str(esi))}\n" + (f"      select: {json.dumps(select)}\n" if select else "")
+               + (f"      policy: {policy}\n" if policy != "exact" else ""))
+    motion = _motion(device, profiles.rules_for(device))
+    # the skeleton's parameters are written in PS: an ESI command for the same object gives way to them
+    replaced = {(int(a, 16), int(b, 16)) for a, b in re.findall(r'\{object: "([0-9A-F]{4}):([0-9A-F]{2})"', motion)}
+    body = (_dc(device) + (_esi_init(device, replaced) if esi is not None else "") + motion
+            + _accept_flaws(device, findings or []))
     return ("# ecattool project file (format 1). Docs: docs/project.md\n"
             "ecattool: 1\n"
             "name: my-machine\n"
@@ -74,6 +80,30 @@ def new_project(device: Device, *, name: str = "axis1", profile: str | None = No
             f"  - name: {_scalar(name)}\n"
             "    device:\n"
             f"{ref}{body}")
+
+
+def _esi_init(device: Device, replaced: set[tuple[int, int]]) -> str:
+    """The ESI's init commands as comments (commission sends them; lint checks them), and a commented-out
+    ``esi_init_cmds`` that skips those the ESI's own dictionary says the drive refuses (PRJ021)."""
+    from ecattool.project.initcmds import esi_startup, refusal, skip_hint
+
+    cmds = esi_startup(device)
+    if not cmds:
+        return ""
+    lines = ["    # The ESI's init commands, sent after the PDO assignment and before the parameters (as TwinCAT does):"]
+    for c in cmds:
+        where = f", ESI line {c.source.line}" if c.source is not None and c.source.line else ""
+        value = f"hex:{c.data.hex()}" if c.value is None else c.value
+        gone = "; the PS parameter below replaces it" if c.transition == "PS" and (c.index, c.subindex) in replaced else ""
+        lines.append(f"    #   {c.transition} {c.index:04X}:{c.subindex:02X} = {value} ({_comment(c.comment)}{where}{gone})")
+    lines.append('    # Change one with esi_init_cmds: [{object: "6060:00", value: 1}], or leave it out with skip: true.')
+    refused = [c for c in cmds if refusal(device, c) is not None]
+    if refused:
+        lines += ["    # The ESI's own dictionary says the drive refuses some of them (PRJ021; `ecattool lint` says why).",
+                  "    # If the drive refuses them too, skip them:",
+                  "    # esi_init_cmds:"]
+        lines += [f"    #   - {skip_hint(c)}" for c in refused]
+    return "\n".join(lines) + "\n"
 
 
 def dc_only_mode(device: Device) -> str | None:
@@ -153,8 +183,48 @@ def _motion(device: Device, rules: FamilyRules) -> str:
             continue
         if e.default_zero_or_unknown:
             params.append(f'{{object: "{index:04X}:00", value: {value}, comment: {_scalar(comment)}}}')
+    factor, asked = _factor_parts(device, rx, rules)
+    params += factor
     lines = "".join(f"      - {p}\n" for p in params)
-    return (f"    parameters:\n{lines}" if lines else "") + "    move: {distance: 1}\n"
+    return (f"    parameters:\n{lines}" if lines else "") + asked + "    move: {distance: 1}\n"
+
+
+#: the parts of the position factor a skeleton can set: revolution counts, 1 (a pair of 1:1 is the CiA-402
+#: default); the encoder increments (608Fh:01) and the feed (6092h:01) are the machine's, so it asks for them
+_ONE = {(0x608F, 2), (0x6091, 1), (0x6091, 2), (0x6092, 2)}
+
+
+def _factor_parts(device: Device, rx: set[tuple[int, int]], rules: FamilyRules) -> tuple[list[str], str]:
+    """Parameters for the zero parts of the position factor the ESI's defaults leave (lint PRJ023) that the
+    skeleton can set, and a comment asking for those it cannot."""
+    from ecattool.errors import EcatToolError
+    from ecattool.project.steps import zero_factor_parts
+
+    if rules.family not in ("generic", "controltechniques"):
+        return [], ""
+
+    def read(index: int, sub: int) -> int | None:
+        e = device.dictionary.entry(index, sub)
+        if e is None or not e.access.writable() or (index, sub) in rx or not e.default or e.datatype is None:
+            return None
+        try:
+            return int(e.decode(e.default))
+        except (EcatToolError, TypeError, ValueError):
+            return None
+
+    params, asked = [], ""
+    for index, sub in zero_factor_parts(read):
+        e = device.dictionary.entry(index, sub)
+        assert e is not None
+        line = e.location.line if e.location is not None else None
+        if (index, sub) in _ONE:
+            params.append(f'{{object: "{index:04X}:{sub:02X}", value: 1, comment: '
+                          f'{_scalar(f"{_comment(e.name)}: the ESI leaves 0 (line {line}), the factor would be 0")}}}')
+        else:
+            asked += (f"    # {index:04X}:{sub:02X} ({_comment(e.name)}) is 0 in the ESI (line {line}): the drive cannot convert\n"
+                      f"    # positions. Add your drive's value under parameters:, e.g. {{object: \"{index:04X}:{sub:02X}\", "
+                      "value: 4096}, or a scaling: section.\n")
+    return params, asked
 
 
 def _comment(text: str) -> str:

@@ -5,6 +5,7 @@ Each step adds located findings to the ResolvedDrive and returns the startup com
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from ecattool.errors import EcatToolError, Location
@@ -132,6 +133,8 @@ def check_sw_identification(rd: ResolvedDrive, file: str, loc: Location | None) 
 
 #: modes of operation (6060h) of the commissioning move's modes
 MOVE_MODE_CODES = {"pp": 1, "csp": 8}
+#: what a profile position move runs at: profile velocity and acceleration (lint PRJ019)
+PP_PROFILE = ((0x6081, 0), (0x6083, 0))
 
 
 def move_mode(rd: ResolvedDrive) -> str | None:
@@ -147,14 +150,17 @@ def move_mode(rd: ResolvedDrive) -> str | None:
 
 
 def _modes_run(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[tuple[int, Any]]:
-    """The modes of operation the drive will run, with where the project sets them: the 6060h parameters
-    and the commissioning move (which commission sets through the PDO or by SDO)."""
+    """The modes of operation the drive will run, with where the project sets them: the last 6060h write of
+    the startup list (a parameter after the ESI's init command wins: the Elmo ESI's PS 6060h := 8 does not
+    make a PP project a CSP one) and the commissioning move (which commission sets through the PDO or by SDO)."""
+    writes = [c for c in rd.startup if (c.index, c.subindex) == (0x6060, 0) and len(c.data) == 1]
     out: list[tuple[int, Any]] = [(int.from_bytes(c.data, "little", signed=True), c.source or lp.drive_location(i))
-                                  for c in rd.startup if (c.index, c.subindex) == (0x6060, 0) and len(c.data) == 1]
+                                  for c in writes[-1:]]
     mode = move_mode(rd) if rd.drive.enable else None
     if mode is not None:
         out.append((MOVE_MODE_CODES[mode], lp.drive_location(i, "move")))
-    return out
+    here = lp.drive_location(i).file  # what the project sets first: a finding points where the user can change it
+    return sorted(out, key=lambda m: getattr(m[1], "file", here) != here)
 
 
 def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
@@ -188,9 +194,75 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         if e is None or (index, 0) in written or (index, 0) in mapped:
             continue
         if e.default_zero_or_unknown:
+            # where the vendor ESI documents the 0, point at its line: that default is what blocks the move
+            esi_zero = e.default is not None and rd.drive.device.esi is not None and e.location is not None \
+                and bool(e.location.line)
             rd.warning("PRJ019", f"the pp move runs at {name} {index:04X}h, which the project does not set and "
                                  f"{rd.device.type_name} leaves at 0 (or does not document): the drive would not "
-                                 f"move; add a parameter {index:04X}:00", loc)
+                                 f"move; add a parameter {index:04X}:00", e.location if esi_zero else loc)
+
+
+def zero_factor_parts(read: Callable[[int, int], int | None]) -> list[tuple[int, int]]:
+    """The parts of the CiA-402 position factor 608Fh (encoder increments / motor revolutions) x 6091h (gear)
+    / 6092h (feed) that make it 0 or undefined: a 0 beside a non-zero partner (``read(index, sub)``: the value,
+    None where unknown). Used by lint (PRJ023), ``project new`` and commission's report of a failed move. 0:0
+    reads as not configured (the simulator takes it as 1:1), so it is not reported (docs/decisions.md, "ESI init
+    commands and defaults that break a drive")."""
+    out = []
+    for index in (0x608F, 0x6091, 0x6092):
+        a, b = read(index, 1), read(index, 2)
+        if a is not None and b is not None and (a == 0) != (b == 0):
+            out.append((index, 1 if a == 0 else 2))
+    return out
+
+
+def _effective(rd: ResolvedDrive, index: int, sub: int) -> tuple[int | None, Any]:
+    """The value an object holds after the PRE-OP startup writes (IP, PS), else its ESI default; with where
+    it comes from (the write's location, else the dictionary entry's: the ESI's line)."""
+    assert rd.device is not None
+    entry = rd.device.dictionary.entry(index, sub)
+    value: int | None = None
+    where = entry.location if entry is not None else None
+    if entry is not None and entry.default is not None and entry.datatype is not None and entry.datatype.bits:
+        try:
+            value = int(entry.decode(entry.default))
+        except (EcatToolError, TypeError, ValueError):
+            value = None
+    for c in rd.startup:
+        if (c.index, c.subindex) == (index, sub) and c.transition in ("IP", "PS") and not c.complete_access:
+            value, where = int.from_bytes(c.data, "little"), c.source
+    return value, where
+
+
+def check_factor_defaults(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """PRJ023: a zero part of the position factor (608Fh x 6091h / 6092h) that the ESI's default leaves (or the
+    startup list writes): the drive cannot convert positions in user units. An error where the drive moves in
+    commissioning, a warning otherwise; at the ESI's line (or the write's)."""
+    assert rd.device is not None
+    if getattr(rd.rules, "family", "generic") not in ("generic", "controltechniques"):
+        return  # Technosoft and HDT scale through 6093h (from their setup or their own factors)
+    found: dict[tuple[int, int], Any] = {}
+
+    def read(index: int, sub: int) -> int | None:
+        entry = rd.device.dictionary.entry(index, sub) if rd.device is not None else None
+        if entry is None or not entry.access.writable():
+            return None  # a part the drive computes itself (Control Techniques 608Fh) is its business
+        value, where = _effective(rd, index, sub)
+        found[(index, sub)] = where
+        return value
+
+    moves = move_mode(rd) is not None and rd.drive.enable
+    for index, sub in zero_factor_parts(read):
+        entry = rd.device.dictionary.entry(index, sub)
+        assert entry is not None
+        other = 2 if sub == 1 else 1
+        finding = Finding("PRJ023", Severity.ERROR if moves else Severity.WARNING,
+                          f"{index:04X}:{sub:02X} ({entry.name}) is 0 beside a non-zero {index:04X}:{other:02X}: the "
+                          f"position factor 608Fh x 6091h / 6092h is 0 or undefined, so {rd.device.type_name} cannot "
+                          f"convert positions{' and the move cannot happen' if moves else ''}; write the drive's value "
+                          f"with a parameter {index:04X}:{sub:02X} (or describe the mechanics in scaling:)",
+                          found.get((index, sub)) or lp.drive_location(i, "device"))
+        rd.findings.append(finding)
 
 
 def check_interpolation_period(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:

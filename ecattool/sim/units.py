@@ -31,10 +31,19 @@ Reader = Callable[[int, int], int | None]
 
 
 def _ratio(read: Reader, index: int, default: Fraction = Fraction(1)) -> Fraction:
+    """num/den of a factor pair; ``default`` where the drive lacks it or both parts are 0 (not configured); a
+    0 denominator beside a non-zero numerator makes the factor 0, as a 0 numerator does (no motion)."""
     num, den = read(index, 1), read(index, 2)
-    if num is None or den is None or den == 0:
+    if num is None or den is None or (num == 0 and den == 0):
         return default
+    if den == 0:
+        return Fraction(0)
     return Fraction(num, den)
+
+
+def _div(a: Fraction, b: Fraction) -> Fraction:
+    """a / b, 0 where b is 0 (a factor pair with a 0 part: nothing converts)."""
+    return a / b if b else Fraction(0)
 
 
 class Units:
@@ -55,16 +64,16 @@ class Units:
         enc = _ratio(self.read, 0x608F)
         gear = _ratio(self.read, 0x6091)
         feed = _ratio(self.read, 0x6092)
-        return enc * gear / feed if feed else enc * gear
+        return enc * gear / feed if feed else Fraction(0)  # a feed of 0 per revolution: no position converts
 
     def velocity_factor(self) -> Fraction:
         """Position units per second per velocity unit: 6096h is velocity units per (position unit/s),
         1 where the drive has no 6096h (Control Techniques, Inovance)."""
-        return self.position_factor() / _ratio(self.read, 0x6096)
+        return _div(self.position_factor(), _ratio(self.read, 0x6096))
 
     def acceleration_factor(self) -> Fraction:
         """6097h is acceleration units per (velocity unit/s), 1 where the drive has none."""
-        return self.velocity_factor() / _ratio(self.read, 0x6097)
+        return _div(self.velocity_factor(), _ratio(self.read, 0x6097))
 
     # --- conversions --------------------------------------------------------------------------
     def position_to_internal(self, user: int | Fraction) -> Fraction:
@@ -157,9 +166,9 @@ class TechnosoftUnits(Units):
         position (6093h) = 608F · 6091 / 6092; velocity (6094h) = position / 6096 · T · 2^16;
         acceleration (210Fh) = velocity / 6097 · T.
         """
-        position = _ratio(self.read, 0x608F) * _ratio(self.read, 0x6091) / _ratio(self.read, 0x6092)
-        velocity = position / _ratio(self.read, 0x6096) * self.slow_loop_s * 65536
-        acceleration = velocity / _ratio(self.read, 0x6097) * self.slow_loop_s
+        position = _div(_ratio(self.read, 0x608F) * _ratio(self.read, 0x6091), _ratio(self.read, 0x6092))
+        velocity = _div(position, _ratio(self.read, 0x6096)) * self.slow_loop_s * 65536
+        acceleration = _div(velocity, _ratio(self.read, 0x6097)) * self.slow_loop_s
         return {"position": position, "velocity": velocity, "acceleration": acceleration}
 
 

@@ -31,7 +31,7 @@ RX, TX = Direction.RX, Direction.TX
 @dataclass(frozen=True, slots=True)
 class Event:
     """One thing the drive did. ``kind``: sdo_upload, sdo_download, sdo_abort, sdo_timeout, state,
-    state_refused, cia402, emcy, reset, power_loss, eeprom, foe, halt, homing."""
+    state_refused, cia402, emcy, reset, power_loss, eeprom, foe, halt, homing, motion_blocked."""
 
     seq: int
     kind: str

@@ -95,10 +95,10 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         return cls(device, profiles.rules_for(device), **kw)
 
     @classmethod
-    def from_esi(cls, path: str | Path, selector: str | None = None, **kw: Any) -> "Drive":
+    def from_esi(cls, path: str | Path, selector: str | None = None, policy: str = "exact", **kw: Any) -> "Drive":
         from ecattool import esi
 
-        device = esi.load_device(path, selector)
+        device = esi.load_device(path, selector, policy)
         return cls(_complete(expand_default_modules(device)), **kw)
 
     # ------------------------------------------------------------------------------------------

@@ -43,10 +43,26 @@ class Motion(DriveCore):
                 relative = bool(cw & 0x40)
                 target = (self._read_int(0x607A, 0) or 0) - (0 if relative else self._home_offset())
                 self.cia.new_setpoint(self.units.position_to_internal(target), relative=relative)
+                self._report_blocked_motion()
             elif not cw & 0x10:
                 self.cia.setpoint_ack = False
         hh.on_controlword(self, cw, prev)
         self._refresh_inputs()
+
+    def _report_blocked_motion(self) -> None:
+        """A set-point the drive takes but cannot move to: a profile velocity or acceleration of 0, or a position
+        factor pair (608Fh, 6091h, 6092h, 6093h) with one part 0 (0:0 reads as unset, 1:1). The drive names the
+        object instead of standing still silently: emergency 6320h (parameter error) whose manufacturer bytes
+        carry the index (little-endian) and sub-index, and a ``motion_blocked`` event."""
+        blocked = [(i, 0) for i in (0x6081, 0x6083) if (i, 0) in self._entries and not self._read_int(i, 0)]
+        for index in (0x608F, 0x6091, 0x6092, 0x6093):
+            a, b = self._read_int(index, 1), self._read_int(index, 2)
+            if a is not None and b is not None and (a == 0) != (b == 0):
+                blocked.append((index, 1 if a == 0 else 2))
+        for index, sub in blocked[:1]:
+            entry = self._entries.get((index, sub))
+            self._log("motion_blocked", index=index, subindex=sub, name=entry.name if entry is not None else "")
+            self.emcy(0x6320, index.to_bytes(2, "little") + bytes([sub]))
 
     def _on_mode(self, sub: int, value: int | None) -> None:
         if not self.behaviour.mode_display_on_enable or self.cia.state is State.OPERATION_ENABLED:
