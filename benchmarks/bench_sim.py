@@ -13,9 +13,14 @@ from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
 
 
-def bench_canopen(seconds: float) -> float:
+@contextmanager
+def canopen_remote(channel: str = "ecattool-bench") -> Iterator[Any]:
+    """A python-canopen RemoteNode talking to a LocalNode (607Ah, INTEGER32 rw) over python-can's virtual bus."""
     import canopen
     from canopen.objectdictionary import ODVariable
 
@@ -25,23 +30,28 @@ def bench_canopen(seconds: float) -> float:
     var.access_type = "rw"
     od.add_object(var)
     server, client = canopen.Network(), canopen.Network()
-    server.connect(interface="virtual", channel="ecattool-bench", receive_own_messages=False)
-    client.connect(interface="virtual", channel="ecattool-bench", receive_own_messages=False)
+    server.connect(interface="virtual", channel=channel, receive_own_messages=False)
+    client.connect(interface="virtual", channel=channel, receive_own_messages=False)
     try:
         server.add_node(canopen.LocalNode(1, od))
         remote = canopen.RemoteNode(1, od)
         client.add_node(remote)
         for i in range(20):  # warm up
             remote.sdo.download(0x607A, 0, i.to_bytes(4, "little"))
+        yield remote
+    finally:
+        client.disconnect()
+        server.disconnect()
+
+
+def bench_canopen(seconds: float) -> float:
+    with canopen_remote() as remote:
         n = 0
         start = time.perf_counter()
         while time.perf_counter() - start < seconds:
             remote.sdo.download(0x607A, 0, (n & 0x7FFFFFFF).to_bytes(4, "little"))
             n += 1
         return n / (time.perf_counter() - start)
-    finally:
-        client.disconnect()
-        server.disconnect()
 
 
 def bench_sim(seconds: float) -> float:

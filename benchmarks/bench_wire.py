@@ -45,23 +45,9 @@ MAX_COUNT = 2_000_000
 
 def bench_canopen(seconds: float) -> dict[str, float]:
     """Expedited uploads and downloads per second, python-canopen RemoteNode -> LocalNode (virtual bus)."""
-    import canopen
-    from canopen.objectdictionary import ODVariable
+    from bench_sim import canopen_remote
 
-    od = canopen.ObjectDictionary()
-    var = ODVariable("Target position", 0x607A, 0)
-    var.data_type = canopen.objectdictionary.INTEGER32
-    var.access_type = "rw"
-    od.add_object(var)
-    server, client = canopen.Network(), canopen.Network()
-    server.connect(interface="virtual", channel="ecattool-bench-wire", receive_own_messages=False)
-    client.connect(interface="virtual", channel="ecattool-bench-wire", receive_own_messages=False)
-    try:
-        server.add_node(canopen.LocalNode(1, od))
-        remote = canopen.RemoteNode(1, od)
-        client.add_node(remote)
-        for i in range(20):  # warm up
-            remote.sdo.download(0x607A, 0, i.to_bytes(4, "little"))
+    with canopen_remote("ecattool-bench-wire") as remote:
         out = {}
         for kind in ("upload", "download"):
             n, start = 0, time.perf_counter()
@@ -73,9 +59,6 @@ def bench_canopen(seconds: float) -> dict[str, float]:
                 n += 1
             out[kind] = n / (time.perf_counter() - start)
         return out
-    finally:
-        client.disconnect()
-        server.disconnect()
 
 
 def bench_drive(seconds: float) -> dict[str, float]:
