@@ -2,12 +2,12 @@
 the mailbox over the wire with SOEM (pysoem) as the master.
 
     python wire_mailbox_scenario.py od SOURCE                  # pysoem's slave.od, then config_map
-    python wire_mailbox_scenario.py faults PROJECT NTH CODE    # two commission runs against a faulty bus
-    python wire_mailbox_scenario.py serve PROJECT NTH CODE     # the faulty bus (started by 'faults')
+    python wire_mailbox_scenario.py faults PROJECT SPEC...     # two commission runs against each faulty bus
+    python wire_mailbox_scenario.py serve PROJECT SPEC         # a faulty bus (started by 'faults')
 
-``faults``: the virtual bus serves PROJECT with an SDO abort injected into its first drive (the NTH SDO
-request from now is answered with abort CODE, once); ``ecattool commission --target pysoem`` then runs twice
-against the same bus. ``od``: SOEM reads the object dictionary through SDO information (ecx_readODlist,
+``faults``: for each PROJECT SPEC pair, the virtual bus serves PROJECT with the fault SPEC (see ``serve``)
+armed in its first drive or on its link; ``ecattool commission --target pysoem`` then runs twice against the
+same bus. ``od``: SOEM reads the object dictionary through SDO information (ecx_readODlist,
 ecx_readODdescription, ecx_readOE).
 
 Prints one JSON document on stdout. Every wait is bounded."""
@@ -47,38 +47,103 @@ def od(source: str) -> dict[str, Any]:
     return out
 
 
-def serve(project: str, nth: int, code: int) -> None:
+#: what a frame fault does to one frame the master sent (the bus sees the result): see FrameFaults
+FRAME_FAULTS = ("lost", "corrupt", "wkc")
+
+
+class FrameFaults:
+    """A link fault from the (AFTER+1)th frame on, until the link is restored (SIGUSR1, sent between the two
+    commission runs: the cable is plugged back in). ``lost``: frames vanish; ``corrupt``: one bit flipped, the
+    FCS does not match and the slave discards the frame (counting it); ``wkc``: process data frames (LRD,
+    LWR, LRW) reach the bus with their working counter already raised by one, so they come back one too high."""
+
+    def __init__(self, kind: str, after: int) -> None:
+        self.kind, self.after, self.seen, self.restored = kind, after, 0, False
+
+    def __call__(self, raw: bytes) -> tuple[bytes | None, bool]:
+        from ecattool.sim.bus.frame import Cmd, parse_frame
+
+        self.seen += 1
+        if self.restored or self.seen <= self.after:
+            return raw, True
+        if self.kind == "lost":
+            return None, True
+        if self.kind == "corrupt":
+            spoilt = bytearray(raw)
+            spoilt[-1] ^= 0x10
+            return bytes(spoilt), False
+        frame = parse_frame(raw)
+        if frame is None or not any(d.cmd in (Cmd.LRD, Cmd.LWR, Cmd.LRW) for d in frame.datagrams):
+            return raw, True
+        for d in frame.datagrams:
+            if d.cmd in (Cmd.LRD, Cmd.LWR, Cmd.LRW):
+                d.wkc += 1
+        return frame.to_bytes(), True
+
+
+def serve(project: str, spec: str) -> None:
+    """Serve PROJECT with the fault SPEC armed: ``sdo-abort:NTH:CODE`` (the NTH SDO request from now is
+    answered with abort CODE), ``al-refusal:STATE:CODE`` (the next request for STATE is refused with AL status
+    code CODE), ``eeprom-power:WORDS`` (the power fails after WORDS more EEPROM words are written), or
+    ``lost|corrupt|wkc:AFTER`` (:class:`FrameFaults`)."""
+    import signal
+
+    from ecattool.od.model import EcState
     from ecattool.project.bus import devices_in_bus_order
     from ecattool.sim.bus.serve import serve as serve_bus
     from ecattool.sim.bus.serve import virtual_slaves
 
     served = virtual_slaves(devices_in_bus_order(project))
-    served[0].slave.drive.faults.abort_sdo(nth, code)
+    faults = served[0].slave.drive.faults
+    kind, *args = spec.split(":")
+    frame_fault = None
+    if kind == "sdo-abort":
+        faults.abort_sdo(int(args[0]), int(args[1], 0))
+    elif kind == "al-refusal":
+        faults.refuse_state(EcState[args[0]], int(args[1], 0))
+    elif kind == "eeprom-power":
+        faults.power_loss_during_eeprom_write(int(args[0]))
+    elif kind in FRAME_FAULTS:
+        frame_fault = FrameFaults(kind, int(args[0]))
+
+    def restore(signum: int, frame: object) -> None:
+        if frame_fault is not None:
+            frame_fault.restored = True
+
+    signal.signal(signal.SIGUSR1, restore)
 
     def ready() -> None:
         print(json.dumps({"iface": SLAVE_IF, "slaves": [s.describe() for s in served]}), flush=True)
 
-    serve_bus(served, SLAVE_IF, ready)
+    serve_bus(served, SLAVE_IF, ready, fault=frame_fault)
 
 
-def faults(project: str, nth: int, code: int) -> dict[str, Any]:
-    server, ready = start_server([project], [sys.executable, __file__, "serve", project, str(nth), str(code)])
-    runs = []
-    try:
-        for _ in range(2):
-            done = subprocess.run([sys.executable, "-m", "ecattool", "commission", project, "--target",
-                                   f"pysoem:{MASTER_IF}", "--json"], capture_output=True, text=True, timeout=240)
-            runs.append({"returncode": done.returncode, "stdout": done.stdout, "stderr": done.stderr[-2000:]})
-    finally:
-        stopped = stop_server(server)
-    return {"ready": ready, "runs": runs, "server": stopped}
+def faults(cases: list[tuple[str, str]]) -> dict[str, Any]:
+    """For each (PROJECT, SPEC), one after the other: a bus of its own with the fault armed, two commission
+    runs against it (the link restored between them)."""
+    import signal
+
+    out = []
+    for project, spec in cases:
+        server, ready = start_server([project], [sys.executable, __file__, "serve", project, spec])
+        runs = []
+        try:
+            for _ in range(2):
+                done = subprocess.run([sys.executable, "-m", "ecattool", "commission", project, "--target",
+                                       f"pysoem:{MASTER_IF}", "--json"], capture_output=True, text=True, timeout=240)
+                runs.append({"returncode": done.returncode, "stdout": done.stdout, "stderr": done.stderr[-2000:]})
+                server.send_signal(signal.SIGUSR1)
+        finally:
+            stopped = stop_server(server)
+        out.append({"project": project, "fault": spec, "ready": ready, "runs": runs, "server": stopped})
+    return {"cases": out}
 
 
 if __name__ == "__main__":
     mode, args = sys.argv[1], sys.argv[2:]
     if mode == "serve":
-        serve(args[0], int(args[1]), int(args[2], 0))
+        serve(args[0], args[1])
     elif mode == "od":
         print(json.dumps(od(args[0])))
-    else:
-        print(json.dumps(faults(args[0], int(args[1]), int(args[2], 0))))
+    else:  # faults PROJECT SPEC [PROJECT SPEC ...]
+        print(json.dumps(faults(list(zip(args[::2], args[1::2])))))

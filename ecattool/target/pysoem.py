@@ -168,6 +168,9 @@ class PysoemSlave:
         self._slave.state = code | ack
         self._slave.write_state()
         if int(reached := self._wait_for(code)) & 0x0F != code:
+            if not reached:  # SOEM reads state 0 when the AL status read itself got no answer
+                raise TargetError(f"slave {self.position}: no answer while requesting {state.value} (the frames "
+                                  "did not come back)")
             raise StateChangeError(state.value, current.value, int(self._slave.al_status or 0))
 
     def _wait_for(self, code: int) -> int:
@@ -203,6 +206,14 @@ class PysoemSlave:
         wkc = self._master.cycle()
         if wkc <= 0:
             raise TargetError(f"slave {self.position}: no process data came back (working counter {wkc})")
+        # ETG.1000.4: every slave adds 2 for its outputs (in OP) and 1 for its inputs. With every slave in OP
+        # (as the master last read them) anything but the full count is a slave missing its part of the frame;
+        # a counter above the full count is never right (a frame spoilt on the way, or an unknown slave).
+        expected = int(self._master.master.expected_wkc)
+        op = int(self._mod.OP_STATE)
+        all_op = all(int(s.state) & 0x0F == op for s in self._master.master.slaves)
+        if wkc > expected or (all_op and wkc != expected):
+            raise TargetError(f"slave {self.position}: process data working counter {wkc}, expected {expected}")
         return bytes(self._slave.input)
 
 

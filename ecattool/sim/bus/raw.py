@@ -14,6 +14,7 @@ from collections.abc import Callable
 from ecattool.errors import TargetError
 from ecattool.sim.bus.engine import Bus
 from ecattool.sim.bus.frame import ETHERTYPE_ECAT
+from ecattool.sim.bus.loop import FrameFault
 
 #: the largest Ethernet frame (without FCS) the socket reads
 MAX_FRAME = 1514
@@ -40,10 +41,12 @@ def open_raw(ifname: str) -> socket.socket:
 
 
 class RawTransport:
-    """Serves ``bus`` on ``ifname``."""
+    """Serves ``bus`` on ``ifname``. ``fault`` (tests: faults over the wire) sees every frame the master sent
+    before the bus does, as the in-process loop's hooks do: it may lose the frame or spoil it."""
 
-    def __init__(self, bus: Bus, ifname: str) -> None:
+    def __init__(self, bus: Bus, ifname: str, fault: FrameFault | None = None) -> None:
         self.bus = bus
+        self.fault = fault
         self.ifname = ifname
         self.sock = open_raw(ifname)
         self.received = 0
@@ -61,7 +64,13 @@ class RawTransport:
             if len(addr) > 2 and addr[2] == socket.PACKET_OUTGOING:
                 continue  # a frame this interface sent (our own answer seen by another tap)
             self.received += 1
-            reply = self.bus.process(raw)
+            fcs_ok = True
+            if self.fault is not None:
+                delivered, fcs_ok = self.fault(raw)
+                if delivered is None:
+                    continue
+                raw = delivered
+            reply = self.bus.process(raw, fcs_ok=fcs_ok)
             if reply is not None:
                 sock.send(reply)
                 self.answered += 1

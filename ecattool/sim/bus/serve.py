@@ -9,13 +9,16 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import InputError
 from ecattool.esi.model import Device
 from ecattool.sim.bus.engine import Bus
 from ecattool.sim.esc import Clock
 from ecattool.sim.slave import VirtualSlave, drive_for_device
+
+if TYPE_CHECKING:
+    from ecattool.sim.bus.loop import FrameFault
 
 #: each slave's local clock starts this far from the previous one's (the master's DC offsets matter)
 CLOCK_SPREAD_NS = 1_000_000_007
@@ -84,11 +87,12 @@ def stop_on_signals() -> Iterator[Callable[[], bool]]:
 
 
 def serve(served: list[Served], ifname: str, on_ready: Callable[[], None],
-          max_frames: int | None = None) -> int:
-    """Serve the slaves on ``ifname`` until SIGINT/SIGTERM (or ``max_frames``); returns the frames answered."""
+          max_frames: int | None = None, fault: "FrameFault | None" = None) -> int:
+    """Serve the slaves on ``ifname`` until SIGINT/SIGTERM (or ``max_frames``); returns the frames answered.
+    ``fault`` sees every frame before the bus (tests: lost and spoilt frames, see RawTransport)."""
     from ecattool.sim.bus.raw import RawTransport
 
-    transport = RawTransport(bus_of(served), ifname)
+    transport = RawTransport(bus_of(served), ifname, fault)
     try:
         with stop_on_signals() as stop:
             on_ready()
