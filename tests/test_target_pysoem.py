@@ -83,6 +83,23 @@ def test_exchange_checks_the_image_and_the_working_counter():
         s.exchange(bytes(size))
 
 
+def test_a_wrong_process_data_working_counter_is_an_error():
+    """In SAFE-OP only the inputs count (1 of 3); in OP anything but the full count means a slave missed its part
+    of the frame, and more than the full count is never right (tests/test_wire_faults.py: the same on the wire)."""
+    t, _ = bus()
+    s = t.slaves()[0]
+    s.request_state(EcState.SAFEOP)
+    size = len(s._slave.output)
+    s.exchange(bytes(size))  # working counter 1 of 3: the outputs do not count before OP
+    s.request_state(EcState.OP)
+    s.exchange(bytes(size))
+    received = t.master.receive_processdata
+    for delta in (+1, -1):
+        t.master.receive_processdata = lambda timeout=2000, d=delta: received(timeout) + d
+        with pytest.raises(TargetError, match=f"working counter {3 + delta}, expected 3"):
+            s.exchange(bytes(size))
+
+
 def test_dc_is_configured_once_and_activation_is_mapped():
     t, (drive,) = bus()
     s = t.slaves()[0]
