@@ -29,6 +29,11 @@ from math import floor
 #: reads (index, subindex) from the drive's dictionary as an integer, or None when the entry is missing
 Reader = Callable[[int, int], int | None]
 
+#: every object a conversion factor (or the cycle, 60C2h) is derived from: a write to one of them changes the
+#: store's version, so the factors are computed once per change instead of on every cycle
+FACTOR_OBJECTS = frozenset({0x608A, 0x608C, 0x608E, 0x608F, 0x6091, 0x6092, 0x6093, 0x6094, 0x6096, 0x6097,
+                            0x210F, 0x60C2})
+
 
 def _ratio(read: Reader, index: int, default: Fraction = Fraction(1)) -> Fraction:
     """num/den of a factor pair; ``default`` where the drive lacks it or both parts are 0 (not configured); a
@@ -56,6 +61,23 @@ class Units:
     def __init__(self, read: Reader, cycle_s: Fraction = Fraction(1, 1000)) -> None:
         self.read = read
         self.cycle_s = cycle_s
+        #: where set, a number that changes whenever an object of FACTOR_OBJECTS changes (the drive's store)
+        self.version: Callable[[], int] | None = None
+        self._cache: dict[str, Fraction] = {}
+        self._cached_version = -1
+
+    def _factor(self, name: str) -> Fraction:
+        """``position_factor()`` & co. by name, computed once per version of the factor objects."""
+        if self.version is None:
+            return getattr(self, name)()  # type: ignore[no-any-return]
+        v = self.version()
+        if v != self._cached_version:
+            self._cache.clear()
+            self._cached_version = v
+        f = self._cache.get(name)
+        if f is None:
+            f = self._cache[name] = getattr(self, name)()
+        return f
 
     # --- factors (internal units per user unit) -----------------------------------------------
     def position_factor(self) -> Fraction:
@@ -77,21 +99,21 @@ class Units:
 
     # --- conversions --------------------------------------------------------------------------
     def position_to_internal(self, user: int | Fraction) -> Fraction:
-        return Fraction(user) * self.position_factor()
+        return Fraction(user) * self._factor("position_factor")
 
     def position_to_user(self, internal: Fraction) -> Fraction:
-        f = self.position_factor()
+        f = self._factor("position_factor")
         return internal / f if f else Fraction(0)
 
     def velocity_to_internal(self, user: int | Fraction) -> Fraction:
-        return Fraction(user) * self.velocity_factor()
+        return Fraction(user) * self._factor("velocity_factor")
 
     def velocity_to_user(self, internal: Fraction) -> Fraction:
-        f = self.velocity_factor()
+        f = self._factor("velocity_factor")
         return internal / f if f else Fraction(0)
 
     def acceleration_to_internal(self, user: int | Fraction) -> Fraction:
-        return Fraction(user) * self.acceleration_factor()
+        return Fraction(user) * self._factor("acceleration_factor")
 
     # --- physics of internal units ------------------------------------------------------------
     def increments_per_second(self, velocity_internal: Fraction) -> Fraction:

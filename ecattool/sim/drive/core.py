@@ -9,6 +9,7 @@ builds on), so every module imports downward: core <- pieces <- facade.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -23,7 +24,7 @@ from ecattool.sim import eeprom as ee
 from ecattool.sim.cia402 import Cia402, State
 from ecattool.sim.drive.behaviour import Behaviour
 from ecattool.sim.faults import Faults
-from ecattool.sim.units import Units
+from ecattool.sim.units import FACTOR_OBJECTS, Units
 
 RX, TX = Direction.RX, Direction.TX
 
@@ -58,6 +59,33 @@ class Layout:
     @property
     def size(self) -> int:
         return (self.bits + 7) // 8
+
+
+_VERSIONS = itertools.count(1)
+
+
+class Store(dict[tuple[int, int], bytes]):
+    """The drive's object values by (index, subindex). ``version`` is new for every store and after every write
+    to an object the unit conversions derive from (FACTOR_OBJECTS), so they can be cached between writes."""
+
+    __slots__ = ("version",)
+
+    def __init__(self, *args: Any) -> None:
+        super().__init__(*args)
+        self.version = next(_VERSIONS)
+
+    def __setitem__(self, key: tuple[int, int], value: bytes) -> None:
+        if key[0] in FACTOR_OBJECTS:
+            self.version = next(_VERSIONS)
+        super().__setitem__(key, value)
+
+    def setdefault(self, key: tuple[int, int], default: bytes) -> bytes:
+        self.version = next(_VERSIONS)
+        return super().setdefault(key, default)
+
+    def __delitem__(self, key: tuple[int, int]) -> None:
+        self.version = next(_VERSIONS)
+        super().__delitem__(key)
 
 
 def sdo_abort(index: int, sub: int, code: int) -> SdoAbort:
@@ -107,7 +135,7 @@ class DriveCore:
     _after_write: dict[int, Callable[[int, int | None], None]]
     # -- set at power-on / reset -------------------------------------------------------------------
     esm: EcState
-    _store: dict[tuple[int, int], bytes]
+    _store: Store
     _entries: dict[tuple[int, int], Entry]
     layout: dict[Direction, Layout]
     cia: Cia402

@@ -17,7 +17,7 @@ from ecattool.profiles.rules import FamilyRules
 from ecattool.sim import eeprom as ee
 from ecattool.sim.cia402 import Cia402
 from ecattool.sim.drive.behaviour import BEHAVIOURS
-from ecattool.sim.drive.core import RX, TX, Layout
+from ecattool.sim.drive.core import RX, TX, Layout, Store
 from ecattool.sim.drive.esm import StateMachine
 from ecattool.sim.drive.family import FamilyQuirks
 from ecattool.sim.drive.injection import Injection
@@ -111,7 +111,7 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
     def _reset_application(self) -> None:
         """Dictionary to defaults, PDO configuration from the device description, CiA-402 restarted."""
         d = self.device
-        self._store = {}
+        self._store = Store()
         self._entries = {}
         for obj in d.dictionary:
             for e in obj.entries.values():
@@ -133,6 +133,7 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self.has_cia402 = (0x6040, 0) in self._entries and (0x6041, 0) in self._entries
         self.units = units_for(self.family, self._read_int, revision=d.revision,
                              has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
+        self.units.version = lambda: self._store.version
         self._refresh_inputs()
 
     def _default_bytes(self, e: Entry) -> bytes:

@@ -19,12 +19,19 @@ class Motion(DriveCore):
     """The CiA-402 device control and the motion it produces."""
 
     def cycle_time(self) -> Fraction:
-        """The process-data cycle in seconds: 60C2h (sub1 × 10^sub2) where present, else 1 ms."""
-        if hasattr(self, "_store"):
-            base, exp = self._read_int(0x60C2, 1), self._read_int(0x60C2, 2)
-            if base and exp is not None and -9 <= exp <= 2:
-                return interpolation_period_ns(base, exp) / 10**9
-        return Fraction(1, 1000)
+        """The process-data cycle in seconds: 60C2h (sub1 × 10^sub2) where present, else 1 ms (computed once per
+        version of the store's factor objects, 60C2h among them)."""
+        store = getattr(self, "_store", None)
+        if store is None:
+            return Fraction(1, 1000)
+        cached: tuple[int, Fraction] | None = getattr(self, "_cycle_cache", None)
+        if cached is not None and cached[0] == store.version:
+            return cached[1]
+        base, exp = self._read_int(0x60C2, 1), self._read_int(0x60C2, 2)
+        cycle = interpolation_period_ns(base, exp) / 10**9 if base and exp is not None and -9 <= exp <= 2 \
+            else Fraction(1, 1000)
+        self._cycle_cache = (store.version, cycle)
+        return cycle
 
     def _cia_moves(self, moves: list[tuple[State, State]], why: str) -> None:
         for old, new in moves:

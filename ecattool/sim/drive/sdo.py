@@ -8,7 +8,7 @@ from ecattool.errors import SdoAbort, SdoTimeout
 from ecattool.od.model import MAILBOX_STATES, Entry, ObjectCode
 from ecattool.od.types import Kind
 from ecattool.sim import eeprom as ee
-from ecattool.sim.drive.core import decode_int, sdo_abort
+from ecattool.sim.drive.core import Store, decode_int, sdo_abort
 from ecattool.sim.drive.pdo import PdoConfig, is_assign, is_mapping
 
 
@@ -184,7 +184,7 @@ class SdoServer(PdoConfig):
             pos += nbytes
         if pos != len(data) or not writes:
             raise sdo_abort(index, sub, A.LENGTH_MISMATCH if writes else A.LENGTH_TOO_LOW)
-        snapshot = dict(self._store)
+        snapshot = Store(self._store)
         try:
             if writes[0][0] == 0:
                 count = writes[0][1]

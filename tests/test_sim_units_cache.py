@@ -1,0 +1,46 @@
+"""The drive computes its unit factors once per change of the factor objects (sim.units.FACTOR_OBJECTS): a write
+to one of them, by SDO or by restoring a store after an aborted complete access, must show at once."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+from ecattool.od.model import EcState
+from ecattool.sim import Drive
+
+
+def _hdt() -> Drive:
+    d = Drive.from_profile("hdt")
+    d.request_state(EcState.PREOP)
+    return d
+
+
+def test_a_factor_written_by_sdo_converts_at_once() -> None:
+    d = _hdt()
+    d.sdo_download(0x6093, 1, (16384).to_bytes(4, "little"))
+    d.sdo_download(0x6093, 2, (25).to_bytes(4, "little"))
+    assert d.units.position_to_internal(100) == 65536
+    d.sdo_download(0x6093, 2, (50).to_bytes(4, "little"))
+    assert d.units.position_to_internal(100) == 32768
+    assert d.units.position_to_user(Fraction(32768)) == 100
+
+
+def test_the_cycle_follows_60c2() -> None:
+    d = _hdt()
+    assert (0x60C2, 1) in d._entries
+    d.sdo_download(0x60C2, 1, bytes([2]))
+    d.sdo_download(0x60C2, 2, (-3).to_bytes(1, "little", signed=True))
+    assert d.cycle_time() == Fraction(2, 1000)
+    d.sdo_download(0x60C2, 1, bytes([4]))
+    assert d.cycle_time() == Fraction(4, 1000)
+
+
+def test_a_restored_store_is_a_new_version() -> None:
+    d = _hdt()
+    before = d._store.version
+    d._store[(0x6093, 1)] = (1).to_bytes(4, "little")
+    assert d._store.version != before
+    d._store[(0x6040, 0)] = b"\x00\x00"  # not a factor object: the cached factors stay
+    v = d._store.version
+    d._store[(0x6040, 0)] = b"\x06\x00"
+    assert d._store.version == v
