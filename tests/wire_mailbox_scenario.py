@@ -19,7 +19,7 @@ import subprocess
 import sys
 from typing import Any
 
-from wire_pysoem_scenario import MASTER_IF, SLAVE_IF, start_server, stop_server  # tests/ is the script's folder
+from wire_pysoem_scenario import MASTER_IF, SLAVE_IF, open_preop, start_server, stop_server  # tests/ is the script's folder
 
 
 def _text(value: str | bytes) -> str:
@@ -27,15 +27,10 @@ def _text(value: str | bytes) -> str:
 
 
 def od(source: str) -> dict[str, Any]:
-    import pysoem
-
     server, ready = start_server([source])
     out: dict[str, Any] = {"ready": ready}
     try:
-        master = pysoem.Master()
-        master.open(MASTER_IF)
-        out["found"] = master.config_init()
-        master.state_check(pysoem.PREOP_STATE, 2_000_000)
+        master = open_preop(out)
         out["od"] = [[o.index, _text(o.name), o.object_code, o.data_type,
                       [[_text(e.name), e.data_type, e.bit_length, e.obj_access] for e in o.entries]]
                      for o in master.slaves[0].od]

@@ -58,16 +58,24 @@ def stop_server(server: subprocess.Popen[str]) -> dict[str, Any]:
     return {"returncode": server.returncode, "stderr": err[-2000:]}
 
 
+def open_preop(out: dict[str, Any]) -> Any:
+    """A pysoem master on MASTER_IF with the bus found (``out["found"]``) and brought to PRE-OP."""
+    import pysoem
+
+    master = pysoem.Master()
+    master.open(MASTER_IF)
+    out["found"] = master.config_init()
+    master.state_check(pysoem.PREOP_STATE, 2_000_000)
+    return master
+
+
 def bringup(sources: list[str]) -> dict[str, Any]:
     import pysoem
 
     server, ready = start_server(sources)
     out: dict[str, Any] = {"ready": ready}
     try:
-        master = pysoem.Master()
-        master.open(MASTER_IF)
-        out["found"] = master.config_init()
-        master.state_check(pysoem.PREOP_STATE, 2_000_000)
+        master = open_preop(out)
         out["identity"] = [[s.man, s.id, s.rev] for s in master.slaves]
         out["names"] = [s.name for s in master.slaves]
         reads = []
