@@ -44,7 +44,9 @@ def _scenario(script: str, *args: str, timeout: int, module: str) -> dict[str, A
     done = subprocess.run(netns.command([sys.executable, str(HERE / script), *args]), capture_output=True,
                           text=True, timeout=timeout, cwd=ROOT)
     assert done.returncode == 0, done.stderr[-3000:]
-    result: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
+    # the scenario's result is its last JSON line: KickCAT's C++ side writes its own lines to stdout, and
+    # its buffer may be flushed after Python's at exit ("Opening redundant interface: None")
+    result: dict[str, Any] = json.loads([ln for ln in done.stdout.splitlines() if ln.startswith("{")][-1])
     return result
 
 
