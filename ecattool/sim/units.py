@@ -99,21 +99,21 @@ class Units:
 
     # --- conversions --------------------------------------------------------------------------
     def position_to_internal(self, user: int | Fraction) -> Fraction:
-        return Fraction(user) * self._factor("position_factor")
+        return self._factor("position_factor") * user  # Fraction * int: no Fraction(user) made
 
     def position_to_user(self, internal: Fraction) -> Fraction:
         f = self._factor("position_factor")
         return internal / f if f else Fraction(0)
 
     def velocity_to_internal(self, user: int | Fraction) -> Fraction:
-        return Fraction(user) * self._factor("velocity_factor")
+        return self._factor("velocity_factor") * user  # Fraction * int: no Fraction(user) made
 
     def velocity_to_user(self, internal: Fraction) -> Fraction:
         f = self._factor("velocity_factor")
         return internal / f if f else Fraction(0)
 
     def acceleration_to_internal(self, user: int | Fraction) -> Fraction:
-        return Fraction(user) * self._factor("acceleration_factor")
+        return self._factor("acceleration_factor") * user  # Fraction * int: no Fraction(user) made
 
     # --- physics of internal units ------------------------------------------------------------
     def increments_per_second(self, velocity_internal: Fraction) -> Fraction:

@@ -50,15 +50,33 @@ class Emergency:
         return self.code.to_bytes(2, "little") + bytes([self.register & 0xFF]) + self.data[:5].ljust(5, b"\x00")
 
 
+#: a mapped entry of a process image: (index, subindex, first byte, end byte, bit offset, bit length); the byte
+#: bounds are -1 where the entry does not start and end on whole bytes
+Slot = tuple[int, int, int, int, int, int]
+
+
 @dataclass
 class Layout:
     bits: int = 0
     #: (index, subindex, bit offset, bit length); index 0 = gap or dummy
     entries: list[tuple[int, int, int, int]] = field(default_factory=list)
+    _slots: tuple[tuple[tuple[int, int, int, int], ...], tuple[Slot, ...]] = \
+        field(default=((), ()), init=False, repr=False, compare=False)
 
     @property
     def size(self) -> int:
         return (self.bits + 7) // 8
+
+    def slots(self) -> tuple[Slot, ...]:
+        """The mapped entries (gaps and dummies left out) with their byte bounds, for the cyclic exchange;
+        computed again whenever ``entries`` differs from what they were computed from."""
+        key = tuple(self.entries)
+        if key != self._slots[0]:
+            self._slots = (key, tuple(
+                (index, sub, offset // 8, (offset + bits) // 8, offset, bits) if offset % 8 == 0 and bits % 8 == 0
+                else (index, sub, -1, -1, offset, bits)
+                for index, sub, offset, bits in key if index != 0))
+        return self._slots[1]
 
 
 _VERSIONS = itertools.count(1)
@@ -160,10 +178,8 @@ class DriveCore:
         if e is None:
             return
         size = e.byte_size
-        signed = e.datatype is not None and e.datatype.kind is Kind.SIGNED
-        mask = (1 << (8 * size)) - 1
-        self._store[(index, sub)] = (value & mask).to_bytes(size, "little", signed=False) if signed else \
-            (value & mask).to_bytes(size, "little")
+        # two's complement of a negative value through the mask (signed and unsigned entries alike)
+        self._store[(index, sub)] = (value & ((1 << (8 * size)) - 1)).to_bytes(size, "little")
 
     def value(self, index: int, sub: int = 0) -> Any:
         """The decoded value of an entry (no SDO rules, no side effects): for tests and inspection."""

@@ -9,10 +9,12 @@ from fractions import Fraction
 from ecattool import abort as A
 from ecattool.od.model import EcState
 from ecattool.profiles.rules import interpolation_period_ns
-from ecattool.sim.cia402 import CSP, HOMING, PP, Homing, State
+from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, State
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.core import DriveCore, sdo_abort
 from ecattool.sim.units import to_int
+
+_ZERO = Fraction(0)
 
 
 class Motion(DriveCore):
@@ -108,13 +110,19 @@ class Motion(DriveCore):
         for _ in range(cycles):
             mode = self.mode()
             homing_before = self.cia.homing
+            # only the targets the mode moves by are converted (the conversions are exact fractions; a drive
+            # that is not enabled, or halted, moves by none of them)
+            moving = self.cia.state is State.OPERATION_ENABLED and not self.cia.controlword & HALT
             self.cia.step(
                 mode, dt,
-                target_position=u.position_to_internal((self._read_int(0x607A, 0) or 0) - self._home_offset()
-                                                       if mode == CSP else 0),
-                target_velocity=u.velocity_to_internal(self._read_int(0x60FF, 0) or 0),
-                profile_velocity=u.velocity_to_internal(self._read_int(0x6081, 0) or 0),
-                acceleration=u.acceleration_to_internal(self._read_int(0x6083, 0) or 0),
+                target_position=u.position_to_internal((self._read_int(0x607A, 0) or 0) - self._home_offset())
+                if moving and mode == CSP else _ZERO,
+                target_velocity=u.velocity_to_internal(self._read_int(0x60FF, 0) or 0)
+                if moving and mode in (CSV, PV) else _ZERO,
+                profile_velocity=u.velocity_to_internal(self._read_int(0x6081, 0) or 0)
+                if moving and mode == PP else _ZERO,
+                acceleration=u.acceleration_to_internal(self._read_int(0x6083, 0) or 0)
+                if moving and mode == PV else _ZERO,
                 inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
                 inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
             )

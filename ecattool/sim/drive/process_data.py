@@ -70,13 +70,17 @@ class ProcessData(PdoConfig):
         if self.esm is EcState.OP:
             # A drive latches the whole RxPDO image first and only then reacts to it (a new set-point in
             # the controlword must see the target position of the same cycle).
-            image = int.from_bytes(outputs, "little")
+            outputs = bytes(outputs)  # a no-op for bytes: the store keeps bytes, never a caller's buffer
+            image: int | None = None
             reactions: list[tuple[int, int, bytes]] = []
             try:
-                for index, sub, offset, bits in rx.entries:
-                    if index == 0:
-                        continue
-                    raw = ((image >> offset) & ((1 << bits) - 1)).to_bytes((bits + 7) // 8, "little")
+                for index, sub, lo, hi, offset, bits in rx.slots():
+                    if lo >= 0:
+                        raw = outputs[lo:hi]  # an entry on whole bytes: its bytes as they are
+                    else:
+                        if image is None:
+                            image = int.from_bytes(outputs, "little")
+                        raw = ((image >> offset) & ((1 << bits) - 1)).to_bytes((bits + 7) // 8, "little")
                     if self._pdo_write(index, sub, raw):
                         reactions.append((index, sub, raw))
             except ee.PowerLost:
@@ -91,23 +95,30 @@ class ProcessData(PdoConfig):
     def _pdo_write(self, index: int, sub: int, raw: bytes) -> bool:
         """Store one mapped output; True when the object has a reaction to run once the image is latched."""
         old = self._store.get((index, sub))
+        if old == raw:
+            return False  # unchanged: nothing to store and nothing to react to
         handler = self._handlers_down.get(index)
         if index in (0x2065, 0x2067) and handler is not None:
-            if old == raw:
-                return False
             try:
                 handler(sub, raw, int.from_bytes(raw, "little"))
             except SdoAbort:
                 return False
         self._store[(index, sub)] = raw
-        return index in self._after_write and old != raw
+        return index in self._after_write
 
     def _pack_inputs(self) -> bytes:
+        """The input image: each mapped object's value, cut or padded with zeros to its mapped length."""
         tx = self.layout[TX]
-        image = 0
-        for index, sub, offset, bits in tx.entries:
-            if index == 0:
-                continue
-            raw = self._store.get((index, sub), b"")
-            image |= (int.from_bytes(raw, "little") & ((1 << bits) - 1)) << offset
-        return image.to_bytes(tx.size, "little")
+        store = self._store
+        image = bytearray(tx.size)
+        bits_image = 0  # entries that do not sit on whole bytes
+        for index, sub, lo, hi, offset, bits in tx.slots():
+            raw = store.get((index, sub), b"")
+            if lo >= 0:
+                n = hi - lo
+                image[lo:hi] = raw if len(raw) == n else raw[:n].ljust(n, b"\x00")
+            else:
+                bits_image |= (int.from_bytes(raw, "little") & ((1 << bits) - 1)) << offset
+        if bits_image:
+            return (int.from_bytes(image, "little") | bits_image).to_bytes(tx.size, "little")
+        return bytes(image)

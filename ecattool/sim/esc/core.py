@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from ecattool.sim.esc import registers as R
 from ecattool.sim.esc.dc import Clock
 from ecattool.sim.esc.eeprom import SiiEeprom
+from ecattool.sim.esc.mapping import Derived, Piece, Segment, pieces, segments
 
 _WRITABLE = R.writable_mask()
 
@@ -105,6 +106,9 @@ class Esc:
         self._sm_pdi_off = [False] * 16
         self._sms: list[_Sm] | None = None
         self._fmmus: list[_Fmmu] | None = None
+        #: per (address, length): its pieces at SM boundaries / its FMMU geometry, until the SMs / FMMUs change
+        self._segment_memo: Derived[tuple[int, int], tuple[Segment, ...]] = Derived()
+        self._piece_memo: Derived[tuple[int, int], tuple[Piece, ...]] = Derived()
         self._al_event = False
         self.frame_ns = 0
         m = self.mem
@@ -215,25 +219,10 @@ class Esc:
     def end_frame(self) -> None:
         self.app.frame_done(self)
 
-    def _segments(self, addr: int, n: int) -> list[tuple[int, int, int | None]]:
+    def _segments(self, addr: int, n: int) -> tuple[Segment, ...]:
         """Split [addr, addr+n) into pieces outside (None) and inside an enabled sync manager's area."""
-        cuts: list[tuple[int, int, int | None]] = []
-        end = addr + n
-        pos = addr
-        active = sorted(((sm.start, sm.end, i) for i, sm in enumerate(self.sms()) if sm.enabled and sm.length),
-                        key=lambda t: t[0])
-        for start, stop, i in active:
-            if stop <= pos or start >= end:
-                continue
-            if start > pos:
-                cuts.append((pos, start, None))
-            lo = max(pos, start)
-            hi = min(end, stop)
-            cuts.append((lo, hi, i))
-            pos = hi
-        if pos < end:
-            cuts.append((pos, end, None))
-        return cuts
+        sms = self.sms()
+        return self._segment_memo.get(sms, (addr, n), lambda: segments(sms, addr, n))
 
     def ecat_read(self, addr: int, n: int) -> tuple[bytes, bool]:
         """The master reads ``n`` bytes at ``addr``; False when the ESC refuses (no working counter)."""
@@ -371,33 +360,31 @@ class Esc:
         """Map the datagram bytes at logical ``address``: FMMUs of read type copy physical bits into
         ``data`` (when ``read``), those of write type copy ``data`` bits into the ESC (when ``write``).
         Returns (read happened, write happened) for the working counter."""
-        incoming = int.from_bytes(data, "little")
-        d0, d1 = address * 8, (address + len(data)) * 8
+        fmmus = self.fmmus()
+        n = len(data)
+        incoming = bytes(data)  # what a write FMMU takes, whatever a read FMMU put into ``data`` before it
         did_read = did_write = False
-        value = incoming
-        for f in self.fmmus():
-            lb0, lb1 = f.bit_range()
-            o0, o1 = max(lb0, d0), min(lb1, d1)
-            if o0 >= o1:
-                continue
-            nbits, mask = o1 - o0, (1 << (o1 - o0)) - 1
-            pbit = f.physical * 8 + f.physical_bit + (o0 - lb0)
-            pbyte0, pbyte1 = pbit // 8, (pbit + nbits + 7) // 8
-            pshift, dshift = pbit - pbyte0 * 8, o0 - d0
-            if write and f.write:
-                bits = (incoming >> dshift) & mask
-                current = int.from_bytes(self.mem[pbyte0:pbyte1], "little")
-                merged = (current & ~(mask << pshift)) | (bits << pshift)
-                if self.ecat_write(pbyte0, merged.to_bytes(pbyte1 - pbyte0, "little")):
+        for f_read, f_write, p0, p1, d0, d1, whole, mask, pshift, dshift in \
+                self._piece_memo.get(fmmus, (address, n), lambda: pieces(fmmus, address, n)):
+            if write and f_write:
+                if whole:
+                    chunk = incoming[d0:d1]
+                else:
+                    bits = (int.from_bytes(incoming[d0:d1], "little") >> dshift) & mask
+                    current = int.from_bytes(self.mem[p0:p1], "little")
+                    chunk = ((current & ~(mask << pshift)) | (bits << pshift)).to_bytes(p1 - p0, "little")
+                if self.ecat_write(p0, chunk):
                     did_write = True
-            if read and f.read:
-                raw, ok = self.ecat_read(pbyte0, pbyte1 - pbyte0)
+            if read and f_read:
+                raw, ok = self.ecat_read(p0, p1 - p0)
                 if ok:
-                    bits = (int.from_bytes(raw, "little") >> pshift) & mask
-                    value = (value & ~(mask << dshift)) | (bits << dshift)
+                    if whole:
+                        data[d0:d1] = raw
+                    else:
+                        bits = (int.from_bytes(raw, "little") >> pshift) & mask
+                        current = int.from_bytes(data[d0:d1], "little")
+                        data[d0:d1] = ((current & ~(mask << dshift)) | (bits << dshift)).to_bytes(d1 - d0, "little")
                     did_read = True
-        if did_read:
-            data[:] = value.to_bytes(len(data), "little")
         return did_read, did_write
 
     # ------------------------------------------------------------------------------------------
