@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass
+from functools import lru_cache
 
 from ecattool.sim.esc import registers as R
 from ecattool.sim.esc.dc import Clock
@@ -87,6 +88,21 @@ class _Fmmu:
     def bit_range(self) -> tuple[int, int]:
         """The logical bits [first, end) the FMMU maps."""
         return self.logical * 8 + self.start_bit, (self.logical + self.length - 1) * 8 + self.stop_bit + 1
+
+
+@lru_cache(maxsize=None)
+def _dl_status(loop: int, *links: bool) -> int:
+    """DL status 0x0110 from the loop settings (DL control bits 8..15) and the link of each port; a pure
+    function of at most 256 x 16 arguments, so it is computed once per combination (the bus asks every frame)."""
+    v = 0x0001 | 0x0002  # PDI operational (EEPROM loaded), PDI watchdog reloaded
+    for port, linked in enumerate(links):
+        setting = (loop >> (2 * port)) & 0x3
+        # loop setting: 0 auto, 1 auto close (closed without a link), 2 always open, 3 always closed
+        closed = setting == 3 or (setting in (0, 1) and not linked)
+        v |= (0x10 << port) if linked else 0
+        v |= (1 << (8 + 2 * port)) if closed else 0
+        v |= (1 << (9 + 2 * port)) if linked and not closed else 0
+    return v
 
 
 class Esc:
@@ -403,17 +419,8 @@ class Esc:
         return self.mem[R.AL_STATUS] & 0x0F
 
     def _dl_status(self) -> int:
-        v = 0x0001 | 0x0002  # PDI operational (EEPROM loaded), PDI watchdog reloaded
-        loop = self.u16(R.DL_CONTROL) >> 8
-        for port in range(4):
-            linked = self.link[port]
-            setting = (loop >> (2 * port)) & 0x3
-            # loop setting: 0 auto, 1 auto close (closed without a link), 2 always open, 3 always closed
-            closed = setting == 3 or (setting in (0, 1) and not linked)
-            v |= (0x10 << port) if linked else 0
-            v |= (1 << (8 + 2 * port)) if closed else 0
-            v |= (1 << (9 + 2 * port)) if linked and not closed else 0
-        return v
+        link = self.link
+        return _dl_status(self.mem[R.DL_CONTROL + 1], link[0], link[1], link[2], link[3])
 
     def port_open(self, port: int) -> bool:
         """Whether frames leave through ``port`` (the loop is open and a link is there)."""
