@@ -13,6 +13,9 @@ from ecattool.od.types import DataType, Kind
 from ecattool.record import FrozenRecord, Record, set_field
 
 
+_AL_CODES = {"INIT": 1, "PREOP": 2, "BOOT": 3, "SAFEOP": 4, "OP": 8}
+
+
 class EcState(str, Enum):
     """EtherCAT application-layer states (the AL control/status values are the ``code``)."""
 
@@ -24,7 +27,7 @@ class EcState(str, Enum):
 
     @property
     def code(self) -> int:
-        return {"INIT": 1, "PREOP": 2, "BOOT": 3, "SAFEOP": 4, "OP": 8}[self.value]
+        return _AL_CODES[self.value]
 
     @classmethod
     def parse(cls, text: str) -> "EcState":

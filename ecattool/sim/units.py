@@ -105,12 +105,20 @@ class Units:
         f = self._factor("position_factor")
         return internal / f if f else Fraction(0)
 
+    def position_to_user_int(self, internal: Fraction) -> int:
+        """``to_int(position_to_user(internal))`` without the intermediate fraction (every cycle)."""
+        return floor_div(internal, self._factor("position_factor"))
+
     def velocity_to_internal(self, user: int | Fraction) -> Fraction:
         return self._factor("velocity_factor") * user  # Fraction * int: no Fraction(user) made
 
     def velocity_to_user(self, internal: Fraction) -> Fraction:
         f = self._factor("velocity_factor")
         return internal / f if f else Fraction(0)
+
+    def velocity_to_user_int(self, internal: Fraction) -> int:
+        """``to_int(velocity_to_user(internal))`` without the intermediate fraction (every cycle)."""
+        return floor_div(internal, self._factor("velocity_factor"))
 
     def acceleration_to_internal(self, user: int | Fraction) -> Fraction:
         return self._factor("acceleration_factor") * user  # Fraction * int: no Fraction(user) made
@@ -197,6 +205,13 @@ class TechnosoftUnits(Units):
 def to_int(value: Fraction) -> int:
     """How the drive stores a converted value: truncation towards minus infinity."""
     return floor(value)
+
+
+def floor_div(value: Fraction | int, factor: Fraction) -> int:
+    """``to_int(value / factor)``, 0 where the factor is 0 (as the conversions to user units), in integers."""
+    if not factor:
+        return 0
+    return (value.numerator * factor.denominator) // (value.denominator * factor.numerator)
 
 
 def technosoft_cia402_2(revision: int, has_210f: bool) -> bool:

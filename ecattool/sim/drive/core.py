@@ -50,9 +50,13 @@ class Emergency:
         return self.code.to_bytes(2, "little") + bytes([self.register & 0xFF]) + self.data[:5].ljust(5, b"\x00")
 
 
-#: a mapped entry of a process image: (index, subindex, first byte, end byte, bit offset, bit length); the byte
+#: a mapped entry of a process image: ((index, subindex), first byte, end byte, bit offset, bit length); the byte
 #: bounds are -1 where the entry does not start and end on whole bytes
-Slot = tuple[int, int, int, int, int, int]
+Slot = tuple[tuple[int, int], int, int, int, int]
+#: a process image on whole bytes, piece by piece: ((index, subindex) or GAP, zero bytes of the piece's length)
+Pieces = tuple[tuple[tuple[int, int], bytes], ...]
+#: the key of a gap or dummy in :data:`Pieces` (no object has it)
+GAP = (-1, -1)
 
 
 @dataclass
@@ -60,23 +64,41 @@ class Layout:
     bits: int = 0
     #: (index, subindex, bit offset, bit length); index 0 = gap or dummy
     entries: list[tuple[int, int, int, int]] = field(default_factory=list)
-    _slots: tuple[tuple[tuple[int, int, int, int], ...], tuple[Slot, ...]] = \
-        field(default=((), ()), init=False, repr=False, compare=False)
+    _derived: tuple[tuple[tuple[int, int, int, int], ...], tuple[Slot, ...], Pieces | None] = \
+        field(default=((), (), ()), init=False, repr=False, compare=False)
 
     @property
     def size(self) -> int:
         return (self.bits + 7) // 8
 
-    def slots(self) -> tuple[Slot, ...]:
-        """The mapped entries (gaps and dummies left out) with their byte bounds, for the cyclic exchange;
-        computed again whenever ``entries`` differs from what they were computed from."""
+    def _derive(self) -> tuple[tuple[tuple[int, int, int, int], ...], tuple[Slot, ...], Pieces | None]:
+        """What the cyclic exchange reads from the entries, computed again whenever they differ from what it
+        was computed from."""
         key = tuple(self.entries)
-        if key != self._slots[0]:
-            self._slots = (key, tuple(
-                (index, sub, offset // 8, (offset + bits) // 8, offset, bits) if offset % 8 == 0 and bits % 8 == 0
-                else (index, sub, -1, -1, offset, bits)
-                for index, sub, offset, bits in key if index != 0))
-        return self._slots[1]
+        if key != self._derived[0]:
+            slots: list[Slot] = []
+            pieces: list[tuple[tuple[int, int], bytes]] | None = []
+            position = 0
+            for index, sub, offset, bits in key:
+                whole = offset % 8 == 0 and bits % 8 == 0
+                if index != 0:
+                    slots.append(((index, sub), offset // 8, (offset + bits) // 8, offset, bits) if whole
+                                 else ((index, sub), -1, -1, offset, bits))
+                if pieces is not None and whole and offset == position:
+                    pieces.append(((index, sub) if index != 0 else GAP, bytes(bits // 8)))
+                else:
+                    pieces = None
+                position = offset + bits
+            self._derived = (key, tuple(slots), None if pieces is None or position != self.bits else tuple(pieces))
+        return self._derived
+
+    def slots(self) -> tuple[Slot, ...]:
+        """The mapped entries (gaps and dummies left out) with their byte bounds."""
+        return self._derive()[1]
+
+    def pieces(self) -> Pieces | None:
+        """The whole image in order as pieces of whole bytes; None where an entry is not on whole bytes."""
+        return self._derive()[2]
 
 
 _VERSIONS = itertools.count(1)
@@ -177,9 +199,9 @@ class DriveCore:
         e = self._entries.get((index, sub))
         if e is None:
             return
-        size = e.byte_size
+        size = (e.bit_size + 7) >> 3  # Entry.byte_size, without the property call (every cycle, every input)
         # two's complement of a negative value through the mask (signed and unsigned entries alike)
-        self._store[(index, sub)] = (value & ((1 << (8 * size)) - 1)).to_bytes(size, "little")
+        self._store[(index, sub)] = (value & ((1 << (size << 3)) - 1)).to_bytes(size, "little")
 
     def value(self, index: int, sub: int = 0) -> Any:
         """The decoded value of an entry (no SDO rules, no side effects): for tests and inspection."""

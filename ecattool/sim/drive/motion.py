@@ -144,7 +144,7 @@ class Motion(DriveCore):
         user_position = self._user_position()
         self._put(0x6064, 0, user_position)
         self._put(0x6062, 0, user_position)
-        self._put(0x606C, 0, to_int(u.velocity_to_user(self.cia.velocity)))
+        self._put(0x606C, 0, u.velocity_to_user_int(self.cia.velocity))
         self._put(0x603F, 0, self.cia.fault_code)
 
     def _home_offset(self) -> int:
@@ -155,7 +155,7 @@ class Motion(DriveCore):
 
     def _user_position(self) -> int:
         """6064h: the position in user units (HDT: sensor position + home offset 607Ch, §4.06.6)."""
-        return to_int(self.units.position_to_user(self.cia.position)) + self._home_offset()
+        return self.units.position_to_user_int(self.cia.position) + self._home_offset()
 
     @property
     def internal_position(self) -> int:

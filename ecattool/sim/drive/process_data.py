@@ -73,16 +73,19 @@ class ProcessData(PdoConfig):
             outputs = bytes(outputs)  # a no-op for bytes: the store keeps bytes, never a caller's buffer
             image: int | None = None
             reactions: list[tuple[int, int, bytes]] = []
+            stored = self._store.get
             try:
-                for index, sub, lo, hi, offset, bits in rx.slots():
+                for key, lo, hi, offset, bits in rx.slots():
                     if lo >= 0:
                         raw = outputs[lo:hi]  # an entry on whole bytes: its bytes as they are
                     else:
                         if image is None:
                             image = int.from_bytes(outputs, "little")
                         raw = ((image >> offset) & ((1 << bits) - 1)).to_bytes((bits + 7) // 8, "little")
-                    if self._pdo_write(index, sub, raw):
-                        reactions.append((index, sub, raw))
+                    if stored(key) == raw:
+                        continue  # unchanged: nothing to store and nothing to react to
+                    if self._pdo_write(key[0], key[1], raw):
+                        reactions.append((key[0], key[1], raw))
             except ee.PowerLost:
                 # the drive drops off the bus; it comes back in INIT with the EEPROM as far as it was written
                 self._power_loss()
@@ -93,10 +96,8 @@ class ProcessData(PdoConfig):
         return self._pack_inputs()
 
     def _pdo_write(self, index: int, sub: int, raw: bytes) -> bool:
-        """Store one mapped output; True when the object has a reaction to run once the image is latched."""
-        old = self._store.get((index, sub))
-        if old == raw:
-            return False  # unchanged: nothing to store and nothing to react to
+        """Store one mapped output that changed; True when the object has a reaction to run once the image is
+        latched."""
         handler = self._handlers_down.get(index)
         if index in (0x2065, 0x2067) and handler is not None:
             try:
@@ -109,16 +110,16 @@ class ProcessData(PdoConfig):
     def _pack_inputs(self) -> bytes:
         """The input image: each mapped object's value, cut or padded with zeros to its mapped length."""
         tx = self.layout[TX]
-        store = self._store
-        image = bytearray(tx.size)
-        bits_image = 0  # entries that do not sit on whole bytes
-        for index, sub, lo, hi, offset, bits in tx.slots():
-            raw = store.get((index, sub), b"")
-            if lo >= 0:
-                n = hi - lo
-                image[lo:hi] = raw if len(raw) == n else raw[:n].ljust(n, b"\x00")
-            else:
-                bits_image |= (int.from_bytes(raw, "little") & ((1 << bits) - 1)) << offset
-        if bits_image:
-            return (int.from_bytes(image, "little") | bits_image).to_bytes(tx.size, "little")
-        return bytes(image)
+        stored = self._store.get
+        pieces = tx.pieces()
+        if pieces is not None:
+            # on whole bytes: the values themselves, joined (a gap's key is in no store: its zeros)
+            raws = [stored(key, zeros) for key, zeros in pieces]
+            for i, (raw, (_, zeros)) in enumerate(zip(raws, pieces)):
+                if len(raw) != len(zeros):
+                    raws[i] = raw[:len(zeros)].ljust(len(zeros), b"\x00")
+            return b"".join(raws)
+        image = 0
+        for key, _, _, offset, bits in tx.slots():
+            image |= (int.from_bytes(stored(key, b""), "little") & ((1 << bits) - 1)) << offset
+        return image.to_bytes(tx.size, "little")

@@ -122,6 +122,8 @@ class MailboxServer:
 
     def _drain_emergencies(self) -> None:
         emergencies = self.drive.emergencies
+        if len(emergencies) == self._emcy_seen:
+            return  # nothing new (every frame asks)
         new = emergencies[self._emcy_seen:]
         self._emcy_seen = len(emergencies)
         if MailboxType.COE not in self.protocols or self.drive.state() not in MAILBOX_STATES:

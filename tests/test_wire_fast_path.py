@@ -1,11 +1,16 @@
 """What the frame path keeps between frames is forgotten when what it was derived from changes (issue 13,
 item 7): the ESC's pieces of an access at sync manager boundaries and its FMMU geometry per logical address
 (``ecattool.sim.esc.mapping``), and the drive's byte slots of its process image (``Layout.slots``). Each test
-uses a configuration for a cycle, changes it, and checks the next cycle follows the new one."""
+uses a configuration for a cycle, changes it, and checks the next cycle follows the new one. The shortcuts the
+cycle takes (whole bytes instead of bits, integers instead of fractions) agree with the general way."""
 
 from __future__ import annotations
 
 import struct
+from fractions import Fraction
+
+from hypothesis import given
+from hypothesis import strategies as st
 
 from ecattool import profiles
 from ecattool.od.model import EcState
@@ -13,10 +18,11 @@ from ecattool.sii.builder import build
 from ecattool.sim import Drive
 from ecattool.sim.bus import Bus, Cmd, Datagram
 from ecattool.sim.bus.loop import Loop
-from ecattool.sim.drive.core import Layout
+from ecattool.sim.drive.core import GAP, TX, Layout
 from ecattool.sim.esc import Esc, EscApplication
 from ecattool.sim.esc import registers as R
 from ecattool.sim.esc.mapping import Derived
+from ecattool.sim.units import Units, floor_div, to_int
 
 ST = 0x1001
 
@@ -104,11 +110,34 @@ def test_derived_values_follow_their_source_and_stay_bounded() -> None:
     assert calls == [1, 1, 2, 3, 1]
 
 
-def test_layout_slots_follow_the_entries() -> None:
+def test_layout_slots_and_pieces_follow_the_entries() -> None:
     layout = Layout(32, [(0x6040, 0, 0, 16), (0, 0, 16, 4), (0x6060, 0, 20, 4), (0x607A, 0, 24, 8)])
-    assert layout.slots() == ((0x6040, 0, 0, 2, 0, 16), (0x6060, 0, -1, -1, 20, 4), (0x607A, 0, 3, 4, 24, 8))
+    assert layout.slots() == (((0x6040, 0), 0, 2, 0, 16), ((0x6060, 0), -1, -1, 20, 4), ((0x607A, 0), 3, 4, 24, 8))
+    assert layout.pieces() is None  # bits 16..23 are not whole bytes: the exchange takes the bit path
+    layout.entries[1:3] = [(0, 0, 16, 8)]
+    assert layout.slots() == (((0x6040, 0), 0, 2, 0, 16), ((0x607A, 0), 3, 4, 24, 8))
+    assert layout.pieces() == (((0x6040, 0), bytes(2)), (GAP, bytes(1)), ((0x607A, 0), bytes(1)))
     layout.entries[0] = (0x6041, 0, 0, 16)
-    assert layout.slots()[0] == (0x6041, 0, 0, 2, 0, 16)
+    assert layout.slots()[0] == ((0x6041, 0), 0, 2, 0, 16)
+
+
+def test_inputs_on_whole_bytes_and_bits_agree() -> None:
+    """The same objects packed through whole-byte pieces and through the bit path (a 4-bit gap) give the same
+    bytes where they overlap; a value longer than its mapping is cut, a shorter one padded."""
+    drive = Drive.from_profile("hdt")
+    drive.request_state(EcState.PREOP)
+    drive.request_state(EcState.SAFEOP)
+    drive._store[(0x6041, 0)] = b"\x37\x16\xFF"  # one byte more than mapped: cut
+    drive._store[(0x6061, 0)] = b""  # shorter: zeros
+    whole = Layout(48, [(0x6041, 0, 0, 16), (0x6061, 0, 16, 8), (0, 0, 24, 8), (0x6064, 0, 32, 16)])
+    bits = Layout(52, [(0x6041, 0, 0, 16), (0x6061, 0, 16, 8), (0, 0, 24, 12), (0x6064, 0, 36, 16)])
+    drive._store[(0x6064, 0)] = b"\x34\x12\x00\x00"
+    drive.layout[TX] = whole
+    packed = drive._pack_inputs()
+    assert whole.pieces() is not None and packed == b"\x37\x16\x00\x00\x34\x12"
+    drive.layout[TX] = bits
+    assert bits.pieces() is None
+    assert drive._pack_inputs() == b"\x37\x16\x00\x00\x40\x23\x01"
 
 
 def test_a_new_pdo_mapping_after_a_cycle_is_exchanged() -> None:
@@ -141,3 +170,11 @@ def test_a_new_pdo_mapping_after_a_cycle_is_exchanged() -> None:
     assert drive.value(0x607A) == 1234 and drive.value(0x6040) == 6
     position, status = struct.unpack("<iH", back)
     assert position == drive.value(0x6064) and status == drive.value(0x6041) != 0
+
+
+@given(st.fractions(), st.fractions())
+def test_conversions_to_user_integers_floor_as_the_fractions_do(value: Fraction, factor: Fraction) -> None:
+    assert floor_div(value, factor) == (to_int(value / factor) if factor else 0)
+    units = Units(lambda index, sub: {(0x608F, 1): factor.numerator, (0x608F, 2): factor.denominator}.get((index, sub)))
+    assert units.position_to_user_int(value) == to_int(units.position_to_user(value))
+    assert units.velocity_to_user_int(value) == to_int(units.velocity_to_user(value))
