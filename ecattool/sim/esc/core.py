@@ -48,6 +48,11 @@ class EscApplication:
     def dc_activation(self, esc: "Esc", activation: int) -> None:
         """The master wrote the DC activation register 0x0981."""
 
+    def pd_watchdog_expired(self, esc: "Esc") -> None:
+        """The process data watchdog expired: no write of a watchdog-triggering SM for longer than its time.
+        An ESC without an application (digital I/O) would release its outputs; a slave application in OP
+        goes to SAFE-OP with AL status code 0x001B (ETG.1000.6, as the slave stack code does)."""
+
     def frame_done(self, esc: "Esc") -> None:
         """A frame has passed this slave."""
 
@@ -107,6 +112,8 @@ class Esc:
         self._fmmus: list[_Fmmu] | None = None
         self._al_event = False
         self.frame_ns = 0
+        #: host time (ns) of the last process data watchdog trigger while the watchdog runs, else None
+        self._wd_pd_since: int | None = None
         m = self.mem
         m[R.TYPE], m[R.REVISION] = esc_type, revision
         m[R.BUILD:R.BUILD + 2] = build.to_bytes(2, "little")
@@ -119,7 +126,6 @@ class Esc:
         self._put16(R.WD_DIVIDER, 0x09C2)  # 100 us
         self._put16(R.WD_TIME_PDI, 1000)
         self._put16(R.WD_TIME_PD, 1000)
-        self._put16(R.WD_STATUS_PD, 0x0001)
         self._put16(R.DC_SPEED_START, 0x1000)
         self._put16(R.DC_FILTER_DEPTH, 0x0C04)
         self._put16(R.ECAT_EVENT_MASK, 0x0000)
@@ -211,6 +217,8 @@ class Esc:
         """A frame arrives; ``arrival_ns`` per port (host time in ns, None where it does not pass)."""
         self._arrival = arrival_ns
         self.frame_ns = arrival_ns[0] if arrival_ns[0] is not None else self.clock.host_ns()
+        if self._wd_pd_since is not None:
+            self.watchdog_check(self.frame_ns)
 
     def end_frame(self) -> None:
         self.app.frame_done(self)
@@ -289,6 +297,9 @@ class Esc:
             self._sync_events()
         if addr < R.DC_SYNC1_CYCLE and end > R.DC_ACTIVATION_STATUS:
             self._sync_dc_status()
+        if addr < R.WD_STATUS_PD + 2 and end > R.WD_STATUS_PD:
+            running = self._wd_pd_since is not None or not self.watchdog_pd_ns()
+            self._put16(R.WD_STATUS_PD, 1 if running else 0)
 
     def ecat_write(self, addr: int, data: bytes) -> bool:
         """The master writes ``data`` at ``addr``; False when the ESC refuses (no working counter)."""
@@ -320,7 +331,7 @@ class Esc:
             else:
                 self._sm_full[smn] = True
                 if sm.control & SM_WATCHDOG_TRIGGER:
-                    self._put16(R.WD_STATUS_PD, 1)
+                    self._wd_pd_since = self.frame_ns
                 self.app.buffer_written(self, smn, buffer)
         return ok
 
@@ -353,6 +364,11 @@ class Esc:
             # writing an error counter clears it
             for a in range(max(addr, R.RX_ERROR_COUNTER), min(end, R.RX_ERROR_COUNTER + 0x14)):
                 self.mem[a] = 0
+        if hit(R.WD_DIVIDER, R.WD_TIME_PD + 2 - R.WD_DIVIDER) and self._wd_pd_since is not None:
+            self._wd_pd_since = self.frame_ns  # a new watchdog time counts from its write
+        if hit(R.WD_COUNTER_PD, 2):
+            # writing either watchdog counter clears both
+            self.mem[R.WD_COUNTER_PD] = self.mem[R.WD_COUNTER_PDI] = 0
         if hit(R.EEPROM_CONTROL, 2):
             self._eeprom_command()
         if hit(R.DC_RECEIVE_TIME, 4):
@@ -399,6 +415,27 @@ class Esc:
         if did_read:
             data[:] = value.to_bytes(len(data), "little")
         return did_read, did_write
+
+    # ------------------------------------------------------------------------------------------
+    # the process data watchdog 0x0400-0x0443
+    # ------------------------------------------------------------------------------------------
+    def watchdog_pd_ns(self) -> int:
+        """The process data watchdog time in ns, 0 when disabled: (divider 0x0400 + 2) x 40 ns x 0x0420."""
+        return (self.u16(R.WD_DIVIDER) + 2) * 40 * self.u16(R.WD_TIME_PD)
+
+    def watchdog_check(self, now_ns: int) -> None:
+        """Expire the process data watchdog when its time has passed since the last trigger (a complete write
+        of a buffered SM whose control has bit 6 set): status 0x0440 reads 0, counter 0x0442 counts (saturates),
+        and the application is told. The check runs when a frame arrives, so the master sees the expiry in the
+        first frame after the watchdog time, as it would from a real ESC; a stopped watchdog waits for the
+        next trigger."""
+        since = self._wd_pd_since
+        timeout = self.watchdog_pd_ns()
+        if since is None or not timeout or now_ns - since <= timeout:
+            return
+        self._wd_pd_since = None
+        self.mem[R.WD_COUNTER_PD] = min(0xFF, self.mem[R.WD_COUNTER_PD] + 1)
+        self.app.pd_watchdog_expired(self)
 
     # ------------------------------------------------------------------------------------------
     # AL, DL, events
