@@ -273,3 +273,21 @@ def test_process_data_watchdog_outside_op_and_without_outputs_never_trips() -> N
     assert m2.al(8) == (0x08, 0)
     t.ms(500)
     assert m2.al(8) == (0x08, 0) and m2.rd(R.WD_STATUS_PD, 2)[0] == b"\x00\x00"
+
+
+def test_a_slow_mailbox_holds_its_answer_back() -> None:
+    """Faults.slow_mailbox: the answer waits in the slave until its time has come (the master keeps polling SM1
+    and finds it empty), then comes whole; the next request is answered at once."""
+    t = FakeTime()
+    m = MiniMaster(VirtualSlave.from_drive(Drive.from_profile("hdt")), clock=t)
+    m.mailbox_config()
+    assert m.al(2) == (0x02, 0)
+    m.slave.drive.faults.slow_mailbox(EcState.PREOP, 50)
+    assert m.send_mbx(struct.pack("<HBHB4x", 0x2000, 0x40, 0x1018, 1)) == 1
+    for _ in range(3):
+        t.ms(16)
+        assert m.recv_mbx() is None
+    t.ms(3)
+    reply = m.recv_mbx() or m.recv_mbx()  # the application fills SM1 after the frame that finds it due
+    assert reply is not None and reply[6:10] == m.slave.drive.sdo_upload(0x1018, 1)
+    assert m.upload(0x1018, 2) == m.slave.drive.sdo_upload(0x1018, 2)

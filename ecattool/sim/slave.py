@@ -68,6 +68,8 @@ class VirtualSlave(EscApplication):
         mbx = self._mailbox_defaults()
         self.mailbox = MailboxServer(drive, mbx[0], mbx[1])
         self.refusals: list[Refusal] = []
+        #: host time (ns) before which the mailbox answer waits (a slow mailbox, ``Faults.slow_mailbox``)
+        self._reply_due: int | None = None
         self._sync_state()
 
     # ------------------------------------------------------------------------------------------
@@ -178,6 +180,9 @@ class VirtualSlave(EscApplication):
     # ------------------------------------------------------------------------------------------
     def mailbox_written(self, esc: Esc, sm: int, data: bytes) -> None:
         esc.pdi_mailbox_take(sm)
+        delay = self.drive.faults.mailbox_delay_ms(self.drive.state())
+        if delay:
+            self._reply_due = esc.frame_ns + delay * 1_000_000
         self.mailbox.handle(data)
         self._push_mailbox()
 
@@ -195,6 +200,10 @@ class VirtualSlave(EscApplication):
         sm = esc.sm(MBX_IN)
         if not sm.enabled or esc.sm_full(MBX_IN) or esc.sm_deactivated(MBX_IN):
             return
+        if self._reply_due is not None:
+            if esc.frame_ns < self._reply_due:
+                return
+            self._reply_due = None
         reply = self.mailbox.pending()
         if reply is not None:
             esc.pdi_mailbox_put(MBX_IN, reply)
