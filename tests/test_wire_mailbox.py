@@ -41,8 +41,9 @@ def _scenario(script: str, *args: str, timeout: int, module: str) -> dict[str, A
     if reason:
         print(f"wire test skipped: {reason}", file=sys.stderr)
         pytest.skip(reason)
-    done = subprocess.run(netns.command([sys.executable, str(HERE / script), *args]), capture_output=True,
-                          text=True, timeout=timeout, cwd=ROOT)
+    # faulthandler: a crash inside a master's compiled code still names the Python line that called it
+    done = subprocess.run(netns.command([sys.executable, "-X", "faulthandler", str(HERE / script), *args]),
+                          capture_output=True, text=True, timeout=timeout, cwd=ROOT)
     assert done.returncode == 0, done.stderr[-3000:]
     # the scenario's result is its last JSON line: KickCAT's C++ side writes its own lines to stdout, and
     # its buffer may be flushed after Python's at exit ("Opening redundant interface: None")

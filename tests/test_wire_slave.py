@@ -118,6 +118,8 @@ def test_coe_upload_agrees_with_the_drive_and_repeat(hdt: MiniMaster) -> None:
     with pytest.raises(SdoAbort) as want:
         drive.sdo_upload(0x5FFF, 0)
     assert got.value.code == want.value.code
+    # an empty string (HDT's 1008h device name) is a normal upload of size 0: an expedited reply cannot say 0 bytes
+    assert drive.sdo_upload(0x1008, 0) == b"" and hdt.upload(0x1008, 0) == b""
     # a lost read: the master toggles the repeat request and gets the same answer again
     assert hdt.send_mbx(struct.pack("<HBHB4x", 0x2000, 0x40, 0x1018, 1)) == 1
     first = hdt.recv_mbx()
