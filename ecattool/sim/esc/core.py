@@ -12,7 +12,7 @@ import struct
 from dataclasses import dataclass
 
 from ecattool.sim.esc import registers as R
-from ecattool.sim.esc.dc import Clock
+from ecattool.sim.esc.dc import Clock, next_pulse, sync1_train
 from ecattool.sim.esc.eeprom import SiiEeprom
 
 _WRITABLE = R.writable_mask()
@@ -114,6 +114,8 @@ class Esc:
         self.frame_ns = 0
         #: host time (ns) of the last process data watchdog trigger while the watchdog runs, else None
         self._wd_pd_since: int | None = None
+        #: the start time of cyclic operation the cyclic unit took when it was activated
+        self._dc_start: int | None = None
         m = self.mem
         m[R.TYPE], m[R.REVISION] = esc_type, revision
         m[R.BUILD:R.BUILD + 2] = build.to_bytes(2, "little")
@@ -376,6 +378,8 @@ class Esc:
         if hit(R.DC_SYSTEM_TIME, 8):
             self._compare_system_time(addr, data)
         if hit(R.DC_ACTIVATION, 1):
+            # the cyclic unit takes the start time when it is switched on (0x0990 is writable only while it is off)
+            self._dc_start = self.u64(R.DC_START_TIME) if self.mem[R.DC_ACTIVATION] & 0x01 else None
             self.app.dc_activation(self, self.mem[R.DC_ACTIVATION])
         if hit(R.AL_CONTROL, 2):
             self.app.al_control(self, self.u16(R.AL_CONTROL))
@@ -603,21 +607,27 @@ class Esc:
         self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = local.to_bytes(8, "little")
 
     def _sync_dc_status(self) -> None:
-        """0x0984 activation status, 0x098E/0x098F SYNC0/1 status and, while SYNC0 runs, 0x0990 = the next
-        SYNC0 pulse (the first one at or after the system time) and 0x0998 the next SYNC1 pulse."""
+        """0x0984 activation status (bit 0/1: the first SYNC0/SYNC1 pulse is still pending), 0x098E/0x098F SYNC0/1
+        status (a pulse has come), and while the cyclic unit runs 0x0990 = the next SYNC0 pulse and 0x0998 = the
+        next SYNC1 pulse (:func:`~ecattool.sim.esc.dc.sync1_train`)."""
         act, cycle, start = self.dc_sync0()
-        running = bool(act & 0x01) and bool(act & 0x02)
+        sync0 = bool(act & 0x01) and bool(act & 0x02)
+        sync1 = sync0 and bool(act & 0x04)
         now = self.system_time()
-        self.mem[R.DC_ACTIVATION_STATUS] = (0x01 if running else 0) | (0x02 if running and act & 0x04 else 0)
-        pulsed = running and now >= start
-        self.mem[R.DC_SYNC0_STATUS] = 0x01 if pulsed else 0
-        self.mem[R.DC_SYNC1_STATUS] = 0x01 if pulsed and act & 0x04 else 0
-        if running and cycle:
-            nxt = start if now <= start else start + -(-(now - start) // cycle) * cycle
-            self.mem[R.DC_START_TIME:R.DC_START_TIME + 8] = nxt.to_bytes(8, "little")
-            self.mem[R.DC_NEXT_SYNC1:R.DC_NEXT_SYNC1 + 8] = nxt.to_bytes(8, "little")
+        first1, period1 = sync1_train(start, cycle, self.u32(R.DC_SYNC1_CYCLE))
+        self.mem[R.DC_ACTIVATION_STATUS] = (0x01 if sync0 and now < start else 0) | (0x02 if sync1 and now < first1
+                                                                                      else 0)
+        self.mem[R.DC_SYNC0_STATUS] = 0x01 if sync0 and now >= start else 0
+        self.mem[R.DC_SYNC1_STATUS] = 0x01 if sync1 and now >= first1 else 0
+        if sync0:
+            self.mem[R.DC_START_TIME:R.DC_START_TIME + 8] = next_pulse(now, start, cycle).to_bytes(8, "little")
+        if sync1:
+            self.mem[R.DC_NEXT_SYNC1:R.DC_NEXT_SYNC1 + 8] = next_pulse(now, first1, period1).to_bytes(8, "little")
 
     def dc_sync0(self) -> tuple[int, int, int]:
-        """(activation 0x0981, SYNC0 cycle ns, start time) as the master wrote them."""
-        return self.mem[R.DC_ACTIVATION], self.u32(R.DC_SYNC0_CYCLE), self.u64(R.DC_START_TIME)
+        """(activation 0x0981, SYNC0 cycle ns, start time) as the master wrote them: the start time is the one the
+        cyclic unit took when it was activated (while it runs, 0x0990 reads the next SYNC0 pulse)."""
+        act = self.mem[R.DC_ACTIVATION]
+        start = self._dc_start if act & 0x01 and self._dc_start is not None else self.u64(R.DC_START_TIME)
+        return act, self.u32(R.DC_SYNC0_CYCLE), start
 
