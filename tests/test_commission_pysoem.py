@@ -18,7 +18,8 @@ from tests.fake_pysoem import VirtualClock, make_module
 
 def pysoem_on(drives):
     clock = VirtualClock()
-    target = PysoemTarget("eth-test", pysoem_module=make_module(drives), clock=clock.now, sleep=clock.sleep)
+    target = PysoemTarget("eth-test", pysoem_module=make_module(drives), clock=clock.now, sleep=clock.sleep,
+                          keep_cycling=False)
     target.master.clock = clock
     return target, target.master
 

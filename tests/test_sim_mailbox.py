@@ -499,10 +499,18 @@ def test_foe_write_of_a_setup_file_programs_the_eeprom_like_the_api():
     ("FOEFW_F515K.foe", 0x35313546, 0x8008),  # firmware only in BOOT
 ])
 def test_foe_refusals_carry_the_drive_code(name, password, code):
+    """A wrong name, password or state is refused at the write request, before any data is sent."""
     data = corpus_path("sw", SETUP).read_bytes()
     server = MailboxServer(technosoft(), 128, 128)
     seen = foe_write(server, name, data, password)
-    assert seen[-1] == (5, code) and all(op == 4 for op, _ in seen[:-1])
+    assert seen == [(5, code)]
+
+
+def test_foe_content_refused_after_the_last_packet():
+    """What is wrong inside the file shows only once the drive has it all: the data packets are acknowledged."""
+    server = MailboxServer(technosoft(), 128, 128)
+    seen = foe_write(server, "FOESW_AXIS1.bin", b"\x01\x02\x03" * 100)
+    assert seen[-1] == (5, 0x8004) and len(seen) > 2 and all(op == 4 for op, _ in seen[:-1])
 
 
 def test_foe_busy_then_ack_on_the_repeated_last_packet():

@@ -13,7 +13,8 @@ from tests.fake_pysoem import STATE_ERROR, VirtualClock, make_module
 def bus(*profiles):
     drives = [Drive.from_profile(p) for p in profiles or ("technosoft-ipos",)]
     clock = VirtualClock()
-    target = PysoemTarget("eth0", pysoem_module=make_module(drives), clock=clock.now, sleep=clock.sleep)
+    target = PysoemTarget("eth0", pysoem_module=make_module(drives), clock=clock.now, sleep=clock.sleep,
+                          keep_cycling=False)
     target.master.clock = clock
     return target, drives
 
@@ -149,3 +150,67 @@ def test_dc_without_a_sync0_cycle_runs_sync0_at_the_bus_cycle():
     s.configure_dc(0x0300)
     assert s._slave.dc == (0x03, 1_000_000, 0, None) and drive.dc == (0x0300, 1_000_000)
     assert t.cycle_s == pytest.approx(0.001)
+
+
+def _op_on_real_time(**kwargs):
+    """One HDT in OP through a target on the real clock, its keeper thread running."""
+    drive = Drive.from_profile("hdt")
+    t = PysoemTarget("eth0", pysoem_module=make_module([drive]), **kwargs)
+    s = t.slaves()[0]
+    s.request_state(EcState.SAFEOP)
+    s.exchange(bytes(len(s._slave.output)))
+    s.request_state(EcState.OP)
+    return t, s, drive
+
+
+def test_the_keeper_cycles_while_the_caller_waits_for_an_sdo():
+    """A drive's watchdog takes it out of OP when no outputs come for 100 ms (tests/test_wire_slave.py): while the
+    caller waits for a slow SDO answer, the keeper thread sends the last outputs. The fake's SDO waits with the
+    GIL released, as pysoem's does once always_release_gil is set."""
+    import time
+
+    t, s, drive = _op_on_real_time()
+    try:
+        assert t.master.always_release_gil is True
+        outputs = bytes([6, 0]) + bytes(len(s._slave.output) - 2)  # controlword 6 (shutdown)
+        s.exchange(outputs)
+        before = len(t.master.sent_at)
+        slow = s._slave.sdo_read
+
+        def slow_read(*args, **kwargs):
+            time.sleep(0.3)  # the drive is slow to answer (e.g. storing parameters)
+            return slow(*args, **kwargs)
+
+        s._slave.sdo_read = slow_read
+        s.sdo_upload(0x6041, 0)
+        kept = t.kept_cycles
+        assert kept > 0 and len(t.master.sent_at) - before >= kept
+        assert s._slave.output == outputs and drive.value(0x6040) == 6  # the last outputs, held
+        assert s.state() is EcState.OP
+    finally:
+        t.close()
+    assert t._keeper is not None and not t._keeper.is_alive()  # close() ends it
+
+
+def test_the_keeper_stops_by_itself_when_the_caller_is_gone():
+    t, s, _ = _op_on_real_time(keeper_idle_s=0.05)
+    assert t._keeper is not None
+    t._keeper.join(timeout=10)  # bounded: it ends by itself 50 ms after the last use
+    assert not t._keeper.is_alive()
+    t.close()
+
+
+def test_a_drive_that_leaves_op_by_itself_is_reported():
+    """In SAFE-OP a drive still takes its outputs and the working counter stays full: the adapter reads the AL
+    status every STATE_POLL_S of process data and names what happened."""
+    t, (drive,) = bus("hdt")
+    s = t.slaves()[0]
+    s.request_state(EcState.SAFEOP)
+    s.exchange(bytes(len(s._slave.output)))
+    s.request_state(EcState.OP)
+    for _ in range(5):
+        s.exchange(bytes(len(s._slave.output)))
+    drive.lose_communication()  # e.g. its watchdog expired
+    with pytest.raises(TargetError, match="slave 0 left OP by itself: it is in SAFEOP"):
+        for _ in range(200):  # 100 ms of 1 ms cycles at the most
+            s.exchange(bytes(len(s._slave.output)))

@@ -265,9 +265,55 @@ def test_sync0_next_pulse_and_activation_status() -> None:
     assert loop.one(Datagram.make(Cmd.FPRD, 0x1001, R.DC_ACTIVATION_STATUS, 1)).data == b"\x00"
     loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_ACTIVATION, b"\x03"))
     back = loop.one(Datagram.make(Cmd.FPRD, 0x1001, R.DC_ACTIVATION_STATUS, 0x14))
-    assert back.data[0] == 0x01 and back.data[R.DC_SYNC0_STATUS - R.DC_ACTIVATION_STATUS] == 0x01
+    # the first pulse is no longer pending (0x0984 bit 0), SYNC0 has pulsed (0x098E)
+    assert back.data[0] == 0x00 and back.data[R.DC_SYNC0_STATUS - R.DC_ACTIVATION_STATUS] == 0x01
     nxt = int.from_bytes(back.data[R.DC_START_TIME - R.DC_ACTIVATION_STATUS:][:8], "little")
     assert (nxt - start) % 1_000_000 == 0 and nxt > now
+
+
+def _dc_registers(loop: Loop) -> tuple[int, int, int, int, int, int]:
+    """(system time, 0x0984, 0x098E, 0x098F, next SYNC0 0x0990, next SYNC1 0x0998) in one frame."""
+    d = loop.transact([Datagram.make(Cmd.FPRD, 0x1001, R.DC_SYSTEM_TIME, 8),
+                       Datagram.make(Cmd.FPRD, 0x1001, R.DC_ACTIVATION_STATUS, 0x1C)])
+    assert d is not None
+    regs = bytes(d[1].data)
+    at = R.DC_ACTIVATION_STATUS
+    return (int.from_bytes(d[0].data, "little"), regs[0], regs[R.DC_SYNC0_STATUS - at], regs[R.DC_SYNC1_STATUS - at],
+            int.from_bytes(regs[R.DC_START_TIME - at:][:8], "little"),
+            int.from_bytes(regs[R.DC_NEXT_SYNC1 - at:][:8], "little"))
+
+
+@pytest.mark.parametrize(("sync1_cycle", "period"), [
+    (0, 1_000_000),              # SYNC1 reflects SYNC0
+    (250_000, 1_000_000),        # below the SYNC0 cycle: every SYNC0 pulse, 250 us later
+    (1_000_000, 1_000_000),      # equal: with the next SYNC0 pulse
+    (1_500_000, 2_000_000),      # between 1x and 2x: every second SYNC0 pulse, 1.5 ms after it
+    (3_000_000, 3_000_000),      # 3x: every third
+])
+def test_sync1_follows_sync0(sync1_cycle: int, period: int) -> None:
+    """Beckhoff ESC technology, SYNC1 generation: each SYNC1 pulse comes the SYNC1 cycle after a SYNC0 pulse, the
+    next one after the first SYNC0 pulse at or after it (0: SYNC1 is SYNC0). 0x0998 reads the next SYNC1 pulse;
+    0x0984 bit 0/1 say the first SYNC0/SYNC1 pulse is still pending. SOEM's dc_sync with SYNC1 writes 0x07."""
+    cycle = 1_000_000
+    loop = _loop(1)
+    _configure_addresses(loop)
+    now = int.from_bytes(loop.one(Datagram.make(Cmd.FPRD, 0x1001, R.DC_SYSTEM_TIME, 8)).data, "little")
+    start = now + 5_000_000_000  # 5 s ahead: nothing pulses during the first reads
+    loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_SYNC0_CYCLE, struct.pack("<II", cycle, sync1_cycle)))
+    loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_START_TIME, struct.pack("<Q", start)))
+    loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_ACTIVATION, b"\x07"))
+    _, pending, s0, s1, next0, next1 = _dc_registers(loop)
+    first1 = start + sync1_cycle
+    assert (pending, s0, s1, next0, next1) == (0x03, 0, 0, start, first1)
+    esc = loop.bus.escs[0]
+    esc.clock.offset_ns += 7_000_000_000  # 7 s later in the slave's time: 2 s of pulses have passed
+    t, pending, s0, s1, next0, next1 = _dc_registers(loop)
+    assert (pending, s0, s1) == (0x00, 0x01, 0x01)
+    assert next0 >= t and (next0 - start) % cycle == 0 and next0 - t <= cycle
+    assert next1 >= t and (next1 - first1) % period == 0 and next1 - t <= period
+    # the master rewrites 0x0990 while the unit runs: the unit keeps the start time it took
+    loop.one(Datagram.make(Cmd.FPWR, 0x1001, R.DC_START_TIME, struct.pack("<Q", start + 123)))
+    assert (_dc_registers(loop)[4] - start) % cycle == 0
 
 
 def test_loop_faults_lose_or_spoil_frames() -> None:

@@ -51,3 +51,18 @@ def test_a_fault_on_the_wire_fails_commission_and_a_second_run_converges(
         assert failed[0]["abort_code"] == "0x06090030"
     assert second["returncode"] == 0 and json.loads(second["stdout"])["ok"] is True, second
     assert case["server"] == {"returncode": 0, "stderr": ""}
+
+
+def test_a_slow_sdo_in_op_the_watchdog_and_the_keeper() -> None:
+    """The drive's process data watchdog on the wire (100 ms, ESC defaults): HDT answers its first SDO in OP
+    300 ms late. A master that stops cycling while it waits loses the drive to SAFE-OP with AL status code
+    0x001B, and commission says so; ``ecattool commission --target pysoem`` keeps cycling and passes."""
+    out = _scenario("wire_mailbox_scenario.py", "watchdog", HDT, "300", timeout=240, module="pysoem")
+    without, with_keeper = out["runs"]
+    assert without["returncode"] == 1, without
+    report = json.loads(without["stdout"])
+    failed = [s for d in report["drives"] for s in d["steps"] if not s["ok"]]
+    assert failed and "left OP by itself: it is in SAFEOP with AL status code 0x001B (sync manager watchdog)" \
+        in failed[0]["detail"], failed
+    assert with_keeper["returncode"] == 0 and json.loads(with_keeper["stdout"])["ok"] is True, with_keeper
+    assert out["server"] == {"returncode": 0, "stderr": ""}

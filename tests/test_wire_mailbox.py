@@ -41,8 +41,15 @@ def _scenario(script: str, *args: str, timeout: int, module: str) -> dict[str, A
     if reason:
         print(f"wire test skipped: {reason}", file=sys.stderr)
         pytest.skip(reason)
-    done = subprocess.run(netns.command([sys.executable, str(HERE / script), *args]), capture_output=True,
-                          text=True, timeout=timeout, cwd=ROOT)
+    # faulthandler: a crash inside a master's compiled code still names the Python line that called it
+    argv = netns.command([sys.executable, "-X", "faulthandler", str(HERE / script), *args])
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, cwd=ROOT)
+    if done.returncode < 0 and module == "kickcat":
+        # KickCAT 2.5's C++ master has crashed (SIGSEGV) in create_mapping's SDO reads on a heavily loaded machine
+        # (the full suite beside a benchmark); it is KickCAT's own process that dies: run the scenario once more
+        print(f"KickCAT crashed (signal {-done.returncode}), running the scenario again:\n{done.stderr[-1500:]}",
+              file=sys.stderr)
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, cwd=ROOT)
     assert done.returncode == 0, done.stderr[-3000:]
     # the scenario's result is its last JSON line: KickCAT's C++ side writes its own lines to stdout, and
     # its buffer may be flushed after Python's at exit ("Opening redundant interface: None")

@@ -6,6 +6,7 @@ AL codes, the error indication until acknowledged, process data through SM2/SM3,
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 
 import pytest
 
@@ -31,9 +32,9 @@ def _fmmu(logical: int, length: int, physical: int, kind: int) -> bytes:
 class MiniMaster:
     """Just enough master to drive one slave: register access, AL requests, CoE expedited uploads."""
 
-    def __init__(self, slave: VirtualSlave) -> None:
+    def __init__(self, slave: VirtualSlave, clock: Callable[[], int] | None = None) -> None:
         self.slave = slave
-        self.loop = Loop(Bus([slave.esc]))
+        self.loop = Loop(Bus([slave.esc]) if clock is None else Bus([slave.esc], clock=clock))
         self.counter = 0
         assert self.loop.one(Datagram.make(Cmd.APWR, 0, R.STATION_ADDRESS, struct.pack("<H", ST))).wkc == 1
         words = slave.esc.eeprom.words(0x18, 4)  # SII: standard mailbox offsets and sizes
@@ -117,6 +118,8 @@ def test_coe_upload_agrees_with_the_drive_and_repeat(hdt: MiniMaster) -> None:
     with pytest.raises(SdoAbort) as want:
         drive.sdo_upload(0x5FFF, 0)
     assert got.value.code == want.value.code
+    # an empty string (HDT's 1008h device name) is a normal upload of size 0: an expedited reply cannot say 0 bytes
+    assert drive.sdo_upload(0x1008, 0) == b"" and hdt.upload(0x1008, 0) == b""
     # a lost read: the master toggles the repeat request and gets the same answer again
     assert hdt.send_mbx(struct.pack("<HBHB4x", 0x2000, 0x40, 0x1018, 1)) == 1
     first = hdt.recv_mbx()
@@ -173,3 +176,120 @@ def test_dc_activation_reaches_the_drive(hdt: MiniMaster) -> None:
     assert dc[-1] == {"assign_activate": 0x0300, "sync0_cycle_ns": 1_000_000, "sync0_shift_ns": 250_000}
     hdt.wr(R.DC_ACTIVATION, b"\x00")
     assert [e.data for e in hdt.slave.drive.events if e.kind == "dc"][-1]["assign_activate"] == 0
+
+
+class FakeTime:
+    """The bus's host clock (ns), advanced by the test: the watchdog is checked without waiting."""
+
+    def __init__(self) -> None:
+        self.ns = 10_000_000_000
+
+    def __call__(self) -> int:
+        return self.ns
+
+    def ms(self, n: float) -> None:
+        self.ns += int(n * 1_000_000)
+
+
+def _to_op(m: MiniMaster, out_len: int = 28, in_len: int = 20) -> bytearray:
+    """HDT (default assignment) to OP with one process data cycle; the outputs (controlword 0)."""
+    m.mailbox_config()
+    assert m.al(2) == (0x02, 0)
+    _pd_config(m, out_len, in_len)
+    assert m.al(4) == (0x04, 0)
+    outputs = bytearray(out_len)
+    assert m.loop.one(Datagram.logical(Cmd.LRW, 0, bytes(outputs) + bytes(in_len))).wkc == 3
+    assert m.al(8) == (0x08, 0)
+    return outputs
+
+
+def _cycle(m: MiniMaster, outputs: bytes, in_len: int = 20) -> int:
+    return m.loop.one(Datagram.logical(Cmd.LRW, 0, bytes(outputs) + bytes(in_len))).wkc
+
+
+def test_process_data_watchdog_takes_the_drive_out_of_op_with_0x001b() -> None:
+    """ET1100 watchdog: (0x0400 + 2) x 40 ns x 0x0420, default 2498 / 1000 = 100 ms (HDT manual 3.04),
+    triggered by each complete write of SM2 (control bit 6). Expired in OP: SAFE-OP + error + 0x001B, the
+    status 0x0440 reads 0 and the counter 0x0442 counts; the master acknowledges and goes back to OP."""
+    t = FakeTime()
+    m = MiniMaster(VirtualSlave.from_drive(Drive.from_profile("hdt")), clock=t)
+    outputs = _to_op(m)
+    wd = m.rd(R.WD_DIVIDER, 2)[0] + m.rd(R.WD_TIME_PD, 2)[0]
+    assert struct.unpack("<HH", wd) == (2498, 1000)
+    for _ in range(5):  # cycles 99 ms apart keep it alive
+        t.ms(99)
+        assert _cycle(m, outputs) == 3
+    assert m.rd(R.WD_STATUS_PD, 2)[0] == b"\x01\x00"
+    assert m.al(8) == (0x08, 0)
+    t.ms(100.001)  # just over 100 ms since the last write of SM2: the next frame finds it expired
+    status, code = m.al(8)  # a request for OP without acknowledge is ignored while the error shows
+    assert (status, code) == (0x14, 0x001B)
+    assert m.slave.drive.state() is EcState.SAFEOP
+    assert m.rd(R.WD_STATUS_PD, 2)[0] == b"\x00\x00" and m.rd(R.WD_COUNTER_PD, 1)[0] == b"\x01"
+    reason = [e.data for e in m.slave.drive.events if e.kind == "state"][-1]
+    assert reason["al_status"] == 0x001B and reason["reason"] == "sync manager watchdog"
+    assert _cycle(m, outputs) == 3  # SAFE-OP: the SM2 write is taken (and triggers), the drive ignores it
+    assert m.al(4 | 0x10) == (0x04, 0)  # acknowledged
+    assert m.al(8) == (0x08, 0) and _cycle(m, outputs) == 3
+    m.wr(R.WD_COUNTER_PD, b"\x00")  # a write clears the counter
+    assert m.rd(R.WD_COUNTER_PD, 1)[0] == b"\x00"
+
+
+def test_process_data_watchdog_time_and_divider_are_the_masters() -> None:
+    t = FakeTime()
+    m = MiniMaster(VirtualSlave.from_drive(Drive.from_profile("hdt")), clock=t)
+    outputs = _to_op(m)
+    m.wr(R.WD_TIME_PD, struct.pack("<H", 0))  # 0 disables it
+    _cycle(m, outputs)
+    t.ms(5000)
+    assert m.al(8) == (0x08, 0) and m.rd(R.WD_STATUS_PD, 2)[0] == b"\x01\x00"
+    m.wr(R.WD_DIVIDER, struct.pack("<H", 498))  # 20 us
+    m.wr(R.WD_TIME_PD, struct.pack("<H", 1000))  # 20 ms
+    _cycle(m, outputs)
+    t.ms(19)
+    assert m.al(8) == (0x08, 0)
+    _cycle(m, outputs)
+    t.ms(21)
+    assert m.al(8) == (0x14, 0x001B)
+
+
+def test_process_data_watchdog_outside_op_and_without_outputs_never_trips() -> None:
+    """The application acts on an expiry only in OP; SAFE-OP keeps its state. An SM2 without the watchdog
+    trigger bit never starts it."""
+    t = FakeTime()
+    m = MiniMaster(VirtualSlave.from_drive(Drive.from_profile("hdt")), clock=t)
+    m.mailbox_config()
+    m.al(2)
+    _pd_config(m, 28, 20)
+    assert m.al(4) == (0x04, 0)
+    _cycle(m, bytes(28))
+    t.ms(500)
+    assert m.al(4) == (0x04, 0) and m.rd(R.WD_COUNTER_PD, 1)[0] == b"\x01"
+    m2 = MiniMaster(VirtualSlave.from_drive(Drive.from_profile("hdt")), clock=t)
+    m2.mailbox_config()
+    m2.al(2)
+    m2.wr(R.SM + 16, _sm(0x1100, 28, 0x24) + _sm(0x1400, 20, 0x20))  # no watchdog trigger
+    m2.wr(R.FMMU, _fmmu(0x0, 28, 0x1100, 2) + _fmmu(28, 20, 0x1400, 1))
+    assert m2.al(4) == (0x04, 0)
+    _cycle(m2, bytes(28))
+    assert m2.al(8) == (0x08, 0)
+    t.ms(500)
+    assert m2.al(8) == (0x08, 0) and m2.rd(R.WD_STATUS_PD, 2)[0] == b"\x00\x00"
+
+
+def test_a_slow_mailbox_holds_its_answer_back() -> None:
+    """Faults.slow_mailbox: the answer waits in the slave until its time has come (the master keeps polling SM1
+    and finds it empty), then comes whole; the next request is answered at once."""
+    t = FakeTime()
+    m = MiniMaster(VirtualSlave.from_drive(Drive.from_profile("hdt")), clock=t)
+    m.mailbox_config()
+    assert m.al(2) == (0x02, 0)
+    m.slave.drive.faults.slow_mailbox(EcState.PREOP, 50)
+    assert m.send_mbx(struct.pack("<HBHB4x", 0x2000, 0x40, 0x1018, 1)) == 1
+    for _ in range(3):
+        t.ms(16)
+        assert m.recv_mbx() is None
+    t.ms(3)
+    reply = m.recv_mbx() or m.recv_mbx()  # the application fills SM1 after the frame that finds it due
+    assert reply is not None and reply[6:10] == m.slave.drive.sdo_upload(0x1018, 1)
+    assert m.upload(0x1018, 2) == m.slave.drive.sdo_upload(0x1018, 2)

@@ -4,6 +4,7 @@ the mailbox over the wire with SOEM (pysoem) as the master.
     python wire_mailbox_scenario.py od SOURCE                  # pysoem's slave.od, then config_map
     python wire_mailbox_scenario.py faults PROJECT SPEC...     # two commission runs against each faulty bus
     python wire_mailbox_scenario.py serve PROJECT SPEC         # a faulty bus (started by 'faults')
+    python wire_mailbox_scenario.py watchdog PROJECT MS        # a slow SDO in OP against the drive's watchdog
 
 ``faults``: for each PROJECT SPEC pair, the virtual bus serves PROJECT with the fault SPEC (see ``serve``)
 armed in its first drive or on its link; ``ecattool commission --target pysoem`` then runs twice against the
@@ -79,7 +80,8 @@ class FrameFaults:
 def serve(project: str, spec: str) -> None:
     """Serve PROJECT with the fault SPEC armed: ``sdo-abort:NTH:CODE`` (the NTH SDO request from now is
     answered with abort CODE), ``al-refusal:STATE:CODE`` (the next request for STATE is refused with AL status
-    code CODE), ``eeprom-power:WORDS`` (the power fails after WORDS more EEPROM words are written), or
+    code CODE), ``eeprom-power:WORDS`` (the power fails after WORDS more EEPROM words are written),
+    ``mailbox-slow:STATE:MS:TIMES`` (the next TIMES mailbox requests in STATE are answered MS late), or
     ``lost|corrupt|wkc:AFTER`` (:class:`FrameFaults`)."""
     import signal
 
@@ -98,6 +100,8 @@ def serve(project: str, spec: str) -> None:
         faults.refuse_state(EcState[args[0]], int(args[1], 0))
     elif kind == "eeprom-power":
         faults.power_loss_during_eeprom_write(int(args[0]))
+    elif kind == "mailbox-slow":
+        faults.slow_mailbox(EcState[args[0]], int(args[1]), int(args[2]))
     elif kind in FRAME_FAULTS:
         frame_fault = FrameFaults(kind, int(args[0]))
 
@@ -134,11 +138,47 @@ def faults(cases: list[tuple[str, str]]) -> dict[str, Any]:
     return {"cases": out}
 
 
+#: commission through a pysoem target that does not cycle while it waits for an SDO (argv: PROJECT IFNAME)
+_WITHOUT_KEEPER = """
+import json, sys
+from ecattool.commission.runner import commission
+from ecattool.target.pysoem import PysoemTarget
+target = PysoemTarget(sys.argv[2], keep_cycling=False)
+try:
+    report = commission(sys.argv[1], target)
+finally:
+    target.close()
+print(json.dumps(report.to_json()))
+sys.exit(0 if report.ok else 1)
+"""
+
+
+def watchdog(project: str, ms: str) -> dict[str, Any]:
+    """PROJECT's drive answers its first SDO request in OP MS late (longer than its 100 ms process data
+    watchdog), twice: commission through a target that stops the process data while it waits (the drive must
+    leave OP with AL status code 0x001B and commission must say so), then ``ecattool commission`` (its
+    pysoem target keeps the process data cycling: the drive stays in OP)."""
+    spec = f"mailbox-slow:OP:{ms}:2"
+    server, ready = start_server([project], [sys.executable, __file__, "serve", project, spec])
+    runs = []
+    try:
+        for argv in ([sys.executable, "-c", _WITHOUT_KEEPER, project, MASTER_IF],
+                     [sys.executable, "-m", "ecattool", "commission", project, "--target", f"pysoem:{MASTER_IF}",
+                      "--json"]):
+            done = subprocess.run(argv, capture_output=True, text=True, timeout=240)
+            runs.append({"returncode": done.returncode, "stdout": done.stdout, "stderr": done.stderr[-2000:]})
+    finally:
+        stopped = stop_server(server)
+    return {"project": project, "fault": spec, "ready": ready, "runs": runs, "server": stopped}
+
+
 if __name__ == "__main__":
     mode, args = sys.argv[1], sys.argv[2:]
     if mode == "serve":
         serve(args[0], args[1])
     elif mode == "od":
         print(json.dumps(od(args[0])))
+    elif mode == "watchdog":
+        print(json.dumps(watchdog(args[0], args[1])))
     else:  # faults PROJECT SPEC [PROJECT SPEC ...]
         print(json.dumps(faults(list(zip(args[::2], args[1::2])))))

@@ -13,6 +13,7 @@ class Faults:
     sdo_count: int = 0
     _sdo: dict[int, tuple[str, int]] = field(default_factory=dict)
     _states: dict[EcState, list[int]] = field(default_factory=dict)
+    _slow: dict[EcState, list[int]] = field(default_factory=dict)
     #: EEPROM words that may still be written before the power fails (None = no power loss planned)
     eeprom_power_loss_after: int | None = None
 
@@ -27,6 +28,12 @@ class Faults:
     def refuse_state(self, state: EcState, al_status: int = 0x0011, times: int = 1) -> None:
         """The next ``times`` requests for ``state`` are refused with ``al_status``."""
         self._states.setdefault(state, []).extend([al_status] * times)
+
+    def slow_mailbox(self, state: EcState, ms: int, times: int = 1) -> None:
+        """The next ``times`` mailbox requests (SDOs) the drive receives in ``state`` are answered ``ms`` late, as
+        by a drive busy storing its parameters. On the wire only: the slave's mailbox holds the answer back for
+        that long (the in-process API has no time to wait)."""
+        self._slow.setdefault(state, []).extend([ms] * times)
 
     def power_loss_during_eeprom_write(self, after_words: int = 0) -> None:
         """The power fails while writing EEPROM word number ``after_words + 1`` from now."""
@@ -45,7 +52,14 @@ class Faults:
             return pending.pop(0)
         return None
 
+    def mailbox_delay_ms(self, state: EcState) -> int | None:
+        pending = self._slow.get(state)
+        if pending:
+            return pending.pop(0)
+        return None
+
     def clear(self) -> None:
         self._sdo.clear()
         self._states.clear()
+        self._slow.clear()
         self.eeprom_power_loss_after = None

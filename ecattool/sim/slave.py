@@ -9,7 +9,9 @@ of the drive's public API, so the in-process :class:`~ecattool.sim.Drive` and th
   INIT -> PRE-OP (0x0016; 0x0015 for BOOT), the process data SMs and FMMUs at PRE-OP -> SAFE-OP against the
   drive's PDO assignment (0x001D outputs, 0x001E inputs); SMs not valid in a state are deactivated;
 - SM0 -> mailbox server -> SM1 (with the repeat request), SM2 outputs -> ``drive.exchange`` -> SM3 inputs;
-- DC activation (0x0981, SYNC0 cycle 0x09A0, start time 0x0990) -> ``drive.configure_dc``.
+- DC activation (0x0981, SYNC0 cycle 0x09A0, start time 0x0990) -> ``drive.configure_dc``;
+- the process data watchdog expiring in OP -> ``drive.lose_communication`` (the family's reaction, 6007h):
+  SAFE-OP with the error indication and AL status code 0x001B until the master acknowledges it.
 
 The SII image is the one ``ecattool sii build`` makes: from the drive's ESI, or from the built-in profile's
 device model (the three manual families have no public ESI).
@@ -36,6 +38,7 @@ AL_INVALID_MAILBOX = 0x0016
 AL_INVALID_SM = 0x0017
 AL_INVALID_OUTPUTS = 0x001D
 AL_INVALID_INPUTS = 0x001E
+AL_SM_WATCHDOG = 0x001B
 
 _BY_CODE = {s.code: s for s in EcState}
 MBX_OUT, MBX_IN, PD_OUT, PD_IN = 0, 1, 2, 3
@@ -65,6 +68,8 @@ class VirtualSlave(EscApplication):
         mbx = self._mailbox_defaults()
         self.mailbox = MailboxServer(drive, mbx[0], mbx[1])
         self.refusals: list[Refusal] = []
+        #: host time (ns) before which the mailbox answer waits (a slow mailbox, ``Faults.slow_mailbox``)
+        self._reply_due: int | None = None
         self._sync_state()
 
     # ------------------------------------------------------------------------------------------
@@ -175,6 +180,9 @@ class VirtualSlave(EscApplication):
     # ------------------------------------------------------------------------------------------
     def mailbox_written(self, esc: Esc, sm: int, data: bytes) -> None:
         esc.pdi_mailbox_take(sm)
+        delay = self.drive.faults.mailbox_delay_ms(self.drive.state())
+        if delay:
+            self._reply_due = esc.frame_ns + delay * 1_000_000
         self.mailbox.handle(data)
         self._push_mailbox()
 
@@ -192,6 +200,10 @@ class VirtualSlave(EscApplication):
         sm = esc.sm(MBX_IN)
         if not sm.enabled or esc.sm_full(MBX_IN) or esc.sm_deactivated(MBX_IN):
             return
+        if self._reply_due is not None:
+            if esc.frame_ns < self._reply_due:
+                return
+            self._reply_due = None
         reply = self.mailbox.pending()
         if reply is not None:
             esc.pdi_mailbox_put(MBX_IN, reply)
@@ -235,6 +247,11 @@ class VirtualSlave(EscApplication):
             self.drive.configure_dc(act << 8, cycle, shift)
         else:
             self.drive.configure_dc(0, 0, 0)
+
+    def pd_watchdog_expired(self, esc: Esc) -> None:
+        if self.drive.state() is EcState.OP:
+            self.drive.lose_communication()
+            self._sync_state(error=True, code=AL_SM_WATCHDOG)
 
     def frame_done(self, esc: Esc) -> None:
         if self.drive.state().code != esc.al_state:

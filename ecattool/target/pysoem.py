@@ -22,16 +22,26 @@ What pysoem (1.1, over SOEM) requires, and how the adapter meets it:
   set-point per cycle, and frames sent as fast as Python can would skip set-points.
 - Emergency messages are collected through ``add_emergency_callback``; without a callback pysoem raises
   ``Emergency`` from the SDO call that happened to pop it and the SDO's own result is lost.
+- Once the IO map exists the process data never stops for long: a drive in OP leaves OP (AL status code
+  0x001B) when its sync manager watchdog (100 ms by default) sees no outputs. A keeper thread sends a cycle
+  with the last outputs whenever the caller has not cycled for two bus cycles (while it waits for an SDO, a
+  state change or its own work), as SOEM's examples keep a process data thread. SDO and process data calls
+  release the GIL (pysoem ``always_release_gil``); SOEM serialises its frames itself. The keeper stops with
+  :meth:`PysoemTarget.close`, or by itself once the caller has not used the target for ``KEEPER_IDLE_S``.
+- A drive that leaves OP by itself (its watchdog, a fault) is noticed: every ``STATE_POLL_S`` of process data
+  the adapter reads the AL status and raises a TargetError naming the state and the AL status code.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections.abc import Callable
 from types import ModuleType
 from typing import Any, TypeVar
 
+from ecattool.abort import al_status_text
 from ecattool.errors import SdoAbort, SdoTimeout, StateChangeError, TargetError
 from ecattool.esi.model import Identity
 from ecattool.od.model import EcState
@@ -43,8 +53,16 @@ STATE_TIMEOUT_US = 2_000_000
 PROCESSDATA_TIMEOUT_US = 2000
 #: the process data cycle when no DC cycle is configured, in nanoseconds
 DEFAULT_CYCLE_NS = 1_000_000
-#: how long one state check waits between two process data cycles on the way to OP, in microseconds
+#: how long one state check waits before the GIL is given back (the keeper thread may cycle) or, on the way to OP,
+#: the next process data cycle goes out, in microseconds
 OP_POLL_US = 10_000
+#: the keeper thread sends a cycle when the caller has not for this many bus cycles
+KEEP_CYCLING_AFTER = 2
+#: the keeper thread stops by itself when the target has not been used for this long, in seconds (a drive still in
+#: OP then leaves OP through its own watchdog: the safe end)
+KEEPER_IDLE_S = 5.0
+#: how often process data exchanges read the AL status to notice a drive that left OP by itself, in seconds
+STATE_POLL_S = 0.1
 #: pysoem reads into a 256-byte buffer unless told otherwise; a larger object is read again with this size
 LARGE_SDO_BYTES = 65536
 _STATE_NAMES = {EcState.INIT: "INIT_STATE", EcState.PREOP: "PREOP_STATE", EcState.BOOT: "BOOT_STATE",
@@ -91,6 +109,9 @@ class PysoemSlave:
         #: emergency messages the slave sent (pysoem ``Emergency`` objects), oldest first
         self.emergencies: list[Any] = []
         slave.add_emergency_callback(self.emergencies.append)
+        #: the state last requested (a slave asked for OP is watched for leaving it by itself)
+        self.requested: EcState | None = None
+        self._state_read_at = master.clock()
 
     @property
     def _mod(self) -> ModuleType:
@@ -105,6 +126,7 @@ class PysoemSlave:
     def _sdo(self, fn: Callable[[], _T], index: int, subindex: int) -> _T:
         """Run one pysoem SDO call, its exceptions translated into ecattool's."""
         mod = self._mod
+        self._master.touch()
         try:
             return fn()
         except mod.SdoError as exc:
@@ -165,6 +187,8 @@ class PysoemSlave:
             self._master.map()
         code = int(getattr(mod, _STATE_NAMES[state]))
         ack = int(mod.STATE_ACK) if raw & int(mod.STATE_ERROR) else 0  # never on a slave without an error
+        self._master.touch()
+        self.requested = state
         self._slave.state = code | ack
         self._slave.write_state()
         if int(reached := self._wait_for(code)) & 0x0F != code:
@@ -176,9 +200,14 @@ class PysoemSlave:
     def _wait_for(self, code: int) -> int:
         """Wait for the requested state. On the way to OP the process data keeps flowing: a drive takes
         SAFE-OP -> OP only once it has received outputs, and its sync manager watchdog is running."""
-        if code != int(self._mod.OP_STATE):
-            return int(self._slave.state_check(code, STATE_TIMEOUT_US))
         reached = 0
+        if code != int(self._mod.OP_STATE):
+            # short checks: pysoem's state_check holds the GIL, the keeper thread cycles between two of them
+            for _ in range(math.ceil(STATE_TIMEOUT_US / OP_POLL_US)):
+                reached = int(self._slave.state_check(code, OP_POLL_US))
+                if reached & 0x0F == code:
+                    break
+            return reached
         # as many paced cycles as STATE_TIMEOUT_US holds (>= 2 s); each state check may add up to OP_POLL_US, so
         # a drive that never reaches OP is given up after 2 s + cycles x OP_POLL_US at the most (~22 s at 1 ms)
         for _ in range(math.ceil(STATE_TIMEOUT_US / 1e6 / self._master.cycle_s)):
@@ -202,8 +231,9 @@ class PysoemSlave:
         if len(outputs) != size:
             raise TargetError(f"slave {self.position}: {len(outputs)} output bytes for a {size}-byte output image "
                               "(the PDO mapping the master read differs from the project's)")
-        self._slave.output = bytes(outputs)
-        wkc = self._master.cycle()
+        with self._master.lock:  # the keeper thread never sends a half-written image
+            self._slave.output = bytes(outputs)
+            wkc = self._master.cycle()
         if wkc <= 0:
             raise TargetError(f"slave {self.position}: no process data came back (working counter {wkc})")
         # ETG.1000.4: every slave adds 2 for its outputs (in OP) and 1 for its inputs. With every slave in OP
@@ -213,22 +243,49 @@ class PysoemSlave:
         op = int(self._mod.OP_STATE)
         all_op = all(int(s.state) & 0x0F == op for s in self._master.master.slaves)
         if wkc > expected or (all_op and wkc != expected):
+            self._check_still_op(now=True)  # the likeliest cause: the slave left OP
             raise TargetError(f"slave {self.position}: process data working counter {wkc}, expected {expected}")
+        self._check_still_op()
         return bytes(self._slave.input)
+
+    def _check_still_op(self, now: bool = False) -> None:
+        """Every STATE_POLL_S (or ``now``): a slave asked for OP must still be there. In SAFE-OP a drive may still
+        take its outputs (the working counter stays full): only its AL status tells that it left OP by itself."""
+        t = self._master.clock()
+        if self.requested is not EcState.OP or (not now and t - self._state_read_at < STATE_POLL_S):
+            return
+        self._state_read_at = t
+        raw = self._al_status()
+        if raw & 0x0F != int(self._mod.OP_STATE):
+            code = int(self._slave.al_status or 0)
+            raise TargetError(f"slave {self.position} left OP by itself: it is in {self._decode(raw).value} with AL "
+                              f"status code 0x{code:04X} ({al_status_text(code)})")
 
 
 class PysoemTarget:
     """A pysoem master on a network interface, e.g. ``PysoemTarget("eth0")``."""
 
     def __init__(self, ifname: str, pysoem_module: ModuleType | None = None,
-                 clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep) -> None:
+                 clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep,
+                 keep_cycling: bool = True, keeper_idle_s: float = KEEPER_IDLE_S) -> None:
         self.pysoem = pysoem_module or _import_pysoem()
         #: the bus cycle in seconds: the SYNC0 cycle once DC is configured, else 1 ms
         self.cycle_s = DEFAULT_CYCLE_NS / 1e9
         self.clock = clock
         self._sleep = sleep
         self._next_cycle = clock()
+        #: held while the IO map is written or sent (the caller's cycles and the keeper's)
+        self.lock = threading.RLock()
+        self.keep_cycling = keep_cycling
+        self.keeper_idle_s = keeper_idle_s
+        #: cycles the keeper thread sent while the caller did something else
+        self.kept_cycles = 0
+        self._used = clock()
+        self._stop = threading.Event()
+        self._keeper: threading.Thread | None = None
         self.master = self.pysoem.Master()
+        # SDO and process data calls wait in SOEM without the GIL: the keeper thread runs meanwhile
+        self.master.always_release_gil = True
         try:
             self.master.open(ifname)
         except Exception as exc:  # noqa: BLE001 - ConnectionError, or an OS error on some platforms
@@ -258,6 +315,30 @@ class PysoemTarget:
             raise TargetError(f"reading the PDO mappings failed ({len(exc.error_list)} errors, "
                               f"first: {detail})") from None
         self.mapped = True
+        if self.keep_cycling and self._keeper is None:
+            self._keeper = threading.Thread(target=self._keep, name="ecattool-pysoem-keeper", daemon=True)
+            self._keeper.start()
+
+    def touch(self) -> None:
+        """The caller uses the target (the keeper's idle time starts again)."""
+        self._used = self.clock()
+
+    def _keep(self) -> None:
+        """The keeper thread: a cycle with the last outputs whenever the caller has not sent one for
+        KEEP_CYCLING_AFTER bus cycles. Ends with close(), or once the caller has been idle for keeper_idle_s."""
+        while not self._stop.wait(self.cycle_s):
+            now = self.clock()
+            if now - self._used > self.keeper_idle_s:
+                return
+            if now < self._next_cycle + (KEEP_CYCLING_AFTER - 1) * self.cycle_s or not self.lock.acquire(blocking=False):
+                continue
+            try:
+                self._send_receive(now)
+                self.kept_cycles += 1
+            except Exception:  # noqa: BLE001 - a closed interface: the caller's next call reports it
+                return
+            finally:
+                self.lock.release()
 
     def configure_dc(self) -> None:
         """Locate the DC slaves and measure propagation delays (pysoem ``config_dc``), once."""
@@ -270,10 +351,16 @@ class PysoemTarget:
         """One process data cycle of the bus, paced: it starts one bus cycle after the previous one (a drive
         in CSP/CSV takes one set-point per SYNC0 cycle, faster frames would skip set-points). Returns the
         working counter."""
-        now = self.clock()
-        if now < self._next_cycle:
-            self._sleep(self._next_cycle - now)
-            now = self._next_cycle
+        with self.lock:
+            self.touch()
+            now = self.clock()
+            if now < self._next_cycle:
+                self._sleep(self._next_cycle - now)
+                now = self._next_cycle
+            return self._send_receive(now)
+
+    def _send_receive(self, now: float) -> int:
+        """One frame of process data (the lock held) at ``now``; the next cycle is due one bus cycle later."""
         self._next_cycle = now + self.cycle_s
         self.master.send_processdata()
         return int(self.master.receive_processdata(PROCESSDATA_TIMEOUT_US))
@@ -282,4 +369,8 @@ class PysoemTarget:
         return list(self._slaves)
 
     def close(self) -> None:
-        self.master.close()
+        self._stop.set()
+        if self._keeper is not None:
+            self._keeper.join(timeout=1.0)
+        with self.lock:
+            self.master.close()

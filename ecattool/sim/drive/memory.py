@@ -114,10 +114,10 @@ class Memory(DriveCore):
     def eeprom_words(self, start: int, count: int) -> list[int]:
         return [self.memory.read_word(ee.EEPROM, start + i) for i in range(count)]
 
-    def foe_write(self, name: str, data: bytes, password: int = 0) -> None:
-        """An FoE download. Setup files (FOESW_…, password 0) are accepted in PRE-OP/SAFE-OP/OP, and in
-        BOOT only when 210Ch = 1; firmware files (FOEFW_…) only in BOOT with the firmware password."""
-        self._log("foe", name=name, bytes=len(data), password=password, esm=self.esm.value)
+    def foe_accepts(self, name: str, password: int) -> bool:
+        """Whether an FoE write of ``name`` with ``password`` may start now (what the drive checks on the write
+        request, before any data): True for a firmware file in BOOT, False for a setup file; FoeError (with the
+        FoE error code) when it is refused."""
         if self.device.mailbox is None or "FoE" not in self.device.mailbox.protocols:
             raise FoeError(name, ee.FOE_NOT_DEFINED, "the device has no FoE mailbox")
         if self.esm is EcState.INIT:
@@ -128,8 +128,7 @@ class Memory(DriveCore):
                 raise FoeError(name, ee.FOE_ILLEGAL, "in BOOT the drive expects a FOEFW_ firmware file (210Ch = 0)")
             if password not in ee.FIRMWARE_PASSWORDS:
                 raise FoeError(name, ee.FOE_NO_RIGHTS, f"wrong firmware password 0x{password:08X}")
-            self._log("foe", name=name, result="firmware accepted")
-            return
+            return True
         if ee.is_firmware_name(name):
             raise FoeError(name, ee.FOE_BOOTSTRAP_ONLY, "firmware files are accepted only in BOOT")
         why = ee.check_setup_name(name)
@@ -139,6 +138,15 @@ class Memory(DriveCore):
             raise FoeError(name, ee.FOE_NO_RIGHTS, "setup files need password 0")
         if self.memory.locked:
             raise FoeError(name, ee.FOE_ACCESS_DENIED, "the EEPROM is locked (2091h)")
+        return False
+
+    def foe_write(self, name: str, data: bytes, password: int = 0) -> None:
+        """An FoE download. Setup files (FOESW_…, password 0) are accepted in PRE-OP/SAFE-OP/OP, and in
+        BOOT only when 210Ch = 1; firmware files (FOEFW_…) only in BOOT with the firmware password."""
+        self._log("foe", name=name, bytes=len(data), password=password, esm=self.esm.value)
+        if self.foe_accepts(name, password):
+            self._log("foe", name=name, result="firmware accepted")
+            return
         try:
             blocks = ee.parse_foe_setup(data)
         except ValueError as exc:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 from ecattool.sim.esc import registers as R
-from ecattool.sim.esc.dc import Clock
+from ecattool.sim.esc.dc import Clock, next_pulse, sync1_train
 from ecattool.sim.esc.eeprom import SiiEeprom
 from ecattool.sim.esc.mapping import Derived, Piece, Segment, pieces, segments
 
@@ -49,6 +49,11 @@ class EscApplication:
 
     def dc_activation(self, esc: "Esc", activation: int) -> None:
         """The master wrote the DC activation register 0x0981."""
+
+    def pd_watchdog_expired(self, esc: "Esc") -> None:
+        """The process data watchdog expired: no write of a watchdog-triggering SM for longer than its time.
+        An ESC without an application (digital I/O) would release its outputs; a slave application in OP
+        goes to SAFE-OP with AL status code 0x001B (ETG.1000.6, as the slave stack code does)."""
 
     def frame_done(self, esc: "Esc") -> None:
         """A frame has passed this slave."""
@@ -127,6 +132,10 @@ class Esc:
         self._piece_memo: Derived[tuple[int, int], tuple[Piece, ...]] = Derived()
         self._al_event = False
         self.frame_ns = 0
+        #: host time (ns) of the last process data watchdog trigger while the watchdog runs, else None
+        self._wd_pd_since: int | None = None
+        #: the start time of cyclic operation the cyclic unit took when it was activated
+        self._dc_start: int | None = None
         m = self.mem
         m[R.TYPE], m[R.REVISION] = esc_type, revision
         m[R.BUILD:R.BUILD + 2] = build.to_bytes(2, "little")
@@ -139,7 +148,6 @@ class Esc:
         self._put16(R.WD_DIVIDER, 0x09C2)  # 100 us
         self._put16(R.WD_TIME_PDI, 1000)
         self._put16(R.WD_TIME_PD, 1000)
-        self._put16(R.WD_STATUS_PD, 0x0001)
         self._put16(R.DC_SPEED_START, 0x1000)
         self._put16(R.DC_FILTER_DEPTH, 0x0C04)
         self._put16(R.ECAT_EVENT_MASK, 0x0000)
@@ -231,6 +239,8 @@ class Esc:
         """A frame arrives; ``arrival_ns`` per port (host time in ns, None where it does not pass)."""
         self._arrival = arrival_ns
         self.frame_ns = arrival_ns[0] if arrival_ns[0] is not None else self.clock.host_ns()
+        if self._wd_pd_since is not None:
+            self.watchdog_check(self.frame_ns)
 
     def end_frame(self) -> None:
         self.app.frame_done(self)
@@ -294,6 +304,9 @@ class Esc:
             self._sync_events()
         if addr < R.DC_SYNC1_CYCLE and end > R.DC_ACTIVATION_STATUS:
             self._sync_dc_status()
+        if addr < R.WD_STATUS_PD + 2 and end > R.WD_STATUS_PD:
+            running = self._wd_pd_since is not None or not self.watchdog_pd_ns()
+            self._put16(R.WD_STATUS_PD, 1 if running else 0)
 
     def ecat_write(self, addr: int, data: bytes) -> bool:
         """The master writes ``data`` at ``addr``; False when the ESC refuses (no working counter)."""
@@ -325,7 +338,7 @@ class Esc:
             else:
                 self._sm_full[smn] = True
                 if sm.control & SM_WATCHDOG_TRIGGER:
-                    self._put16(R.WD_STATUS_PD, 1)
+                    self._wd_pd_since = self.frame_ns
                 self.app.buffer_written(self, smn, buffer)
         return ok
 
@@ -358,6 +371,11 @@ class Esc:
             # writing an error counter clears it
             for a in range(max(addr, R.RX_ERROR_COUNTER), min(end, R.RX_ERROR_COUNTER + 0x14)):
                 self.mem[a] = 0
+        if hit(R.WD_DIVIDER, R.WD_TIME_PD + 2 - R.WD_DIVIDER) and self._wd_pd_since is not None:
+            self._wd_pd_since = self.frame_ns  # a new watchdog time counts from its write
+        if hit(R.WD_COUNTER_PD, 2):
+            # writing either watchdog counter clears both
+            self.mem[R.WD_COUNTER_PD] = self.mem[R.WD_COUNTER_PDI] = 0
         if hit(R.EEPROM_CONTROL, 2):
             self._eeprom_command()
         if hit(R.DC_RECEIVE_TIME, 4):
@@ -365,6 +383,8 @@ class Esc:
         if hit(R.DC_SYSTEM_TIME, 8):
             self._compare_system_time(addr, data)
         if hit(R.DC_ACTIVATION, 1):
+            # the cyclic unit takes the start time when it is switched on (0x0990 is writable only while it is off)
+            self._dc_start = self.u64(R.DC_START_TIME) if self.mem[R.DC_ACTIVATION] & 0x01 else None
             self.app.dc_activation(self, self.mem[R.DC_ACTIVATION])
         if hit(R.AL_CONTROL, 2):
             self.app.al_control(self, self.u16(R.AL_CONTROL))
@@ -402,6 +422,27 @@ class Esc:
                         data[d0:d1] = ((current & ~(mask << dshift)) | (bits << dshift)).to_bytes(d1 - d0, "little")
                     did_read = True
         return did_read, did_write
+
+    # ------------------------------------------------------------------------------------------
+    # the process data watchdog 0x0400-0x0443
+    # ------------------------------------------------------------------------------------------
+    def watchdog_pd_ns(self) -> int:
+        """The process data watchdog time in ns, 0 when disabled: (divider 0x0400 + 2) x 40 ns x 0x0420."""
+        return (self.u16(R.WD_DIVIDER) + 2) * 40 * self.u16(R.WD_TIME_PD)
+
+    def watchdog_check(self, now_ns: int) -> None:
+        """Expire the process data watchdog when its time has passed since the last trigger (a complete write
+        of a buffered SM whose control has bit 6 set): status 0x0440 reads 0, counter 0x0442 counts (saturates),
+        and the application is told. The check runs when a frame arrives, so the master sees the expiry in the
+        first frame after the watchdog time, as it would from a real ESC; a stopped watchdog waits for the
+        next trigger."""
+        since = self._wd_pd_since
+        timeout = self.watchdog_pd_ns()
+        if since is None or not timeout or now_ns - since <= timeout:
+            return
+        self._wd_pd_since = None
+        self.mem[R.WD_COUNTER_PD] = min(0xFF, self.mem[R.WD_COUNTER_PD] + 1)
+        self.app.pd_watchdog_expired(self)
 
     # ------------------------------------------------------------------------------------------
     # AL, DL, events
@@ -560,21 +601,27 @@ class Esc:
         self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = local.to_bytes(8, "little")
 
     def _sync_dc_status(self) -> None:
-        """0x0984 activation status, 0x098E/0x098F SYNC0/1 status and, while SYNC0 runs, 0x0990 = the next
-        SYNC0 pulse (the first one at or after the system time) and 0x0998 the next SYNC1 pulse."""
+        """0x0984 activation status (bit 0/1: the first SYNC0/SYNC1 pulse is still pending), 0x098E/0x098F SYNC0/1
+        status (a pulse has come), and while the cyclic unit runs 0x0990 = the next SYNC0 pulse and 0x0998 = the
+        next SYNC1 pulse (:func:`~ecattool.sim.esc.dc.sync1_train`)."""
         act, cycle, start = self.dc_sync0()
-        running = bool(act & 0x01) and bool(act & 0x02)
+        sync0 = bool(act & 0x01) and bool(act & 0x02)
+        sync1 = sync0 and bool(act & 0x04)
         now = self.system_time()
-        self.mem[R.DC_ACTIVATION_STATUS] = (0x01 if running else 0) | (0x02 if running and act & 0x04 else 0)
-        pulsed = running and now >= start
-        self.mem[R.DC_SYNC0_STATUS] = 0x01 if pulsed else 0
-        self.mem[R.DC_SYNC1_STATUS] = 0x01 if pulsed and act & 0x04 else 0
-        if running and cycle:
-            nxt = start if now <= start else start + -(-(now - start) // cycle) * cycle
-            self.mem[R.DC_START_TIME:R.DC_START_TIME + 8] = nxt.to_bytes(8, "little")
-            self.mem[R.DC_NEXT_SYNC1:R.DC_NEXT_SYNC1 + 8] = nxt.to_bytes(8, "little")
+        first1, period1 = sync1_train(start, cycle, self.u32(R.DC_SYNC1_CYCLE))
+        self.mem[R.DC_ACTIVATION_STATUS] = (0x01 if sync0 and now < start else 0) | (0x02 if sync1 and now < first1
+                                                                                      else 0)
+        self.mem[R.DC_SYNC0_STATUS] = 0x01 if sync0 and now >= start else 0
+        self.mem[R.DC_SYNC1_STATUS] = 0x01 if sync1 and now >= first1 else 0
+        if sync0:
+            self.mem[R.DC_START_TIME:R.DC_START_TIME + 8] = next_pulse(now, start, cycle).to_bytes(8, "little")
+        if sync1:
+            self.mem[R.DC_NEXT_SYNC1:R.DC_NEXT_SYNC1 + 8] = next_pulse(now, first1, period1).to_bytes(8, "little")
 
     def dc_sync0(self) -> tuple[int, int, int]:
-        """(activation 0x0981, SYNC0 cycle ns, start time) as the master wrote them."""
-        return self.mem[R.DC_ACTIVATION], self.u32(R.DC_SYNC0_CYCLE), self.u64(R.DC_START_TIME)
+        """(activation 0x0981, SYNC0 cycle ns, start time) as the master wrote them: the start time is the one the
+        cyclic unit took when it was activated (while it runs, 0x0990 reads the next SYNC0 pulse)."""
+        act = self.mem[R.DC_ACTIVATION]
+        start = self._dc_start if act & 0x01 and self._dc_start is not None else self.u64(R.DC_START_TIME)
+        return act, self.u32(R.DC_SYNC0_CYCLE), start
 

@@ -138,7 +138,7 @@ class SdoServer:
             return value
         ca_bit = 0x10 if ca else 0
         head = coe_header(SERVICE_SDO_RESPONSE)
-        if len(value) <= 4 and not ca:
+        if 0 < len(value) <= 4 and not ca:  # an empty value (a blank string) goes normal, with size 0
             command = (SCS_UPLOAD << 5) | ((4 - len(value)) << 2) | 0x03  # expedited, size indicated
             return [head + struct.pack("<BHB", command, index, subindex) + value.ljust(4, b"\x00")]
         room = max(0, self.in_size - NORMAL_OVERHEAD)

@@ -1,7 +1,8 @@
 """FoE (File access over EtherCAT, ETG.1000.6 §5.8): write and read requests, data packets, ACK, BUSY and
-ERR. A written file is handed whole to :meth:`Drive.foe_write`, which decides (Technosoft §17.4: FOESW_ setup
-files with password 0 in PRE-OP/SAFE-OP/OP, FOEFW_ firmware in BOOT); its refusal goes back as an FoE error
-with the drive's code and reason.
+ERR. The write request is checked by :meth:`Drive.foe_accepts` (Technosoft §17.4: FOESW_ setup files with
+password 0 in PRE-OP/SAFE-OP/OP, FOEFW_ firmware in BOOT): a wrong name, password or state is refused at once
+with an FoE error. The written file is handed whole to :meth:`Drive.foe_write`, which checks its content; a
+refusal goes back as an FoE error with the drive's code and reason.
 
     OpCode (octet 0): 1 read request, 2 write request, 3 data, 4 ack, 5 error, 6 busy; octet 1 reserved
     octets 2-5: password (requests), packet number (data, ack), error code (error), Done/Entire (busy)
@@ -87,7 +88,12 @@ class FoeServer:
         body = data[FOE_OVERHEAD:]
         if opcode == WRITE:
             self.reset()
-            self._write = _Write(_file_name(body), word, busy_left=self.busy_replies)
+            name = _file_name(body)
+            try:  # the drive refuses a wrong name, password or state at once, before any data
+                self.drive.foe_accepts(name, word)
+            except TargetError as exc:
+                return self._error(getattr(exc, "code", NOT_DEFINED), str(exc))
+            self._write = _Write(name, word, busy_left=self.busy_replies)
             return [struct.pack("<BBI", ACK, 0, 0)]
         if opcode == DATA:
             return self._data(word, body)
