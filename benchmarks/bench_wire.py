@@ -9,12 +9,17 @@ Side by side in the same run:
   the p50/p99 round-trip latency of a cycle (send to receive), the p50/p99 cycle start lateness and the missed
   cycles (a working counter short of the expected one, or a cycle started a whole period late);
 * frames per second for one drive in OP: process data frames through the in-process loop (``Loop``, frame
-  encoding and decoding included) and through pysoem over the veth pair, back to back.
+  encoding and decoding included) and through pysoem over the veth pair, back to back;
+* the server's time per frame: ``Bus.process`` of one LRW frame for 1 and 8 HDTs (idle, and enabled in CSP
+  following a moving target) in process, what ``sim serve`` spends per frame; with ``--against DIR`` also for
+  another revision's package (``git archive REV ecattool | tar -x -C DIR``), each in its own process,
+  interleaved.
 
 The wire parts run inside a private network namespace with a veth pair that the script makes itself
 (``ecattool.sim.bus.netns``; never the host's interfaces). Every loop is bounded in time and count.
 
     .venv/bin/python benchmarks/bench_wire.py [--seconds 2] [--drives 8] [--pd-seconds 10] [--hz 1000]
+        [--motion] [--cyclic-only] [--against DIR] [--json]
 
 Needs the ``wire`` and ``bench`` extras (pysoem 1.1.13, canopen) and root (or unprivileged user namespaces).
 Prints a table, and one JSON document with ``--json``.
@@ -91,39 +96,139 @@ def _fmmu(logical: int, length: int, physical: int, kind: int) -> bytes:
     return struct.pack("<IHBBHBBBxxx", logical, length, 0, 7, physical, 0, kind, 1)
 
 
-def bench_loop_frames(seconds: float) -> dict[str, float]:
-    """One HDT brought to OP through the in-process loop the way a master does it, then LRW process data frames
-    back to back (frame built, passed through the ESC and the drive, parsed)."""
+def _bus_in_op(drives: int, motion: bool = False) -> tuple[Any, list[Any], int, int]:
+    """``drives`` HDTs brought to OP through the in-process loop the way a master does it (station addresses,
+    mailbox SMs, PRE-OP, process data SMs and FMMUs: all outputs first, then all inputs, as SOEM maps them,
+    SAFE-OP, OP). ``motion``: mode 8 (CSP) set in PRE-OP. Returns (loop, slaves, output bytes, input bytes)
+    per drive."""
     from ecattool.od.model import EcState
     from ecattool.sim import Drive
     from ecattool.sim.bus import Bus, Cmd, Datagram
     from ecattool.sim.bus.loop import Loop
+    from ecattool.sim.esc import Clock
     from ecattool.sim.esc import registers as R
     from ecattool.sim.slave import VirtualSlave
 
-    slave = VirtualSlave.from_drive(Drive.from_profile("hdt"))
-    loop = Loop(Bus([slave.esc]))
-    st = 0x1001
-    loop.one(Datagram.make(Cmd.APWR, 0, R.STATION_ADDRESS, struct.pack("<H", st)))
-
-    def wr(addr: int, data: bytes) -> None:
-        loop.one(Datagram.make(Cmd.FPWR, st, addr, data))
-
-    def al(state: int) -> int:
-        wr(R.AL_CONTROL, struct.pack("<H", state))
-        return int.from_bytes(bytes(loop.one(Datagram.make(Cmd.FPRD, st, R.AL_STATUS, 2)).data), "little")
-
-    mbx_out, mbx_out_len, mbx_in, mbx_in_len = slave.esc.eeprom.words(0x18, 4)
-    wr(R.SM, _sm(mbx_out, mbx_out_len, 0x26) + _sm(mbx_in, mbx_in_len, 0x22))
-    assert al(2) == 2, "PRE-OP refused"
+    slaves = [VirtualSlave.from_drive(Drive.from_profile("hdt"), clock=Clock(offset_ns=i * 1_000_000_007))
+              for i in range(drives)]
+    loop = Loop(Bus([s.esc for s in slaves]))
     probe = Drive.from_profile("hdt")  # the image sizes of the default PDO assignment, known from SAFE-OP on
     probe.request_state(EcState.PREOP)
     probe.request_state(EcState.SAFEOP)
     out_len, in_len = probe.process_image_sizes()
-    wr(R.SM + 16, _sm(0x1100, out_len, 0x64) + _sm(0x1400, in_len, 0x20))
-    wr(R.FMMU, _fmmu(0, out_len, 0x1100, 2) + _fmmu(out_len, in_len, 0x1400, 1))
-    assert al(4) == 4, "SAFE-OP refused"
-    assert al(8) == 8, "OP refused"
+    for i, slave in enumerate(slaves):
+        st = 0x1001 + i
+        assert loop.one(Datagram.make(Cmd.APWR, (-i) & 0xFFFF, R.STATION_ADDRESS, struct.pack("<H", st))).wkc == 1
+
+        def wr(addr: int, data: bytes) -> None:
+            loop.one(Datagram.make(Cmd.FPWR, st, addr, data))  # noqa: B023 (used within the iteration)
+
+        def al(state: int) -> int:
+            wr(R.AL_CONTROL, struct.pack("<H", state))
+            return int.from_bytes(bytes(loop.one(Datagram.make(Cmd.FPRD, st, R.AL_STATUS, 2)).data), "little")  # noqa: B023
+
+        mbx_out, mbx_out_len, mbx_in, mbx_in_len = slave.esc.eeprom.words(0x18, 4)
+        wr(R.SM, _sm(mbx_out, mbx_out_len, 0x26) + _sm(mbx_in, mbx_in_len, 0x22))
+        assert al(2) == 2, "PRE-OP refused"
+        if motion:
+            slave.drive.sdo_download(0x6060, 0, b"\x08")
+        wr(R.SM + 16, _sm(0x1100, out_len, 0x64) + _sm(0x1400, in_len, 0x20))
+        wr(R.FMMU, _fmmu(i * out_len, out_len, 0x1100, 2) + _fmmu(drives * out_len + i * in_len, in_len, 0x1400, 1))
+        assert al(4) == 4, "SAFE-OP refused"
+        assert al(8) == 8, "OP refused"
+    return loop, slaves, out_len, in_len
+
+
+def _csp_outputs(drive: Any, out_len: int, controlword: int, position: int) -> bytes:
+    """One drive's output image with the controlword and the CSP target position (607Ah) where it maps them."""
+    from ecattool.esi.model import Direction
+
+    out = bytearray(out_len)
+    for index, _sub, offset, _bits in drive.layout[Direction.RX].entries:
+        if index == 0x6040:
+            out[offset // 8:offset // 8 + 2] = struct.pack("<H", controlword)
+        elif index == 0x607A:
+            out[offset // 8:offset // 8 + 4] = struct.pack("<i", position)
+    return bytes(out)
+
+
+def bench_bus(drives: int, seconds: float, motion: bool = False) -> dict[str, float]:
+    """The server's time for one LRW frame of ``drives`` HDTs in OP: ``Bus.process`` alone (frame parsed,
+    every ESC and drive cycle, reply encoded), as ``sim serve`` runs it per frame. Idle drives (controlword 0)
+    or, with ``motion``, drives enabled in CSP following a moving target. Wall time per frame (median and
+    minimum over batches of 100 frames) and CPU time of the thread (minimum)."""
+    from ecattool.sim.bus import Cmd, Datagram, make_frame
+
+    loop, slaves, out_len, in_len = _bus_in_op(drives, motion)
+    bus = loop.bus
+
+    def frame(controlword: int, position: int) -> bytes:
+        outputs = b"".join(_csp_outputs(s.drive, out_len, controlword, position) for s in slaves)
+        return make_frame([Datagram.logical(Cmd.LRW, 0, outputs + bytes(drives * in_len))])
+
+    if motion:
+        for controlword in (0x06, 0x07, 0x0F):  # shutdown, switch on, enable operation
+            for _ in range(3):
+                bus.process(frame(controlword, 0))
+        frames = [frame(0x0F, k * 10) for k in range(100)]
+        assert all(s.drive.cia402_state.name == "OPERATION_ENABLED" for s in slaves)
+    else:
+        frames = [frame(0, 0)] * 100
+    wall: list[float] = []
+    cpu: list[float] = []
+    start = time.perf_counter()
+    while (time.perf_counter() - start < seconds or len(wall) < 5) and len(wall) < MAX_COUNT:
+        t0, c0 = time.perf_counter(), time.thread_time()
+        for raw in frames:
+            bus.process(raw)
+        wall.append((time.perf_counter() - t0) / len(frames))
+        cpu.append((time.thread_time() - c0) / len(frames))
+        for s in slaves:
+            s.drive.events.clear()
+    return {"drives": drives, "motion": motion, "median_us": statistics.median(wall) * 1e6,
+            "min_us": min(wall) * 1e6, "cpu_min_us": min(cpu) * 1e6, "frame_octets": drives * (out_len + in_len)}
+
+
+#: the in-process bus measurements: (drives, motion)
+BUS_CASES = ((1, False), (8, False), (8, True))
+
+
+def bus_figures(seconds: float) -> list[dict[str, float]]:
+    return [bench_bus(drives, seconds, motion) for drives, motion in BUS_CASES]
+
+
+def bus_side_by_side(seconds: float, against: str | None, rounds: int = 3) -> dict[str, list[dict[str, float]]]:
+    """:func:`bus_figures` of this checkout's package and, with ``against``, of the package in that directory
+    (``git archive REV ecattool | tar -x -C DIR``), each in its own process, interleaved ``rounds`` times; per
+    case the smallest minimum and the median of the medians."""
+    runs: dict[str, list[list[dict[str, float]]]] = {"current": []}
+    dirs = {"current": str(ROOT)}
+    if against:
+        runs["against"] = []
+        dirs["against"] = str(Path(against).resolve())
+    for _ in range(rounds):
+        for who, where in dirs.items():
+            env = dict(os.environ, PYTHONPATH=where)
+            done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--bus-only", "--seconds",
+                                   str(seconds)], capture_output=True, text=True, env=env, cwd=where, timeout=600)
+            if done.returncode != 0:
+                raise SystemExit(f"the bus measurement of {where} failed: {done.stderr[-2000:]}")
+            runs[who].append(json.loads(done.stdout.strip().splitlines()[-1]))
+    out: dict[str, list[dict[str, float]]] = {}
+    for who, results in runs.items():
+        out[who] = [dict(results[0][i], min_us=min(r[i]["min_us"] for r in results),
+                         cpu_min_us=min(r[i]["cpu_min_us"] for r in results),
+                         median_us=statistics.median(r[i]["median_us"] for r in results))
+                    for i in range(len(BUS_CASES))]
+    return out
+
+
+def bench_loop_frames(seconds: float) -> dict[str, float]:
+    """One HDT brought to OP through the in-process loop the way a master does it, then LRW process data frames
+    back to back (frame built, passed through the ESC and the drive, parsed)."""
+    from ecattool.sim.bus import Cmd, Datagram
+
+    loop, (slave,), out_len, in_len = _bus_in_op(1)
     image = bytes(out_len + in_len)
     n, start = 0, time.perf_counter()
     while time.perf_counter() - start < seconds and n < MAX_COUNT:
@@ -228,11 +333,20 @@ def _pct(values: list[int], q: float) -> float:
     return ordered[min(len(ordered) - 1, int(q * len(ordered)))] / 1000.0  # ns -> us
 
 
-def wire_cyclic(drives: int, hz: float, seconds: float) -> dict[str, Any]:
+def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False) -> dict[str, Any]:
     """``drives`` HDTs in OP, one process data frame per cycle at ``hz`` for ``seconds`` (absolute deadlines,
-    sleep then a short spin); latency = send to receive of a cycle's frame, lateness = start after deadline."""
+    sleep then a short spin); latency = send to receive of a cycle's frame, lateness = start after deadline.
+    ``motion``: the drives are put in CSP (6060h = 8 by SDO in PRE-OP), enabled through the controlword and
+    follow a target position that moves 10 units per cycle; else they stay idle (controlword 0)."""
     import pysoem
 
+    from ecattool.od.model import EcState
+    from ecattool.sim import Drive
+
+    probe = Drive.from_profile("hdt")  # where the default mapping puts the controlword and the target position
+    probe.request_state(EcState.PREOP)
+    probe.request_state(EcState.SAFEOP)
+    out_len = probe.process_image_sizes()[0]
     server = _start_server(["hdt"] * drives)
     try:
         master = pysoem.Master()
@@ -241,7 +355,18 @@ def wire_cyclic(drives: int, hz: float, seconds: float) -> dict[str, Any]:
         if found != drives:
             raise SystemExit(f"pysoem found {found} drives, not {drives}")
         master.state_check(pysoem.PREOP_STATE, 2_000_000)
+        if motion:
+            for slave in master.slaves:
+                slave.sdo_write(0x6060, 0, b"\x08")
         _op(master)
+        if motion:
+            for controlword in (0x06, 0x07, 0x0F):  # shutdown, switch on, enable operation
+                for slave in master.slaves:
+                    slave.output = _csp_outputs(probe, out_len, controlword, 0)
+                for _ in range(5):
+                    master.send_processdata()
+                    master.receive_processdata(20_000)
+                    time.sleep(0.002)
         # first the bus's own pace: frames back to back for at most 1 s (what cycle rate it could sustain)
         n, start = 0, time.perf_counter()
         while time.perf_counter() - start < 1.0 and n < MAX_COUNT:
@@ -257,7 +382,11 @@ def wire_cyclic(drives: int, hz: float, seconds: float) -> dict[str, Any]:
         short_wkc = overruns = 0
         _realtime()
         next_t = time.perf_counter_ns() + period
-        for _ in range(cycles):
+        for k in range(cycles):
+            if motion:
+                image = _csp_outputs(probe, out_len, 0x0F, 10 * k)
+                for slave in master.slaves:
+                    slave.output = image
             wait = next_t - time.perf_counter_ns()
             if wait > 200_000:
                 time.sleep((wait - 150_000) / 1e9)
@@ -281,7 +410,7 @@ def wire_cyclic(drives: int, hz: float, seconds: float) -> dict[str, Any]:
         master.close()
     finally:
         _stop_server(server)
-    return {"drives": drives, "hz": hz, "cycles": cycles, "latency_p50_us": _pct(latency, 0.5),
+    return {"drives": drives, "hz": hz, "cycles": cycles, "motion": motion, "latency_p50_us": _pct(latency, 0.5),
             "latency_p99_us": _pct(latency, 0.99), "latency_max_us": max(latency) / 1000.0,
             "lateness_p50_us": _pct(lateness, 0.5), "lateness_p99_us": _pct(lateness, 0.99),
             "short_wkc": short_wkc, "overruns": overruns, "missed": short_wkc + overruns,
@@ -293,9 +422,9 @@ def inside(args: argparse.Namespace) -> None:
         os.nice(-10)
     except OSError:
         pass
-    out = {"one": wire_one_drive(args.seconds)}
+    out: dict[str, Any] = {"one": wire_one_drive(args.seconds)} if not args.cyclic_only else {}
     if args.drives:
-        out["cyclic"] = wire_cyclic(args.drives, args.hz, args.pd_seconds)
+        out["cyclic"] = wire_cyclic(args.drives, args.hz, args.pd_seconds, args.motion)
     print(json.dumps(out))
 
 
@@ -312,7 +441,8 @@ def on_the_wire(args: argparse.Namespace) -> dict[str, Any] | str:
     if reason:
         return reason
     argv = [sys.executable, str(Path(__file__).resolve()), "--inside", "--seconds", str(args.seconds),
-            "--drives", str(args.drives), "--hz", str(args.hz), "--pd-seconds", str(args.pd_seconds)]
+            "--drives", str(args.drives), "--hz", str(args.hz), "--pd-seconds", str(args.pd_seconds),
+            *(["--motion"] if args.motion else []), *(["--cyclic-only"] if args.cyclic_only else [])]
     budget = 120 + 3 * args.seconds + args.pd_seconds * 2
     done = subprocess.run(netns.command(argv), capture_output=True, text=True, timeout=budget, cwd=ROOT)
     if done.returncode != 0:
@@ -327,13 +457,24 @@ def main() -> None:
     ap.add_argument("--drives", type=int, default=8, help="drives on the cyclic bus (0: skip it)")
     ap.add_argument("--hz", type=float, default=1000.0)
     ap.add_argument("--pd-seconds", type=float, default=10.0)
+    ap.add_argument("--motion", action="store_true",
+                    help="cyclic bus: drives enabled in CSP following a moving target (default: idle drives)")
+    ap.add_argument("--cyclic-only", action="store_true",
+                    help="on the wire, only the cyclic bus (no SDO and one-drive frame rates)")
+    ap.add_argument("--against", metavar="DIR",
+                    help="also measure the server's time per frame with the ecattool package in DIR, interleaved")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--inside", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--bus-only", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.inside:
         inside(args)
         return
-    res: dict[str, Any] = {"canopen": bench_canopen(args.seconds), "drive": bench_drive(args.seconds),
+    if args.bus_only:
+        print(json.dumps(bus_figures(args.seconds)))
+        return
+    res: dict[str, Any] = {"bus": bus_side_by_side(min(args.seconds, 1.0), args.against),
+                           "canopen": bench_canopen(args.seconds), "drive": bench_drive(args.seconds),
                            "loop": bench_loop_frames(args.seconds), "wire": on_the_wire(args),
                            "loadavg": os.getloadavg()}
     if args.json:
@@ -342,24 +483,31 @@ def main() -> None:
     co, dr, wire = res["canopen"], res["drive"], res["wire"]
     print(f"load average {res['loadavg'][0]:.2f} {res['loadavg'][1]:.2f} {res['loadavg'][2]:.2f}, "
           f"{os.cpu_count()} CPUs")
+    print("server time per LRW frame (Bus.process in process; min / median of 100-frame batches, CPU min), us")
+    for who, figures in res["bus"].items():
+        for f in figures:
+            print(f"  {who:8s} {f['drives']:.0f} HDT {'CSP moving' if f['motion'] else 'idle':10s} "
+                  f"{f['min_us']:8.0f} {f['median_us']:8.0f} {f['cpu_min_us']:8.0f}")
     print("SDO round trips/s            upload     download")
     print(f"  python-canopen LocalNode {co['upload']:10,.0f} {co['download']:12,.0f}")
     print(f"  ecattool Drive in process {dr['upload']:9,.0f} {dr['download']:12,.0f}")
     if isinstance(wire, str):
         print(f"  wire: skipped ({wire})")
-    else:
+    elif "one" in wire:
         one = wire["one"]
         print(f"  pysoem over veth          {one['upload']:10,.0f} {one['download']:12,.0f}")
         print(f"  wire / LocalNode          {one['upload'] / co['upload']:10.2f}x {one['download'] / co['download']:11.2f}x")
         print(f"  in process / wire         {dr['upload'] / one['upload']:10.0f}x {dr['download'] / one['download']:11.0f}x")
     print("frames/s, one drive in OP (LRW process data)")
     print(f"  in-process loop           {res['loop']['frames_per_s']:10,.0f}")
-    if not isinstance(wire, str):
+    if not isinstance(wire, str) and "one" in wire:
         print(f"  pysoem over veth          {wire['one']['frames_per_s']:10,.0f}"
               f"  (short working counter: {wire['one']['frames_short_wkc']})")
+    if not isinstance(wire, str):
         cyc = wire.get("cyclic")
         if cyc:
-            print(f"process data, {cyc['drives']} drives at {cyc['hz']:.0f} Hz, {cyc['cycles']} cycles")
+            print(f"process data, {cyc['drives']} drives at {cyc['hz']:.0f} Hz, {cyc['cycles']} cycles, "
+                  f"{'enabled in CSP, moving' if cyc['motion'] else 'idle'}")
             print(f"  latency p50 {cyc['latency_p50_us']:.0f} us, p99 {cyc['latency_p99_us']:.0f} us, "
                   f"max {cyc['latency_max_us']:.0f} us; start lateness p50 {cyc['lateness_p50_us']:.0f} us, "
                   f"p99 {cyc['lateness_p99_us']:.0f} us")

@@ -6,9 +6,11 @@ cycle takes (whole bytes instead of bits, integers instead of fractions) agree w
 
 from __future__ import annotations
 
+import gc
 import struct
 from fractions import Fraction
 
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -178,3 +180,31 @@ def test_conversions_to_user_integers_floor_as_the_fractions_do(value: Fraction,
     units = Units(lambda index, sub: {(0x608F, 1): factor.numerator, (0x608F, 2): factor.denominator}.get((index, sub)))
     assert units.position_to_user_int(value) == to_int(units.position_to_user(value))
     assert units.velocity_to_user_int(value) == to_int(units.velocity_to_user(value))
+
+
+def test_serving_freezes_the_set_up_and_stops_the_event_log_until_it_ends(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``serve``: while frames are answered the drives log no events and the set-up is frozen for the garbage
+    collector; both are as before once it returns (the transport is replaced: no network here)."""
+    from ecattool.sim.bus import raw
+    from ecattool.sim.bus.serve import serve, virtual_slaves
+
+    seen: list[tuple[bool, int]] = []
+
+    class FakeTransport:
+        answered = 7
+
+        def __init__(self, bus: Bus, ifname: str, fault: object) -> None:
+            self.bus = bus
+
+        def serve(self, stop: object, max_frames: int | None) -> None:
+            seen.append((served[0].slave.drive.record_events, gc.get_freeze_count()))
+
+        def close(self) -> None:
+            pass
+
+    monkeypatch.setattr(raw, "RawTransport", FakeTransport)
+    served = virtual_slaves([("hdt", profiles.load("hdt"))])
+    assert served[0].slave.drive.record_events and gc.get_freeze_count() == 0
+    assert serve(served, "ecat1", lambda: None) == 7
+    assert len(seen) == 1 and seen[0][0] is False and seen[0][1] > 0
+    assert served[0].slave.drive.record_events and gc.get_freeze_count() == 0

@@ -3,6 +3,7 @@ interface, in bus order."""
 
 from __future__ import annotations
 
+import gc
 import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -89,14 +90,28 @@ def stop_on_signals() -> Iterator[Callable[[], bool]]:
 def serve(served: list[Served], ifname: str, on_ready: Callable[[], None],
           max_frames: int | None = None, fault: "FrameFault | None" = None) -> int:
     """Serve the slaves on ``ifname`` until SIGINT/SIGTERM (or ``max_frames``); returns the frames answered.
-    ``fault`` sees every frame before the bus (tests: lost and spoilt frames, see RawTransport)."""
+    ``fault`` sees every frame before the bus (tests: lost and spoilt frames, see RawTransport).
+
+    While it serves, the drives keep no event log (nobody can read it from the wire, and it would grow for as
+    long as the server runs), and what exists when serving starts (the drives, their dictionaries and SII
+    images, the imported modules) is moved out of the garbage collector's way (``gc.freeze``): a full
+    collection over 8 drives' objects takes ~10 ms, ten cycles of a 1 kHz bus; frozen, it takes microseconds.
+    Both come back as they were when serving stops."""
     from ecattool.sim.bus.raw import RawTransport
 
     transport = RawTransport(bus_of(served), ifname, fault)
+    logging = [s.slave.drive.record_events for s in served]
+    for s in served:
+        s.slave.drive.record_events = False
+    gc.collect()
+    gc.freeze()
     try:
         with stop_on_signals() as stop:
             on_ready()
             transport.serve(stop, max_frames)
     finally:
+        gc.unfreeze()
+        for s, on in zip(served, logging):
+            s.slave.drive.record_events = on
         transport.close()
     return transport.answered
