@@ -118,7 +118,8 @@ def test_layout_slots_and_pieces_follow_the_entries() -> None:
     assert layout.pieces() is None  # bits 16..23 are not whole bytes: the exchange takes the bit path
     layout.entries[1:3] = [(0, 0, 16, 8)]
     assert layout.slots() == (((0x6040, 0), 0, 2, 0, 16), ((0x607A, 0), 3, 4, 24, 8))
-    assert layout.pieces() == (((0x6040, 0), bytes(2)), (GAP, bytes(1)), ((0x607A, 0), bytes(1)))
+    assert layout.pieces() == ((((0x6040, 0), bytes(2)), (GAP, bytes(1)), ((0x607A, 0), bytes(1))), (2, 1, 1))
+    assert Layout().pieces() == ((), ()) and Layout().slots() == ()  # no process data: an empty image
     layout.entries[0] = (0x6041, 0, 0, 16)
     assert layout.slots()[0] == ((0x6041, 0), 0, 2, 0, 16)
 
@@ -208,3 +209,18 @@ def test_serving_freezes_the_set_up_and_stops_the_event_log_until_it_ends(monkey
     assert serve(served, "ecat1", lambda: None) == 7
     assert len(seen) == 1 and seen[0][0] is False and seen[0][1] > 0
     assert served[0].slave.drive.record_events and gc.get_freeze_count() == 0
+
+
+def test_put_all_stores_as_put_does_and_renews_the_version_for_factor_objects() -> None:
+    drive = Drive.from_profile("hdt")
+    other = Drive.from_profile("hdt")
+    keys = ((0x6064, 0), (0x6041, 0), (0x6093, 1), (0x7FFF, 9))  # the last one is in no dictionary: skipped
+    for values in ((-5, 0x1637, 3, 1), (1 << 40, -1, 4, 1)):
+        version = drive._store.version
+        drive._put_all(keys, values)
+        for (index, sub), value in zip(keys[:3], values):
+            other._put(index, sub, value)
+            assert drive._store[(index, sub)] == other._store[(index, sub)]
+        assert drive._store.version != version  # 6093h is a factor object: the unit conversions see it
+        assert (0x7FFF, 9) not in drive._store
+    assert drive._store[(0x6064, 0)] == b"\x00\x00\x00\x00" and drive._store[(0x6041, 0)] == b"\xff\xff"

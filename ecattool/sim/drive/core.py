@@ -53,8 +53,9 @@ class Emergency:
 #: a mapped entry of a process image: ((index, subindex), first byte, end byte, bit offset, bit length); the byte
 #: bounds are -1 where the entry does not start and end on whole bytes
 Slot = tuple[tuple[int, int], int, int, int, int]
-#: a process image on whole bytes, piece by piece: ((index, subindex) or GAP, zero bytes of the piece's length)
-Pieces = tuple[tuple[tuple[int, int], bytes], ...]
+#: a process image on whole bytes, piece by piece: ((index, subindex) or GAP, zero bytes of the piece's length),
+#: and the pieces' lengths
+Pieces = tuple[tuple[tuple[tuple[int, int], bytes], ...], tuple[int, ...]]
 #: the key of a gap or dummy in :data:`Pieces` (no object has it)
 GAP = (-1, -1)
 
@@ -65,7 +66,7 @@ class Layout:
     #: (index, subindex, bit offset, bit length); index 0 = gap or dummy
     entries: list[tuple[int, int, int, int]] = field(default_factory=list)
     _derived: tuple[tuple[tuple[int, int, int, int], ...], tuple[Slot, ...], Pieces | None] = \
-        field(default=((), (), ()), init=False, repr=False, compare=False)
+        field(default=((), (), ((), ())), init=False, repr=False, compare=False)
 
     @property
     def size(self) -> int:
@@ -89,7 +90,8 @@ class Layout:
                 else:
                     pieces = None
                 position = offset + bits
-            self._derived = (key, tuple(slots), None if pieces is None or position != self.bits else tuple(pieces))
+            self._derived = (key, tuple(slots), None if pieces is None or position != self.bits
+                             else (tuple(pieces), tuple(len(zeros) for _, zeros in pieces)))
         return self._derived
 
     def slots(self) -> tuple[Slot, ...]:
@@ -97,9 +99,15 @@ class Layout:
         return self._derive()[1]
 
     def pieces(self) -> Pieces | None:
-        """The whole image in order as pieces of whole bytes; None where an entry is not on whole bytes."""
+        """The whole image in order as pieces of whole bytes, and their lengths; None where an entry is not on
+        whole bytes."""
         return self._derive()[2]
 
+
+#: what :meth:`DriveCore._put_all` keeps: the keys and the dictionary (and its length) it was made for, and per
+#: key (key, byte size, mask, a factor object) or None where the dictionary lacks the key
+_PutPlan = tuple[tuple[tuple[int, int], ...], dict[tuple[int, int], Entry], int,
+                 list[tuple[tuple[int, int], int, int, bool] | None]]
 
 _VERSIONS = itertools.count(1)
 
@@ -202,6 +210,30 @@ class DriveCore:
         size = (e.bit_size + 7) >> 3  # Entry.byte_size, without the property call (every cycle, every input)
         # two's complement of a negative value through the mask (signed and unsigned entries alike)
         self._store[(index, sub)] = (value & ((1 << (size << 3)) - 1)).to_bytes(size, "little")
+
+    def _put_all(self, keys: tuple[tuple[int, int], ...], values: tuple[int, ...]) -> None:
+        """:meth:`_put` of each key with its value, for the keys stored every cycle: their sizes are looked up
+        once per dictionary (and key set), and objects that are no factor objects skip the store's version
+        check (there is nothing to renew for them)."""
+        entries = self._entries
+        plan: _PutPlan | None = getattr(self, "_put_plan", None)
+        if plan is None or plan[0] is not keys or plan[1] is not entries or plan[2] != len(entries):
+            slots: list[tuple[tuple[int, int], int, int, bool] | None] = []
+            for key in keys:
+                e = entries.get(key)
+                size = 0 if e is None else (e.bit_size + 7) >> 3
+                slots.append(None if e is None else (key, size, (1 << (size << 3)) - 1, key[0] in FACTOR_OBJECTS))
+            plan = self._put_plan = (keys, entries, len(entries), slots)
+        store = self._store
+        plain = dict.__setitem__
+        for slot, value in zip(plan[3], values):
+            if slot is None:
+                continue
+            key, size, mask, factor = slot
+            if factor:
+                store[key] = (value & mask).to_bytes(size, "little")
+            else:
+                plain(store, key, (value & mask).to_bytes(size, "little"))
 
     def value(self, index: int, sub: int = 0) -> Any:
         """The decoded value of an entry (no SDO rules, no side effects): for tests and inspection."""

@@ -15,6 +15,8 @@ from ecattool.sim.drive.core import DriveCore, sdo_abort
 from ecattool.sim.units import to_int
 
 _ZERO = Fraction(0)
+#: the actual values every cycle refreshes, in the order :meth:`Motion._refresh_inputs` gives them
+_ACTUAL_VALUES = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0))
 
 
 class Motion(DriveCore):
@@ -107,6 +109,7 @@ class Motion(DriveCore):
             return
         dt = self.cycle_time()
         u = self.units
+        mode: int | None = None
         for _ in range(cycles):
             mode = self.mode()
             homing_before = self.cia.homing
@@ -128,24 +131,22 @@ class Motion(DriveCore):
             )
             if homing_before is not self.cia.homing:
                 hh.after_step(self, homing_before)
-        self._refresh_inputs()
+        self._refresh_inputs(mode)  # the step changes no mode (6061h)
 
-    def _refresh_inputs(self) -> None:
-        """Actual values from the state: 6041h, 6063h/6064h, 606Ch, 603Fh."""
+    def _refresh_inputs(self, mode: int | None = None) -> None:
+        """Actual values from the state: 6041h, 6063h/6064h, 606Ch, 603Fh (``mode``: 6061h, where the caller
+        has just read it)."""
         if not getattr(self, "has_cia402", False):
             return
-        mode = self.mode()
-        sw = self.cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
-        if self.family == "technosoft-ipos" and mode == HOMING and self.cia.homing is Homing.IN_PROGRESS:
+        if mode is None:
+            mode = self.mode()
+        cia = self.cia
+        sw = cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
+        if self.family == "technosoft-ipos" and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
-        self._put(0x6041, 0, sw)
-        u = self.units
-        self._put(0x6063, 0, to_int(self.cia.position))
         user_position = self._user_position()
-        self._put(0x6064, 0, user_position)
-        self._put(0x6062, 0, user_position)
-        self._put(0x606C, 0, u.velocity_to_user_int(self.cia.velocity))
-        self._put(0x603F, 0, self.cia.fault_code)
+        self._put_all(_ACTUAL_VALUES, (sw, to_int(cia.position), user_position, user_position,
+                                       self.units.velocity_to_user_int(cia.velocity), cia.fault_code))
 
     def _home_offset(self) -> int:
         """607Ch where the family adds it to the measured position at all times (HDT), else 0."""

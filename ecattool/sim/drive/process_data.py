@@ -111,13 +111,13 @@ class ProcessData(PdoConfig):
         """The input image: each mapped object's value, cut or padded with zeros to its mapped length."""
         tx = self.layout[TX]
         stored = self._store.get
-        pieces = tx.pieces()
-        if pieces is not None:
+        whole = tx.pieces()
+        if whole is not None:
             # on whole bytes: the values themselves, joined (a gap's key is in no store: its zeros)
+            pieces, lengths = whole
             raws = [stored(key, zeros) for key, zeros in pieces]
-            for i, (raw, (_, zeros)) in enumerate(zip(raws, pieces)):
-                if len(raw) != len(zeros):
-                    raws[i] = raw[:len(zeros)].ljust(len(zeros), b"\x00")
+            if tuple(map(len, raws)) != lengths:
+                raws = [raw[:len(zeros)].ljust(len(zeros), b"\x00") for raw, (_, zeros) in zip(raws, pieces)]
             return b"".join(raws)
         image = 0
         for key, _, _, offset, bits in tx.slots():
