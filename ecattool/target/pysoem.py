@@ -330,7 +330,8 @@ class PysoemTarget:
             now = self.clock()
             if now - self._used > self.keeper_idle_s:
                 return
-            if now < self._next_cycle + (KEEP_CYCLING_AFTER - 1) * self.cycle_s or not self.lock.acquire(blocking=False):
+            caller_late = now >= self._next_cycle + (KEEP_CYCLING_AFTER - 1) * self.cycle_s
+            if not caller_late or not self.lock.acquire(blocking=False):
                 continue
             try:
                 self._send_receive(now)
