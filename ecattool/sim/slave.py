@@ -41,6 +41,9 @@ AL_INVALID_INPUTS = 0x001E
 AL_SM_WATCHDOG = 0x001B
 
 _BY_CODE = {s.code: s for s in EcState}
+#: looked up once (every frame asks, for every slave)
+_CODES = {s: s.code for s in EcState}
+_OP, _SAFEOP = EcState.OP, EcState.SAFEOP
 MBX_OUT, MBX_IN, PD_OUT, PD_IN = 0, 1, 2, 3
 
 
@@ -224,12 +227,12 @@ class VirtualSlave(EscApplication):
 
     def _exchange(self, outputs: bytes | None) -> None:
         """One process data cycle: outputs to the drive (None: the first inputs at SAFE-OP), inputs to SM3."""
-        if self.drive.state() not in (EcState.SAFEOP, EcState.OP):
+        state = self.drive.state()
+        if state is not _OP and state is not _SAFEOP:
             return
         out_size, in_size = self.drive.process_image_sizes()
         try:
-            inputs = self.drive.exchange(bytes(out_size) if outputs is None or self.drive.state() is not EcState.OP
-                                         else outputs)
+            inputs = self.drive.exchange(bytes(out_size) if outputs is None or state is not _OP else outputs)
         except TargetError:
             self._sync_state()  # e.g. power lost during an EEPROM write: the drive is back in INIT
             return
@@ -254,7 +257,7 @@ class VirtualSlave(EscApplication):
             self._sync_state(error=True, code=AL_SM_WATCHDOG)
 
     def frame_done(self, esc: Esc) -> None:
-        if self.drive.state().code != esc.al_state:
+        if _CODES[self.drive.state()] != esc.al_state:
             self._sync_state()  # the drive changed state by itself (power loss, communication lost)
         self._push_mailbox()
 

@@ -15,6 +15,7 @@ from ecattool.sim.drive.core import DriveCore, sdo_abort
 from ecattool.sim.units import to_int
 
 _ZERO = Fraction(0)
+_ENABLED = State.OPERATION_ENABLED
 #: the actual values every cycle refreshes, in the order :meth:`Motion._refresh_inputs` gives them
 _ACTUAL_VALUES = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0))
 
@@ -115,7 +116,7 @@ class Motion(DriveCore):
             homing_before = self.cia.homing
             # only the targets the mode moves by are converted (the conversions are exact fractions; a drive
             # that is not enabled, or halted, moves by none of them)
-            moving = self.cia.state is State.OPERATION_ENABLED and not self.cia.controlword & HALT
+            moving = self.cia.state is _ENABLED and not self.cia.controlword & HALT
             self.cia.step(
                 mode, dt,
                 target_position=u.position_to_internal((self._read_int(0x607A, 0) or 0) - self._home_offset())

@@ -11,6 +11,9 @@ from ecattool.sim.drive.core import RX, TX, Layout
 from ecattool.sim.drive.esm import AL_INVALID_INPUT_CONFIG, AL_INVALID_OUTPUT_CONFIG
 from ecattool.sim.drive.pdo import PdoConfig
 
+#: looked up once: every cycle asks (an enum member's lookup costs as much as the comparison's rest)
+_OP, _SAFEOP = EcState.OP, EcState.SAFEOP
+
 
 class ProcessData(PdoConfig):
     """The process image: built from the assignment at PRE-OP -> SAFE-OP, exchanged each cycle."""
@@ -62,12 +65,13 @@ class ProcessData(PdoConfig):
     def exchange(self, outputs: bytes) -> bytes:
         """One cycle: in OP the outputs are written into the mapped objects and the motion advances one
         cycle; in SAFE-OP outputs are ignored. Returns the input image."""
-        if self.esm not in (EcState.SAFEOP, EcState.OP):
-            raise TargetError(f"no process data in {self.esm.value} (request SAFEOP or OP first)")
+        esm = self.esm
+        if esm is not _OP and esm is not _SAFEOP:
+            raise TargetError(f"no process data in {esm.value} (request SAFEOP or OP first)")
         rx = self.layout[RX]
         if len(outputs) != rx.size:
             raise TargetError(f"output image is {len(outputs)} bytes, the drive expects {rx.size}")
-        if self.esm is EcState.OP:
+        if esm is _OP:
             # A drive latches the whole RxPDO image first and only then reacts to it (a new set-point in
             # the controlword must see the target position of the same cycle).
             outputs = bytes(outputs)  # a no-op for bytes: the store keeps bytes, never a caller's buffer
