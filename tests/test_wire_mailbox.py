@@ -23,6 +23,9 @@ from ecattool.project.bus import devices_in_bus_order
 from ecattool.sim.bus.serve import Served, device_source, virtual_slaves
 from tests.conftest import ROOT
 
+#: every bus of these tests runs in one xdist worker (scripts/dev.py: --dist loadgroup), never two at once
+pytestmark = pytest.mark.xdist_group("wire")
+
 HERE = Path(__file__).parent
 #: the samples KickCAT takes to OP on one bus (Control Techniques runs CSP, which needs DC: see below)
 PROJECTS = ["samples/hdt/project.yaml", "samples/technosoft_ipos/project.yaml", "samples/generic_esi/project.yaml"]

@@ -21,7 +21,8 @@ import subprocess
 import sys
 from typing import Any
 
-from wire_pysoem_scenario import MASTER_IF, SLAVE_IF, open_preop, start_server, stop_server  # tests/ is the script's folder
+from wire_pysoem_scenario import (  # tests/ is the script's folder
+    MASTER_IF, SLAVE_IF, master_priority, open_preop, start_server, stop_server)
 
 
 def _text(value: str | bytes) -> str:
@@ -212,6 +213,8 @@ def foe(project: str, sw: str) -> dict[str, Any]:
 
 if __name__ == "__main__":
     mode, args = sys.argv[1], sys.argv[2:]
+    if mode != "serve":  # the served bus takes the server's priority itself (start_server)
+        master_priority()
     if mode == "serve":
         serve(args[0], args[1])
     elif mode == "od":
