@@ -14,6 +14,9 @@ import pytest
 
 from tests.test_wire_mailbox import _scenario
 
+#: every bus of these tests runs in one xdist worker (scripts/dev.py: --dist loadgroup), never two at once
+pytestmark = pytest.mark.xdist_group("wire")
+
 HDT, TECHNOSOFT = "samples/hdt/project.yaml", "samples/technosoft_ipos/project.yaml"
 #: (project, fault spec, what the failed step says): HDT's startup writes 6097h:01 as its 12th SDO request;
 #: 300 frames bring it about to SAFE-OP (SOEM's frame count depends on its polling, so the step where the

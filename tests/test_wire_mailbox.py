@@ -23,6 +23,9 @@ from ecattool.project.bus import devices_in_bus_order
 from ecattool.sim.bus.serve import Served, device_source, virtual_slaves
 from tests.conftest import ROOT
 
+#: every bus of these tests runs in one xdist worker (scripts/dev.py: --dist loadgroup), never two at once
+pytestmark = pytest.mark.xdist_group("wire")
+
 HERE = Path(__file__).parent
 #: the samples KickCAT takes to OP on one bus (Control Techniques runs CSP, which needs DC: see below)
 PROJECTS = ["samples/hdt/project.yaml", "samples/technosoft_ipos/project.yaml", "samples/generic_esi/project.yaml"]
@@ -133,4 +136,18 @@ def test_soem_reads_the_object_dictionary_through_sdo_information_and_maps_by_co
     drive.request_state(EcState.PREOP)
     drive.request_state(EcState.SAFEOP)
     assert out["sizes"] == list(drive.process_image_sizes())  # config_map read 1C12h/1C13h by complete access
+    assert out["server"] == {"returncode": 0, "stderr": ""}
+
+
+def test_soem_writes_a_setup_image_by_foe() -> None:
+    """FoE over the wire (item 3, as Technosoft §17.4 uses it): the sample's setup.sw made into an FoE setup file
+    (``ecattool sw foe``) and written by SOEM's ``foe_write`` in PRE-OP. The drive refuses a name without FOESW_
+    and a password other than 0 (SOEM returns -5, its FoE error); the right request programs the EEPROM, which
+    ``ecattool sw verify --target pysoem`` finds differing before and holding the image after."""
+    out = _scenario("wire_mailbox_scenario.py", "foe", "samples/technosoft_ipos/project.yaml",
+                    "samples/technosoft_ipos/setup.sw", timeout=240, module="pysoem")
+    assert out["verify_before"]["returncode"] == 1 and json.loads(out["verify_before"]["stdout"])["ok"] is False
+    assert [w.get("result") for w in out["writes"]] == [-5, -5, 1], out["writes"]
+    after = json.loads(out["verify_after"]["stdout"])
+    assert out["verify_after"]["returncode"] == 0 and after["ok"] is True and all(b["ok"] for b in after["blocks"])
     assert out["server"] == {"returncode": 0, "stderr": ""}

@@ -20,6 +20,9 @@ from ecattool.sim.bus import netns
 from ecattool.sim.bus.serve import device_source, virtual_slaves
 from tests.conftest import ROOT
 
+#: every bus of these tests runs in one xdist worker (scripts/dev.py: --dist loadgroup), never two at once
+pytestmark = pytest.mark.xdist_group("wire")
+
 SCENARIO = Path(__file__).with_name("wire_pysoem_scenario.py")
 GENERIC_ESI = ROOT / "samples" / "generic_esi" / "inovance_SV660_EOE_1Axis_V9.12.xml"
 SAMPLES = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "samples").glob("*/project.yaml"))

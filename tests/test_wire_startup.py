@@ -16,6 +16,9 @@ from ecattool.sim.bus import netns
 from tests.conftest import ROOT
 from tests.test_wire_pysoem import SAMPLES, _skip_reason
 
+#: every bus of these tests runs in one xdist worker (scripts/dev.py: --dist loadgroup), never two at once
+pytestmark = pytest.mark.xdist_group("wire")
+
 SCENARIO = Path(__file__).with_name("wire_startup_scenario.py")
 
 

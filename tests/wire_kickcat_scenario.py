@@ -12,12 +12,11 @@ is bounded."""
 from __future__ import annotations
 
 import json
-import os
 import sys
 import time
 from typing import Any
 
-from wire_pysoem_scenario import MASTER_IF, start_server, stop_server  # tests/ is the script's folder
+from wire_pysoem_scenario import MASTER_IF, master_priority, start_server, stop_server  # tests/ is the script's folder
 
 #: mailbox polls KickCAT may take for one SDO (each poll is one exchange of frames with the bus)
 POLLS = 5000
@@ -116,8 +115,5 @@ def run(projects: list[str]) -> dict[str, Any]:
 
 
 if __name__ == "__main__":
-    try:  # as wire_pysoem_scenario: the master and the server (which inherits it) get the CPU on a busy machine
-        os.nice(-10)
-    except OSError:
-        pass
+    master_priority()  # as wire_pysoem_scenario: the master gets the CPU on a busy machine
     print(json.dumps(run(sys.argv[1:])))

@@ -5,6 +5,7 @@ the mailbox over the wire with SOEM (pysoem) as the master.
     python wire_mailbox_scenario.py faults PROJECT SPEC...     # two commission runs against each faulty bus
     python wire_mailbox_scenario.py serve PROJECT SPEC         # a faulty bus (started by 'faults')
     python wire_mailbox_scenario.py watchdog PROJECT MS        # a slow SDO in OP against the drive's watchdog
+    python wire_mailbox_scenario.py foe PROJECT SW              # a .sw setup image by FoE through SOEM
 
 ``faults``: for each PROJECT SPEC pair, the virtual bus serves PROJECT with the fault SPEC (see ``serve``)
 armed in its first drive or on its link; ``ecattool commission --target pysoem`` then runs twice against the
@@ -20,7 +21,8 @@ import subprocess
 import sys
 from typing import Any
 
-from wire_pysoem_scenario import MASTER_IF, SLAVE_IF, open_preop, start_server, stop_server  # tests/ is the script's folder
+from wire_pysoem_scenario import (  # tests/ is the script's folder
+    MASTER_IF, SLAVE_IF, master_priority, open_preop, start_server, stop_server)
 
 
 def _text(value: str | bytes) -> str:
@@ -172,13 +174,54 @@ def watchdog(project: str, ms: str) -> dict[str, Any]:
     return {"project": project, "fault": spec, "ready": ready, "runs": runs, "server": stopped}
 
 
+def _verify(sw: str) -> dict[str, Any]:
+    done = subprocess.run([sys.executable, "-m", "ecattool", "sw", "verify", sw, "--target", f"pysoem:{MASTER_IF}",
+                           "--json"], capture_output=True, text=True, timeout=120)
+    return {"returncode": done.returncode, "stdout": done.stdout, "stderr": done.stderr[-2000:]}
+
+
+def foe(project: str, sw: str) -> dict[str, Any]:
+    """The setup image SW as an FoE setup file (``ecattool sw foe``) written by SOEM's ``foe_write`` (Technosoft
+    §17.4: FOESW_ files, password 0, in PRE-OP) into the served drive of PROJECT: ``ecattool sw verify`` over
+    the wire before (the drive's EEPROM differs) and after (it holds the image); first two write requests the
+    drive refuses (a name without FOESW_, a wrong password)."""
+    import pysoem
+
+    from ecattool.sw import read, to_foe
+
+    data = to_foe(read(sw))
+    server, ready = start_server([project])
+    out: dict[str, Any] = {"ready": ready, "bytes": len(data)}
+    try:
+        out["verify_before"] = _verify(sw)
+        master = open_preop(out)
+        slave = master.slaves[0]
+        writes = []
+        for name, password in (("setup.bin", 0), ("FOESW_AXIS1.bin", 7), ("FOESW_AXIS1.bin", 0)):
+            try:
+                writes.append({"name": name, "password": password,
+                               "result": int(slave.foe_write(name, password, data, 5_000_000))})
+            except Exception as exc:  # noqa: BLE001 - whatever pysoem raises is the result
+                writes.append({"name": name, "password": password, "error": f"{type(exc).__name__}: {exc}"})
+        out["writes"] = writes
+        master.close()
+        out["verify_after"] = _verify(sw)
+    finally:
+        out["server"] = stop_server(server)
+    return out
+
+
 if __name__ == "__main__":
     mode, args = sys.argv[1], sys.argv[2:]
+    if mode != "serve":  # the served bus takes the server's priority itself (start_server)
+        master_priority()
     if mode == "serve":
         serve(args[0], args[1])
     elif mode == "od":
         print(json.dumps(od(args[0])))
     elif mode == "watchdog":
         print(json.dumps(watchdog(args[0], args[1])))
+    elif mode == "foe":
+        print(json.dumps(foe(args[0], args[1])))
     else:  # faults PROJECT SPEC [PROJECT SPEC ...]
         print(json.dumps(faults(list(zip(args[::2], args[1::2])))))

@@ -26,6 +26,22 @@ SDO_READS = [(0x1018, 1), (0x1018, 2), (0x1018, 3), (0x1018, 4), (0x1C12, 0), (0
              (0x1C13, 1), (0x1600, 0), (0x1A00, 0), (0x1A00, 1), (0x6041, 0), (0x6060, 0), (0x6064, 0)]
 
 
+#: the served bus's real-time priority (SCHED_FIFO) where permitted
+SERVER_PRIORITY = 10
+
+
+def master_priority() -> None:
+    """The master side: this scenario and the masters it starts (they inherit it) at a raised nice value. Not
+    real-time: SOEM polls its socket without sleeping while it waits for a frame, and two such threads (the
+    pysoem target's caller and its keeper) at a real-time priority starve the kernel's softirq threads that carry
+    the frames over the veth pair (an SDO answer then never arrives). A master starved for 100 ms stops the
+    process data and the drives' watchdogs take them out of OP (AL 0x001B), as on a real bus."""
+    try:
+        os.nice(-10)
+    except OSError:
+        pass  # not permitted: normal priority (may time out on a busy machine)
+
+
 def _server_child() -> None:
     """In the server's process before it starts. The server sleeps in select() until a frame comes and then needs
     the CPU at once: SOEM gives a frame 2 ms to come back (EC_TIMEOUTRET) and a mailbox write no second chance. A
@@ -33,7 +49,7 @@ def _server_child() -> None:
     some hundred microseconds. And the server ends with the scenario (PR_SET_PDEATHSIG): a master that crashes
     inside its compiled code (KickCAT once did, under load) leaves no server behind, nor its namespace."""
     try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(10))
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(SERVER_PRIORITY))
     except (OSError, AttributeError):
         pass  # not permitted: it keeps the scenario's raised priority
     try:
@@ -135,12 +151,9 @@ def commission(projects: list[str]) -> dict[str, Any]:
 
 if __name__ == "__main__":
     # SOEM gives each frame 2 ms to come back (EC_TIMEOUTRET) and a mailbox send no second chance: both the
-    # master and the server must get the CPU when a frame is on its way. On a loaded machine (the rest of the
-    # test suite runs beside this) a raised priority gives them that; the server inherits it.
-    try:
-        os.nice(-10)
-    except OSError:
-        pass  # not permitted: normal priority (may time out on a busy machine)
+    # master and the server must get the CPU when a frame is on its way, also on a loaded machine (the rest of
+    # the test suite runs beside this)
+    master_priority()
     # "bringup SOURCE... -- PROJECT...": one after the other (never two buses at once on a small machine)
     args = sys.argv[1:]
     split = args.index("--") if "--" in args else len(args)

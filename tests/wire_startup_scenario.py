@@ -17,7 +17,7 @@ import sys
 import time
 from typing import Any
 
-from wire_pysoem_scenario import MASTER_IF, start_server, stop_server
+from wire_pysoem_scenario import MASTER_IF, master_priority, start_server, stop_server
 
 WRITE = re.compile(r"slave\.sdo_write\(0x([0-9A-F]{4}), 0x([0-9A-F]{2}), bytes\.fromhex\('([0-9a-f]*)'\)")
 
@@ -72,9 +72,6 @@ def run_module(project: str, module_path: str) -> dict[str, Any]:
 
 
 if __name__ == "__main__":
-    try:
-        os.nice(-10)  # see wire_pysoem_scenario: SOEM gives a frame 2 ms to come back
-    except OSError:
-        pass
+    master_priority()  # see wire_pysoem_scenario: SOEM gives a frame 2 ms to come back
     runs = [run_module(*arg.split("=", 1)) for arg in sys.argv[1:]]
     print(json.dumps({"runs": runs}))
