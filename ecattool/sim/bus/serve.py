@@ -95,7 +95,7 @@ def serve(served: list[Served], ifname: str, on_ready: Callable[[], None],
     While it serves, the drives keep no event log (nobody can read it from the wire, and it would grow for as
     long as the server runs), and what exists when serving starts (the drives, their dictionaries and SII
     images, the imported modules) is moved out of the garbage collector's way (``gc.freeze``): a full
-    collection over 8 drives' objects takes ~10 ms, ten cycles of a 1 kHz bus; frozen, it takes microseconds.
+    collection over 8 drives' objects takes ~12 ms, twelve cycles of a 1 kHz bus; frozen, microseconds.
     Both come back as they were when serving stops."""
     from ecattool.sim.bus.raw import RawTransport
 
