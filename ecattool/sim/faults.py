@@ -47,19 +47,19 @@ class Faults:
         return self._sdo.pop(self.sdo_count, None)
 
     def state_refusal(self, state: EcState) -> int | None:
-        pending = self._states.get(state)
-        if pending:
-            return pending.pop(0)
-        return None
+        return _next(self._states, state)
 
     def mailbox_delay_ms(self, state: EcState) -> int | None:
-        pending = self._slow.get(state)
-        if pending:
-            return pending.pop(0)
-        return None
+        return _next(self._slow, state)
 
     def clear(self) -> None:
         self._sdo.clear()
         self._states.clear()
         self._slow.clear()
         self.eeprom_power_loss_after = None
+
+
+def _next(planned: dict[EcState, list[int]], state: EcState) -> int | None:
+    """The next value planned for ``state`` (consumed), or None."""
+    pending = planned.get(state)
+    return pending.pop(0) if pending else None
