@@ -98,6 +98,10 @@ CASES: dict[str, dict] = {
         "image.categories": "siitool writes one TXPDO and one DC category per PDO/OpMode and skips FMMUs it "
                             "does not know; ecattool writes one category of each kind",
         "fmmu[*]": "the ESI's FMMU texts (OrbitaIn…) are not FMMU usages; ecattool writes them as unused",
+        "sm[2].type": "the ESI names SM2 'OrbitaIn'; its ControlByte #x64 makes it Outputs (ETG.2000), which "
+                      "ecattool writes; siitool wrote unused",
+        "sm[3].type": "the ESI names SM3 'OrbitaOut'; its ControlByte #x20 makes it Inputs (ETG.2000), which "
+                      "ecattool writes; siitool wrote unused",
         "strings": STRING_TABLE, "strings.extra": STRINGS_PAD, "general.order": SIITOOL_ORDER,
         "general.flags": DLL_FLAG, "general.group_name": GROUP_NAME,
         "*.entry[*].data_type": "UINT8 is an 8-bit unsigned (USINT, 0x05); siitool wrote UINT (0x06)",

@@ -6,12 +6,14 @@
 * ``esi-pdo-sm-missing`` / ``esi-pdo-sm-direction`` — a PDO's default Sm does not exist or carries the
   other direction;
 * ``esi-sm-size`` — the default process image of a sync manager is larger than its MaxSize;
-* ``esi-exclude-missing`` — an Exclude names a PDO the device does not define.
+* ``esi-exclude-missing`` — an Exclude names a PDO the device does not define;
+* ``esi-product-zero`` — the device's product code is 0 (an EDS without ProductNumber and 1018h:02 default,
+  an ESI ProductCode of 0): a master configuration made from it expects product 0, which no real drive reports.
 """
 
 from __future__ import annotations
 
-from ecattool.esi.model import Device, Direction, EsiFile, Pdo
+from ecattool.esi.model import Device, Direction, EsiFile, Pdo, with_article
 from ecattool.findings import Finding, Severity
 
 
@@ -24,6 +26,7 @@ RULES: dict[str, str] = {
     "esi-pdo-sm-direction": "a PDO's default Sm carries the other direction",
     "esi-sm-size": "the default process image of a sync manager is larger than its MaxSize",
     "esi-exclude-missing": "an Exclude names a PDO the device does not define",
+    "esi-product-zero": "the device's product code is 0: exported master configurations would expect product 0",
 }
 
 
@@ -53,6 +56,14 @@ def check_device(dev: Device) -> list[Finding]:
             out.append(_f("esi-pdo-duplicate", Severity.ERROR,
                           f"{name}: PDO 0x{pdo.index:04X} is defined twice", pdo.location, pdo=pdo.index))
         seen.setdefault(pdo.index, pdo)
+    if dev.product_code == 0:
+        fmt = dev.extra.get("format")
+        where = (f"the {fmt} has no ProductNumber in [DeviceInfo] and no 1018h:02 default" if fmt in ("EDS", "DCF")
+                 else "its Type ProductCode is 0")
+        out.append(_f("esi-product-zero", Severity.WARNING,
+                      f"{name}: product code 0 ({where}); every master configuration exported from it expects "
+                      "product 0 and a master that checks the identity refuses the real drive: use the vendor's "
+                      "ESI, or set 'identity: {product: false}' on the drive in the project", dev.location))
     od = dev.dictionary
     check_od = len(od) > 0
     for pdo in pdos:
@@ -80,7 +91,7 @@ def check_device(dev: Device) -> list[Finding]:
             elif sm.direction is not None and sm.direction is not pdo.direction:
                 out.append(_f("esi-pdo-sm-direction", Severity.ERROR,
                               f"{name}: {tag} 0x{pdo.index:04X} is assigned to Sm {pdo.sm} ({sm.kind}); "
-                              f"a {tag} belongs in a {pdo.direction.sm_kind} sync manager", pdo.location, pdo=pdo.index))
+                              f"{with_article(tag)} belongs in {with_article(pdo.direction.sm_kind)} sync manager", pdo.location, pdo=pdo.index))
         for ex in pdo.excludes:
             if ex not in seen:
                 out.append(_f("esi-exclude-missing", Severity.WARNING,

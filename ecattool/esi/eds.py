@@ -393,7 +393,8 @@ def _device(cod: Any, od: ObjectDictionary, lines: _Lines, source: str, conv: _C
     sms = standard_sync_managers(rx_bytes, tx_bytes, 8 * len(rx), 8 * len(tx))
     file_info = getattr(cod, "__edsFileInfo", {}) or {}
     name = str(info.product_name or file_info.get("Description") or Path(source).stem)
-    extra = {k: str(v) for k, v in (("eds_file", file_info.get("FileName")),
+    extra = {k: str(v) for k, v in (("format", "DCF" if conv.dcf else "EDS"),
+                                     ("eds_file", file_info.get("FileName")),
                                      ("eds_version", file_info.get("EDSVersion")),
                                      ("eds_file_version", file_info.get("FileVersion")),
                                      ("eds_file_revision", file_info.get("FileRevision")),

@@ -49,6 +49,12 @@ class Direction(str, Enum):
         return "Outputs" if self is Direction.RX else "Inputs"
 
 
+def with_article(word: str) -> str:
+    """``word`` after ``a`` or ``an`` as it is spoken: an Inputs, an Outputs, an MBoxIn, an RxPDO, a TxPDO."""
+    spoken_vowel = word[:1].lower() in "aeiou" or word.startswith(("MBox", "Rx", "SM"))
+    return f"{'an' if spoken_vowel else 'a'} {word}"
+
+
 class SyncManager(Record):
     __slots__ = ("number", "kind", "start_address", "default_size", "min_size", "max_size", "control_byte",
                  "enable", "virtual", "location", "op_only", "enable_byte")

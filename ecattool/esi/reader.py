@@ -43,6 +43,21 @@ from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
 
 ROOTS = ("EtherCATInfo", "EtherCATModule", "EtherCATDict")
 _BIT = {"0": 0, "1": 1}
+#: sync manager kind -> True when the master writes it (ControlByte direction 01)
+_SM_DIRECTION = {"MBoxOut": True, "Outputs": True, "MBoxIn": False, "Inputs": False}
+
+
+def sm_kind_from_control(control: int, has_pdos: bool) -> str | None:
+    """The kind a ``ControlByte`` gives a sync manager (ETG.2000, ESC register 0x0804): bits 2-3 the direction
+    (01 written by the master, 00 read by it; 10 and 11 are reserved: None), bits 0-1 the mode (00 buffered:
+    process data; 10 one-buffer: a mailbox, or process data when a PDO names the sync manager; 01 and 11:
+    None)."""
+    direction, mode = (control >> 2) & 3, control & 3
+    if direction > 1 or mode in (1, 3):
+        return None
+    if mode == 2 and not has_pdos:
+        return "MBoxOut" if direction else "MBoxIn"
+    return "Outputs" if direction else "Inputs"
 _NO_INDEX = -(1 << 200)  # a PDO without an Index element (a schema-valid Index is never this)
 _T = TypeVar("_T")
 
@@ -633,6 +648,31 @@ class Reader:
             enable_byte=enable,
         )
 
+    def _sm_kinds(self, dev: Device, elements: list[Any]) -> None:
+        """Each sync manager's kind as ETG.2000 defines it: the ``Sm`` text names it (MBoxOut, MBoxIn, Outputs,
+        Inputs), the ``ControlByte`` (the SII/ESC control register 0x0804) says it: bits 2-3 the direction
+        (01 the master writes: outputs, 00 the master reads: inputs), bits 0-1 the mode (00 buffered, 10 mailbox
+        = one buffer). Where the text is missing, is not one of the four words, or names the other direction than
+        the ControlByte, the ControlByte decides (with a located warning). A one-buffer sync manager is a mailbox
+        unless a PDO of the device names it (process data in one-buffer mode, as EL1252 or EM7004 use it)."""
+        for sm, el in zip(dev.sync_managers, elements):
+            if el.get("ControlByte") is None:
+                continue
+            pdos = [*dev.rx_pdos, *dev.tx_pdos, *(p for m in dev.modules for p in (*m.rx_pdos, *m.tx_pdos))]
+            derived = sm_kind_from_control(sm.control_byte, any(p.sm == sm.number for p in pdos))
+            if derived is None or derived == sm.kind:
+                continue
+            given = _SM_DIRECTION.get(sm.kind)
+            if given is not None and given == _SM_DIRECTION[derived]:
+                continue  # the same direction: a mailbox-mode process-data SM, or the reverse (the text's word)
+            text = f"{sm.kind!r}" if sm.kind else "no text"
+            why = "is not one of MBoxOut, MBoxIn, Outputs, Inputs" if given is None and sm.kind else (
+                "names the other direction" if sm.kind else "gives no kind")
+            self.ctx.warn("esi-sm-kind", f"Sm {sm.number} has {text}, which {why}; ControlByte "
+                          f"#x{sm.control_byte:02X} makes it {derived} (ETG.2000)", el, sm=sm.number,
+                          text=sm.kind, kind=derived)
+            sm.kind = derived
+
     def dc(self, el: Any) -> list[DcOpMode]:
         ctx = self.ctx
         out = []
@@ -793,6 +833,7 @@ class Reader:
         dev = Device(h.identity, h.type_name, lc_text(el, "Name"), physics=el.get("Physics", "") or "",
                      source=self.source, location=ctx.loc(el))
         sm_no = 0
+        sm_elements: list[Any] = []
         profile_seen = False
         for child in el[:]:
             tag = child.tag
@@ -802,6 +843,7 @@ class Reader:
                 dev.rx_pdos.append(self.pdo(child, Direction.RX))
             elif tag == "Sm":
                 dev.sync_managers.append(self.sync_manager(child, sm_no))
+                sm_elements.append(child)
                 sm_no += 1
             elif tag == "Fmmu":
                 dev.fmmus.append(Fmmu((child.text or "").strip(), ctx.opt_number(child.get("Sm"), child, "Fmmu Sm"),
@@ -854,6 +896,7 @@ class Reader:
             idents = {i for s in dev.slots for i in s.module_idents}
             classes = {c for s in dev.slots for c in s.module_classes if c}
             dev.modules = [m for m in esi.modules if m.ident in idents or (m.module_class and m.module_class in classes)]
+        self._sm_kinds(dev, sm_elements)
         return dev
 
 

@@ -11,7 +11,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from ecattool.errors import EcatToolError, Location
-from ecattool.esi.model import Device, Direction, Pdo, PdoEntry
+from ecattool.esi.model import Device, Direction, Pdo, PdoEntry, with_article
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Entry
 from ecattool.od.types import lookup
@@ -81,8 +81,11 @@ def _finding(rule: str, message: str, location: Any, **data: Any) -> Finding:
     return Finding(rule, RULES[rule][0], message, location, data)
 
 
-def _image(d: Direction) -> str:
-    return "output image (SM2)" if d is Direction.RX else "input image (SM3)"
+def _image(d: Direction, sm: int | None = None) -> str:
+    """``output image (SM2)``: the image of one sync manager (the direction's usual one when not known)."""
+    if sm is None:
+        sm = 2 if d is Direction.RX else 3
+    return f"{'output' if d is Direction.RX else 'input'} image (SM{sm})"
 
 
 def _kind(d: Direction) -> str:
@@ -159,10 +162,14 @@ class _Checker:
             limit = assign_entries
         obj = self.od.get(d.assign_index)
         od_limit = obj.max_subindex if obj is not None and obj.max_subindex > 0 else None
+        # the assignment object governs the direction's first process-data SM; PDOs whose Sm attribute puts them
+        # on another SM of the same direction (outputs over SM0, SM1 and SM2) are not in its list
+        first = self.device.process_sm(d)
+        counted = [p for p in pdos if first is None or self.sm_of(d, p.index) == first.number]
         for lim, why in ((limit, f"the {self.rules.family} family"), (od_limit, f"0x{d.assign_index:04X}")):
-            if lim is not None and len(pdos) > lim:
-                self.add("PDO011", f"{len(pdos)} PDOs assigned to 0x{d.assign_index:04X}; {why} allows at most {lim}",
-                         pdos[lim].location, count=len(pdos), limit=lim)
+            if lim is not None and len(counted) > lim:
+                self.add("PDO011", f"{len(counted)} PDOs assigned to 0x{d.assign_index:04X}; {why} allows at most "
+                         f"{lim}", counted[lim].location, count=len(counted), limit=lim)
                 break
         # mandatory and exclude
         assigned = {p.index for p in pdos}
@@ -217,11 +224,28 @@ class _Checker:
             return f"{self.device.type_name} (its ESI: CoE PdoAssign/PdoConfig, Fixed PDOs)"
         return f"the {self.rules.family} family"
 
+    def sm_of(self, d: Direction, index: int) -> int | None:
+        """The sync manager that carries PDO ``index`` in direction ``d``: the one its ``Sm`` attribute names when
+        that is a process-data sync manager of this direction (a terminal may spread its outputs over SM0, SM1
+        and SM2 by design), else the direction's first one (SM2/SM3 usually); None when the device has none."""
+        dev_pdo = self.device.pdo(index)
+        if dev_pdo is not None and dev_pdo.sm is not None:
+            sm = self.device.sm(dev_pdo.sm)
+            if sm is not None and sm.kind == d.sm_kind:
+                return sm.number
+        first = self.device.process_sm(d)
+        return first.number if first is not None else None
+
     def check_device_pdo(self, d: Direction, p: MappedPdo, dev_pdo: Pdo, sm_check: bool = True) -> None:
-        sm = self.device.process_sm(d)
-        if sm_check and dev_pdo.sm is not None and sm is not None and dev_pdo.sm != sm.number:
-            self.add("PDO017", f"PDO {_a(p.index)} belongs to SM{dev_pdo.sm} (Sm attribute), not to SM{sm.number}",
-                     p.location, pdo=p.index, sm=dev_pdo.sm)
+        if sm_check and dev_pdo.sm is not None and self.device.process_sm(d) is not None:
+            sm = self.device.sm(dev_pdo.sm)
+            if sm is None:
+                self.add("PDO017", f"PDO {_a(p.index)} names SM{dev_pdo.sm} (Sm attribute), which the device does "
+                         f"not have", p.location, pdo=p.index, sm=dev_pdo.sm)
+            elif sm.kind != d.sm_kind:
+                what = with_article(sm.kind) if sm.kind else "an unused"
+                self.add("PDO017", f"PDO {_a(p.index)} belongs to SM{dev_pdo.sm} (Sm attribute), {what} sync "
+                         f"manager, not {with_article(d.sm_kind)} one", p.location, pdo=p.index, sm=dev_pdo.sm)
         if dev_pdo.fixed and p.explicit and entry_keys(p.entries) != entry_keys(dev_pdo.entries):
             self.add("PDO014", f"PDO {_a(p.index)} ({dev_pdo.name}) is Fixed; its entries cannot be changed "
                      f"(omit 'entries' to assign it as it is)", p.location, pdo=p.index)
@@ -355,30 +379,54 @@ class _Checker:
         return any(m.strip().lower() == "slow" for m in marks)
 
     # --- image level ------------------------------------------------------------------------------
+    def sm_groups(self, d: Direction, pdos: list[MappedPdo]) -> list[tuple[int | None, list[MappedPdo]]]:
+        """The assigned PDOs of ``d`` per sync manager, in the order of their first PDO (one group, the
+        direction's first process-data SM, unless PDOs name other SMs of the same direction)."""
+        groups: dict[int | None, list[MappedPdo]] = {}
+        for p in pdos:
+            groups.setdefault(self.sm_of(d, p.index), []).append(p)
+        return list(groups.items())
+
+    def pad_hint(self, d: Direction, pdos: list[MappedPdo], pad: int) -> str | None:
+        """How to pad an image of whole PDOs to whole bytes, or None when nothing can be done: every PDO of the
+        image is Fixed or its mapping object cannot be written (a device with no mailbox, a fixed 2-bit input
+        terminal: its sync manager simply carries the bits it has, as the ESC maps them bit by bit)."""
+        changeable = [p for p in pdos if p.index not in self.bad and not self.mapping_not_writable(p.index)
+                      and not ((dp := self.device.pdo(p.index)) is not None and dp.fixed)]
+        if not changeable:
+            return None
+        if self.rules.gaps_allowed:
+            return f"add a gap of {pad} bits (gap/{pad})"
+        if self.rules.dummy_indices and (self.rules.dummies_in_rx if d is Direction.RX else self.rules.dummies_in_tx):
+            return f"pad it with {pad} bits of dummy entries ({self.rules.family} allows no gaps)"
+        return f"map {pad} more bits ({self.rules.family} allows no gaps)"
+
     def check_image(self) -> None:
         lay = layout(self.device, self.mapping)
         for d in Direction:
             img = lay.image(d)
             pdos = self.mapping.pdos(d)
-            loc = pdos[0].location if pdos else None
-            sm = self.device.process_sm(d)
-            if img.bit_size and sm is None and self.device.sync_managers:
+            if img.bit_size and self.device.process_sm(d) is None and self.device.sync_managers:
                 self.add("PDO018", f"the device has no {d.sm_kind} sync manager for {img.byte_size} bytes of "
-                         f"{_kind(d)} process data", loc, bytes=img.byte_size)
-            elif sm is not None and sm.max_size is not None and img.byte_size > sm.max_size:
-                self.add("PDO018", f"the {_image(d)} is {img.byte_size} bytes; SM{sm.number} holds at most "
-                         f"{sm.max_size} bytes", loc, bytes=img.byte_size, max=sm.max_size)
-            if img.bit_size % 8:
-                pad = 8 - img.bit_size % 8
-                if self.rules.gaps_allowed:
-                    hint = f"add a gap of {pad} bits (gap/{pad})"
-                elif self.rules.dummy_indices and (self.rules.dummies_in_rx if d is Direction.RX
-                                                   else self.rules.dummies_in_tx):
-                    hint = f"pad it with {pad} bits of dummy entries ({self.rules.family} allows no gaps)"
-                else:
-                    hint = f"map {pad} more bits ({self.rules.family} allows no gaps)"
-                self.add("PDO027", f"the {_image(d)} is {img.bit_size} bits, not a whole number of bytes; {hint}",
-                         loc, bits=img.bit_size)
+                         f"{_kind(d)} process data", pdos[0].location if pdos else None, bytes=img.byte_size)
+            # bit offsets inside each sync manager's own image
+            where: dict[int, tuple[int | None, int]] = {}  # id of a PDO entry -> (SM, bit offset in that SM)
+            for sm_no, group in self.sm_groups(d, pdos):
+                bits = 0
+                for p in group:
+                    for e in p.entries:
+                        where[id(e)] = (sm_no, bits)
+                        bits += e.bit_len
+                loc = group[0].location
+                sm = self.device.sm(sm_no) if sm_no is not None else None
+                size = (bits + 7) // 8
+                if sm is not None and sm.max_size is not None and size > sm.max_size:
+                    self.add("PDO018", f"the {_image(d, sm_no)} is {size} bytes; SM{sm_no} holds at most "
+                             f"{sm.max_size} bytes", loc, bytes=size, max=sm.max_size)
+                hint = self.pad_hint(d, group, 8 - bits % 8) if bits % 8 else None
+                if hint is not None:
+                    self.add("PDO027", f"the {_image(d, sm_no)} is {bits} bits, not a whole number of bytes; {hint}",
+                             loc, bits=bits)
             by_pdo = {p.index: p for p in pdos}
             seen: dict[tuple[int, int], int] = {}
             # every mapped RxPDO object is overwritten every cycle, default PDOs included
@@ -391,17 +439,18 @@ class _Checker:
                 if pdo is None or not pdo.explicit:
                     continue
                 eloc = src.location or pdo.location
+                sm_no, bit_offset = where.get(id(src), (img.sm, ie.bit_offset))
                 dt = lookup(ie.type_name) if ie.type_name else None
                 bit_type = ie.bit_len < 8 or (dt is not None and dt.is_bit_type)
-                if ie.bit % 8 and not bit_type:
-                    self.add("PDO019", f"{_a(ie.index, ie.subindex)} starts at bit {ie.offset} of the "
-                             f"{_image(d)}; a {ie.bit_len}-bit value should start on a byte boundary",
-                             eloc, offset=ie.offset)
+                if bit_offset % 8 and not bit_type:
+                    self.add("PDO019", f"{_a(ie.index, ie.subindex)} starts at bit {bit_offset // 8}.{bit_offset % 8} "
+                             f"of the {_image(d, sm_no)}; a {ie.bit_len}-bit value should start on a byte boundary",
+                             eloc, offset=f"{bit_offset // 8}.{bit_offset % 8}")
                 key = (ie.index, ie.subindex)
                 if self.is_dummy(ie.index):
                     continue  # dummies pad a PDO and carry no data: repeating one is how they are used (§2.3.1)
                 if key in seen:
-                    self.add("PDO020", f"{_a(*key)} is mapped twice in the {_image(d)} "
+                    self.add("PDO020", f"{_a(*key)} is mapped twice in the {_image(d, img.sm)} "
                              f"(PDO {_a(seen[key])} and {_a(ie.pdo)})", eloc, index=ie.index, subindex=ie.subindex)
                 seen[key] = ie.pdo
             if d is Direction.RX:
@@ -464,7 +513,7 @@ def check_config(
                 where = f"at {a.offset} in PDO {_a(a.pdo)}" if a is not None else "nowhere"
                 findings.append(_finding(
                     "PDO028", f"{_a(e.index, e.subindex)} is declared at {e.offset} in PDO {_a(e.pdo)} of the "
-                    f"{_image(d)}, but the startup SDOs map it {where}",
+                    f"{_image(d, lay.image(d).sm)}, but the startup SDOs map it {where}",
                     where_declared.get((e.index, e.subindex)) or (Location(mapping.source) if mapping.source else None),
                     index=e.index, subindex=e.subindex, declared=e.offset, actual=a.offset if a else None))
     return mapping, findings

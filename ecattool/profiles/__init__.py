@@ -19,12 +19,13 @@ Example::
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from types import ModuleType
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
 from ecattool.profiles._common import ProductInfo, ProfileInfo
-from ecattool.profiles.generic import complete_generic, generic_rules
+from ecattool.profiles.generic import complete_generic, generic_rules, supported_modes_of
 from ecattool.profiles.rules import FamilyRules
 
 __all__ = [
@@ -100,4 +101,22 @@ def rules_for(device: Device) -> FamilyRules:
     if fam == "generic":
         return generic_rules(device)
     rules: Callable[[Device], FamilyRules] = _module(fam).rules
-    return rules(device)
+    return own_modes(device, rules(device))
+
+
+def own_modes(device: Device, rules: FamilyRules) -> FamilyRules:
+    """A built-in family's rules for a device read from a CANopen EDS/DCF, with the modes its own 6502h
+    (supported drive modes) lists: the family's list is what the family's firmware can do, the EDS says what this
+    drive does. Standard modes (1-10) are kept where 6502h sets their bit; the family's manufacturer-specific
+    (negative) modes where 6502h sets any of its manufacturer bits 16-31. Other devices, and an EDS without a
+    6502h default, keep the family's list."""
+    if device.extra.get("format") not in ("EDS", "DCF"):
+        return rules
+    e = device.dictionary.entry(0x6502, 0)
+    value = e.default_value if e is not None else None
+    if not isinstance(value, int) or not value:
+        return rules
+    standard = set(supported_modes_of(device.dictionary))
+    modes = tuple(m for m in rules.supported_modes if m in standard or (m < 0 and value >> 16))
+    return replace(rules, supported_modes=modes, dc_required_modes=tuple(m for m in rules.dc_required_modes
+                                                                           if m in modes))
