@@ -241,11 +241,21 @@ def test_segmented_download_refused_by_the_drive_at_the_last_segment():
 
 
 def test_segments_longer_than_announced_are_refused():
-    server = MailboxServer(etg(), 20, 128)
-    server.handle(coe(struct.pack("<BHBI", 0x21, 0x1A00, 0, 6) + b"\x01\x02\x03\x04"))
+    server = MailboxServer(etg(), 20, 128)  # complete access: only the cap bounds the announced size
+    server.handle(coe(struct.pack("<BHBI", 0x31, 0x1A00, 0, 6) + b"\x01\x02\x03\x04"))
     reply(server)
     server.handle(coe(bytes([0x01]) + bytes(9), 2))
     assert abort_code(reply(server)[2]) == 0x06070010
+
+
+def test_an_announced_size_the_object_cannot_have_is_refused_at_the_initiate():
+    """1A00h:00 is one octet: a segmented download announcing 6 is aborted at once (0x06070012), as a slave stack
+    checks it, and the segments that follow belong to no transfer."""
+    server = MailboxServer(etg(), 20, 128)
+    server.handle(coe(struct.pack("<BHBI", 0x21, 0x1A00, 0, 6) + b"\x01\x02\x03\x04"))
+    assert abort_code(reply(server)[2]) == 0x06070012
+    server.handle(coe(bytes([0x01]) + bytes(9), 2))
+    assert abort_code(reply(server)[2]) == 0x05040001
 
 
 def test_master_abort_ends_the_transfer_without_a_reply():

@@ -132,6 +132,8 @@ class VirtualSlave(EscApplication):
             return
         if requested in (EcState.PREOP, EcState.BOOT) and current is EcState.INIT:
             self.mailbox.resize(esc.sm(MBX_OUT).length, esc.sm(MBX_IN).length)
+        elif requested is EcState.INIT or EcState.BOOT in (requested, current):
+            self.mailbox.reset()  # the mailbox stops: transfers a master left unfinished are dropped
         self._sync_state()
         if requested in (EcState.SAFEOP, EcState.OP):
             self._exchange(None)
@@ -201,7 +203,7 @@ class VirtualSlave(EscApplication):
     def _push_mailbox(self) -> None:
         esc = self.esc
         sm = esc.sm(MBX_IN)
-        if not sm.enabled or esc.sm_full(MBX_IN) or esc.sm_deactivated(MBX_IN):
+        if not sm.active or esc.sm_full(MBX_IN) or esc.sm_deactivated(MBX_IN):
             return
         if self._reply_due is not None:
             if esc.frame_ns < self._reply_due:
@@ -237,7 +239,7 @@ class VirtualSlave(EscApplication):
             self._sync_state()  # e.g. power lost during an EEPROM write: the drive is back in INIT
             return
         sm = self.esc.sm(PD_IN)
-        if in_size and sm.enabled:
+        if in_size and sm.active:
             self.esc.pdi_write(sm.start, inputs[:sm.length])
 
     # ------------------------------------------------------------------------------------------

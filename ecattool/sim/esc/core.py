@@ -64,7 +64,11 @@ class _Sm:
     start: int
     length: int
     control: int
+    #: the enable bit (register +6 bit 0) as the master wrote it
     enabled: bool
+    #: whether the ESC serves the area: enabled, with a length, inside the process memory the ESC has (an SM over
+    #: the register area 0x0000-0x0FFF or past the memory end is not activated, and never shadows a register)
+    active: bool = False
 
     @property
     def end(self) -> int:
@@ -191,9 +195,12 @@ class Esc:
     def sms(self) -> list[_Sm]:
         if self._sms is None:
             out = []
+            size = len(self.mem)
             for n in range(self.sm_count):
                 a = R.SM + R.SM_SIZE * n
-                out.append(_Sm(self.u16(a), self.u16(a + 2), self.mem[a + 4], bool(self.mem[a + 6] & 1)))
+                start, length, enabled = self.u16(a), self.u16(a + 2), bool(self.mem[a + 6] & 1)
+                active = enabled and length > 0 and start >= R.PROCESS_RAM and start + length <= size
+                out.append(_Sm(start, length, self.mem[a + 4], enabled, active))
             self._sms = out
         return self._sms
 
@@ -208,8 +215,12 @@ class Esc:
                 if not self.mem[a + 12] & 1 or not self.u16(a + 4):
                     continue
                 t = self.mem[a + 11]
-                out.append(_Fmmu(self.u32(a), self.u16(a + 4), self.mem[a + 6] & 7, self.mem[a + 7] & 7,
-                                 self.u16(a + 8), self.mem[a + 10] & 7, bool(t & 1), bool(t & 2)))
+                f = _Fmmu(self.u32(a), self.u16(a + 4), self.mem[a + 6] & 7, self.mem[a + 7] & 7,
+                          self.u16(a + 8), self.mem[a + 10] & 7, bool(t & 1), bool(t & 2))
+                first, end = f.bit_range()
+                if f.physical * 8 + f.physical_bit + max(0, end - first) > len(self.mem) * 8:
+                    continue  # its physical bytes run past the memory the ESC has: the FMMU serves nothing
+                out.append(f)
             self._fmmus = out
         return self._fmmus
 
@@ -471,7 +482,7 @@ class Esc:
         req = 0x08 if self._al_event else 0
         for n in range(self.sm_count):
             sm = self.sm(n)
-            if sm.enabled and sm.mailbox and not sm.ecat_writes and self._sm_full[n]:
+            if sm.active and sm.mailbox and not sm.ecat_writes and self._sm_full[n]:
                 req |= 0x10 << n
         self._put16(R.ECAT_EVENT_REQUEST, req)
 
@@ -512,7 +523,7 @@ class Esc:
         """Write one mailbox frame into read mailbox ``sm``; False when it is still full (unless ``force``:
         a repeat overwrites it)."""
         s = self.sm(sm)
-        if not s.enabled or self._sm_pdi_off[sm] or (self._sm_full[sm] and not force):
+        if not s.active or self._sm_pdi_off[sm] or (self._sm_full[sm] and not force):
             return False
         self.mem[s.start:s.start + min(len(data), s.length)] = data[:s.length]
         self._sm_full[sm] = True
@@ -530,7 +541,9 @@ class Esc:
         self.mem[a + 7] = (self.mem[a + 7] & ~0x02 & 0xFF) | (self.mem[a + 6] & 0x02)
 
     def pdi_write(self, addr: int, data: bytes) -> None:
-        """The application writes process RAM (the input buffer of a buffered SM)."""
+        """The application writes process RAM (the input buffer of a buffered SM); bytes past the memory end
+        are not there to write (the memory never grows)."""
+        data = data[:max(0, len(self.mem) - addr)]
         self.mem[addr:addr + len(data)] = data
 
     def pdi_read(self, addr: int, n: int) -> bytes:

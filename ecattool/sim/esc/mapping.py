@@ -55,27 +55,26 @@ class SmArea(Protocol):
     def length(self) -> int: ...
 
     @property
-    def enabled(self) -> bool: ...
+    def active(self) -> bool: ...
 
 
 def segments(sms: Sequence[SmArea], addr: int, n: int) -> tuple[Segment, ...]:
-    """Split [addr, addr+n) into pieces outside (None) and inside an enabled sync manager's area."""
-    cuts: list[Segment] = []
+    """Split [addr, addr+n) into pieces outside (None) and inside an active sync manager's area. Where areas
+    overlap (a sync manager an earlier master left over another's area), the lower-numbered one serves the bytes:
+    a master that configures SM0-SM3 (SOEM resets only those) is served by them whatever SM4-SM7 say."""
     end = addr + n
-    pos = addr
-    active = sorted(((sm.start, sm.start + sm.length, i) for i, sm in enumerate(sms) if sm.enabled and sm.length),
-                    key=lambda t: t[0])
-    for start, stop, i in active:
-        if stop <= pos or start >= end:
-            continue
-        if start > pos:
-            cuts.append((pos, start, None))
-        lo = max(pos, start)
-        hi = min(end, stop)
-        cuts.append((lo, hi, i))
-        pos = hi
-    if pos < end:
-        cuts.append((pos, end, None))
+    areas = [(sm.start, sm.start + sm.length, i) for i, sm in enumerate(sms)
+             if sm.active and sm.length and sm.start < end and sm.start + sm.length > addr]
+    if not areas:
+        return ((addr, end, None),)
+    bounds = sorted({addr, end, *(max(addr, a[0]) for a in areas), *(min(end, a[1]) for a in areas)})
+    cuts: list[Segment] = []
+    for lo, hi in zip(bounds, bounds[1:]):
+        owner = min((i for start, stop, i in areas if start <= lo and hi <= stop), default=None)
+        if cuts and cuts[-1][2] == owner:
+            cuts[-1] = (cuts[-1][0], hi, owner)
+        else:
+            cuts.append((lo, hi, owner))
     return tuple(cuts)
 
 

@@ -43,6 +43,10 @@ SCS_DOWNLOAD = 3
 
 TOGGLE_NOT_ALTERNATED = 0x05030000
 
+#: the most a segmented download may announce for an object of variable length (a string, a domain) or a
+#: complete access: the simulated drive keeps what it is sent in memory, so a master cannot make it hold more
+MAX_SDO_BYTES = 1 << 20
+
 #: octets of a full SDO frame: CoE header, command, index, sub-index, 4 data octets (the minimum size)
 SDO_FRAME = 10
 #: octets before the data of a normal initiate frame (mailbox header + SDO_FRAME with the size in its data)
@@ -186,9 +190,22 @@ class SdoServer:
             if refused is not None:
                 return refused
         else:
+            too_long = self._announced_too_long(index, subindex, ca, size)
+            if too_long:
+                return [sdo_abort_data(index, subindex, too_long)]
             self._transfer = _Transfer(False, index, subindex, ca, size, bytearray(value))
         command = (SCS_DOWNLOAD << 5) | (0x10 if ca else 0)
         return [coe_header(SERVICE_SDO_RESPONSE) + struct.pack("<BHBI", command, index, subindex, 0)]
+
+    def _announced_too_long(self, index: int, subindex: int, ca: bool, size: int) -> int:
+        """The abort code for a segmented download whose announced size no transfer to this object may have,
+        checked at the initiate as a slave stack does (0 when it may go on): more octets than an object of fixed
+        size has (0x06070012), or more than :data:`MAX_SDO_BYTES` (0x05040005, out of memory)."""
+        entry = None if ca else self.drive.device.dictionary.entry(index, subindex)
+        bits = entry.datatype.bits if entry is not None and entry.datatype is not None else None
+        if bits is not None and size > (max(bits, entry.bit_size if entry is not None else 0) + 7) // 8:
+            return A.LENGTH_TOO_HIGH
+        return A.OUT_OF_MEMORY if size > MAX_SDO_BYTES else 0
 
     def _download_segment(self, data: bytes) -> list[bytes]:
         t = self._transfer

@@ -32,6 +32,12 @@ NOT_DEFINED = 0x8000
 NOT_FOUND = 0x8001
 ILLEGAL = 0x8004
 PACKET_NUMBER_WRONG = 0x8005
+DISK_FULL = 0x8003
+
+#: the largest file an FoE write may bring: the drive's memories are 64 K words (128 KiB) each, and a setup
+#: image that writes every EEPROM word in a block of its own takes 6 octets per word; a firmware file is no
+#: larger than the program memory. More is refused with "disk full" and dropped.
+MAX_FILE_BYTES = 6 * 0x10000
 
 
 @dataclass
@@ -116,6 +122,8 @@ class FoeServer:
         if packet != w.next_packet:
             return self._error(PACKET_NUMBER_WRONG, f"packet {packet}, expected {w.next_packet}")
         full = max(1, self.out_size - HEADER_SIZE - FOE_OVERHEAD)
+        if len(w.data) + min(len(chunk), full) > MAX_FILE_BYTES:
+            return self._error(DISK_FULL, f"the file is larger than the {MAX_FILE_BYTES} octets the drive takes")
         if len(chunk) >= full:
             w.data += chunk[:full]
             w.next_packet += 1

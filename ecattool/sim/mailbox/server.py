@@ -24,6 +24,10 @@ if TYPE_CHECKING:
     from ecattool.sim.drive import Drive
 
 
+#: replies (and emergencies) a mailbox keeps for SM1 at most
+MAX_QUEUED_REPLIES = 64
+
+
 class MailboxServer:
     """Mailbox protocols of one drive over SM0 (``out_size``, master → slave) and SM1 (``in_size``).
 
@@ -42,7 +46,9 @@ class MailboxServer:
         self.sdo = coe.SdoServer(drive, out_size, in_size)
         self.info = sdoinfo.SdoInfoServer(drive, in_size)
         self.foe = foe.FoeServer(drive, out_size, in_size)
-        self._replies: deque[bytes] = deque()
+        #: replies not yet read through SM1, bounded: a master that writes requests and never reads the answers
+        #: loses the oldest (a legitimate master reads each answer before its next request)
+        self._replies: deque[bytes] = deque(maxlen=MAX_QUEUED_REPLIES)
         self._last: bytes | None = None
         self._rx_counter = 0
         self._tx_counter = 0
