@@ -77,6 +77,14 @@ def test_one_buffer_process_data_keeps_its_kind():
     assert not [w for w in esi.device_findings(doc, dev) if w.rule == "esi-sm-kind"]
 
 
+def test_a_vendor_word_of_the_same_direction_is_read_quietly():
+    """AX5206 (revision 0210): SM4 'DynamicOutputs' #x24 and SM5 'DynamicInputs' #x20."""
+    doc = esi.load(corpus_path("esi", "beckhoff_AX5xxx.xml"))
+    dev = next(d for d in doc.devices if len(d.sync_managers) > 5)
+    assert [(s.number, s.kind) for s in dev.sync_managers[4:6]] == [(4, "Outputs"), (5, "Inputs")]
+    assert not [w for w in doc.warnings if w.rule == "esi-sm-kind"]
+
+
 def test_sm_direction_message_is_grammatical():
     text = corpus_path("esi", "weidmueller_UR20_FBC_from_IgH.xml").read_bytes()
     # the first RxPdo's Sm moved to the input sync manager (the file as a careless edit would leave it)

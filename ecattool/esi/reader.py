@@ -665,6 +665,11 @@ class Reader:
             given = _SM_DIRECTION.get(sm.kind)
             if given is not None and given == _SM_DIRECTION[derived]:
                 continue  # the same direction: a mailbox-mode process-data SM, or the reverse (the text's word)
+            word = sm.kind.lower()
+            if given is None and ("outputs" in word or "inputs" in word) and ("outputs" in word) == \
+                    _SM_DIRECTION[derived]:
+                sm.kind = derived  # a vendor's word that says the same (Beckhoff's DynamicOutputs/DynamicInputs)
+                continue
             text = f"{sm.kind!r}" if sm.kind else "no text"
             why = "is not one of MBoxOut, MBoxIn, Outputs, Inputs" if given is None and sm.kind else (
                 "names the other direction" if sm.kind else "gives no kind")
