@@ -8,6 +8,8 @@ from __future__ import annotations
 import struct
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from ecattool.od.model import EcState
 from ecattool.sim import Drive
@@ -191,3 +193,37 @@ def test_a_bus_of_several_slaves_after_a_leftover_sm_over_the_registers() -> Non
     loop = Loop(Bus([s.esc for s in slaves]))
     assert loop.one(Datagram.make(Cmd.BWR, 0, R.SM + 4 * R.SM_SIZE, _sm(0x0000, 0x1000, 0x26))).wkc == 2
     assert loop.one(Datagram.make(Cmd.BRD, 0, R.TYPE, 1)).wkc == 2  # what SOEM counts slaves with
+
+
+# --- any sequence of accesses -------------------------------------------------------------------------
+
+_ACCESS = st.tuples(
+    st.sampled_from(["wr", "rd", "sm", "fmmu", "lrw"]),
+    st.integers(0, 0xFFFF),
+    st.binary(min_size=1, max_size=48),
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(_ACCESS, min_size=1, max_size=25))
+def test_no_sequence_of_accesses_grows_the_memory_or_breaks_the_registers(accesses: list) -> None:
+    slave = VirtualSlave.from_drive(Drive.from_profile("hdt"))
+    loop = Loop(Bus([slave.esc]))
+    for kind, addr, data in accesses:
+        if kind == "wr":
+            loop.one(Datagram.make(Cmd.BWR, 0, addr, data))
+        elif kind == "rd":
+            d = loop.one(Datagram.make(Cmd.BRD, 0, addr, len(data)))
+            assert len(d.data) == len(data)
+        elif kind == "sm":
+            loop.one(Datagram.make(Cmd.BWR, 0, R.SM + R.SM_SIZE * (addr % 8), (data * 8)[:8]))
+        elif kind == "fmmu":
+            loop.one(Datagram.make(Cmd.BWR, 0, R.FMMU + R.FMMU_SIZE * (addr % 8), (data * 16)[:16]))
+        else:
+            loop.one(Datagram.logical(Cmd.LRW, addr * 0x10001, data))
+        assert len(slave.esc.mem) == END
+    # whatever was left, the registers answer: the type, and a station address written and read back
+    assert loop.one(Datagram.make(Cmd.BRD, 0, R.TYPE, 1)).wkc == 1
+    assert loop.one(Datagram.make(Cmd.APWR, 0, R.STATION_ADDRESS, struct.pack("<H", 0x1234))).wkc == 1
+    assert bytes(loop.one(Datagram.make(Cmd.FPRD, 0x1234, R.STATION_ADDRESS, 2)).data) == struct.pack("<H", 0x1234)
+
