@@ -81,11 +81,11 @@ def _finding(rule: str, message: str, location: Any, **data: Any) -> Finding:
     return Finding(rule, RULES[rule][0], message, location, data)
 
 
-def _image(d: Direction, sm: int | None = None) -> str:
-    """``output image (SM2)``: the image of one sync manager (the direction's usual one when not known)."""
-    if sm is None:
-        sm = 2 if d is Direction.RX else 3
-    return f"{'output' if d is Direction.RX else 'input'} image (SM{sm})"
+def _image(d: Direction, sm: int | None) -> str:
+    """``output image (SM2)``: the image of one sync manager; without the SM number when the device has none
+    for the direction (a finding never names a sync manager the device does not have)."""
+    name = "output image" if d is Direction.RX else "input image"
+    return name if sm is None else f"{name} (SM{sm})"
 
 
 def _kind(d: Direction) -> str:
