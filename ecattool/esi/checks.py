@@ -91,7 +91,8 @@ def check_device(dev: Device) -> list[Finding]:
             elif sm.direction is not None and sm.direction is not pdo.direction:
                 out.append(_f("esi-pdo-sm-direction", Severity.ERROR,
                               f"{name}: {tag} 0x{pdo.index:04X} is assigned to Sm {pdo.sm} ({sm.kind}); "
-                              f"{with_article(tag)} belongs in {with_article(pdo.direction.sm_kind)} sync manager", pdo.location, pdo=pdo.index))
+                              f"{with_article(tag)} belongs in {with_article(pdo.direction.sm_kind)} sync manager",
+                              pdo.location, pdo=pdo.index))
         for ex in pdo.excludes:
             if ex not in seen:
                 out.append(_f("esi-exclude-missing", Severity.WARNING,

@@ -58,6 +58,8 @@ def sm_kind_from_control(control: int, has_pdos: bool) -> str | None:
     if mode == 2 and not has_pdos:
         return "MBoxOut" if direction else "MBoxIn"
     return "Outputs" if direction else "Inputs"
+
+
 _NO_INDEX = -(1 << 200)  # a PDO without an Index element (a schema-valid Index is never this)
 _T = TypeVar("_T")
 
@@ -655,11 +657,11 @@ class Reader:
         = one buffer). Where the text is missing, is not one of the four words, or names the other direction than
         the ControlByte, the ControlByte decides (with a located warning). A one-buffer sync manager is a mailbox
         unless a PDO of the device names it (process data in one-buffer mode, as EL1252 or EM7004 use it)."""
+        named = {p.sm for p in (*dev.rx_pdos, *dev.tx_pdos, *(p for m in dev.modules for p in (*m.rx_pdos, *m.tx_pdos)))}
         for sm, el in zip(dev.sync_managers, elements):
             if el.get("ControlByte") is None:
                 continue
-            pdos = [*dev.rx_pdos, *dev.tx_pdos, *(p for m in dev.modules for p in (*m.rx_pdos, *m.tx_pdos))]
-            derived = sm_kind_from_control(sm.control_byte, any(p.sm == sm.number for p in pdos))
+            derived = sm_kind_from_control(sm.control_byte, sm.number in named)
             if derived is None or derived == sm.kind:
                 continue
             given = _SM_DIRECTION.get(sm.kind)
