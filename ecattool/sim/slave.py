@@ -132,7 +132,7 @@ class VirtualSlave(EscApplication):
             return
         if requested in (EcState.PREOP, EcState.BOOT) and current is EcState.INIT:
             self.mailbox.resize(esc.sm(MBX_OUT).length, esc.sm(MBX_IN).length)
-        elif requested is EcState.INIT or EcState.BOOT in (requested, current):
+        elif requested is EcState.INIT:  # from PRE-OP, SAFE-OP, OP or BOOT
             self.mailbox.reset()  # the mailbox stops: transfers a master left unfinished are dropped
         self._sync_state()
         if requested in (EcState.SAFEOP, EcState.OP):
