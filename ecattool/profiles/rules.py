@@ -84,6 +84,8 @@ class FamilyRules:
     factor_group: str = ""
     #: device type (1000h) the family documents, for cross-checks; None = unknown
     device_type: int | None = None
+    #: an FoE setup file (FOESW_) is accepted in BOOT while 210Ch = 1 (Technosoft F515I and newer, §17.4.5)
+    foe_setup_in_boot: bool = False
 
     def accepts_ip_period(self, ns: Fraction | int) -> bool:
         """Whether the drive takes this interpolation period (60C2h); True where the family has no rule."""

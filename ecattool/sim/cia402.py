@@ -75,8 +75,11 @@ def decode_statusword(sw: int) -> State:
 class Cia402:
     """State, controlword handling and the motion model of one axis (internal units as Fractions)."""
 
-    def __init__(self, *, enable_needs_op: bool = False) -> None:
+    def __init__(self, *, enable_needs_op: bool = False, supply_bit_always: bool = False) -> None:
         self.enable_needs_op = enable_needs_op
+        #: statusword bit 4 shows the motor supply in every state, and SWITCHED ON / OPERATION ENABLED need
+        #: it (Technosoft §4.2.2 "Motor supply voltage is present", Remark 2)
+        self.supply_bit_always = supply_bit_always
         self.state = State.SWITCH_ON_DISABLED
         self.controlword = 0
         self.fault_code = 0
@@ -166,6 +169,9 @@ class Cia402:
         enable = cw & 0x0F == 0x0F
         disable_voltage = not cw & 0x02
         quick_stop = cw & 0x06 == 0x02
+        if self.supply_bit_always and not self.voltage:
+            # Remark 2: "cannot transition to states Switched On and Operation enabled without this bit"
+            switch_on = enable = False
         if s is State.SWITCH_ON_DISABLED:
             if shutdown and (ecat_op or not self.enable_needs_op):
                 go(State.READY)
@@ -226,7 +232,7 @@ class Cia402:
 
     def statusword(self, *, mode: int) -> int:
         sw = STATUS_BITS[self.state] | 0x0200  # bit 9 remote
-        if self.voltage and self.state not in (State.NOT_READY, State.SWITCH_ON_DISABLED):
+        if self.voltage and (self.supply_bit_always or self.state not in (State.NOT_READY, State.SWITCH_ON_DISABLED)):
             sw |= 0x0010
         if self.state is State.FAULT_REACTION or self.state is State.FAULT:
             sw |= 0x0008

@@ -54,6 +54,18 @@ class Injection(DriveCore):
             self.cia.interrupt_homing()
         self._refresh_inputs()
 
+    def set_motor_supply(self, present: bool) -> None:
+        """The motor supply (+Vmot) is switched on or off. Technosoft (§4.2.2 Remark 2): statusword bit 4
+        follows it in every state; its loss in SWITCHED ON or OPERATION ENABLED is an undervoltage fault
+        (3220h), in a lower state no fault. Other families: bit 4 (voltage enabled) clears, no reaction."""
+        self.cia.voltage = present
+        self._log("inputs", motor_supply=present)
+        code = self.behaviour.supply_undervoltage_fault
+        if not present and code is not None and self.cia.state in (State.SWITCHED_ON, State.OPERATION_ENABLED):
+            self.inject_fault(code)
+            return
+        self._refresh_inputs()
+
     def option_end_state(self, index: int, option: int, default: str) -> str:
         """The end state the family rules give an option code (``option_code_end_states``), else ``default``."""
         for i, v, end in getattr(self.rules, "option_code_end_states", ()):
