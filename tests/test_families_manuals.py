@@ -64,6 +64,41 @@ def test_2_technosoft_foe_setup_in_boot_from_f515i(revision, accepted):
             d.foe_write("FOESW_AXIS01.bin", image)
 
 
+# 3 -------------------------------------------------------------------------------------------------------
+def _lint(tmp_path: Path, cycle_ns: int, period: tuple[int, int] | None, slow_loop: str | None = None) -> list:
+    from ecattool.project.lint import lint_project
+
+    scaling = (f"    scaling: {{feedback: {{lines: 500}}, units: {{position: rev}}, slow_loop: {slow_loop}}}\n"
+               if slow_loop else "")
+    params = (f"    parameters:\n      - {{object: \"60C2:02\", value: {period[1]}}}\n"
+              f"      - {{object: \"60C2:01\", value: {period[0]}}}\n" if period else "")
+    text = ("ecattool: 1\ndrives:\n  - name: x\n    device: {profile: technosoft-ipos}\n"
+            f"    dc: {{assign_activate: 0x0300, cycle_ns: {cycle_ns}}}\n{scaling}{params}")
+    path = tmp_path / "p.yaml"
+    path.write_text(text)
+    return [(f.rule, f.severity.value) for f in lint_project(path).findings if f.rule == "PRJ080"]
+
+
+def test_3_technosoft_sync0_is_the_slow_loop_or_a_multiple_and_60c2_the_sync_cycle(tmp_path):
+    manual_says(TS_TEXT, 1843, "The SYNC 0 signal must have the period equal or multiple than the drive slow "
+                               "control loop which is by default at 1ms.")
+    manual_says(TS_TEXT, 8759, "Its value must be set with the time value of the EtherCAT master communication "
+                               "cycle time and sync time")
+    assert _lint(tmp_path, 500_000, (4, -3)) == [("PRJ080", "error"), ("PRJ080", "warning")]  # the issue's case
+    assert _lint(tmp_path, 1_000_000, None) == []  # default 60C2h = 1 x 10^-3 s
+    assert _lint(tmp_path, 2_000_000, (2, -3)) == []
+    assert _lint(tmp_path, 2_000_000, None) == [("PRJ080", "warning")]
+    assert _lint(tmp_path, 1_500_000, (15, -4)) == [("PRJ080", "error")]
+    # the slow loop is the project's: 500 us SYNC0 on a 0.5 ms slow loop is right
+    assert _lint(tmp_path, 500_000, (5, -4), slow_loop="0.5 ms") == []
+    assert _lint(tmp_path, 250_000, (25, -5), slow_loop="0.5 ms") == [("PRJ080", "error")]
+
+
+def test_3_other_families_have_no_slow_loop_rule():
+    rules = profiles.rules_for(profiles.load("hdt"))
+    assert rules.dc_cycle_problems(500_000, 4_000_000, 1_000_000) == []
+
+
 # 4 -------------------------------------------------------------------------------------------------------
 def test_4_technosoft_60c2_sub2_range_minus128_to_63():
     manual_says(TS_TEXT, 8792, "Value range\tINTEGER8, (-128 to +63)")
