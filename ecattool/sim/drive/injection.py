@@ -45,8 +45,10 @@ class Injection(DriveCore):
         elif end == "SWITCH_ON_DISABLED":
             self._cia_moves(self.cia.communication_lost(), "communication lost")
         elif end == "QUICK_STOP" and self.cia.state is State.OPERATION_ENABLED:
+            option = self._read_int(0x605A, 0) or 2
+            self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
             self._cia_moves(self.cia.controlword_written(self.cia.controlword & ~0x04 | 0x02, ecat_op=False,
-                                                        quick_stop_option=self._read_int(0x605A, 0) or 2),
+                                                        quick_stop_option=option),
                             "communication lost: quick stop")
         elif end == "OPERATION_ENABLED":
             self.cia.velocity = Fraction(0)
