@@ -49,7 +49,6 @@ def technosoft() -> dict[tuple[int, int], list[Row]]:
     out: dict[tuple[int, int], list[Row]] = {}
     obj: dict[str, str] | None = None
     index = 0
-    entry: Row | None = None
     entries: dict[int, dict[str, str]] = {}
 
     def flush() -> None:
@@ -65,9 +64,9 @@ def technosoft() -> dict[tuple[int, int], list[Row]]:
                 m = _TS_TYPE_WORD.match(cells.get("Value range", ""))
                 typ = m.group(1) if m else (obj.get("Data type", "") if obj.get("Object code", "").upper() == "ARRAY"
                                             else "")
-            out.setdefault((index, sub), []).append(Row(int(cells["line"]), typ, cells.get("Access", "").lower(),
-                                    cells.get("PDO mapping", ""), cells.get("Default value", ""),
-                                    cells.get("Value range", "")))
+            out.setdefault((index, sub), []).append(
+                Row(int(cells["line"]), typ, cells.get("Access", "").lower(), cells.get("PDO mapping", ""),
+                    cells.get("Default value", ""), cells.get("Value range", "")))
 
     current: dict[str, str] | None = None
     for no, line in enumerate(_lines(TS_SEED), 1):
@@ -104,7 +103,6 @@ def technosoft() -> dict[tuple[int, int], list[Row]]:
         else:
             current[key] = value
     flush()
-    del entry
     return out
 
 

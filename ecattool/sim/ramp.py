@@ -90,7 +90,7 @@ class ProfileMove:
     """One profile move as the drive's reference generator runs it, cycle by cycle: the trapezoid, smoothed
     over ``jerk_time`` seconds where the profile is jerk-limited (0: a plain trapezoid)."""
 
-    __slots__ = ("ramp", "elapsed", "window", "steps", "raw", "position")
+    __slots__ = ("ramp", "elapsed", "window", "steps", "total", "raw", "position")
 
     def __init__(self, start: Fraction, v0: Fraction, target: Fraction, vmax: Fraction, acc: Fraction,
                  dec: Fraction, jerk_time: Fraction, dt: Fraction) -> None:
@@ -98,6 +98,7 @@ class ProfileMove:
         self.elapsed = _ZERO
         self.window = max(1, round(jerk_time / dt)) if jerk_time > 0 and dt > 0 else 1
         self.steps: deque[Fraction] = deque([v0 * dt] * (self.window - 1) if self.window > 1 else ())
+        self.total = sum(self.steps, _ZERO)  # the window's sum, kept as steps enter and leave
         self.raw = start  # the trapezoid's own position
         self.position = start
 
@@ -116,9 +117,10 @@ class ProfileMove:
             velocity = now
         else:
             self.steps.append(step)
+            self.total += step
             while len(self.steps) > self.window:
-                self.steps.popleft()
-            moved = sum(self.steps, _ZERO) / self.window
+                self.total -= self.steps.popleft()
+            moved = self.total / self.window
             self.position += moved
             velocity = moved / dt if dt else _ZERO
         done = self.elapsed >= self.ramp.duration and (
