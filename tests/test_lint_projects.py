@@ -48,6 +48,7 @@ EXPECTED: dict[str, set[tuple[str, Severity, int, int | None]]] = {
     "prj044_period_vs_sync0.yaml": {("PRJ044", W, 6, 45)},
     "prj045_csp_without_dc.yaml": {("PRJ045", W, 7, 11)},
     "prj050_scaling.yaml": {("PRJ050", E, 7, 7)},
+    "prj080_technosoft_cycle.yaml": {("PRJ080", E, 7, 45), ("PRJ080", W, 10, 36)},
     "pdo003_twice.yaml": {("PDO003", E, 10, 18)},
     "pdo006_direction.yaml": {("PDO006", E, 9, 34)},
     "pdo007_bit_length.yaml": {("PDO007", E, 9, 21)},

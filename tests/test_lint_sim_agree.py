@@ -61,7 +61,7 @@ def _values(e) -> st.SearchStrategy[int]:
     bits = e.datatype.bits
     lo, hi = (-(1 << (bits - 1)), (1 << (bits - 1)) - 1) if e.datatype.kind is Kind.SIGNED else (0, (1 << bits) - 1)
     edges = [lo, hi, 0, 1]
-    for b in (e.minimum, e.maximum):
+    for b in (e.minimum, e.maximum, *sorted(e.values or ())):
         if b is not None:
             edges += [b - 1, b, b + 1]
     return st.one_of(st.sampled_from([v for v in edges if lo <= v <= hi]), st.integers(lo, hi))

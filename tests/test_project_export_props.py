@@ -35,7 +35,10 @@ def parameter(draw) -> tuple[int, object, int]:
     lo, hi = (-(1 << (bits - 1)), (1 << (bits - 1)) - 1) if e.datatype.kind is Kind.SIGNED else (0, (1 << bits) - 1)
     lo = max(lo, e.minimum) if e.minimum is not None else lo
     hi = min(hi, e.maximum) if e.maximum is not None else hi
-    value = draw(st.sampled_from(sorted(e.enum))) if e.enum else draw(st.integers(lo, hi))
+    if e.values:  # a printed value list (decision Profiles-2): only its values are valid
+        value = draw(st.sampled_from(sorted(e.values)))
+    else:
+        value = draw(st.sampled_from(sorted(e.enum))) if e.enum else draw(st.integers(lo, hi))
     return index, e, value
 
 

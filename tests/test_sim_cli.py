@@ -38,7 +38,7 @@ SCRIPT = """\
 - state: SAFEOP
 - state: OP
 - read: "6041:00"
-  expect: 0x0640
+  expect: 0x0650
 - exchange: "060000000000 060008"
 """
 

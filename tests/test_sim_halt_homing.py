@@ -143,14 +143,17 @@ def test_hdt_4_07_halt_in_profile_position_keeps_the_set_point_and_resumes():
     m = Master(d)
     for cw in (0x06, 0x07, 0x0F):
         m.cycle(x6040=cw, x6081=1000, x6083=1000, x6084=1000)
-    ins = m.cycle(10, x6040=0x1F, x607A=65536)  # 1000 rpm = 2184.53 counts per 2 ms cycle
-    assert ins[0x6064] == 21845 and not ins[0x6041] & 0x0400
-    held = m.cycle(5, x6040=0x11F)
-    assert held[0x6064] == 21845 and held[0x6041] & 0x0400 and held[0x6041] & 0x6F == 0x27
+    w(d, 0x6086, 0, 0, 2)  # linear ramp (trapezoidal profile)
+    ins = m.cycle(100, x6040=0x1F, x607A=65536)  # 200 ms at 1000 rpm/s: 200 rpm
+    assert 0 < ins[0x6064] < 65536 and not ins[0x6041] & 0x0400 and r(d, 0x606C) == 200
+    held = m.cycle(x6040=0x11F)
+    assert not held[0x6041] & 0x0400 and 0 < r(d, 0x606C) < 200  # "the motor stops in ramp" (6084h)
+    held = m.cycle(100, x6040=0x11F)
+    assert r(d, 0x606C) == 0 and held[0x6041] & 0x0400 and held[0x6041] & 0x6F == 0x27
     assert m.cycle(x6040=0x11F)[0x6064] == held[0x6064]
-    moving = m.cycle(x6040=0x1F)
+    moving = m.cycle(2, x6040=0x1F)
     assert not moving[0x6041] & 0x0400 and moving[0x6064] > held[0x6064]
-    done = m.cycle(30, x6040=0x1F)
+    done = m.cycle(2000, x6040=0x1F)
     assert done[0x6064] == 65536 and done[0x6041] & 0x0400
 
 
@@ -173,10 +176,15 @@ def test_hdt_4_08_3_valid_homing_methods_are_accepted():
 
 def _hdt_at(position: int, **setup: tuple[int, int, int]) -> Drive:
     """HDT in OPERATION ENABLED, moved by profile position to ``position`` counts, then in homing mode."""
+    # a homing acceleration steep enough for the searches to be at full speed within the first 2 ms cycle
+    setup.setdefault("homing_acceleration", (0x609A, 1_000_000, 4))
     d = enabled("hdt", 1, halt=(0x605D, 1, 2), **setup)
     w(d, 0x607A, 0, position, 4)
     w(d, 0x6040, 0, 0x1F, 2)
-    d.step(20)
+    for _ in range(100):
+        d.step(20)
+        if r(d, 0x6041) & 0x0400:
+            break
     assert r(d, 0x6064, signed=True) == position
     w(d, 0x6040, 0, 0x0F, 2)
     w(d, 0x6060, 0, 6, 1)
@@ -214,7 +222,7 @@ def test_hdt_oracle_38_home_offset_zeroes_the_measured_position():
     w(d, 0x6060, 0, 1, 1)
     w(d, 0x607A, 0, 500, 4)
     w(d, 0x6040, 0, 0x1F, 2)
-    d.step(5)
+    d.step(500)  # the profile move (6081h/6083h/6084h, S-curve by default: 6086h = 3)
     assert r(d, 0x6064, signed=True) == 500 and r(d, 0x6063, signed=True) == 1500
 
 
@@ -369,7 +377,7 @@ def test_technosoft_6_3_4_reserved_method_is_stored_and_answered_with_emcy_ff03(
 def test_technosoft_6_2_8_method_18_starting_on_the_positive_limit_switch():
     """§6.2.8 method 18 (positive limit switch, no index): already on the switch, the drive leaves it in the
     negative direction at the zero search speed and homes where it becomes inactive (6064h = 607Ch)."""
-    d = enabled("technosoft-ipos", 6, method=(0x6098, 18, 1), offset=(0x607C, -7, 4))
+    d = enabled("technosoft-ipos", 6, method=(0x6098, 18, 1), offset=(0x607C, -7, 4), acc=(0x609A, 0, 4))
     w(d, 0x6099, 2, 3 * 65536, 4)
     d.set_limit_switches(positive=True)
     assert d.emergencies[-1].code == 0x5443
@@ -399,14 +407,16 @@ def test_technosoft_oracle_33_homing_setup_and_search_status_sequence():
     d.step(10)
     sw = r(d, 0x6041)
     assert sw & HOMING_BITS == IN_PROGRESS and sw & 0x0100
-    assert d.internal_velocity == 0x00140000 and r(d, 0x6064) == 200  # 20 counts per 1 ms sample, positive
+    # the search speeds up with 609Ah: 0x28F IU = 0.01 counts per sample² (towards 20 counts per sample)
+    assert d.internal_velocity == 10 * 0x28F and r(d, 0x6064) == 655 * 55 // 65536
     w(d, 0x6040, 0, 0x0F, 2)  # bit 4 back to 0 does not stop a Technosoft homing
     w(d, 0x6040, 0, 0x1F, 2)  # a second start while it runs is ignored with the warning bit 7 (§4.2.2)
-    assert r(d, 0x6041) & 0x0180 == 0x0180 and r(d, 0x6064) == 200
-    d.step(int(d.homing_search_s / d.cycle_time()) - 10)
+    assert r(d, 0x6041) & 0x0180 == 0x0180
+    n = int(d.homing_search_s / d.cycle_time())
+    d.step(n - 10)
     sw = r(d, 0x6041)
     assert sw & HOMING_BITS == ERROR_STOPPED and not sw & 0x0180 and d.internal_velocity == 0
-    assert r(d, 0x6064) == 20000
+    assert r(d, 0x6064) == 655 * n * (n + 1) // 2 // 65536  # one second of the ramp: no switch connected
 
 
 # --- Control Techniques ------------------------------------------------------------------------------------
@@ -504,10 +514,13 @@ def test_generic_inovance_halt_in_profile_position_through_pdos():
     m = Master(d)
     for cw in (0x06, 0x07, 0x0F):
         m.cycle(x6040=cw)
-    ins = m.cycle(x6040=0x1F, x607A=100_000)
+    ins = m.cycle(20, x6040=0x1F, x607A=100_000)
     pos = ins[0x6064]
     assert 0 < pos < 100_000
-    ins = m.cycle(3, x6040=0x11F)
+    for _ in range(100):  # the halt ramps down (6084h)
+        ins = m.cycle(10, x6040=0x11F)
+        if ins[0x6041] & 0x0400:
+            break
     assert ins[0x6041] & 0x0400 and ins[0x6041] & 0x6F == 0x27
     assert m.cycle(x6040=0x11F)[0x6064] == ins[0x6064]
     assert m.cycle(x6040=0x1F)[0x6064] > ins[0x6064]

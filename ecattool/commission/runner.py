@@ -370,6 +370,7 @@ def _zero_objects(io: ProcessIo, rd: ResolvedDrive, mode: str) -> str:
 
 
 def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
+    from ecattool.commission.profiletime import check_move_time
     from ecattool.project.steps import MOVE_MODE_CODES, move_mode
 
     move = rd.drive.move
@@ -402,7 +403,10 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
             detail += f"; internal {i0} -> {i1} = {i1 - i0} counts (factor group: {float(want):g})"
         else:
             detail += f"; internal {i0} -> {i1} counts"
-    report.steps.append(Step("move", True, detail))
+    took_ok, took = check_move_time(io, rd, report.trace, mode, dist)  # the profile's time (issue 24)
+    if not took_ok:
+        raise _Failed(Step("move", False, took))
+    report.steps.append(Step("move", True, detail + took))
 
 
 def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fraction) -> None:

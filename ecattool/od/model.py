@@ -113,7 +113,7 @@ class Entry(Record):
 
     __slots__ = ("subindex", "name", "datatype", "bit_size", "type_name", "bit_offset", "access", "pdo_mapping",
                  "default", "minimum", "maximum", "enum", "backup", "setting", "category", "unit", "comment",
-                 "location")
+                 "location", "values")
     subindex: int
     name: str
     datatype: DataType | None
@@ -132,12 +132,16 @@ class Entry(Record):
     unit: str
     comment: str
     location: Location | None
+    #: the only values the entry takes, where its source lists them (a value list, not an interval); None: any
+    #: value between minimum and maximum
+    values: frozenset[int] | None
 
     def __init__(self, subindex: int, name: str, datatype: DataType | None, bit_size: int, type_name: str = "",
                  bit_offset: int = 0, access: Access = RO, pdo_mapping: str = "", default: bytes | None = None,
                  minimum: int | float | None = None, maximum: int | float | None = None,
                  enum: dict[int, str] | None = None, backup: bool = False, setting: bool = False,
-                 category: str = "", unit: str = "", comment: str = "", location: Location | None = None) -> None:
+                 category: str = "", unit: str = "", comment: str = "", location: Location | None = None,
+                 values: frozenset[int] | None = None) -> None:
         self.subindex = subindex
         self.name = name
         self.datatype = datatype
@@ -157,6 +161,7 @@ class Entry(Record):
         self.unit = unit
         self.comment = comment
         self.location = location
+        self.values = values
 
     @property
     def rx_mappable(self) -> bool:

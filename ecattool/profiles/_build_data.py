@@ -99,9 +99,84 @@ def parse_range(text: str) -> tuple[int | None, int | None]:
     return None, None
 
 
+#: a decimal-comma number ("0,9500", "0,01"): a display value (decision HDT-6), not a list of values
+_DECIMAL_COMMA = re.compile(r"\d,\d")
+_LIST_ITEM = r"[-+]?(?:0x[0-9A-Fa-f]+|[0-9A-Fa-f]+h|\d+)"
+
+
+def _numbers(text: str) -> list[int] | None:
+    """``-1, 0, 3`` → [-1, 0, 3]; None unless every comma-separated item is a number."""
+    items = [parse_number(x) for x in text.split(",")]
+    return None if any(v is None for v in items) else [v for v in items if v is not None]
+
+
+class RangeSpec:
+    """A printed value range as one of three kinds (decision Profiles-2): an interval ``lo..hi``, a single
+    value (``lo == hi``: "0, only linear", "fixed to -3") or a value list (``values``: "-1, 0, 3",
+    "0..6 (values 0,1,2,5,6)", "0..35 except 15,16,31,32"), whose ``lo``/``hi`` are its smallest and largest
+    values."""
+
+    __slots__ = ("lo", "hi", "values")
+
+    def __init__(self, lo: int | None = None, hi: int | None = None, values: list[int] | None = None) -> None:
+        self.lo, self.hi, self.values = lo, hi, values
+
+    def __repr__(self) -> str:
+        return f"RangeSpec({self.lo}, {self.hi}, {self.values})"
+
+    @property
+    def kind(self) -> str:
+        if self.values is not None:
+            return "values"
+        if self.lo is None or self.hi is None:
+            return "none"
+        return "single" if self.lo == self.hi else "interval"
+
+
+def parse_range_spec(text: str) -> RangeSpec:
+    """The range cell of a manual's table as a :class:`RangeSpec` (interval, single value or value list).
+
+    A decimal comma ("0,8000..0,9900", HDT-6) is a display value of unstated scale: no range. A type name
+    before a parenthesised range ("INTEGER8, (-128 to +63)", Technosoft 60C2h:02) gives the parenthesised
+    range."""
+    t = text.strip().replace("\u2013", "-")
+    t = t.replace("(printed", "#").split("#")[0].strip()
+    if not t:
+        return RangeSpec()
+    m = re.search(r"\(values\s+([^)]*)\)", t)
+    if m:
+        vals = _numbers(m.group(1))
+        if vals:
+            return RangeSpec(min(vals), max(vals), sorted(vals))
+    m = re.fullmatch(r"(.*?)\s+except\s+(.*)", t)
+    if m:
+        outer = parse_range_spec(m.group(1))
+        gone = _numbers(m.group(2))
+        if outer.lo is not None and outer.hi is not None and gone and outer.hi - outer.lo <= 4096:
+            vals = [v for v in range(outer.lo, outer.hi + 1) if v not in gone]
+            return RangeSpec(min(vals), max(vals), vals)
+    if _DECIMAL_COMMA.search(t) and not re.search(r",\s", t):
+        return RangeSpec()
+    if re.fullmatch(rf"{_LIST_ITEM}(?:\s*,\s*{_LIST_ITEM})+", t):
+        vals = _numbers(t)
+        if vals:
+            return RangeSpec(min(vals), max(vals), sorted(set(vals)))
+    bare = re.sub(r"\(.*?\)", "", t).strip()
+    if re.fullmatch(_LIST_ITEM, bare):
+        v = parse_number(bare)
+        return RangeSpec(v, v)
+    lo, hi = parse_range(bare)
+    if lo is None and re.fullmatch(r"[A-Za-z]+\d*,?", bare):  # a type name, then the range in brackets
+        for inner in re.findall(r"\(([^)]*)\)", t):
+            lo, hi = parse_range(inner)
+            if lo is not None:
+                break
+    return RangeSpec(lo, hi)
+
+
 def entry(sub: int, name: str, typ: str, bits: int, access: str, pdo: str = "", default: Any = None,
           lo: int | None = None, hi: int | None = None, unit: str = "", comment: str = "",
-          write: str | None = None, category: str = "") -> dict[str, Any]:
+          write: str | None = None, category: str = "", values: list[int] | None = None) -> dict[str, Any]:
     e: dict[str, Any] = OrderedDict(sub=sub, name=name, type=typ, bits=bits, access=access)
     if write:
         e["write"] = write
@@ -113,6 +188,8 @@ def entry(sub: int, name: str, typ: str, bits: int, access: str, pdo: str = "", 
         e["min"] = lo
     if hi is not None:
         e["max"] = hi
+    if values is not None:
+        e["values"] = values
     if unit:
         e["unit"] = unit
     if category:
@@ -147,6 +224,17 @@ def clean_range(typ: str, bits: int, lo: int | None, hi: int | None) -> tuple[in
     if lo < tlo or hi > thi or lo > hi:
         return None, None
     return lo, hi
+
+
+def clean_spec(typ: str, bits: int, spec: RangeSpec) -> tuple[int | None, int | None, list[int] | None]:
+    """:func:`clean_range` for a :class:`RangeSpec`: (min, max, value list or None)."""
+    lo, hi = clean_range(typ, bits, spec.lo, spec.hi)
+    if spec.values is None:
+        return lo, hi, None
+    tlo, thi = type_range(typ, bits)
+    if tlo is None or thi is None or not all(tlo <= v <= thi for v in spec.values):
+        return None, None, None
+    return spec.lo, spec.hi, list(spec.values)
 
 
 def fit_default(typ: str, bits: int, value: int | None) -> int | None:
@@ -267,7 +355,8 @@ def build_technosoft(ref: Path) -> dict[str, Any]:
         # data type
         nt = norm_type(r["data_type"])
         if nt is None:
-            if sub == 0 and index not in (0x1009,) and (obj["object_code"] != "VAR" or "entries" in r["name"].lower()):
+            counts = "entries" in r["name"].lower() or "number of sub" in r["name"].lower()
+            if sub == 0 and index not in (0x1009,) and (obj["object_code"] != "VAR" or counts):
                 nt = ("USINT", 8)
             elif index in (0x1C12, 0x1C13):
                 nt = ("UINT", 16)
@@ -296,9 +385,10 @@ def build_technosoft(ref: Path) -> dict[str, Any]:
             bits = 8 * len(default) if default else 0
         else:
             default = fit_default(typ, bits, parse_default(r["default"]))
-        lo, hi = clean_range(typ, bits, *parse_range(r["value_range"])) if typ != "STRING" else (None, None)
+        lo, hi, values = clean_spec(typ, bits, parse_range_spec(r["value_range"])) if typ != "STRING" \
+            else (None, None, None)
         e = entry(sub, ename, typ, bits, acc, "", default, lo, hi, r["units"].strip(" -"), "",
-                  write=write)
+                  write=write, values=values)
         e["pdo"] = pdo_dirs(mappable, acc)
         e.update(variants)
         note = r["notes"].strip()
@@ -417,18 +507,17 @@ def build_hdt(ref: Path) -> dict[str, Any]:
             default: Any = int(m.group(1), 16) + HDT_NODE_ID
         elif typ == "STRING":
             default = None
-        elif "," in dtext:
+        elif _DECIMAL_COMMA.search(dtext):
             default = None  # decimal-comma display values (decision HDT-6)
         else:
             default = fit_default(typ, bits, parse_default(dtext))
-        lo, hi = (None, None) if "," in r["value_range"] else parse_range(r["value_range"])
-        if r["value_range"].strip().startswith("0..35 except"):
-            lo, hi = 0, 35
-        lo, hi = clean_range(typ, bits, lo, hi)
+        # the range is read with the decided type (608Ah/608Ch/608Eh hold ACh/A4h/A3h, decision HDT-8)
+        rtyp = HDT_FIX.get((index, sub), {}).get("type", typ)
+        lo, hi, values = clean_spec(rtyp, bits, parse_range_spec(r["value_range"]))
         if typ == "STRING":
             bits = 0
         e = entry(sub, r["name"], typ, bits, acc, pdo_dirs(mappable, acc), default, lo, hi, r["units"].strip(),
-                  f"§{r['section']}")
+                  f"§{r['section']}", values=values)
         if index in (0x6060,):
             e["enum"] = {"-2": "Press", "-1": "Gearbox / electrical axis", "1": "Profile position", "2": "Velocity (vl)",
                          "3": "Profile velocity", "4": "Torque", "6": "Homing", "7": "Interpolated position",
@@ -464,7 +553,7 @@ CT_FIX: dict[tuple[int, int], dict[str, Any]] = {
     (0x6041, 0): {"access": "ro", "comment": "printed RW; CiA-402 RO (decision CT-4)"},
     (0x6099, 0): {"type": "USINT"},
     (0x60C1, 1): {"type": "DINT", "comment": "printed Unsigned 32; a signed position set-point (ambiguity A17)"},
-    (0x60C0, 0): {"min": 0, "max": 0, "comment": "range printed as the single value 0: only linear (decision CT-10)"},
+    (0x60C0, 0): {"comment": "range printed as the single value 0: only linear (decision CT-10)"},
 }
 CT_MAPPABLE_EXTRA = {0x6040, 0x6041, 0x6042, 0x6044, 0x6060, 0x6061, 0x6062, 0x6064, 0x2830, 0x2831}
 #: objects that are writable profile targets or readable actual values the manual lists as cyclic data;
@@ -507,16 +596,21 @@ def build_controltechniques(ref: Path) -> dict[str, Any]:
         default = fit_default(typ, bits, parse_default(r["default"]))
         if r["default"].strip().startswith(("See", "High", "N/A")):
             default = None
-        lo, hi = parse_range(r["value_range"])
+        spec = parse_range_spec(r["value_range"])
         if index == 0x6098:
-            lo, hi = 0, 35
-        lo, hi = clean_range(typ, bits, lo, hi)
+            spec = RangeSpec(0, 35)  # "15, 16, 31, 32 reserved" (Table 7.59): refused by the drive's own check
+        listed = re.search(r"defined values ([-\d, ]+)", r["notes"])
+        if listed:  # 605Ah "0 to 6", "defined values 0,1,2,5,6 (Table 7.9)": the list is the range
+            spec = parse_range_spec(f"{spec.lo}..{spec.hi} (values {listed.group(1).strip(' ,')})")
+        lo, hi, values = clean_spec(typ, bits, spec)
         for sub in subs:
             nm = ename if not m else re.sub(r"1st to 255th mapped objects|assigned [RT]xPDO n",
                                                      f"mapped object {sub}" if "PDO mapping" in oname else f"assigned PDO {sub}",
                                                      ename)
-            e = entry(sub, nm, typ, bits, acc, pdo_dirs(mappable, acc), default, lo, hi,
-                      "" if r["units"].strip() == "N/A" else r["units"].strip(), f"§{r['section']}")
+            # sub-index 0 counts are never mappable (decision Profiles-1), whatever the object's list says
+            count = sub == 0 and (m is not None or "sub-ind" in r["name"].lower())
+            e = entry(sub, nm, typ, bits, acc, "" if count else pdo_dirs(mappable, acc), default, lo, hi,
+                      "" if r["units"].strip() == "N/A" else r["units"].strip(), f"§{r['section']}", values=values)
             if cyclic_only:
                 e["category"] = "pdo-only"
             if 0x1600 <= index <= 0x1BFF and sub > 0:

@@ -103,6 +103,7 @@ def make_entry(e: dict[str, Any], source: str, name: str | None = None, default:
         unit=e.get("unit", ""),
         comment=e.get("comment", ""),
         location=Location(source),
+        values=frozenset(e["values"]) if "values" in e else None,
     )
 
 

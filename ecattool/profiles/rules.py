@@ -84,6 +84,27 @@ class FamilyRules:
     factor_group: str = ""
     #: device type (1000h) the family documents, for cross-checks; None = unknown
     device_type: int | None = None
+    #: an FoE setup file (FOESW_) is accepted in BOOT while 210Ch = 1 (Technosoft F515I and newer, §17.4.5)
+    foe_setup_in_boot: bool = False
+    #: SYNC0 must equal or be a multiple of the drive's slow control loop (Technosoft §3.2.1; the loop is
+    #: 1 ms by default and set per setup), and the interpolation period 60C2h must equal the sync cycle
+    #: (Technosoft §13.2.1); see :func:`dc_cycle_problems`
+    sync0_multiple_of_slow_loop: bool = False
+    ip_period_equals_sync0: bool = False
+
+    def dc_cycle_problems(self, sync0_ns: int, ip_period_ns: Fraction | int | None,
+                          slow_loop_ns: Fraction | int = 1_000_000) -> list[tuple[str, str]]:
+        """What is wrong with a SYNC0 cycle (and the interpolation period 60C2h that goes with it) for this
+        family: (``"sync0"`` or ``"60C2h"``, message) pairs; [] where the family has no such rule."""
+        out: list[tuple[str, str]] = []
+        if self.sync0_multiple_of_slow_loop and slow_loop_ns > 0 and (sync0_ns <= 0 or sync0_ns % slow_loop_ns):
+            out.append(("sync0", f"SYNC0 cycle {sync0_ns / 1000:g} us is not the slow loop ({float(slow_loop_ns) / 1000:g} "
+                                  "us) or a multiple of it (the drive synchronises its slow control loop on SYNC0)"))
+        if self.ip_period_equals_sync0 and ip_period_ns is not None and ip_period_ns != sync0_ns:
+            out.append(("60C2h", f"interpolation period 60C2h = {float(ip_period_ns) / 1000:g} us is not the sync cycle "
+                                 f"{sync0_ns / 1000:g} us (60C2h must be set to the master's communication and sync "
+                                 "cycle)"))
+        return out
 
     def accepts_ip_period(self, ns: Fraction | int) -> bool:
         """Whether the drive takes this interpolation period (60C2h); True where the family has no rule."""

@@ -108,6 +108,7 @@ class Firmware:
             "FA00G+": self.is_fa and self.letter >= "G",
             "F515J+": self.is_fa or (f515 and self.letter >= "J"),
             "F515F+": self.is_fa or (f515 and self.letter >= "F"),
+            "F515I+": self.is_fa or (f515 and self.letter >= "I"),
         }
         return checks.get(requirement, True)
 
@@ -234,6 +235,14 @@ def rules(device: Device | None = None) -> FamilyRules:
         max_assign_entries=4,
         factor_group=fw.factor_group,
         device_type=DEVICE_TYPE,
+        # §17.4.5: "Only drives with firmware F515I or newer, support FoE ... Setup data while in Bootstrap
+        # state when object 210Ch = 1"
+        foe_setup_in_boot=fw.has("F515I+"),
+        # §3.2.1 "The SYNC 0 signal must have the period equal or multiple than the drive slow control loop";
+        # §13.2.1 60C2h "must be set with the time value of the EtherCAT master communication cycle time and
+        # sync time"
+        sync0_multiple_of_slow_loop=True,
+        ip_period_equals_sync0=True,
         notes=(
             "§1.6.3.1: the sum of the mapped object sizes must not exceed 64 bits per PDO (EMCY 8210h/8220h, abort 0604 0042h)",
             "§2.4: up to 8 entries per PDO (sub-indices 1-8)",

@@ -9,6 +9,7 @@ from pathlib import Path
 from ecattool.errors import EcatToolError, Location
 from ecattool.fileio import read_bytes
 from ecattool.findings import Finding, Severity, has_errors
+from ecattool.project import familycycle
 from ecattool.project.loader import LoadedProject, parse_project
 from ecattool.project.model import RuleOff
 from ecattool.project.resolve import ResolvedDrive, resolve_device, resolve_parameters
@@ -51,6 +52,7 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ044": "the interpolation period (60C2h) differs from the SYNC0 cycle of an interpolated mode",
     "PRJ045": "the drive runs cyclic synchronous position (csp) without distributed clocks",
     "PRJ050": "the scaling section cannot be computed",
+    familycycle.RULE: familycycle.DESCRIPTION,
 }
 
 
@@ -117,6 +119,7 @@ def build_drive(lp: LoadedProject, i: int) -> ResolvedDrive:
     steps.check_factor_defaults(lp, i, rd)
     steps.check_interpolation_period(lp, i, rd)
     steps.check_dc(lp, i, rd)
+    familycycle.check_dc_cycle(lp, i, rd, bool(steps.dc_assign_activate(rd)))
     if rd.device.source and not rd.device.source.startswith("profile:"):
         steps.check_esi(lp, i, rd)
     rd.findings = _disable(rd.findings, drive.disable_rules, lp, ("drives", i, "disable_rules"))

@@ -178,6 +178,9 @@ def encode_parameter(device: Device, p: Parameter, location: Location, value_loc
             return err("PRJ014", f"{value} is below the minimum {entry.minimum} of 0x{index:04X}:{sub:02X} ({entry.name})", value_location)
         if entry.maximum is not None and value > entry.maximum:
             return err("PRJ014", f"{value} is above the maximum {entry.maximum} of 0x{index:04X}:{sub:02X} ({entry.name})", value_location)
+        if entry.values is not None and value not in entry.values and (index, sub) != (0x6060, 0):
+            # a printed value list (decision Profiles-2); modes of operation are PRJ017's
+            return err("PRJ014", f"{value} is not one of the values {sorted(entry.values)} of 0x{index:04X}:{sub:02X} ({entry.name})", value_location)
         modes = tuple(getattr(rules, "supported_modes", ()) or ())
         if (index, sub) == (0x6060, 0) and modes and isinstance(value, int) and value not in modes and value != 0:
             # HDT and Control Techniques abort an unsupported mode (0609 0030h); Technosoft accepts it and

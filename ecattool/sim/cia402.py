@@ -9,9 +9,13 @@ Table 4.1.1, HDT §4.03.1, Control Techniques Table 7.2); the family differences
   transition 16 back to OPERATION ENABLED).
 
 Halt (controlword bit 8) and homing (mode 6) keep their state here; what the option codes and homing methods
-mean per family is decided by the drive application (``ecattool.sim.drive``), which reads the dictionary. The
-motion model has no ramps in the position modes, so a halt stops PP, CSP, CSV and a homing search within the cycle; profile
-velocity ramps down with the deceleration the drive passes in (increments per second²).
+mean per family is decided by the drive application (``ecattool.sim.drive``), which reads the dictionary.
+
+Profile position runs the trapezoid (or S-curve) of :mod:`ecattool.sim.ramp` planned when a set-point is taken;
+profile velocity ramps up with the profile acceleration and down with the profile deceleration; a homing search
+speeds up with the homing acceleration; a halt ramps PP, PV and a homing search down with the deceleration the
+drive passes in, and QUICK STOP ACTIVE (option codes 5-8, where the state lasts) with the quick-stop ramp
+(increments per second²; None or 0 stops within the cycle). CSP and CSV follow the master's set-points.
 """
 
 from __future__ import annotations
@@ -20,8 +24,25 @@ from collections.abc import Callable
 from enum import Enum
 from fractions import Fraction
 
+from ecattool.sim.ramp import ProfileMove
+
 #: a unit conversion of the drive (internal velocity/acceleration units <-> increments per second)
 _Convert = Callable[[Fraction], Fraction]
+
+
+class Profile:
+    """The profile a mode moves by, as the drive reads it from its dictionary: profile velocity (6081h) in
+    increments/s, acceleration (6083h) and deceleration (6084h, or the family's choice) in increments/s², and
+    the jerk time in s of a jerk-limited ramp (0: trapezoidal)."""
+
+    __slots__ = ("velocity", "acceleration", "deceleration", "jerk_time")
+
+    def __init__(self, velocity: Fraction, acceleration: Fraction, deceleration: Fraction,
+                 jerk_time: Fraction = Fraction(0)) -> None:
+        self.velocity = abs(velocity)
+        self.acceleration = abs(acceleration)
+        self.deceleration = abs(deceleration)
+        self.jerk_time = jerk_time
 
 
 class State(str, Enum):
@@ -75,8 +96,11 @@ def decode_statusword(sw: int) -> State:
 class Cia402:
     """State, controlword handling and the motion model of one axis (internal units as Fractions)."""
 
-    def __init__(self, *, enable_needs_op: bool = False) -> None:
+    def __init__(self, *, enable_needs_op: bool = False, supply_bit_always: bool = False) -> None:
         self.enable_needs_op = enable_needs_op
+        #: statusword bit 4 shows the motor supply in every state, and SWITCHED ON / OPERATION ENABLED need
+        #: it (Technosoft §4.2.2 "Motor supply voltage is present", Remark 2)
+        self.supply_bit_always = supply_bit_always
         self.state = State.SWITCH_ON_DISABLED
         self.controlword = 0
         self.fault_code = 0
@@ -84,6 +108,12 @@ class Cia402:
         self.velocity = Fraction(0)  # internal velocity units
         self.acceleration = Fraction(0)
         self.target: Fraction | None = None
+        #: the profile move running towards ``target`` (planned on the first step after the set-point)
+        self.move: ProfileMove | None = None
+        #: the quick-stop ramp of QUICK STOP ACTIVE (option codes 5-8), increments/s² (None: within the cycle)
+        self.quick_stop_ramp: Fraction | None = None
+        #: the homing acceleration 609Ah in increments/s² (None: the search starts at full speed)
+        self.homing_acceleration: Fraction | None = None
         self.target_reached = True
         self.setpoint_ack = False
         self.following_error = Fraction(0)
@@ -105,6 +135,7 @@ class Cia402:
         """The power stage leaves OPERATION ENABLED (or faults): motion and any homing search end."""
         self.velocity = Fraction(0)
         self.target = None
+        self.move = None
         if self.homing is Homing.IN_PROGRESS:
             self.homing = Homing.NOT_STARTED
 
@@ -115,6 +146,7 @@ class Cia402:
         self.homing_search_left = search_s
         self.homing_phase = phase
         self.target = None
+        self.move = None
 
     def interrupt_homing(self) -> None:
         if self.homing is Homing.IN_PROGRESS:
@@ -126,6 +158,7 @@ class Cia402:
         self.homing = Homing.ATTAINED
         self.velocity = Fraction(0)
         self.target = None
+        self.move = None
         if position is not None:
             self.position = position
 
@@ -166,6 +199,9 @@ class Cia402:
         enable = cw & 0x0F == 0x0F
         disable_voltage = not cw & 0x02
         quick_stop = cw & 0x06 == 0x02
+        if self.supply_bit_always and not self.voltage:
+            # Remark 2: "cannot transition to states Switched On and Operation enabled without this bit"
+            switch_on = enable = False
         if s is State.SWITCH_ON_DISABLED:
             if shutdown and (ecat_op or not self.enable_needs_op):
                 go(State.READY)
@@ -189,7 +225,10 @@ class Cia402:
                 go(State.SWITCH_ON_DISABLED)
             elif quick_stop:
                 go(State.QUICK_STOP)
-                self._stop()
+                self.target = None
+                self.move = None
+                if self.homing is Homing.IN_PROGRESS:
+                    self.homing = Homing.NOT_STARTED
                 if quick_stop_option in (0, 1, 2, 3, 4):
                     go(State.SWITCH_ON_DISABLED)
             elif shutdown:
@@ -201,6 +240,8 @@ class Cia402:
                 go(State.SWITCH_ON_DISABLED)
             elif enable and quick_stop_option in (5, 6, 7, 8):
                 go(State.OPERATION_ENABLED)
+        if self.state is State.QUICK_STOP and self.quick_stop_ramp:
+            return moves  # the axis ramps down in QUICK STOP ACTIVE (step)
         if self.state is not State.OPERATION_ENABLED:
             self._stop()
         return moves
@@ -226,7 +267,7 @@ class Cia402:
 
     def statusword(self, *, mode: int) -> int:
         sw = STATUS_BITS[self.state] | 0x0200  # bit 9 remote
-        if self.voltage and self.state not in (State.NOT_READY, State.SWITCH_ON_DISABLED):
+        if self.voltage and (self.supply_bit_always or self.state not in (State.NOT_READY, State.SWITCH_ON_DISABLED)):
             sw |= 0x0010
         if self.state is State.FAULT_REACTION or self.state is State.FAULT:
             sw |= 0x0008
@@ -251,27 +292,39 @@ class Cia402:
     # --- motion -------------------------------------------------------------------------------------
     def new_setpoint(self, target: Fraction, *, relative: bool) -> None:
         self.target = self.position + target if relative else target
+        self.move = None  # planned again from where the axis is, at the speed it has
         self.target_reached = False
         self.setpoint_ack = True
 
     def step(self, mode: int, dt: Fraction, *, target_position: Fraction, target_velocity: Fraction,
              profile_velocity: Fraction, acceleration: Fraction, inc_per_s: _Convert,
              vel_from_inc_per_s: _Convert, inc_per_s2: _Convert,
-             halt_deceleration: Fraction | None = None) -> None:
+             halt_deceleration: Fraction | None = None, profile: Profile | None = None) -> None:
         """Advance the motion by ``dt`` seconds. Velocity/acceleration are internal units; the callables
-        convert them to increments per second (per second²) and back. ``halt_deceleration`` (increments/s²)
-        is the ramp a halt uses in profile velocity; None or 0 stops within the cycle."""
+        convert them to increments per second (per second²) and back. ``profile`` is what PP and PV move by
+        (increments; without it PP runs at ``profile_velocity`` with ``acceleration`` both ways);
+        ``halt_deceleration`` (increments/s²) is the ramp a halt uses; None or 0 stops within the cycle."""
+        if self.state is State.QUICK_STOP and self.quick_stop_ramp and self.velocity:
+            self._slow_down(dt, self.quick_stop_ramp, inc_per_s, vel_from_inc_per_s)
+            return
         if self.state is not State.OPERATION_ENABLED:
             self.velocity = Fraction(0)
             return
         if self.controlword & HALT:
             self._halt_step(mode, dt, halt_deceleration, inc_per_s, vel_from_inc_per_s)
             return
+        if profile is None:
+            acc = abs(inc_per_s2(acceleration))
+            profile = Profile(inc_per_s(profile_velocity), acc, acc)
         if mode == HOMING:
             if self.homing is not Homing.IN_PROGRESS:
                 self.velocity = Fraction(0)
                 return
-            self.velocity = self.homing_velocity
+            if self.homing_acceleration:
+                self._ramp_to(self.homing_velocity, self.homing_acceleration, self.homing_acceleration, dt,
+                              inc_per_s, vel_from_inc_per_s)
+            else:
+                self.velocity = self.homing_velocity
             self.position += inc_per_s(self.velocity) * dt
             self.homing_search_left -= dt
             if self.homing_search_left <= 0:
@@ -285,18 +338,31 @@ class Cia402:
             self.velocity = target_velocity
             self.position += inc_per_s(target_velocity) * dt
         elif mode == PV:
-            self._ramp_to(target_velocity, acceleration, dt, inc_per_s, vel_from_inc_per_s, inc_per_s2)
+            if profile.acceleration == 0:
+                self.velocity = target_velocity  # no ramp configured: the set-point at once
+            else:
+                self._ramp_to(target_velocity, profile.acceleration, profile.deceleration or profile.acceleration,
+                              dt, inc_per_s, vel_from_inc_per_s)
             self.position += inc_per_s(self.velocity) * dt
             self.target_reached = self.velocity == target_velocity
         elif mode == PP:
-            if self.target is None:
-                self.velocity = Fraction(0)
-                return
+            self._profile_position_step(dt, profile, inc_per_s, vel_from_inc_per_s)
+
+    def _profile_position_step(self, dt: Fraction, profile: Profile, inc_per_s: _Convert,
+                               vel_from_inc_per_s: _Convert) -> None:
+        """One cycle of the profile move towards the set-point (planned on its first cycle). A profile velocity
+        of 0 does not move. A profile acceleration of 0 is a drive whose ramp is not known here (Technosoft's
+        comes from its setup, §7.3's examples write only 6081h): it moves at the profile velocity from the first
+        cycle and stops on the target (the drive reports 6083h = 0 with EMCY 6320h)."""
+        if self.target is None:
+            self.velocity = Fraction(0)
+            return
+        if profile.velocity == 0:
+            return
+        if profile.acceleration == 0:
+            self.move = None
             remaining = self.target - self.position
-            speed = abs(inc_per_s(profile_velocity))
-            if speed == 0:
-                return
-            stepped = speed * dt
+            stepped = profile.velocity * dt
             if abs(remaining) <= stepped:
                 self.position = self.target
                 self.velocity = Fraction(0)
@@ -305,28 +371,50 @@ class Cia402:
             else:
                 sign = 1 if remaining > 0 else -1
                 self.position += sign * stepped
-                self.velocity = vel_from_inc_per_s(sign * speed)
+                self.velocity = vel_from_inc_per_s(sign * profile.velocity)
+            return
+        if self.move is None or self.move.target != self.target:
+            self.move = ProfileMove(self.position, inc_per_s(self.velocity), self.target, profile.velocity,
+                                    profile.acceleration, profile.deceleration or profile.acceleration,
+                                    profile.jerk_time, dt)
+        position, velocity, done = self.move.step(dt)
+        self.position = position
+        self.velocity = vel_from_inc_per_s(velocity)
+        if done:
+            self.velocity = Fraction(0)
+            self.target = None
+            self.move = None
+            self.target_reached = True
 
     def _halt_step(self, mode: int, dt: Fraction, deceleration: Fraction | None, inc_per_s: _Convert,
                    vel_from_inc_per_s: _Convert) -> None:
-        """Halt: the pending set-point (PP target, homing search) is kept for when bit 8 clears."""
+        """Halt: the pending set-point (PP target, homing search) is kept for when bit 8 clears; the axis ramps
+        down with ``deceleration`` (PP, PV, homing; CSP/CSV and a 0 ramp stop within the cycle)."""
+        self.move = None  # a PP move resumes with a new plan from standstill
+        if mode in (CSP, CSV) or not deceleration or deceleration <= 0:
+            self.velocity = Fraction(0)
+            return
+        self._slow_down(dt, deceleration, inc_per_s, vel_from_inc_per_s)
+
+    def _slow_down(self, dt: Fraction, deceleration: Fraction, inc_per_s: _Convert,
+                   vel_from_inc_per_s: _Convert) -> None:
+        """One cycle of a ramp to standstill at ``deceleration`` increments/s²."""
         now = inc_per_s(self.velocity)
-        if mode != PV or not deceleration or deceleration <= 0 or abs(now) <= deceleration * dt:
+        if abs(now) <= deceleration * dt:
             self.velocity = Fraction(0)
             return
         now -= deceleration * dt if now > 0 else -deceleration * dt
         self.velocity = vel_from_inc_per_s(now)
         self.position += now * dt
 
-    def _ramp_to(self, target: Fraction, acceleration: Fraction, dt: Fraction, inc_per_s: _Convert,
-                 vel_from_inc_per_s: _Convert, inc_per_s2: _Convert) -> None:
-        acc = abs(inc_per_s2(acceleration))
-        if acc == 0:
-            self.velocity = target
-            return
+    def _ramp_to(self, target: Fraction, acceleration: Fraction, deceleration: Fraction, dt: Fraction,
+                 inc_per_s: _Convert, vel_from_inc_per_s: _Convert) -> None:
+        """Velocity towards ``target`` (internal units): ``acceleration`` while the speed grows, ``deceleration``
+        while it falls (increments/s²)."""
         now = inc_per_s(self.velocity)
         goal = inc_per_s(target)
-        max_change = acc * dt
+        rate = acceleration if abs(goal) > abs(now) and goal * now >= 0 else deceleration
+        max_change = rate * dt
         if abs(goal - now) <= max_change:
             self.velocity = target
         else:

@@ -43,6 +43,14 @@ class Behaviour:
     home_offset_continuous: bool = False
     #: a homing start while a search runs is ignored with statusword bit 7 (warning) set (Technosoft §4.2.2)
     homing_busy_warning: bool = False
+    #: statusword bit 4 = motor supply present in every state; SWITCHED ON / OPERATION ENABLED need it, and its
+    #: loss there is an undervoltage fault with this code (Technosoft §4.2.2 Remark 2, EMCY 3220h); None: bit 4
+    #: is the CiA-402 "voltage enabled" of the power stage
+    supply_undervoltage_fault: int | None = None
+
+    @property
+    def supply_bit_always(self) -> bool:
+        return self.supply_undervoltage_fault is not None
 
 
 BEHAVIOURS: dict[str, Behaviour] = {
@@ -50,6 +58,7 @@ BEHAVIOURS: dict[str, Behaviour] = {
         mapping_busy=A.DATA_CANNOT_BE_STORED_STATE, assign_busy=A.DATA_CANNOT_BE_STORED_STATE,
         unsupported_mode_emcy=0xFF04, mode_display_on_enable=True, pdo_length_emcy=0x8220,
         homing_stop_on_bit4_clear=False, homing_unavailable_emcy=0xFF03, homing_busy_warning=True,
+        supply_undervoltage_fault=0x3220,
     ),
     "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
                      home_offset_continuous=True),

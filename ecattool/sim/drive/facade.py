@@ -126,7 +126,8 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self.memory.reset()
         self._sync_memory_objects()
         self.layout = {RX: Layout(), TX: Layout()}
-        self.cia = Cia402(enable_needs_op=self.behaviour.enable_needs_op)
+        self.cia = Cia402(enable_needs_op=self.behaviour.enable_needs_op,
+                          supply_bit_always=self.behaviour.supply_bit_always)
         self.limit_active = False
         self.limit_switches = (False, False)  # (negative, positive) inputs, set_limit_switches()
         self.homing_warning = False  # Technosoft statusword bit 7 (homing start ignored)

@@ -31,9 +31,18 @@ class FamilyQuirks(DriveCore):
 
     #: Control Techniques Pr MM.04 (5.5, Table 5.6): the ESM state as the module reports it in its menu
     _CT_MM04 = {EcState.INIT: 1, EcState.PREOP: 2, EcState.SAFEOP: 4, EcState.OP: 8}
-    #: Control Techniques 7.3.1: the module writes these drive parameters, in this order, on SAFE-OP -> OP
-    #: (Pr 6.42 = 0, Pr 6.43 = 1: control word enable; Pr 3.22 = 0, Pr 3.23 = 1 where the drive has them)
-    _CT_TO_OP = ((0x2006, 42, 0), (0x2006, 43, 1), (0x2003, 22, 0), (0x2003, 23, 1))
+    #: Control Techniques 7.3.1 (lines 1473-1488): the module writes these sixteen drive parameters, in this
+    #: order, on SAFE-OP -> OP ("Pr 6.42 to 0 ... Pr 1.14 to 3"); Pr 3.22/3.23 "where present", Pr 3.13 only
+    #: "in open-loop operating modes" (see :meth:`_ct_open_loop`)
+    _CT_TO_OP = ((0x2006, 42, 0), (0x2006, 43, 1), (0x2003, 22, 0), (0x2003, 23, 1), (0x2003, 13, 0),
+                 (0x2002, 10, 1), (0x2002, 20, 1), (0x2002, 2, 1), (0x2001, 4, 0), (0x2001, 21, 0),
+                 (0x2001, 38, 0), (0x2001, 8, 0), (0x2001, 10, 1), (0x2001, 9, 0), (0x2001, 15, 1),
+                 (0x2001, 14, 3))
+
+    def _ct_open_loop(self) -> bool:
+        """Whether the host drive runs open loop: one without position control (no homing, 6060h = 6, in its
+        modes: Commander SK, Affinity), decision "Control Techniques SAFE-OP -> OP parameters"."""
+        return 6 not in self.rules.supported_modes
 
     def _esm_effects(self, previous: EcState, state: EcState) -> None:
         """What a family's module does itself on an ESM change (Control Techniques: MM.04 follows the state in
@@ -46,6 +55,8 @@ class FamilyQuirks(DriveCore):
                 self._put(menu, 4, code)
         if previous is EcState.SAFEOP and state is EcState.OP:
             for index, sub, value in self._CT_TO_OP:
+                if (index, sub) == (0x2003, 13) and not self._ct_open_loop():
+                    continue
                 if (index, sub) in self._entries:
                     self._put(index, sub, value)
                     self._log("drive_parameter", parameter=f"{index - 0x2000}.{sub:02d}", value=value,

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 
 from ecattool.errors import SdoAbort
 from ecattool import abort as A
-from ecattool.sim.cia402 import HALT, HOMING, PV, Homing, State
+from ecattool.sim.cia402 import HALT, HOMING, PP, PV, Homing, State
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
@@ -92,9 +92,10 @@ def halt_option(drive: DriveCore) -> int:
     return 1 if value is None else value
 
 
-def halt_deceleration(drive: DriveCore) -> Fraction | None:
-    """The ramp a halt uses in profile velocity, in increments per second² (None: stop within the cycle)."""
-    option = halt_option(drive)
+def halt_deceleration(drive: DriveCore, option: int | None = None) -> Fraction | None:
+    """The ramp a halt uses in profile velocity, in increments per second² (None: stop within the cycle);
+    ``option`` 1 slow-down ramp, 2 quick-stop ramp (default: 605Dh)."""
+    option = halt_option(drive) if option is None else option
     read = drive._read_int
     if drive.family == "hdt":
         # §4.03.7-4.03.9: deceleration = 604Eh (6042h units, x 604Ch -> rpm) / 6050h or 6051h (ms)
@@ -156,6 +157,11 @@ def start_homing(drive: DriveCore) -> None:
         return
     drive.homing_warning = False
     drive._log("homing", event="start", method=method, procedure=kind, state=cia.state.value)
+    # the search speeds up with the homing acceleration 609Ah (CiA-402; every family's manual lists it)
+    if (0x609A, 0) in drive._entries:
+        u = drive.units
+        cia.homing_acceleration = abs(u.increments_per_second2(
+            u.acceleration_to_internal(drive._read_int(0x609A, 0) or 0))) or None
     if kind == "none":
         cia.homing = Homing.NOT_STARTED  # "no homing operation will be executed" (Technosoft §6.3.4)
         return
@@ -239,7 +245,25 @@ def check_method(drive: DriveCore, sub: int, value: int) -> None:
 
 
 def halt_decel_for_step(drive: DriveCore, mode: int) -> Fraction | None:
-    """Only profile velocity ramps a halt in this motion model."""
-    if mode != PV or not drive.cia.controlword & HALT:
+    """The ramp a halt uses in the mode (increments/s²): profile velocity the option code's (see
+    :func:`halt_deceleration`); profile position the slow-down ramp of the mode (HDT §4.07: 6084h; Technosoft
+    §4.4.10: 6083h, or 6085h for option 2); a homing search the homing acceleration 609Ah. CSP/CSV: None."""
+    if not drive.cia.controlword & HALT or mode not in (PV, PP, HOMING):
         return None
+    if mode == PV:
+        return halt_deceleration(drive)
+    if mode == HOMING:
+        return drive.cia.homing_acceleration
+    if drive.family == "hdt":
+        u = drive.units
+        return abs(u.increments_per_second2(u.acceleration_to_internal(drive._read_int(0x6084, 0) or 0))) or None
     return halt_deceleration(drive)
+
+
+def quick_stop_ramp(drive: DriveCore, option: int) -> Fraction | None:
+    """The ramp of QUICK STOP ACTIVE for quick stop option codes 5-8 (605Ah; CiA-402: 5 slow-down ramp, 6 quick-
+    stop ramp, 7/8 current/voltage limit — the model has no torque: the quick-stop ramp), increments/s²; None
+    where the state ends at once (0-4: SWITCH ON DISABLED)."""
+    if option not in (5, 6, 7, 8):
+        return None
+    return halt_deceleration(drive, 1 if option == 5 else 2)

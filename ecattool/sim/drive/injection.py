@@ -45,13 +45,27 @@ class Injection(DriveCore):
         elif end == "SWITCH_ON_DISABLED":
             self._cia_moves(self.cia.communication_lost(), "communication lost")
         elif end == "QUICK_STOP" and self.cia.state is State.OPERATION_ENABLED:
+            option = self._read_int(0x605A, 0) or 2
+            self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
             self._cia_moves(self.cia.controlword_written(self.cia.controlword & ~0x04 | 0x02, ecat_op=False,
-                                                        quick_stop_option=self._read_int(0x605A, 0) or 2),
+                                                        quick_stop_option=option),
                             "communication lost: quick stop")
         elif end == "OPERATION_ENABLED":
             self.cia.velocity = Fraction(0)
             self.cia.target = None
             self.cia.interrupt_homing()
+        self._refresh_inputs()
+
+    def set_motor_supply(self, present: bool) -> None:
+        """The motor supply (+Vmot) is switched on or off. Technosoft (§4.2.2 Remark 2): statusword bit 4
+        follows it in every state; its loss in SWITCHED ON or OPERATION ENABLED is an undervoltage fault
+        (3220h), in a lower state no fault. Other families: bit 4 (voltage enabled) clears, no reaction."""
+        self.cia.voltage = present
+        self._log("inputs", motor_supply=present)
+        code = self.behaviour.supply_undervoltage_fault
+        if not present and code is not None and self.cia.state in (State.SWITCHED_ON, State.OPERATION_ENABLED):
+            self.inject_fault(code)
+            return
         self._refresh_inputs()
 
     def option_end_state(self, index: int, option: int, default: str) -> str:

@@ -122,7 +122,8 @@ class Memory(DriveCore):
             raise FoeError(name, ee.FOE_NOT_DEFINED, "the device has no FoE mailbox")
         if self.esm is EcState.INIT:
             raise FoeError(name, ee.FOE_ACCESS_DENIED, "no mailbox in INIT")
-        setup_in_boot = (self._read_int(0x210C, 0) or 0) == 1
+        # §17.4.5: setup data in BOOT only from F515I on (210Ch exists from F515F)
+        setup_in_boot = self.rules.foe_setup_in_boot and (self._read_int(0x210C, 0) or 0) == 1
         if self.esm is EcState.BOOT and not setup_in_boot:
             if not ee.is_firmware_name(name):
                 raise FoeError(name, ee.FOE_ILLEGAL, "in BOOT the drive expects a FOEFW_ firmware file (210Ch = 0)")

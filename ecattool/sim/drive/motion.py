@@ -9,7 +9,7 @@ from fractions import Fraction
 from ecattool import abort as A
 from ecattool.od.model import EcState
 from ecattool.profiles.rules import interpolation_period_ns
-from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, State
+from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile, State
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.core import DriveCore, sdo_abort
 from ecattool.sim.units import to_int
@@ -47,8 +47,9 @@ class Motion(DriveCore):
     def _on_controlword(self, sub: int, value: int | None) -> None:
         cw = value or 0
         prev = self.cia.controlword
-        moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP,
-                                             quick_stop_option=self._read_int(0x605A, 0) or 2)
+        option = self._read_int(0x605A, 0) or 2
+        self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
+        moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP, quick_stop_option=option)
         self._cia_moves(moves, f"controlword 0x{cw:04X}")
         if self.cia.state is State.OPERATION_ENABLED and self.mode() == PP:
             if cw & 0x10 and not prev & 0x10:
@@ -123,16 +124,44 @@ class Motion(DriveCore):
                 if moving and mode == CSP else _ZERO,
                 target_velocity=u.velocity_to_internal(self._read_int(0x60FF, 0) or 0)
                 if moving and mode in (CSV, PV) else _ZERO,
-                profile_velocity=u.velocity_to_internal(self._read_int(0x6081, 0) or 0)
-                if moving and mode == PP else _ZERO,
-                acceleration=u.acceleration_to_internal(self._read_int(0x6083, 0) or 0)
-                if moving and mode == PV else _ZERO,
+                profile_velocity=_ZERO, acceleration=_ZERO,
                 inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
                 inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
+                profile=self._profile(mode) if moving and mode in (PP, PV) else None,
             )
             if homing_before is not self.cia.homing:
                 hh.after_step(self, homing_before)
         self._refresh_inputs(mode)  # the step changes no mode (6061h)
+
+    def _profile(self, mode: int) -> Profile:
+        """What a profile move runs by, in increments (the family's reading of its manual):
+
+        * profile velocity 6081h (PP), profile acceleration 6083h;
+        * deceleration: 6084h where the drive has it (HDT §4.07, Control Techniques, generic), else 6083h
+          (Technosoft: "Profile Acceleration (6083h)" is the only ramp of §7.2 and §8);
+        * a jerk-limited ramp where 6086h = 3: Technosoft §7.2.5 jerk time 2023h (ms, "the time needed to reach
+          the maximum acceleration starting from zero"); HDT §4.07.9/4.07.10: 2021h rounding time (ms) when
+          201Ah bit 2 = 1, else profile jerk 2011h (acceleration units per second, through 6097h)."""
+        u = self.units
+        read = self._read_int
+
+        def acc(index: int) -> Fraction:
+            return abs(u.increments_per_second2(u.acceleration_to_internal(read(index, 0) or 0)))
+
+        velocity = abs(u.increments_per_second(u.velocity_to_internal(read(0x6081, 0) or 0))) if mode == PP else _ZERO
+        up = acc(0x6083)
+        down = acc(0x6084) if (0x6084, 0) in self._entries else up
+        jerk_time = _ZERO
+        if mode == PP and (read(0x6086, 0) or 0) == 3:
+            if self.family == "technosoft-ipos":
+                jerk_time = Fraction(read(0x2023, 0) or 0, 1000)
+            elif self.family == "hdt":
+                if (read(0x201A, 0) or 0) & 0x4:
+                    jerk_time = Fraction(read(0x2021, 0) or 0, 1000)
+                else:
+                    jerk = acc(0x2011)
+                    jerk_time = up / jerk if jerk else _ZERO
+        return Profile(velocity, up, down, jerk_time)
 
     def _refresh_inputs(self, mode: int | None = None) -> None:
         """Actual values from the state: 6041h, 6063h/6064h, 606Ch, 603Fh (``mode``: 6061h, where the caller

@@ -141,6 +141,9 @@ class SdoServer(PdoConfig):
                 raise sdo_abort(index, sub, A.VALUE_TOO_LOW)
             if e.maximum is not None and value > e.maximum:
                 raise sdo_abort(index, sub, A.VALUE_TOO_HIGH)
+            if e.values is not None and value not in e.values and (index, sub) != (0x6060, 0):
+                # a value list's gap (decision Profiles-2); modes of operation are the mode handler's (0 = none)
+                raise sdo_abort(index, sub, A.INVALID_VALUE)
         elif dt is not None and dt.kind is Kind.REAL:
             f = dt.decode(data)
             if e.minimum is not None and f < e.minimum:

@@ -1,0 +1,138 @@
+"""The reference generator of a profile move: a trapezoidal velocity profile planned when the set-point is taken
+(profile velocity 6081h, profile acceleration 6083h, profile deceleration 6084h — Technosoft has no 6084h and
+ramps down with 6083h), and the jerk-limited ramp (S-curve) the manuals define on top of it.
+
+Everything is in increments, increments per second and per second² (exact fractions). A trapezoid is a list of
+constant-acceleration segments; :class:`SCurve` is the trapezoid's per-cycle steps averaged over the jerk time
+(a moving average over ``Tj`` of a trapezoidal velocity profile is the jerk-limited profile with jerk
+``a / Tj``: the acceleration becomes a trapezoid, the velocity an S, and the distance stays the same).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from fractions import Fraction
+from math import isqrt
+
+_ZERO = Fraction(0)
+
+
+def _sqrt(x: Fraction) -> Fraction:
+    """A square root to 2^-24 relative precision, as a fraction (the peak of a triangular move is irrational)."""
+    if x <= 0:
+        return _ZERO
+    scale = 1 << 48
+    return Fraction(isqrt(int(x * scale * scale)), scale)
+
+
+class Trapezoid:
+    """Constant-acceleration segments (start time, start position, start velocity, acceleration) from ``start``
+    at velocity ``v0`` to rest at ``target``, never faster than ``vmax``, speeding up at ``acc`` and slowing
+    down at ``dec``."""
+
+    __slots__ = ("segments", "target", "duration")
+
+    def __init__(self, start: Fraction, v0: Fraction, target: Fraction, vmax: Fraction, acc: Fraction,
+                 dec: Fraction) -> None:
+        self.target = target
+        self.segments: list[tuple[Fraction, Fraction, Fraction, Fraction]] = []
+        vmax, acc, dec = abs(vmax), abs(acc), abs(dec)
+        t, p, v = _ZERO, start, v0
+
+        def add(duration: Fraction, a: Fraction) -> None:
+            nonlocal t, p, v
+            if duration <= 0:
+                return
+            self.segments.append((t, p, v, a))
+            p += v * duration + a * duration * duration / 2
+            v += a * duration
+            t += duration
+
+        for _ in range(3):  # at most: brake (moving away or too fast to stop), then the move itself
+            dist = target - p
+            sign = 1 if dist > 0 or (dist == 0 and v > 0) else -1
+            u, d = v * sign, abs(dist)
+            if u < 0:  # moving away from the target: stop first
+                add(-u / dec, sign * dec)
+                continue
+            if u * u > 2 * dec * d:  # cannot stop in time: stop beyond the target, then come back
+                add(u / dec, -sign * dec)
+                continue
+            if u > vmax:  # faster than the profile velocity (6081h lowered during the move)
+                add((u - vmax) / dec, -sign * dec)
+                continue
+            peak = min(vmax, _sqrt((2 * acc * dec * d + dec * u * u) / (acc + dec)))
+            peak = max(peak, u)
+            d_up = (peak * peak - u * u) / (2 * acc)
+            d_down = peak * peak / (2 * dec)
+            add((peak - u) / acc, sign * acc)
+            if peak > 0:
+                add(max(_ZERO, d - d_up - d_down) / peak, _ZERO)
+            add(peak / dec, -sign * dec)
+            break
+        self.duration = t
+
+    def at(self, time: Fraction) -> tuple[Fraction, Fraction]:
+        """(position, velocity) ``time`` seconds after the plan started; at rest on the target at the end."""
+        if time >= self.duration or not self.segments:
+            return self.target, _ZERO
+        seg = self.segments[0]
+        for s in self.segments:
+            if s[0] > time:
+                break
+            seg = s
+        t0, p0, v0, a = seg
+        tau = time - t0
+        return p0 + v0 * tau + a * tau * tau / 2, v0 + a * tau
+
+
+class ProfileMove:
+    """One profile move as the drive's reference generator runs it, cycle by cycle: the trapezoid, smoothed
+    over ``jerk_time`` seconds where the profile is jerk-limited (0: a plain trapezoid)."""
+
+    __slots__ = ("ramp", "elapsed", "window", "steps", "total", "raw", "position")
+
+    def __init__(self, start: Fraction, v0: Fraction, target: Fraction, vmax: Fraction, acc: Fraction,
+                 dec: Fraction, jerk_time: Fraction, dt: Fraction) -> None:
+        self.ramp = Trapezoid(start, v0, target, vmax, acc, dec)
+        self.elapsed = _ZERO
+        self.window = max(1, round(jerk_time / dt)) if jerk_time > 0 and dt > 0 else 1
+        self.steps: deque[Fraction] = deque([v0 * dt] * (self.window - 1) if self.window > 1 else ())
+        self.total = sum(self.steps, _ZERO)  # the window's sum, kept as steps enter and leave
+        self.raw = start  # the trapezoid's own position
+        self.position = start
+
+    @property
+    def target(self) -> Fraction:
+        return self.ramp.target
+
+    def step(self, dt: Fraction) -> tuple[Fraction, Fraction, bool]:
+        """Advance one cycle: (position, velocity, done)."""
+        self.elapsed += dt
+        raw, now = self.ramp.at(self.elapsed)
+        step = raw - self.raw
+        self.raw = raw
+        if self.window == 1:
+            self.position = raw
+            velocity = now
+        else:
+            self.steps.append(step)
+            self.total += step
+            while len(self.steps) > self.window:
+                self.total -= self.steps.popleft()
+            moved = self.total / self.window
+            self.position += moved
+            velocity = moved / dt if dt else _ZERO
+        done = self.elapsed >= self.ramp.duration and (
+            self.window == 1 or self.elapsed >= self.ramp.duration + self.window * dt)
+        if done:
+            self.position = self.ramp.target
+            velocity = _ZERO
+        return self.position, velocity, done
+
+
+def profile_time(distance: Fraction, vmax: Fraction, acc: Fraction, dec: Fraction) -> Fraction:
+    """The time a trapezoidal move of ``distance`` from rest to rest takes (the shortest the profile allows)."""
+    if distance == 0:
+        return _ZERO
+    return Trapezoid(_ZERO, _ZERO, abs(distance), vmax, acc, dec).duration
