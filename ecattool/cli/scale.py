@@ -362,25 +362,28 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
 
 
 def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> Any:
-    from ecattool.errors import InputError
+    from ecattool.errors import InputError, SelectionError
+    from ecattool.target.opener import TARGET_FORMS, open_target, slave_at
 
-    if spec == "sim":
-        from ecattool.od.model import EcState
-        from ecattool.sim import Drive
+    devices = []
+    if spec.strip().lower() == "sim":
+        from ecattool import profiles
 
         if family == "generic":
             raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
-        drive = Drive.from_profile(family, revision=firmware) if firmware else Drive.from_profile(family)
-        drive.request_state(EcState.PREOP)
-        return drive
-    if spec.startswith("pysoem:"):
-        from ecattool.target.pysoem import PysoemTarget
+        devices = [profiles.load(family, revision=firmware) if firmware else profiles.load(family)]
+        slave = 0  # the simulated bus has the one drive of the family
+    try:
+        found = slave_at(open_target(spec, devices), slave)
+    except SelectionError as exc:
+        if exc.message.startswith("unknown target"):
+            raise click.BadParameter(f"use {TARGET_FORMS}", param_hint="--target") from None
+        raise InputError(f"--slave {slave}: {exc.message}") from None
+    if spec.strip().lower() == "sim":
+        from ecattool.od.model import EcState
 
-        slaves = PysoemTarget(spec.split(":", 1)[1]).slaves()
-        if not 0 <= slave < len(slaves):
-            raise InputError(f"--slave {slave}: the bus has {len(slaves)} slaves")
-        return slaves[slave]
-    raise click.BadParameter("use 'sim' or 'pysoem:<interface>'", param_hint="--target")
+        found.request_state(EcState.PREOP)
+    return found
 
 
 @scale.command("si", epilog="""\b

@@ -156,7 +156,7 @@ def _modes_run(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[tuple[int, 
     writes = [c for c in rd.startup if (c.index, c.subindex) == (0x6060, 0) and len(c.data) == 1]
     out: list[tuple[int, Any]] = [(int.from_bytes(c.data, "little", signed=True), c.source or lp.drive_location(i))
                                   for c in writes[-1:]]
-    mode = move_mode(rd) if rd.drive.enable else None
+    mode = move_mode(rd) if rd.enables else None
     if mode is not None:
         out.append((MOVE_MODE_CODES[mode], lp.drive_location(i, "move")))
     here = lp.drive_location(i).file  # what the project sets first: a finding points where the user can change it
@@ -166,7 +166,7 @@ def _modes_run(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[tuple[int, 
 def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     """The commissioning move needs 6060h, 607Ah and 6064h, and a mode the drive has (a Commander SK has
     neither pp nor csp: it aborts 6060h = 8 with 0609 0030h)."""
-    mode = move_mode(rd) if rd.drive.enable else None
+    mode = move_mode(rd) if rd.enables else None
     if mode is None:
         return
     assert rd.device is not None
@@ -181,6 +181,8 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     if modes and code not in modes:
         rd.error("PRJ017", f"the {mode} move needs mode {code}, which {rd.device.type_name} does not support "
                            f"(supported: {', '.join(str(m) for m in modes)}); leave out move:", loc)
+        return
+    if not _move_fits(lp, i, rd, mode):
         return
     if mode != "pp" or rd.drive.sw_config is not None:  # a Technosoft setup image may hold them
         return
@@ -197,9 +199,55 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
             # where the vendor ESI documents the 0, point at its line: that default is what blocks the move
             esi_zero = e.default is not None and rd.drive.device.esi is not None and e.location is not None \
                 and bool(e.location.line)
-            rd.warning("PRJ019", f"the pp move runs at {name} {index:04X}h, which the project does not set and "
+            rd.error("PRJ019", f"the pp move runs at {name} {index:04X}h, which the project does not set and "
                                  f"{rd.device.type_name} leaves at 0 (or does not document): the drive would not "
                                  f"move; add a parameter {index:04X}:00", e.location if esi_zero else loc)
+
+
+def _move_fits(lp: LoadedProject, i: int, rd: ResolvedDrive, mode: str) -> bool:
+    """PRJ024: the move's target (the actual position, 0 after power-on, plus the distance) must be a value of
+    the target position 607Ah's data type and lie within the software position limits 607Dh where the device
+    sets them; commission would otherwise fail writing 607Ah (or the drive would stop at the limit)."""
+    from fractions import Fraction
+
+    from ecattool.errors import EncodeError
+
+    assert rd.device is not None and rd.drive.move is not None
+    loc = lp.drive_location(i, "move", "distance")
+    if loc.line is None:
+        loc = lp.drive_location(i, "move")
+    dist = Fraction(rd.drive.move.distance).limit_denominator(1)
+    target = int(dist)
+    entry = rd.device.dictionary.entry(0x607A, 0)
+    if entry is not None and entry.datatype is not None:
+        try:
+            entry.encode(target)
+        except EncodeError as exc:
+            rd.error("PRJ024", f"the {mode} move of {dist} user units goes to {target}, which the "
+                               f"target position 607Ah ({entry.type_name}) cannot hold: {exc.message}; "
+                               "move a shorter distance", loc)
+            return False
+    limits = [_effective(rd, 0x607D, sub)[0] for sub in (1, 2)]
+    low, high = limits
+    if low is not None and high is not None and low < high and not low <= target <= high:
+        rd.error("PRJ024", f"the {mode} move of {dist} user units goes to {target}, outside the "
+                           f"software position limits 607Dh [{low}, {high}] of {rd.device.type_name}; move a shorter "
+                           "distance or set 607Dh", loc)
+        return False
+    return True
+
+
+def check_kind(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """PRJ025: ``enable: true`` on a slave that is not a CiA-402 axis (no 6040h/6041h, no profile 402 or 6060h):
+    commission would run the CiA-402 enable on a terminal, a coupler or a gateway."""
+    assert rd.device is not None
+    if rd.drive.enable and rd.kind == "io":
+        rd.error("PRJ025", f"enable: true, but {rd.device.type_name} is not a CiA-402 axis (it has no controlword "
+                           "6040h and statusword 6041h of a drive profile 402): commission proves an I/O slave's "
+                           "states, mapping and process data; remove enable:", lp.drive_location(i, "enable"))
+    if rd.drive.move is not None and rd.kind == "io" and rd.drive.enable is None:
+        rd.error("PRJ018", f"move: on {rd.device.type_name}, which is not a CiA-402 axis; leave out move:",
+                 lp.drive_location(i, "move"))
 
 
 def zero_factor_parts(read: Callable[[int, int], int | None]) -> list[tuple[int, int]]:
@@ -251,7 +299,7 @@ def check_factor_defaults(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         found[(index, sub)] = where
         return value
 
-    moves = move_mode(rd) is not None and rd.drive.enable
+    moves = move_mode(rd) is not None and rd.enables
     for index, sub in zero_factor_parts(read):
         entry = rd.device.dictionary.entry(index, sub)
         assert entry is not None
