@@ -141,6 +141,7 @@ def build_slave(lp: LoadedProject, i: int) -> Slave:
     startup.extend(params)
     s.startup = startup
     steps.check_kind(lp, i, s)
+    steps.check_pdo_objects(lp, i, s)
     steps.check_sw(lp, i, s)
     steps.check_move(lp, i, s)
     steps.check_factor_defaults(lp, i, s)

@@ -37,6 +37,8 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ023": "a zero part of the position factor (608Fh, 6091h, 6092h) makes positions impossible to convert",
     "PRJ024": "the commissioning move's target does not fit the target position's type (607Ah) or position limits (607Dh)",
     "PRJ025": "enable: true on a slave that is not a CiA-402 axis",
+    "PRJ026": "a SoE drive's PDO is not a CoE mapping object: ecattool configures CoE slaves only",
+    "PRJ027": "a mapping object of the device's dictionary differs from its ESI PDO list, and the project keeps the power-on mapping",
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
     "PRJ032": "a .sw image was made for another Technosoft product or firmware than the drive's",

@@ -250,6 +250,62 @@ def check_kind(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
                  lp.drive_location(i, "move"))
 
 
+#: the CoE PDO mapping object ranges (ETG.1000.6 / CiA 301): RxPDOs 1600h–17FFh, TxPDOs 1A00h–1BFFh
+_COE_PDO_RANGES = {"rx": range(0x1600, 0x1800), "tx": range(0x1A00, 0x1C00)}
+
+
+def check_pdo_objects(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """What the slave will run with, as its own dictionary says it, against what lint checked (the PDO list):
+
+    * PRJ026: a SoE drive (mailbox without CoE) whose PDOs are not CoE mapping objects (the AX5000's
+      IDN-numbered MDT/AT): ecattool configures and commissions CoE slaves; such a device cannot be set up by it;
+    * PRJ027: where the project keeps the power-on mapping (no ``pdo:``), a mapping object of the device's
+      dictionary whose default entries lay out another image than the ESI's PDO list (the EM7004 ESI's
+      1601h–1609h are shifted by one against its RxPdo list): the slave runs with the dictionary's mapping, which
+      lint never checked
+      (the simulator refuses SAFE-OP with AL 001Dh/001Eh). Reported at the dictionary object's line; ``pdo:``
+      programs the mapping the project means."""
+    from ecattool.esi.model import Direction
+
+    device = rd.device
+    assert device is not None
+    loc = lp.drive_location(i, "device")
+    protocols = device.mailbox.protocols if device.mailbox is not None else []
+    soe = device.mailbox is not None and device.mailbox.coe is None and "SoE" in protocols
+    for d, key in ((Direction.RX, "rx"), (Direction.TX, "tx")):
+        foreign = [p for p in device.pdos(d) if p.index not in _COE_PDO_RANGES[key]]
+        if foreign and soe:  # without a mailbox the indices are only names: the master lays out the SMs
+            p = foreign[0]
+            rd.error("PRJ026", f"{device.type_name}'s {'Rx' if key == 'rx' else 'Tx'}PDO 0x{p.index:04X} ({p.name}) "
+                               "is not a CoE mapping object (16xxh/1Axxh): the device is configured over SoE (its "
+                               f"mailbox speaks {', '.join(protocols)}, not CoE); ecattool configures "
+                               "and commissions CoE slaves only", p.location if p.location and p.location.line else loc)
+            return
+    if rd.mapping is None or (rd.drive.pdo is not None and (rd.drive.pdo.rx is not None or rd.drive.pdo.tx is not None)):
+        return
+    for mp in (*rd.mapping.rx, *rd.mapping.tx):
+        obj = device.dictionary.get(mp.index)
+        if obj is None or obj.location is None or not obj.location.line:
+            continue  # synthesised from the PDO list: it agrees by construction
+        count = obj.entry(0)
+        if count is None or count.default is None:
+            continue
+        n = int.from_bytes(count.default, "little")
+        held = []
+        for sub in range(1, n + 1):
+            e = obj.entry(sub)
+            held.append(int.from_bytes(e.default, "little") if e is not None and e.default is not None else None)
+        listed = [e.mapping_value for e in mp.entries]
+        if None in held or [v & 0xFF for v in held if v is not None] == [v & 0xFF for v in listed]:
+            continue  # the same layout: an entry the PDO list names differently is esi-pdo-object-missing's
+        rd.error("PRJ027", f"the dictionary's mapping object 0x{mp.index:04X} maps "
+                           f"{', '.join(f'0x{v:08X}' for v in held if v is not None) or 'nothing'}, the ESI's PDO list "
+                           f"{', '.join(f'0x{v:08X}' for v in listed) or 'nothing'}: {device.type_name} would run with "
+                           "the dictionary's mapping, which differs from the one checked; give the mapping in pdo: so "
+                           "that commission programs it", obj.location)
+        return
+
+
 def zero_factor_parts(read: Callable[[int, int], int | None]) -> list[tuple[int, int]]:
     """The parts of the CiA-402 position factor 608Fh (encoder increments / motor revolutions) x 6091h (gear)
     / 6092h (feed) that make it 0 or undefined: a 0 beside a non-zero partner (``read(index, sub)``: the value,
