@@ -70,11 +70,11 @@ def scaling_commands(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[Start
         rd.error("PRJ050", exc.message, exc.location if exc.location and exc.location.line else loc)
         return []
     rd.factor_group = group
-    from ecattool.scaling.compute import HDT_COUNTS_PER_REV
+    from ecattool.scaling.compute import fixed_counts_per_rev
     from ecattool.scaling.exact import Exact
 
-    family_key = scaling.resolve_family(family)
-    ipr = Exact.of(HDT_COUNTS_PER_REV) if family_key == "hdt" else spec.axis.counts_per_motor_rev
+    fixed = fixed_counts_per_rev(family)
+    ipr = Exact.of(fixed) if fixed is not None else spec.axis.counts_per_motor_rev
     rd.counts_per_unit = spec.axis.internal_per_unit(spec.axis.units[0], ipr).rational
     for note in group.findings:
         rd.findings.append(_relocate(note, loc))
