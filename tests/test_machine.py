@@ -169,3 +169,16 @@ def test_the_simulator_serves_the_modular_device_lint_checks():
     drive = drive_for_device(device)
     assert sorted(o.index for o in drive.device.dictionary) == sorted(o.index for o in device.dictionary)
     assert [p.index for p in drive.device.rx_pdos] == [p.index for p in device.rx_pdos]
+
+
+def test_scale_explain_reads_what_a_projects_drive_holds(capsys):
+    """`scale explain --project`: the factor objects the drive holds after its startup list, in its family."""
+    code, out, err = run(capsys, "scale", "explain", "--project", str(sample("hdt")), "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["family"] == "hdt"
+    slave = load_machine(sample("hdt")).slaves[0]
+    written = {(c.index, c.subindex): c.int_value for c in slave.startup if 0x6089 <= c.index <= 0x60AB}
+    assert written and all(slave.object_values(range(0x6089, 0x60AC))[k] == v for k, v in written.items())
+    code, _, err = run(capsys, "scale", "explain", "--project", str(sample("hdt")), "--drive", "nope")
+    assert code == 1 and "has no drive 'nope'" in err

@@ -95,6 +95,23 @@ class Slave:
     def family(self) -> str:
         return self.rules.family if self.rules is not None else "generic"
 
+    def object_values(self, indices: range | tuple[int, ...]) -> dict[tuple[int, int], int]:
+        """What the objects at ``indices`` hold once the startup list ran: the last write of the startup list,
+        else the device's default (unsigned, as startup files print them); for ``scale explain --project``."""
+        out: dict[tuple[int, int], int] = {}
+        if self.device is not None:
+            for index in indices:
+                obj = self.device.dictionary.get(index)
+                if obj is None:
+                    continue
+                for sub, e in obj.entries.items():
+                    if e.default is not None and e.datatype is not None and e.datatype.bits and (sub or len(obj.entries) == 1):
+                        out[(index, sub)] = int.from_bytes(e.default, "little")
+        for c in self.startup:
+            if c.index in indices and not c.complete_access:
+                out[(c.index, c.subindex)] = c.int_value
+        return out
+
     def error(self, rule: str, message: str, location: Location | None) -> None:
         self.findings.append(Finding(rule, Severity.ERROR, message, location))
 
