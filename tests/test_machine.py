@@ -182,3 +182,19 @@ def test_scale_explain_reads_what_a_projects_drive_holds(capsys):
     assert written and all(slave.object_values(range(0x6089, 0x60AC))[k] == v for k, v in written.items())
     code, _, err = run(capsys, "scale", "explain", "--project", str(sample("hdt")), "--drive", "nope")
     assert code == 1 and "has no drive 'nope'" in err
+
+
+def test_a_mapping_object_the_slave_cannot_map_is_a_lint_error_at_the_object(tmp_path):
+    """A SOES-style ESI: the PDO list is right, the dictionary's own 1B01h maps 0x00060120 (a 32-bit entry of the
+    16-bit dummy 0006h, in a TxPDO). The slave runs the dictionary's mapping: lint says so at the object."""
+    name = "inovance_SV660_EOE_1Axis_V9.12.xml"
+    text = corpus_path("esi", name).read_bytes().decode("utf-8")
+    at = text.index("<Index>#x1B01</Index>")
+    hit = text.index("#x603F0010", at)
+    (tmp_path / name).write_text(text[:hit] + "#x00060120" + text[hit + len("#x603F0010"):], encoding="utf-8")
+    p = tmp_path / "p.yaml"
+    p.write_text(f"ecattool: 1\ndrives:\n  - name: s\n    device: {{esi: {name}}}\n    dc: {{opmode: DC, cycle_ns: 1000000}}\n",
+                 encoding="utf-8")
+    errors = [f for f in load_machine(p).findings if f.severity is Severity.ERROR]
+    assert [f.rule for f in errors] == ["PRJ027"] and "0x00060120" in errors[0].message
+    assert errors[0].location.file.endswith(name) and errors[0].location.line == text[:at].count("\n")

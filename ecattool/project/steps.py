@@ -9,6 +9,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ecattool.errors import EcatToolError, Location
+from ecattool.esi.model import Device, Direction
 from ecattool.findings import Finding, Severity
 from ecattool.project.loader import LoadedProject
 from ecattool.project.resolve import ResolvedDrive
@@ -254,6 +255,19 @@ def check_kind(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
 _COE_PDO_RANGES = {"rx": range(0x1600, 0x1800), "tx": range(0x1A00, 0x1C00)}
 
 
+def _maps_validly(device: Device, value: int, direction: Direction) -> bool:
+    """Whether a mapping entry value (index << 16 | sub << 8 | bits) is one the slave can map: a gap (index 0),
+    a dummy of a standard data type (index below 20h; CiA 301: RxPDOs only), or an object of its dictionary of
+    that size."""
+    index, sub, bits = value >> 16, (value >> 8) & 0xFF, value & 0xFF
+    if index == 0:
+        return True
+    if index < 0x20:
+        return direction is Direction.RX
+    entry = device.dictionary.entry(index, sub)
+    return entry is not None and entry.bit_size == bits
+
+
 def check_pdo_objects(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     """What the slave will run with, as its own dictionary says it, against what lint checked (the PDO list):
 
@@ -262,10 +276,9 @@ def check_pdo_objects(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     * PRJ027: where the project keeps the power-on mapping (no ``pdo:``), a mapping object of the device's
       dictionary whose default entries lay out another image than the ESI's PDO list (the EM7004 ESI's
       1601h–1609h are shifted by one against its RxPdo list): the slave runs with the dictionary's mapping, which
-      lint never checked
-      (the simulator refuses SAFE-OP with AL 001Dh/001Eh). Reported at the dictionary object's line; ``pdo:``
-      programs the mapping the project means."""
-    from ecattool.esi.model import Direction
+      lint never checked (the simulator refuses SAFE-OP with AL 001Dh/001Eh); or the same image where an entry
+      of the dictionary's own mapping cannot be mapped (a SOES board's 1A00h mapping 0x00060120, a dummy in a
+      TxPDO). Reported at the dictionary object's line; ``pdo:`` programs the mapping the project means."""
 
     device = rd.device
     assert device is not None
@@ -283,7 +296,7 @@ def check_pdo_objects(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
             return
     if rd.mapping is None or (rd.drive.pdo is not None and (rd.drive.pdo.rx is not None or rd.drive.pdo.tx is not None)):
         return
-    for mp in (*rd.mapping.rx, *rd.mapping.tx):
+    for direction, mp in [(Direction.RX, p) for p in rd.mapping.rx] + [(Direction.TX, p) for p in rd.mapping.tx]:
         obj = device.dictionary.get(mp.index)
         if obj is None or obj.location is None or not obj.location.line:
             continue  # synthesised from the PDO list: it agrees by construction
@@ -296,8 +309,11 @@ def check_pdo_objects(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
             e = obj.entry(sub)
             held.append(int.from_bytes(e.default, "little") if e is not None and e.default is not None else None)
         listed = [e.mapping_value for e in mp.entries]
-        if None in held or [v & 0xFF for v in held if v is not None] == [v & 0xFF for v in listed]:
-            continue  # the same layout: an entry the PDO list names differently is esi-pdo-object-missing's
+        if None in held or held == listed:
+            continue
+        same_layout = [v & 0xFF for v in held if v is not None] == [v & 0xFF for v in listed]
+        if same_layout and all(_maps_validly(device, v, direction) for v in held if v is not None):
+            continue  # the same image of valid entries: a PDO list entry named otherwise is esi-pdo-object-missing's
         rd.error("PRJ027", f"the dictionary's mapping object 0x{mp.index:04X} maps "
                            f"{', '.join(f'0x{v:08X}' for v in held if v is not None) or 'nothing'}, the ESI's PDO list "
                            f"{', '.join(f'0x{v:08X}' for v in listed) or 'nothing'}: {device.type_name} would run with "
