@@ -198,3 +198,15 @@ def test_a_mapping_object_the_slave_cannot_map_is_a_lint_error_at_the_object(tmp
     errors = [f for f in load_machine(p).findings if f.severity is Severity.ERROR]
     assert [f.rule for f in errors] == ["PRJ027"] and "0x00060120" in errors[0].message
     assert errors[0].location.file.endswith(name) and errors[0].location.line == text[:at].count("\n")
+
+
+def test_a_failed_enable_names_the_setting_that_skips_it(monkeypatch):
+    from ecattool.commission import cia402
+    from ecattool.errors import TargetError
+
+    def refuse(*_args: object, **_kw: object) -> list[str]:
+        raise TargetError("drive did not reach OPERATION ENABLED in 200 cycles")
+
+    monkeypatch.setattr(cia402, "enable", refuse)
+    report = commission(sample("hdt"))
+    assert not report.ok and "enable: false in the project" in report.drives[0].error

@@ -591,8 +591,12 @@ class _DriveRun:
         if rd.enables:
             _sdo_step("mode", lambda: _preselect_mode(io, rd))
             _sdo_step("hold position", lambda: _hold_position(io))
-            passed = _sdo_step("enable", lambda: cia402.enable(lambda: io.read(0x6041, 0),
-                                                               lambda v: io.write(0x6040, 0, v), io.cycle))
+            try:
+                passed = _sdo_step("enable", lambda: cia402.enable(lambda: io.read(0x6041, 0),
+                                                                   lambda v: io.write(0x6040, 0, v), io.cycle))
+            except _Failed as exc:  # name the project setting that commissions the slave without the enable
+                exc.step.detail += " (enable: false in the project commissions it to OP without the CiA-402 enable)"
+                raise
             report.steps.append(Step("enable", True, " -> ".join(passed)))
             _sdo_step("move", lambda: _move(io, rd, report))
         report.ok = True
