@@ -210,3 +210,14 @@ def test_a_failed_enable_names_the_setting_that_skips_it(monkeypatch):
     monkeypatch.setattr(cia402, "enable", refuse)
     report = commission(sample("hdt"))
     assert not report.ok and "enable: false in the project" in report.drives[0].error
+
+
+def test_a_fixed_two_bit_terminal_runs_with_its_sync_manager_padded(tmp_path):
+    """The EL1002 has two input bits in fixed PDOs and no mailbox: a real one runs with SM3 one byte long. The
+    simulator pads instead of refusing SAFE-OP (lint's PDO027 for it is being removed, issue 22 item 4)."""
+    extra = "    disable_rules: [{rule: PDO027, reason: the ESC pads the fixed 2 bits to a byte}]\n"
+    machine = load_machine(_project(tmp_path, EL1XXX, "EL1002", extra, policy="newest"))
+    assert [f for f in machine.findings if f.severity is Severity.ERROR] == []
+    report = commission(machine)
+    assert report.ok, report.drives[0].error
+    assert "1 input byte(s) read (2 object(s)" in next(s.detail for s in report.drives[0].steps if s.name == "process data")
