@@ -38,7 +38,7 @@ def _documented_rules() -> dict[str, str]:
     start = text.index("## Machine: the corpus sweep")
     end = text.find("\n## ", start + 1)
     section = text[start:end if end > 0 else None]
-    rows = re.findall(r"^\| `?([A-Za-z0-9.\-]+)`? \| (.+?) \|", section, re.M)
+    rows = re.findall(r"^\| `?([A-Za-z0-9.\-]+)`? \| (.+?) \|", section, re.MULTILINE)
     return {rule: reason for rule, reason in rows if rule.lower() != "rule"}
 
 

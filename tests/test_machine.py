@@ -148,9 +148,9 @@ def test_one_policy_for_a_project_with_errors(tmp_path, capsys):
     p = _project(tmp_path, EL1XXX, "EL1008", "    enable: true\n", policy="newest")
     for args in (("startup", "export", "--project", str(p), "--format", "eni"),
                  ("sim", "serve", str(p), "--list")):
-        code, out, err = run(capsys, *args)
+        code, _, err = run(capsys, *args)
         assert code == 1 and "PRJ025" in err and "--allow-errors" in err and f"{p}:8" in err, (args, err)
-        code, out, err = run(capsys, *args, "--allow-errors")
+        code, _, err = run(capsys, *args, "--allow-errors")
         assert code == 0, (args, err)
     machine = load_machine(p)
     with pytest.raises(InputError, match="cannot act: the project has lint errors"):

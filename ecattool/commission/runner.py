@@ -440,6 +440,9 @@ def _prove_process_data(io: ProcessIo, rd: Slave, report: DriveReport) -> None:
     working counter that is not full (pysoem) or an image of the wrong size (the simulator)."""
     assert rd.device is not None
     io.cycle()
+    if len(io.inputs) != io.layout.inputs.byte_size:
+        raise _Failed(Step("process data", False, f"the input image is {len(io.inputs)} byte(s), the mapping "
+                                                  f"lays out {io.layout.inputs.byte_size}"))
     values = []
     for (index, sub), pos in io.in_pos.items():
         entry = rd.device.dictionary.entry(index, sub)

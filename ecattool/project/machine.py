@@ -30,7 +30,7 @@ from ecattool.project.resolve import Slave, SlaveKind, is_axis, resolve_device, 
 from ecattool.project.rules import disable
 from ecattool.startup.model import StartupList
 
-__all__ = ["Machine", "Slave", "SlaveKind", "is_axis", "load_machine", "ALLOW_ERRORS_HELP"]
+__all__ = ["ALLOW_ERRORS_HELP", "Machine", "Slave", "SlaveKind", "is_axis", "load_machine"]
 
 #: the help of the ``--allow-errors`` option every command that acts on a project has
 ALLOW_ERRORS_HELP = ("Act on the project even when lint reports errors (by default a project with lint errors is "

@@ -154,13 +154,14 @@ def _motion(device: Device, rules: FamilyRules) -> str:
     from ecattool.esi.model import Direction
     from ecattool.od.model import EcState
     from ecattool.pdo import default_mapping
-
     from ecattool.project.resolve import is_axis
 
     mode = device.dictionary.entry(0x6060, 0)
-    if not is_axis(device) or mode is None:
+    if not is_axis(device):
         return ("    # an I/O slave, not a CiA-402 axis (no 6040h/6041h of a drive profile 402): commission proves its\n"
                 "    # identity, every state to OP with its mapping and one cycle of process data; add parameters: as needed\n")
+    if mode is None:
+        return "    # no modes of operation (6060h): commission enables the drive without a move; add parameters: as needed\n"
     if modes and 1 not in modes:
         listed = ", ".join(f"{m} ({MODE_NAMES.get(m, '?')})" for m in modes)
         head = f"    # {_comment(device.type_name)} has no profile position mode; it supports {listed}.\n"
