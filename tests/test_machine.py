@@ -234,3 +234,14 @@ def test_a_fixed_two_bit_terminal_runs_with_its_sync_manager_padded(tmp_path):
     report = commission(machine)
     assert report.ok, report.drives[0].error
     assert "1 input byte(s) read (2 object(s)" in next(s.detail for s in report.drives[0].steps if s.name == "process data")
+
+
+def test_a_project_wide_disable_holds_for_commission_too(tmp_path):
+    """Lint clean ⇒ commissions: a rule disabled for the whole project does not refuse the slave either."""
+    shutil.copy(corpus_path("esi", EL1XXX), tmp_path / EL1XXX)
+    p = tmp_path / "p.yaml"
+    p.write_text("ecattool: 1\ndisable_rules: [{rule: PDO027, reason: the ESC pads the fixed 2 bits}]\ndrives:\n"
+                 f"  - name: s\n    device: {{esi: {EL1XXX}, select: EL1002, policy: newest}}\n", encoding="utf-8")
+    machine = load_machine(p)
+    assert machine.findings == []
+    assert commission(machine).ok

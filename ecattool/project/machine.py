@@ -179,6 +179,9 @@ def load_machine(path: str | Path) -> Machine:
         positions.setdefault(s.position, s.name)
         machine.findings.extend(s.findings)
     machine.findings = disable(machine.findings, project.disable_rules, lp, ("disable_rules",))
+    off = {o.rule for o in project.disable_rules if o.reason.strip()}
+    for s in machine.slaves:  # a project-wide disable holds for each slave too (commission checks a slave's own)
+        s.findings = [f for f in s.findings if f.rule not in off]
     # de-duplicate (ESI findings of a file shared by several drives)
     seen = set()
     unique = []
