@@ -56,13 +56,16 @@ def esi_flaws(esi: str, select: str | None, base_dir: Path, policy: str = "exact
     return esi_findings_cached(base_dir / esi, select, policy)
 
 
-def new_project(device: Device, *, name: str = "axis1", profile: str | None = None, product: str | None = None,
+def new_project(device: Device, *, name: str | None = None, profile: str | None = None, product: str | None = None,
                 esi: str | None = None, select: str | None = None, policy: str = "exact",
                 findings: list[Finding] | None = None) -> str:
     """The text of a minimal project with one drive of ``device``, named as the user named it; ``findings``:
     the ESI's structural findings (:func:`esi_flaws`), pointed out where they concern the PDOs in use."""
     from ecattool import profiles
+    from ecattool.project.resolve import is_axis
 
+    if name is None:  # a CiA-402 axis or an I/O slave (docs/project.md, "Axes and I/O slaves")
+        name = "axis1" if is_axis(device) else "io1"
     if profile is not None:
         ref = f"      profile: {_scalar(profile)}\n" + (f"      product: {_scalar(product)}\n" if product else "")
     else:
