@@ -27,18 +27,21 @@ Exit codes: 0 every drive commissioned, 1 a drive failed or the project is inval
 @click.argument("projects", nargs=-1, required=True, type=InputFile())
 @click.option("--target", default=None, help="'sim' (default: the project's target) or 'pysoem:<interface>'.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+@click.option("--allow-errors", is_flag=True, help="Commission drives even when lint reports errors for them (by "
+              "default such a drive is not touched and its report names the first error).")
 @output_option(help="Also write the JSON report to FILE.")
 @file_output_option("--report", "report", help="Also write a self-contained HTML report to FILE: per drive the result, "
                     "the process image, the startup list as sent and read back, the .sw blocks, the state timeline "
                     "and plots of the move, and the lint findings (docs/report.md). Needs "
                     "pip install 'ecattool[report]'.")
-def commission(projects: tuple[str, ...], target: str | None, as_json: bool, output: str | None,
-               report: str | None) -> None:
-    """Commission the drives of project files.
+def commission(projects: tuple[str, ...], target: str | None, as_json: bool, allow_errors: bool,
+               output: str | None, report: str | None) -> None:
+    """Commission the drives and I/O slaves of project files.
 
-    For each drive: INIT -> PRE-OP, identity check, .sw verify/download, the startup list with every write
-    read back, SAFE-OP, OP, enable through the CiA-402 state machine, and a short move in user units checked
-    in internal units. A failing drive is stopped safely and the failing command and abort code are named.
+    For each slave: INIT -> PRE-OP, identity check, .sw verify/download, the startup list with every write
+    read back, SAFE-OP, OP. A CiA-402 axis is then enabled through the state machine and makes a short move in
+    user units checked in internal units; an I/O slave exchanges one cycle of process data (outputs written,
+    inputs read). A failing slave is stopped safely and the failing command and abort code are named.
     """
     from ecattool.commission import commission as run
 
@@ -67,7 +70,7 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, out
             for s in dr.steps:
                 con.print(f"    {'ok ' if s.ok else 'ERR'} {s.name}: {s.detail}", markup=False,
                           style=None if s.ok else "red")
-        reports.append(run(path, target=target, on_drive=show))
+        reports.append(run(path, target=target, on_drive=show, allow_errors=allow_errors))
     data = {"ok": all(r.ok for r in reports), "projects": [r.to_json() for r in reports]}
     if as_json:
         click.echo(dump_json(data))

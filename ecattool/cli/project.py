@@ -56,10 +56,10 @@ Examples:
 @click.option("--esi", "esi_path", help="ESI file of the drive (relative to where the project will be).")
 @click.option("--select", help="Device selector in the ESI.")
 @policy_option
-@click.option("--name", default="axis1", show_default=True, help="Name of the first drive.")
+@click.option("--name", default=None, help="Name of the first drive (default: axis1, or io1 for an I/O slave).")
 @output_option()
-def new(profile: str | None, product: str | None, esi_path: str | None, select: str | None, policy: str, name: str,
-        output: str | None) -> None:
+def new(profile: str | None, product: str | None, esi_path: str | None, select: str | None, policy: str,
+        name: str | None, output: str | None) -> None:
     """Write a minimal project file for one drive that lints clean (a vendor ESI's own flaws aside, which it
     points out with a commented-out disable_rules): the device is resolved first (unknown
     profile, product, ESI or selector: exit 1), and the PP move is only proposed where the drive has mode 1."""

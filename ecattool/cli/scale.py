@@ -304,19 +304,25 @@ Examples:
   ecattool scale explain --family technosoft-ipos --from drive_startup.xml --json
   ecattool scale explain --family hdt --target sim
   ecattool scale explain --family technosoft-ipos --target pysoem:eth0 --slave 2
-  ecattool scale explain --family hdt 6093:01=16384 6093:02=25 --html scaling.html""")
+  ecattool scale explain --family hdt 6093:01=16384 6093:02=25 --html scaling.html
+  ecattool scale explain --project samples/hdt/project.yaml           # what the project's startup list sets""")
 @click.argument("assignments", nargs=-1)
 @click.option("--family", type=click.Choice(_FAMILIES), default="technosoft-ipos", show_default=True)
 @click.option("--from", "source", type=InputFile(),
               help="Read values from a startup file (any format), a `scale compute --json` file or a YAML mapping.")
 @click.option("--target", help="Read the values from a drive: 'sim' (the family's simulated drive) or 'pysoem:IFACE'.")
 @click.option("--slave", type=int, default=0, show_default=True, help="Bus position of the drive (with --target).")
+@click.option("--project", type=InputFile(), help="Read the values a project's drive holds after its startup list "
+              "(its writes, else the device's defaults) and take its family.")
+@click.option("--drive", "drive_name", help="Drive name in --project (needed when it has several).")
+@click.option("--allow-errors", is_flag=True, help="With --project: explain even when lint reports errors for the drive.")
 @click.option("--firmware", help="Technosoft firmware (F515I → obsolete factor set).")
 @click.option("--slow-loop", default="1ms", show_default=True, help="Technosoft slow-loop period.")
 @click.option("--counts-per-rev", help="Increments per motor revolution, to express velocities in rpm.")
 @json_option
 @file_output_option("--html", "html", help=_HTML_HELP)
 def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, target: str | None, slave: int,
+                project: str | None, drive_name: str | None, allow_errors: bool,
                 firmware: str | None, slow_loop: str, counts_per_rev: str | None, as_json: bool,
                 html: str | None) -> None:
     """What one user unit is in counts, and what velocity and acceleration units mean, from object values."""
@@ -330,6 +336,19 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     _html_prerequisites(html, as_json)
 
     values = _values_from_file(source) if source else {}
+    if project:
+        from ecattool.project.machine import load_machine
+
+        machine = load_machine(project)
+        machine.require_loaded()
+        chosen = machine.slave(drive_name)
+        machine.refuse_errors(f"explain drive {chosen.name!r}", allow_errors=allow_errors, slaves=[chosen])
+        if click.get_current_context().get_parameter_source("family") is click.core.ParameterSource.DEFAULT:
+            family = chosen.family if chosen.family in _FAMILIES else "generic"
+        values.update(chosen.object_values(range(0x6089, 0x60AC)))
+        source = source or project
+    elif drive_name is not None:
+        raise click.UsageError("--drive needs --project")
     if target:
         from ecattool.scaling.explain import read_values
 
@@ -362,25 +381,28 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
 
 
 def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> Any:
-    from ecattool.errors import InputError
+    from ecattool.errors import InputError, SelectionError
+    from ecattool.target.opener import TARGET_FORMS, open_target, slave_at
 
-    if spec == "sim":
-        from ecattool.od.model import EcState
-        from ecattool.sim import Drive
+    devices = []
+    if spec.strip().lower() == "sim":
+        from ecattool import profiles
 
         if family == "generic":
             raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
-        drive = Drive.from_profile(family, revision=firmware) if firmware else Drive.from_profile(family)
-        drive.request_state(EcState.PREOP)
-        return drive
-    if spec.startswith("pysoem:"):
-        from ecattool.target.pysoem import PysoemTarget
+        devices = [profiles.load(family, revision=firmware) if firmware else profiles.load(family)]
+        slave = 0  # the simulated bus has the one drive of the family
+    try:
+        found = slave_at(open_target(spec, devices), slave)
+    except SelectionError as exc:
+        if exc.message.startswith("unknown target"):
+            raise click.BadParameter(f"use {TARGET_FORMS}", param_hint="--target") from None
+        raise InputError(f"--slave {slave}: {exc.message}") from None
+    if spec.strip().lower() == "sim":
+        from ecattool.od.model import EcState
 
-        slaves = PysoemTarget(spec.split(":", 1)[1]).slaves()
-        if not 0 <= slave < len(slaves):
-            raise InputError(f"--slave {slave}: the bus has {len(slaves)} slaves")
-        return slaves[slave]
-    raise click.BadParameter("use 'sim' or 'pysoem:<interface>'", param_hint="--target")
+        found.request_state(EcState.PREOP)
+    return found
 
 
 @scale.command("si", epilog="""\b

@@ -198,9 +198,10 @@ Run it inside a private network namespace with a veth pair (never on the host's 
 @click.option("--frames", type=click.IntRange(min=1), default=None,
               help="Stop after this many frames (default: until SIGINT/SIGTERM).")
 @click.option("--list", "list_only", is_flag=True, help="Print the slaves in bus order and exit (no interface).")
+@click.option("--allow-errors", is_flag=True, help="Serve a project even when lint reports errors for it.")
 @json_option
 def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, revision: str | None,
-              selector: str | None, frames: int | None, list_only: bool, as_json: bool) -> None:
+              selector: str | None, frames: int | None, list_only: bool, allow_errors: bool, as_json: bool) -> None:
     """Serve simulated drives as EtherCAT slaves on a network interface, for a real master (SOEM/pysoem).
 
     SOURCES, in bus order: a project file (every drive of the project, in its bus order), a built-in profile
@@ -218,7 +219,7 @@ def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, 
     named = []
     for src in sources:  # a project file: its drives in bus order; anything else: a profile or an ESI file
         if src.lower().endswith((".yaml", ".yml")):
-            named += devices_in_bus_order(src)
+            named += devices_in_bus_order(src, allow_errors)
         else:
             named.append(device_source(src, product=product, revision=revision, selector=selector))
     slaves = virtual_slaves(named)

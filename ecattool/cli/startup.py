@@ -104,9 +104,10 @@ Examples:
               help="Only this drive of the project (or slave of --from): name or bus position; repeatable. "
                    "TwinCAT and ros2 files hold one slave.")
 @_sync0_option
+@click.option("--allow-errors", is_flag=True, help="With --project: export even when lint reports errors.")
 @output_option()
 def export_cmd(source: str | None, project: str | None, from_format: str | None, fmt: str, drives: tuple[str, ...],
-               sync0_cycle: int | None, output: str | None) -> None:
+               sync0_cycle: int | None, allow_errors: bool, output: str | None) -> None:
     """Write the startup list of FILE (--from) or of a project (--project) in a master's format (stdout
     unless -o)."""
     from ecattool.startup import select_slaves
@@ -119,7 +120,7 @@ def export_cmd(source: str | None, project: str | None, from_format: str | None,
         from ecattool.project.export import slave_configs
         from ecattool.project.loader import project_inputs
 
-        _write(_with_cycle(select_slaves(slave_configs(project), drives), sync0_cycle), fmt, output,
+        _write(_with_cycle(select_slaves(slave_configs(project, allow_errors), drives), sync0_cycle), fmt, output,
                tuple(project_inputs([project])))
         return
     assert source is not None

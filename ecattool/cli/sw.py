@@ -109,42 +109,40 @@ def from_foe_cmd(file: str, output: str | None) -> None:
 
 
 # ---------------------------------------------------------------------------------------------- targets
-def _open_target(spec: str, slave: int, device: Any = None, rules: Any = None) -> Any:
-    if spec == "sim":
-        from ecattool.sim import Drive
+def _open_target(spec: str, slave: int, device: Any = None) -> Any:
+    """The slave at ``slave`` of the target ``spec`` (ecattool.target.opener): with ``sim``, a simulated bus of
+    ``device`` at that position (a Technosoft iPOS without one)."""
+    from ecattool.target.opener import open_target, slave_at
 
-        if device is not None:
-            return Drive.from_device(device, rules, position=slave)
-        return Drive.from_profile("technosoft-ipos")
-    if spec.startswith("pysoem:"):
-        from ecattool.target.pysoem import PysoemTarget
+    if spec.strip().lower() == "sim":
+        if device is None:
+            from ecattool import profiles
 
-        master = PysoemTarget(spec.split(":", 1)[1])
-        slaves = master.slaves()
-        if not 0 <= slave < len(slaves):
-            raise InputError(f"slave position {slave}: the bus has {len(slaves)} slaves")
-        return slaves[slave]
-    raise InputError(f"unknown target {spec!r} (use 'sim' or 'pysoem:<interface>')")
+            device = profiles.load("technosoft-ipos")
+        tgt = open_target(spec, [device])
+        found = slave_at(tgt, 0)
+        found.position = slave
+        return found
+    return slave_at(open_target(spec), slave)
 
 
-def _project_drive(project: str, name: str | None) -> tuple[Any, str]:
-    """The resolved drive ``name`` of a project (or its only drive) and the project's default target."""
-    from ecattool.project.lint import lint_project
+def _project_drive(project: str, name: str | None, allow_errors: bool = False) -> tuple[Any, str]:
+    """The slave ``name`` of a project's machine (or its only slave, or the one with an ``sw:``) and the
+    project's default target; a project with lint errors for it is refused unless ``allow_errors``."""
+    from ecattool.project.machine import load_machine
 
-    result = lint_project(project)
-    if result.loaded is None:
-        first = result.findings[0]
-        raise InputError(first.message, first.location)
-    drives = result.drives
-    if name is not None:
-        chosen = [rd for rd in drives if rd.drive.name == name]
-    else:
-        chosen = [rd for rd in drives if rd.drive.sw_config is not None] or drives
-    if len(chosen) != 1:
-        names = ", ".join(rd.drive.name for rd in drives)
-        why = f"has no drive {name!r}" if name is not None else "has several drives"
-        raise InputError(f"the project {why}; choose one with --drive ({names})", Location(project))
-    return chosen[0], result.loaded.project.target
+    machine = load_machine(project)
+    machine.require_loaded()
+    if name is None:
+        with_sw = [s for s in machine.slaves if s.drive.sw_config is not None]
+        name = with_sw[0].name if len(with_sw) == 1 else None
+    chosen = machine.slave(name)
+    if chosen.drive.sw_config is not None and chosen.sw_image is None:  # configured but unreadable: lint's why
+        why = next((f for f in chosen.findings if f.rule in ("PRJ002", "PRJ030") and f.severity.value == "error"), None)
+        if why is not None:
+            raise InputError(f"drive {chosen.name!r}: {why.message}", why.location)
+    machine.refuse_errors(f"use drive {chosen.name!r}", allow_errors=allow_errors, slaves=[chosen])
+    return chosen, machine.target
 
 
 _target_option = click.option("--target", default=None,
@@ -154,35 +152,34 @@ _slave_option = click.option("--slave", default=None, type=int, help="Slave posi
 _project_option = click.option("--project", type=InputFile(),
                                help="Project file: the drive's device, bus position, target and .sw file.")
 _drive_option = click.option("--drive", "drive_name", help="Drive name in --project (needed when it has several).")
+_allow_errors_option = click.option("--allow-errors", is_flag=True,
+                                    help="With --project: use the drive even when lint reports errors for it.")
 _preload_option = click.option("--preload", type=InputFile(),
                                help="Simulator only: program this .sw into the simulated EEPROM first.")
 
 
 def _target_options(f: Any) -> Any:
-    """--target, --slave, --project, --drive and --preload (verify and download)."""
-    for option in (_preload_option, _drive_option, _project_option, _slave_option, _target_option):
+    """--target, --slave, --project, --drive, --preload and --allow-errors (verify and download)."""
+    for option in (_allow_errors_option, _preload_option, _drive_option, _project_option, _slave_option,
+                   _target_option):
         f = option(f)
     return f
 
 
 def _target_and_image(file: str | None, target: str | None, slave: int | None, project: str | None,
-                      drive_name: str | None, preload: str | None) -> tuple[Any, Any, str, str]:
+                      drive_name: str | None, preload: str | None,
+                      allow_errors: bool = False) -> tuple[Any, Any, str, str]:
     """(target, image, image name, target name) for verify/download."""
-    device = rules = None
+    device = None
     image = None
     name = file
     if project is not None:
-        rd, project_target = _project_drive(project, drive_name)
-        device, rules = rd.device, rd.rules
+        rd, project_target = _project_drive(project, drive_name, allow_errors)
+        device = rd.device
         target = target or project_target
         slave = rd.position if slave is None else slave
         if file is None:
             cfg = rd.drive.sw_config
-            if cfg is not None and rd.sw_image is None:  # configured but unreadable: why, where lint says it
-                why = next((f for f in rd.findings if f.rule in ("PRJ002", "PRJ030") and f.severity.value == "error"),
-                           None)
-                if why is not None:
-                    raise InputError(f"drive {rd.drive.name!r}: {why.message}", why.location)
             if cfg is None or rd.sw_image is None:
                 raise InputError(f"drive {rd.drive.name!r} has no readable sw image; give FILE", Location(project))
             image, name = rd.sw_image, cfg.file
@@ -193,7 +190,7 @@ def _target_and_image(file: str | None, target: str | None, slave: int | None, p
             raise click.UsageError("give the .sw FILE (or --project with a drive that has 'sw:')")
         image = _image(file)
     spec = target or "sim"
-    tgt = _open_target(spec, slave or 0, device, rules)
+    tgt = _open_target(spec, slave or 0, device)
     if preload:
         if spec != "sim":
             raise InputError("--preload is for the simulator only")
@@ -225,14 +222,14 @@ Examples:
 @_target_options
 @json_option
 def verify(file: str | None, target: str | None, slave: int | None, project: str | None, drive_name: str | None,
-           preload: str | None, as_json: bool) -> None:
+           preload: str | None, allow_errors: bool, as_json: bool) -> None:
     """Compare the drive's EEPROM checksums (2069h/206Ah) with the file, block by block.
 
     Exit status 1 when any block differs: reload it with 'ecattool sw download'.
     """
     from ecattool.sw.apply import verify as verify_image
 
-    tgt, image, name, spec = _target_and_image(file, target, slave, project, drive_name, preload)
+    tgt, image, name, spec = _target_and_image(file, target, slave, project, drive_name, preload, allow_errors)
     checks = verify_image(image, tgt)
     if as_json:
         print_json({"ok": all(c.ok for c in checks), "blocks": [c.to_json() for c in checks]})
@@ -259,7 +256,7 @@ Examples:
 @json_option
 def download(file: str | None, dry_run: bool, mode: str, force: bool, no_reset: bool, target: str | None,
              slave: int | None, project: str | None, drive_name: str | None, preload: str | None,
-             as_json: bool) -> None:
+             allow_errors: bool, as_json: bool) -> None:
     """Program the image into the drive EEPROM over CoE (2064h/2065h), verify, then reset.
 
     Without --dry-run only the blocks whose drive checksum differs are written; each is verified after
@@ -283,7 +280,7 @@ def download(file: str | None, dry_run: bool, mode: str, force: bool, no_reset: 
             t.add_row(str(n), c.address, f"0x{c.int_value:0{2 * len(c.data)}X}", c.comment)
         console().print(t)
         return
-    tgt, image, file, _ = _target_and_image(file, target, slave, project, drive_name, preload)
+    tgt, image, file, _ = _target_and_image(file, target, slave, project, drive_name, preload, allow_errors)
     report = _run_download(image, tgt, int(mode), not no_reset, force, show_progress=not as_json)
     if as_json:
         print_json(report.to_json())

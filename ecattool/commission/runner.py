@@ -11,10 +11,11 @@ from typing import TYPE_CHECKING, Any
 
 from ecattool.commission import cia402
 from ecattool.commission.trace import DriveTrace, StartupWrite
-from ecattool.errors import EcatToolError, InputError, SdoAbort, StateChangeError, TargetError
+from ecattool.errors import EcatToolError, SdoAbort, StateChangeError, TargetError
 from ecattool.findings import Finding, has_errors
 from ecattool.od.model import EcState
-from ecattool.project.resolve import TRANSITION_STATE, ResolvedDrive
+from ecattool.project.machine import Machine, load_machine
+from ecattool.project.resolve import TRANSITION_STATE, ResolvedDrive, Slave
 from ecattool.startup.model import StartupCommand
 from ecattool.target.base import SlaveTarget, Target
 
@@ -47,6 +48,8 @@ class Step:
 class DriveReport:
     name: str
     position: int
+    #: "axis" (CiA-402: enabled and moved) or "io" (states, mapping and process data proven)
+    kind: str = "axis"
     ok: bool = False
     steps: list[Step] = field(default_factory=list)
     error: str | None = None
@@ -55,7 +58,7 @@ class DriveReport:
     trace: DriveTrace = field(default_factory=DriveTrace)
 
     def to_json(self) -> dict[str, Any]:
-        return {"name": self.name, "position": self.position, "ok": self.ok, "error": self.error,
+        return {"name": self.name, "position": self.position, "kind": self.kind, "ok": self.ok, "error": self.error,
                 "final_state": self.final_state, "steps": [s.to_json() for s in self.steps]}
 
 
@@ -274,9 +277,10 @@ def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     from ecattool import sw
 
     cfg = rd.drive.sw_config
-    if rd.sw_image is None or cfg is None:
+    image = rd.sw_image
+    if image is None or cfg is None:
         return
-    diff = _sdo_step("sw verify", lambda: sw.verify(rd.sw_image, slave))
+    diff = _sdo_step("sw verify", lambda: sw.verify(image, slave))
     report.trace.sw_checked(diff, cfg.file)
     bad = [b for b in diff if not b.ok]
     if not bad:
@@ -285,7 +289,7 @@ def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     if not cfg.download:
         raise _Failed(Step("sw verify", False, f"{len(bad)} block(s) differ from {cfg.file}: "
                            + ", ".join(f"0x{b.start:04X}" for b in bad) + " (download disabled)"))
-    result = _sdo_step("sw download", lambda: sw.download(rd.sw_image, slave, mode=cfg.mode))
+    result = _sdo_step("sw download", lambda: sw.download(image, slave, mode=cfg.mode))
     report.trace.sw_downloaded(result, result.after)
     if not result.ok:
         starts = dict.fromkeys([*(c.start for c in result.failed), *result.write_errors])
@@ -296,7 +300,7 @@ def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     _sdo_step("sw reset", lambda: slave.request_state(EcState.PREOP))
     report.trace.ec_state(EcState.INIT.value)  # the reset, as the timeline shows it
     report.trace.ec_state(EcState.PREOP.value)
-    after = _sdo_step("sw verify", lambda: sw.verify(rd.sw_image, slave))
+    after = _sdo_step("sw verify", lambda: sw.verify(image, slave))
     report.trace.sw_downloaded(result, after)
     still = [b for b in after if not b.ok]
     if still:
@@ -433,6 +437,42 @@ def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fracti
         _cycle_until(io, lambda sw: False, 50)
 
 
+def _prove_process_data(io: ProcessIo, rd: Slave, report: DriveReport) -> None:
+    """An I/O slave in OP: one cycle with the output image (every output at its startup value or 0: nothing is
+    switched on), its inputs read and decoded, and each mapped output read back by SDO where the slave's
+    dictionary makes it readable in OP (the outputs arrived where the mapping says). A target raises on a
+    working counter that is not full (pysoem) or an image of the wrong size (the simulator)."""
+    assert rd.device is not None
+    io.cycle()
+    if len(io.inputs) != io.layout.inputs.byte_size:
+        raise _Failed(Step("process data", False, f"the input image is {len(io.inputs)} byte(s), the mapping "
+                                                  f"lays out {io.layout.inputs.byte_size}"))
+    values = []
+    for (index, sub), pos in io.in_pos.items():
+        entry = rd.device.dictionary.entry(index, sub)
+        if entry is not None and entry.datatype is not None and entry.datatype.bits:
+            values.append(f"{index:04X}:{sub:02X}={_get_bits(io.inputs, pos.bit_offset, pos.bit_len)}")
+    checked = 0
+    for (index, sub), pos in io.out_pos.items():
+        entry = rd.device.dictionary.entry(index, sub)
+        if entry is None or not entry.access.readable(EcState.OP) or pos.bit_len % 8:
+            continue
+        try:
+            raw = bytes(io.slave.sdo_upload(index, sub))
+        except EcatToolError:
+            continue  # no mailbox, or an object the slave will not read out: the cycle itself is the proof
+        sent = _get_bits(bytes(io.outputs), pos.bit_offset, pos.bit_len)
+        if len(raw) * 8 == pos.bit_len and int.from_bytes(raw, "little") != sent:
+            raise _Failed(Step("process data", False, f"output {index:04X}:{sub:02X} ({entry.name}) reads "
+                                                      f"{int.from_bytes(raw, 'little')} by SDO after the cycle wrote {sent}"))
+        checked += 1
+    shown = ", ".join(values[:8]) + (f", … ({len(values)} inputs)" if len(values) > 8 else "")
+    report.steps.append(Step("process data", True,
+                             f"{len(io.outputs)} output byte(s) written ({len(io.out_pos)} object(s)"
+                             + (f", {checked} read back by SDO" if checked else "") + f"), {len(io.inputs)} input "
+                             f"byte(s) read ({len(io.in_pos)} object(s)" + (f": {shown}" if shown else "") + ")"))
+
+
 def _expected_readbacks(rd: ResolvedDrive) -> list[FactorObject]:
     """Factor objects the drive computes from its own hardware configuration (Control Techniques' read-only
     608Fh): the scaling is only right if the drive reports the value the project's feedback assumes."""
@@ -497,10 +537,11 @@ class _DriveRun:
     :meth:`prepare` does everything in PRE-OP (identity, .sw, startup list, read-backs, DC), :meth:`finish`
     goes to SAFE-OP and OP, enables and moves. A failure in either stops the drive safely."""
 
-    def __init__(self, slave: SlaveTarget, rd: ResolvedDrive) -> None:
+    def __init__(self, slave: SlaveTarget, rd: ResolvedDrive, allow_errors: bool = False) -> None:
         self.slave = slave
         self.rd = rd
-        self.report = DriveReport(rd.drive.name, rd.position, trace=DriveTrace.for_drive(rd))
+        self.allow_errors = allow_errors
+        self.report = DriveReport(rd.drive.name, rd.position, rd.kind, trace=DriveTrace.for_drive(rd))
         self.io: ProcessIo | None = None
         self.failed = False
 
@@ -527,9 +568,10 @@ class _DriveRun:
 
     def _prepare(self) -> None:
         slave, rd, report = self.slave, self.rd, self.report
-        if has_errors(rd.findings):
+        if has_errors(rd.findings) and not self.allow_errors:
             first = next(f for f in rd.findings if f.severity.value == "error")
-            raise _Failed(Step("lint", False, f"the project has errors for this drive, first: {first}"))
+            raise _Failed(Step("lint", False, f"the project has errors for this drive, first: {first} "
+                                              "(--allow-errors commissions it anyway)"))
         current = _sdo_step("state", slave.state)
         report.trace.ec_state(current.value)
         if current is not EcState.INIT:
@@ -551,11 +593,17 @@ class _DriveRun:
         io.seed_from_drive()
         io.cycle()  # the image a real master keeps sending while the drive goes to OP holds the seeded values
         _goto(slave, EcState.OP, report)
-        if rd.drive.enable:
+        if rd.kind == "io":
+            _sdo_step("process data", lambda: _prove_process_data(io, rd, report))
+        if rd.enables:
             _sdo_step("mode", lambda: _preselect_mode(io, rd))
             _sdo_step("hold position", lambda: _hold_position(io))
-            passed = _sdo_step("enable", lambda: cia402.enable(lambda: io.read(0x6041, 0),
-                                                               lambda v: io.write(0x6040, 0, v), io.cycle))
+            try:
+                passed = _sdo_step("enable", lambda: cia402.enable(lambda: io.read(0x6041, 0),
+                                                                   lambda v: io.write(0x6040, 0, v), io.cycle))
+            except _Failed as exc:  # name the project setting that commissions the slave without the enable
+                exc.step.detail += " (enable: false in the project commissions it to OP without the CiA-402 enable)"
+                raise
             report.steps.append(Step("enable", True, " -> ".join(passed)))
             _sdo_step("move", lambda: _move(io, rd, report))
         report.ok = True
@@ -588,57 +636,49 @@ def _drive_error(slave: SlaveTarget, rd: ResolvedDrive) -> str:
     return f"; the drive reports error 603Fh = 0x{code:04X} ({error_text(code, getattr(rd.rules, 'family', None))})"
 
 
-def open_target(spec: str, drives: list[ResolvedDrive]) -> tuple[Target, str]:
-    """``sim`` → one simulated drive per project entry; ``pysoem:<ifname>`` → a real master."""
-    if spec == "sim":
-        from ecattool.target.sim import SimTarget
+def open_target(spec: str, drives: list[Slave]) -> tuple[Target, str]:
+    """The target ``spec`` names (:func:`ecattool.target.opener.open_target`) with the slaves' devices for a
+    simulator; and the target's name for the report. A slave whose device did not resolve cannot be simulated:
+    an InputError naming it and why (the file and line lint names)."""
+    from ecattool.target.opener import open_target as open_spec
 
-        for rd in drives:  # name the drive and why (the file and line lint names), not just "see lint"
-            if rd.device is None:
-                why = next((f for f in rd.findings if f.severity.value == "error"), None)
-                raise InputError(f"drive {rd.drive.name!r} cannot be simulated: its device did not resolve"
-                                 + (f": {why.message} [{why.rule}]" if why else " (see 'ecattool lint')"),
-                                 why.location if why else None)
-        devices = [rd.device for rd in sorted(drives, key=lambda r: r.position) if rd.device is not None]
-        return SimTarget.from_devices(devices), "sim"
-    if spec.startswith("pysoem:"):
-        from ecattool.target.pysoem import PysoemTarget
-
-        return PysoemTarget(spec.split(":", 1)[1]), spec
-    raise InputError(f"unknown target {spec!r} (use 'sim' or 'pysoem:<interface>')")
+    machine = Machine("", slaves=list(drives))
+    devices = [d for _, d in machine.devices()] if spec.strip().lower() == "sim" else []
+    return open_spec(spec, devices), spec
 
 
-def commission(path: str | Path, target: str | Target | None = None,
-               on_drive: Callable[[DriveReport], None] | None = None) -> CommissionReport:
-    """Commission every drive of the project at ``path`` on ``target``.
+def commission(path: str | Path | Machine, target: str | Target | None = None,
+               on_drive: Callable[[DriveReport], None] | None = None, *,
+               allow_errors: bool = False) -> CommissionReport:
+    """Commission every slave of the project at ``path`` (or of a :class:`Machine` already built) on ``target``.
+
+    An axis goes to OP, is enabled through CiA-402 and makes the project's move; an I/O slave goes to OP and
+    exchanges one cycle of process data (:func:`_prove_process_data`). A slave with lint errors is not touched
+    (its report names the first error) unless ``allow_errors`` (the ``--allow-errors`` policy of every command).
 
     ``target`` is a spec string (``"sim"``, ``"pysoem:eth0"``; default: the project's, i.e. ``"sim"``) or a
     ready :class:`~ecattool.target.base.Target` object (e.g. a ``SimTarget`` of prepared simulated drives with
     faults scheduled); a target object passed in is not closed, its owner closes it.
     """
-    from ecattool.project.lint import lint_project
-
-    result = lint_project(path)
-    if result.loaded is None:
-        first = result.findings[0]
-        raise InputError(first.message, first.location)
+    machine = path if isinstance(path, Machine) else load_machine(path)
+    machine.require_loaded()
     owned = target is None or isinstance(target, str)
     if target is None or isinstance(target, str):
-        tgt, name = open_target(target or result.loaded.project.target, result.drives)
+        tgt, name = open_target(target or machine.target, machine.slaves)
     else:
         tgt, name = target, type(target).__name__
-    report = CommissionReport(str(path), name, findings=list(result.findings))
+    report = CommissionReport(machine.path, name, findings=list(machine.findings))
     try:
         slaves = tgt.slaves()
-        ordered = sorted(result.drives, key=lambda r: r.position)
+        ordered = machine.in_bus_order()
         runs: list[_DriveRun | DriveReport] = []
         for rd in ordered:  # every drive's PRE-OP work first, then SAFE-OP/OP drive by drive
             if rd.position >= len(slaves):
-                dr = DriveReport(rd.drive.name, rd.position, error=f"no slave at bus position {rd.position}")
+                dr = DriveReport(rd.drive.name, rd.position, rd.kind, error=f"no slave at bus position {rd.position}")
                 dr.steps.append(Step("bus", False, dr.error or ""))
                 runs.append(dr)
             else:
-                run = _DriveRun(slaves[rd.position], rd)
+                run = _DriveRun(slaves[rd.position], rd, allow_errors)
                 run.prepare()
                 runs.append(run)
         for item in runs:

@@ -102,6 +102,29 @@ def _assign_object(device: Device, direction: Direction, pdos: list[Pdo], writab
     return obj
 
 
+def plug_default_modules(device: Device) -> Device:
+    """A copy of ``device`` with each slot's default module plugged in, as an ESI-configured master starts a
+    modular device: the module PDOs and dictionary objects (:func:`expand_default_modules`) the device does
+    not have itself are added; what the device's own PDO list and dictionary say wins. The one rule for "the
+    device as it runs" that lint, the simulator and the exports share (docs/decisions.md, "Profiles: slot
+    expansion")."""
+    out = copy.deepcopy(device)
+    if not out.slots:
+        return out
+    od = ObjectDictionary({o.index: o for o in out.dictionary})
+    pdos, objects = expand_default_modules(out)
+    known = {p.index for p in (*out.rx_pdos, *out.tx_pdos)}
+    for p in pdos:
+        if p.index not in known:
+            out.pdos(p.direction).append(p)
+            known.add(p.index)
+    for o in objects:
+        if o.index not in od:
+            od.add(o)
+    out.dictionary = od
+    return out
+
+
 def complete_generic(device: Device) -> Device:
     """A copy of ``device`` whose dictionary has 1000h, 1018h, 1C00h, 16xxh/1Axxh and 1C12h/1C13h.
 
@@ -109,18 +132,8 @@ def complete_generic(device: Device) -> Device:
     identity, the sync managers and the PDO list, with each PDO's default SM deciding its assignment).
     Mapping objects of Fixed PDOs, and the assignment when the ESI does not declare PdoAssign, are read-only.
     """
-    out = copy.deepcopy(device)
+    out = plug_default_modules(device)
     od = ObjectDictionary({o.index: o for o in out.dictionary})
-    if out.slots:
-        pdos, objects = expand_default_modules(out)
-        known = {p.index for p in (*out.rx_pdos, *out.tx_pdos)}
-        for p in pdos:
-            if p.index not in known:
-                out.pdos(p.direction).append(p)
-                known.add(p.index)
-        for o in objects:
-            if o.index not in od:
-                od.add(o)
     where = f"synthesised from {device.source or device.type_name}"
     coe = out.mailbox.coe if out.mailbox is not None else None
     if 0x1000 not in od:
@@ -275,7 +288,8 @@ def generic_rules(device: Device) -> FamilyRules:
     )
 
 
-__all__ = ["MODE_BITS", "SM_TYPE", "complete_generic", "generic_rules", "init_cmds", "supported_modes_of"]
+__all__ = ["MODE_BITS", "SM_TYPE", "complete_generic", "generic_rules", "init_cmds", "plug_default_modules",
+           "supported_modes_of"]
 
 
 def init_cmds(device: Device) -> list[InitCmd]:

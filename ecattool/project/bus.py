@@ -1,27 +1,17 @@
-"""The devices of a project's drives in bus order, for whatever puts them on a bus (``ecattool sim serve``)."""
+"""The devices of a project's slaves in bus order, for whatever puts them on a bus (``ecattool sim serve``)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from ecattool.errors import InputError
 from ecattool.esi.model import Device
+from ecattool.project.machine import Machine, load_machine
 
 
-def devices_in_bus_order(path: str | Path) -> list[tuple[str, Device]]:
-    """(drive name, resolved device) of every drive of the project at ``path``, in bus order. A project that
-    does not load, or a drive whose device does not resolve, is an InputError naming the file and line."""
-    from ecattool.project.lint import lint_project
-
-    result = lint_project(path)
-    if result.loaded is None:
-        first = result.findings[0]
-        raise InputError(first.message, first.location)
-    out = []
-    for rd in sorted(result.drives, key=lambda r: r.position):
-        if rd.device is None:
-            why = next((f for f in rd.findings if f.severity.value == "error"), None)
-            raise InputError(f"drive {rd.drive.name!r} cannot be simulated: its device did not resolve"
-                             + (f": {why.message} [{why.rule}]" if why else ""), why.location if why else None)
-        out.append((rd.drive.name, rd.device))
-    return out
+def devices_in_bus_order(path: str | Path | Machine, allow_errors: bool = False) -> list[tuple[str, Device]]:
+    """(slave name, device as it runs) of every slave of the project at ``path``, in bus order. A project that
+    does not load, or a slave whose device does not resolve, is an InputError naming the file and line; a
+    project with other lint errors too unless ``allow_errors`` (``Machine.refuse_errors``)."""
+    machine = path if isinstance(path, Machine) else load_machine(path)
+    machine.refuse_errors("simulate the project", allow_errors=allow_errors)
+    return machine.devices()

@@ -7,17 +7,17 @@
 The configuration is what ``ecattool lint`` resolved: the drive's identity, its startup list (PDO
 programming, scaling objects, parameters, in that order), the assigned PDOs of the resolved mapping (the
 device default where the project gives none), the device's sync managers and the DC settings (an ESI OpMode
-by name, or explicit values). A project with lint errors is refused: exporting a configuration that lint
-rejects would only move the failure to the plant.
+by name, or explicit values). A project with lint errors is refused (``Machine.refuse_errors``, the policy
+every command shares): exporting a configuration that lint rejects would only move the failure to the plant;
+``allow_errors`` exports it anyway.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from ecattool.errors import InputError, Location
-from ecattool.findings import Severity
-from ecattool.project.lint import ProjectResult, lint_project
+from ecattool.errors import InputError
+from ecattool.project.machine import Machine, load_machine
 from ecattool.project.resolve import ResolvedDrive
 from ecattool.startup.config import SlaveConfig
 
@@ -40,22 +40,17 @@ def drive_config(rd: ResolvedDrive) -> SlaveConfig:
     return cfg
 
 
-def refuse_errors(result: ProjectResult, what: str) -> None:
+def refuse_errors(result: Machine, what: str) -> None:
     """Raise a located InputError naming the first lint error of ``result`` (and how many there are)."""
-    errors = [f for f in result.findings if f.severity is Severity.ERROR]
-    if not errors:
-        return
-    first = errors[0]
-    more = f" (and {len(errors) - 1} more; run `ecattool lint {result.path}`)" if len(errors) > 1 else ""
-    raise InputError(f"cannot {what}: the project has lint errors, first: {first.message} [{first.rule}]{more}",
-                     first.location or Location(result.path))
+    result.refuse_errors(what)
 
 
-def slave_configs(path: str | Path) -> list[SlaveConfig]:
-    """Lint the project at ``path`` and return one slave configuration per drive, in bus order.
+def slave_configs(path: str | Path | Machine, allow_errors: bool = False) -> list[SlaveConfig]:
+    """One slave configuration per slave of the project at ``path`` (or of a built Machine), in bus order.
 
-    Raises :class:`~ecattool.errors.InputError` (located at the first error) when lint reports errors.
+    Raises :class:`~ecattool.errors.InputError` (located at the first error) when lint reports errors, unless
+    ``allow_errors``.
     """
-    result = lint_project(path)
-    refuse_errors(result, "export the startup configuration")
-    return [drive_config(rd) for rd in sorted(result.drives, key=lambda r: r.position)]
+    machine = path if isinstance(path, Machine) else load_machine(path)
+    machine.refuse_errors("export the startup configuration", allow_errors=allow_errors)
+    return [drive_config(rd) for rd in machine.in_bus_order()]

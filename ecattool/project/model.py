@@ -175,8 +175,9 @@ class Drive(_Strict):
     )
     dc: DcConfig | None = None
     move: MoveTest | None = Field(default=None, description="Commissioning move; omit to skip the move")
-    enable: bool = Field(
-        default=True, description="Enable the drive through the CiA-402 state machine when commissioning"
+    enable: bool | None = Field(
+        default=None, description="Enable the drive through the CiA-402 state machine when commissioning "
+        "(default: yes for a CiA-402 axis, no for an I/O slave; false commissions an axis without enabling it)"
     )
     disable_rules: list[RuleOff] = Field(default_factory=list)
 

@@ -56,13 +56,16 @@ def esi_flaws(esi: str, select: str | None, base_dir: Path, policy: str = "exact
     return esi_findings_cached(base_dir / esi, select, policy)
 
 
-def new_project(device: Device, *, name: str = "axis1", profile: str | None = None, product: str | None = None,
+def new_project(device: Device, *, name: str | None = None, profile: str | None = None, product: str | None = None,
                 esi: str | None = None, select: str | None = None, policy: str = "exact",
                 findings: list[Finding] | None = None) -> str:
     """The text of a minimal project with one drive of ``device``, named as the user named it; ``findings``:
     the ESI's structural findings (:func:`esi_flaws`), pointed out where they concern the PDOs in use."""
     from ecattool import profiles
+    from ecattool.project.resolve import is_axis
 
+    if name is None:  # a CiA-402 axis or an I/O slave (docs/project.md, "Axes and I/O slaves")
+        name = "axis1" if is_axis(device) else "io1"
     if profile is not None:
         ref = f"      profile: {_scalar(profile)}\n" + (f"      product: {_scalar(product)}\n" if product else "")
     else:
@@ -154,10 +157,14 @@ def _motion(device: Device, rules: FamilyRules) -> str:
     from ecattool.esi.model import Direction
     from ecattool.od.model import EcState
     from ecattool.pdo import default_mapping
+    from ecattool.project.resolve import is_axis
 
     mode = device.dictionary.entry(0x6060, 0)
+    if not is_axis(device):
+        return ("    # an I/O slave, not a CiA-402 axis (no 6040h/6041h of a drive profile 402): commission proves its\n"
+                "    # identity, every state to OP with its mapping and one cycle of process data; add parameters: as needed\n")
     if mode is None:
-        return "    # no modes of operation (6060h): not a CiA-402 drive; add parameters: as needed\n"
+        return "    # no modes of operation (6060h): commission enables the drive without a move; add parameters: as needed\n"
     if modes and 1 not in modes:
         listed = ", ".join(f"{m} ({MODE_NAMES.get(m, '?')})" for m in modes)
         head = f"    # {_comment(device.type_name)} has no profile position mode; it supports {listed}.\n"

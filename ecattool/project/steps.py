@@ -9,6 +9,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ecattool.errors import EcatToolError, Location
+from ecattool.esi.model import Device, Direction
 from ecattool.findings import Finding, Severity
 from ecattool.project.loader import LoadedProject
 from ecattool.project.resolve import ResolvedDrive
@@ -70,11 +71,11 @@ def scaling_commands(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[Start
         rd.error("PRJ050", exc.message, exc.location if exc.location and exc.location.line else loc)
         return []
     rd.factor_group = group
-    from ecattool.scaling.compute import HDT_COUNTS_PER_REV
+    from ecattool.scaling.compute import fixed_counts_per_rev
     from ecattool.scaling.exact import Exact
 
-    family_key = scaling.resolve_family(family)
-    ipr = Exact.of(HDT_COUNTS_PER_REV) if family_key == "hdt" else spec.axis.counts_per_motor_rev
+    fixed = fixed_counts_per_rev(family)
+    ipr = Exact.of(fixed) if fixed is not None else spec.axis.counts_per_motor_rev
     rd.counts_per_unit = spec.axis.internal_per_unit(spec.axis.units[0], ipr).rational
     for note in group.findings:
         rd.findings.append(_relocate(note, loc))
@@ -156,7 +157,7 @@ def _modes_run(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[tuple[int, 
     writes = [c for c in rd.startup if (c.index, c.subindex) == (0x6060, 0) and len(c.data) == 1]
     out: list[tuple[int, Any]] = [(int.from_bytes(c.data, "little", signed=True), c.source or lp.drive_location(i))
                                   for c in writes[-1:]]
-    mode = move_mode(rd) if rd.drive.enable else None
+    mode = move_mode(rd) if rd.enables else None
     if mode is not None:
         out.append((MOVE_MODE_CODES[mode], lp.drive_location(i, "move")))
     here = lp.drive_location(i).file  # what the project sets first: a finding points where the user can change it
@@ -166,7 +167,7 @@ def _modes_run(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[tuple[int, 
 def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     """The commissioning move needs 6060h, 607Ah and 6064h, and a mode the drive has (a Commander SK has
     neither pp nor csp: it aborts 6060h = 8 with 0609 0030h)."""
-    mode = move_mode(rd) if rd.drive.enable else None
+    mode = move_mode(rd) if rd.enables else None
     if mode is None:
         return
     assert rd.device is not None
@@ -181,6 +182,8 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     if modes and code not in modes:
         rd.error("PRJ017", f"the {mode} move needs mode {code}, which {rd.device.type_name} does not support "
                            f"(supported: {', '.join(str(m) for m in modes)}); leave out move:", loc)
+        return
+    if not _move_fits(lp, i, rd, mode):
         return
     if mode != "pp" or rd.drive.sw_config is not None:  # a Technosoft setup image may hold them
         return
@@ -197,9 +200,126 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
             # where the vendor ESI documents the 0, point at its line: that default is what blocks the move
             esi_zero = e.default is not None and rd.drive.device.esi is not None and e.location is not None \
                 and bool(e.location.line)
-            rd.warning("PRJ019", f"the pp move runs at {name} {index:04X}h, which the project does not set and "
+            rd.error("PRJ019", f"the pp move runs at {name} {index:04X}h, which the project does not set and "
                                  f"{rd.device.type_name} leaves at 0 (or does not document): the drive would not "
                                  f"move; add a parameter {index:04X}:00", e.location if esi_zero else loc)
+
+
+def _move_fits(lp: LoadedProject, i: int, rd: ResolvedDrive, mode: str) -> bool:
+    """PRJ024: the move's target (the actual position, 0 after power-on, plus the distance) must be a value of
+    the target position 607Ah's data type and lie within the software position limits 607Dh where the device
+    sets them; commission would otherwise fail writing 607Ah (or the drive would stop at the limit)."""
+    from fractions import Fraction
+
+    from ecattool.errors import EncodeError
+
+    assert rd.device is not None and rd.drive.move is not None
+    loc = lp.drive_location(i, "move", "distance")
+    if loc.line is None:
+        loc = lp.drive_location(i, "move")
+    dist = Fraction(rd.drive.move.distance).limit_denominator(1)
+    target = int(dist)
+    entry = rd.device.dictionary.entry(0x607A, 0)
+    if entry is not None and entry.datatype is not None:
+        try:
+            entry.encode(target)
+        except EncodeError as exc:
+            rd.error("PRJ024", f"the {mode} move of {dist} user units goes to {target}, which the "
+                               f"target position 607Ah ({entry.type_name}) cannot hold: {exc.message}; "
+                               "move a shorter distance", loc)
+            return False
+    limits = [_effective(rd, 0x607D, sub)[0] for sub in (1, 2)]
+    low, high = limits
+    if low is not None and high is not None and low < high and not low <= target <= high:
+        rd.error("PRJ024", f"the {mode} move of {dist} user units goes to {target}, outside the "
+                           f"software position limits 607Dh [{low}, {high}] of {rd.device.type_name}; move a shorter "
+                           "distance or set 607Dh", loc)
+        return False
+    return True
+
+
+def check_kind(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """PRJ025: ``enable: true`` on a slave that is not a CiA-402 axis (no 6040h/6041h, no profile 402 or 6060h):
+    commission would run the CiA-402 enable on a terminal, a coupler or a gateway."""
+    assert rd.device is not None
+    if rd.drive.enable and rd.kind == "io":
+        rd.error("PRJ025", f"enable: true, but {rd.device.type_name} is not a CiA-402 axis (it has no controlword "
+                           "6040h and statusword 6041h of a drive profile 402): commission proves an I/O slave's "
+                           "states, mapping and process data; remove enable:", lp.drive_location(i, "enable"))
+    if rd.drive.move is not None and rd.kind == "io" and rd.drive.enable is None:
+        rd.error("PRJ018", f"move: on {rd.device.type_name}, which is not a CiA-402 axis; leave out move:",
+                 lp.drive_location(i, "move"))
+
+
+#: the CoE PDO mapping object ranges (ETG.1000.6 / CiA 301): RxPDOs 1600h–17FFh, TxPDOs 1A00h–1BFFh
+_COE_PDO_RANGES = {"rx": range(0x1600, 0x1800), "tx": range(0x1A00, 0x1C00)}
+
+
+def _maps_validly(device: Device, value: int, direction: Direction) -> bool:
+    """Whether a mapping entry value (index << 16 | sub << 8 | bits) is one the slave can map: a gap (index 0),
+    a dummy of a standard data type (index below 20h; CiA 301: RxPDOs only), or an object of its dictionary of
+    that size."""
+    index, sub, bits = value >> 16, (value >> 8) & 0xFF, value & 0xFF
+    if index == 0:
+        return True
+    if index < 0x20:
+        return direction is Direction.RX
+    entry = device.dictionary.entry(index, sub)
+    return entry is not None and entry.bit_size == bits
+
+
+def check_pdo_objects(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """What the slave will run with, as its own dictionary says it, against what lint checked (the PDO list):
+
+    * PRJ026: a SoE drive (mailbox without CoE) whose PDOs are not CoE mapping objects (the AX5000's
+      IDN-numbered MDT/AT): ecattool configures and commissions CoE slaves; such a device cannot be set up by it;
+    * PRJ027: where the project keeps the power-on mapping (no ``pdo:``), a mapping object of the device's
+      dictionary whose default entries lay out another image than the ESI's PDO list (the EM7004 ESI's
+      1601h–1609h are shifted by one against its RxPdo list): the slave runs with the dictionary's mapping, which
+      lint never checked (the simulator refuses SAFE-OP with AL 001Dh/001Eh); or the same image where an entry
+      of the dictionary's own mapping cannot be mapped (a SOES board's 1A00h mapping 0x00060120, a dummy in a
+      TxPDO). Reported at the dictionary object's line; ``pdo:`` programs the mapping the project means."""
+
+    device = rd.device
+    assert device is not None
+    loc = lp.drive_location(i, "device")
+    protocols = device.mailbox.protocols if device.mailbox is not None else []
+    soe = device.mailbox is not None and device.mailbox.coe is None and "SoE" in protocols
+    for d, key in ((Direction.RX, "rx"), (Direction.TX, "tx")):
+        foreign = [p for p in device.pdos(d) if p.index not in _COE_PDO_RANGES[key]]
+        if foreign and soe:  # without a mailbox the indices are only names: the master lays out the SMs
+            p = foreign[0]
+            rd.error("PRJ026", f"{device.type_name}'s {'Rx' if key == 'rx' else 'Tx'}PDO 0x{p.index:04X} ({p.name}) "
+                               "is not a CoE mapping object (16xxh/1Axxh): the device is configured over SoE (its "
+                               f"mailbox speaks {', '.join(protocols)}, not CoE); ecattool configures "
+                               "and commissions CoE slaves only", p.location if p.location and p.location.line else loc)
+            return
+    if rd.mapping is None or (rd.drive.pdo is not None and (rd.drive.pdo.rx is not None or rd.drive.pdo.tx is not None)):
+        return
+    for direction, mp in [(Direction.RX, p) for p in rd.mapping.rx] + [(Direction.TX, p) for p in rd.mapping.tx]:
+        obj = device.dictionary.get(mp.index)
+        if obj is None or obj.location is None or not obj.location.line:
+            continue  # synthesised from the PDO list: it agrees by construction
+        count = obj.entry(0)
+        if count is None or count.default is None:
+            continue
+        n = int.from_bytes(count.default, "little")
+        held = []
+        for sub in range(1, n + 1):
+            e = obj.entry(sub)
+            held.append(int.from_bytes(e.default, "little") if e is not None and e.default is not None else None)
+        listed = [e.mapping_value for e in mp.entries]
+        if None in held or held == listed:
+            continue
+        same_layout = [v & 0xFF for v in held if v is not None] == [v & 0xFF for v in listed]
+        if same_layout and all(_maps_validly(device, v, direction) for v in held if v is not None):
+            continue  # the same image of valid entries: a PDO list entry named otherwise is esi-pdo-object-missing's
+        rd.error("PRJ027", f"the dictionary's mapping object 0x{mp.index:04X} maps "
+                           f"{', '.join(f'0x{v:08X}' for v in held if v is not None) or 'nothing'}, the ESI's PDO list "
+                           f"{', '.join(f'0x{v:08X}' for v in listed) or 'nothing'}: {device.type_name} would run with "
+                           "the dictionary's mapping, which differs from the one checked; give the mapping in pdo: so "
+                           "that commission programs it", obj.location)
+        return
 
 
 def zero_factor_parts(read: Callable[[int, int], int | None]) -> list[tuple[int, int]]:
@@ -251,7 +371,7 @@ def check_factor_defaults(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         found[(index, sub)] = where
         return value
 
-    moves = move_mode(rd) is not None and rd.drive.enable
+    moves = move_mode(rd) is not None and rd.enables
     for index, sub in zero_factor_parts(read):
         entry = rd.device.dictionary.entry(index, sub)
         assert entry is not None

@@ -53,10 +53,11 @@ def chain(explanation: Explanation, values: Values, mechanics: dict[str, str] | 
     pf = pf if isinstance(pf, Fraction) else None
     cpr = _ratio(values, 0x608F)
     cpr_from = "608Fh"
-    if explanation.family == "hdt":
-        from ecattool.scaling.compute import HDT_COUNTS_PER_REV
+    from ecattool.scaling.compute import fixed_counts_per_rev
 
-        cpr, cpr_from = Fraction(HDT_COUNTS_PER_REV), "HDT: 65536 internal units per motor revolution, always"
+    fixed = fixed_counts_per_rev(explanation.family)
+    if fixed is not None:
+        cpr, cpr_from = Fraction(fixed), f"{explanation.family.upper()}: {fixed} internal units per motor revolution, always"
     gear, feed = _ratio(values, 0x6091), _ratio(values, 0x6092)
     links = [Link("Encoder", f"{_num(cpr)} counts / motor rev" if cpr else "counts per motor rev not known",
                   cpr_from if cpr else "608Fh absent (give --counts-per-rev)", m.get("feedback", ""),

@@ -25,7 +25,7 @@ _FAMILY_ALIASES = {
     "ct": "controltechniques", "control-techniques": "controltechniques", "sm-ethercat": "controltechniques",
     "unidrive": "controltechniques", "tomcat": "hdt", "dgfox": "hdt", "ntt": "hdt", "cia402": "generic",
 }
-HDT_COUNTS_PER_REV = 65536
+HDT_COUNTS_PER_REV = 65536  # HDT §4.05.3 (the family's data: ecattool.profiles.hdt.COUNTS_PER_REV)
 U32 = 0xFFFFFFFF
 TWO16 = 65536
 
@@ -36,6 +36,13 @@ def resolve_family(name: str, location: Location | None = None) -> str:
     if key not in FAMILIES:
         raise SelectionError(f"unknown drive family {name!r} (one of {', '.join(FAMILIES)})", location)
     return key
+
+
+def fixed_counts_per_rev(family: str) -> int | None:
+    """Internal position units per motor revolution where the family fixes them whatever the encoder (HDT:
+    65536, §4.05); None where the feedback's counts are the internal unit. The one place of that rule: the
+    factor group, ``scale explain``, the project's counts per unit and the scaling report all ask here."""
+    return HDT_COUNTS_PER_REV if resolve_family(family) == "hdt" else None
 
 
 def technosoft_factor_set(firmware: str | None) -> str:
@@ -190,7 +197,8 @@ def compute(axis: Axis, family: str = "technosoft-ipos", *, firmware: str | None
         od = _types(None, fam, "F515I")
     strat: Strategy = strategy or ("max-scale" if fam == "technosoft-ipos" else "best")
     b = _Builder(group, od, strat, axis.source)
-    ipr = Exact(Fraction(HDT_COUNTS_PER_REV)) if fam == "hdt" else axis.counts_per_motor_rev
+    fixed = fixed_counts_per_rev(fam)
+    ipr = Exact(Fraction(fixed)) if fixed is not None else axis.counts_per_motor_rev
     ctx = _Ctx(axis, ipr)
     _summary(group, axis, ctx, fam)
     if axis.transmission.kind in ("hollow_shaft", "linear_motor") and axis.gear.ratio != 1:

@@ -9,7 +9,7 @@ from typing import Any
 
 from ecattool.errors import InputError, Location
 from ecattool.findings import Finding, Severity
-from ecattool.scaling.compute import HDT_COUNTS_PER_REV, resolve_family, technosoft_factor_set
+from ecattool.scaling.compute import fixed_counts_per_rev, resolve_family, technosoft_factor_set
 from ecattool.scaling.units import decode_si_unit, describe_dimension
 
 Values = dict[tuple[int, int], int]
@@ -89,8 +89,9 @@ def explain(values: Values, family: str = "technosoft-ipos", *, slow_loop: Fract
     r = _Reader(values, location)
     T = Fraction(slow_loop)
     cpr: Fraction | None = Fraction(counts_per_rev) if counts_per_rev else None
-    if fam == "hdt":
-        cpr = Fraction(HDT_COUNTS_PER_REV)
+    fixed = fixed_counts_per_rev(fam)
+    if fixed is not None:
+        cpr = Fraction(fixed)
     elif r.has(0x608F):
         cpr = r.ratio(0x608F)
 

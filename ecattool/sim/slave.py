@@ -26,6 +26,7 @@ from ecattool.errors import StateChangeError, TargetError
 from ecattool.esi.model import Device
 from ecattool.od.model import EcState
 from ecattool.sim.drive import Drive
+from ecattool.sim.drive.esm import AL_INVALID_INPUT_CONFIG, AL_INVALID_OUTPUT_CONFIG
 from ecattool.sim.esc import Clock, Esc, EscApplication
 from ecattool.sim.esc import registers as R
 from ecattool.sim.esc.core import SM_DIR_READ, SM_DIR_WRITE, SM_MODE_BUFFERED, SM_MODE_MAILBOX
@@ -36,8 +37,9 @@ AL_INVALID_STATE_CHANGE = 0x0011
 AL_INVALID_MAILBOX_BOOT = 0x0015
 AL_INVALID_MAILBOX = 0x0016
 AL_INVALID_SM = 0x0017
-AL_INVALID_OUTPUTS = 0x001D
-AL_INVALID_INPUTS = 0x001E
+# one name per AL status code: the drive application's (sim.drive.esm)
+AL_INVALID_OUTPUTS = AL_INVALID_OUTPUT_CONFIG
+AL_INVALID_INPUTS = AL_INVALID_INPUT_CONFIG
 AL_SM_WATCHDOG = 0x001B
 
 _BY_CODE = {s.code: s for s in EcState}

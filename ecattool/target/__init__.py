@@ -4,13 +4,17 @@ from typing import Any
 
 from ecattool.target.base import SlaveTarget, Target
 
-__all__ = ["SlaveTarget", "Target", "SimTarget", "open_target"]
+__all__ = ["SlaveTarget", "Target", "SimTarget", "open_target", "slave_at"]
 
 
 def __getattr__(name: str) -> Any:
     # the simulator is imported only when asked for
-    if name in ("SimTarget", "open_target"):
+    if name == "SimTarget":
         from ecattool.target import sim
 
         return getattr(sim, name)
+    if name in ("open_target", "slave_at"):  # the one opener of target specs (ecattool.target.opener)
+        from ecattool.target import opener
+
+        return getattr(opener, name)
     raise AttributeError(name)

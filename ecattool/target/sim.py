@@ -39,14 +39,3 @@ class SimTarget:
     def close(self) -> None:
         self._drives = []
 
-
-def open_target(spec: str, devices: Iterable[Device] = ()) -> SimTarget:
-    """A target from a spec string. ``"sim"``: the embedded simulator with one drive per device.
-
-    A real master is :class:`ecattool.target.pysoem.PysoemTarget` (an optional extra); ``commission``, ``sw``
-    and ``scale explain`` open it from ``"pysoem:<interface>"``, this function opens only the simulator.
-    """
-    kind = spec.split(":", 1)[0].strip().lower()
-    if kind == "sim":
-        return SimTarget.from_devices(devices)
-    raise SelectionError(f"unknown target {spec!r}; available: sim")

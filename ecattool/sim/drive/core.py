@@ -273,7 +273,10 @@ class DriveCore:
 
     def _refuse(self, state: EcState, code: int, why: str) -> None:
         self._log("state_refused", previous=self.esm.value, requested=state.value, al_status=code, reason=why)
-        raise StateChangeError(state.value, self.esm.value, code)
+        from ecattool.abort import al_status_text
+
+        # the reason goes with the error, so that commission's text, JSON and HTML reports say why
+        raise StateChangeError(state.value, self.esm.value, code, f"{al_status_text(code)} ({why})")
 
     # ------------------------------------------------------------------------------------------
     # what the pieces offer each other (implemented by the piece named)

@@ -18,6 +18,11 @@ _OP, _SAFEOP = EcState.OP, EcState.SAFEOP
 class ProcessData(PdoConfig):
     """The process image: built from the assignment at PRE-OP -> SAFE-OP, exchanged each cycle."""
 
+    def _mapping_is_fixed(self, assigned: list[int]) -> bool:
+        """Whether the master cannot change what is assigned: no CoE mailbox, or only Fixed PDOs."""
+        mailbox = self.device.mailbox
+        return mailbox is None or mailbox.coe is None or all(p in self._fixed for p in assigned)
+
     def _check_sm(self, d: Direction) -> Layout:
         """The SAFE-OP check of one direction's assigned PDOs; returns the process image layout."""
         code = AL_INVALID_OUTPUT_CONFIG if d is RX else AL_INVALID_INPUT_CONFIG
@@ -51,7 +56,9 @@ class ProcessData(PdoConfig):
             if self.rules.max_pdo_entries is not None and len(entries) > self.rules.max_pdo_entries:
                 self._refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} has {len(entries)} entries")
             layout.bits += bits
-        if layout.bits % 8:
+        if layout.bits % 8 and not self._mapping_is_fixed(assigned):
+            # a slave whose mapping the master cannot change (fixed PDOs, no CoE: an EL1002's 2 bits) has its
+            # sync manager one byte long, the ESC pads the rest; a configurable one refuses the odd length
             self._refuse(EcState.SAFEOP, code, f"{layout.bits} bits of process data is not a whole number of bytes")
         sm = self.device.process_sm(d)
         if sm is not None and sm.max_size is not None and layout.size > sm.max_size:

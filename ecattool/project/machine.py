@@ -1,0 +1,196 @@
+"""The machine as a project sets it up: one :class:`Machine` of :class:`Slave` objects, built once.
+
+>>> from ecattool.project.machine import load_machine
+>>> m = load_machine("samples/hdt/project.yaml")                  # doctest: +SKIP
+>>> [(s.name, s.kind, s.device.type_name) for s in m.in_bus_order()]  # doctest: +SKIP
+
+``load_machine`` reads the project file and resolves every slave: the device as it runs (ESI default modules
+plugged in, communication objects completed: :func:`ecattool.project.cache.load_device_cached`), its family
+rules, the PDO mapping, the startup list (PDO programming, ESI init commands, scaling objects, parameters, in
+that order), DC, and for an axis the factor group and the ``.sw`` image; every check lint has adds its findings
+on the way. Every action consumes the result instead of resolving the project again: ``lint`` prints its
+findings, ``commission`` runs it, ``startup export`` writes it, ``sim serve`` puts its devices on a bus,
+``sw verify/download --project`` and ``scale explain --project`` take one slave of it, and the HTML report
+shows it. A command acts on a project with lint errors only when told to (:meth:`Machine.refuse_errors`,
+the ``--allow-errors`` option).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ecattool.errors import EcatToolError, InputError, Location
+from ecattool.esi.model import Device
+from ecattool.fileio import read_bytes
+from ecattool.findings import Finding, Severity
+from ecattool.project import familycycle
+from ecattool.project.loader import LoadedProject, parse_project
+from ecattool.project.resolve import Slave, SlaveKind, is_axis, resolve_device, resolve_parameters
+from ecattool.project.rules import disable
+from ecattool.startup.model import StartupList
+
+__all__ = ["ALLOW_ERRORS_HELP", "Machine", "Slave", "SlaveKind", "is_axis", "load_machine"]
+
+#: the help of the ``--allow-errors`` option every command that acts on a project has
+ALLOW_ERRORS_HELP = ("Act on the project even when lint reports errors (by default a project with lint errors is "
+                     "refused, naming the first error's file and line).")
+
+
+@dataclass(slots=True)
+class Machine:
+    """The slaves of one project file, resolved, and every finding lint reports about them."""
+
+    path: str
+    slaves: list[Slave] = field(default_factory=list)
+    #: project-level findings and every slave's, after ``disable_rules``, de-duplicated
+    findings: list[Finding] = field(default_factory=list)
+    loaded: LoadedProject | None = None
+
+    @property
+    def drives(self) -> list[Slave]:
+        """The slaves in file order (the project file calls them ``drives``)."""
+        return self.slaves
+
+    @property
+    def target(self) -> str:
+        """The project's default target spec (``sim`` where the project does not load)."""
+        return self.loaded.project.target if self.loaded is not None else "sim"
+
+    def in_bus_order(self) -> list[Slave]:
+        return sorted(self.slaves, key=lambda s: s.position)
+
+    def slave(self, name: str | None) -> Slave:
+        """The slave called ``name``; without a name the only slave (an InputError lists the names)."""
+        chosen = [s for s in self.slaves if s.name == name] if name is not None else self.slaves
+        if len(chosen) != 1:
+            names = ", ".join(s.name for s in self.slaves)
+            why = f"has no drive {name!r}" if name is not None else "has several drives"
+            raise InputError(f"the project {why}; choose one ({names})", Location(self.path))
+        return chosen[0]
+
+    def errors(self, slaves: Sequence[Slave] | None = None) -> list[Finding]:
+        """The error findings of the project (or only those of ``slaves``, with the project-level ones)."""
+        errs = [f for f in self.findings if f.severity is Severity.ERROR]
+        if slaves is None:
+            return errs
+
+        def key(f: Finding) -> tuple[str, str, str]:
+            return f.rule, f.message, str(f.location)
+
+        mine = {key(f) for s in slaves for f in s.findings}
+        anyone = {key(f) for s in self.slaves for f in s.findings}
+        return [f for f in errs if key(f) in mine or key(f) not in anyone]
+
+    def require_loaded(self) -> LoadedProject:
+        """The loaded project, or the InputError of why it does not load (file and line)."""
+        if self.loaded is None:
+            first = self.findings[0]
+            raise InputError(first.message, first.location or Location(self.path))
+        return self.loaded
+
+    def refuse_errors(self, what: str, *, allow_errors: bool = False, slaves: Sequence[Slave] | None = None) -> None:
+        """The one policy for acting on a project with lint errors: refuse (an InputError at the first error,
+        naming its rule and how many more there are) unless ``allow_errors``. A project that does not load,
+        or a slave whose device does not resolve, is refused even then: there is nothing to act on."""
+        self.require_loaded()
+        self._refuse_unresolved(what, slaves if slaves is not None else self.slaves)
+        errors = self.errors(slaves)
+        if allow_errors or not errors:
+            return
+        first = errors[0]
+        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        raise InputError(f"cannot {what}: the project has lint errors, first: {first.message} [{first.rule}]{more}; "
+                         f"run `ecattool lint {self.path}`, or --allow-errors to act anyway",
+                         first.location or Location(self.path))
+
+    @staticmethod
+    def _refuse_unresolved(what: str, slaves: Sequence[Slave]) -> None:
+        for s in slaves:
+            if s.device is None:
+                why = next((f for f in s.findings if f.severity is Severity.ERROR), None)
+                raise InputError(f"cannot {what}: drive {s.name!r}'s device did not resolve"
+                                 + (f": {why.message} [{why.rule}]" if why else " (see `ecattool lint`)"),
+                                 why.location if why else None)
+
+    def devices(self) -> list[tuple[str, Device]]:
+        """(name, device as it runs) of every slave in bus order (an InputError for one that did not resolve)."""
+        self._refuse_unresolved("put the project's devices on a bus", self.slaves)
+        return [(s.name, s.device) for s in self.in_bus_order() if s.device is not None]
+
+
+def build_slave(lp: LoadedProject, i: int) -> Slave:
+    """Resolve one slave: device, rules, startup list (PDO, ESI init commands, scaling, parameters), .sw image,
+    with the findings of every check."""
+    from ecattool.project import steps
+
+    drive = lp.project.drives[i]
+    s = Slave(i, drive)
+    resolve_device(lp, i, s)
+    if s.device is None:
+        return s
+    startup = StartupList(name=drive.name, vendor_id=s.device.vendor_id,
+                          product_code=s.device.product_code, revision=s.device.revision)
+    params = resolve_parameters(lp, i, s)
+    startup.extend(steps.pdo_commands(lp, i, s, params))
+    if drive.device.esi is not None:  # the ESI's init commands, as TwinCAT sends them: after the PDO assignment
+        from ecattool.project.initcmds import resolve_esi_init
+
+        startup.extend(resolve_esi_init(lp, i, s, params))
+    startup.extend(steps.scaling_commands(lp, i, s))
+    startup.extend(params)
+    s.startup = startup
+    steps.check_kind(lp, i, s)
+    steps.check_pdo_objects(lp, i, s)
+    steps.check_sw(lp, i, s)
+    steps.check_move(lp, i, s)
+    steps.check_factor_defaults(lp, i, s)
+    steps.check_interpolation_period(lp, i, s)
+    steps.check_dc(lp, i, s)
+    familycycle.check_dc_cycle(lp, i, s, bool(steps.dc_assign_activate(s)))
+    if s.device.source and not s.device.source.startswith("profile:"):
+        steps.check_esi(lp, i, s)
+    s.findings = disable(s.findings, drive.disable_rules, lp, ("drives", i, "disable_rules"))
+    return s
+
+
+def load_machine(path: str | Path) -> Machine:
+    """Build the machine of the project file at ``path``. Never raises for a bad project: a file that does not
+    load is a Machine without slaves whose findings say why (PRJ001, at the file and line)."""
+    p = Path(path)
+    machine = Machine(str(p))
+    try:
+        project, doc, schema_findings = parse_project(read_bytes(p, 16 * 1024 * 1024), str(p))
+    except EcatToolError as exc:
+        machine.findings.append(Finding("PRJ001", Severity.ERROR, exc.message, exc.location or Location(str(p))))
+        return machine
+    if project is None:
+        machine.findings.extend(schema_findings)
+        return machine
+    lp = LoadedProject(project, p, doc)
+    machine.loaded = lp
+    positions: dict[int, str] = {}
+    for i in range(len(project.drives)):
+        s = build_slave(lp, i)
+        machine.slaves.append(s)
+        if s.position in positions:
+            s.findings.append(Finding("PRJ020", Severity.ERROR,
+                                      f"drive {s.name!r} has bus position {s.position}, like {positions[s.position]!r}",
+                                      lp.drive_location(i, "position")))
+        positions.setdefault(s.position, s.name)
+        machine.findings.extend(s.findings)
+    machine.findings = disable(machine.findings, project.disable_rules, lp, ("disable_rules",))
+    off = {o.rule for o in project.disable_rules if o.reason.strip()}
+    for s in machine.slaves:  # a project-wide disable holds for each slave too (commission checks a slave's own)
+        s.findings = [f for f in s.findings if f.rule not in off]
+    # de-duplicate (ESI findings of a file shared by several drives)
+    seen = set()
+    unique = []
+    for f in machine.findings:
+        key = (f.rule, f.message, str(f.location))
+        if key not in seen:
+            seen.add(key)
+            unique.append(f)
+    machine.findings = unique
+    return machine
