@@ -75,4 +75,5 @@ def new(profile: str | None, product: str | None, esi_path: str | None, select: 
     device = resolve(profile, product, esi_path, select, base, policy)
     findings = esi_flaws(esi_path, select, base, policy) if esi_path is not None else []
     write_output(output, new_project(device, name=name, profile=profile, product=product, esi=esi_path,
-                                     select=select, policy=policy, findings=findings))
+                                     select=select, policy=policy, findings=findings),
+                 (str(base / esi_path),) if esi_path is not None else ())
