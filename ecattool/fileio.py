@@ -69,7 +69,7 @@ def read_bytes(path: str | Path, max_bytes: int | None = None) -> bytes:
         raise InputError("empty file name", Location("''"))
     try:
         with open(p, "rb") as fh:
-            return read_stream(fh, str(p), max_bytes)  # type: ignore[arg-type]
+            return read_stream(fh, str(p), max_bytes)
     except OSError as exc:
         raise InputError(f"cannot read file: {exc.strerror or exc}", Location(str(p))) from None
 
@@ -248,7 +248,7 @@ def _guard_signals() -> list[int]:
 
     if threading.current_thread() is not threading.main_thread():
         return []
-    installed = []
+    installed: list[int] = []
     for signum in (signal.SIGTERM, signal.SIGINT):
         try:
             previous = signal.getsignal(signum)

@@ -15,7 +15,7 @@ from ecattool.errors import InputError, Location
 
 Path_ = tuple[str | int, ...]
 
-_MAX_YAML_BYTES = 16 * 1024 * 1024
+MAX_YAML_BYTES = 16 * 1024 * 1024
 
 #: How many values aliases (``*name``) may add beyond the nodes written in the file: a document of a few hundred
 #: bytes whose anchors refer to anchors ("billion laughs") would otherwise expand exponentially. Real project files
@@ -51,8 +51,8 @@ class LocatedYaml:
 
 
 def load_yaml(text: str | bytes, source: str) -> LocatedYaml:
-    if len(text) > _MAX_YAML_BYTES:
-        raise InputError(f"YAML file is larger than {_MAX_YAML_BYTES} bytes", Location(source))
+    if len(text) > MAX_YAML_BYTES:
+        raise InputError(f"YAML file is larger than {MAX_YAML_BYTES} bytes", Location(source))
     try:
         loader = _Loader(text)
     except yaml.YAMLError as exc:  # the reader checks characters and encoding up front

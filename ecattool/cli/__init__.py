@@ -97,7 +97,7 @@ def main(argv: list[str] | None = None) -> Any:
     except EcatToolError as exc:
         if debug:
             raise
-        click.echo(f"ecattool: error: {exc}", err=True)
+        click.echo(f"ecattool: error: {' '.join(str(exc).split())}", err=True)  # one line, whatever a message holds
         sys.exit(1)
     except BrokenPipeError:
         sys.exit(0)

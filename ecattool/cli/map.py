@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -76,10 +75,10 @@ def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping
     if mapping_file:
         if rx or tx:
             raise click.UsageError("give the mapping either with --rx/--tx or with --mapping, not both")
-        from ecattool.fileio import read_bytes
+        from ecattool.fileio import read_input
         from ecattool.yamlloc import load_yaml
 
-        raw = sys.stdin.buffer.read() if mapping_file == "-" else read_bytes(mapping_file)
+        raw = read_input(mapping_file)
         source = "<stdin>" if mapping_file == "-" else mapping_file
         doc = load_yaml(raw, source)
         data = doc.data

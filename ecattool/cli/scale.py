@@ -84,7 +84,7 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
     else:
         from dataclasses import replace
 
-        from ecattool.scaling.model import feedback_from, gear_from, transmission_from
+        from ecattool.scaling.model import feedback_from, gear_from, slow_loop_from, transmission_from
         from ecattool.scaling.units import time_seconds
 
         ax = base.axis
@@ -100,7 +100,7 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
             if val:
                 changes[key] = val
         if slow_loop:
-            changes["slow_loop"] = time_seconds(slow_loop)
+            changes["slow_loop"] = slow_loop_from(slow_loop)
         if reverse is not None:
             changes["reverse"] = reverse
         parsed = replace(base, axis=replace(ax, **changes))

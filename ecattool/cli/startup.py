@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from typing import Any
 
 import click
@@ -33,11 +32,11 @@ def startup() -> None:
 
 def _read_with_format(path: str, fmt: str | None) -> tuple[list[Any], str]:
     """Read a startup configuration from a file, or from stdin for ``-``; also say which format it was."""
-    from ecattool.fileio import read_bytes
+    from ecattool.fileio import read_input
     from ecattool.startup import detect_format, import_bytes
 
     source = "<stdin>" if path == "-" else path
-    data = sys.stdin.buffer.read() if path == "-" else read_bytes(path)
+    data = read_input(path)
     name = fmt or detect_format(data, source)
     return import_bytes(data, source, name), name
 

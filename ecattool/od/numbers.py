@@ -11,8 +11,8 @@ _ADDR = re.compile(r"^\s*(?:0x|#x)?([0-9A-Fa-f]{1,4})(?:h)?\s*[:.]\s*(?:0x|#x)?(
 
 def parse_int(text: str | int, location: Location | None = None, what: str = "number") -> int:
     """``0x1C12``, ``#x1C12``, ``1C12h``, ``-5``, ``7186`` → int. Raises :class:`InputError`."""
-    if isinstance(text, bool):
-        return int(text)
+    if isinstance(text, bool):  # YAML true/false: a boolean is never a number
+        raise InputError(f"{what} must be a number, not {str(text).lower()}", location)
     if isinstance(text, int):
         return text
     s = str(text).strip().replace("_", "")

@@ -42,10 +42,10 @@ def load_spec(path: str | Path, text: str | bytes | None = None) -> Spec:
 
     src = str(path)
     if text is None:
-        try:
-            # bytes from stdin too: load_yaml decodes, so bytes that are not UTF-8 are an InputError, not a crash
-            text = Path(path).read_bytes() if src != "-" else __import__("sys").stdin.buffer.read()
-        except OSError as exc:
-            raise InputError(f"cannot read spec: {exc.strerror}", Location(src)) from None
+        from ecattool.fileio import read_input
+        from ecattool.yamlloc import MAX_YAML_BYTES
+
+        # bytes from stdin too: load_yaml decodes, so bytes that are not UTF-8 are an InputError, not a crash
+        text = read_input(src, MAX_YAML_BYTES)
     doc = load_yaml(text, src)
     return spec_from_dict(doc.data, doc.locate, Location(src, 1, 1))
