@@ -79,7 +79,7 @@ def _write(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, 
 
 
 def _sync0_option(f: Any) -> Any:
-    return click.option("--sync0-cycle", type=click.IntRange(min=1), metavar="NS",
+    return click.option("--sync0-cycle", type=click.IntRange(min=1, max=0xFFFFFFFF), metavar="NS",
                         help="SYNC0 cycle in ns for slaves that activate DC without giving a cycle (ros2 files); "
                              "an ENI needs it.")(f)
 

@@ -107,9 +107,9 @@ def parse_steps(data: Any, locations: list[Location], source: str = "<script>") 
     return data, locations
 
 
-#: Most process-data cycles one ``cycles:`` step may run: 10^6 cycles are 1000 s of motion at a 1 ms cycle (minutes
+#: Most process-data cycles one ``cycles:`` step may run: 10^5 cycles are 100 s of motion at a 1 ms cycle (seconds
 #: of simulation); a count from a typo (2^40) is refused where the script is read instead of running for days.
-MAX_CYCLES = 1_000_000
+MAX_CYCLES = 100_000
 
 #: (key, what, lowest, highest) of the counts and codes a step gives, checked when the script is read
 _BOUNDS = (("cycles", "cycle count", 0, MAX_CYCLES), ("password", "FoE password", 0, 0xFFFFFFFF),
