@@ -138,6 +138,16 @@ def _is_stream_path(path: str | Path) -> bool:
 def _stream_write(target: str, payload: bytes) -> None:
     """Write through a device, FIFO, socket or process stream without replacing it."""
     try:
+        own = _own_descriptor(target)
+        if own is not None:  # /dev/stdout, /dev/fd/N: the descriptor itself, at its offset (shell '>' and '>>')
+            for stream in (sys.stdout, sys.stderr):
+                try:
+                    if stream is not None and stream.fileno() == own:
+                        stream.flush()
+                except (OSError, ValueError, AttributeError):
+                    pass
+            _write_all(own, payload)
+            return
         st = os.stat(target)
         if stat.S_ISSOCK(st.st_mode):
             import socket
@@ -146,33 +156,39 @@ def _stream_write(target: str, payload: bytes) -> None:
                 sk.connect(target)
                 sk.sendall(payload)
             return
-        flags = os.O_WRONLY | getattr(os, "O_BINARY", 0)
-        if stat.S_ISREG(st.st_mode):
-            flags |= os.O_TRUNC if not _appending(target) else os.O_APPEND
+        # another process's descriptor that ends in a regular file: appended to, never truncated
+        flags = os.O_WRONLY | getattr(os, "O_BINARY", 0) | (os.O_APPEND if stat.S_ISREG(st.st_mode) else 0)
         fd = os.open(target, flags)
         try:
-            view = memoryview(payload)
-            while view:
-                n = os.write(fd, view)
-                view = view[n:]
+            _write_all(fd, payload)
         finally:
             os.close(fd)
     except OSError as exc:
         raise InputError(f"cannot write file: {exc.strerror or exc}", Location(target)) from None
 
 
-def _appending(target: str) -> bool:
-    """Whether ``/dev/stdout`` (or another process stream path) is a descriptor opened for appending (``>>``)."""
-    m = re.match(r"^/(?:dev/fd|proc/(?:self|\d+)/fd)/(\d+)$", target)
-    fdnum = int(m.group(1)) if m else {"/dev/stdout": 1, "/dev/stderr": 2}.get(target)
-    if fdnum is None:
-        return False
-    try:
-        import fcntl
+def _write_all(fd: int, payload: bytes) -> None:
+    view = memoryview(payload)
+    while view:
+        n = os.write(fd, view)
+        view = view[n:]
 
-        return bool(fcntl.fcntl(fdnum, fcntl.F_GETFL) & os.O_APPEND)
-    except (OSError, ImportError):
-        return False
+
+def _own_descriptor(target: str) -> int | None:
+    """The descriptor number when ``target`` names one of this process's own (``/dev/stdout``, ``/dev/fd/3``,
+    ``/proc/self/fd/1``), and it is open."""
+    path = os.path.normpath(target)
+    m = re.match(r"^/(?:dev/fd|proc/(?:self|thread-self|(\d+))/fd)/(\d+)$", path)
+    if m and m.group(1) is not None and int(m.group(1)) != os.getpid():
+        return None
+    number = int(m.group(2)) if m else {"/dev/stdout": 1, "/dev/stderr": 2}.get(path)
+    if number is None:
+        return None
+    try:
+        os.fstat(number)
+    except OSError:
+        return None
+    return number
 
 
 def clean_stale_temporaries(folder: str | Path) -> list[Path]:
@@ -229,11 +245,9 @@ def _on_signal(signum: int, frame: Any) -> None:
         _LIVE.discard(tmp)
     previous = _PREVIOUS.pop(signum, signal.SIG_DFL)
     signal.signal(signum, previous)
-    if callable(previous):
+    if callable(previous):  # Python's own SIGINT handler raises KeyboardInterrupt, as without this one
         previous(signum, frame)
-    elif signum == signal.SIGINT and previous == signal.default_int_handler:  # pragma: no cover
-        raise KeyboardInterrupt
-    else:
+    else:  # the default action (SIGTERM: end the process), now that the temporary file is gone
         os.kill(os.getpid(), signum)
 
 
