@@ -85,7 +85,6 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
         from dataclasses import replace
 
         from ecattool.scaling.model import feedback_from, gear_from, slow_loop_from, transmission_from
-        from ecattool.scaling.units import time_seconds
 
         ax = base.axis
         changes: dict[str, Any] = {}

@@ -14,10 +14,8 @@ SCHEMAS = {"EtherCATInfo": "EtherCATInfo.xsd", "EtherCATModule": "EtherCATModule
 def _schema(path: Path):  # type: ignore[no-untyped-def]
     from lxml import etree
 
-    from ecattool.xmlsafe import check_xml_bytes
-
     from ecattool.fileio import read_bytes
-    from ecattool.xmlsafe import MAX_XML_BYTES
+    from ecattool.xmlsafe import MAX_XML_BYTES, check_xml_bytes
 
     data = read_bytes(path, MAX_XML_BYTES)
     check_xml_bytes(data, str(path))

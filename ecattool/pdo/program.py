@@ -34,8 +34,8 @@ def _le(value: int, size: int, what: str, location: Location | None = None) -> b
     try:
         return value.to_bytes(size, "little")
     except OverflowError:
-        raise InputError(f"{what} {value:#x} does not fit {size} byte(s) (0..{(1 << 8 * size) - 1:#x})"
-                         if value >= 0 else f"{what} {value} is negative", location) from None
+        raise InputError(f"{what}: {value} does not fit {size} byte(s) (0..{(1 << 8 * size) - 1})"
+                         if value >= 0 else f"{what}: {value} is negative", location) from None
 
 
 def _u8(n: int, location: Location | None = None) -> bytes:
