@@ -20,7 +20,7 @@ MAX_YAML_BYTES = 16 * 1024 * 1024
 #: How many values aliases (``*name``) may add beyond the nodes written in the file: a document of a few hundred
 #: bytes whose anchors refer to anchors ("billion laughs") would otherwise expand exponentially. Real project files
 #: repeat a block with an alias now and then; this is far more than they need and far less than a bomb makes.
-MAX_ALIAS_VALUES = 100_000
+MAX_ALIAS_VALUES = 10_000
 
 #: libyaml's parser where PyYAML has it (10x faster on large projects; same nodes, marks and errors)
 _Loader: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
