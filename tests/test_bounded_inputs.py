@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 import threading
@@ -177,6 +178,32 @@ def test_every_reader_stops_on_endless_input_under_512_mib(tmp_path: Path, kind:
     assert len(results) == len(cases)
     for case, name, result in zip(cases, named, results):
         _check(list(case["argv"]), name, result)  # type: ignore[call-overload]
+
+
+#: counts a small file gives that would mean unbounded work: (command, file name, content)
+HUGE_COUNTS: list[tuple[list[str], str, str]] = [
+    (["sim", "run", "technosoft-ipos", "{f}"], "cycles.yaml", "- state: PREOP\n- cycles: 1099511627776\n"),
+    (["scale", "compute", "{f}"], "spec.yaml",
+     "feedback: {lines: 500}\ntransmission: {type: ballscrew, pitch: 1e99999999 mm}\n"),
+    (["sw", "build", "{f}", "-o", "{o}"], "build.yaml", "blocks:\n  - start: 0xFFFFFFFF\n    words: [1]\n"),
+    (["map", "check", "--profile", "technosoft-ipos", "--mapping", "{f}"], "mapping.yaml",
+     "rx:\n  - index: 0x1600\n    entries: ['0x607A:00/" + "9" * 5000 + "']\n"),
+    (["lint", "{f}"], "project.yaml", "ecattool: 1\nname: m\ndrives:\n  - name: a\n    device: {profile: hdt}\n"
+                                      "    scaling: {feedback: {counts_per_rev: 1e99999999}}\n"),
+]
+
+
+def test_huge_counts_end_with_a_located_error_under_512_mib(tmp_path: Path) -> None:
+    """cycles: 2^40 and its kind are refused where they are read, not run (the child's timeout is a hang guard)."""
+    cases: list[dict[str, object]] = []
+    for n, (argv, name, text) in enumerate(HUGE_COUNTS):
+        f = tmp_path / name
+        f.write_text(text)
+        cases.append({"argv": _fill(argv, str(f), tmp_path, n), "stdin": None})
+    results = _run_child(cases, tmp_path)
+    for (argv, name, _), case, result in zip(HUGE_COUNTS, cases, results):
+        _check(list(case["argv"]), name, result)  # type: ignore[call-overload]
+        assert re.search(rf"{re.escape(name)}:\d+:\d+: ", str(result["stdout"]) + str(result["stderr"])), result
 
 
 def test_alias_bomb_error_is_located() -> None:
