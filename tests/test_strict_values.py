@@ -99,6 +99,32 @@ def test_a_boolean_is_never_a_number_in_a_project(capsys: pytest.CaptureFixture[
     assert code == 1 and words in out and f"project.yaml:{line}:" in out, out + err
 
 
+@pytest.mark.parametrize(("old", "new", "words"), [
+    ("move: {distance: 1000, mode: pp}", "move: {distance: .inf, mode: pp}", "finite number"),
+    ("move: {distance: 1000, mode: pp}", "move: {distance: 1e999, mode: pp}", "finite number"),
+    ("move: {distance: 1000, mode: pp}", "move: {distance: true, mode: pp}", "true is a boolean"),
+    ("identity: {revision: exact}", "identity: {revision: exact}\n    position: true", "true is a boolean"),
+    ("identity: {revision: exact}", "identity: {revision: exact}\n    dc: {opmode: DC, cycle_ns: 18446744073709551616}",
+     "less than or equal to 4294967295"),
+    ("identity: {revision: exact}", "identity: {revision: exact}\n    dc: {assign_activate: 0x1FFFFFFFF, cycle_ns: 1000000}",
+     "does not fit 16 bits"),
+])
+def test_project_numbers_are_finite_typed_and_bounded(capsys: pytest.CaptureFixture[str], tmp_path: Path, old: str,
+                                                      new: str, words: str) -> None:
+    """The move distance, bus position and DC values: formerly an OverflowError in commission or startup export."""
+    for f in (TS_PROJECT.parent).iterdir():
+        (tmp_path / f.name).write_bytes(f.read_bytes())
+    project = tmp_path / "project.yaml"
+    text = project.read_text()
+    assert old in text
+    project.write_text(text.replace(old, new))
+    for argv in (["lint", str(project)], ["commission", str(project)],
+                 ["startup", "export", "--project", str(project), "--format", "eni"]):
+        code, out, err = run(capsys, *argv)
+        assert code == 1 and "Traceback" not in out + err and words in out + err, (argv, out, err)
+        assert re.search(r"project\.yaml:\d+:\d+: ", out + err), (argv, out, err)
+
+
 def test_parse_int_refuses_booleans() -> None:
     from ecattool.errors import InputError
     from ecattool.od.numbers import parse_int
