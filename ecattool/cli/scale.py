@@ -324,7 +324,7 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     from ecattool.errors import InputError
     from ecattool.od.numbers import parse_address, parse_int
     from ecattool.scaling import explain
-    from ecattool.scaling.units import time_seconds
+    from ecattool.scaling.model import slow_loop_from
 
     _html_prerequisites(html, as_json)
 
@@ -341,7 +341,7 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     if not values:
         raise InputError("give object values (6093:01=… 6093:02=…) or --from FILE")
     cpr = Fraction(parse_int(counts_per_rev)) if counts_per_rev else None
-    e = explain(values, family, slow_loop=time_seconds(slow_loop), counts_per_rev=cpr, firmware=firmware)
+    e = explain(values, family, slow_loop=slow_loop_from(slow_loop), counts_per_rev=cpr, firmware=firmware)
     if html:
         from ecattool.report import scaling_html
 

@@ -13,12 +13,12 @@ A linear motor is modelled as a "motor revolution" of one pole pitch.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any
 
 from ecattool.errors import InputError, Location
+from ecattool.od.numbers import check_exponent, parse_fraction
 from ecattool.scaling.exact import Exact
 from ecattool.scaling.units import Unit, parse_unit, quantity, time_seconds
 
@@ -36,20 +36,6 @@ MIN_LENGTH, MAX_LENGTH = Fraction(1, 10**12), Fraction(1000)
 MIN_NUMBER, MAX_NUMBER = Fraction(1, 10**9), Fraction(10**12)
 #: the drive's slow-loop (position loop) period, seconds: 1 µs .. 10 s
 MIN_SLOW_LOOP, MAX_SLOW_LOOP = Fraction(1, 10**6), Fraction(10)
-#: the largest decimal exponent a number may be written with (1e999 is a typo, and 1e99999999 would take
-#: minutes to make exact)
-MAX_EXPONENT = 30
-
-_EXPONENT = re.compile(r"[eE]\s*([-+]?\d+)")
-
-
-def _check_exponent(value: Any, what: str, location: Location | None) -> None:
-    if isinstance(value, str):
-        for m in _EXPONENT.finditer(value):
-            if abs(int(m.group(1)[:6])) > MAX_EXPONENT:
-                raise InputError(f"{what} {value!r} is out of range (exponent beyond ±{MAX_EXPONENT})", location)
-
-
 def _bounded(f: Fraction, shown: Any, what: str, location: Location | None, lo: Fraction, hi: Fraction,
              unit: str = "") -> None:
     if f <= 0:
@@ -65,13 +51,7 @@ def _plain(f: Fraction) -> str:
 
 def _frac(value: Any, what: str, location: Location | None, positive: bool = True,
           lo: Fraction = MIN_NUMBER, hi: Fraction = MAX_NUMBER) -> Fraction:
-    if isinstance(value, bool):  # YAML true/false: a boolean is never a number
-        raise InputError(f"{what} must be a number, not {str(value).lower()}", location)
-    _check_exponent(value, what, location)
-    try:
-        f = Fraction(str(value).strip()) if not isinstance(value, (int, Fraction)) else Fraction(value)
-    except (ValueError, ZeroDivisionError, TypeError, OverflowError):
-        raise InputError(f"{what} {value!r} is not a number", location) from None
+    f = parse_fraction(value, location, what)  # a boolean is never a number; 1e999 is refused before it is exact
     if positive:
         _bounded(f, value, what, location, lo, hi)
     return f
@@ -81,7 +61,7 @@ def _length(value: Any, what: str, location: Location | None) -> Exact:
     """A length from a spec or an option, within :data:`MIN_LENGTH` .. :data:`MAX_LENGTH`."""
     if isinstance(value, bool):
         raise InputError(f"{what} must be a length, not {str(value).lower()}", location)
-    _check_exponent(value, what, location)
+    check_exponent(value, location, what)
     q = quantity(value, ("length",), location)[0]
     _bounded(q.coef, value, what, location, MIN_LENGTH, MAX_LENGTH, " m")
     return q
@@ -437,7 +417,7 @@ def slow_loop_from(value: Any, location: Location | None = None) -> Fraction:
     """The slow-loop period (``1ms``, ``250 us``), within :data:`MIN_SLOW_LOOP` .. :data:`MAX_SLOW_LOOP`."""
     if isinstance(value, bool):
         raise InputError(f"slow_loop must be a time, not {str(value).lower()}", location)
-    _check_exponent(value, "slow_loop", location)
+    check_exponent(value, location, "slow_loop")
     t = time_seconds(value, location)
     _bounded(t, value, "slow_loop", location, MIN_SLOW_LOOP, MAX_SLOW_LOOP, " s")
     return t
