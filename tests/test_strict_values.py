@@ -169,3 +169,19 @@ def test_scaling_exact_reports_huge_ratios_without_overflow() -> None:
 
     with pytest.raises(EcatToolError, match=r"~1e400 is out of reach"):
         approximate(Fraction(10) ** 400)
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("family: technosoft-ipos\nfirmware: F515I\nfeedback: {lines: 500}\nunits: {position: rev, time: e99999999}\n",
+     "units time must be a time unit"),
+    ("feedback: {lines: 500}\nvl_setpoint: 1e99999999\n", "exponent beyond"),
+    ("feedback: {lines: 500}\nslow_loop: 1e99999999 ms\n", "exponent beyond"),
+])
+def test_exponents_are_refused_before_they_are_made_exact(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                                          text: str, words: str) -> None:
+    """Fraction('1e99999999') computes a 100-million-digit integer: such a value is refused where it is read."""
+    spec = tmp_path / "e.yaml"
+    spec.write_text(text)
+    code, _, err = run(capsys, "scale", "compute", str(spec))
+    line = _one_error(err)
+    assert code == 1 and words in line and re.search(r"e\.yaml:\d+:\d+: ", line), line

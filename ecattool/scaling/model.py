@@ -399,7 +399,7 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
         velocity=None if units.get("velocity") is None else str(units["velocity"]),
         acceleration=None if units.get("acceleration") is None else str(units["acceleration"]),
         jerk=None if units.get("jerk") is None else str(units["jerk"]),
-        time=str(units.get("time", "ms")),
+        time=_time_unit(units.get("time", "ms"), _loc(locate, "units", "time") or source),
         slow_loop=slow_loop_from(slow, _loc(locate, "slow_loop")),
         reverse=polarity != "normal" or bool(data.get("reverse", False)),
         name=str(data.get("name", "")),
@@ -411,6 +411,15 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
         except InputError as exc:
             raise InputError(exc.message, _loc(locate, "units", key) or source) from None
     return axis
+
+
+def _time_unit(value: Any, location: Location | None) -> str:
+    """The time unit of the obsolete 2071h factor: a unit name (ms, s, us, min), checked where it is read."""
+    text = str(value).strip()
+    if isinstance(value, bool) or not text.isalpha():
+        raise InputError(f"units time must be a time unit (s, ms, us, min), got {str(value)[:40]!r}", location)
+    time_seconds("1" + text, location)  # an unknown name is refused here, not when the factor is computed
+    return text
 
 
 def slow_loop_from(value: Any, location: Location | None = None) -> Fraction:
