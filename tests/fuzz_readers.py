@@ -50,6 +50,7 @@ ESI_SEEDS = ("samples/esi/etg2001_cia402.xml", "corpus:esi/smc_EX260-SECx_V11.xm
 ENTRIES: tuple[Entry, ...] = (
     Entry("esi devices", ("esi", "devices", "{f}"), ESI_SEEDS, ".xml"),
     Entry("sii build (ESI)", ("sii", "build", "{f}", "--device", "0", "-o", "{o}", "--force"), ESI_SEEDS, ".xml"),
+    Entry("sim run (ESI)", ("sim", "run", "{f}", "{script}", "--device", "0"), ESI_SEEDS[:3], ".xml"),
     Entry("esi show (EDS)", ("esi", "show", "{f}", "--pdos"), ("corpus:eds/technosoft_iPOS.D.v1.04.eds",), ".eds"),
     Entry("sii info", ("sii", "info", "{f}"),
           ("corpus:sii/ni9144.bin", "corpus:sii/soes_linux_lan9252demo.bin", "samples/sii/custom_slave.bin"), ".bin"),
@@ -79,7 +80,7 @@ ENTRIES: tuple[Entry, ...] = (
 
 #: Numbers a mutation puts where a number was: zero, negative, the edges of the CoE integer types, absurd ones
 NUMBERS = (b"0", b"-1", b"-5", b"1", b"255", b"256", b"65535", b"65536", b"4294967295", b"4294967296",
-           b"-2147483649", b"18446744073709551616", b"99999999999999999999999999999999", b"1e999", b"1.0e999",
+           b"-2147483649", b"34359738360", b"18446744073709551616", b"99999999999999999999999999999999", b"1e999", b"1.0e999",
            b"-1e999", b"1e-999", b"0x", b"0xFFFFFFFFFFFFFFFFF", b"#x1FFFF", b"0.0", b"-0", b".inf", b".nan", b"1/0",
            b"true", b"9" * 5000)
 #: Tokens readers meet rarely
@@ -137,6 +138,7 @@ def workdir(base: Path) -> Path:
     w = base / "fuzz"
     if not w.exists():
         shutil.copytree(ROOT / "samples", w / "samples")
+        (w / "steps.yaml").write_text("- state: PREOP\n- read: '1018:01'\n- read: '1008:00'\n- state: SAFEOP\n")
     return w
 
 
@@ -177,7 +179,7 @@ def invoke(argv: list[str]) -> tuple[int, str, str, BaseException | None]:
 def check(entry: Entry, path: Path, work: Path) -> None:
     """Run ``entry`` on the file at ``path``; raise AssertionError when the outcome breaks the contract."""
     sw = CORPUS / "sw" / "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw"
-    argv = [a.format(f=path, o=work / "fuzz-output", sw=sw) for a in entry.argv]
+    argv = [a.format(f=path, o=work / "fuzz-output", sw=sw, script=work / "steps.yaml") for a in entry.argv]
     code, out, err, escaped = invoke(argv)
     where = f"{' '.join(argv)}"
     if escaped is not None:

@@ -201,9 +201,27 @@ def test_huge_counts_end_with_a_located_error_under_512_mib(tmp_path: Path) -> N
         f.write_text(text)
         cases.append({"argv": _fill(argv, str(f), tmp_path, n), "stdin": None})
     results = _run_child(cases, tmp_path)
+    assert len(results) == len(cases)
     for (argv, name, _), case, result in zip(HUGE_COUNTS, cases, results):
         _check(list(case["argv"]), name, result)  # type: ignore[call-overload]
         assert re.search(rf"{re.escape(name)}:\d+:\d+: ", str(result["stdout"]) + str(result["stderr"])), result
+
+
+def test_an_esi_object_of_gigabytes_is_skipped_not_allocated(tmp_path: Path) -> None:
+    """BitSize 34359738360 (4 GiB) on one object: the dictionary reader skips it with a located finding, so the
+    simulator never allocates it (it did: 5.8 GB before the limit)."""
+    text = (ROOT / "samples" / "esi" / "etg2001_cia402.xml").read_text()
+    start = text.index("<Index>#x1008</Index>")
+    head, tail = text[:start], text[start:]
+    esi = tmp_path / "huge.xml"
+    esi.write_text(head + tail.replace("<BitSize>48</BitSize>", "<BitSize>34359738360</BitSize>", 1))
+    script = tmp_path / "s.yaml"
+    script.write_text("- state: PREOP\n- read: '1018:01'\n")
+    results = _run_child([{"argv": ["sim", "run", str(esi), str(script)], "stdin": None},
+                          {"argv": ["esi", "validate", str(esi)], "stdin": None}], tmp_path)
+    assert results[0]["exception"] is None and results[0]["code"] == 0, results[0]
+    assert results[1]["exception"] is None and re.search(r"huge\.xml:\d+: warning: object skipped: 0x1008:00 has a "
+                                                         r"BitSize of 34359738360", str(results[1]["stdout"])), results[1]
 
 
 def test_alias_bomb_error_is_located() -> None:

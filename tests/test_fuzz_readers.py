@@ -54,8 +54,8 @@ def test_the_seeds_themselves_pass(work: Path) -> None:
         for seed in entry.seeds:
             path = place(work, entry, seed, seed_bytes(seed))
             sw = Path(os.environ.get("ECATTOOL_CORPUS", Path(__file__).resolve().parents[2] / "shared" / "corpus"))
-            argv = [a.format(f=path, o=work / "fuzz-output", sw=sw / "sw" / "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw")
-                    for a in entry.argv]
+            argv = [a.format(f=path, o=work / "fuzz-output", sw=sw / "sw" / "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw",
+                             script=work / "steps.yaml") for a in entry.argv]
             code, out, err, escaped = invoke(argv)
             assert escaped is None and (code == 0 or entry.reporter and code in (0, 1)), f"{argv}: {code} {err}{out[-500:]}"
 
