@@ -43,7 +43,10 @@ class Entry:
     reporter: bool = False  # reports a bad input as a finding (lint, sii check)
 
 
-TEXT_SEEDS = {"steps": STEPS, "mapping": MAPPING}
+FACTORS_YAML = "6093:01: 4294967295\n6093:02: 13493038\n6094:01: 0x1000\n6094:02: 1\n"
+FACTORS_JSON = ('{"factor_set": "cia402-2", "objects": [{"index": "0x6093", "subindex": 1, "value": 1200}, '
+                '{"index": "0x6093", "subindex": 2, "value": 1}, {"index": "0x6094", "subindex": 1, "value": 5}]}\n')
+TEXT_SEEDS = {"steps": STEPS, "mapping": MAPPING, "factors-yaml": FACTORS_YAML, "factors-json": FACTORS_JSON}
 
 ESI_SEEDS = ("samples/esi/etg2001_cia402.xml", "corpus:esi/smc_EX260-SECx_V11.xml",
              "corpus:esi/synapticon_Somanet_CiA402-single.xml", "samples/sii/custom_slave.xml")
@@ -74,6 +77,8 @@ ENTRIES: tuple[Entry, ...] = (
           ".yaml"),
     Entry("sw build (spec)", ("sw", "build", "{f}", "-o", "{o}", "--force"), ("samples/sw/build.yaml",), ".yaml"),
     Entry("sim run (script)", ("sim", "run", "technosoft-ipos", "{f}"), ("text:steps",), ".yaml"),
+    Entry("scale explain --from", ("scale", "explain", "--from", "{f}"), ("text:factors-yaml", "text:factors-json"),
+          ".yaml"),
     Entry("map check (mapping)", ("map", "check", "--profile", "technosoft-ipos", "--mapping", "{f}"),
           ("text:mapping",), ".yaml", reporter=True),  # a mapping that breaks a rule: findings on stdout
 )

@@ -185,3 +185,18 @@ def test_exponents_are_refused_before_they_are_made_exact(capsys: pytest.Capture
     code, _, err = run(capsys, "scale", "compute", str(spec))
     line = _one_error(err)
     assert code == 1 and words in line and re.search(r"e\.yaml:\d+:\d+: ", line), line
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("[" * 100000 + "]" * 100000, "deep.json"),
+    ('{"objects": [{"index": 1}], "factor_set": 1}', "objects[0] of a `scale compute --json` file needs"),
+    ('{"objects": [5], "factor_set": 1}', "objects[0] of a `scale compute --json` file needs"),
+    ('{"objects": [{"index": "0x6093", "subindex": true, "value": 1}], "factor_set": 1}', "not true"),
+])
+def test_scale_explain_from_a_malformed_file_is_one_line(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                                         text: str, words: str) -> None:
+    """Deep nesting (RecursionError), objects without their keys (KeyError) or not mappings (TypeError)."""
+    path = tmp_path / "deep.json"
+    path.write_text(text)
+    code, _, err = run(capsys, "scale", "explain", "--from", str(path))
+    assert code == 1 and words in _one_error(err)

@@ -270,10 +270,20 @@ def _values_from_file(path: str) -> dict[tuple[int, int], int]:
     raw = read_bytes(path)
     try:
         doc = json.loads(raw)
-    except (ValueError, UnicodeDecodeError):
+    except (ValueError, UnicodeDecodeError, RecursionError):  # RecursionError: [[[[… nested 100000 deep
         doc = None
     if isinstance(doc, dict) and "objects" in doc and "factor_set" in doc:
-        return {(parse_int(o["index"]), int(o["subindex"])): int(o["value"]) for o in doc["objects"]}
+        objects = doc["objects"]
+        found: dict[tuple[int, int], int] = {}
+        for i, o in enumerate(objects if isinstance(objects, list) else [objects]):
+            if not isinstance(o, dict) or not {"index", "subindex", "value"} <= set(o):
+                raise InputError(f"objects[{i}] of a `scale compute --json` file needs index, subindex and value",
+                                 Location(path))
+            try:
+                found[(parse_int(o["index"]), parse_int(o["subindex"]))] = parse_int(o["value"])
+            except InputError as exc:
+                raise InputError(f"objects[{i}]: {exc.message}", Location(path)) from None
+        return found
     if doc is None and raw.lstrip()[:1] not in (b"<",):
         from ecattool.yamlloc import load_yaml
 
@@ -283,7 +293,8 @@ def _values_from_file(path: str) -> dict[tuple[int, int], int]:
         except InputError:
             doc = None
     if isinstance(doc, dict) and doc and all(":" in str(k) for k in doc):
-        return {parse_address(str(k), Location(path)): parse_int(v, Location(path)) for k, v in doc.items()}
+        return {parse_address(str(k), Location(path)): parse_int(v if isinstance(v, (int, str)) else str(v), Location(path))
+                for k, v in doc.items()}
     from ecattool.startup import import_file
 
     values: dict[tuple[int, int], int] = {}
