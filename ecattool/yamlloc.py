@@ -132,12 +132,15 @@ def _convert(node: yaml.Node, path: Path_, locs: dict[Path_, Location], keys: di
         return node.value  # yes/no/on/off stay words
     if tag.endswith(":timestamp") or tag.endswith(":binary"):
         return node.value
+    if tag.rsplit(":", 1)[-1] in ("seq", "map", "set", "omap", "pairs"):  # !!set x: a collection tag on a scalar
+        raise InputError(f"invalid YAML value: the tag !!{tag.rsplit(':', 1)[-1]} does not fit the scalar "
+                         f"{node.value[:40]!r}", _loc(node, source))
     try:
         value = loader.construct_object(node)
     except yaml.YAMLError as exc:  # the location is ours; the library's text repeats it on further lines
         what = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         raise InputError(f"invalid YAML value: {what}", _loc(node, source)) from None
-    except (ValueError, TypeError, OverflowError) as exc:  # an explicit tag on text it does not fit: !!int x
+    except (ValueError, TypeError, OverflowError, IndexError, KeyError) as exc:  # a tag the text does not fit: !!int x
         kind = tag.rsplit(":", 1)[-1]
         what = str(exc).splitlines()[0] if "digits" in str(exc) else f"{node.value!r} is not a valid {kind}"
         raise InputError(f"invalid YAML value: {what}", _loc(node, source)) from None

@@ -242,7 +242,7 @@ def test_aliases_a_real_file_uses_still_load() -> None:
     assert doc.data["repeat"][2] == {"transition": "PS", "comment": "x"}
 
 
-@pytest.mark.parametrize("text", ["a: !!int x", "a: !!float x", "a: !!int 0x", "a: !!float 1e", "a: !!bool maybe",
+@pytest.mark.parametrize("text", ["a: !!int x", "!!int", "a: !!set x", "a: !!float x", "a: !!int 0x", "a: !!float 1e", "a: !!bool maybe",
                                   "a: " + "9" * 5000, "a: !!int " + "9" * 5000])
 def test_explicit_tags_and_huge_numbers_are_validated(text: str) -> None:
     from ecattool.errors import InputError

@@ -352,7 +352,10 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     if not values:
         raise InputError("give object values (6093:01=… 6093:02=…) or --from FILE")
     cpr = Fraction(parse_int(counts_per_rev)) if counts_per_rev else None
-    e = explain(values, family, slow_loop=slow_loop_from(slow_loop), counts_per_rev=cpr, firmware=firmware)
+    from ecattool.errors import Location
+
+    e = explain(values, family, slow_loop=slow_loop_from(slow_loop), counts_per_rev=cpr, firmware=firmware,
+                location=Location(source) if source else None)
     if html:
         from ecattool.report import scaling_html
 
