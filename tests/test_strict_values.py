@@ -19,6 +19,15 @@ def _one_error(err: str) -> str:
     return lines[0]
 
 
+def _error_on(capsys: pytest.CaptureFixture[str], path: Path, text: str, *argv: str) -> str:
+    """Write ``text`` to ``path``, run ``argv`` ({f} = the path): exit 1 and the one error line, which it returns."""
+    path.write_text(text)
+    code, _, err = run(capsys, *(a.replace("{f}", str(path)) for a in argv))
+    line = _one_error(err)
+    assert code == 1, line
+    return line
+
+
 @pytest.mark.parametrize(("steps", "words"), [
     ("- cycles: 1099511627776\n", "cycle count 1099511627776 is out of range 0..100000"),
     ("- state: PREOP\n- cycles: -5\n", "cycle count -5 is out of range"),
@@ -30,11 +39,8 @@ def _one_error(err: str) -> str:
 ])
 def test_sim_script_counts_and_data_are_checked_where_read(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                                            steps: str, words: str) -> None:
-    script = tmp_path / "s.yaml"
-    script.write_text(steps)
-    code, _, err = run(capsys, "sim", "run", "technosoft-ipos", str(script))
-    line = _one_error(err)
-    assert code == 1 and words in line and re.search(r"s\.yaml:\d+:\d+: ", line), line
+    line = _error_on(capsys, tmp_path / "s.yaml", steps, "sim", "run", "technosoft-ipos", "{f}")
+    assert words in line and re.search(r"s\.yaml:\d+:\d+: ", line), line
 
 
 @pytest.mark.parametrize("size", ["0", "-128", "0x10000000000", "100"])
@@ -55,11 +61,8 @@ def test_sii_build_size_is_checked_as_an_option(capsys: pytest.CaptureFixture[st
 ])
 def test_sw_build_spec_values_are_located(capsys: pytest.CaptureFixture[str], tmp_path: Path, spec: str,
                                           words: str) -> None:
-    path = tmp_path / "b.yaml"
-    path.write_text(spec)
-    code, _, err = run(capsys, "sw", "build", str(path), "-o", str(tmp_path / "out.sw"))
-    line = _one_error(err)
-    assert code == 1 and words in line and re.search(r"b\.yaml:\d+:\d+: ", line), line
+    line = _error_on(capsys, tmp_path / "b.yaml", spec, "sw", "build", "{f}", "-o", str(tmp_path / "out.sw"))
+    assert words in line and re.search(r"b\.yaml:\d+:\d+: ", line), line
 
 
 @pytest.mark.parametrize(("args", "words"), [
@@ -79,6 +82,17 @@ def test_scale_si_word_is_unsigned32(capsys: pytest.CaptureFixture[str]) -> None
     assert run(capsys, "scale", "si", "0xFD010100")[0] == 0
 
 
+def _edited_project(tmp_path: Path, old: str, new: str) -> Path:
+    """The Technosoft sample project (and its .sw) in ``tmp_path``, with ``old`` replaced by ``new``."""
+    for f in (TS_PROJECT.parent).iterdir():
+        (tmp_path / f.name).write_bytes(f.read_bytes())
+    project = tmp_path / "project.yaml"
+    text = project.read_text()
+    assert old in text
+    project.write_text(text.replace(old, new))
+    return project
+
+
 @pytest.mark.parametrize(("old", "new", "words"), [
     ("feedback: {lines: 500, on: motor}", "feedback: {counts_per_rev: true, on: motor}",
      "counts_per_rev must be a number, not true"),
@@ -88,12 +102,7 @@ def test_scale_si_word_is_unsigned32(capsys: pytest.CaptureFixture[str]) -> None
 ])
 def test_a_boolean_is_never_a_number_in_a_project(capsys: pytest.CaptureFixture[str], tmp_path: Path, old: str,
                                                   new: str, words: str) -> None:
-    for f in (TS_PROJECT.parent).iterdir():
-        (tmp_path / f.name).write_bytes(f.read_bytes())
-    project = tmp_path / "project.yaml"
-    text = project.read_text()
-    assert old in text
-    project.write_text(text.replace(old, new))
+    project = _edited_project(tmp_path, old, new)
     line = next(i for i, ln in enumerate(project.read_text().splitlines(), 1) if new.split(",")[0] in ln)
     code, out, err = run(capsys, "lint", str(project))
     assert code == 1 and words in out and f"project.yaml:{line}:" in out, out + err
@@ -112,12 +121,7 @@ def test_a_boolean_is_never_a_number_in_a_project(capsys: pytest.CaptureFixture[
 def test_project_numbers_are_finite_typed_and_bounded(capsys: pytest.CaptureFixture[str], tmp_path: Path, old: str,
                                                       new: str, words: str) -> None:
     """The move distance, bus position and DC values: formerly an OverflowError in commission or startup export."""
-    for f in (TS_PROJECT.parent).iterdir():
-        (tmp_path / f.name).write_bytes(f.read_bytes())
-    project = tmp_path / "project.yaml"
-    text = project.read_text()
-    assert old in text
-    project.write_text(text.replace(old, new))
+    project = _edited_project(tmp_path, old, new)
     for argv in (["lint", str(project)], ["commission", str(project)],
                  ["startup", "export", "--project", str(project), "--format", "eni"]):
         code, out, err = run(capsys, *argv)
@@ -180,11 +184,8 @@ def test_scaling_exact_reports_huge_ratios_without_overflow() -> None:
 def test_exponents_are_refused_before_they_are_made_exact(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                                           text: str, words: str) -> None:
     """Fraction('1e99999999') computes a 100-million-digit integer: such a value is refused where it is read."""
-    spec = tmp_path / "e.yaml"
-    spec.write_text(text)
-    code, _, err = run(capsys, "scale", "compute", str(spec))
-    line = _one_error(err)
-    assert code == 1 and words in line and re.search(r"e\.yaml:\d+:\d+: ", line), line
+    line = _error_on(capsys, tmp_path / "e.yaml", text, "scale", "compute", "{f}")
+    assert words in line and re.search(r"e\.yaml:\d+:\d+: ", line), line
 
 
 @pytest.mark.parametrize(("text", "words"), [
@@ -196,7 +197,4 @@ def test_exponents_are_refused_before_they_are_made_exact(capsys: pytest.Capture
 def test_scale_explain_from_a_malformed_file_is_one_line(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                                          text: str, words: str) -> None:
     """Deep nesting (RecursionError), objects without their keys (KeyError) or not mappings (TypeError)."""
-    path = tmp_path / "deep.json"
-    path.write_text(text)
-    code, _, err = run(capsys, "scale", "explain", "--from", str(path))
-    assert code == 1 and words in _one_error(err)
+    assert words in _error_on(capsys, tmp_path / "deep.json", text, "scale", "explain", "--from", "{f}")
