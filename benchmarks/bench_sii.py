@@ -44,14 +44,16 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out.bin"
         build = [sys.executable, "-m", "ecattool", "sii", "build", str(args.file), "--device", args.device,
-                 "--policy", "newest", "-o", str(out)]
+                 "--policy", "newest", "-o", str(out), "--force"]  # each run replaces the previous image
         cmds: dict[str, Variant] = {
             "bare-parse": ([sys.executable, "-c", "import sys\nfrom lxml import etree\netree.parse(sys.argv[1])\n",
                             str(args.file)], None),
             "sii-build": (build, None),
         }
         if args.against is not None:
-            cmds["sii-build@" + args.against.name] = (build, args.against.resolve())
+            # a revision older than the shared --force replaces without it (and knows no such flag)
+            older = [*build[:-3], "-o", str(Path(tmp) / "older.bin")]
+            cmds["sii-build@" + args.against.name] = (older, args.against.resolve())
         times = interleaved(cmds, args.runs, warmups=2)
         size = out.stat().st_size
     print(f"file: {args.file.name} ({args.file.stat().st_size} bytes), device {args.device} -> {size}-byte image, "

@@ -67,19 +67,16 @@ def parse_xml(data: bytes, source: str | None = None, drop_blank_text: bool = Fa
         line, col = exc.position if exc.position else (None, None)
         msg = str(exc.msg if hasattr(exc, "msg") else exc)
         msg = re.sub(r", line \d+, column \d+$", "", msg)
+        # libxml2 quotes raw document text in some messages (an unfinished CDATA section, a bad character): one
+        # line, printable, bounded
+        msg = " ".join(msg.split())
+        msg = "".join(c if c.isprintable() else f"\\x{ord(c):02x}" for c in msg)[:200]
         raise InputError(f"not well-formed XML: {msg}", Location(source, line, col)) from None
 
 
 def read_xml_file(path: str | Path) -> etree._ElementTree:
     """Read and safely parse an XML file (bytes in, so BOMs and declared encodings are honoured)."""
+    from ecattool.fileio import read_bytes
+
     p = Path(path)
-    try:
-        size = p.stat().st_size
-        if size > MAX_XML_BYTES:
-            raise XmlSecurityError(
-                f"XML file is {size} bytes, larger than the {MAX_XML_BYTES} byte limit", Location(str(p))
-            )
-        data = p.read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read file: {exc.strerror or exc}", Location(str(p))) from None
-    return parse_xml(data, str(p))
+    return parse_xml(read_bytes(p, MAX_XML_BYTES), str(p))  # bounded by the bytes read, not the size on disk

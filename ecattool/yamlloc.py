@@ -15,7 +15,12 @@ from ecattool.errors import InputError, Location
 
 Path_ = tuple[str | int, ...]
 
-_MAX_YAML_BYTES = 16 * 1024 * 1024
+MAX_YAML_BYTES = 16 * 1024 * 1024
+
+#: How many values aliases (``*name``) may add beyond the nodes written in the file: a document of a few hundred
+#: bytes whose anchors refer to anchors ("billion laughs") would otherwise expand exponentially. Real project files
+#: repeat a block with an alias now and then; this is far more than they need and far less than a bomb makes.
+MAX_ALIAS_VALUES = 10_000
 
 #: libyaml's parser where PyYAML has it (10x faster on large projects; same nodes, marks and errors)
 _Loader: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
@@ -46,8 +51,8 @@ class LocatedYaml:
 
 
 def load_yaml(text: str | bytes, source: str) -> LocatedYaml:
-    if len(text) > _MAX_YAML_BYTES:
-        raise InputError(f"YAML file is larger than {_MAX_YAML_BYTES} bytes", Location(source))
+    if len(text) > MAX_YAML_BYTES:
+        raise InputError(f"YAML file is larger than {MAX_YAML_BYTES} bytes", Location(source))
     try:
         loader = _Loader(text)
     except yaml.YAMLError as exc:  # the reader checks characters and encoding up front
@@ -70,7 +75,7 @@ def load_yaml(text: str | bytes, source: str) -> LocatedYaml:
     keys: dict[Path_, Location] = {}
     if node is None:
         return LocatedYaml(None, {(): Location(source, 1, 1)}, source)
-    data = _convert(node, (), locations, keys, source, loader, depth=0)
+    data = _convert(node, (), locations, keys, source, loader, depth=0, budget=_Budget())
     return LocatedYaml(data, locations, source, keys)
 
 
@@ -78,10 +83,31 @@ def _loc(node: yaml.Node, source: str) -> Location:
     return Location(source, node.start_mark.line + 1, node.start_mark.column + 1)
 
 
+class _Budget:
+    """The nodes met so far and how many values aliases have added (see :data:`MAX_ALIAS_VALUES`)."""
+
+    __slots__ = ("seen", "repeated")
+
+    def __init__(self) -> None:
+        self.seen: set[int] = set()
+        self.repeated = 0
+
+    def visit(self, node: yaml.Node, source: str) -> None:
+        key = id(node)
+        if key not in self.seen:
+            self.seen.add(key)
+            return
+        self.repeated += 1
+        if self.repeated > MAX_ALIAS_VALUES:
+            raise InputError(f"YAML aliases expand to more than {MAX_ALIAS_VALUES} values (an alias bomb?); "
+                             "write the repeated blocks out", _loc(node, source))
+
+
 def _convert(node: yaml.Node, path: Path_, locs: dict[Path_, Location], keys: dict[Path_, Location], source: str,
-             loader: yaml.SafeLoader, depth: int) -> Any:
+             loader: yaml.SafeLoader, depth: int, budget: _Budget) -> Any:
     if depth > 64:
         raise InputError("YAML nesting is deeper than 64 levels", _loc(node, source))
+    budget.visit(node, source)
     locs[path] = _loc(node, source)
     if isinstance(node, yaml.MappingNode):
         out: dict[str, Any] = {}
@@ -94,10 +120,10 @@ def _convert(node: yaml.Node, path: Path_, locs: dict[Path_, Location], keys: di
             if key in out:
                 raise InputError(f"duplicate key {key!r}", _loc(key_node, source))
             keys[(*path, key)] = _loc(key_node, source)
-            out[key] = _convert(value_node, (*path, key), locs, keys, source, loader, depth + 1)
+            out[key] = _convert(value_node, (*path, key), locs, keys, source, loader, depth + 1, budget)
         return out
     if isinstance(node, yaml.SequenceNode):
-        return [_convert(v, (*path, i), locs, keys, source, loader, depth + 1) for i, v in enumerate(node.value)]
+        return [_convert(v, (*path, i), locs, keys, source, loader, depth + 1, budget) for i, v in enumerate(node.value)]
     assert isinstance(node, yaml.ScalarNode)
     tag = node.tag
     if tag.endswith((":int", ":float")) and ":" in node.value:
@@ -106,8 +132,19 @@ def _convert(node: yaml.Node, path: Path_, locs: dict[Path_, Location], keys: di
         return node.value  # yes/no/on/off stay words
     if tag.endswith(":timestamp") or tag.endswith(":binary"):
         return node.value
+    if tag.rsplit(":", 1)[-1] in ("seq", "map", "set", "omap", "pairs"):  # !!set x: a collection tag on a scalar
+        raise InputError(f"invalid YAML value: the tag !!{tag.rsplit(':', 1)[-1]} does not fit the scalar "
+                         f"{node.value[:40]!r}", _loc(node, source))
     try:
-        return loader.construct_object(node)
+        value = loader.construct_object(node)
     except yaml.YAMLError as exc:  # the location is ours; the library's text repeats it on further lines
         what = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         raise InputError(f"invalid YAML value: {what}", _loc(node, source)) from None
+    except (ValueError, TypeError, OverflowError, IndexError, KeyError) as exc:  # a tag the text does not fit: !!int x
+        kind = tag.rsplit(":", 1)[-1]
+        what = str(exc).splitlines()[0] if "digits" in str(exc) else f"{node.value!r} is not a valid {kind}"
+        raise InputError(f"invalid YAML value: {what}", _loc(node, source)) from None
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 256:
+        raise InputError(f"integer {node.value[:20]!r}... is absurdly large ({value.bit_length()} bits)",
+                         _loc(node, source))
+    return value

@@ -394,7 +394,8 @@ def test_bad_input_is_one_line_and_exit_1(capsys: pytest.CaptureFixture[str], ge
     for o in outs:
         if keep:
             o.write_bytes(previous)
-    code, out, err = run(capsys, *cmd, *argv(inv, gen, out_dir, {i: bad}))
+    force = ("--force",) if keep and outs else ()  # allowed to replace it: the bad input is what must stop it
+    code, out, err = run(capsys, *cmd, *argv(inv, gen, out_dir, {i: bad}), *force)
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert "Traceback" not in out + err
     if (inp.kind, kind) in UNDETECTABLE:
@@ -472,6 +473,26 @@ def test_output_that_cannot_be_written_is_one_line_and_exit_1(capsys: pytest.Cap
     assert "Traceback" not in out + err
     assert code == 1 and len(lines) == 1 and "no-such-dir" in lines[0], f"exit {code}\nstdout: {out}\nstderr: {err}"
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("cmd", "n"), OUT_CASES, ids=[f"{_name(c)}#{n}" for c, n in OUT_CASES])
+def test_existing_output_is_replaced_only_with_force(capsys: pytest.CaptureFixture[str], gen: Path, tmp_path: Path,
+                                                     cmd: tuple[str, ...], n: int) -> None:
+    """Every command that writes a file: an existing one is refused in one line that names --force, and left as it
+    was; with --force it is replaced (docs/cli.md, "Output files")."""
+    inv = HAPPY[cmd][n]
+    outs = [tmp_path / a.name for a in inv if isinstance(a, Out)]
+    assert any("--force" in p.opts for p in LEAVES[cmd].params if isinstance(p, click.Option))
+    for o in outs:
+        o.write_bytes(b"an earlier result\n")
+    code, out, err = run(capsys, *cmd, *argv(inv, gen, tmp_path))
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert code == 1 and len(lines) == 1 and "file exists; use --force" in lines[0], f"exit {code}\n{out}\n{err}"
+    assert all(o.read_bytes() == b"an earlier result\n" for o in outs)
+    code, out, err = run(capsys, *cmd, *argv(inv, gen, tmp_path), "--force")
+    assert code == 0, err or out
+    assert all(o.read_bytes() != b"an earlier result\n" for o in outs)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(o.name for o in outs), "stray files"
 
 
 # ------------------------------------------------------------------------------------ files named in files

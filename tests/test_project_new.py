@@ -80,7 +80,7 @@ def test_every_corpus_drive_esi_gets_a_skeleton_that_lints_and_commissions(capsy
 def test_profile_velocity_is_set_only_where_the_esi_leaves_it_zero(capsys, tmp_path):
     for name, wanted in (("ingenia_eve-xcr-e_esi.xml", True), ("inovance_SV660_EOE_1Axis_V9.12.xml", False)):
         shutil.copy(corpus_path("esi", name), tmp_path / name)
-        data = _check(capsys, tmp_path / "m.yaml", "--esi", name)
+        data = _check(capsys, tmp_path / f"{name}.yaml", "--esi", name)
         objects = [p["object"] for p in data["drives"][0].get("parameters", [])]
         assert ("6081:00" in objects) is wanted, objects
 

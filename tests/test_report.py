@@ -126,7 +126,7 @@ def test_outputs_are_written_atomically(capsys: pytest.CaptureFixture[str], tmp_
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(os, "fsync", broken)
-    code, _, err = run(capsys, "map", "layout", *TS, "--svg", str(out))
+    code, _, err = run(capsys, "map", "layout", *TS, "--svg", str(out), "--force")
     assert code == 1 and err.startswith(f"ecattool: error: {out}: cannot write file: No space left on device")
     assert out.read_text() == "previous" and [p.name for p in tmp_path.iterdir()] == ["layout.svg"]
 

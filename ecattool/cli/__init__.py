@@ -97,7 +97,8 @@ def main(argv: list[str] | None = None) -> Any:
     except EcatToolError as exc:
         if debug:
             raise
-        click.echo(f"ecattool: error: {exc}", err=True)
+        text = " ".join(str(exc).split())  # one line, whatever a message holds, and not a page long
+        click.echo(f"ecattool: error: {text if len(text) <= 600 else text[:400] + ' … ' + text[-150:]}", err=True)
         sys.exit(1)
     except BrokenPipeError:
         sys.exit(0)

@@ -54,11 +54,11 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, all
             raise click.UsageError("--report - and the JSON report cannot both go to stdout")
     for out in (output, report):
         if out not in (None, "-"):  # refused before the drives are touched, not after
-            from ecattool.fileio import refuse_input
+            from ecattool.cli.common import check_output
             from ecattool.project.loader import project_inputs
 
             inputs = inputs or project_inputs(projects)  # the projects and the ESI/.sw files they name
-            refuse_input(out, inputs)
+            check_output(out, inputs)
     reports = []
     con = None if as_json or report == "-" else console()
     for path in projects:

@@ -28,14 +28,65 @@ def policy_option(f: Callable[..., Any]) -> Callable[..., Any]:
                              "newest-not-newer (the newest not newer than the one named) or newest.")(f)
 
 
-def output_option(required: bool = False, help: str = "Write to FILE (atomically; never over an input). '-' = stdout.") -> Callable[..., Any]:
-    return click.option("-o", "--output", "output", type=click.Path(dir_okay=False, allow_dash=True), required=required, help=help)
+#: where the shared ``--force`` flag leaves its value for :func:`write_output` (click's per-invocation meta)
+_FORCE_KEY = "ecattool.force"
+
+FORCE_HELP = "Overwrite an existing output file (never an input)."
+
+
+def store_force(ctx: click.Context, param: click.Parameter, value: bool) -> bool:
+    """The callback of every ``--force`` that allows overwriting an existing output (also a command's own
+    ``--force`` with a wider meaning, such as ``map sdo``'s)."""
+    if value:
+        ctx.meta[_FORCE_KEY] = True
+    return value
+
+
+def force_requested() -> bool:
+    """Whether this invocation was given ``--force`` (an existing output file may be replaced)."""
+    ctx = click.get_current_context(silent=True)
+    return bool(ctx is not None and ctx.meta.get(_FORCE_KEY))
+
+
+def _with_force(f: Callable[..., Any]) -> Callable[..., Any]:
+    """Add the shared ``--force`` to a command that writes files, once (a command with ``-o`` and ``--html`` gets
+    one flag for both)."""
+    params = getattr(f, "__click_params__", [])
+    if any("--force" in getattr(p, "opts", ()) for p in params):
+        return f
+    return click.option("--force", is_flag=True, expose_value=False, callback=store_force, help=FORCE_HELP)(f)
+
+
+def _output_path(ctx: click.Context, param: click.Parameter, value: str | None) -> str | None:
+    if value == "":
+        raise click.BadParameter("the file name is empty (use '-' for standard output)")
+    return value
+
+
+def output_option(required: bool = False, help: str = "Write to FILE (atomically; never over an input; an existing "
+                  "file only with --force). '-' = stdout.", force: bool = True) -> Callable[..., Any]:
+    """``-o/--output FILE`` plus the shared ``--force`` (unless ``force=False``: the command has its own flag that
+    calls :func:`store_force`)."""
+    option = click.option("-o", "--output", "output", type=click.Path(dir_okay=False, allow_dash=True),
+                          required=required, callback=_output_path, help=help)
+
+    def decorate(f: Callable[..., Any]) -> Callable[..., Any]:
+        f = option(f)
+        return _with_force(f) if force else f
+
+    return decorate
 
 
 def file_output_option(flag: str, name: str, help: str) -> Callable[..., Any]:
     """An option naming a file to write besides the main output (``--svg``, ``--report``, ``--html``): written
-    atomically, never over an input, like ``-o``; '-' is stdout."""
-    return click.option(flag, name, type=click.Path(dir_okay=False, allow_dash=True), metavar="FILE", help=help)
+    atomically, never over an input, an existing file only with ``--force``, like ``-o``; '-' is stdout."""
+    option = click.option(flag, name, type=click.Path(dir_okay=False, allow_dash=True), metavar="FILE",
+                          callback=_output_path, help=help)
+
+    def decorate(f: Callable[..., Any]) -> Callable[..., Any]:
+        return _with_force(option(f))
+
+    return decorate
 
 
 def _plain(v: Any) -> Any:
@@ -103,7 +154,8 @@ def table(title: str | None, columns: list[str]) -> Any:
 
 
 def write_output(output: str | None, data: bytes | str, inputs: tuple[str, ...] | list[str] = ()) -> None:
-    """Write to ``-o FILE`` atomically, or to stdout when output is None or '-'."""
+    """Write to ``-o FILE`` (see :func:`ecattool.fileio.write_atomic`: atomically, through devices and FIFOs,
+    never over an input, over an existing file only with ``--force``), or to stdout when output is None or '-'."""
     if output in (None, "-"):
         if isinstance(data, bytes):
             sys.stdout.buffer.write(data)
@@ -113,7 +165,16 @@ def write_output(output: str | None, data: bytes | str, inputs: tuple[str, ...] 
         return
     from ecattool.fileio import write_atomic
 
-    write_atomic(output, data, inputs)
+    write_atomic(output, data, inputs, overwrite=force_requested())
+
+
+def check_output(output: str | None, inputs: tuple[str, ...] | list[str] = ()) -> None:
+    """Refuse an output :func:`write_output` would refuse, before long work (commission, sim runs)."""
+    if output in (None, "-"):
+        return
+    from ecattool.fileio import check_output as check
+
+    check(output, inputs, overwrite=force_requested())
 
 
 def parse_int_arg(text: str, what: str = "number") -> int:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from typing import Any
 
 import click
@@ -18,7 +17,10 @@ def _load(file: str, lazy: bool = False) -> Any:
     from ecattool.esi import load, load_bytes
 
     if file == "-":
-        return load_bytes(sys.stdin.buffer.read(), "<stdin>", lazy=lazy)
+        from ecattool.fileio import read_stdin
+        from ecattool.xmlsafe import MAX_XML_BYTES
+
+        return load_bytes(read_stdin(MAX_XML_BYTES), "<stdin>", lazy=lazy)
     return load(file, lazy=lazy)
 
 

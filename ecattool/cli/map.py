@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 from typing import Any
 
 import click
 
 from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
-                                 table, write_output)
+                                 store_force, table, write_output)
 from ecattool.cli.paths import InputFile
 
 _EXAMPLES = """\b
@@ -76,10 +75,10 @@ def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping
     if mapping_file:
         if rx or tx:
             raise click.UsageError("give the mapping either with --rx/--tx or with --mapping, not both")
-        from ecattool.fileio import read_bytes
+        from ecattool.fileio import read_input
         from ecattool.yamlloc import load_yaml
 
-        raw = sys.stdin.buffer.read() if mapping_file == "-" else read_bytes(mapping_file)
+        raw = read_input(mapping_file)
         source = "<stdin>" if mapping_file == "-" else mapping_file
         doc = load_yaml(raw, source)
         data = doc.data
@@ -225,11 +224,12 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
 @click.option("--order", type=click.Choice(["standard", "count-first"]), default="standard", show_default=True,
               help="standard: sub-index 0 = 0, entries, count; count-first: the Control Techniques quick start order.")
 @click.option("--transition", default="PS", show_default=True, help="Transition the writes belong to.")
-@click.option("--force", is_flag=True, help="Print the sequence even when the mapping has errors.")
+@click.option("--force", is_flag=True, callback=store_force,
+              help="Print the sequence even when the mapping has errors; overwrite an existing output file.")
 @click.option("--format", "fmt", help="Write the sequence as a startup list for a master: eni, twincat, igh, "
               "pysoem, ros2, ecmc, json, csv, lcec (see `ecattool startup`).")
 @json_option
-@output_option()
+@output_option(force=False)
 def sdo(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
         policy: str, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
         slave: int | None, complete_access: bool, order: str, transition: str, force: bool, fmt: str | None,

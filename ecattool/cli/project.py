@@ -20,7 +20,7 @@ def project() -> None:
     "schema",
     epilog="""\b
 Examples:
-  ecattool project schema -o schemas/project.schema.json
+  ecattool project schema -o schemas/project.schema.json --force   # regenerate
   ecattool project schema --check schemas/project.schema.json   # CI drift check""",
 )
 @output_option()
@@ -36,7 +36,7 @@ def schema(output: str | None, check: str | None) -> None:
 
         if read_bytes(check) != text.encode("utf-8"):  # bytes: a file that is not even UTF-8 is simply out of date
             click.echo(f"ecattool: error: {check}: out of date; regenerate with "
-                       f"'ecattool project schema -o {check}'", err=True)
+                       f"'ecattool project schema -o {check} --force'", err=True)
             raise SystemExit(1)
         click.echo(f"{check}: up to date")
         return
@@ -75,4 +75,5 @@ def new(profile: str | None, product: str | None, esi_path: str | None, select: 
     device = resolve(profile, product, esi_path, select, base, policy)
     findings = esi_flaws(esi_path, select, base, policy) if esi_path is not None else []
     write_output(output, new_project(device, name=name, profile=profile, product=product, esi=esi_path,
-                                     select=select, policy=policy, findings=findings))
+                                     select=select, policy=policy, findings=findings),
+                 (str(base / esi_path),) if esi_path is not None else ())

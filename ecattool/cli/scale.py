@@ -84,8 +84,7 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
     else:
         from dataclasses import replace
 
-        from ecattool.scaling.model import feedback_from, gear_from, transmission_from
-        from ecattool.scaling.units import time_seconds
+        from ecattool.scaling.model import feedback_from, gear_from, slow_loop_from, transmission_from
 
         ax = base.axis
         changes: dict[str, Any] = {}
@@ -100,7 +99,7 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
             if val:
                 changes[key] = val
         if slow_loop:
-            changes["slow_loop"] = time_seconds(slow_loop)
+            changes["slow_loop"] = slow_loop_from(slow_loop)
         if reverse is not None:
             changes["reverse"] = reverse
         parsed = replace(base, axis=replace(ax, **changes))
@@ -271,10 +270,20 @@ def _values_from_file(path: str) -> dict[tuple[int, int], int]:
     raw = read_bytes(path)
     try:
         doc = json.loads(raw)
-    except (ValueError, UnicodeDecodeError):
+    except (ValueError, UnicodeDecodeError, RecursionError):  # RecursionError: [[[[… nested 100000 deep
         doc = None
     if isinstance(doc, dict) and "objects" in doc and "factor_set" in doc:
-        return {(parse_int(o["index"]), int(o["subindex"])): int(o["value"]) for o in doc["objects"]}
+        objects = doc["objects"]
+        found: dict[tuple[int, int], int] = {}
+        for i, o in enumerate(objects if isinstance(objects, list) else [objects]):
+            if not isinstance(o, dict) or not {"index", "subindex", "value"} <= set(o):
+                raise InputError(f"objects[{i}] of a `scale compute --json` file needs index, subindex and value",
+                                 Location(path))
+            try:
+                found[(parse_int(o["index"]), parse_int(o["subindex"]))] = parse_int(o["value"])
+            except InputError as exc:
+                raise InputError(f"objects[{i}]: {exc.message}", Location(path)) from None
+        return found
     if doc is None and raw.lstrip()[:1] not in (b"<",):
         from ecattool.yamlloc import load_yaml
 
@@ -284,7 +293,8 @@ def _values_from_file(path: str) -> dict[tuple[int, int], int]:
         except InputError:
             doc = None
     if isinstance(doc, dict) and doc and all(":" in str(k) for k in doc):
-        return {parse_address(str(k), Location(path)): parse_int(v, Location(path)) for k, v in doc.items()}
+        return {parse_address(str(k), Location(path)): parse_int(v if isinstance(v, (int, str)) else str(v), Location(path))
+                for k, v in doc.items()}
     from ecattool.startup import import_file
 
     values: dict[tuple[int, int], int] = {}
@@ -331,7 +341,7 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     from ecattool.errors import InputError
     from ecattool.od.numbers import parse_address, parse_int
     from ecattool.scaling import explain
-    from ecattool.scaling.units import time_seconds
+    from ecattool.scaling.model import slow_loop_from
 
     _html_prerequisites(html, as_json)
 
@@ -361,7 +371,10 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     if not values:
         raise InputError("give object values (6093:01=… 6093:02=…) or --from FILE")
     cpr = Fraction(parse_int(counts_per_rev)) if counts_per_rev else None
-    e = explain(values, family, slow_loop=time_seconds(slow_loop), counts_per_rev=cpr, firmware=firmware)
+    from ecattool.errors import Location
+
+    e = explain(values, family, slow_loop=slow_loop_from(slow_loop), counts_per_rev=cpr, firmware=firmware,
+                location=Location(source) if source else None)
     if html:
         from ecattool.report import scaling_html
 

@@ -38,9 +38,10 @@ def _stdin(path: str) -> bytes | None:
     """The bytes of standard input when ``path`` is '-' (read once), else None."""
     if path != "-":
         return None
-    import sys
+    from ecattool.fileio import read_stdin
+    from ecattool.sii.image import MAX_IMAGE_BYTES
 
-    return sys.stdin.buffer.read()
+    return read_stdin(4 * MAX_IMAGE_BYTES)
 
 
 def _load(path: str) -> Any:
@@ -233,9 +234,17 @@ def build_cmd(esi: str, selector: str | None, no_pdo_categories: bool, size: str
     from ecattool.findings import Severity
     from ecattool.sii.checks import check
 
+    byte_size = parse_int_arg(size, "EEPROM size") if size is not None else None
+    if byte_size is not None:  # checked before the ESI is read, as the option's own error
+        from ecattool.errors import InputError
+        from ecattool.sii.builder import size_word_for
+
+        try:
+            size_word_for(byte_size)
+        except InputError as exc:
+            raise click.BadParameter(exc.message, param_hint="'--size'") from None
     device = _select(esi, selector, policy=policy)
-    img = build(device, pdo_categories=not no_pdo_categories,
-                size=parse_int_arg(size, "EEPROM size") if size else None)
+    img = build(device, pdo_categories=not no_pdo_categories, size=byte_size)
     _write_image(output, img, (esi,))
     # the image is what the ESI says; where that does not pass `sii check` (a vendor's own Eeprom/Category
     # replacing a generated one, as Elmo's boot devices give a 9-byte SyncM), say so rather than stay silent

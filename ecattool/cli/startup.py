@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from typing import Any
 
 import click
@@ -33,11 +32,11 @@ def startup() -> None:
 
 def _read_with_format(path: str, fmt: str | None) -> tuple[list[Any], str]:
     """Read a startup configuration from a file, or from stdin for ``-``; also say which format it was."""
-    from ecattool.fileio import read_bytes
+    from ecattool.fileio import read_input
     from ecattool.startup import detect_format, import_bytes
 
     source = "<stdin>" if path == "-" else path
-    data = sys.stdin.buffer.read() if path == "-" else read_bytes(path)
+    data = read_input(path)
     name = fmt or detect_format(data, source)
     return import_bytes(data, source, name), name
 
@@ -80,7 +79,7 @@ def _write(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, 
 
 
 def _sync0_option(f: Any) -> Any:
-    return click.option("--sync0-cycle", type=click.IntRange(min=1), metavar="NS",
+    return click.option("--sync0-cycle", type=click.IntRange(min=1, max=0xFFFFFFFF), metavar="NS",
                         help="SYNC0 cycle in ns for slaves that activate DC without giving a cycle (ros2 files); "
                              "an ENI needs it.")(f)
 

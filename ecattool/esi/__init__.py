@@ -88,7 +88,18 @@ def _is_eds(data: bytes) -> bool:
 def load(path: str | Path, lazy: bool = False) -> EsiFile:
     """Read an ESI file (EtherCATInfo, EtherCATModule or EtherCATDict root), or a CANopen EDS/DCF file (told
     apart by content: see :mod:`ecattool.esi.eds`); ``lazy`` as in :func:`load_bytes`."""
+    import stat
+
     p = Path(path)
+    try:
+        regular = stat.S_ISREG(p.stat().st_mode)
+    except OSError:
+        regular = True  # the reader reports the file error
+    if not regular:  # a FIFO or a device is read once: its first bytes cannot be peeked and read again
+        from ecattool.fileio import read_bytes
+        from ecattool.xmlsafe import MAX_XML_BYTES
+
+        return load_bytes(read_bytes(p, MAX_XML_BYTES), str(p), base_dir=p.parent, lazy=lazy)
     try:
         with open(p, "rb") as fh:
             head = fh.read(4096)

@@ -203,6 +203,27 @@ def _make_clone() -> Any:
 _clone = _make_clone()
 
 
+#: Largest entry a dictionary may declare: 128 KiB (four times the largest in the corpus, Copley's 32 KiB). A
+#: BitSize of 34359738360 would make every reader that stores a value (the simulator) allocate 4 GiB.
+MAX_ENTRY_BITS = 1 << 20
+#: Largest sum of the entries of one dictionary (the real ones hold well under 1 MiB)
+MAX_DICTIONARY_BYTES = 16 * 1024 * 1024
+
+
+def _bounded_size(obj: Any, total: int, location: Any) -> int:
+    """The bytes of ``obj``'s entries, checked against :data:`MAX_ENTRY_BITS` and, with the ``total`` so far,
+    :data:`MAX_DICTIONARY_BYTES` (issue 28.2: every size a file gives has a limit, checked where it is read)."""
+    size = 0
+    for entry in obj.entries.values():
+        if entry.bit_size > MAX_ENTRY_BITS:
+            raise InputError(f"0x{obj.index:04X}:{entry.subindex:02X} has a BitSize of {entry.bit_size}, beyond the "
+                             f"{MAX_ENTRY_BITS} bits (128 KiB) of any real CoE object", location)
+        size += (entry.bit_size + 7) // 8
+    if total + size > MAX_DICTIONARY_BYTES:
+        raise InputError(f"the dictionary's objects add up to more than {MAX_DICTIONARY_BYTES} bytes", location)
+    return size
+
+
 def _not_negative(v: int | None, el: Any, what: str, ctx: Context) -> int | None:
     """A size or offset: the schema allows any integer; a negative one makes its object unreadable (skipped)."""
     if v is not None and v < 0:
@@ -338,9 +359,11 @@ class DictionaryBuilder:
         objects = self.el.find("Objects")
         if objects is None:
             return od
+        total = 0
         for obj_el in objects.iterchildren("Object"):
             try:
                 obj = self.object(obj_el)
+                total += _bounded_size(obj, total, self.ctx.loc(obj_el))
             except EcatToolError as exc:
                 self.ctx.warnings.append(Finding("esi-object-skipped", Severity.WARNING,
                                                  f"object skipped: {exc.message}", exc.location or self.ctx.loc(obj_el)))

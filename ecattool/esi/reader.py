@@ -918,15 +918,9 @@ def _next_line(el: Any) -> int | None:
 
 
 def _read(path: Path) -> bytes:
-    try:
-        size = path.stat().st_size
-        if size > MAX_XML_BYTES:
-            from ecattool.errors import XmlSecurityError
+    from ecattool.fileio import read_bytes
 
-            raise XmlSecurityError(f"file is {size} bytes, larger than the {MAX_XML_BYTES} byte limit", Location(str(path)))
-        return path.read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read file: {exc.strerror or exc}", Location(str(path))) from None
+    return read_bytes(path, MAX_XML_BYTES)  # bounded by the bytes read: a FIFO or /dev/zero has no size on disk
 
 
 def load_bytes(data: bytes, source: str = "<bytes>", base_dir: str | Path | None = None,

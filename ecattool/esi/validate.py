@@ -14,12 +14,10 @@ SCHEMAS = {"EtherCATInfo": "EtherCATInfo.xsd", "EtherCATModule": "EtherCATModule
 def _schema(path: Path):  # type: ignore[no-untyped-def]
     from lxml import etree
 
-    from ecattool.xmlsafe import check_xml_bytes
+    from ecattool.fileio import read_bytes
+    from ecattool.xmlsafe import MAX_XML_BYTES, check_xml_bytes
 
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read schema: {exc.strerror or exc}", Location(str(path))) from None
+    data = read_bytes(path, MAX_XML_BYTES)
     check_xml_bytes(data, str(path))
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False)
     try:

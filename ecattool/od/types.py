@@ -72,6 +72,8 @@ class DataType(FrozenRecord):
         Raises :class:`EncodeError` when the value does not fit.
         """
         n = self.bits if self.bits is not None else bits
+        if isinstance(value, bool) and self.kind is not Kind.BOOL:  # true/false: never a number
+            raise EncodeError(f"{str(value).lower()} is a boolean, not a value of {self.name}")
         if self.kind is Kind.REAL:
             try:
                 f = float(value)

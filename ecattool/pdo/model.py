@@ -306,6 +306,9 @@ def parse_entry(text: str | int, device: Device | None = None, location: Locatio
             # "object/entry" names contain '/' too: treat the whole text as a name then
             head, bits = s, None
         else:
+            if len(bits_text.strip()) > 6:  # thousands of digits: no int() of them (Python refuses > 4300)
+                raise InputError(f"bit length {bits_text.strip()[:8]}… ({len(bits_text.strip())} digits) in "
+                                 f"{head.strip()[:40]!r} is outside 1..255", location)
             bits = int(bits_text)
             if not 1 <= bits <= 255:
                 raise InputError(f"bit length {bits} in {s!r} is outside 1..255", location)

@@ -28,8 +28,18 @@ from ecattool.startup.model import StartupCommand, StartupList
 ORDERS = ("standard", "count-first")
 
 
-def _u8(n: int) -> bytes:
-    return n.to_bytes(1, "little")
+def _le(value: int, size: int, what: str, location: Location | None = None) -> bytes:
+    """``value`` as ``size`` little-endian bytes; a value that does not fit (a mapping with 300 entries, an entry
+    of 0x1FFFF:00 forced through ``map sdo --force``) is a located error, not an OverflowError."""
+    try:
+        return value.to_bytes(size, "little")
+    except OverflowError:
+        raise InputError(f"{what}: {value} does not fit {size} byte(s) (0..{(1 << 8 * size) - 1})"
+                         if value >= 0 else f"{what}: {value} is negative", location) from None
+
+
+def _u8(n: int, location: Location | None = None) -> bytes:
+    return _le(n, 1, "count", location)
 
 
 def _cmd(transition: str, index: int, sub: int, value: int, size: int, comment: str,
@@ -37,7 +47,7 @@ def _cmd(transition: str, index: int, sub: int, value: int, size: int, comment: 
     type_name = {1: "USINT", 2: "UINT", 4: "UDINT"}[size] if data is None else "OCTET_STRING"
     return StartupCommand(
         transition=transition, index=index, subindex=sub,
-        data=data if data is not None else value.to_bytes(size, "little"),
+        data=data if data is not None else _le(value, size, comment, source),
         comment=comment, complete_access=complete_access, type_name=type_name, value=value, source=source,
     )
 
@@ -123,7 +133,7 @@ def program(
         idx = d.assign_index
         src = pdos[0].location if pdos else None
         if ca:
-            data = _u8(n) + b"\x00" + b"".join(p.index.to_bytes(2, "little") for p in pdos)
+            data = _u8(n, src) + b"\x00" + b"".join(_le(p.index, 2, "PDO index", p.location) for p in pdos)
             out.commands.append(_cmd(transition, idx, 0, n, 1, f"download pdo 0x{idx:04X} (complete access)", src,
                                      True, data))
             continue
@@ -142,7 +152,8 @@ def _mapping_commands(pdo: MappedPdo, transition: str, ca: bool, count_first: bo
     n = len(pdo.entries)
     idx = pdo.index
     if ca:
-        data = _u8(n) + b"\x00" + b"".join(e.mapping_value.to_bytes(4, "little") for e in pdo.entries)
+        data = _u8(n, pdo.location) + b"\x00" + b"".join(
+            _le(e.mapping_value, 4, "mapping entry", e.location or pdo.location) for e in pdo.entries)
         return [_cmd(transition, idx, 0, n, 1, f"download pdo 0x{idx:04X} entries (complete access)", pdo.location,
                      True, data)]
     entries = [

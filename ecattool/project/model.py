@@ -5,9 +5,9 @@ See docs/project.md for the format with examples. Paths inside the file are rela
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 #: The project file format version this ecattool writes and reads.
 FORMAT_VERSION = 1
@@ -15,8 +15,25 @@ FORMAT_VERSION = 1
 IntLike = Annotated[int | str, Field(description="An integer: 8, 0x1C12 or #x1C12")]
 
 
+def _takes_bool(annotation: Any) -> bool:
+    """Whether a field's type admits true/false (``bool`` itself, or in a union)."""
+    if annotation is bool:
+        return True
+    return any(_takes_bool(a) for a in get_args(annotation))
+
+
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_boolean_numbers(cls, value: Any, info: ValidationInfo) -> Any:
+        """A boolean is never a number: pydantic would take ``position: true`` as 1 (issue 28.3)."""
+        if isinstance(value, bool) and info.field_name is not None:
+            field = cls.model_fields.get(info.field_name)
+            if field is not None and not _takes_bool(field.annotation):
+                raise ValueError(f"{str(value).lower()} is a boolean; a number or text belongs here")
+        return value
 
 
 class DeviceRef(_Strict):
@@ -129,8 +146,26 @@ class DcConfig(_Strict):
 
     opmode: str | None = Field(default=None, description="Name of an ESI Dc/OpMode (e.g. DC, DC-Synchron)")
     assign_activate: IntLike | None = Field(default=None, description="AssignActivate word, e.g. 0x0300")
-    cycle_ns: int | None = Field(default=None, description="SYNC0 cycle time in ns")
-    shift_ns: int | None = Field(default=None, description="SYNC0 shift time in ns")
+
+    @field_validator("assign_activate")
+    @classmethod
+    def _a_word(cls, value: int | str | None) -> int | str | None:
+        """AssignActivate is the 16-bit register 0x0980: checked where it is read."""
+        if value is None:
+            return value
+        from ecattool.errors import InputError
+        from ecattool.od.numbers import parse_int
+
+        try:
+            number = parse_int(value, what="AssignActivate word")
+        except InputError as exc:
+            raise ValueError(exc.message) from None
+        if not 0 <= number <= 0xFFFF:
+            raise ValueError(f"AssignActivate {value} does not fit 16 bits (0..0xFFFF)")
+        return value
+    cycle_ns: int | None = Field(default=None, ge=1, le=0xFFFFFFFF, description="SYNC0 cycle time in ns (UNSIGNED32)")
+    shift_ns: int | None = Field(default=None, ge=-(2**31), le=2**31 - 1,
+                                 description="SYNC0 shift time in ns (INTEGER32)")
 
 
 class SwConfig(_Strict):
@@ -149,7 +184,7 @@ class RuleOff(_Strict):
 class MoveTest(_Strict):
     """The short move of the commissioning run, in user units."""
 
-    distance: float = Field(default=1.0, description="Relative move in position user units")
+    distance: float = Field(default=1.0, allow_inf_nan=False, description="Relative move in position user units")
     mode: Literal["pp", "csp"] = Field(
         default="pp", description="Profile position or cyclic synchronous position"
     )
@@ -158,7 +193,7 @@ class MoveTest(_Strict):
 class Drive(_Strict):
     name: str = Field(description="Axis/drive name, unique in the project")
     position: int | None = Field(
-        default=None, ge=0, description="Position on the bus (default: order in the file)"
+        default=None, ge=0, le=0xFFFF, description="Position on the bus (default: order in the file)"
     )
     device: DeviceRef
     identity: IdentityCheck = Field(default_factory=IdentityCheck)

@@ -196,6 +196,8 @@ def _coerce(entry: Entry, value: Any, location: Location) -> Any:
                 raise InputError(f"{value!r} is not a number", location) from None
         return parse_int(v, location, "value")
     if isinstance(value, list):
+        if not all(isinstance(b, int) and not isinstance(b, bool) and 0 <= b <= 255 for b in value):
+            raise InputError("a list value is bytes: each item an integer 0..255", location)
         return bytes(value)
     return value
 

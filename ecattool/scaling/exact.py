@@ -22,6 +22,15 @@ PI = Fraction(
 Number = Union[int, Fraction, "Exact"]
 
 
+def _g(x: Fraction) -> str:
+    """``x`` for a message, like ``{:.6g}``, also where it is too large (or small) for a float."""
+    try:
+        return f"{float(x):.6g}"
+    except OverflowError:
+        digits = len(str(abs(x.numerator))) - len(str(x.denominator))
+        return f"{'-' if x < 0 else ''}~1e{digits}"
+
+
 @dataclass(frozen=True, slots=True)
 class Exact:
     """``coef * pi**pi_power`` — an exact positive or negative real of the form scaling needs."""
@@ -171,7 +180,7 @@ def _best(x: Fraction, max_num: int, max_den: int) -> tuple[int, int]:
         if 0 < cand[0] <= max_num and (best is None or abs(Fraction(*cand) - x) < abs(Fraction(*best) - x)):
             best = cand
     if best is None or best[0] == 0:
-        raise EncodeError(f"ratio {float(x):.6g} cannot be represented with numerator <= {max_num} and denominator <= {max_den}")
+        raise EncodeError(f"ratio {_g(x)} cannot be represented with numerator <= {max_num} and denominator <= {max_den}")
     return best
 
 
@@ -213,7 +222,7 @@ def approximate(
         return Approximation(p, q, ex, True, Fraction(0), Fraction(0), "exact")
     if x > max_num + Fraction(1, 2) or x < Fraction(1, 2 * max_den):
         raise EncodeError(
-            f"{what} {float(x):.6g} is out of reach of numerator <= {max_num} and divisor <= {max_den}", location)
+            f"{what} {_g(x)} is out of reach of numerator <= {max_num} and divisor <= {max_den}", location)
     if strategy == "max-scale":
         # the field that limits the ratio gets its maximum, the other is rounded (Technosoft §5.1.10.1)
         if x * max_den >= max_num:

@@ -71,6 +71,33 @@ def _consistency(e: Explanation, what: str, stored: Fraction | None, expected: F
                                   f"({float(ppm):+.3g} ppm)", loc))
 
 
+#: CiA 402's types of the objects explain reads, where the family's dictionary does not have them
+_STANDARD_TYPES = {0x604B: "INTEGER16", 0x604C: "INTEGER32", 0x607E: "UNSIGNED8", 0x6089: "INTEGER8",
+                   0x608A: "UNSIGNED8", 0x608B: "INTEGER8", 0x608C: "UNSIGNED8", 0x608D: "INTEGER8",
+                   0x608E: "UNSIGNED8", 0x206F: "INTEGER8", 0x2070: "UNSIGNED16"}
+
+
+def _check_types(values: Values, family: str, firmware: str | None, location: Location | None) -> None:
+    """Every value fits the data type of the object it is given for (the family's dictionary, else CiA 402's;
+    UNSIGNED32 for the factor pairs): 6093:01 = 2^32 or -1 is refused, never wrapped or taken as a ratio."""
+    from ecattool.od.types import lookup
+    from ecattool.scaling.compute import _types
+
+    od = _types(None, family, firmware)
+    for (index, sub), value in values.items():
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise InputError(f"0x{index:04X}:{sub:02X} = {value!r} is not an integer", location)
+        entry = od.entry(index, sub) if od is not None else None
+        dt = entry.datatype if entry is not None else None
+        if dt is None:
+            name = _STANDARD_TYPES.get(index, "UNSIGNED32")
+            dt = lookup(name)
+        bounds = dt.range() if dt is not None else None
+        if dt is not None and bounds is not None and not bounds[0] <= value <= bounds[1]:
+            raise InputError(f"0x{index:04X}:{sub:02X} = {value} does not fit its type {dt.name} "
+                             f"({bounds[0]}..{bounds[1]})", location)
+
+
 def explain(values: Values, family: str = "technosoft-ipos", *, slow_loop: Fraction = Fraction(1, 1000),
             counts_per_rev: Fraction | int | None = None, firmware: str | None = None,
             factor_set: str | None = None, location: Location | None = None) -> Explanation:
@@ -80,6 +107,14 @@ def explain(values: Values, family: str = "technosoft-ipos", *, slow_loop: Fract
     do not carry it (608Fh does on CiA-402-2 drives; HDT is always 65536).
     """
     fam = resolve_family(family, location)
+    _check_types(values, fam, firmware, location)
+    from ecattool.scaling.model import MAX_COUNTS, MAX_SLOW_LOOP, MIN_SLOW_LOOP
+
+    if not MIN_SLOW_LOOP <= Fraction(slow_loop) <= MAX_SLOW_LOOP:
+        raise InputError(f"slow-loop period {Fraction(slow_loop)} s is out of range ({MIN_SLOW_LOOP} .. {MAX_SLOW_LOOP} s)",
+                         location)
+    if counts_per_rev is not None and not 1 <= Fraction(counts_per_rev) <= MAX_COUNTS:
+        raise InputError(f"counts per revolution {counts_per_rev} is out of range (1 .. {MAX_COUNTS})", location)
     if fam == "technosoft-ipos":
         fs = factor_set or (technosoft_factor_set(firmware) if firmware else (
             "obsolete" if (0x2071, 1) in values or (0x608A, 0) in values and (0x210F, 1) not in values else "cia402-2"))

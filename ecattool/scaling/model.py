@@ -18,20 +18,60 @@ from fractions import Fraction
 from typing import Any
 
 from ecattool.errors import InputError, Location
+from ecattool.od.numbers import check_exponent, parse_fraction
 from ecattool.scaling.exact import Exact
 from ecattool.scaling.units import Unit, parse_unit, quantity, time_seconds
 
 TRANSMISSIONS = ("rotary", "belt", "ballscrew", "rack", "linear_motor", "hollow_shaft", "label")
 
 
-def _frac(value: Any, what: str, location: Location | None, positive: bool = True) -> Fraction:
-    try:
-        f = Fraction(str(value).strip()) if not isinstance(value, (int, Fraction)) else Fraction(value)
-    except (ValueError, ZeroDivisionError):
-        raise InputError(f"{what} {value!r} is not a number", location) from None
-    if positive and f <= 0:
-        raise InputError(f"{what} must be positive, got {value!r}", location)
+# --- domain limits of the mechanics: far beyond any real machine, and far inside what the exact arithmetic and
+# the 32-bit factors can carry (a zero, negative or absurd value is a located error where it is read, never a
+# ZeroDivisionError or an OverflowError later). See docs/scaling.md, "Limits".
+#: counts per revolution: 608Fh:01 (encoder increments) is UNSIGNED32
+MAX_COUNTS = 2**32
+#: lengths (pitch, diameter, tooth pitch, module, pole pitch, scale resolution), metres: 1 pm .. 1 km
+MIN_LENGTH, MAX_LENGTH = Fraction(1, 10**12), Fraction(1000)
+#: plain ratios and counts (gear parts, pulley stages, custom-label units): 10^-9 .. 10^12
+MIN_NUMBER, MAX_NUMBER = Fraction(1, 10**9), Fraction(10**12)
+#: the drive's slow-loop (position loop) period, seconds: 1 µs .. 10 s
+MIN_SLOW_LOOP, MAX_SLOW_LOOP = Fraction(1, 10**6), Fraction(10)
+def _bounded(f: Fraction, shown: Any, what: str, location: Location | None, lo: Fraction, hi: Fraction,
+             unit: str = "") -> None:
+    if f <= 0:
+        raise InputError(f"{what} must be positive, got {shown!r}", location)
+    if not lo <= f <= hi:
+        raise InputError(f"{what} {shown!r} is out of range ({_plain(lo)}{unit} .. {_plain(hi)}{unit})", location)
+
+
+def _plain(f: Fraction) -> str:
+    return str(f) if f.denominator == 1 or f.numerator != 1 else f"1e-{len(str(f.denominator)) - 1}" \
+        if str(f.denominator).strip("0") == "1" else str(f)
+
+
+def _frac(value: Any, what: str, location: Location | None, positive: bool = True,
+          lo: Fraction = MIN_NUMBER, hi: Fraction = MAX_NUMBER) -> Fraction:
+    f = parse_fraction(value, location, what)  # a boolean is never a number; 1e999 is refused before it is exact
+    if positive:
+        _bounded(f, value, what, location, lo, hi)
     return f
+
+
+def _length(value: Any, what: str, location: Location | None) -> Exact:
+    """A length from a spec or an option, within :data:`MIN_LENGTH` .. :data:`MAX_LENGTH`."""
+    if isinstance(value, bool):
+        raise InputError(f"{what} must be a length, not {str(value).lower()}", location)
+    check_exponent(value, location, what)
+    q = quantity(value, ("length",), location)[0]
+    _bounded(q.coef, value, what, location, MIN_LENGTH, MAX_LENGTH, " m")
+    return q
+
+
+def _integer(value: Any, what: str, location: Location | None, hi: int) -> int:
+    f = _frac(value, what, location, lo=Fraction(1), hi=Fraction(hi))
+    if f.denominator != 1:
+        raise InputError(f"{what} must be an integer, got {value!r}", location)
+    return int(f)
 
 
 @dataclass(frozen=True, slots=True)
@@ -231,26 +271,24 @@ def _loc(locate: Any, *path: Any) -> Location | None:
 def feedback_from(data: Any, locate: Any = None) -> Feedback:
     loc = _loc(locate, "feedback")
     if isinstance(data, (int, str)) and not isinstance(data, bool):
-        return Feedback.encoder(_frac(data, "feedback counts_per_rev", loc))
+        return Feedback.encoder(_frac(data, "feedback counts_per_rev", loc, lo=Fraction(1), hi=Fraction(MAX_COUNTS)))
     if not isinstance(data, dict):
         raise InputError("feedback must be a mapping (counts_per_rev, lines, steps/microsteps or resolution)", loc)
     on = str(data.get("on", "motor"))
     if on not in ("motor", "load"):
         raise InputError(f"feedback 'on' must be motor or load, got {on!r}", _loc(locate, "feedback", "on"))
     if "counts_per_rev" in data:
-        return Feedback.encoder(_frac(data["counts_per_rev"], "counts_per_rev", _loc(locate, "feedback", "counts_per_rev")), on)
-    if "lines" in data:
-        lines = _frac(data["lines"], "lines", _loc(locate, "feedback", "lines"))
-        if lines.denominator != 1:
-            raise InputError("encoder lines must be an integer", _loc(locate, "feedback", "lines"))
-        return Feedback.lines(int(lines), on)
+        return Feedback.encoder(_frac(data["counts_per_rev"], "counts_per_rev", _loc(locate, "feedback", "counts_per_rev"),
+                                      lo=Fraction(1), hi=Fraction(MAX_COUNTS)), on)
+    if "lines" in data:  # four counts per line: 4 x lines within UNSIGNED32
+        return Feedback.lines(_integer(data["lines"], "encoder lines", _loc(locate, "feedback", "lines"),
+                                       MAX_COUNTS // 4), on)
     if "steps" in data:
-        steps = _frac(data["steps"], "steps", _loc(locate, "feedback", "steps"))
-        micro = _frac(data.get("microsteps", 1), "microsteps", _loc(locate, "feedback", "microsteps"))
-        return Feedback.stepper(int(steps), int(micro))
+        steps = _integer(data["steps"], "steps", _loc(locate, "feedback", "steps"), 2**16)
+        micro = _integer(data.get("microsteps", 1), "microsteps", _loc(locate, "feedback", "microsteps"), 2**16)
+        return Feedback.stepper(steps, micro)
     if "resolution" in data:
-        res, _ = quantity(data["resolution"], ("length",), _loc(locate, "feedback", "resolution"))
-        return Feedback.linear_scale(res)
+        return Feedback.linear_scale(_length(data["resolution"], "resolution", _loc(locate, "feedback", "resolution")))
     raise InputError("feedback needs counts_per_rev, lines, steps (+ microsteps) or resolution (linear scale)", loc)
 
 
@@ -281,7 +319,7 @@ def transmission_from(data: Any, locate: Any = None) -> Transmission:
             "linear": "linear_motor", "hollow": "hollow_shaft", "custom_label": "label"}.get(kind, kind)
 
     def q(key: str) -> Exact:
-        return quantity(data[key], ("length",), _loc(locate, "transmission", key))[0]
+        return _length(data[key], key, _loc(locate, "transmission", key))
 
     def n(key: str, default: Any = None) -> Fraction:
         return _frac(data.get(key, default), key, _loc(locate, "transmission", key))
@@ -299,9 +337,7 @@ def transmission_from(data: Any, locate: Any = None) -> Transmission:
         return Transmission.ballscrew(pitch) if kind == "ballscrew" else Transmission.hollow_shaft(pitch)
     if kind in ("belt", "rack"):
         if "teeth" in data and ("tooth_pitch" in data or "module" in data):
-            teeth = n("teeth")
-            if teeth.denominator != 1:
-                raise InputError("teeth must be an integer", _loc(locate, "transmission", "teeth"))
+            teeth = _integer(data["teeth"], "teeth", _loc(locate, "transmission", "teeth"), 10**6)
             pitch = q("tooth_pitch") if "tooth_pitch" in data else q("module") * Exact(Fraction(1), 1)
             return (Transmission.belt_teeth if kind == "belt" else Transmission.rack_teeth)(int(teeth), pitch)
         key = next((k for k in ("diameter", "pitch_diameter", "pulley_diameter") if k in data), None)
@@ -363,8 +399,8 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
         velocity=None if units.get("velocity") is None else str(units["velocity"]),
         acceleration=None if units.get("acceleration") is None else str(units["acceleration"]),
         jerk=None if units.get("jerk") is None else str(units["jerk"]),
-        time=str(units.get("time", "ms")),
-        slow_loop=time_seconds(slow, _loc(locate, "slow_loop")),
+        time=_time_unit(units.get("time", "ms"), _loc(locate, "units", "time") or source),
+        slow_loop=slow_loop_from(slow, _loc(locate, "slow_loop")),
         reverse=polarity != "normal" or bool(data.get("reverse", False)),
         name=str(data.get("name", "")),
         source=source,
@@ -375,6 +411,25 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
         except InputError as exc:
             raise InputError(exc.message, _loc(locate, "units", key) or source) from None
     return axis
+
+
+def _time_unit(value: Any, location: Location | None) -> str:
+    """The time unit of the obsolete 2071h factor: a unit name (ms, s, us, min), checked where it is read."""
+    text = str(value).strip()
+    if isinstance(value, bool) or not text.isalpha():
+        raise InputError(f"units time must be a time unit (s, ms, us, min), got {str(value)[:40]!r}", location)
+    time_seconds("1" + text, location)  # an unknown name is refused here, not when the factor is computed
+    return text
+
+
+def slow_loop_from(value: Any, location: Location | None = None) -> Fraction:
+    """The slow-loop period (``1ms``, ``250 us``), within :data:`MIN_SLOW_LOOP` .. :data:`MAX_SLOW_LOOP`."""
+    if isinstance(value, bool):
+        raise InputError(f"slow_loop must be a time, not {str(value).lower()}", location)
+    check_exponent(value, location, "slow_loop")
+    t = time_seconds(value, location)
+    _bounded(t, value, "slow_loop", location, MIN_SLOW_LOOP, MAX_SLOW_LOOP, " s")
+    return t
 
 
 def _article(kind: str) -> str:

@@ -28,10 +28,13 @@ def spec_from_dict(data: Any, locate: Any = None, source: Location | None = None
         raise InputError(f"approximation must be best or max-scale, got {approx!r}",
                          locate(("approximation",)) if locate else source)
     sp = data.get("vl_setpoint", "1/1")
+    from ecattool.od.numbers import parse_fraction
+
+    where = locate(("vl_setpoint",)) if locate else source
     try:
-        f = Fraction(str(sp))
-    except (ValueError, ZeroDivisionError):
-        raise InputError(f"vl_setpoint {sp!r} is not a ratio (e.g. 1/10)", locate(("vl_setpoint",)) if locate else source) from None
+        f = parse_fraction(sp, where, "vl_setpoint")
+    except InputError as exc:
+        raise InputError(f"{exc.message} (a ratio, e.g. 1/10)", where) from None
     return Spec(axis, None if data.get("family") is None else str(data["family"]),
                 None if data.get("firmware") is None else str(data["firmware"]), approx, (f.numerator, f.denominator))
 
@@ -42,10 +45,10 @@ def load_spec(path: str | Path, text: str | bytes | None = None) -> Spec:
 
     src = str(path)
     if text is None:
-        try:
-            # bytes from stdin too: load_yaml decodes, so bytes that are not UTF-8 are an InputError, not a crash
-            text = Path(path).read_bytes() if src != "-" else __import__("sys").stdin.buffer.read()
-        except OSError as exc:
-            raise InputError(f"cannot read spec: {exc.strerror}", Location(src)) from None
+        from ecattool.fileio import read_input
+        from ecattool.yamlloc import MAX_YAML_BYTES
+
+        # bytes from stdin too: load_yaml decodes, so bytes that are not UTF-8 are an InputError, not a crash
+        text = read_input(src, MAX_YAML_BYTES)
     doc = load_yaml(text, src)
     return spec_from_dict(doc.data, doc.locate, Location(src, 1, 1))

@@ -172,7 +172,8 @@ def encode_si_unit(unit: str | Unit, location: Location | None = None) -> int:
 
 def decode_si_unit(word: int) -> str:
     """Text of any SI unit word: 0xFD010100 → 'mm', 0x00B44700 → 'rot/min', 0x00B50100 → 'inc'."""
-    word &= 0xFFFFFFFF
+    if isinstance(word, bool) or not 0 <= word <= 0xFFFFFFFF:  # 60A8h..60ABh are UNSIGNED32: never wrapped
+        raise InputError(f"SI unit word {word:#x} does not fit UNSIGNED32 (0..0xFFFFFFFF)")
     prefix = (word >> 24) & 0xFF
     exp = prefix - 256 if prefix >= 128 else prefix
     num = (word >> 16) & 0xFF

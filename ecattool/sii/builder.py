@@ -127,7 +127,7 @@ def build(device: Device, *, pdo_categories: bool = True, size: int | None = Non
         return image
     image = assemble(device, pdo_categories=pdo_categories)
     used = len(image.to_bytes())
-    byte_size = size or (eeprom.byte_size if eeprom and eeprom.byte_size else None)
+    byte_size = size if size is not None else (eeprom.byte_size if eeprom and eeprom.byte_size else None)
     if byte_size is None:
         byte_size = DEFAULT_EEPROM_BYTES
         while byte_size < used:

@@ -82,9 +82,9 @@ class Transcript:
 def load_script(path: str | Path) -> tuple[list[dict[str, Any]], list[Location]]:
     """The steps of a JSON/YAML script file and the location of each step."""
     from ecattool.fileio import read_bytes
-    from ecattool.yamlloc import load_yaml
+    from ecattool.yamlloc import MAX_YAML_BYTES, load_yaml
 
-    doc = load_yaml(read_bytes(path), str(path))
+    doc = load_yaml(read_bytes(path, MAX_YAML_BYTES), str(path))
     return parse_steps(doc.data, [doc.locate((i,)) for i in range(len(doc.data or []))], str(path))
 
 
@@ -103,7 +103,25 @@ def parse_steps(data: Any, locations: list[Location], source: str = "<script>") 
             if key != kinds[0] and key not in allowed:
                 raise InputError(f"step {i + 1} ({kinds[0]}): unknown key {key!r}{_suggest(str(key), allowed)}"
                                  f" (a {kinds[0]} step takes {', '.join(sorted(allowed)) or 'nothing else'})", loc)
+        _check_bounds(step, i + 1, loc)
     return data, locations
+
+
+#: Most process-data cycles one ``cycles:`` step may run: 10^5 cycles are 100 s of motion at a 1 ms cycle (seconds
+#: of simulation); a count from a typo (2^40) is refused where the script is read instead of running for days.
+MAX_CYCLES = 100_000
+
+#: (key, what, lowest, highest) of the counts and codes a step gives, checked when the script is read
+_BOUNDS = (("cycles", "cycle count", 0, MAX_CYCLES), ("password", "FoE password", 0, 0xFFFFFFFF),
+           ("expect_abort", "abort code", 0, 0xFFFFFFFF), ("expect_al_status", "AL status", 0, 0xFFFF))
+
+
+def _check_bounds(step: dict[str, Any], n: int, loc: Location) -> None:
+    for key, what, lo, hi in _BOUNDS:
+        if key in step:
+            v = _int(step[key], loc, what)
+            if not lo <= v <= hi:
+                raise InputError(f"step {n} ({key}): {what} {v} is out of range {lo}..{hi}", loc)
 
 
 def _suggest(key: str, allowed: frozenset[str]) -> str:
@@ -114,6 +132,8 @@ def _suggest(key: str, allowed: frozenset[str]) -> str:
 
 
 def _int(v: Any, loc: Location, what: str) -> int:
+    if isinstance(v, bool):  # YAML true/false: never a number
+        raise InputError(f"{what} must be a number, not {str(v).lower()}", loc)
     return parse_int(v if isinstance(v, (int, str)) else str(v), loc, what)
 
 
@@ -145,6 +165,7 @@ def _run_step(drive: Drive, step: dict[str, Any], n: int, loc: Location, base_di
             return Line(n, ln, "state", state.value, "refused", str(exc), exc.al_status, want_al == exc.al_status)
         return Line(n, ln, "state", state.value, "ok", expected=want_al is None)
     if "cycles" in step:
+        _check_bounds(step, n, loc)  # steps given to run_script directly are not parsed first
         drive.step(_int(step["cycles"], loc, "cycle count"))
         return Line(n, ln, "cycles", str(step["cycles"]), "ok")
     if "exchange" in step:
@@ -164,7 +185,10 @@ def _run_step(drive: Drive, step: dict[str, Any], n: int, loc: Location, base_di
 
             data = read_bytes((base_dir or Path(".")) / str(step["file"]))
         else:
-            data = bytes.fromhex(str(step.get("data", "")))
+            try:
+                data = bytes.fromhex(str(step.get("data", "")).replace(" ", ""))
+            except ValueError:
+                raise InputError(f"foe data must be hex bytes (\"0800\"), not {step.get('data')!r}", loc) from None
         try:
             drive.foe_write(name, data, _int(step.get("password", 0), loc, "password"))
         except FoeError as exc:

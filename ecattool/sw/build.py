@@ -63,13 +63,27 @@ def build_from(data: Any, locate: Any, base_dir: Path, source: str, read: list[P
         if not isinstance(value, str) or not value:
             raise InputError("expected a file path", locate(where))
         p = base_dir / value
-        if not p.exists():
-            raise InputError(f"file not found: {p}", locate(where))
+        try:
+            found = p.is_file()
+        except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL byte
+            raise InputError(f"cannot use file name {value[:40]!r}{'…' if len(value) > 40 else ''}: "
+                             f"{getattr(exc, 'strerror', None) or exc}", locate(where)) from None
+        if not found:
+            raise InputError(f"file not found: {p}" if not p.is_dir() else f"not a file: {p}", locate(where))
         if read is not None:
             read.append(p)
         return p
 
+    def start_of(spec: dict[str, Any], where: tuple[Any, ...]) -> int:
+        start = number(spec["start"], where + ("start",), "block start")
+        if not 0 <= start <= 0xFFFF:
+            raise InputError(f"block start 0x{start:X} is outside the drive's 16-bit word space 0x0000..0xFFFF"
+                             if start >= 0 else f"block start {start} is negative", locate(where + ("start",)))
+        return start
+
     def number(value: Any, where: tuple[Any, ...], what: str) -> int:
+        if isinstance(value, bool):
+            raise InputError(f"expected a {what}, not {str(value).lower()}", locate(where))
         try:
             n = parse_int(value, locate(where), what)
         except InputError:
@@ -90,12 +104,12 @@ def build_from(data: Any, locate: Any, base_dir: Path, source: str, read: list[P
             other = load_image(path_of(spec["from"], where + ("from",)))
             new = list(other.blocks)
             if "start" in spec:
-                start = number(spec["start"], where + ("start",), "block start")
+                start = start_of(spec, where)
                 new = [b for b in new if b.start == start]
                 if not new:
                     raise InputError(f"{spec['from']} has no block starting at 0x{start:04X}", locate(where + ("start",)))
         elif "start" in spec and "words" in spec:
-            start = number(spec["start"], where + ("start",), "block start")
+            start = start_of(spec, where)
             raw = spec["words"]
             if not isinstance(raw, list) or not raw:
                 raise InputError("words must be a non-empty list of 16-bit values", locate(where + ("words",)))
@@ -109,8 +123,12 @@ def build_from(data: Any, locate: Any, base_dir: Path, source: str, read: list[P
                 raise InputError(f"block 0x{start:X} with {len(words)} words does not fit 0x0000..0xFFFF", locate(where))
             new = [Block(start, tuple(words))]
         elif "start" in spec and "cam" in spec:
-            start = number(spec["start"], where + ("start",), "block start")
-            new = [Block(start, _cam_words(spec["cam"], where + ("cam",), locate, number))]
+            start = start_of(spec, where)
+            cam_words = _cam_words(spec["cam"], where + ("cam",), locate, number)
+            if start + len(cam_words) - 1 > 0xFFFF:
+                raise InputError(f"block 0x{start:X} with {len(cam_words)} words does not fit 0x0000..0xFFFF",
+                                 locate(where))
+            new = [Block(start, cam_words)]
         else:
             raise InputError("a block needs 'from: FILE' (optionally with 'start'), or 'start' with 'words' or 'cam'",
                              locate(where))

@@ -94,10 +94,13 @@ def encode(ptype: str, text: str | int, name: str, location: Location | None = N
             if not 0 <= raw <= 0xFFFF_FFFF:
                 raise InputError(f"{name}: raw FIXED value {s} does not fit 32 bits", location)
         else:
+            from ecattool.od.numbers import parse_fraction
+
             try:
-                exact = Fraction(s)
-            except (ValueError, ZeroDivisionError):
-                raise InputError(f"{name}: {s!r} is not a number (FIXED 16.16, e.g. 3.18311 or 0x00032EE0)", location) from None
+                exact = parse_fraction(s, location, f"{name} value")
+            except InputError:
+                raise InputError(f"{name}: {s[:40]!r} is not a number (FIXED 16.16, e.g. 3.18311 or 0x00032EE0)",
+                                 location) from None
             scaled = exact * 0x10000
             raw = round(scaled)
             if not -0x8000_0000 <= raw <= 0x7FFF_FFFF:
