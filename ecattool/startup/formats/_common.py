@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from collections.abc import Callable
 from typing import Any
 
 from ecattool.errors import EncodeError, InputError, Location
@@ -54,7 +55,8 @@ def encode_sized(value: int, size: int, location: Location | None, what: str = "
     if -(1 << (8 * size - 1)) <= value < 0:
         value += 1 << (8 * size)
     if not 0 <= value < (1 << (8 * size)):
-        raise InputError(f"{what} {value} does not fit in {size} byte(s)", location)
+        shown = value if value.bit_length() <= 64 else f"of {value.bit_length()} bits"
+        raise InputError(f"{what} {shown} does not fit in {size} byte(s)", location)
     return value.to_bytes(size, "little")
 
 
@@ -118,18 +120,97 @@ def as_list(value: object, location: Location | None, what: str) -> list[Any]:
     return value
 
 
+#: the largest data of one startup download ecattool accepts (a CoE segmented download could be longer, but no
+#: startup list holds more than a few kilobytes; a bound keeps every exporter's work small)
+MAX_DATA_BYTES = 1 << 16
+
+
+def _bounded(value: int | None, low: int, high: int, what: str, location: Location | None) -> None:
+    """``value`` (None: not given) within ``low..high``, else a located error (a huge value named by its size)."""
+    if value is not None and not low <= value <= high:
+        raise InputError(f"{what} {value if abs(value) < 1 << 64 else 'of ' + str(value.bit_length()) + ' bits'} is "
+                         f"out of range ({low}..{high})", location)
+
+
 def check_commands(configs: list[SlaveConfig]) -> None:
-    """Index, sub-index and data of every command are within CoE limits (whatever format they came from)."""
+    """Every number a source gives is within the domain of what it describes, whatever format it came from:
+    object index and sub-index, data size, timeout, bus position, identity, DC, PDO entries (a mapping entry's
+    bit length is one byte: 0..255, so a PDO table never makes an exporter loop over millions of bits)."""
     for c in configs:
+        _bounded(c.position, 0, 0xFFFF, "bus position", c.source)
+        if c.identity is not None:
+            for what, v in (("vendor id", c.identity.vendor_id), ("product code", c.identity.product_code),
+                            ("revision", c.identity.revision), ("serial", c.identity.serial)):
+                _bounded(v, 0, 0xFFFFFFFF, what, c.source)
+        _bounded(c.dc_assign_activate, 0, 0xFFFF, "DC assign activate", c.source)
+        for what, cycle in (("SYNC0 cycle", c.dc_cycle_ns), ("SYNC1 cycle", c.dc_sync1_cycle_ns)):
+            _bounded(cycle, 0, 0xFFFFFFFF, f"{what} (ns)", c.source)
+        for what, shift in (("SYNC0 shift", c.dc_shift_ns), ("SYNC1 shift", c.dc_sync1_shift_ns)):
+            _bounded(shift, -(1 << 31), 0xFFFFFFFF, f"{what} (ns)", c.source)
         for cmd in c.commands:
             if not 0 <= cmd.index <= 0xFFFF or not 0 <= cmd.subindex <= 0xFF:
                 raise InputError(f"object 0x{cmd.index:X}:{cmd.subindex:X} is out of range (index 0..0xFFFF, "
                                  "sub-index 0..0xFF)", cmd.source)
             if not cmd.data:
                 raise InputError(f"{cmd.address}: a startup download needs at least one data byte", cmd.source)
+            if len(cmd.data) > MAX_DATA_BYTES:
+                raise InputError(f"{cmd.address}: {len(cmd.data)} data bytes; a startup download of more than "
+                                 f"{MAX_DATA_BYTES} bytes is not accepted", cmd.source)
+            _bounded(cmd.timeout_ms, 0, 0xFFFFFFFF, f"{cmd.address}: timeout (ms)", cmd.source)
         for s in c.soe_commands:
             if not 0 <= s.idn <= 0xFFFF or not 0 <= s.drive_no <= 7:
                 raise InputError(f"SoE IDN {s.idn} drive {s.drive_no} is out of range", s.source)
+            if len(s.data) > MAX_DATA_BYTES:
+                raise InputError(f"SoE IDN {s.idn}: {len(s.data)} data bytes is more than {MAX_DATA_BYTES}", s.source)
+            for what, v, high in (("op code", s.op_code, 0xFF), ("elements", s.elements, 0xFF),
+                                  ("attribute", s.attribute, 0xFFFFFFFF), ("timeout (ms)", s.timeout_ms, 0xFFFFFFFF)):
+                _bounded(v, 0, high, f"SoE IDN {s.idn}: {what}", s.source)
+        for p in (*c.rx_pdos, *c.tx_pdos):
+            loc = p.location or c.source
+            _bounded(p.index, 0, 0xFFFF, "PDO index", loc)
+            _bounded(p.sm, 0, 0xFF, f"PDO 0x{p.index:04X}: sync manager", loc)
+            for e in p.entries:
+                eloc = e.location or loc
+                _bounded(e.index, 0, 0xFFFF, f"PDO 0x{p.index:04X}: entry index", eloc)
+                _bounded(e.subindex, 0, 0xFF, f"PDO 0x{p.index:04X}: entry sub-index", eloc)
+                _bounded(e.bit_len, 0, 0xFF, f"PDO 0x{p.index:04X}: entry bit length", eloc)
+        for sm in c.sync_managers:
+            loc = sm.location or c.source
+            _bounded(sm.number, 0, 0xFF, "sync manager number", loc)
+            for what, size in (("start address", sm.start_address), ("default size", sm.default_size),
+                               ("min size", sm.min_size), ("max size", sm.max_size)):
+                _bounded(size, 0, 0xFFFF, f"SM{sm.number} {what}", loc)
+            _bounded(sm.control_byte, 0, 0xFF, f"SM{sm.number} control byte", loc)
+
+
+#: how deep a JSON/YAML startup document may nest (the deepest real one nests 6 levels)
+MAX_DEPTH = 32
+
+
+def check_tree(node: Any, locate: Callable[[tuple[str | int, ...]], Location]) -> None:
+    """A parsed JSON/YAML document holds no integer beyond 64 bits and nests at most :data:`MAX_DEPTH` levels:
+    what no startup value is, and what writers would fail on (checked iteratively, so a deep document cannot
+    exhaust the stack). NaN and infinity pass: ros2 channels use ``default: .nan``."""
+    stack: list[tuple[Any, tuple[str | int, ...]]] = [(node, ())]
+    while stack:
+        value, path = stack.pop()
+        if len(path) > MAX_DEPTH:
+            raise InputError(f"nesting deeper than {MAX_DEPTH} levels", locate(path))
+        if isinstance(value, bool):
+            continue
+        if isinstance(value, int) and not -(1 << 64) < value < (1 << 64):
+            raise InputError(f"number of {value.bit_length()} bits: no startup value is wider than 64 bits",
+                             locate(path))
+        if isinstance(value, dict):
+            stack += [(v, (*path, str(k))) for k, v in value.items()]
+        elif isinstance(value, list):
+            stack += [(v, (*path, i)) for i, v in enumerate(value)]
+
+
+def long_number_location(text: str, source: str) -> Location:
+    """The line of the first number too long for Python to convert (more than 4300 digits)."""
+    m = re.search(r"\d{4300}", text)
+    return Location(source, text.count("\n", 0, m.start()) + 1 if m else None)
 
 
 @dataclass(slots=True)

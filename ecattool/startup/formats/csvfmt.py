@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+from typing import Any
 
 from ecattool.errors import InputError, Location
 from ecattool.od.numbers import parse_int
@@ -42,6 +43,13 @@ def export(configs: list[SlaveConfig]) -> str:
 def load(data: bytes, source: str) -> list[SlaveConfig]:
     text = decode_text(data, source)
     reader = csv.reader(io.StringIO(text))
+    try:
+        return _rows(reader, source)
+    except csv.Error as exc:  # a line break or NUL inside an unquoted cell, a cell over the csv module's limit
+        raise InputError(f"not CSV: {exc}", Location(source, reader.line_num or 1)) from None
+
+
+def _rows(reader: Any, source: str) -> list[SlaveConfig]:  # a csv reader (its type is private)
     header = next(reader, None)
     if header is None or [h.strip().lower() for h in header[:len(COLUMNS)]] != list(COLUMNS):
         raise InputError(f"CSV header must be: {','.join(COLUMNS)}", Location(source, 1))
@@ -63,8 +71,10 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
         if rec["value"].strip():
             try:
                 value = json.loads(rec["value"])
-            except json.JSONDecodeError:
+            except (ValueError, RecursionError):  # not JSON (or a number past Python's 4300 digits): the text
                 value = rec["value"]
+            if not isinstance(value, (bool, int, float, str)) or isinstance(value, int) and value.bit_length() > 64:
+                value = rec["value"]  # a value is one number or text; anything else stays as written
         cfg.startup.commands.append(StartupCommand(
             check_transition(rec["transition"], loc), parse_int(rec["index"], loc, "index"),
             parse_int(rec["subindex"], loc, "subindex"), parse_hex(rec["data"], loc),

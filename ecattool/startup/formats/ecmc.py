@@ -44,6 +44,8 @@ EXTENSIONS = (".cmd", ".script")
 DESCRIPTION = "ecmc/EPICS startup script (Cfg.EcAddSdo lines; reads EcWriteSdo and ecmccfg macros too)"
 
 SLAVE_MACRO = "${ECMC_EC_SLAVE_NUM}"
+#: the longest macro value or expanded line (ecmccfg's longest are file paths of a few hundred characters)
+MAX_MACRO_CHARS = 1 << 16
 _CALL = re.compile(r"Cfg\.(Ec\w+)\s*\((.*)\)")
 #: a command given to ecmcConfig without the ``Cfg.`` prefix (ecmccfg writes ``ecmcConfig "EcReadSdo(...)"``)
 _BARE_CALL = re.compile(r'^ecmcConfig(?:OrDie)?\s+"\s*(Ec\w+)\s*\((.*)\)')
@@ -212,6 +214,7 @@ class _Reader:
         self.pdos: dict[tuple[str, int], Pdo] = {}
         self.tolerant = False  # `ecmcConfig` (not OrDie): a failure is tolerated, e.g. a reset with no reply
         self.unused: list[tuple[str, str, Location, Severity]] = []  # notes for lines no slave owns yet
+        self.location = Location(source)  # of the line being read
 
     def skip(self, rule: str, message: str, loc: Location, severity: Severity = Severity.WARNING,
              slave: str | None = None) -> None:
@@ -223,6 +226,7 @@ class _Reader:
             self.unused.append((rule, message, loc, severity))
 
     def expand(self, text: str) -> str:
+        """``text`` with the script's macros replaced (8 rounds at most, each result bounded)."""
         def repl(m: re.Match[str]) -> str:
             name, default = m.group(1), m.group(2)
             if name in self.env:
@@ -235,6 +239,8 @@ class _Reader:
             new = _MACRO.sub(repl, text)
             if new == text:
                 break
+            if len(new) > MAX_MACRO_CHARS:
+                raise InputError(f"macros expand to more than {MAX_MACRO_CHARS} characters", self.location)
             text = new
         return text
 
@@ -394,7 +400,7 @@ class _Reader:
                      "holds SYNC0 only", loc, Severity.INFO)
 
     def line(self, raw: str, n: int) -> None:
-        loc = Location(self.source, n)
+        loc = self.location = Location(self.source, n)
         s = raw.strip()
         if not s:
             return
@@ -403,7 +409,10 @@ class _Reader:
             return
         m = _ENVSET.match(s)
         if m:
-            self.env[m.group(1)] = self.expand(m.group(2))
+            value = self.expand(m.group(2))
+            if len(value) > MAX_MACRO_CHARS:  # macros doubling each other grow exponentially: a bounded budget
+                raise InputError(f"macro {m.group(1)} expands to more than {MAX_MACRO_CHARS} characters", loc)
+            self.env[m.group(1)] = value
             return
         m = _CALL.search(s) or _BARE_CALL.match(s)
         if m:

@@ -13,6 +13,7 @@ with several Transition elements becomes one command per transition.
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from lxml import etree
@@ -48,10 +49,21 @@ _FPWR = 5  # configured-address physical write
 _FIRST_PHYS_ADDR = 1001
 
 
+#: characters XML 1.0 cannot hold (C0 controls other than tab and line breaks, surrogates, U+FFFE/U+FFFF)
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
+def xml_text(value: str) -> str:
+    """Text as XML can hold it: a character XML 1.0 has no place for (a control character in a TwinCAT comment
+    or a JSON name) is written as ``\\xNN`` / ``\\uNNNN``, visibly, instead of making the writer fail."""
+    return _NOT_XML.sub(lambda m: f"\\x{ord(m.group()):02x}" if ord(m.group()) < 0x100 else
+                        f"\\u{ord(m.group()):04x}", value)
+
+
 def _sub(parent: Any, tag: str, text: object | None = None, cdata: bool = False) -> Any:
     el = etree.SubElement(parent, tag)
     if text is not None:
-        value = str(text)
+        value = xml_text(str(text))
         el.text = etree.CDATA(value) if cdata and value and "]]>" not in value else value
     return el
 
@@ -121,7 +133,7 @@ def _mailbox(slave: Any, c: SlaveConfig) -> None:
     cmds = _sub(_sub(mb, "CoE"), "InitCmds")
     for cmd in c.commands:
         if cmd.one_shot:  # a master re-sends InitCmds at every transition: not one of them
-            cmds.append(etree.Comment(f" not an InitCmd: {one_shot_text(cmd).replace('--', '- -')} "))
+            cmds.append(etree.Comment(xml_text(f" not an InitCmd: {one_shot_text(cmd).replace('--', '- -')} ")))
             continue
         _mailbox_cmd(cmds, {"CompleteAccess": "true"} if cmd.complete_access else {}, cmd.transition, cmd.comment,
                      (("Timeout", cmd.timeout_ms), ("Ccs", 1), ("Index", cmd.index), ("SubIndex", cmd.subindex),

@@ -7,12 +7,21 @@ Reading keeps the line of every command (the file is located with the YAML loade
 from __future__ import annotations
 
 import json
+import math
 from typing import Any
 
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry, SyncManager
 from ecattool.startup.config import SlaveConfig, SoeCommand
-from ecattool.startup.formats._common import as_list, check_transition, decode_text, parse_hex
+from ecattool.startup.formats._common import (
+    MAX_DEPTH,
+    as_list,
+    check_transition,
+    check_tree,
+    decode_text,
+    long_number_location,
+    parse_hex,
+)
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "json"
@@ -23,6 +32,10 @@ VERSION = 1
 
 
 def _value(v: Any) -> Any:
+    if isinstance(v, int) and not isinstance(v, bool) and v.bit_length() > 64:
+        return str(v)  # not a value of any CoE type; text, which JSON can hold at any length
+    if isinstance(v, float) and not math.isfinite(v):
+        return str(v)  # JSON has no NaN or infinity
     if v is None or isinstance(v, (bool, int, float, str)):
         return v
     if isinstance(v, (bytes, bytearray)):
@@ -121,7 +134,7 @@ class _Doc:
             from ecattool.yamlloc import load_yaml
 
             self.located = load_yaml(text, source)
-        except InputError:
+        except (InputError, RecursionError, ValueError):  # the lines are a help; the JSON itself was read
             self.located = None
 
     def loc(self, *path: str | int) -> Location:
@@ -226,13 +239,21 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
         top = json.loads(text)
     except json.JSONDecodeError as exc:
         raise InputError(f"invalid JSON: {exc.msg}", Location(source, exc.lineno, exc.colno)) from None
+    except RecursionError:
+        raise InputError(f"JSON nested deeper than Python can read (a startup file nests {MAX_DEPTH} levels at most)",
+                         Location(source, 1)) from None
+    except ValueError:  # Python refuses to convert an integer of more than 4300 digits
+        raise InputError("a number of more than 4300 digits: no startup value is wider than 64 bits",
+                         long_number_location(text, source)) from None
     if not isinstance(top, dict) or top.get("format") != FORMAT_TAG:
         raise InputError(f"not an ecattool startup JSON file (expected \"format\": \"{FORMAT_TAG}\")",
                          Location(source, 1))
     if top.get("version") != VERSION:
         raise InputError(f"unsupported ecattool startup JSON version {top.get('version')!r} (this is {VERSION})",
                          Location(source, 1))
+    check_tree(top, lambda path: Location(source))  # before locating it: a deep document stops here
     doc = _Doc(text, source)
+    check_tree(top, lambda path: doc.loc(*path))
     slaves = as_list(top.get("slaves"), doc.loc("slaves"), "slaves")
     return [_read_slave(s, doc, i) for i, s in enumerate(slaves)]
 

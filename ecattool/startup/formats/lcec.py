@@ -125,7 +125,7 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
             loc = Location(source, _line(slave))
             idx = slave.get("idx")
             cfg = SlaveConfig(startup=StartupList(), name=slave.get("name") or slave.get("type") or "",
-                              position=int(idx) if idx and idx.isdigit() else None, source=loc)
+                              position=parse_int(idx, loc, "idx") if idx and idx.isdigit() else None, source=loc)
             cfg.extra["lcec_type"] = slave.get("type") or ""
             if master.get("idx") not in (None, "0"):
                 cfg.extra["master"] = master.get("idx")
@@ -154,12 +154,12 @@ def _app_period(master: Any, source: str) -> int | None:
     return parse_int(text, Location(source, master.sourceline), "appTimePeriod")
 
 
-def _cycle(text: str, app_period: int | None) -> int | None:
+def _cycle(text: str, app_period: int | None, loc: Location) -> int | None:
     """An lcec cycle: ns, or ``*N`` = N application periods (lcec's ``parseSyncCycle``)."""
     t = text.strip()
     if t.startswith("*") and t[1:].isdigit():
-        return int(t[1:]) * app_period if app_period else None
-    return int(t) if t.lstrip("-").isdigit() else None
+        return parse_int(t[1:], loc, "cycle multiple") * app_period if app_period else None
+    return parse_int(t, loc, "cycle") if t.lstrip("-").isdigit() else None
 
 
 def _dc(dc: Any, cfg: SlaveConfig, source: str, app_period: int | None) -> None:
@@ -168,9 +168,9 @@ def _dc(dc: Any, cfg: SlaveConfig, source: str, app_period: int | None) -> None:
     for attr in ("sync0Cycle", "sync0Shift", "sync1Cycle", "sync1Shift"):
         if dc.get(attr) is not None:
             cfg.extra[attr] = dc.get(attr)
-    cfg.dc_cycle_ns = _cycle(dc.get("sync0Cycle") or "", app_period)
+    cfg.dc_cycle_ns = _cycle(dc.get("sync0Cycle") or "", app_period, loc)
     shift = dc.get("sync0Shift") or ""
-    cfg.dc_shift_ns = int(shift) if shift.lstrip("-").isdigit() else None
+    cfg.dc_shift_ns = parse_int(shift, loc, "sync0Shift") if shift.lstrip("-").isdigit() else None
     if (dc.get("sync0Cycle") or "").startswith("*") and cfg.dc_cycle_ns is None:
         cfg.note("startup.lcec.dc", f"sync0Cycle={dc.get('sync0Cycle')!r} is a multiple of the master's "
                  "appTimePeriod, which the file does not give: the SYNC0 cycle is unknown", loc)

@@ -19,7 +19,15 @@ from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.od import types as dt
 from ecattool.od.standard import standard_type
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import as_list, decode_text, one_line, one_shot_text, require_identity
+from ecattool.startup.formats._common import (
+    as_list,
+    check_tree,
+    decode_text,
+    long_number_location,
+    one_line,
+    one_shot_text,
+    require_identity,
+)
 from ecattool.startup.model import StartupCommand, StartupList, is_pdo_programming
 
 NAME = "ros2"
@@ -269,11 +277,19 @@ def load_located(text: str, source: str) -> Any:
     from ecattool.yamlloc import load_yaml
 
     try:
-        return load_yaml(text, source)
+        doc = load_yaml(text, source)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         raise InputError(f"invalid YAML: {getattr(exc, 'problem', None) or exc}",
                          Location(source, mark.line + 1 if mark else None)) from None
+    except RecursionError:  # PyYAML composes nested nodes recursively
+        raise InputError("YAML nested deeper than can be read (a ros2 slave file nests a few levels)",
+                         Location(source, 1)) from None
+    except ValueError:  # Python refuses to convert an integer of more than 4300 digits
+        raise InputError("a number of more than 4300 digits: no startup value is wider than 64 bits",
+                         long_number_location(text, source)) from None
+    check_tree(doc.data, doc.locate)
+    return doc
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
@@ -317,6 +333,12 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
                 if rest:
                     cfg.channel_info[(pdo.index, j)] = rest
             cfg.pdos(direction).append(pdo)
+    for i, sm in enumerate(as_list(top.get("sm"), doc.locate(("sm",)), "sm")):
+        if not isinstance(sm, dict) or not isinstance(sm.get("index"), int) or isinstance(sm.get("index"), bool):
+            raise InputError("an sm entry is a mapping {index, type, pdo, watchdog} with an integer index "
+                             "(the driver's SMConfig)", doc.locate(("sm", i)))
+        if not 0 <= sm["index"] <= 0xFF:
+            raise InputError(f"sm index {sm['index']} is out of range (0..255)", doc.locate(("sm", i, "index")))
     for key, value in top.items():
         if key not in _KNOWN_KEYS:
             cfg.extra[key] = value

@@ -95,7 +95,7 @@ def parse_line(line: str, loc: Location) -> StartupCommand | SoeCommand:
     data = parse_value(value, loc)
     return StartupCommand(transition, int(m.group(1), 16), int(m.group(2), 16), data, comment=comment,
                           complete_access=bool(m.group(3)), type_name=unsigned_type(len(data)),
-                          value=int.from_bytes(data, "little"), source=loc)
+                          value=int.from_bytes(data, "little") if len(data) <= 8 else None, source=loc)
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
