@@ -193,3 +193,13 @@ def test_a_control_character_in_a_comment_gives_an_eni_that_shows_it(fmt):
     (cfg,) = import_bytes(text.encode(), "x", fmt)
     root = etree.fromstring(export(cfg, "eni").encode())
     assert root.findtext(".//InitCmd/Comment") == "a\\x01b\\x00c"
+
+
+def test_an_lcec_initcmds_name_the_file_system_refuses_is_reported_as_missing(tmp_path):
+    conf = tmp_path / "ethercat-conf.xml"
+    conf.write_text('<masters><master idx="0" appTimePeriod="1000000"><slave idx="0" type="generic" vid="2" '
+                    f'pid="3"><initCmds filename="{"x" * 5000}.xml"/></slave></master></masters>')
+    from ecattool.startup import import_file
+
+    (cfg,) = import_file(conf)
+    assert any("not found beside the configuration" in n.message for n in cfg.notes)

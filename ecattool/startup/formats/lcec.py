@@ -10,6 +10,7 @@ application period) is kept in ``extra``.
 
 from __future__ import annotations
 
+import glob
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
@@ -85,12 +86,17 @@ def _pdos(slave: Any, cfg: SlaveConfig, source: str) -> None:
 def _find_beside(folder: Path, name: str) -> Path | None:
     """The initCmds file: ``name`` beside the configuration, else the one sibling ending in ``_<name>``
     (collections such as ecattool's corpus prefix copied files with their origin)."""
-    exact = folder / name
-    if exact.is_file():
-        return exact
-    if not name or "/" in name or "\\" in name:
+    if not name or "\0" in name:
         return None
-    matches = sorted(p for p in folder.glob(f"*_{name}") if p.is_file())
+    try:
+        exact = folder / name
+        if exact.is_file():
+            return exact
+        if "/" in name or "\\" in name:
+            return None
+        matches = sorted(p for p in folder.glob(f"*_{glob.escape(name)}") if p.is_file())
+    except (OSError, ValueError):  # a name the file system refuses (too long): not found, and reported so
+        return None
     return matches[0] if len(matches) == 1 else None
 
 
