@@ -123,24 +123,22 @@ def _with_reset() -> SlaveConfig:
     return SlaveConfig(StartupList(cmds, name="ipos"), name="ipos", position=0, identity=Identity(0x1A3, 0x019F418D))
 
 
+#: IgH 1.5 before 2014: ecrt_master_sdo_download takes a non-const ``uint8_t *data`` (a const array passed to it is a
+#: warning, an error under -Werror or in C++)
 ONCE_H = ECRT_H + ("int ecrt_master_sdo_download(ec_master_t *master, uint16_t slave_position, uint16_t index, "
-                   "uint8_t subindex, const uint8_t *data, size_t data_size, uint32_t *abort_code);\n")
+                   "uint8_t subindex, uint8_t *data, size_t data_size, uint32_t *abort_code);\n")
 
 
 def test_one_shot_reset_is_no_igh_startup_sdo(tmp_path):
     text = export(_with_reset(), "igh")
     configure = text[text.index("int ipos_configure("):]
     assert "0x2080" not in configure and "ecrt_slave_config_sdo8(sc, 0x6060" in configure
-    once = text[text.index("void ipos_once("):text.index("int ipos_configure(")]
-    assert "ecrt_master_sdo_download(master, 0, 0x2080, 0x00," in once
-    (tmp_path / "ecrt.h").write_text(ONCE_H)
-    c = tmp_path / "config.c"
-    c.write_text(text)
-    import shutil
-    import subprocess
-
-    result = subprocess.run([shutil.which("gcc") or "gcc", "-std=c99", "-Wall", "-Wextra", "-Werror",
-                             "-fsyntax-only", "-I", str(tmp_path), str(c)], capture_output=True, text=True)
+    once = text[text.index("int ipos_once("):text.index("int ipos_configure(")]
+    assert "(void)ecrt_master_sdo_download(master, 0, 0x2080, 0x00," in once  # the reset's missing reply is expected
+    assert "static uint8_t ipos_once0[]" in once  # not const: IgH 1.5 before 2014 takes uint8_t *
+    # the real ecrt.h, and IgH 1.5's older non-const prototype, both without a warning
+    assert _gcc(text, tmp_path).returncode == 0, _gcc(text, tmp_path).stderr
+    result = _gcc(text, tmp_path, header=ONCE_H)
     assert result.returncode == 0, result.stderr
 
 
@@ -164,13 +162,64 @@ def test_one_shot_reset_is_no_ros2_eni_twincat_or_ecmc_startup_write():
     assert [(c.index, c.one_shot) for c in back.commands] == [(0x6060, False), (0x2080, True)]
 
 
-def test_one_shot_from_the_ecmc_eeprom_script_stays_one_shot_everywhere(tmp_path):
+def _eeprom_script():
     (cfg,) = import_file(corpus_path("configs", "ecmc_ecmciPOS4808-EEPROM-BaseConfig-StepperOpenLoopCSV.cmd"))
     cfg.identity = Identity(0x1A3, 0x019F418D)  # set by the device script ecmccfg runs before it
-    assert [c.index for c in cfg.commands if c.one_shot] == [0x2080]
-    text = export(cfg, "igh")
-    assert text.count("ecrt_master_sdo_download(") == 1
-    assert "0x2080" not in text[text.index("int ecmc_ecmcipos4808"):]
+    return cfg
+
+
+def _writes(cmds):
+    return [(c.kind, c.index, c.subindex, c.data) for c in cmds]
+
+
+def test_the_ecmc_eeprom_script_stays_one_shot_in_order_with_the_reset_last_in_every_format(tmp_path):
+    """Issue 27, done when: 2064h, 1,081 x 2065h (EcWriteSdo, once) and the 2080h reset (ecmcConfig, no reply)
+    converted to ecmc, IgH, pysoem, JSON and CSV (and back where the format is read) stay one-shot, in order,
+    the reset last."""
+    cfg = _eeprom_script()
+    want = _writes(cfg.commands)
+    assert len(want) == 1083 and {k for k, *_ in want[:-1]} == {"once"} and want[-1][:2] == ("reset", 0x2080)
+    assert [i for _, i, _, _ in want[:2]] == [0x2064, 0x2065]
+    for fmt in ("ecmc", "json", "csv"):
+        (back,) = import_bytes(export(cfg, fmt).encode(), f"x.{fmt}", fmt)
+        assert _writes(back.commands) == want, fmt
+    ecmc = export(cfg, "ecmc")
+    assert "EcAddSdo(" not in ecmc and ecmc.count('ecmcConfigOrDie "Cfg.EcWriteSdo(') == 1082
+    assert ecmc.rstrip().splitlines()[-1] == 'ecmcConfig "Cfg.EcWriteSdo(${ECMC_EC_SLAVE_NUM},0x2080,0x0,0x1,2)"'
+    # IgH: every write in <slave>_once(), in order, none in the startup configuration; compiled with ecrt.h
+    igh = export(cfg, "igh")
+    once = igh[igh.index("_once(ec_master_t *master)"):igh.index("_configure(ec_master_t *master)")]
+    arrays = dict(re.findall(r"static uint8_t (\w+)\[\] = \{([^}]*)\};", once))
+    calls = re.findall(r"(\(void\)|if \()ecrt_master_sdo_download\(master, \w+, (0x[0-9a-f]+), (0x[0-9a-f]+), (\w+),",
+                       once)
+    assert [("reset" if v == "(void)" else "once", int(i, 16), int(sub, 16),
+             bytes(int(b, 16) for b in arrays[name].split(","))) for v, i, sub, name in calls] == want
+    assert "ecrt_slave_config_sdo" not in igh[igh.index("_configure(ec_master_t *master)"):]
+    from tests.test_startup_export import _gcc
+
+    assert _gcc(igh, tmp_path).returncode == 0
+    # pysoem (the real module for WkcError): once(master) writes them in order; config_func writes none
+    import pysoem
+
+    sent = []
+
+    class Slave:
+        def sdo_write(self, index, sub, data, ca=False):
+            sent.append((index, sub, data))
+            if index == 0x2080:
+                raise pysoem.WkcError("no reply: the drive resets")
+
+    class Master:
+        slaves = [Slave()]
+
+    ns: dict = {}
+    exec(compile(export(cfg, "pysoem"), "startup_pysoem.py", "exec"), ns)
+    ns["once"](Master())
+    assert sent == [(i, sub, d) for _, i, sub, d in want]
+    sent.clear()
+    for _, func, *_ in ns["SLAVES"]:
+        func(Slave())
+    assert sent == []
 
 
 # --- 7. identity ---------------------------------------------------------------------------------------

@@ -1,7 +1,7 @@
 """CSV: one startup command per row, for spreadsheets and reviews.
 
 Columns: ``slave, position, transition, index, subindex, data, complete_access, timeout_ms, type, value,
-comment``. Index and sub-index as hex (``0x1C12``, ``0x00``), data as little-endian hex bytes, value as JSON
+comment, kind``. Index and sub-index as hex (``0x1C12``, ``0x00``), data as little-endian hex bytes, value as JSON
 (so ``-3``, ``2.5`` and ``"FOESW_x"`` come back as they were). Identity, PDO information and SoE commands
 are not part of the CSV form (use JSON or ENI for those).
 """
@@ -17,26 +17,30 @@ from ecattool.errors import InputError, Location
 from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig
 from ecattool.startup.formats._common import check_transition, decode_text, parse_hex
-from ecattool.startup.model import StartupCommand, StartupList
+from ecattool.startup.model import KINDS, StartupCommand, StartupList, set_kind
 
 NAME = "csv"
 EXTENSIONS = (".csv",)
 DESCRIPTION = "CSV, one command per row (slave, position, transition, index, subindex, data, …)"
 COLUMNS = ("slave", "position", "transition", "index", "subindex", "data", "complete_access", "timeout_ms", "type",
            "value", "comment")
+#: the last column (files without it are read as startup writes): when the write happens (startup, once, reset;
+#: ``+noverify`` where a read-back cannot return what was written)
+KIND_COLUMN = "kind"
 
 
 def export(configs: list[SlaveConfig]) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(COLUMNS)
+    w.writerow((*COLUMNS, KIND_COLUMN))
     for c in configs:
         for cmd in c.commands:
+            kind = cmd.kind + ("" if cmd.verify else "+noverify")
             value = "" if cmd.value is None else json.dumps(cmd.value if isinstance(cmd.value, (int, float, str, bool))
                                                             else str(cmd.value))
             w.writerow([c.name, "" if c.position is None else c.position, cmd.transition, f"0x{cmd.index:04X}",
                         f"0x{cmd.subindex:02X}", cmd.data.hex(), "1" if cmd.complete_access else "0", cmd.timeout_ms,
-                        cmd.type_name or "", value, cmd.comment])
+                        cmd.type_name or "", value, cmd.comment, kind])
     return buf.getvalue()
 
 
@@ -52,7 +56,8 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
 def _rows(reader: Any, source: str) -> list[SlaveConfig]:  # a csv reader (its type is private)
     header = next(reader, None)
     if header is None or [h.strip().lower() for h in header[:len(COLUMNS)]] != list(COLUMNS):
-        raise InputError(f"CSV header must be: {','.join(COLUMNS)}", Location(source, 1))
+        raise InputError(f"CSV header must be: {','.join(COLUMNS)},{KIND_COLUMN}", Location(source, 1))
+    with_kind = len(header) > len(COLUMNS) and header[len(COLUMNS)].strip().lower() == KIND_COLUMN
     slaves: dict[tuple[str, str], SlaveConfig] = {}
     for row in reader:
         loc = Location(source, reader.line_num)
@@ -75,12 +80,18 @@ def _rows(reader: Any, source: str) -> list[SlaveConfig]:  # a csv reader (its t
                 value = rec["value"]
             if not isinstance(value, (bool, int, float, str)) or isinstance(value, int) and value.bit_length() > 64:
                 value = rec["value"]  # a value is one number or text; anything else stays as written
-        cfg.startup.commands.append(StartupCommand(
+        cmd = StartupCommand(
             check_transition(rec["transition"], loc), parse_int(rec["index"], loc, "index"),
             parse_int(rec["subindex"], loc, "subindex"), parse_hex(rec["data"], loc),
             comment=rec["comment"], complete_access=rec["complete_access"].strip().lower() in ("1", "true", "yes"),
             timeout_ms=parse_int(rec["timeout_ms"] or "0", loc, "timeout_ms"), type_name=rec["type"] or None,
-            value=value, source=loc))
+            value=value, source=loc)
+        kind, *flags = (row[len(COLUMNS)] if with_kind and len(row) > len(COLUMNS) else "").strip().lower().split("+")
+        if kind not in ("", *KINDS) or any(f != "noverify" for f in flags):
+            raise InputError(f"kind {row[len(COLUMNS)]!r} is not one of {', '.join(KINDS)} (+noverify)", loc)
+        set_kind(cmd, kind or "startup")
+        cmd.verify = "noverify" not in flags
+        cfg.startup.commands.append(cmd)
     return list(slaves.values())
 
 

@@ -56,6 +56,8 @@ def _cmd(cmd: StartupCommand) -> dict[str, Any]:
         d["type"] = cmd.type_name
     if cmd.value is not None:
         d["value"] = _value(cmd.value)
+    if cmd.once:
+        d["once"] = True
     if not cmd.expect_reply:
         d["expect_reply"] = False
     if not cmd.verify:
@@ -98,7 +100,8 @@ def slave_to_json(c: SlaveConfig) -> dict[str, Any]:
         d["identity"] = {"vendor_id": c.identity.vendor_id, "product_code": c.identity.product_code,
                          "revision": c.identity.revision, "serial": c.identity.serial}
     dc = {k: v for k, v in (("assign_activate", c.dc_assign_activate), ("cycle_ns", c.dc_cycle_ns),
-                            ("shift_ns", c.dc_shift_ns)) if v is not None}
+                            ("shift_ns", c.dc_shift_ns), ("sync1_cycle_ns", c.dc_sync1_cycle_ns),
+                            ("sync1_shift_ns", c.dc_sync1_shift_ns)) if v is not None}
     if dc:
         d["dc"] = dc
     d["commands"] = [_cmd(x) for x in c.commands]
@@ -183,8 +186,9 @@ def _read_slave(s: Any, doc: _Doc, i: int) -> SlaveConfig:
     cfg.startup.name = cfg.name
     dloc = doc.loc(*base, "dc")
     dc = _obj(s.get("dc") or {}, dloc, "dc")
-    cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns = (
-        None if dc.get(k) is None else _int(dc[k], dloc, k) for k in ("assign_activate", "cycle_ns", "shift_ns"))
+    (cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns, cfg.dc_sync1_cycle_ns, cfg.dc_sync1_shift_ns) = (
+        None if dc.get(k) is None else _int(dc[k], dloc, k)
+        for k in ("assign_activate", "cycle_ns", "shift_ns", "sync1_cycle_ns", "sync1_shift_ns"))
     for j, c in enumerate(as_list(s.get("commands"), doc.loc(*base, "commands"), "commands")):
         loc = doc.loc(*base, "commands", j)
         cfg.startup.commands.append(StartupCommand(
@@ -192,7 +196,8 @@ def _read_slave(s: Any, doc: _Doc, i: int) -> SlaveConfig:
             _int(_need(c, "subindex", loc), loc, "subindex"), parse_hex(str(_need(c, "data", loc)), loc),
             comment=str(c.get("comment", "")), complete_access=bool(c.get("complete_access", False)),
             timeout_ms=_opt(c, "timeout_ms", 0, loc), type_name=c.get("type"), value=c.get("value"),
-            expect_reply=bool(c.get("expect_reply", True)), verify=bool(c.get("verify", True)), source=loc))
+            expect_reply=bool(c.get("expect_reply", True)), verify=bool(c.get("verify", True)),
+            once=bool(c.get("once", False)), source=loc))
     for key, direction in (("rx_pdos", Direction.RX), ("tx_pdos", Direction.TX)):
         for j, p in enumerate(as_list(s.get(key), doc.loc(*base, key), key)):
             ploc = doc.loc(*base, key, j)
