@@ -532,7 +532,14 @@ def test_lcec_keeps_the_app_period_cycle_and_reports_sync1_watchdog_and_the_rest
     assert all(any("<watchdog divider=\"2498\"" in n.message for n in c.notes) for c in el7342)
     configs = import_file(corpus_path("configs", "lcec_initcmds_ethercat-conf.xml"))
     ax = next(c for c in configs if c.identity is not None)
-    assert ax.dc_cycle_ns == 250_000 and any(n.rule == "startup.lcec.sync1" for n in ax.notes)
+    assert (ax.dc_cycle_ns, ax.dc_shift_ns, ax.dc_sync1_cycle_ns, ax.dc_sync1_shift_ns) == \
+        (250_000, 50_000, 750_000, 250_000)
+    el7211 = next(c for c in configs if c.extra.get("lcec_type") == "EL7211")  # sync1Cycle="*1" of 1 ms
+    assert (el7211.dc_cycle_ns, el7211.dc_sync1_cycle_ns, el7211.dc_sync1_shift_ns) == (1_000_000, 1_000_000, 1000)
+    # appTimePeriod and configPdos are named with their lines, not passed over
+    notes = [n for c in configs for n in c.notes]
+    assert any("appTimePeriod='1000000'" in n.message and n.location.line == 2 for n in notes)
+    assert any(n.rule == "startup.lcec.configpdos" and 'configPdos="true"' in n.message for n in ax.notes)
     conf = tmp_path / "conf.xml"
     conf.write_text('<masters><master idx="0" appTimePeriod="500000"><slave idx="0" type="generic" vid="2" pid="3">'
                     '<dcConf assignActivate="300" sync0Cycle="*2"/><modParam name="enableFB2" value="true"/>'

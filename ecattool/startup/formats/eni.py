@@ -170,7 +170,7 @@ def _dc(slave: Any, c: SlaveConfig, phys_addr: int) -> None:
                           "cycle, and an ENI needs it (a cycle of 0 stops the slave in SAFE-OP); give it with "
                           "--sync0-cycle NS", c.source)
     cmds = _sub(slave, "InitCmds")
-    cycles = c.dc_cycle_ns.to_bytes(4, "little") + bytes(4)
+    cycles = c.dc_cycle_ns.to_bytes(4, "little") + (c.dc_sync1_cycle_ns or 0).to_bytes(4, "little")
     _ecat_cmd(cmds, ("PS",), "set DC cycle time", phys_addr, DC_CYCLE_REGISTER, cycles)
     _ecat_cmd(cmds, ("PS",), "set DC start time", phys_addr, DC_START_REGISTER, bytes(8))
     _ecat_cmd(cmds, ("PS",), "set DC activation", phys_addr, DC_ACTIVATION_REGISTER,
@@ -178,7 +178,7 @@ def _dc(slave: Any, c: SlaveConfig, phys_addr: int) -> None:
     _ecat_cmd(cmds, ("IP",), "clear DC activation", phys_addr, DC_ACTIVATION_REGISTER, bytes(2))
     dc = _sub(slave, "DC")
     _sub(dc, "CycleTime0", c.dc_cycle_ns)
-    _sub(dc, "CycleTime1", 0)
+    _sub(dc, "CycleTime1", c.dc_sync1_cycle_ns or 0)  # ENI has no SYNC1 shift: a loss the exporter reports
     _sub(dc, "ShiftTime", c.dc_shift_ns or 0)
 
 
@@ -382,9 +382,7 @@ def _read_slave(slave: Any, source: str, i: int) -> SlaveConfig:
     if dc is not None:
         cfg.dc_cycle_ns = _int(dc, "CycleTime0", source) or None
         cfg.dc_shift_ns = _int(dc, "ShiftTime", source)
-        if _int(dc, "CycleTime1", source):
-            cfg.note("startup.eni.sync1", f"SYNC1 (CycleTime1 {_int(dc, 'CycleTime1', source)} ns) is not converted: "
-                     "the startup model holds SYNC0 only", _loc(source, dc))
+        cfg.dc_sync1_cycle_ns = _int(dc, "CycleTime1", source) or None
     _report_unused(slave, cfg, source)
     return cfg
 

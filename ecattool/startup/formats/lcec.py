@@ -144,6 +144,8 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
                          "built-in driver; no vendor/product code in the file", loc, Severity.INFO)
             _sdo_configs(slave, cfg, source)
             _pdos(slave, cfg, source)
+            if cfg.has_pdo_info:
+                _config_pdos_note(slave, cfg, source)
             dc = slave.find("dcConf")
             if dc is not None:
                 _dc(dc, cfg, source, _app_period(master, source))
@@ -180,9 +182,26 @@ def _dc(dc: Any, cfg: SlaveConfig, source: str, app_period: int | None) -> None:
     if (dc.get("sync0Cycle") or "").startswith("*") and cfg.dc_cycle_ns is None:
         cfg.note("startup.lcec.dc", f"sync0Cycle={dc.get('sync0Cycle')!r} is a multiple of the master's "
                  "appTimePeriod, which the file does not give: the SYNC0 cycle is unknown", loc)
-    if dc.get("sync1Cycle") is not None:
-        cfg.note("startup.lcec.sync1", f"SYNC1 (sync1Cycle={dc.get('sync1Cycle')!r}, sync1Shift="
-                 f"{dc.get('sync1Shift')!r}) is not converted: the startup model holds SYNC0 only", loc)
+    if (dc.get("sync1Cycle") or "").strip():
+        cfg.dc_sync1_cycle_ns = _cycle(dc.get("sync1Cycle") or "", app_period, loc)
+        if cfg.dc_sync1_cycle_ns is None:
+            cfg.note("startup.lcec.sync1", f"sync1Cycle={dc.get('sync1Cycle')!r} is not a cycle in ns or a multiple "
+                     "of a known appTimePeriod: SYNC1 is not converted", loc)
+    shift1 = (dc.get("sync1Shift") or "").strip()
+    cfg.dc_sync1_shift_ns = parse_int(shift1, loc, "sync1Shift") if shift1.lstrip("-").isdigit() else None
+
+
+def _config_pdos_note(slave: Any, cfg: SlaveConfig, source: str) -> None:
+    """lcec programs a generic slave's PDO tables only with ``configPdos="true"``; otherwise they name the
+    slave's own mapping for the HAL pins. Either way the reader says what it did with them."""
+    loc = Location(source, slave.sourceline)
+    if (slave.get("configPdos") or "").strip().lower() == "true":
+        cfg.note("startup.lcec.configpdos", 'configPdos="true": lcec programs these PDO tables; they are converted '
+                 "as the slave's PDO assignment and mapping", loc, Severity.INFO)
+    else:
+        cfg.note("startup.lcec.configpdos", "configPdos is not \"true\": lcec leaves the slave's own PDO mapping and "
+                 "uses these tables for its HAL pins only; they are converted as the PDO assignment and mapping, "
+                 "which IgH, ros2 and pysoem exports program", loc)
 
 
 #: what the reader uses; every other element or attribute is reported
@@ -205,6 +224,10 @@ def _report_unused(master: Any, slave: Any, cfg: SlaveConfig, source: str) -> No
         why = _WHY.get(child.tag, "not an lcec element this reader knows")
         cfg.note("startup.lcec.unused", f"<{child.tag} {attrs}> is not converted: {why}",
                  Location(source, child.sourceline))
+    if master.get("appTimePeriod") and cfg is not None and slave is master.find("slave"):
+        cfg.note("startup.lcec.master", f"master appTimePeriod={master.get('appTimePeriod')!r} ns is lcec's "
+                 "application cycle: used for the sync cycles given as *N; a master setting, not part of a slave "
+                 "configuration", Location(source, master.sourceline), Severity.INFO)
     extra = sorted(set(master.attrib) - {"idx", "appTimePeriod"})
     if extra and cfg is not None and slave is master.find("slave"):
         cfg.note("startup.lcec.master", "master attributes " + ", ".join(f"{k}={master.get(k)!r}" for k in extra)
