@@ -24,9 +24,17 @@ def test_corpus_list_is_complete(corpus):
     assert on_disk == set(CONFIGS) | {"hwdevmgr_device_config.yaml"}
 
 
+#: configurations that hold nothing of a startup list (an ecmc script that sets the identity and includes others)
+NOTHING = {"ecmc_ecmciPOS4808.cmd"}
+
+
 @pytest.mark.parametrize("name", CONFIGS)
 def test_every_corpus_config_imports_with_locations(name):
     path = corpus_path("configs", name)
+    if name in NOTHING:
+        with pytest.raises(InputError, match="nothing to import"):
+            import_file(path)
+        return
     configs = import_file(path)
     assert configs
     for c in configs:
@@ -178,10 +186,37 @@ def test_ecmc_sw_image_as_sdo_writes():
 
 
 def test_ecmc_identity_from_macros():
-    (c,) = import_file(corpus_path("configs", "ecmc_ecmciPOS4808.cmd"))
+    from ecattool.startup.formats import ecmc
+
+    (c,) = ecmc.load(corpus_path("configs", "ecmc_ecmciPOS4808.cmd").read_bytes(), "ecmciPOS4808.cmd")
     assert (c.identity.vendor_id, c.identity.product_code) == (0x1A3, 0x019F418D)
     assert c.name == "iPOS4808"
     assert sum(n.rule == "startup.ecmc.include" for n in c.notes) == 2
+
+
+def test_an_import_of_nothing_is_an_error_naming_what_was_not_followed():
+    # the script sets the identity and includes two others: nothing of a startup list is in it (issue 27)
+    with pytest.raises(InputError) as err:
+        import_file(corpus_path("configs", "ecmc_ecmciPOS4808.cmd"))
+    assert "nothing to import" in str(err.value) and ":23: included script not followed" in str(err.value)
+    with pytest.raises(InputError, match="x.csv:1: nothing to import"):
+        import_bytes(b"slave,position,transition,index,subindex,data,complete_access,timeout_ms,type,value,comment\n",
+                     "x.csv")
+
+
+def test_a_cmd_that_only_includes_scripts_is_ecmc_not_yaml():
+    script = (b"#- hardware script\n${SCRIPTEXEC} ${ecmccfg_DIR}configureSlave.cmd, \"HW_DESC=EL7041\"\n"
+              b"${SCRIPTEXEC} ${ecmccfg_DIR}applySlaveConfig.cmd\n")
+    assert detect_format(script, "x.cmd") == "ecmc"
+    with pytest.raises(InputError, match=r"x.cmd:1: nothing to import.*x.cmd:2: included script not followed"):
+        import_bytes(script, "x.cmd")
+
+
+def test_ecmc_header_date_is_no_comment():
+    script = (b"#-########\n#     Date: 2018/01/24 09:40:21\n#  Author: someone\n"
+              b'ecmcConfigOrDie "Cfg.EcAddSdo(0,0x6060,0x0,8,1)"\n# csp\necmcConfigOrDie "Cfg.EcAddSdo(0,0x6060,0x0,8,1)"\n')
+    (c,) = import_bytes(script, "x.cmd")
+    assert [cmd.comment for cmd in c.commands] == ["", "csp"]
 
 
 def test_ecmc_undefined_macro_in_index_is_an_error_with_line():

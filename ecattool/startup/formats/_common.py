@@ -280,3 +280,63 @@ def sync_plan(c: SlaveConfig) -> list[SmPlan]:
     for plan in plans.values():
         plan.watchdog = None if plan.mailbox else sm_watchdog(c, plan.number)
     return [plans[n] for n in sorted(plans)]
+
+
+# --- what a format cannot carry -----------------------------------------------------------------------
+
+def _where(items: list[Any]) -> str:
+    first = next((x.source for x in items if getattr(x, "source", None) is not None), None)
+    return f", first at {first}" if first else ""
+
+
+def one_shot_losses(c: SlaveConfig, fmt: str) -> list[str]:
+    """The one-shot writes a format with startup writes only cannot run once: once-writes (EEPROM programming)
+    are written as startup writes in their order, as its master runs them (re-sent at every configuration);
+    a reset is left out (a comment names it): in a startup list it would reset the drive at every
+    configuration and abort what follows."""
+    out = []
+    once = [cmd for cmd in c.commands if cmd.kind == "once"]
+    if once:
+        out.append(f"{len(once)} once-write(s) ({once[0].address} … {once[-1].address}{_where(once)}) are written as "
+                   f"startup writes: {fmt} has no one-shot write, its master re-sends them at every configuration")
+    resets = [cmd for cmd in c.commands if cmd.kind == "reset"]
+    if resets:
+        out.append(f"{len(resets)} reset write(s) ({resets[0].address}{_where(resets)}) left out: {fmt} has no "
+                   "one-shot write, and a reset among startup writes would reset the drive at every configuration")
+    return out
+
+
+def soe_losses(c: SlaveConfig, fmt: str) -> list[str]:
+    if not c.soe_commands:
+        return []
+    return [f"{len(c.soe_commands)} SoE command(s) ({c.soe_commands[0].address}{_where(c.soe_commands)}): {fmt} "
+            "has no SoE write"]
+
+
+def dc_losses(c: SlaveConfig, fmt: str, *, dc: bool = True, shift0: bool = True, sync1_cycle: bool = True,
+              sync1_shift: bool = True) -> list[str]:
+    """The DC settings of ``c`` that ``fmt`` has no place for (each keyword: whether it has one)."""
+    if not c.dc_assign_activate:
+        return []
+    if not dc:
+        cycle = f"SYNC0 cycle {c.dc_cycle_ns} ns" if c.dc_cycle_ns else "no SYNC0 cycle given"
+        return [f"DC (AssignActivate 0x{c.dc_assign_activate:04X}, {cycle}): {fmt} has no DC setting"]
+    out = []
+    if not shift0 and c.dc_shift_ns:
+        out.append(f"SYNC0 shift {c.dc_shift_ns} ns: {fmt} has no SYNC0 shift")
+    if not sync1_cycle and c.dc_sync1_cycle_ns:
+        out.append(f"SYNC1 cycle {c.dc_sync1_cycle_ns} ns: {fmt} has no SYNC1 cycle")
+    if not sync1_shift and c.dc_sync1_shift_ns:
+        out.append(f"SYNC1 shift {c.dc_sync1_shift_ns} ns: {fmt} has no SYNC1 shift")
+    return out
+
+
+def pdo_table_losses(c: SlaveConfig, fmt: str) -> list[str]:
+    """PDO tables that no startup write programs (a ros2, lcec or ecmc source), in a format of startup writes."""
+    from ecattool.startup.model import is_pdo_programming
+
+    if not c.has_pdo_info or any(is_pdo_programming(cmd.index) for cmd in c.commands):
+        return []
+    pdos = [f"0x{p.index:04X}" for p in (*c.rx_pdos, *c.tx_pdos)]
+    return [f"PDO assignment and mapping ({', '.join(pdos)}): the source gives them as tables, and {fmt} only as "
+            "startup writes, which the source has none of"]

@@ -16,7 +16,14 @@ from typing import Any
 from ecattool.errors import InputError, Location
 from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import check_transition, decode_text, parse_hex
+from ecattool.startup.formats._common import (
+    check_transition,
+    dc_losses,
+    decode_text,
+    parse_hex,
+    pdo_table_losses,
+    soe_losses,
+)
 from ecattool.startup.model import KINDS, StartupCommand, StartupList, set_kind
 
 NAME = "csv"
@@ -97,3 +104,12 @@ def _rows(reader: Any, source: str) -> list[SlaveConfig]:  # a csv reader (its t
 
 def detect(data: bytes) -> bool:
     return data.lstrip(b"\xef\xbb\xbf").lower().startswith(b"slave,position,transition")
+
+
+def losses(c: SlaveConfig) -> list[str]:
+    """What CSV rows cannot carry: SoE commands, DC and PDO tables no startup write programs."""
+    return soe_losses(c, "CSV") + dc_losses(c, "CSV", dc=False) + pdo_table_losses(c, "CSV")
+
+
+def nothing_left(c: SlaveConfig) -> bool:
+    return not c.commands

@@ -35,6 +35,7 @@ from ecattool.startup.formats._common import (
     one_line,
     parse_hex,
     pdo_sm,
+    soe_losses,
     unsigned_type,
 )
 from ecattool.startup.model import StartupCommand, StartupList
@@ -497,3 +498,8 @@ def detect(data: bytes) -> bool:
     lines; never YAML, whose keys these lines are not."""
     return (b"Cfg.Ec" in data[:1 << 20] or b"epicsEnvSet" in data[:1 << 16]
             or _ECMC_LINE.search(data[:1 << 16]) is not None)
+
+
+def losses(c: SlaveConfig) -> list[str]:
+    """What an ecmc script cannot carry: SoE commands."""
+    return soe_losses(c, "ecmc")

@@ -23,7 +23,16 @@ from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry, SyncManager
 from ecattool.findings import Severity
 from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig, SoeCommand
-from ecattool.startup.formats._common import check_transition, one_shot_text, parse_hex, pdo_sm, sync_plan, unsigned_type
+from ecattool.startup.formats._common import (
+    check_transition,
+    dc_losses,
+    one_shot_losses,
+    one_shot_text,
+    parse_hex,
+    pdo_sm,
+    sync_plan,
+    unsigned_type,
+)
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "eni"
@@ -132,7 +141,7 @@ def _mailbox(slave: Any, c: SlaveConfig) -> None:
         _sub(mb, "Protocol", "SoE")
     cmds = _sub(_sub(mb, "CoE"), "InitCmds")
     for cmd in c.commands:
-        if cmd.one_shot:  # a master re-sends InitCmds at every transition: not one of them
+        if cmd.kind == "reset":  # a master re-sends InitCmds at every transition: a reset is not one of them
             cmds.append(etree.Comment(xml_text(f" not an InitCmd: {one_shot_text(cmd).replace('--', '- -')} ")))
             continue
         _mailbox_cmd(cmds, {"CompleteAccess": "true"} if cmd.complete_access else {}, cmd.transition, cmd.comment,
@@ -448,3 +457,12 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
 def detect(data: bytes) -> bool:
     head = data[:4096]
     return b"<EtherCATConfig" in head or b"<EtherCATMailbox" in head
+
+
+def losses(c: SlaveConfig) -> list[str]:
+    """What an ENI cannot carry for ``c``: one-shot writes (InitCmds run at every transition), an unknown
+    identity (a master matches the slave by VendorId/ProductCode) and a SYNC1 shift (ENI's DC has none)."""
+    out = one_shot_losses(c, "an ENI")
+    if c.identity is None:
+        out.append("no vendor id/product code: an ENI slave needs VendorId and ProductCode, and the source gives none")
+    return out + dc_losses(c, "an ENI", sync1_shift=False)

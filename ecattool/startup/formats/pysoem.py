@@ -22,8 +22,9 @@ Export only.
 from __future__ import annotations
 
 from ecattool.errors import TargetError
+from ecattool.esi.model import Pdo
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import one_line, sync_plan, unique_identifiers
+from ecattool.startup.formats._common import dc_losses, one_line, soe_losses, sync_plan, unique_identifiers
 from ecattool.startup.model import StartupCommand, is_pdo_programming
 from ecattool.target.pysoem import dc_sync_args
 
@@ -129,11 +130,20 @@ def _write_lines(commands: list[StartupCommand]) -> list[str]:
 def _pdo_tables(c: SlaveConfig) -> list[tuple[int, list[tuple[int, list[int]]]]]:
     """``[(assignment object, [(PDO, [mapping entry words])])]`` for a slave whose startup list does not program
     its PDO tables itself; empty where it does (or there are no tables)."""
-    if not c.has_pdo_info or any(is_pdo_programming(cmd.index) for cmd in c.commands):
+    if not _table_pdos(c):
         return []
     return [(0x1C10 + plan.number, [(p.index, [(e.index << 16) | (e.subindex << 8) | e.bit_len for e in p.entries])
                                     for p in plan.pdos])
             for plan in sync_plan(c) if not plan.mailbox and 2 <= plan.number <= 15]
+
+
+def _table_pdos(c: SlaveConfig) -> list[Pdo]:
+    """The PDOs the config function programs from the tables: none where the startup list programs them itself
+    (or there are no tables), and none of a slave whose tables are not CoE mapping objects (SoE IDNs)."""
+    if not c.has_pdo_info or any(is_pdo_programming(cmd.index) for cmd in c.commands):
+        return []
+    pdos = [*c.rx_pdos, *c.tx_pdos]
+    return [] if any(not is_pdo_programming(p.index) for p in pdos) else pdos
 
 
 _PROGRAM_PDOS = [
@@ -227,4 +237,22 @@ def _dc_lines(configs: list[SlaveConfig]) -> list[str]:
             "        if args[0] and args[1] is None:",
             "            args = (args[0], sync0_cycle_ns, *args[2:])",
             "        master.slaves[position].dc_sync(*args)"]
+    return out
+
+
+def losses(c: SlaveConfig) -> list[str]:
+    """What the pysoem module cannot carry: SoE commands, a SYNC1 shift, an AssignActivate other than SYNC0 or
+    SYNC0+SYNC1, and PDO tables of SoE IDNs (pysoem would write them into the CoE objects 1C12h/1C13h)."""
+    out = soe_losses(c, "pysoem") + dc_losses(c, "pysoem", sync1_shift=False)
+    if c.dc_assign_activate:
+        try:
+            dc_sync_args(c.dc_assign_activate, 0)
+        except TargetError as exc:
+            out.append(str(exc.message))
+    programmed = any(is_pdo_programming(cmd.index) for cmd in c.commands)
+    idns = [] if programmed else [p for p in (*c.rx_pdos, *c.tx_pdos) if not is_pdo_programming(p.index)]
+    if idns:
+        out.append(f"PDOs {', '.join(f'0x{p.index:04X}' for p in idns)} are not CoE mapping objects (1600h-17FFh, "
+                   "1A00h-1BFFh) but SoE IDNs (AT/MDT telegrams), mapped by SoE commands: not written into "
+                   f"1C12h/1C13h ({idns[0].location or c.source})")
     return out

@@ -22,11 +22,14 @@ from ecattool.startup.config import SlaveConfig
 from ecattool.startup.formats._common import (
     as_list,
     check_tree,
+    dc_losses,
     decode_text,
     long_number_location,
     one_line,
+    one_shot_losses,
     one_shot_text,
     require_identity,
+    soe_losses,
 )
 from ecattool.startup.model import StartupCommand, StartupList, is_pdo_programming
 
@@ -166,8 +169,8 @@ def export(configs: list[SlaveConfig]) -> str:
         if skipped:
             lines.append(f"# {len(skipped)} PDO assignment/mapping writes of the startup list are done by the driver "
                          "from rpdo/tpdo")
-    once = [cmd for cmd in commands if cmd.one_shot]
-    commands = [cmd for cmd in commands if not cmd.one_shot]
+    once = [cmd for cmd in commands if cmd.kind == "reset"]  # once-writes stay, in order (a loss export() reports)
+    commands = [cmd for cmd in commands if cmd.kind != "reset"]
     lines += [f"# not an sdo entry: {one_shot_text(cmd)}" for cmd in once]
     if commands:
         lines.append("sdo:  # sdo data to be transferred at drive startup")
@@ -348,3 +351,9 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
 def detect_yaml(top: Any) -> bool:
     return isinstance(top, dict) and any(k in top for k in ("rpdo", "tpdo", "sdo", "product_id"))
 
+
+def losses(c: SlaveConfig) -> list[str]:
+    """What the driver's slave file cannot carry: one-shot writes, SoE commands, and DC beyond assign_activate
+    (the driver runs SYNC0 at its own period, unshifted, and SYNC1 with it)."""
+    return (one_shot_losses(c, "ethercat_driver_ros2") + soe_losses(c, "ethercat_driver_ros2")
+            + dc_losses(c, "ethercat_driver_ros2", shift0=False, sync1_cycle=False, sync1_shift=False))
