@@ -69,10 +69,16 @@ def _flow(items: list[tuple[str, Any]]) -> str:
     return "{" + ", ".join(f"{k}: {v if isinstance(v, _Raw) else _scalar(v)}" for k, v in items) + "}"
 
 
+#: channel types the driver maps with their size (its ``type2bits``); float and double it has not: it would map
+#: them as 255 bits (``return -1`` into a uint8_t), shifting every later entry of the domain
+DRIVER_CHANNEL_FLOATS = {"float": "uint32", "double": "uint64"}
+
+
 def _ros_type_of_entry(e: PdoEntry) -> str:
     name = (e.data_type or standard_type(e.index, e.subindex, e.bit_len) or "").upper()
     if name in COE_TO_ROS:
-        return COE_TO_ROS[name]
+        ros = COE_TO_ROS[name]
+        return DRIVER_CHANNEL_FLOATS.get(ros, ros)  # a float channel: its raw bits, at its size (a listed loss)
     if name.startswith("BIT") and name[3:].isdigit():
         return f"bit{name[3:]}"
     if e.bit_len == 1:
@@ -353,7 +359,13 @@ def detect_yaml(top: Any) -> bool:
 
 
 def losses(c: SlaveConfig) -> list[str]:
-    """What the driver's slave file cannot carry: one-shot writes, SoE commands, and DC beyond assign_activate
-    (the driver runs SYNC0 at its own period, unshifted, and SYNC1 with it)."""
-    return (one_shot_losses(c, "ethercat_driver_ros2") + soe_losses(c, "ethercat_driver_ros2")
+    """What the driver's slave file cannot carry: one-shot writes, SoE commands, DC beyond assign_activate
+    (the driver runs SYNC0 at its own period, unshifted, and SYNC1 with it) and float channels (written as the
+    unsigned integer of their size: the driver's type2bits maps float/double as 255 bits)."""
+    floats = [f"0x{p.index:04X}/0x{e.index:04X}:{e.subindex:02X}" for p in (*c.rx_pdos, *c.tx_pdos) for e in p.entries
+              if COE_TO_ROS.get((e.data_type or standard_type(e.index, e.subindex, e.bit_len) or "").upper())
+              in DRIVER_CHANNEL_FLOATS]
+    out = [f"float channel(s) {', '.join(floats)} written as uint32/uint64 (their raw bits): the driver has no float "
+           "channel type (it maps float/double as 255 bits)"] if floats else []
+    return (one_shot_losses(c, "ethercat_driver_ros2") + soe_losses(c, "ethercat_driver_ros2") + out
             + dc_losses(c, "ethercat_driver_ros2", shift0=False, sync1_cycle=False, sync1_shift=False))
