@@ -267,3 +267,40 @@ def test_ecmc_tolerated_reset_write_expects_no_reply():
     assert 'ecmcConfig "Cfg.EcWriteSdo(${ECMC_EC_SLAVE_NUM},0x2080,0x0,0x1,2)"' in text
     (back,) = import_bytes(text.encode(), "again.cmd")
     assert [x.expect_reply for x in back.commands] == [x.expect_reply for x in c.commands]
+
+
+def test_a_source_that_maps_a_pdo_two_ways_is_a_finding_with_its_line():
+    """ecmciPOSXXXX.cmd programs 1A00h with 2 entries (48 bits) by SDO and declares 3 (64 bits) as entries."""
+    (c,) = import_file(corpus_path("configs", "ecmc_ecmciPOSXXXX.cmd"))
+    found = {n.location.line: n.message for n in c.notes if n.rule == "startup.pdo.conflict"}
+    assert set(found) == {162, 165}
+    assert found[162].startswith("PDO 0x1A00 is declared with 3 entries (64 bits) but the startup writes (line(s) "
+                                 "20, 23, 26, 29) map 2 (48 bits): 6041:00/16, 6064:00/32")
+    assert "PDO 0x1A01 is declared with 2 entries (48 bits)" in found[165]
+
+
+def test_soe_idns_in_pdo_tables_are_a_finding_and_pysoem_never_writes_them_into_1c12():
+    from ecattool.errors import EncodeError
+    from ecattool.startup import export, losses
+
+    configs = import_file(corpus_path("configs", "lcec_initcmds_ethercat-conf.xml"))
+    ax = next(c for c in configs if c.soe_commands and c.identity is not None)
+    (note,) = [n for n in ax.notes if n.rule == "startup.pdo.soe"]
+    assert note.message.startswith("PDO(s) 0x0018, 0x1018, 0x0010, 0x1010 are no CoE mapping objects")
+    assert note.location.line == 16
+    with pytest.raises(EncodeError, match="pysoem cannot carry"):
+        export(ax, "pysoem")
+    assert any("SoE IDNs" in x for x in losses(ax, "pysoem")) and any("SoE command" in x for x in losses(ax, "pysoem"))
+    text = export(ax, "pysoem", lossy=True)
+    assert "program_pdos(slave" not in text and "0x0018" not in text  # no IDN written into 1C12h/1C13h
+
+
+def test_consistent_sources_have_no_contradiction():
+    from ecattool.project.export import slave_configs
+    from tests.conftest import ROOT
+
+    for project in sorted((ROOT / "samples").glob("*/project.yaml")):
+        from ecattool.startup import export, import_bytes
+
+        back = import_bytes(export(slave_configs(project), "json").encode(), "x.json")
+        assert not [n for c in back for n in c.notes if n.rule.startswith("startup.pdo")], project

@@ -110,10 +110,11 @@ def import_bytes(data: bytes, source: str = "<input>", fmt: str | None = None) -
     name = fmt or detect_format(data, source)
     if name == "ros2":
         _yaml_format(data, source)  # refuses hw_device_mgr files with a clear message
-    from ecattool.startup.formats._common import check_commands
+    from ecattool.startup.formats._common import check_commands, find_contradictions
 
     configs = list(_format(name, "import").module.load(data, source))
     check_commands(configs)
+    find_contradictions(configs)
     if not any(c.commands or c.has_pdo_info or c.dc_assign_activate or c.soe_commands for c in configs):
         notes = [n for c in configs for n in c.notes]
         first = (f"; {len(notes)} part(s) not used, first: {notes[0].location}: {notes[0].message[:160]}"

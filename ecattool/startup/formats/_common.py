@@ -340,3 +340,70 @@ def pdo_table_losses(c: SlaveConfig, fmt: str) -> list[str]:
     pdos = [f"0x{p.index:04X}" for p in (*c.rx_pdos, *c.tx_pdos)]
     return [f"PDO assignment and mapping ({', '.join(pdos)}): the source gives them as tables, and {fmt} only as "
             "startup writes, which the source has none of"]
+
+
+# --- contradictions within one source -------------------------------------------------------------------
+
+def _programmed_pdos(c: SlaveConfig) -> tuple[dict[int, list[int]], dict[int, list[StartupCommand]]]:
+    """What the startup writes leave in the PDO objects, replayed in order: object -> its sub-index values
+    (mapping words for 1600h-1BFFh, PDO indices for 1C12h/1C13h), and the writes to each object."""
+    from ecattool.startup.model import is_pdo_programming
+
+    subs: dict[int, dict[int, int]] = {}
+    writes: dict[int, list[StartupCommand]] = {}
+    for cmd in c.commands:
+        if not is_pdo_programming(cmd.index):
+            continue
+        width = 2 if cmd.index in (0x1C12, 0x1C13) else 4
+        obj = subs.setdefault(cmd.index, {})
+        writes.setdefault(cmd.index, []).append(cmd)
+        if cmd.complete_access and cmd.subindex == 0 and len(cmd.data) >= 2:
+            obj.clear()
+            obj[0] = cmd.data[0]
+            body = cmd.data[2:]
+            for k in range(len(body) // width):
+                obj[k + 1] = int.from_bytes(body[k * width:(k + 1) * width], "little")
+        else:
+            obj[cmd.subindex] = int.from_bytes(cmd.data[:width], "little")
+    return ({index: [obj.get(k, 0) for k in range(1, obj.get(0, 0) + 1)] for index, obj in subs.items()},
+            writes)
+
+
+def find_contradictions(configs: list[SlaveConfig]) -> None:
+    """Findings (notes, with the source line) for what one source says two ways: a PDO table whose entries or
+    assignment differ from what the same source's startup writes program into that object, and PDO tables of
+    SoE IDNs where CoE mapping objects go."""
+    from ecattool.findings import Severity
+    from ecattool.startup.model import is_pdo_programming
+
+    for c in configs:
+        pdos = [*c.rx_pdos, *c.tx_pdos]
+        idns = [p for p in pdos if not is_pdo_programming(p.index)]
+        if idns:
+            c.note("startup.pdo.soe", f"PDO(s) {', '.join(f'0x{p.index:04X}' for p in idns)} are no CoE mapping "
+                   "objects (1600h-17FFh, 1A00h-1BFFh)" + (": SoE IDNs (AT/MDT telegrams, set by the SoE commands)"
+                                                           if c.soe_commands else "") +
+                   "; an exporter that programs PDOs over CoE (pysoem) does not write them into 1C12h/1C13h",
+                   idns[0].location or c.source, Severity.WARNING)
+        if not pdos:
+            continue
+        state, writes = _programmed_pdos(c)
+        for p in pdos:
+            if p.index not in state:
+                continue
+            table = [(e.index << 16) | (e.subindex << 8) | e.bit_len for e in p.entries]
+            if state[p.index] != table:
+                lines = ", ".join(str(w.source.line) for w in writes[p.index] if w.source and w.source.line)
+                bits = sum(w & 0xFF for w in state[p.index])
+                c.note("startup.pdo.conflict", f"PDO 0x{p.index:04X} is declared with {len(p.entries)} entries "
+                       f"({p.bit_size} bits) but the startup writes (line(s) {lines}) map {len(state[p.index])} "
+                       f"({bits} bits): " + ", ".join(f"{w >> 16:04X}:{(w >> 8) & 0xFF:02X}/{w & 0xFF}"
+                                                      for w in state[p.index]) + "; the source contradicts itself",
+                       p.location or c.source, Severity.WARNING)
+        for assign, direction_pdos in ((0x1C12, c.rx_pdos), (0x1C13, c.tx_pdos)):
+            if assign in state and direction_pdos and state[assign] != [p.index for p in direction_pdos]:
+                lines = ", ".join(str(w.source.line) for w in writes[assign] if w.source and w.source.line)
+                c.note("startup.pdo.conflict", f"0x{assign:04X} is written with PDO(s) "
+                       f"{', '.join(f'0x{x:04X}' for x in state[assign]) or 'none'} (line(s) {lines}) but the PDO "
+                       f"tables assign {', '.join(f'0x{p.index:04X}' for p in direction_pdos)}; the source "
+                       "contradicts itself", direction_pdos[0].location or c.source, Severity.WARNING)
