@@ -622,3 +622,44 @@ def test_project_new_leaves_dc_to_the_user_where_the_esi_offers_free_run(tmp_pat
     assert [m.assign_activate for m in everest.dc_opmodes] == [0, 0x0300] and dc_only_mode(everest) is None
     sv660 = esi.load_device(str(ROOT / "samples" / "generic_esi" / "inovance_SV660_EOE_1Axis_V9.12.xml"))
     assert dc_only_mode(sv660) == "DC"
+
+
+# --- SYNC1 in every format that carries DC (issue 27) --------------------------------------------------------
+
+def test_sync1_cycle_and_shift_are_the_same_in_every_format_that_carries_dc(tmp_path):
+    """The lcec AX5206 slave: SYNC0 250 us shifted 50 us, SYNC1 750 us shifted 250 us (AssignActivate 0x0730)."""
+    from ecattool.errors import EncodeError
+    from ecattool.startup import losses
+
+    configs = import_file(corpus_path("configs", "lcec_initcmds_ethercat-conf.xml"))
+    ax = next(c for c in configs if c.identity is not None and c.soe_commands)
+    ax.rx_pdos, ax.tx_pdos, ax.soe_commands = [], [], []  # DC only here (SoE and IDN tables: tested above)
+    want = (0x0730, 250_000, 50_000, 750_000, 250_000)
+    assert (ax.dc_assign_activate, ax.dc_cycle_ns, ax.dc_shift_ns, ax.dc_sync1_cycle_ns, ax.dc_sync1_shift_ns) == want
+    for fmt in ("json", "ecmc"):  # all five values, read back
+        (back,) = import_bytes(export(ax, fmt).encode(), f"x.{fmt}", fmt)
+        assert (back.dc_assign_activate, back.dc_cycle_ns, back.dc_shift_ns, back.dc_sync1_cycle_ns,
+                back.dc_sync1_shift_ns) == want, fmt
+    igh = export(ax, "igh")
+    assert "ecrt_slave_config_dc(sc, 0x0730, 250000U, 50000, 750000U, 250000);" in igh
+    from tests.test_startup_export import _gcc
+
+    assert _gcc(igh, tmp_path).returncode == 0
+    # ENI: SYNC1 cycle in DC/CycleTime1 and the 0x09A4 half of the cycle register; it has no SYNC1 shift
+    with pytest.raises(EncodeError, match="SYNC1 shift 250000 ns: an ENI has no SYNC1 shift"):
+        export(ax, "eni")
+    root = etree.fromstring(export(ax, "eni", lossy=True).encode())
+    assert root.findtext(".//DC/CycleTime1") == "750000" and root.findtext(".//DC/ShiftTime") == "50000"
+    cycle = next(ic for ic in root.iter("InitCmd") if ic.findtext("Ado") == "2464")
+    assert cycle.findtext("Data") == (250_000).to_bytes(4, "little").hex() + (750_000).to_bytes(4, "little").hex()
+    (back,) = import_bytes(etree.tostring(root), "x.xml", "eni")
+    assert (back.dc_cycle_ns, back.dc_shift_ns, back.dc_sync1_cycle_ns) == (250_000, 50_000, 750_000)
+    # pysoem: dc_sync(act, sync0, shift, sync1) (SYNC0 + SYNC1; the latch bits are not pysoem's); no SYNC1 shift
+    assert [x for x in losses(ax, "pysoem") if "SYNC1" in x] == [f"{ax.label}: SYNC1 shift 250000 ns: pysoem has no "
+                                                                 "SYNC1 shift"]
+    ns: dict = {}
+    exec(compile(export(ax, "pysoem", lossy=True), "m.py", "exec"), ns)
+    assert ns["DC"][0][1] == (True, 250_000, 50_000, 750_000)
+    # ros2: the driver sets only assign_activate; shift and SYNC1 are listed losses
+    lost = " ".join(losses(ax, "ros2"))
+    assert "SYNC0 shift 50000 ns" in lost and "SYNC1 cycle 750000 ns" in lost and "SYNC1 shift 250000 ns" in lost

@@ -501,5 +501,20 @@ def detect(data: bytes) -> bool:
 
 
 def losses(c: SlaveConfig) -> list[str]:
-    """What an ecmc script cannot carry: SoE commands."""
-    return soe_losses(c, "ecmc")
+    """What an ecmc script cannot carry: SoE commands, the transition of a write (ecmc sends every SDO in
+    PRE-OP) and a PDO without entries (ecmc declares PDOs through their entries)."""
+    out = soe_losses(c, "ecmc")
+    other = [cmd for cmd in c.commands if cmd.transition != "PS"]
+    if other:
+        out.append(f"the transition of {len(other)} write(s) ({other[0].transition} {other[0].address}…): ecmc sends "
+                   "every SDO in PRE-OP (PS)")
+    empty = [p for p in (*c.rx_pdos, *c.tx_pdos) if not p.entries]
+    if empty:
+        out.append(f"PDO(s) {', '.join(f'0x{p.index:04X}' for p in empty)} without entries: ecmc declares a PDO "
+                   "through its entries")
+    return out
+
+
+def nothing_left(c: SlaveConfig) -> bool:
+    """No command, PDO entry or DC setting: the script would hold comments only."""
+    return not c.commands and not any(p.entries for p in (*c.rx_pdos, *c.tx_pdos)) and not c.dc_assign_activate

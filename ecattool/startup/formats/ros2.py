@@ -367,5 +367,9 @@ def losses(c: SlaveConfig) -> list[str]:
               in DRIVER_CHANNEL_FLOATS]
     out = [f"float channel(s) {', '.join(floats)} written as uint32/uint64 (their raw bits): the driver has no float "
            "channel type (it maps float/double as 255 bits)"] if floats else []
+    other = [cmd for cmd in c.commands if cmd.transition != "PS" and cmd.kind != "reset"]
+    if other:
+        out.append(f"the transition of {len(other)} write(s) ({other[0].transition} {other[0].address}…): the "
+                   "driver sends every sdo entry in PRE-OP")
     return (one_shot_losses(c, "ethercat_driver_ros2") + soe_losses(c, "ethercat_driver_ros2") + out
             + dc_losses(c, "ethercat_driver_ros2", shift0=False, sync1_cycle=False, sync1_shift=False))
