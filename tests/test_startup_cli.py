@@ -128,3 +128,31 @@ def test_export_one_drive_of_a_project_for_the_one_slave_formats(capsys, tmp_pat
     assert [s["name"] for s in json.loads(out)["slaves"]] == ["x", "y"]  # bus order
     code, _, err = run(capsys, "startup", "export", "--project", str(project), "--format", "json", "--drive", "z")
     assert code == 1 and "no slave named or at position 'z' (slaves: x at 0, y at 1)" in err
+
+
+def test_a_soe_only_drive_to_csv_is_refused_never_a_header_only_file(tmp_path, capsys):
+    """Issue 27: 87 SoE commands into CSV gave a header-only file with exit 0, and the note said CSV carried them."""
+    src = str(corpus_path("configs", "lcec_initcmds_AX5206-AM8032-async.xml"))
+    out = tmp_path / "x.csv"
+    code, _, err = run(capsys, "startup", "convert", src, "--format", "csv", "-o", str(out))
+    assert code == 1 and "csv cannot carry" in err and "87 SoE command(s)" in err and not out.exists()
+    assert "only the ENI, TwinCAT, IgH and JSON formats carry them" in err  # the import's note says it right
+    code, _, err = run(capsys, "startup", "convert", src, "--format", "csv", "--lossy", "-o", str(out))
+    assert code == 1 and "nothing to write: csv carries nothing" in err and not out.exists()
+    code, _, err = run(capsys, "startup", "import", str(_header_only(tmp_path)))
+    assert code == 1 and "nothing to import" in err and err.count("\n") == 1
+
+
+def _header_only(tmp_path):
+    path = tmp_path / "empty.csv"
+    path.write_text("slave,position,transition,index,subindex,data,complete_access,timeout_ms,type,value,comment,kind\n")
+    return path
+
+
+def test_ros2_tables_to_twincat_is_refused_never_an_empty_file(tmp_path, capsys):
+    """Issue 27: a ros2 file whose PDOs are tables only became a 0-byte TwinCAT file with exit 0."""
+    src = str(corpus_path("configs", "ros2_beckhoff_el3104.yaml"))
+    out = tmp_path / "x.txt"
+    for extra in ((), ("--lossy",)):
+        code, _, err = run(capsys, "startup", "convert", src, "--format", "twincat", *extra, "-o", str(out))
+        assert code == 1 and not out.exists() and "PDO assignment and mapping" in err

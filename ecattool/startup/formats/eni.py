@@ -294,7 +294,8 @@ def _soe_initcmds(parent: Any, cfg: SlaveConfig, source: str) -> None:
                 timeout_ms=_int(ic, "Timeout", source, 0) or 0, fixed=_bool_attr(ic, "Fixed"), source=loc))
     if found:
         cfg.note("startup.soe", f"{len(found)} SoE init command(s) kept as SoE entries; they are not CoE SDO "
-                 "downloads and only the ENI, TwinCAT, JSON and CSV formats carry them", _loc(source, parent),
+                 "downloads and only the ENI, TwinCAT, IgH and JSON formats carry them (CSV, ecmc, ros2 and pysoem "
+                 "refuse them unless --lossy)", _loc(source, parent),
                  Severity.INFO)
 
 
