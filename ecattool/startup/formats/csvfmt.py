@@ -24,6 +24,7 @@ from ecattool.startup.formats._common import (
     pdo_table_losses,
     soe_losses,
 )
+from ecattool.startup.formats.jsonfmt import json_value
 from ecattool.startup.model import KINDS, StartupCommand, StartupList, set_kind
 
 NAME = "csv"
@@ -43,8 +44,7 @@ def export(configs: list[SlaveConfig]) -> str:
     for c in configs:
         for cmd in c.commands:
             kind = cmd.kind + ("" if cmd.verify else "+noverify")
-            value = "" if cmd.value is None else json.dumps(cmd.value if isinstance(cmd.value, (int, float, str, bool))
-                                                            else str(cmd.value))
+            value = "" if cmd.value is None else json.dumps(json_value(cmd.value))
             w.writerow([c.name, "" if c.position is None else c.position, cmd.transition, f"0x{cmd.index:04X}",
                         f"0x{cmd.subindex:02X}", cmd.data.hex(), "1" if cmd.complete_access else "0", cmd.timeout_ms,
                         cmd.type_name or "", value, cmd.comment, kind])

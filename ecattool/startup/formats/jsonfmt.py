@@ -31,9 +31,9 @@ FORMAT_TAG = "ecattool-startup"
 VERSION = 1
 
 
-def _value(v: Any) -> Any:
+def json_value(v: Any) -> Any:
     if isinstance(v, int) and not isinstance(v, bool) and v.bit_length() > 64:
-        return str(v)  # not a value of any CoE type; text, which JSON can hold at any length
+        return f"0x{v:x}"  # not a value of any CoE type: hex text (decimal stops at Python's 4300 digits)
     if isinstance(v, float) and not math.isfinite(v):
         return str(v)  # JSON has no NaN or infinity
     if v is None or isinstance(v, (bool, int, float, str)):
@@ -55,7 +55,7 @@ def _cmd(cmd: StartupCommand) -> dict[str, Any]:
     if cmd.type_name:
         d["type"] = cmd.type_name
     if cmd.value is not None:
-        d["value"] = _value(cmd.value)
+        d["value"] = json_value(cmd.value)
     if cmd.once:
         d["once"] = True
     if not cmd.expect_reply:
@@ -124,7 +124,7 @@ def slave_to_json(c: SlaveConfig) -> dict[str, Any]:
 
 def export(configs: list[SlaveConfig]) -> str:
     doc = {"format": FORMAT_TAG, "version": VERSION, "slaves": [slave_to_json(c) for c in configs]}
-    return json.dumps(doc, indent=2, ensure_ascii=False, default=_value) + "\n"
+    return json.dumps(doc, indent=2, ensure_ascii=False, default=json_value) + "\n"
 
 
 # --- reading -----------------------------------------------------------------------------------------

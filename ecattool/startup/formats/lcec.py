@@ -60,7 +60,8 @@ def _sdo_configs(slave: Any, cfg: SlaveConfig, source: str) -> None:
             raise InputError("sdoConfig without sdoDataRaw data (only raw data is supported)", loc)
         cfg.startup.commands.append(StartupCommand("PS", index, sub, raw, complete_access=complete,
                                                    type_name=None if complete else unsigned_type(len(raw)),
-                                                   value=int.from_bytes(raw, "little"), source=loc))
+                                                   value=int.from_bytes(raw, "little") if len(raw) <= 8 else None,
+                                                   source=loc))
 
 
 def _pdos(slave: Any, cfg: SlaveConfig, source: str) -> None:
