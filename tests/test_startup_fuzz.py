@@ -176,6 +176,14 @@ def test_each_found_crash_is_one_located_error(name, data, message):
         assert message in text
 
 
+def test_a_huge_count_in_a_mapping_object_is_replayed_boundedly():
+    """The fuzzer: 1600h:00 := 0x99…99 (a long write) made the contradiction check build a list of 2^32 entries."""
+    slave = ('[{"name": "a", "commands": [{"transition": "PS", "index": 5632, "subindex": 0, "data": "' + "ff" * 40 +
+             '"}], "rx_pdos": [{"index": 5632, "entries": [{"index": 24640, "bit_len": 16}]}]}]')
+    (cfg,) = import_bytes((_JSON % slave).encode(), "big.json")
+    assert [n.rule for n in cfg.notes] == ["startup.pdo.conflict"]  # 255 zero entries, not 2^320
+
+
 def test_csv_value_that_is_no_scalar_stays_text():
     (cfg,) = import_bytes((_HDR + "a,0,PS,0x6060,0x00,08,0,0,USINT,[[1]],x\n").encode(), "v.csv")
     assert cfg.commands[0].value == "[[1]]"

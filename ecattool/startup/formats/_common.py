@@ -365,7 +365,8 @@ def _programmed_pdos(c: SlaveConfig) -> tuple[dict[int, list[int]], dict[int, li
                 obj[k + 1] = int.from_bytes(body[k * width:(k + 1) * width], "little")
         else:
             obj[cmd.subindex] = int.from_bytes(cmd.data[:width], "little")
-    return ({index: [obj.get(k, 0) for k in range(1, obj.get(0, 0) + 1)] for index, obj in subs.items()},
+    # sub-index 0 holds a count of at most 255 sub-indices (a longer write there is bounded, not replayed)
+    return ({index: [obj.get(k, 0) for k in range(1, min(obj.get(0, 0), 0xFF) + 1)] for index, obj in subs.items()},
             writes)
 
 
