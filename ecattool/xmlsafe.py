@@ -66,7 +66,7 @@ def parse_xml(data: bytes, source: str | None = None, drop_blank_text: bool = Fa
     except etree.XMLSyntaxError as exc:
         line, col = exc.position if exc.position else (None, None)
         msg = str(exc.msg if hasattr(exc, "msg") else exc)
-        msg = re.sub(r", line \d+, column \d+$", "", msg)
+        msg = re.sub(r", line \d+, column \d+$", "", msg.splitlines()[0] if msg.strip() else msg)  # libxml2 may add file text
         raise InputError(f"not well-formed XML: {msg}", Location(source, line, col)) from None
 
 

@@ -184,6 +184,12 @@ def test_a_huge_count_in_a_mapping_object_is_replayed_boundedly():
     assert [n.rule for n in cfg.notes] == ["startup.pdo.conflict"]  # 255 zero entries, not 2^320
 
 
+def test_an_xml_syntax_error_is_one_line_without_file_text():
+    with pytest.raises(EcatToolError) as err:
+        import_bytes(b"<EtherCATConfig><Config><![CDATA[abc\nmore file text", "x.xml", "eni")
+    assert str(err.value) == "x.xml:2:15: not well-formed XML: CData section not finished"
+
+
 def test_csv_value_that_is_no_scalar_stays_text():
     (cfg,) = import_bytes((_HDR + "a,0,PS,0x6060,0x00,08,0,0,USINT,[[1]],x\n").encode(), "v.csv")
     assert cfg.commands[0].value == "[[1]]"
