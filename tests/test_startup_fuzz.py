@@ -158,6 +158,8 @@ _JSON = '{"format": "ecattool-startup", "version": 1, "slaves": %s}'
     ("digits.yaml", "vendor_id: 1\nproduct_id: " + "9" * 4400 + "\n", "digits.yaml:2: a number of more"),
     ("deep.yaml", "vendor_id: 1\nproduct_id: 2\nsdo: " + "[" * 3000 + "]" * 3000 + "\n", "deep.yaml"),
     ("sm.yaml", "vendor_id: 1\nproduct_id: 2\nsm: [[1]]\n", "sm.yaml:3:6: an sm entry is a mapping"),
+    ("type.json", _JSON % '[{"name": "a", "commands": [{"transition": "PS", "index": 1, "subindex": 0, "data": "01", '
+     '"type": [1]}]}]', "type must be text, got list"),
     ("sm2.yaml", "vendor_id: 1\nproduct_id: 2\nsm: {a: 1}\n", "sm2.yaml:3:5: sm must be a list"),
     ("gap.cmd", 'ecmcConfigOrDie "Cfg.EcAddEntryComplete(0,0x1,0x2,1,2,0x1600,0x0,0x0,100000000,Gap)"\n',
      "gap.cmd:1: PDO 0x1600: entry bit length 100000000 is out of range (0..255)"),

@@ -156,6 +156,12 @@ def _int(v: Any, loc: Location, what: str) -> int:
     return v
 
 
+def _text(v: Any, loc: Location, what: str) -> str | None:
+    if v is not None and not isinstance(v, str):
+        raise InputError(f"{what} must be text, got {type(v).__name__}", loc)
+    return v
+
+
 def _opt(d: dict[str, Any], key: str, default: int, loc: Location) -> int:
     return _int(d.get(key, default), loc, key)
 
@@ -195,7 +201,7 @@ def _read_slave(s: Any, doc: _Doc, i: int) -> SlaveConfig:
             check_transition(str(_need(c, "transition", loc)), loc), _int(_need(c, "index", loc), loc, "index"),
             _int(_need(c, "subindex", loc), loc, "subindex"), parse_hex(str(_need(c, "data", loc)), loc),
             comment=str(c.get("comment", "")), complete_access=bool(c.get("complete_access", False)),
-            timeout_ms=_opt(c, "timeout_ms", 0, loc), type_name=c.get("type"), value=c.get("value"),
+            timeout_ms=_opt(c, "timeout_ms", 0, loc), type_name=_text(c.get("type"), loc, "type"), value=c.get("value"),
             expect_reply=bool(c.get("expect_reply", True)), verify=bool(c.get("verify", True)),
             once=bool(c.get("once", False)), source=loc))
     for key, direction in (("rx_pdos", Direction.RX), ("tx_pdos", Direction.TX)):
