@@ -141,7 +141,9 @@ EXCERPTS = {"eni": "### ENI (`eni`)", "json": "### JSON (`json`)"}
 def test_startup_format_example_is_what_the_exporter_writes(fmt: str) -> None:
     from ecattool.startup import export
 
-    assert export(startup_example(), fmt).rstrip("\n") == section_block("docs/startup.md", FULL_EXAMPLES[fmt]).rstrip("\n")
+    # lossy: TwinCAT lines and CSV have no DC (docs/startup.md says so); the other formats carry all of it
+    assert export(startup_example(), fmt, lossy=fmt in ("twincat", "csv")).rstrip("\n") == \
+        section_block("docs/startup.md", FULL_EXAMPLES[fmt]).rstrip("\n")
 
 
 @pytest.mark.parametrize("fmt", sorted(EXCERPTS))

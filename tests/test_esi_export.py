@@ -168,3 +168,47 @@ def test_cli_export_of_an_eds_and_option_misuse(capsys, tmp_path):
     assert code == 2 and not (tmp_path / "b.xml").exists()
     code, _, err = run(capsys, "esi", "export", str(out), "-o", str(out))  # never over its input
     assert code == 1 and "input" in err
+
+
+def _eds_with_shared_names(tmp_path):
+    """The corpus EDS with two sub-items of 1018h named "Reserved", as EDS files often have them."""
+    text = (CORPUS / "eds" / "technosoft_iPOS.D.v1.04.eds").read_text(encoding="latin-1")
+    for sub in ("Revision number", "Serial number"):
+        text = text.replace(f"ParameterName={sub}", "ParameterName=Reserved", 1)
+    path = tmp_path / "shared_names.eds"
+    path.write_text(text, encoding="latin-1")
+    return path
+
+
+def test_an_eds_whose_sub_items_share_a_name_exports_a_valid_esi(tmp_path, schemas, capsys):
+    """Issue 27: the names are the schema's key of a DataType's SubItems; a repeat made an invalid ESI, exit 0."""
+    path = _eds_with_shared_names(tmp_path)
+    out = tmp_path / "x.xml"
+    code, _, err = run(capsys, "esi", "export", str(path), "-o", str(out))
+    assert code == 0, err
+    tree = etree.parse(str(out))
+    for version, schema in schemas.items():
+        assert schema.validate(tree), (version, schema.error_log)
+    dt = next(d for d in tree.iter("DataType") if d.findtext("Name") == "DT1018")
+    assert [si.findtext("Name") for si in dt.iter("SubItem")][3:] == ["Reserved", "Reserved_04"]
+    obj = next(o for o in tree.iter("Object") if o.findtext("Index") == "#x1018")
+    assert [si.findtext("Name") for si in obj.find("Info").iter("SubItem")][3:] == ["Reserved", "Reserved_04"]
+    dev = esi.select(esi.load(str(out)), None)
+    assert [e.name for e in dev.dictionary.get(0x1018)][3:] == ["Reserved", "Reserved_04"]
+
+
+def test_esi_export_refuses_to_return_an_esi_that_breaks_a_schema_key():
+    from ecattool.errors import EncodeError
+    from ecattool.esi.export import check_own_output
+
+    device = profiles.load("hdt")
+    root = etree.fromstring(device_to_esi(device))
+    dt = next(root.iter("DataType"))
+    for si in list(dt.iter("SubItem"))[:2]:
+        si.find("Name").text = "Reserved"
+    if len(list(dt.iter("SubItem"))) >= 2:
+        with pytest.raises(EncodeError, match="SubItemKey"):
+            check_own_output(root, device)
+    next(root.iter("Object")).find("Type").text = "NOPE"
+    with pytest.raises(EncodeError, match="'NOPE' names no DataType"):
+        check_own_output(root, device)

@@ -158,7 +158,7 @@ def test_every_exporter_carries_them(drive_projects, fmt):
     for path in drive_projects:
         want = _esi_commands(path)
         assert want, path
-        text = export(slave_configs(path), fmt)
+        text = export(slave_configs(path), fmt, lossy=True)  # the tables TwinCAT/CSV have no place for: not tested here
         if FORMATS[fmt].can_import:
             (cfg,) = import_bytes(text.encode(), f"out.{fmt}", fmt)
             got = {(c.transition, c.index, c.subindex, c.data) for c in cfg.commands}

@@ -63,7 +63,7 @@ def test_parameters_survive_every_exporter(params, styles, transitions):
     want = [(transitions[k], index, e.subindex, e.encode(value)) for k, (index, e, value) in enumerate(params)]
     assert [(c.transition, c.index, c.subindex, c.data) for c in cfg.commands] == want
     for fmt in ("eni", "json", "csv", "twincat", "ecmc", "ros2"):
-        (back,) = import_bytes(export(cfg, fmt).encode(), f"x.{fmt}", fmt)
+        (back,) = import_bytes(export(cfg, fmt, lossy=True).encode(), f"x.{fmt}", fmt)  # CSV/TwinCAT: no PDO tables
         got = [(c.index, c.subindex, c.data) for c in back.commands]
         assert got == [w[1:] for w in want], fmt
         if fmt in ("eni", "json", "csv", "twincat"):

@@ -32,9 +32,12 @@ def test_import_reports_soe_entries(capsys):
 
 
 def test_export_to_stdout(capsys):
-    code, out, _ = run(capsys, "startup", "export", "--from", str(corpus_path("configs", "ros2_elmo_gold.yaml")),
-                       "--format", "twincat")
-    assert code == 0
+    src = str(corpus_path("configs", "ros2_elmo_gold.yaml"))
+    code, out, err = run(capsys, "startup", "export", "--from", src, "--format", "twincat")
+    # TwinCAT lines carry neither its DC nor its PDO tables (the file programs no PDO by SDO): refused, listed
+    assert code == 1 and not out and "twincat cannot carry 2 part(s)" in err and "PDO assignment and mapping" in err
+    code, out, err = run(capsys, "startup", "export", "--from", src, "--format", "twincat", "--lossy")
+    assert code == 0 and err.count("not written (twincat): ") == 2
     assert out.splitlines() == [
         "<PS>,CoE,0x60C2:01,0x0A (10),Set interpolation time for cyclic modes to 10 ms",
         "<PS>,CoE,0x60C2:02,0xFD (253),Set base 10-3s",
@@ -117,10 +120,39 @@ def test_export_one_drive_of_a_project_for_the_one_slave_formats(capsys, tmp_pat
     assert code == 1 and "one by one: --drive" in err
     code, out, _ = run(capsys, "startup", "export", "--project", str(project), "--format", "ros2", "--drive", "y")
     assert code == 0 and "product_id: 0x000010b0" in out and "0x000c010d" not in out
-    code, out, _ = run(capsys, "startup", "export", "--project", str(project), "--format", "twincat", "--drive", "0")
+    code, out, _ = run(capsys, "startup", "export", "--project", str(project), "--format", "twincat", "--drive", "0",
+                       "--lossy")  # drive x runs DC, which a TwinCAT startup list has no place for
     assert (code, out) == (0, "<PS>,CoE,0x6060:00,0x08 (8),Modes of operation\n")
     code, out, _ = run(capsys, "startup", "export", "--project", str(project), "--format", "json",
                        "--drive", "y", "--drive", "x")
     assert [s["name"] for s in json.loads(out)["slaves"]] == ["x", "y"]  # bus order
     code, _, err = run(capsys, "startup", "export", "--project", str(project), "--format", "json", "--drive", "z")
     assert code == 1 and "no slave named or at position 'z' (slaves: x at 0, y at 1)" in err
+
+
+def test_a_soe_only_drive_to_csv_is_refused_never_a_header_only_file(tmp_path, capsys):
+    """Issue 27: 87 SoE commands into CSV gave a header-only file with exit 0, and the note said CSV carried them."""
+    src = str(corpus_path("configs", "lcec_initcmds_AX5206-AM8032-async.xml"))
+    out = tmp_path / "x.csv"
+    code, _, err = run(capsys, "startup", "convert", src, "--format", "csv", "-o", str(out))
+    assert code == 1 and "csv cannot carry" in err and "87 SoE command(s)" in err and not out.exists()
+    assert "only the ENI, TwinCAT, IgH and JSON formats carry them" in err  # the import's note says it right
+    code, _, err = run(capsys, "startup", "convert", src, "--format", "csv", "--lossy", "-o", str(out))
+    assert code == 1 and "nothing to write: csv carries nothing" in err and not out.exists()
+    code, _, err = run(capsys, "startup", "import", str(_header_only(tmp_path)))
+    assert code == 1 and "nothing to import" in err and err.count("\n") == 1
+
+
+def _header_only(tmp_path):
+    path = tmp_path / "empty.csv"
+    path.write_text("slave,position,transition,index,subindex,data,complete_access,timeout_ms,type,value,comment,kind\n")
+    return path
+
+
+def test_ros2_tables_to_twincat_is_refused_never_an_empty_file(tmp_path, capsys):
+    """Issue 27: a ros2 file whose PDOs are tables only became a 0-byte TwinCAT file with exit 0."""
+    src = str(corpus_path("configs", "ros2_beckhoff_el3104.yaml"))
+    out = tmp_path / "x.txt"
+    for extra in ((), ("--lossy",)):
+        code, _, err = run(capsys, "startup", "convert", src, "--format", "twincat", *extra, "-o", str(out))
+        assert code == 1 and not out.exists() and "PDO assignment and mapping" in err

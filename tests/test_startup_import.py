@@ -24,9 +24,17 @@ def test_corpus_list_is_complete(corpus):
     assert on_disk == set(CONFIGS) | {"hwdevmgr_device_config.yaml"}
 
 
+#: configurations that hold nothing of a startup list (an ecmc script that sets the identity and includes others)
+NOTHING = {"ecmc_ecmciPOS4808.cmd"}
+
+
 @pytest.mark.parametrize("name", CONFIGS)
 def test_every_corpus_config_imports_with_locations(name):
     path = corpus_path("configs", name)
+    if name in NOTHING:
+        with pytest.raises(InputError, match="nothing to import"):
+            import_file(path)
+        return
     configs = import_file(path)
     assert configs
     for c in configs:
@@ -178,10 +186,37 @@ def test_ecmc_sw_image_as_sdo_writes():
 
 
 def test_ecmc_identity_from_macros():
-    (c,) = import_file(corpus_path("configs", "ecmc_ecmciPOS4808.cmd"))
+    from ecattool.startup.formats import ecmc
+
+    (c,) = ecmc.load(corpus_path("configs", "ecmc_ecmciPOS4808.cmd").read_bytes(), "ecmciPOS4808.cmd")
     assert (c.identity.vendor_id, c.identity.product_code) == (0x1A3, 0x019F418D)
     assert c.name == "iPOS4808"
     assert sum(n.rule == "startup.ecmc.include" for n in c.notes) == 2
+
+
+def test_an_import_of_nothing_is_an_error_naming_what_was_not_followed():
+    # the script sets the identity and includes two others: nothing of a startup list is in it (issue 27)
+    with pytest.raises(InputError) as err:
+        import_file(corpus_path("configs", "ecmc_ecmciPOS4808.cmd"))
+    assert "nothing to import" in str(err.value) and ":23: included script not followed" in str(err.value)
+    with pytest.raises(InputError, match="x.csv:1: nothing to import"):
+        import_bytes(b"slave,position,transition,index,subindex,data,complete_access,timeout_ms,type,value,comment\n",
+                     "x.csv")
+
+
+def test_a_cmd_that_only_includes_scripts_is_ecmc_not_yaml():
+    script = (b"#- hardware script\n${SCRIPTEXEC} ${ecmccfg_DIR}configureSlave.cmd, \"HW_DESC=EL7041\"\n"
+              b"${SCRIPTEXEC} ${ecmccfg_DIR}applySlaveConfig.cmd\n")
+    assert detect_format(script, "x.cmd") == "ecmc"
+    with pytest.raises(InputError, match=r"x.cmd:1: nothing to import.*x.cmd:2: included script not followed"):
+        import_bytes(script, "x.cmd")
+
+
+def test_ecmc_header_date_is_no_comment():
+    script = (b"#-########\n#     Date: 2018/01/24 09:40:21\n#  Author: someone\n"
+              b'ecmcConfigOrDie "Cfg.EcAddSdo(0,0x6060,0x0,8,1)"\n# csp\necmcConfigOrDie "Cfg.EcAddSdo(0,0x6060,0x0,8,1)"\n')
+    (c,) = import_bytes(script, "x.cmd")
+    assert [cmd.comment for cmd in c.commands] == ["", "csp"]
 
 
 def test_ecmc_undefined_macro_in_index_is_an_error_with_line():
@@ -232,3 +267,40 @@ def test_ecmc_tolerated_reset_write_expects_no_reply():
     assert 'ecmcConfig "Cfg.EcWriteSdo(${ECMC_EC_SLAVE_NUM},0x2080,0x0,0x1,2)"' in text
     (back,) = import_bytes(text.encode(), "again.cmd")
     assert [x.expect_reply for x in back.commands] == [x.expect_reply for x in c.commands]
+
+
+def test_a_source_that_maps_a_pdo_two_ways_is_a_finding_with_its_line():
+    """ecmciPOSXXXX.cmd programs 1A00h with 2 entries (48 bits) by SDO and declares 3 (64 bits) as entries."""
+    (c,) = import_file(corpus_path("configs", "ecmc_ecmciPOSXXXX.cmd"))
+    found = {n.location.line: n.message for n in c.notes if n.rule == "startup.pdo.conflict"}
+    assert set(found) == {162, 165}
+    assert found[162].startswith("PDO 0x1A00 is declared with 3 entries (64 bits) but the startup writes (line(s) "
+                                 "20, 23, 26, 29) map 2 (48 bits): 6041:00/16, 6064:00/32")
+    assert "PDO 0x1A01 is declared with 2 entries (48 bits)" in found[165]
+
+
+def test_soe_idns_in_pdo_tables_are_a_finding_and_pysoem_never_writes_them_into_1c12():
+    from ecattool.errors import EncodeError
+    from ecattool.startup import export, losses
+
+    configs = import_file(corpus_path("configs", "lcec_initcmds_ethercat-conf.xml"))
+    ax = next(c for c in configs if c.soe_commands and c.identity is not None)
+    (note,) = [n for n in ax.notes if n.rule == "startup.pdo.soe"]
+    assert note.message.startswith("PDO(s) 0x0018, 0x1018, 0x0010, 0x1010 are no CoE mapping objects")
+    assert note.location.line == 16
+    with pytest.raises(EncodeError, match="pysoem cannot carry"):
+        export(ax, "pysoem")
+    assert any("SoE IDNs" in x for x in losses(ax, "pysoem")) and any("SoE command" in x for x in losses(ax, "pysoem"))
+    text = export(ax, "pysoem", lossy=True)
+    assert "program_pdos(slave" not in text and "0x0018" not in text  # no IDN written into 1C12h/1C13h
+
+
+def test_consistent_sources_have_no_contradiction():
+    from ecattool.project.export import slave_configs
+    from tests.conftest import ROOT
+
+    for project in sorted((ROOT / "samples").glob("*/project.yaml")):
+        from ecattool.startup import export, import_bytes
+
+        back = import_bytes(export(slave_configs(project), "json").encode(), "x.json")
+        assert not [n for c in back for n in c.notes if n.rule.startswith("startup.pdo")], project

@@ -76,9 +76,18 @@ def test_32bit_odd_block_never_writes_past_its_end():
 
 
 def test_single_word_block_in_32bit_mode():
+    # issue 27: one 2064h per one-word block (16-bit at once), not a 32-bit selection undone by the 16-bit one
     plan = download_plan(parse("7FFF\n7ABD\n"), 32, reset=False)
-    assert [(c.index, c.int_value) for c in plan] == [
-        (0x2064, 0x7FFF0009), (0x2064, 0x7FFF0008), (0x2065, 0x7ABD), (0x2069, 0x7FFF7FFF)]
+    assert [(c.index, c.int_value) for c in plan] == [(0x2064, 0x7FFF0008), (0x2065, 0x7ABD), (0x2069, 0x7FFF7FFF)]
+    assert eeprom_writes(plan) == {0x7FFF: 0x7ABD}
+
+
+def test_a_32bit_plan_of_one_word_blocks_selects_the_address_once_per_block():
+    plan = download_plan(parse("0010\n1111\n\n0020\n2222\n\n0030\n3333\n4444\n"), 32, reset=True)
+    assert [c.int_value for c in plan if c.index == 0x2064] == [0x00100008, 0x00200008, 0x00300009]
+    assert eeprom_writes(plan) == {0x10: 0x1111, 0x20: 0x2222, 0x30: 0x3333, 0x31: 0x4444}
+    # EEPROM programming is written once, the reset last and without a reply
+    assert all(c.one_shot for c in plan) and [c.kind for c in plan][-2:] == ["once", "reset"]
 
 
 def test_2069_value_is_zero_padded_in_the_comment_and_data():

@@ -57,7 +57,7 @@ def _report_import(configs: list[Any], source: str) -> None:
     if not any(c.commands or c.has_pdo_info or c.dc_assign_activate or c.soe_commands for c in configs):
         raise InputError("nothing to convert: no startup command, PDO or DC setting was read"
                          + (f" ({len(notes)} note(s) above say what was skipped)" if notes else ""),
-                         Location(source))
+                         Location(source))  # --drive chose slaves with nothing (an import of nothing fails earlier)
     skipped = [n for n in notes if n.severity is not Severity.INFO]
     if skipped:
         click.echo(f"{source}: {len(skipped)} part(s) of the source were not converted (warnings above)", err=True)
@@ -72,10 +72,25 @@ def _with_cycle(configs: list[Any], sync0_cycle: int | None) -> list[Any]:
     return configs
 
 
-def _write(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, ...]) -> None:
-    from ecattool.startup import export
+def _write(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, ...], lossy: bool = False) -> None:
+    """Write ``configs`` in ``fmt``; what the format cannot carry refuses the export, or with ``--lossy`` is
+    printed to stderr, one line each, with the count."""
+    from ecattool.startup import export, losses
 
-    write_output(output, export(configs, fmt), inputs)
+    text = export(configs, fmt, lossy=lossy)
+    lost = losses(configs, fmt)
+    for what in lost:
+        click.echo(f"not written ({fmt}): {what}", err=True)
+    write_output(output, text, inputs)
+    if lost:
+        click.echo(f"{len(lost)} part(s) of the configuration are not in the {fmt} output (--lossy)", err=True)
+
+
+def _lossy_option(f: Any) -> Any:
+    return click.option("--lossy", is_flag=True,
+                        help="Write the output even where the format cannot carry part of the configuration "
+                             "(one-shot writes, DC, SoE, PDO tables, identity); each loss is printed. Without "
+                             "it such an export fails and lists them.")(f)
 
 
 def _sync0_option(f: Any) -> Any:
@@ -104,9 +119,10 @@ Examples:
                    "TwinCAT and ros2 files hold one slave.")
 @_sync0_option
 @click.option("--allow-errors", is_flag=True, help="With --project: export even when lint reports errors.")
+@_lossy_option
 @output_option()
 def export_cmd(source: str | None, project: str | None, from_format: str | None, fmt: str, drives: tuple[str, ...],
-               sync0_cycle: int | None, allow_errors: bool, output: str | None) -> None:
+               sync0_cycle: int | None, allow_errors: bool, lossy: bool, output: str | None) -> None:
     """Write the startup list of FILE (--from) or of a project (--project) in a master's format (stdout
     unless -o)."""
     from ecattool.startup import select_slaves
@@ -120,24 +136,27 @@ def export_cmd(source: str | None, project: str | None, from_format: str | None,
         from ecattool.project.loader import project_inputs
 
         _write(_with_cycle(select_slaves(slave_configs(project, allow_errors), drives), sync0_cycle), fmt, output,
-               tuple(project_inputs([project])))
+               tuple(project_inputs([project])), lossy)
         return
     assert source is not None
     configs = select_slaves(_read(source, from_format), drives)
     _report_import(configs, source)
-    _write(_with_cycle(configs, sync0_cycle), fmt, output, (source,))
+    _write(_with_cycle(configs, sync0_cycle), fmt, output, (source,), lossy)
 
 
 @startup.command("convert", epilog="""\b
 Examples:
   ecattool startup convert ros2_elmo_gold.yaml --format eni --sync0-cycle 1000000 -o elmo.eni.xml
-  ecattool startup convert AX5206-AM8032-async.xml --format json -o ax5206.json""")
+  ecattool startup convert AX5206-AM8032-async.xml --format json -o ax5206.json
+  ecattool startup convert ros2_elmo_gold.yaml --format twincat --lossy -o elmo.txt""")
 @click.argument("input_file", type=InputFile())
 @click.option("--format", "fmt", required=True, type=click.Choice(_FORMAT_NAMES[:-1]), help="Format to write.")
 @click.option("--from-format", type=click.Choice(_READ_FORMATS), help="Format of INPUT_FILE (default: detect).")
 @_sync0_option
+@_lossy_option
 @output_option(required=True)
-def convert_cmd(input_file: str, fmt: str, from_format: str | None, sync0_cycle: int | None, output: str) -> None:
+def convert_cmd(input_file: str, fmt: str, from_format: str | None, sync0_cycle: int | None, lossy: bool,
+                output: str) -> None:
     """Convert INPUT_FILE into another startup format, written to -o OUT.
 
     Every note of the import (what the source holds that was not converted) is printed to stderr; a
@@ -145,7 +164,7 @@ def convert_cmd(input_file: str, fmt: str, from_format: str | None, sync0_cycle:
     """
     configs = _read(input_file, from_format)
     _report_import(configs, input_file)
-    _write(_with_cycle(configs, sync0_cycle), fmt, output, (input_file,))
+    _write(_with_cycle(configs, sync0_cycle), fmt, output, (input_file,), lossy)
 
 
 @startup.command("import", epilog="""\b

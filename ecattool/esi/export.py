@@ -183,6 +183,23 @@ def _align(offset: int, bits: int) -> int:
     return -(-offset // step) * step
 
 
+def _sub_names(entries: list[Entry]) -> dict[int, str]:
+    """Sub-item names unique within the object, as ETG.2000's SubItemKey requires (a DataType's SubItem names
+    are its key): a later sub-item that repeats a name (EDS files name several "Reserved") gets its sub-index,
+    ``Reserved_03``. The object's Info/SubItem names use the same names, so the two still match."""
+    out: dict[int, str] = {}
+    used: set[str] = set()
+    for e in entries:
+        name = e.name or f"SubIndex {e.subindex:03d}"
+        if name in used:
+            name = f"{name}_{e.subindex:02X}"
+            while name in used:
+                name += "_"
+        used.add(name)
+        out[e.subindex] = name
+    return out
+
+
 def _record_type(types: _Types, obj: OdObject) -> tuple[str, int]:
     """The DataType of a RECORD/ARRAY object; returns (name, bit size)."""
     name = f"DT{obj.index:04X}"
@@ -203,13 +220,14 @@ def _record_type(types: _Types, obj: OdObject) -> tuple[str, int]:
                                                         (first, arr, None)]
     else:
         layout = [(e, types.of(e, f"{name}S{e.subindex:02X}"), str(e.subindex)) for e in entries]
+    names = _sub_names(entries)
     for e, type_name, subidx in layout:
         size = e.bit_size if subidx is not None else e.bit_size * (len(entries) - 1)
         offset = _align(offset, e.bit_size)
         si = _sub(el, "SubItem")
         if subidx is not None:
             _sub(si, "SubIdx", subidx)
-        _sub(si, "Name", e.name if subidx is not None else "Elements")
+        _sub(si, "Name", names[e.subindex] if subidx is not None else "Elements")
         _sub(si, "Type", type_name)
         _sub(si, "BitSize", str(size))
         _sub(si, "BitOffs", str(offset))
@@ -238,9 +256,11 @@ def _object(objects: Any, types: _Types, obj: OdObject) -> None:
     _sub(el, "Type", type_name)
     _sub(el, "BitSize", str(bits))
     info = _sub(el, "Info")
+    # the names the DataType lists its SubItems by (an ArrayInfo array lists one, "Elements": names may repeat)
+    names = {e.subindex: e.name for e in entries} if _uniform_array(obj) else _sub_names(entries)
     for e in entries:  # one per sub-index, in order: the reader matches them by name, else by position
         si = _sub(info, "SubItem")
-        _sub(si, "Name", e.name)
+        _sub(si, "Name", names[e.subindex])
         _values(_sub(si, "Info"), e)
 
 
@@ -405,7 +425,36 @@ def device_to_esi(device: Device, *, vendor_name: str = "") -> bytes:
     _eeprom(dev, device)
     etree.indent(root, space="  ")
     out: bytes = etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
+    check_own_output(root, device)
     return out
 
 
-__all__ = ["device_to_esi"]
+def check_own_output(root: Any, device: Device) -> None:
+    """The identity constraints ETG.2000's schema states for a dictionary (the XSDs are not shipped, so these are
+    checked here, and every ``esi export`` is checked): DataType names unique (DataTypeKey), SubItem names
+    unique within a DataType (SubItemKey), and every DataType a BaseType, SubItem or Object names defined
+    (BaseTypeRef, SubItemTypeRef, ObjectTypesRef). An ESI that breaks one is never returned: EncodeError."""
+    from ecattool.errors import EncodeError
+
+    label = device.type_name or device.name or "device"
+    for dictionary in root.iter("Dictionary"):
+        defined: set[str] = set()
+        for dt in dictionary.iterfind("DataTypes/DataType"):
+            name = dt.findtext("Name") or ""
+            if name in defined:
+                raise EncodeError(f"{label}: the ESI would define DataType {name!r} twice (ETG.2000 DataTypeKey)")
+            defined.add(name)
+            subs = [si.findtext("Name") or "" for si in dt.iterfind("SubItem")]
+            dup = sorted({n for n in subs if subs.count(n) > 1})
+            if dup:
+                raise EncodeError(f"{label}: DataType {name!r} would have SubItems sharing the name(s) "
+                                  f"{', '.join(repr(d) for d in dup)} (ETG.2000 SubItemKey)")
+        refs = [(dt.findtext("BaseType"), "BaseType") for dt in dictionary.iterfind("DataTypes/DataType")]
+        refs += [(si.findtext("Type"), "SubItem Type") for si in dictionary.iterfind("DataTypes/DataType/SubItem")]
+        refs += [(o.findtext("Type"), "Object Type") for o in dictionary.iterfind("Objects/Object")]
+        for ref, what in refs:
+            if ref is not None and ref not in defined:
+                raise EncodeError(f"{label}: {what} {ref!r} names no DataType of the ESI (ETG.2000 key reference)")
+
+
+__all__ = ["check_own_output", "device_to_esi"]

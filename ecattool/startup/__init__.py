@@ -6,10 +6,18 @@
 <PS>,CoE,0x1C12:00,0x00 (0),clear sm pdos
 """
 
-from ecattool.startup.api import as_configs, detect_format, export, import_bytes, import_file, select_slaves
+from ecattool.startup.api import (
+    as_configs,
+    detect_format,
+    export,
+    import_bytes,
+    import_file,
+    losses,
+    select_slaves,
+)
 from ecattool.startup.config import SlaveConfig, SoeCommand
 from ecattool.startup.formats import FORMATS, Format
-from ecattool.startup.model import TRANSITIONS, StartupCommand, StartupList
+from ecattool.startup.model import KINDS, TRANSITIONS, StartupCommand, StartupList
 
-__all__ = ["FORMATS", "Format", "SlaveConfig", "SoeCommand", "StartupCommand", "StartupList", "TRANSITIONS",
-           "as_configs", "detect_format", "export", "import_bytes", "import_file", "select_slaves"]
+__all__ = ["FORMATS", "Format", "KINDS", "SlaveConfig", "SoeCommand", "StartupCommand", "StartupList", "TRANSITIONS",
+           "as_configs", "detect_format", "export", "import_bytes", "import_file", "losses", "select_slaves"]

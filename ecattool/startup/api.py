@@ -32,9 +32,37 @@ def as_configs(config_or_list: SlaveConfig | StartupList | Sequence[SlaveConfig 
     return [c if isinstance(c, SlaveConfig) else SlaveConfig.from_list(c) for c in config_or_list]
 
 
-def export(config_or_list: SlaveConfig | StartupList | Sequence[SlaveConfig | StartupList], fmt: str) -> str:
-    """Write slave configurations (or a bare startup list) in format ``fmt`` (see :data:`FORMATS`)."""
-    return str(_format(fmt, "export").module.export(as_configs(config_or_list)))
+def losses(config_or_list: SlaveConfig | StartupList | Sequence[SlaveConfig | StartupList], fmt: str) -> list[str]:
+    """What format ``fmt`` cannot carry of the configurations, one line each naming the slave (one-shot writes
+    in a format of startup writes, DC or SoE where it has none, an unknown identity an ENI needs, …)."""
+    module = _format(fmt, "export").module
+    if not hasattr(module, "losses"):
+        return []
+    return [f"{c.label}: {what}" for c in as_configs(config_or_list) for what in module.losses(c)]
+
+
+def export(config_or_list: SlaveConfig | StartupList | Sequence[SlaveConfig | StartupList], fmt: str, *,
+           lossy: bool = False) -> str:
+    """Write slave configurations (or a bare startup list) in format ``fmt`` (see :data:`FORMATS`).
+
+    Nothing is lost silently: where ``fmt`` cannot carry part of the configuration (see :func:`losses`) this
+    raises :class:`EncodeError` listing it, unless ``lossy`` accepts the losses; an output that would carry
+    nothing at all is refused either way, never written empty."""
+    from ecattool.errors import EncodeError
+
+    configs = as_configs(config_or_list)
+    f = _format(fmt, "export")
+    lost = losses(configs, f.name)
+    if lost and not lossy:
+        shown = "; ".join(lost[:4]) + (f"; and {len(lost) - 4} more" if len(lost) > 4 else "")
+        raise EncodeError(f"{f.name} cannot carry {len(lost)} part(s) of the configuration: {shown} (--lossy "
+                          "writes it without them, each listed)", configs[0].source if configs else None)
+    empty = getattr(f.module, "nothing_left", None)
+    if empty is not None and (not configs or all(empty(c) for c in configs)):
+        why = f": {'; '.join(lost[:4])}" if lost else ""
+        raise EncodeError(f"nothing to write: {f.name} carries nothing of this configuration{why}",
+                          configs[0].source if configs else None)
+    return str(f.module.export(configs))
 
 
 _HWDEVMGR_KEYS = ("param_values", "sync_manager", "test_category")
@@ -82,10 +110,17 @@ def import_bytes(data: bytes, source: str = "<input>", fmt: str | None = None) -
     name = fmt or detect_format(data, source)
     if name == "ros2":
         _yaml_format(data, source)  # refuses hw_device_mgr files with a clear message
-    from ecattool.startup.formats._common import check_commands
+    from ecattool.startup.formats._common import check_commands, find_contradictions
 
     configs = list(_format(name, "import").module.load(data, source))
     check_commands(configs)
+    find_contradictions(configs)
+    if not any(c.commands or c.has_pdo_info or c.dc_assign_activate or c.soe_commands for c in configs):
+        notes = [n for c in configs for n in c.notes]
+        first = (f"; {len(notes)} part(s) not used, first: {notes[0].location}: {notes[0].message[:160]}"
+                 if notes else "")
+        raise InputError(f"nothing to import: no startup command, PDO, DC setting or SoE command was read{first}",
+                         Location(source, 1))
     return configs
 
 

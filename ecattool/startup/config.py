@@ -56,6 +56,8 @@ class SlaveConfig:
     dc_assign_activate: int | None = None  # e.g. 0x0300 = SYNC0
     dc_cycle_ns: int | None = None  # SYNC0 cycle
     dc_shift_ns: int | None = None  # SYNC0 shift
+    dc_sync1_cycle_ns: int | None = None  # SYNC1 cycle (ETG: added to the SYNC0 cycle, IgH/ecmc "sync1_cycle")
+    dc_sync1_shift_ns: int | None = None  # SYNC1 shift (IgH/ecmc; ENI and TwinCAT have none)
     soe_commands: list[SoeCommand] = field(default_factory=list)
     #: per PDO entry attributes of the source format (ros2 command/state interfaces, defaults, factors),
     #: keyed by (PDO index, entry position within the PDO)

@@ -17,6 +17,16 @@ from ecattool.errors import Location
 TRANSITIONS = ("IP", "PS", "SP", "SO", "OS", "OP", "PI", "SI", "OI", "IB", "BI", "II", "PP", "SS")
 
 
+#: the kinds of write (:attr:`StartupCommand.kind`), in the words the formats use for them
+KINDS = ("startup", "once", "reset")
+
+
+def set_kind(cmd: "StartupCommand", kind: str) -> None:
+    """Make ``cmd`` a write of ``kind`` (one of :data:`KINDS`)."""
+    cmd.once = kind in ("once", "reset")
+    cmd.expect_reply = kind != "reset"
+
+
 def is_pdo_programming(index: int) -> bool:
     """Whether a write to ``index`` programs process data: 1C12h/1C13h or a mapping object 1600h-17FFh/1A00h-1BFFh.
 
@@ -40,6 +50,16 @@ class StartupCommand:
     expect_reply: bool = True  # False for writes a drive answers by resetting (Technosoft 2080h)
     verify: bool = True  # False where a read-back cannot return what was written (2065h data streams)
     source: Location | None = None
+    once: bool = False  # True: written once, when the tool runs (ecmc EcWriteSdo), never at a transition
+
+    @property
+    def kind(self) -> str:
+        """When the write happens: ``"startup"`` (at :attr:`transition`, every time the master configures the
+        slave), ``"once"`` (once, when the tool or script runs, answered like any write) or ``"reset"`` (once,
+        and the drive answers it by resetting: no reply). See :data:`KINDS`."""
+        if not self.expect_reply:
+            return "reset"
+        return "once" if self.once else "startup"
 
     @property
     def address(self) -> str:
@@ -47,10 +67,10 @@ class StartupCommand:
 
     @property
     def one_shot(self) -> bool:
-        """A write to send once, never as part of a startup list: the drive answers it by resetting (no reply),
-        and masters re-send startup lists at every reconfiguration (a reset in the list would reset the drive
-        each time, and abort the configuration that follows it)."""
-        return not self.expect_reply
+        """A write to send once, never as part of a startup list (kind ``once`` or ``reset``): masters re-send
+        startup lists at every reconfiguration, so an EEPROM write would be repeated each time and a reset would
+        reset the drive each time and abort the configuration that follows it."""
+        return self.once or not self.expect_reply
 
     @property
     def int_value(self) -> int:

@@ -41,15 +41,20 @@ def config_value(address: int, mode: int = 16) -> int:
 
 
 def _u32(index: int, value: int, comment: str, verify: bool = True) -> StartupCommand:
+    # EEPROM programming is written once (kind "once"), never as a startup write a master repeats
     return StartupCommand("PS", index, 0, value.to_bytes(4, "little"), comment=comment, type_name="UDINT",
-                          value=value, verify=verify)
+                          value=value, verify=verify, once=True)
 
 
 def block_commands(block: Block, mode: int = 16) -> list[StartupCommand]:
-    """2064h/2065h writes that program one block (no checksum request)."""
+    """2064h/2065h writes that program one block (no checksum request). A one-word block in 32-bit mode is
+    written in 16-bit mode at once: selecting 32-bit first would only be undone by the 16-bit selection the
+    odd last word needs (a second 2064h write for every one-word block)."""
+    words = block.words
+    if mode == 32 and len(words) == 1:
+        mode = 16
     cmds = [_u32(OBJ_CONFIG, config_value(block.start, mode),
                  f"EEPROM 0x{block.start:04X}, {mode}-bit, auto-increment ({block.count} words)")]
-    words = block.words
     if mode == 16:
         cmds += [_u32(OBJ_WRITE, w, f"@0x{block.start + i:04X}", verify=False) for i, w in enumerate(words)]
         return cmds
@@ -72,7 +77,7 @@ def checksum_command(block: Block) -> StartupCommand:
 
 def reset_command() -> StartupCommand:
     return StartupCommand("PS", OBJ_RESET, 0, (1).to_bytes(2, "little"), comment="reset the drive to load the new setup (no SDO reply)",
-                          type_name="UINT", value=1, expect_reply=False, verify=False)
+                          type_name="UINT", value=1, expect_reply=False, verify=False, once=True)
 
 
 def download_plan(image: SwImage, mode: int = 16, blocks: list[Block] | None = None, reset: bool = True,

@@ -35,6 +35,7 @@ from ecattool.startup.formats._common import (
     one_line,
     parse_hex,
     pdo_sm,
+    soe_losses,
     unsigned_type,
 )
 from ecattool.startup.model import StartupCommand, StartupList
@@ -44,6 +45,8 @@ EXTENSIONS = (".cmd", ".script")
 DESCRIPTION = "ecmc/EPICS startup script (Cfg.EcAddSdo lines; reads EcWriteSdo and ecmccfg macros too)"
 
 SLAVE_MACRO = "${ECMC_EC_SLAVE_NUM}"
+#: the longest macro value or expanded line (ecmccfg's longest are file paths of a few hundred characters)
+MAX_MACRO_CHARS = 1 << 16
 _CALL = re.compile(r"Cfg\.(Ec\w+)\s*\((.*)\)")
 #: a command given to ecmcConfig without the ``Cfg.`` prefix (ecmccfg writes ``ecmcConfig "EcReadSdo(...)"``)
 _BARE_CALL = re.compile(r'^ecmcConfig(?:OrDie)?\s+"\s*(Ec\w+)\s*\((.*)\)')
@@ -56,6 +59,9 @@ ECMC_TYPES = {"B1": "BOOL", "B2": "BIT2", "B3": "BIT3", "B4": "BIT4", "U8": "USI
 _ENVSET = re.compile(r'^\s*epicsEnvSet\s*\(\s*"?([A-Za-z_]\w*)"?\s*,?\s*"([^"]*)"\s*\)')
 _MACRO = re.compile(r"\$[({]([A-Za-z_]\w*)(?:=([^)}]*))?[)}]")
 _SDO_WRITES = {"EcAddSdo", "EcWriteSdo"}
+#: header lines of ecmccfg scripts and of the scripts its .sw converter writes: about the file, not a command
+_HEADER_FIELD = re.compile(r"^(date|author|file|input file[\w ]*|output file[\w ]*|description|brief|version)\s*:",
+                           re.IGNORECASE)
 _BUFFER_WRITES = {"EcAddSdoBuffer", "EcAddSdoComplete", "EcWriteSdoComplete"}
 _REPORTED = {"EcReadSdo", "EcVerifySdo", "EcAddSdoAsync"}
 #: understood and without a startup-list meaning (process-image access, master selection, diagnostics)
@@ -72,15 +78,18 @@ def _slave_ref(c: SlaveConfig, i: int, many: bool) -> str:
 
 
 def _command_line(slave: str, cmd: StartupCommand) -> str:
-    """The ecmc call. A one-shot write (the drive answers it by resetting) is not added to the startup list
-    (``EcAddSdo``, re-sent at every reconfiguration) but written once when the script runs, as ecmccfg does:
-    ``ecmcConfig "Cfg.EcWriteSdo(...)"``, whose failure (no reply) does not stop the IOC."""
+    """The ecmc call. A startup write is added to the startup list (``EcAddSdo``, sent at every
+    configuration); a one-shot write is written once when the script runs, as ecmccfg's EEPROM scripts do:
+    ``ecmcConfigOrDie "Cfg.EcWriteSdo(...)"``, and a reset (no reply) through ``ecmcConfig``, whose failure
+    does not stop the IOC. ecmc runs them in script order, so EEPROM writes come before the reset."""
     line = _call(slave, cmd)
     if not cmd.one_shot:
         return line
     if cmd.complete_access or len(cmd.data) not in (1, 2, 4):
-        raise EncodeError(f"{cmd.address}: a one-shot write of {len(cmd.data)} bytes has no ecmc EcWriteSdo form")
-    return line.replace("ecmcConfigOrDie ", "ecmcConfig ", 1).replace("Cfg.EcAddSdo(", "Cfg.EcWriteSdo(", 1)
+        raise EncodeError(f"{cmd.address}: a one-shot write of {len(cmd.data)} bytes has no ecmc EcWriteSdo form",
+                          cmd.source)
+    line = line.replace("Cfg.EcAddSdo(", "Cfg.EcWriteSdo(", 1)
+    return line.replace("ecmcConfigOrDie ", "ecmcConfig ", 1) if cmd.kind == "reset" else line
 
 
 def _call(slave: str, cmd: StartupCommand) -> str:
@@ -124,12 +133,15 @@ def export(configs: list[SlaveConfig]) -> str:
                 cycle = "${ECMC_TEMP_PERIOD_NANO_SECS}"
                 out.append('ecmcEpicsEnvSetCalc("ECMC_TEMP_PERIOD_NANO_SECS",1000/${ECMC_EC_SAMPLE_RATE=1000}*1E6)')
             out.append(f'ecmcConfigOrDie "Cfg.EcSlaveConfigDC({slave},0x{c.dc_assign_activate:x},{cycle},'
-                       f'{c.dc_shift_ns or 0},0,0)"')
+                       f'{c.dc_shift_ns or 0},{c.dc_sync1_cycle_ns or 0},{c.dc_sync1_shift_ns or 0})"')
         for s in c.soe_commands:
             out.append(f"#- SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()}: "
                        "not representable in ecmc")
     return "\n".join(out) + "\n"
 
+
+#: CoE float types -> ecmc's data type (``Cfg.EcAddEntryDT``)
+_ECMC_REAL = {"REAL": "F32", "REAL32": "F32", "LREAL": "F64", "REAL64": "F64"}
 
 #: the entry sizes ecmc maps (``ecmcEcEntry``: B1..B4 and whole 8/16/32/64-bit values); others map as 0 bits
 ECMC_BITS = (64, 32, 16, 8, 4, 3, 2, 1)
@@ -174,6 +186,11 @@ def _entry_lines(c: SlaveConfig, slave: str) -> list[str]:
                     raise EncodeError(f"{c.label}: PDO 0x{pdo.index:04X} entry 0x{e.index:04X}:{e.subindex:02X} has "
                                       f"{e.bit_len} bits; ecmc maps entries of 1-4, 8, 16, 32 or 64 bits (it would "
                                       "map this one as 0 bits)", e.location or c.source)
+                real = _ECMC_REAL.get((e.data_type or "").upper())
+                if real is not None and sizes == [e.bit_len]:  # a float is typed, not read as an unsigned integer
+                    out.append(f'ecmcConfigOrDie "Cfg.EcAddEntryDT({slave},{v},{p},{direction},{sm},0x{pdo.index:04x},'
+                               f'0x{e.index:04x},0x{e.subindex:x},{real},{unique(base)})"')
+                    continue
                 signed = _signed(e.data_type)  # given where the type is known, as ecmccfg scripts do
                 flag = "" if signed is None or len(sizes) > 1 else f"{int(signed)},"
                 for bits in sizes:
@@ -212,6 +229,7 @@ class _Reader:
         self.pdos: dict[tuple[str, int], Pdo] = {}
         self.tolerant = False  # `ecmcConfig` (not OrDie): a failure is tolerated, e.g. a reset with no reply
         self.unused: list[tuple[str, str, Location, Severity]] = []  # notes for lines no slave owns yet
+        self.location = Location(source)  # of the line being read
 
     def skip(self, rule: str, message: str, loc: Location, severity: Severity = Severity.WARNING,
              slave: str | None = None) -> None:
@@ -223,6 +241,7 @@ class _Reader:
             self.unused.append((rule, message, loc, severity))
 
     def expand(self, text: str) -> str:
+        """``text`` with the script's macros replaced (8 rounds at most, each result bounded)."""
         def repl(m: re.Match[str]) -> str:
             name, default = m.group(1), m.group(2)
             if name in self.env:
@@ -235,6 +254,8 @@ class _Reader:
             new = _MACRO.sub(repl, text)
             if new == text:
                 break
+            if len(new) > MAX_MACRO_CHARS:
+                raise InputError(f"macros expand to more than {MAX_MACRO_CHARS} characters", self.location)
             text = new
         return text
 
@@ -257,6 +278,9 @@ class _Reader:
         body = text.lstrip("#").strip()
         if text.startswith("#-") or not body:
             return
+        if _HEADER_FIELD.match(body):  # the script's header (Date:, Author:, …) describes the file, not a write
+            self.pending_comment = ""
+            return
         if re.match(r"^<[A-Za-z]{2}>,", body) and body.count(",") >= 4:
             body = body.split(",", 4)[4].strip()  # a TwinCAT line quoted as comment: keep its comment field
         self.pending_comment = body
@@ -273,7 +297,7 @@ class _Reader:
             cfg.startup.commands.append(StartupCommand(
                 "PS", self.number(args[1], loc, "index"), self.number(args[2], loc, "subindex"), data,
                 comment=self.pending_comment, type_name=unsigned_type(size), value=value,
-                expect_reply=not (self.tolerant and func == "EcWriteSdo"), source=loc))
+                expect_reply=not (self.tolerant and func == "EcWriteSdo"), once=func == "EcWriteSdo", source=loc))
         elif func in _BUFFER_WRITES:
             complete = "Complete" in func
             if len(args) != (4 if complete else 5):
@@ -284,7 +308,8 @@ class _Reader:
                 raise InputError(f"Cfg.{func}: {len(data)} data bytes but byte size {args[-1]}", loc)
             cfg.startup.commands.append(StartupCommand(
                 "PS", self.number(args[1], loc, "index"), 0 if complete else self.number(args[2], loc, "subindex"),
-                data, comment=self.pending_comment, complete_access=complete, source=loc))
+                data, comment=self.pending_comment, complete_access=complete, once=func.startswith("EcWrite"),
+                source=loc))
         elif func == "EcAddEntryComplete":
             self.entry(args, loc)
         elif func == "EcSlaveConfigDC":
@@ -389,12 +414,12 @@ class _Reader:
         cycle, shift = (None if _MACRO.search(a) else self.number(a, loc, what)
                         for a, what in ((args[2], "SYNC0 cycle"), (args[3], "SYNC0 shift")))
         cfg.dc_cycle_ns, cfg.dc_shift_ns = cycle or None, shift
-        if args[4] not in ("0", "0x0"):
-            cfg.note("startup.ecmc.sync1", f"SYNC1 cycle {args[4]} (shift {args[5]}) is not kept: the startup model "
-                     "holds SYNC0 only", loc, Severity.INFO)
+        sync1, shift1 = (None if _MACRO.search(a) else self.number(a, loc, what)
+                         for a, what in ((args[4], "SYNC1 cycle"), (args[5], "SYNC1 shift")))
+        cfg.dc_sync1_cycle_ns, cfg.dc_sync1_shift_ns = sync1 or None, shift1 or None
 
     def line(self, raw: str, n: int) -> None:
-        loc = Location(self.source, n)
+        loc = self.location = Location(self.source, n)
         s = raw.strip()
         if not s:
             return
@@ -403,7 +428,10 @@ class _Reader:
             return
         m = _ENVSET.match(s)
         if m:
-            self.env[m.group(1)] = self.expand(m.group(2))
+            value = self.expand(m.group(2))
+            if len(value) > MAX_MACRO_CHARS:  # macros doubling each other grow exponentially: a bounded budget
+                raise InputError(f"macro {m.group(1)} expands to more than {MAX_MACRO_CHARS} characters", loc)
+            self.env[m.group(1)] = value
             return
         m = _CALL.search(s) or _BARE_CALL.match(s)
         if m:
@@ -460,5 +488,33 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
     return reader.result()
 
 
+#: lines only an ecmc (iocsh) script has: ecmccfg's script includes and ecmc's configuration calls
+_ECMC_LINE = re.compile(rb"^\s*(\$\{SCRIPTEXEC\}|\$\(SCRIPTEXEC\)|iocshLoad\b|ecmcConfig(OrDie)?\s+\"|"
+                        rb"ecmcEpicsEnvSetCalc\b|require\s+ecmccfg\b)", re.MULTILINE)
+
+
 def detect(data: bytes) -> bool:
-    return b"Cfg.Ec" in data[:1 << 20] or b"epicsEnvSet" in data[:1 << 16]
+    """An ecmc script: ``Cfg.Ec…`` calls, macros, or (a script that only includes others) ecmccfg's include
+    lines; never YAML, whose keys these lines are not."""
+    return (b"Cfg.Ec" in data[:1 << 20] or b"epicsEnvSet" in data[:1 << 16]
+            or _ECMC_LINE.search(data[:1 << 16]) is not None)
+
+
+def losses(c: SlaveConfig) -> list[str]:
+    """What an ecmc script cannot carry: SoE commands, the transition of a write (ecmc sends every SDO in
+    PRE-OP) and a PDO without entries (ecmc declares PDOs through their entries)."""
+    out = soe_losses(c, "ecmc")
+    other = [cmd for cmd in c.commands if cmd.transition != "PS"]
+    if other:
+        out.append(f"the transition of {len(other)} write(s) ({other[0].transition} {other[0].address}…): ecmc sends "
+                   "every SDO in PRE-OP (PS)")
+    empty = [p for p in (*c.rx_pdos, *c.tx_pdos) if not p.entries]
+    if empty:
+        out.append(f"PDO(s) {', '.join(f'0x{p.index:04X}' for p in empty)} without entries: ecmc declares a PDO "
+                   "through its entries")
+    return out
+
+
+def nothing_left(c: SlaveConfig) -> bool:
+    """No command, PDO entry or DC setting: the script would hold comments only."""
+    return not c.commands and not any(p.entries for p in (*c.rx_pdos, *c.tx_pdos)) and not c.dc_assign_activate

@@ -13,6 +13,7 @@ with several Transition elements becomes one command per transition.
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from lxml import etree
@@ -22,7 +23,16 @@ from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry, SyncManager
 from ecattool.findings import Severity
 from ecattool.od.numbers import parse_int
 from ecattool.startup.config import SlaveConfig, SoeCommand
-from ecattool.startup.formats._common import check_transition, one_shot_text, parse_hex, pdo_sm, sync_plan, unsigned_type
+from ecattool.startup.formats._common import (
+    check_transition,
+    dc_losses,
+    one_shot_losses,
+    one_shot_text,
+    parse_hex,
+    pdo_sm,
+    sync_plan,
+    unsigned_type,
+)
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "eni"
@@ -48,10 +58,21 @@ _FPWR = 5  # configured-address physical write
 _FIRST_PHYS_ADDR = 1001
 
 
+#: characters XML 1.0 cannot hold (C0 controls other than tab and line breaks, surrogates, U+FFFE/U+FFFF)
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
+def xml_text(value: str) -> str:
+    """Text as XML can hold it: a character XML 1.0 has no place for (a control character in a TwinCAT comment
+    or a JSON name) is written as ``\\xNN`` / ``\\uNNNN``, visibly, instead of making the writer fail."""
+    return _NOT_XML.sub(lambda m: f"\\x{ord(m.group()):02x}" if ord(m.group()) < 0x100 else
+                        f"\\u{ord(m.group()):04x}", value)
+
+
 def _sub(parent: Any, tag: str, text: object | None = None, cdata: bool = False) -> Any:
     el = etree.SubElement(parent, tag)
     if text is not None:
-        value = str(text)
+        value = xml_text(str(text))
         el.text = etree.CDATA(value) if cdata and value and "]]>" not in value else value
     return el
 
@@ -120,8 +141,8 @@ def _mailbox(slave: Any, c: SlaveConfig) -> None:
         _sub(mb, "Protocol", "SoE")
     cmds = _sub(_sub(mb, "CoE"), "InitCmds")
     for cmd in c.commands:
-        if cmd.one_shot:  # a master re-sends InitCmds at every transition: not one of them
-            cmds.append(etree.Comment(f" not an InitCmd: {one_shot_text(cmd).replace('--', '- -')} "))
+        if cmd.kind == "reset":  # a master re-sends InitCmds at every transition: a reset is not one of them
+            cmds.append(etree.Comment(xml_text(f" not an InitCmd: {one_shot_text(cmd).replace('--', '- -')} ")))
             continue
         _mailbox_cmd(cmds, {"CompleteAccess": "true"} if cmd.complete_access else {}, cmd.transition, cmd.comment,
                      (("Timeout", cmd.timeout_ms), ("Ccs", 1), ("Index", cmd.index), ("SubIndex", cmd.subindex),
@@ -158,7 +179,7 @@ def _dc(slave: Any, c: SlaveConfig, phys_addr: int) -> None:
                           "cycle, and an ENI needs it (a cycle of 0 stops the slave in SAFE-OP); give it with "
                           "--sync0-cycle NS", c.source)
     cmds = _sub(slave, "InitCmds")
-    cycles = c.dc_cycle_ns.to_bytes(4, "little") + bytes(4)
+    cycles = c.dc_cycle_ns.to_bytes(4, "little") + (c.dc_sync1_cycle_ns or 0).to_bytes(4, "little")
     _ecat_cmd(cmds, ("PS",), "set DC cycle time", phys_addr, DC_CYCLE_REGISTER, cycles)
     _ecat_cmd(cmds, ("PS",), "set DC start time", phys_addr, DC_START_REGISTER, bytes(8))
     _ecat_cmd(cmds, ("PS",), "set DC activation", phys_addr, DC_ACTIVATION_REGISTER,
@@ -166,7 +187,7 @@ def _dc(slave: Any, c: SlaveConfig, phys_addr: int) -> None:
     _ecat_cmd(cmds, ("IP",), "clear DC activation", phys_addr, DC_ACTIVATION_REGISTER, bytes(2))
     dc = _sub(slave, "DC")
     _sub(dc, "CycleTime0", c.dc_cycle_ns)
-    _sub(dc, "CycleTime1", 0)
+    _sub(dc, "CycleTime1", c.dc_sync1_cycle_ns or 0)  # ENI has no SYNC1 shift: a loss the exporter reports
     _sub(dc, "ShiftTime", c.dc_shift_ns or 0)
 
 
@@ -273,7 +294,8 @@ def _soe_initcmds(parent: Any, cfg: SlaveConfig, source: str) -> None:
                 timeout_ms=_int(ic, "Timeout", source, 0) or 0, fixed=_bool_attr(ic, "Fixed"), source=loc))
     if found:
         cfg.note("startup.soe", f"{len(found)} SoE init command(s) kept as SoE entries; they are not CoE SDO "
-                 "downloads and only the ENI, TwinCAT, JSON and CSV formats carry them", _loc(source, parent),
+                 "downloads and only the ENI, TwinCAT, IgH and JSON formats carry them (CSV, ecmc, ros2 and pysoem "
+                 "refuse them unless --lossy)", _loc(source, parent),
                  Severity.INFO)
 
 
@@ -370,9 +392,7 @@ def _read_slave(slave: Any, source: str, i: int) -> SlaveConfig:
     if dc is not None:
         cfg.dc_cycle_ns = _int(dc, "CycleTime0", source) or None
         cfg.dc_shift_ns = _int(dc, "ShiftTime", source)
-        if _int(dc, "CycleTime1", source):
-            cfg.note("startup.eni.sync1", f"SYNC1 (CycleTime1 {_int(dc, 'CycleTime1', source)} ns) is not converted: "
-                     "the startup model holds SYNC0 only", _loc(source, dc))
+        cfg.dc_sync1_cycle_ns = _int(dc, "CycleTime1", source) or None
     _report_unused(slave, cfg, source)
     return cfg
 
@@ -438,3 +458,12 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
 def detect(data: bytes) -> bool:
     head = data[:4096]
     return b"<EtherCATConfig" in head or b"<EtherCATMailbox" in head
+
+
+def losses(c: SlaveConfig) -> list[str]:
+    """What an ENI cannot carry for ``c``: one-shot writes (InitCmds run at every transition), an unknown
+    identity (a master matches the slave by VendorId/ProductCode) and a SYNC1 shift (ENI's DC has none)."""
+    out = one_shot_losses(c, "an ENI")
+    if c.identity is None:
+        out.append("no vendor id/product code: an ENI slave needs VendorId and ProductCode, and the source gives none")
+    return out + dc_losses(c, "an ENI", sync1_shift=False)

@@ -108,15 +108,21 @@ def _tables(ident: str, c: SlaveConfig) -> list[str]:
 
 def _once(ident: str, pos: int, once: list[StartupCommand]) -> list[str]:
     """One-shot writes: not startup configuration (IgH re-sends that at every reconfiguration) but a function
-    the application calls once, with ``ecrt_master_sdo_download``."""
-    out = [f"/* One-shot writes of {ident}: call once, before ecrt_master_activate(), never at reconfiguration.",
-           " * The drive answers them by resetting, so their error return (no SDO reply) is expected. */",
-           f"void {ident}_once(ec_master_t *master)", "{", "    uint32_t abort_code = 0;"]
+    the application calls once, with ``ecrt_master_sdo_download``, in the order of the source (EEPROM writes,
+    then the reset). The data arrays are not ``const``: IgH 1.5 headers before 2014 take ``uint8_t *``."""
+    out = [f"/* One-shot writes of {ident}: call once, before ecrt_master_activate(), never at reconfiguration;",
+           " * they run in this order. A reset has no SDO reply (the drive resets): its error return is expected.",
+           " * Returns -1 at the first other write that fails. */",
+           f"int {ident}_once(ec_master_t *master)", "{", "    uint32_t abort_code = 0;"]
     for n, cmd in enumerate(once):
-        out.append(f"    static const uint8_t {ident}_once{n}[] = {{{_c_bytes(cmd.data)}}};")
-        out.append(f"    (void)ecrt_master_sdo_download(master, {pos}, 0x{cmd.index:04x}, 0x{cmd.subindex:02x}, "
-                   f"{ident}_once{n}, sizeof({ident}_once{n}), &abort_code);{_c_comment(cmd.comment)}")
-    out += ["}", ""]
+        out.append(f"    static uint8_t {ident}_once{n}[] = {{{_c_bytes(cmd.data)}}};")
+        call = (f"ecrt_master_sdo_download(master, {pos}, 0x{cmd.index:04x}, 0x{cmd.subindex:02x}, "
+                f"{ident}_once{n}, sizeof({ident}_once{n}), &abort_code)")
+        if cmd.kind == "reset":
+            out.append(f"    (void){call};{_c_comment(cmd.comment)}")
+        else:
+            out.append(f"    if ({call}) return -1;{_c_comment(cmd.comment)}")
+    out += ["    return 0;", "}", ""]
     return out
 
 
@@ -166,7 +172,7 @@ def export(configs: list[SlaveConfig]) -> str:
                                 "#ifndef SYNC0_CYCLE_NS", '#error "define SYNC0_CYCLE_NS (the SYNC0 cycle in ns, the '
                                 'application\'s task period): the source configuration has none"', "#endif", ""]
             body.append(f"    ecrt_slave_config_dc(sc, 0x{c.dc_assign_activate:04x}, {cycle}, "
-                        f"{c.dc_shift_ns or 0}, 0U, 0);")
+                        f"{c.dc_shift_ns or 0}, {c.dc_sync1_cycle_ns or 0}U, {c.dc_sync1_shift_ns or 0});")
         for n, s in enumerate(c.soe_commands):
             _idn_call(ident, n, s, body)
         out += body

@@ -7,12 +7,21 @@ Reading keeps the line of every command (the file is located with the YAML loade
 from __future__ import annotations
 
 import json
+import math
 from typing import Any
 
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry, SyncManager
 from ecattool.startup.config import SlaveConfig, SoeCommand
-from ecattool.startup.formats._common import as_list, check_transition, decode_text, parse_hex
+from ecattool.startup.formats._common import (
+    MAX_DEPTH,
+    as_list,
+    check_transition,
+    check_tree,
+    decode_text,
+    long_number_location,
+    parse_hex,
+)
 from ecattool.startup.model import StartupCommand, StartupList
 
 NAME = "json"
@@ -22,7 +31,11 @@ FORMAT_TAG = "ecattool-startup"
 VERSION = 1
 
 
-def _value(v: Any) -> Any:
+def json_value(v: Any) -> Any:
+    if isinstance(v, int) and not isinstance(v, bool) and v.bit_length() > 64:
+        return f"0x{v:x}"  # not a value of any CoE type: hex text (decimal stops at Python's 4300 digits)
+    if isinstance(v, float) and not math.isfinite(v):
+        return str(v)  # JSON has no NaN or infinity
     if v is None or isinstance(v, (bool, int, float, str)):
         return v
     if isinstance(v, (bytes, bytearray)):
@@ -42,7 +55,9 @@ def _cmd(cmd: StartupCommand) -> dict[str, Any]:
     if cmd.type_name:
         d["type"] = cmd.type_name
     if cmd.value is not None:
-        d["value"] = _value(cmd.value)
+        d["value"] = json_value(cmd.value)
+    if cmd.once:
+        d["once"] = True
     if not cmd.expect_reply:
         d["expect_reply"] = False
     if not cmd.verify:
@@ -85,7 +100,8 @@ def slave_to_json(c: SlaveConfig) -> dict[str, Any]:
         d["identity"] = {"vendor_id": c.identity.vendor_id, "product_code": c.identity.product_code,
                          "revision": c.identity.revision, "serial": c.identity.serial}
     dc = {k: v for k, v in (("assign_activate", c.dc_assign_activate), ("cycle_ns", c.dc_cycle_ns),
-                            ("shift_ns", c.dc_shift_ns)) if v is not None}
+                            ("shift_ns", c.dc_shift_ns), ("sync1_cycle_ns", c.dc_sync1_cycle_ns),
+                            ("sync1_shift_ns", c.dc_sync1_shift_ns)) if v is not None}
     if dc:
         d["dc"] = dc
     d["commands"] = [_cmd(x) for x in c.commands]
@@ -108,7 +124,7 @@ def slave_to_json(c: SlaveConfig) -> dict[str, Any]:
 
 def export(configs: list[SlaveConfig]) -> str:
     doc = {"format": FORMAT_TAG, "version": VERSION, "slaves": [slave_to_json(c) for c in configs]}
-    return json.dumps(doc, indent=2, ensure_ascii=False, default=_value) + "\n"
+    return json.dumps(doc, indent=2, ensure_ascii=False, default=json_value) + "\n"
 
 
 # --- reading -----------------------------------------------------------------------------------------
@@ -121,7 +137,7 @@ class _Doc:
             from ecattool.yamlloc import load_yaml
 
             self.located = load_yaml(text, source)
-        except InputError:
+        except (InputError, RecursionError, ValueError):  # the lines are a help; the JSON itself was read
             self.located = None
 
     def loc(self, *path: str | int) -> Location:
@@ -137,6 +153,12 @@ def _need(d: Any, key: str, loc: Location) -> Any:
 def _int(v: Any, loc: Location, what: str) -> int:
     if isinstance(v, bool) or not isinstance(v, int):
         raise InputError(f"{what} must be an integer, got {v!r}", loc)
+    return v
+
+
+def _text(v: Any, loc: Location, what: str) -> str | None:
+    if v is not None and not isinstance(v, str):
+        raise InputError(f"{what} must be text, got {type(v).__name__}", loc)
     return v
 
 
@@ -170,16 +192,18 @@ def _read_slave(s: Any, doc: _Doc, i: int) -> SlaveConfig:
     cfg.startup.name = cfg.name
     dloc = doc.loc(*base, "dc")
     dc = _obj(s.get("dc") or {}, dloc, "dc")
-    cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns = (
-        None if dc.get(k) is None else _int(dc[k], dloc, k) for k in ("assign_activate", "cycle_ns", "shift_ns"))
+    (cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns, cfg.dc_sync1_cycle_ns, cfg.dc_sync1_shift_ns) = (
+        None if dc.get(k) is None else _int(dc[k], dloc, k)
+        for k in ("assign_activate", "cycle_ns", "shift_ns", "sync1_cycle_ns", "sync1_shift_ns"))
     for j, c in enumerate(as_list(s.get("commands"), doc.loc(*base, "commands"), "commands")):
         loc = doc.loc(*base, "commands", j)
         cfg.startup.commands.append(StartupCommand(
             check_transition(str(_need(c, "transition", loc)), loc), _int(_need(c, "index", loc), loc, "index"),
             _int(_need(c, "subindex", loc), loc, "subindex"), parse_hex(str(_need(c, "data", loc)), loc),
             comment=str(c.get("comment", "")), complete_access=bool(c.get("complete_access", False)),
-            timeout_ms=_opt(c, "timeout_ms", 0, loc), type_name=c.get("type"), value=c.get("value"),
-            expect_reply=bool(c.get("expect_reply", True)), verify=bool(c.get("verify", True)), source=loc))
+            timeout_ms=_opt(c, "timeout_ms", 0, loc), type_name=_text(c.get("type"), loc, "type"), value=c.get("value"),
+            expect_reply=bool(c.get("expect_reply", True)), verify=bool(c.get("verify", True)),
+            once=bool(c.get("once", False)), source=loc))
     for key, direction in (("rx_pdos", Direction.RX), ("tx_pdos", Direction.TX)):
         for j, p in enumerate(as_list(s.get(key), doc.loc(*base, key), key)):
             ploc = doc.loc(*base, key, j)
@@ -226,13 +250,21 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
         top = json.loads(text)
     except json.JSONDecodeError as exc:
         raise InputError(f"invalid JSON: {exc.msg}", Location(source, exc.lineno, exc.colno)) from None
+    except RecursionError:
+        raise InputError(f"JSON nested deeper than Python can read (a startup file nests {MAX_DEPTH} levels at most)",
+                         Location(source, 1)) from None
+    except ValueError:  # Python refuses to convert an integer of more than 4300 digits
+        raise InputError("a number of more than 4300 digits: no startup value is wider than 64 bits",
+                         long_number_location(text, source)) from None
     if not isinstance(top, dict) or top.get("format") != FORMAT_TAG:
         raise InputError(f"not an ecattool startup JSON file (expected \"format\": \"{FORMAT_TAG}\")",
                          Location(source, 1))
     if top.get("version") != VERSION:
         raise InputError(f"unsupported ecattool startup JSON version {top.get('version')!r} (this is {VERSION})",
                          Location(source, 1))
+    check_tree(top, lambda path: Location(source))  # before locating it: a deep document stops here
     doc = _Doc(text, source)
+    check_tree(top, lambda path: doc.loc(*path))
     slaves = as_list(top.get("slaves"), doc.loc("slaves"), "slaves")
     return [_read_slave(s, doc, i) for i, s in enumerate(slaves)]
 

@@ -10,6 +10,7 @@ application period) is kept in ``extra``.
 
 from __future__ import annotations
 
+import glob
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
@@ -59,7 +60,8 @@ def _sdo_configs(slave: Any, cfg: SlaveConfig, source: str) -> None:
             raise InputError("sdoConfig without sdoDataRaw data (only raw data is supported)", loc)
         cfg.startup.commands.append(StartupCommand("PS", index, sub, raw, complete_access=complete,
                                                    type_name=None if complete else unsigned_type(len(raw)),
-                                                   value=int.from_bytes(raw, "little"), source=loc))
+                                                   value=int.from_bytes(raw, "little") if len(raw) <= 8 else None,
+                                                   source=loc))
 
 
 def _pdos(slave: Any, cfg: SlaveConfig, source: str) -> None:
@@ -85,12 +87,17 @@ def _pdos(slave: Any, cfg: SlaveConfig, source: str) -> None:
 def _find_beside(folder: Path, name: str) -> Path | None:
     """The initCmds file: ``name`` beside the configuration, else the one sibling ending in ``_<name>``
     (collections such as ecattool's corpus prefix copied files with their origin)."""
-    exact = folder / name
-    if exact.is_file():
-        return exact
-    if not name or "/" in name or "\\" in name:
+    if not name or "\0" in name:
         return None
-    matches = sorted(p for p in folder.glob(f"*_{name}") if p.is_file())
+    try:
+        exact = folder / name
+        if exact.is_file():
+            return exact
+        if "/" in name or "\\" in name:
+            return None
+        matches = sorted(p for p in folder.glob(f"*_{glob.escape(name)}") if p.is_file())
+    except (OSError, ValueError):  # a name the file system refuses (too long): not found, and reported so
+        return None
     return matches[0] if len(matches) == 1 else None
 
 
@@ -125,7 +132,7 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
             loc = Location(source, _line(slave))
             idx = slave.get("idx")
             cfg = SlaveConfig(startup=StartupList(), name=slave.get("name") or slave.get("type") or "",
-                              position=int(idx) if idx and idx.isdigit() else None, source=loc)
+                              position=parse_int(idx, loc, "idx") if idx and idx.isdigit() else None, source=loc)
             cfg.extra["lcec_type"] = slave.get("type") or ""
             if master.get("idx") not in (None, "0"):
                 cfg.extra["master"] = master.get("idx")
@@ -138,6 +145,8 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
                          "built-in driver; no vendor/product code in the file", loc, Severity.INFO)
             _sdo_configs(slave, cfg, source)
             _pdos(slave, cfg, source)
+            if cfg.has_pdo_info:
+                _config_pdos_note(slave, cfg, source)
             dc = slave.find("dcConf")
             if dc is not None:
                 _dc(dc, cfg, source, _app_period(master, source))
@@ -154,12 +163,12 @@ def _app_period(master: Any, source: str) -> int | None:
     return parse_int(text, Location(source, master.sourceline), "appTimePeriod")
 
 
-def _cycle(text: str, app_period: int | None) -> int | None:
+def _cycle(text: str, app_period: int | None, loc: Location) -> int | None:
     """An lcec cycle: ns, or ``*N`` = N application periods (lcec's ``parseSyncCycle``)."""
     t = text.strip()
     if t.startswith("*") and t[1:].isdigit():
-        return int(t[1:]) * app_period if app_period else None
-    return int(t) if t.lstrip("-").isdigit() else None
+        return parse_int(t[1:], loc, "cycle multiple") * app_period if app_period else None
+    return parse_int(t, loc, "cycle") if t.lstrip("-").isdigit() else None
 
 
 def _dc(dc: Any, cfg: SlaveConfig, source: str, app_period: int | None) -> None:
@@ -168,15 +177,32 @@ def _dc(dc: Any, cfg: SlaveConfig, source: str, app_period: int | None) -> None:
     for attr in ("sync0Cycle", "sync0Shift", "sync1Cycle", "sync1Shift"):
         if dc.get(attr) is not None:
             cfg.extra[attr] = dc.get(attr)
-    cfg.dc_cycle_ns = _cycle(dc.get("sync0Cycle") or "", app_period)
+    cfg.dc_cycle_ns = _cycle(dc.get("sync0Cycle") or "", app_period, loc)
     shift = dc.get("sync0Shift") or ""
-    cfg.dc_shift_ns = int(shift) if shift.lstrip("-").isdigit() else None
+    cfg.dc_shift_ns = parse_int(shift, loc, "sync0Shift") if shift.lstrip("-").isdigit() else None
     if (dc.get("sync0Cycle") or "").startswith("*") and cfg.dc_cycle_ns is None:
         cfg.note("startup.lcec.dc", f"sync0Cycle={dc.get('sync0Cycle')!r} is a multiple of the master's "
                  "appTimePeriod, which the file does not give: the SYNC0 cycle is unknown", loc)
-    if dc.get("sync1Cycle") is not None:
-        cfg.note("startup.lcec.sync1", f"SYNC1 (sync1Cycle={dc.get('sync1Cycle')!r}, sync1Shift="
-                 f"{dc.get('sync1Shift')!r}) is not converted: the startup model holds SYNC0 only", loc)
+    if (dc.get("sync1Cycle") or "").strip():
+        cfg.dc_sync1_cycle_ns = _cycle(dc.get("sync1Cycle") or "", app_period, loc)
+        if cfg.dc_sync1_cycle_ns is None:
+            cfg.note("startup.lcec.sync1", f"sync1Cycle={dc.get('sync1Cycle')!r} is not a cycle in ns or a multiple "
+                     "of a known appTimePeriod: SYNC1 is not converted", loc)
+    shift1 = (dc.get("sync1Shift") or "").strip()
+    cfg.dc_sync1_shift_ns = parse_int(shift1, loc, "sync1Shift") if shift1.lstrip("-").isdigit() else None
+
+
+def _config_pdos_note(slave: Any, cfg: SlaveConfig, source: str) -> None:
+    """lcec programs a generic slave's PDO tables only with ``configPdos="true"``; otherwise they name the
+    slave's own mapping for the HAL pins. Either way the reader says what it did with them."""
+    loc = Location(source, slave.sourceline)
+    if (slave.get("configPdos") or "").strip().lower() == "true":
+        cfg.note("startup.lcec.configpdos", 'configPdos="true": lcec programs these PDO tables; they are converted '
+                 "as the slave's PDO assignment and mapping", loc, Severity.INFO)
+    else:
+        cfg.note("startup.lcec.configpdos", "configPdos is not \"true\": lcec leaves the slave's own PDO mapping and "
+                 "uses these tables for its HAL pins only; they are converted as the PDO assignment and mapping, "
+                 "which IgH, ros2 and pysoem exports program", loc)
 
 
 #: what the reader uses; every other element or attribute is reported
@@ -199,6 +225,10 @@ def _report_unused(master: Any, slave: Any, cfg: SlaveConfig, source: str) -> No
         why = _WHY.get(child.tag, "not an lcec element this reader knows")
         cfg.note("startup.lcec.unused", f"<{child.tag} {attrs}> is not converted: {why}",
                  Location(source, child.sourceline))
+    if master.get("appTimePeriod") and cfg is not None and slave is master.find("slave"):
+        cfg.note("startup.lcec.master", f"master appTimePeriod={master.get('appTimePeriod')!r} ns is lcec's "
+                 "application cycle: used for the sync cycles given as *N; a master setting, not part of a slave "
+                 "configuration", Location(source, master.sourceline), Severity.INFO)
     extra = sorted(set(master.attrib) - {"idx", "appTimePeriod"})
     if extra and cfg is not None and slave is master.find("slave"):
         cfg.note("startup.lcec.master", "master attributes " + ", ".join(f"{k}={master.get(k)!r}" for k in extra)

@@ -22,9 +22,10 @@ Export only.
 from __future__ import annotations
 
 from ecattool.errors import TargetError
+from ecattool.esi.model import Pdo
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import one_line, sync_plan, unique_identifiers
-from ecattool.startup.model import is_pdo_programming
+from ecattool.startup.formats._common import dc_losses, one_line, soe_losses, sync_plan, unique_identifiers
+from ecattool.startup.model import StartupCommand, is_pdo_programming
 from ecattool.target.pysoem import dc_sync_args
 
 NAME = "pysoem"
@@ -40,41 +41,50 @@ def export(configs: list[SlaveConfig]) -> str:
            '"""', "", "from __future__ import annotations", ""]
     if any(not cmd.expect_reply for c in configs for cmd in c.commands):
         out += ["import pysoem", ""]  # its WkcError: the write that gets no reply
+    if any(cmd.one_shot for c in configs for cmd in c.commands):
+        out[1:1] = ["", "Call once(master) first, after master.config_init(): the one-shot writes (EEPROM programming,",
+                    "a reset), in order; config_map() re-runs the startup writes at every configuration."]
     tables = {id(c): _pdo_tables(c) for c in configs}
     if any(tables.values()):
         out += ["", *_PROGRAM_PDOS]
     out.append("")
     installs = []
+    onces: list[tuple[int, str]] = []
     for i, (ident, c) in enumerate(zip(idents, configs)):
         pos = c.position if c.position is not None else i
         vendor = f"0x{c.identity.vendor_id:08X}" if c.identity else "None"
         product = f"0x{c.identity.product_code:08X}" if c.identity else "None"
+        once = [cmd for cmd in c.commands if cmd.one_shot]
+        startup = [cmd for cmd in c.commands if not cmd.one_shot]
+        if once:
+            out.append(f"def once_{ident}(slave) -> None:")
+            out.append(f'    """{one_line(c.label).replace(chr(34), chr(39))}: {len(once)} one-shot write(s), in order."""')
+            out += _write_lines(once)
+            out += ["", ""]
+            onces.append((pos, ident))
         out.append(f"def config_{ident}(slave) -> None:")
-        out.append(f'    """{one_line(c.label).replace(chr(34), chr(39))}: {len(c.commands)} startup SDO write(s)."""')
+        out.append(f'    """{one_line(c.label).replace(chr(34), chr(39))}: {len(startup)} startup SDO write(s)."""')
         pdo_tables = tables[id(c)]
         if pdo_tables:
             out.append("    # the source gives the PDO mapping as tables only: program it (where the slave differs)")
             out.append(f"    program_pdos(slave, {pdo_tables!r})")
-        elif not c.commands:
+        elif not startup:
             out.append("    return None")
-        for cmd in c.commands:
-            note = one_line(cmd.comment)
-            if cmd.transition != "PS":
-                note = f"{note} [transition {cmd.transition}; pysoem writes it in PRE-OP]".strip()
-            ca = ", True" if cmd.complete_access else ""
-            call = f"slave.sdo_write(0x{cmd.index:04X}, 0x{cmd.subindex:02X}, bytes.fromhex({cmd.data.hex()!r}){ca})"
-            if cmd.expect_reply:
-                out.append(f"    {call}" + (f"  # {note}" if note else ""))
-            else:
-                out.append("    try:")
-                out.append(f"        {call}" + (f"  # {note}" if note else ""))
-                out.append("    except pysoem.WkcError:  # the drive answers this write by resetting, not with a reply")
-                out.append("        pass")
+        if once:
+            out.append(f"    # {len(once)} one-shot write(s) are in once_{ident}(), called once by once(master)")
+        out += _write_lines(startup)
         for s in c.soe_commands:
             out.append(f"    # SoE IDN {s.idn} drive {s.drive_no} ({s.transition}) {s.data.hex()}: not sent by pysoem")
         out.append("")
         out.append("")
         installs.append((pos, ident, vendor, product))
+    if onces:
+        out.append("def once(master) -> None:")
+        out.append('    """The one-shot writes of every slave, once, in PRE-OP (after config_init(), before install()).')
+        out.append('    Never part of config_func: config_map() runs that at every configuration."""')
+        for pos, ident in onces:
+            out.append(f"    once_{ident}(master.slaves[{pos}])")
+        out += ["", ""]
     out.append("#: (position, config function, vendor id, product code)")
     out.append("SLAVES = [")
     for pos, ident, vendor, product in installs:
@@ -98,14 +108,42 @@ def export(configs: list[SlaveConfig]) -> str:
     return "\n".join(out) + "\n"
 
 
+def _write_lines(commands: list[StartupCommand]) -> list[str]:
+    """``slave.sdo_write`` per command, in order; a reset (no reply) inside ``try/except pysoem.WkcError``."""
+    out = []
+    for cmd in commands:
+        note = one_line(cmd.comment)
+        if cmd.transition != "PS" and not cmd.one_shot:
+            note = f"{note} [transition {cmd.transition}; pysoem writes it in PRE-OP]".strip()
+        ca = ", True" if cmd.complete_access else ""
+        call = f"slave.sdo_write(0x{cmd.index:04X}, 0x{cmd.subindex:02X}, bytes.fromhex({cmd.data.hex()!r}){ca})"
+        if cmd.expect_reply:
+            out.append(f"    {call}" + (f"  # {note}" if note else ""))
+        else:
+            out.append("    try:")
+            out.append(f"        {call}" + (f"  # {note}" if note else ""))
+            out.append("    except pysoem.WkcError:  # the drive answers this write by resetting, not with a reply")
+            out.append("        pass")
+    return out
+
+
 def _pdo_tables(c: SlaveConfig) -> list[tuple[int, list[tuple[int, list[int]]]]]:
     """``[(assignment object, [(PDO, [mapping entry words])])]`` for a slave whose startup list does not program
     its PDO tables itself; empty where it does (or there are no tables)."""
-    if not c.has_pdo_info or any(is_pdo_programming(cmd.index) for cmd in c.commands):
+    if not _table_pdos(c):
         return []
     return [(0x1C10 + plan.number, [(p.index, [(e.index << 16) | (e.subindex << 8) | e.bit_len for e in p.entries])
                                     for p in plan.pdos])
             for plan in sync_plan(c) if not plan.mailbox and 2 <= plan.number <= 15]
+
+
+def _table_pdos(c: SlaveConfig) -> list[Pdo]:
+    """The PDOs the config function programs from the tables: none where the startup list programs them itself
+    (or there are no tables), and none of a slave whose tables are not CoE mapping objects (SoE IDNs)."""
+    if not c.has_pdo_info or any(is_pdo_programming(cmd.index) for cmd in c.commands):
+        return []
+    pdos = [*c.rx_pdos, *c.tx_pdos]
+    return [] if any(not is_pdo_programming(p.index) for p in pdos) else pdos
 
 
 _PROGRAM_PDOS = [
@@ -170,6 +208,8 @@ def _dc_lines(configs: list[SlaveConfig]) -> list[str]:
         what = f"{one_line(c.label)}: AssignActivate 0x{c.dc_assign_activate:04X}"
         try:
             args = dc_sync_args(c.dc_assign_activate, c.dc_cycle_ns or 0, c.dc_shift_ns or 0)
+            if len(args) == 4:  # SYNC0 + SYNC1: the SYNC1 cycle of the source (0: SYNC1 fires with SYNC0)
+                args = (*args[:3], c.dc_sync1_cycle_ns or 0)
         except TargetError:
             out.append(f"    ({pos}, None, {what!r}),")
             continue
@@ -197,4 +237,22 @@ def _dc_lines(configs: list[SlaveConfig]) -> list[str]:
             "        if args[0] and args[1] is None:",
             "            args = (args[0], sync0_cycle_ns, *args[2:])",
             "        master.slaves[position].dc_sync(*args)"]
+    return out
+
+
+def losses(c: SlaveConfig) -> list[str]:
+    """What the pysoem module cannot carry: SoE commands, a SYNC1 shift, an AssignActivate other than SYNC0 or
+    SYNC0+SYNC1, and PDO tables of SoE IDNs (pysoem would write them into the CoE objects 1C12h/1C13h)."""
+    out = soe_losses(c, "pysoem") + dc_losses(c, "pysoem", sync1_shift=False)
+    if c.dc_assign_activate:
+        try:
+            dc_sync_args(c.dc_assign_activate, 0)
+        except TargetError as exc:
+            out.append(str(exc.message))
+    programmed = any(is_pdo_programming(cmd.index) for cmd in c.commands)
+    idns = [] if programmed else [p for p in (*c.rx_pdos, *c.tx_pdos) if not is_pdo_programming(p.index)]
+    if idns:
+        out.append(f"PDOs {', '.join(f'0x{p.index:04X}' for p in idns)} are not CoE mapping objects (1600h-17FFh, "
+                   "1A00h-1BFFh) but SoE IDNs (AT/MDT telegrams), mapped by SoE commands: not written into "
+                   f"1C12h/1C13h ({idns[0].location or c.source})")
     return out

@@ -19,7 +19,18 @@ from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.od import types as dt
 from ecattool.od.standard import standard_type
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.formats._common import as_list, decode_text, one_line, one_shot_text, require_identity
+from ecattool.startup.formats._common import (
+    as_list,
+    check_tree,
+    dc_losses,
+    decode_text,
+    long_number_location,
+    one_line,
+    one_shot_losses,
+    one_shot_text,
+    require_identity,
+    soe_losses,
+)
 from ecattool.startup.model import StartupCommand, StartupList, is_pdo_programming
 
 NAME = "ros2"
@@ -58,10 +69,16 @@ def _flow(items: list[tuple[str, Any]]) -> str:
     return "{" + ", ".join(f"{k}: {v if isinstance(v, _Raw) else _scalar(v)}" for k, v in items) + "}"
 
 
+#: channel types the driver maps with their size (its ``type2bits``); float and double it has not: it would map
+#: them as 255 bits (``return -1`` into a uint8_t), shifting every later entry of the domain
+DRIVER_CHANNEL_FLOATS = {"float": "uint32", "double": "uint64"}
+
+
 def _ros_type_of_entry(e: PdoEntry) -> str:
     name = (e.data_type or standard_type(e.index, e.subindex, e.bit_len) or "").upper()
     if name in COE_TO_ROS:
-        return COE_TO_ROS[name]
+        ros = COE_TO_ROS[name]
+        return DRIVER_CHANNEL_FLOATS.get(ros, ros)  # a float channel: its raw bits, at its size (a listed loss)
     if name.startswith("BIT") and name[3:].isdigit():
         return f"bit{name[3:]}"
     if e.bit_len == 1:
@@ -158,8 +175,8 @@ def export(configs: list[SlaveConfig]) -> str:
         if skipped:
             lines.append(f"# {len(skipped)} PDO assignment/mapping writes of the startup list are done by the driver "
                          "from rpdo/tpdo")
-    once = [cmd for cmd in commands if cmd.one_shot]
-    commands = [cmd for cmd in commands if not cmd.one_shot]
+    once = [cmd for cmd in commands if cmd.kind == "reset"]  # once-writes stay, in order (a loss export() reports)
+    commands = [cmd for cmd in commands if cmd.kind != "reset"]
     lines += [f"# not an sdo entry: {one_shot_text(cmd)}" for cmd in once]
     if commands:
         lines.append("sdo:  # sdo data to be transferred at drive startup")
@@ -269,11 +286,19 @@ def load_located(text: str, source: str) -> Any:
     from ecattool.yamlloc import load_yaml
 
     try:
-        return load_yaml(text, source)
+        doc = load_yaml(text, source)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         raise InputError(f"invalid YAML: {getattr(exc, 'problem', None) or exc}",
                          Location(source, mark.line + 1 if mark else None)) from None
+    except RecursionError:  # PyYAML composes nested nodes recursively
+        raise InputError("YAML nested deeper than can be read (a ros2 slave file nests a few levels)",
+                         Location(source, 1)) from None
+    except ValueError:  # Python refuses to convert an integer of more than 4300 digits
+        raise InputError("a number of more than 4300 digits: no startup value is wider than 64 bits",
+                         long_number_location(text, source)) from None
+    check_tree(doc.data, doc.locate)
+    return doc
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
@@ -317,6 +342,12 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
                 if rest:
                     cfg.channel_info[(pdo.index, j)] = rest
             cfg.pdos(direction).append(pdo)
+    for i, sm in enumerate(as_list(top.get("sm"), doc.locate(("sm",)), "sm")):
+        if not isinstance(sm, dict) or not isinstance(sm.get("index"), int) or isinstance(sm.get("index"), bool):
+            raise InputError("an sm entry is a mapping {index, type, pdo, watchdog} with an integer index "
+                             "(the driver's SMConfig)", doc.locate(("sm", i)))
+        if not 0 <= sm["index"] <= 0xFF:
+            raise InputError(f"sm index {sm['index']} is out of range (0..255)", doc.locate(("sm", i, "index")))
     for key, value in top.items():
         if key not in _KNOWN_KEYS:
             cfg.extra[key] = value
@@ -326,3 +357,19 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
 def detect_yaml(top: Any) -> bool:
     return isinstance(top, dict) and any(k in top for k in ("rpdo", "tpdo", "sdo", "product_id"))
 
+
+def losses(c: SlaveConfig) -> list[str]:
+    """What the driver's slave file cannot carry: one-shot writes, SoE commands, DC beyond assign_activate
+    (the driver runs SYNC0 at its own period, unshifted, and SYNC1 with it) and float channels (written as the
+    unsigned integer of their size: the driver's type2bits maps float/double as 255 bits)."""
+    floats = [f"0x{p.index:04X}/0x{e.index:04X}:{e.subindex:02X}" for p in (*c.rx_pdos, *c.tx_pdos) for e in p.entries
+              if COE_TO_ROS.get((e.data_type or standard_type(e.index, e.subindex, e.bit_len) or "").upper())
+              in DRIVER_CHANNEL_FLOATS]
+    out = [f"float channel(s) {', '.join(floats)} written as uint32/uint64 (their raw bits): the driver has no float "
+           "channel type (it maps float/double as 255 bits)"] if floats else []
+    other = [cmd for cmd in c.commands if cmd.transition != "PS" and cmd.kind != "reset"]
+    if other:
+        out.append(f"the transition of {len(other)} write(s) ({other[0].transition} {other[0].address}…): the "
+                   "driver sends every sdo entry in PRE-OP")
+    return (one_shot_losses(c, "ethercat_driver_ros2") + soe_losses(c, "ethercat_driver_ros2") + out
+            + dc_losses(c, "ethercat_driver_ros2", shift0=False, sync1_cycle=False, sync1_shift=False))

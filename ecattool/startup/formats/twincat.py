@@ -15,11 +15,14 @@ from ecattool.errors import EncodeError, InputError, Location
 from ecattool.startup.config import SlaveConfig, SoeCommand
 from ecattool.startup.formats._common import (
     check_transition,
+    dc_losses,
     decode_text,
     int_in_range,
     one_line,
+    one_shot_losses,
     one_shot_text,
     parse_hex,
+    pdo_table_losses,
     unsigned_type,
 )
 from ecattool.startup.model import StartupCommand, StartupList
@@ -53,7 +56,7 @@ def export(configs: list[SlaveConfig]) -> str:
     c = configs[0]
     # a one-shot write (a reset the drive answers by resetting) is no startup line: TwinCAT sends the list at
     # every transition; it stays visible as a comment line (skipped when read back)
-    lines = [f"# not a startup line: {one_shot_text(cmd)}" if cmd.one_shot else format_line(cmd) for cmd in c.commands]
+    lines = [f"# not a startup line: {one_shot_text(cmd)}" if cmd.kind == "reset" else format_line(cmd) for cmd in c.commands]
     for s in c.soe_commands:
         lines.append(f"<{s.transition}>,SoE,IDN {s.idn} drive {s.drive_no},{s.data.hex()},{one_line(s.comment)}")
     return "".join(line + "\n" for line in lines)
@@ -95,7 +98,7 @@ def parse_line(line: str, loc: Location) -> StartupCommand | SoeCommand:
     data = parse_value(value, loc)
     return StartupCommand(transition, int(m.group(1), 16), int(m.group(2), 16), data, comment=comment,
                           complete_access=bool(m.group(3)), type_name=unsigned_type(len(data)),
-                          value=int.from_bytes(data, "little"), source=loc)
+                          value=int.from_bytes(data, "little") if len(data) <= 8 else None, source=loc)
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
@@ -121,3 +124,11 @@ def detect(data: bytes) -> bool:
     return False
 
 
+def losses(c: SlaveConfig) -> list[str]:
+    """What TwinCAT startup lines cannot carry: one-shot writes, DC and PDO tables no startup write programs."""
+    return (one_shot_losses(c, "a TwinCAT startup list") + dc_losses(c, "a TwinCAT startup list", dc=False)
+            + pdo_table_losses(c, "a TwinCAT startup list"))
+
+
+def nothing_left(c: SlaveConfig) -> bool:
+    return not c.soe_commands and all(cmd.kind == "reset" for cmd in c.commands)
