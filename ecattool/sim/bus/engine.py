@@ -33,7 +33,13 @@ _NOP, _LRD, _LWR, _LRW, _ARMW, _FRMW = int(Cmd.NOP), int(Cmd.LRD), int(Cmd.LWR),
 
 class Bus:
     """A line of slaves behind one master port (slave 0 first). ``process`` takes a frame as the master sent
-    it and returns it as it comes back, or None when it is not an EtherCAT frame."""
+    it and returns it as it comes back, or None when it is not an EtherCAT frame.
+
+    The frame is answered from the ESCs' memory alone (registers, sync manager buffers, FMMU copies, mailbox
+    buffers); the slave applications whose events fired while it passed (SM2 written, a SYNC0 pulse) run
+    afterwards, in :meth:`run_applications`, as a drive's processor runs on its interrupt after the ESC has
+    forwarded the frame. A transport calls it once the reply is on its way; ``process`` calls it itself first
+    when the previous frame's applications have not run yet, so they always run before the next frame."""
 
     def __init__(self, escs: Sequence[Esc], *, hop_ns: int = HOP_NS,
                  clock: Callable[[], int] = time.monotonic_ns) -> None:
@@ -44,6 +50,8 @@ class Bus:
             esc.link[0] = True
             esc.link[1] = i < len(self.escs) - 1
         self.frames = 0
+        #: a frame has passed since the applications last ran
+        self.pending = False
 
     def _reach(self) -> int:
         """How many slaves a frame passes (it turns back at a slave whose port 1 is closed)."""
@@ -52,7 +60,16 @@ class Bus:
                 return i + 1
         return len(self.escs)
 
+    def run_applications(self) -> None:
+        """The slave applications run after the frame: each does what its events since its last run ask."""
+        if self.pending:
+            self.pending = False
+            for esc in self.escs:
+                esc.app.after_frame(esc)
+
     def process(self, raw: bytes, *, fcs_ok: bool = True) -> bytes | None:
+        if self.pending:
+            self.run_applications()
         try:
             frame = parse_frame(raw)
         except FrameError:
@@ -67,6 +84,7 @@ class Bus:
                 esc.count_rx_error(0)
             return None
         self.frames += 1
+        self.pending = True
         t0 = self.clock()
         for k, esc in enumerate(self.escs[:reach]):
             arrive = t0 + (k + 1) * self.hop_ns

@@ -74,6 +74,9 @@ class RawTransport:
             if reply is not None:
                 sock.send(reply)
                 self.answered += 1
+            # the frame is on its way back: now the slave applications whose events fired run (the drives'
+            # cycles), while the master works with the reply, instead of before the reply as a whole bus cycle
+            self.bus.run_applications()
 
     def close(self) -> None:
         self.sock.close()
