@@ -42,14 +42,22 @@ class Bus:
     when the previous frame's applications have not run yet, so they always run before the next frame."""
 
     def __init__(self, escs: Sequence[Esc], *, hop_ns: int = HOP_NS,
-                 clock: Callable[[], int] = time.monotonic_ns) -> None:
+                 clock: Callable[[], int] = time.monotonic_ns, offset: int = 0, line: int | None = None) -> None:
+        """``offset``/``line``: this is a segment of a longer line served by several processes
+        (:mod:`ecattool.sim.bus.split`): ``offset`` slaves come before it, ``line`` slaves in all."""
         self.escs = list(escs)
         self.hop_ns = hop_ns
         self.clock = clock
+        self.offset = offset
+        self.line = offset + len(self.escs) if line is None else line
         for i, esc in enumerate(self.escs):
             esc.link[0] = True
-            esc.link[1] = i < len(self.escs) - 1
+            esc.link[1] = offset + i < self.line - 1
         self.frames = 0
+        #: the last frame turned back inside this segment (a closed port 1): the slaves after it never saw it
+        self.turned_back = False
+        #: the last frame (good or spoilt) goes on to the slaves after this segment
+        self.passed_on = False
         #: a frame has passed since the applications last ran
         self.pending = False
 
@@ -67,9 +75,11 @@ class Bus:
             for esc in self.escs:
                 esc.app.after_frame(esc)
 
-    def process(self, raw: bytes, *, fcs_ok: bool = True) -> bytes | None:
+    def process(self, raw: bytes, *, fcs_ok: bool = True, t0: int | None = None) -> bytes | None:
+        """``t0``: host time (ns) the frame left the master, when an earlier segment took it (else now)."""
         if self.pending:
             self.run_applications()
+        self.passed_on = False
         try:
             frame = parse_frame(raw)
         except FrameError:
@@ -78,6 +88,8 @@ class Bus:
         if frame is None and fcs_ok:
             return None
         reach = self._reach()
+        self.turned_back = reach < len(self.escs) or (bool(self.escs) and not self.escs[-1].port_open(1))
+        self.passed_on = not self.turned_back
         if not fcs_ok or frame is None:
             # a slave that sees a bad frame counts it and spoils the frame further (the master drops it)
             for esc in self.escs[:reach]:
@@ -85,10 +97,15 @@ class Bus:
             return None
         self.frames += 1
         self.pending = True
-        t0 = self.clock()
+        if t0 is None:
+            t0 = self.clock()
+        # the frame turns at the last slave it reaches: in this segment, or (as far as this process knows) at
+        # the end of the line
+        last = self.offset + reach - 1 if self.turned_back else self.line - 1
         for k, esc in enumerate(self.escs[:reach]):
-            arrive = t0 + (k + 1) * self.hop_ns
-            back = arrive + 2 * (reach - 1 - k) * self.hop_ns if k < reach - 1 else None
+            at = self.offset + k
+            arrive = t0 + (at + 1) * self.hop_ns
+            back = arrive + 2 * (last - at) * self.hop_ns if at < last else None
             esc.begin_frame([arrive, back, None, None])
             for d in frame.datagrams:
                 self._datagram(esc, d)
