@@ -80,6 +80,9 @@ class VirtualSlave(EscApplication):
         self._pd_event = False
         #: the last SYNC0 pulse (its number since the start time) the drive ran for, while DC is on
         self._sync0_seen = -1
+        #: SAFE-OP or OP without outputs: each complete read of SM3 is the drive's event (kept by _sync_state,
+        #: which every state change passes, instead of asking the drive on every read of SM3)
+        self._no_outputs = False
         self._sync_state()
 
     # ------------------------------------------------------------------------------------------
@@ -102,6 +105,7 @@ class VirtualSlave(EscApplication):
         self.esc.set_al_status(state.code, error=error, code=code)
         mailbox_on = state in (EcState.PREOP, EcState.SAFEOP, EcState.OP, EcState.BOOT)
         pd_on = state in (EcState.SAFEOP, EcState.OP)
+        self._no_outputs = pd_on and self.drive.process_image_sizes()[0] == 0
         for n in range(self.esc.sm_count):
             sm = self.esc.sm(n)
             if n in (MBX_OUT, MBX_IN) or (sm.mailbox and n < 2):
@@ -227,7 +231,7 @@ class VirtualSlave(EscApplication):
             self._pd_event = True
 
     def buffer_read(self, esc: Esc, sm: int) -> None:
-        if sm == PD_IN and self._out_size() == 0:
+        if sm == PD_IN and self._no_outputs:
             self._outputs = b""
             self._pd_event = True
 
@@ -252,9 +256,6 @@ class VirtualSlave(EscApplication):
             return -1
         now = (esc.local_time(esc.clock.host_ns()) + esc.u64(R.DC_SYSTEM_OFFSET)) & 0xFFFFFFFFFFFFFFFF
         return (now - start) // cycle if now >= start else -1
-
-    def _out_size(self) -> int:
-        return self.drive.process_image_sizes()[0] if self.drive.state() in (EcState.SAFEOP, EcState.OP) else 0
 
     def _exchange(self, outputs: bytes | None) -> None:
         """One process data cycle: outputs to the drive (None: the first inputs at SAFE-OP), inputs to SM3."""
