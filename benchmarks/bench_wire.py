@@ -271,7 +271,7 @@ def _start_server(sources: list[str], where: str | None = None, workers: int | N
     extra = ["--workers", str(workers)] if workers else []
     server = subprocess.Popen([sys.executable, "-m", "ecattool", "sim", "serve", *sources, "--iface", SLAVE_IF,
                                *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              preexec_fn=_realtime, cwd=ROOT, env=env)
+                              preexec_fn=_realtime, cwd=where or ROOT, env=env)  # -m puts the cwd first
     assert server.stdout is not None
     ready, _, _ = select.select([server.stdout], [], [], 60)
     if not ready or not server.stdout.readline():

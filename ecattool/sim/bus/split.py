@@ -27,7 +27,7 @@ from types import FrameType
 from ecattool.errors import TargetError
 from ecattool.sim.bus.engine import Bus
 from ecattool.sim.bus.loop import FrameFault
-from ecattool.sim.bus.raw import MAX_FRAME, POLL_S, open_raw
+from ecattool.sim.bus.raw import MAX_FRAME, POLL_S, RawTransport
 from ecattool.sim.esc import Esc
 
 _HEAD = struct.Struct("<Q?")
@@ -85,26 +85,21 @@ def _pass(bus: Bus, raw: bytes, fcs_ok: bool, t0: int, onward: socket.socket | N
     return False
 
 
-class SplitTransport:
+class SplitTransport(RawTransport):
     """Serves the slaves ``escs`` on ``ifname`` from ``len(segments)`` processes; ``segments`` are consecutive
-    ranges of positions (:func:`split`). This process serves the first segment and reads the interface; the
-    others are forked here and end when this one closes (or on SIGINT/SIGTERM). ``fault`` sees every frame the
-    master sent, before the first slave, as in :class:`~ecattool.sim.bus.raw.RawTransport`."""
+    ranges of positions (:func:`split`). This process serves the first segment and reads the interface (the
+    loop of :class:`~ecattool.sim.bus.raw.RawTransport`, ``fault`` included); the others are forked here and end
+    when this one closes (or on SIGINT/SIGTERM)."""
 
     def __init__(self, escs: Sequence[Esc], segments: Sequence[range], ifname: str,
                  fault: FrameFault | None = None) -> None:
         if not segments or sum(len(r) for r in segments) != len(escs):
             raise ValueError("the segments must cover the slaves")
         line = len(escs)
-        self.fault = fault
-        self.ifname = ifname
-        self.received = 0
-        self.answered = 0
-        self.sock = open_raw(ifname)
+        super().__init__(Bus([escs[i] for i in segments[0]], offset=0, line=line), ifname, fault)
         self.out = _send_only(ifname) if len(segments) > 1 else self.sock
         self.children: list[int] = []
         links = [socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET) for _ in segments[1:]]
-        self.bus = Bus([escs[i] for i in segments[0]], offset=0, line=line)
         self.onward = links[0][0] if links else None
         for j, seg in enumerate(segments[1:], start=1):
             pid = os.fork()
@@ -127,25 +122,11 @@ class SplitTransport:
             if k:
                 a.close()
 
-    def serve(self, stop: Callable[[], bool], max_frames: int | None = None) -> None:
-        sock, out, bus = self.sock, self.out, self.bus
-        while not stop() and (max_frames is None or self.received < max_frames):
-            ready, _, _ = select.select([sock], [], [], POLL_S)
-            if not ready:
-                continue
-            raw, addr = sock.recvfrom(MAX_FRAME + 4)
-            if len(addr) > 2 and addr[2] == socket.PACKET_OUTGOING:
-                continue
-            self.received += 1
-            fcs_ok = True
-            if self.fault is not None:
-                delivered, fcs_ok = self.fault(raw)
-                if delivered is None:
-                    continue
-                raw = delivered
-            if _pass(bus, raw, fcs_ok, bus.clock(), self.onward, out.send):
-                self.answered += 1
-            bus.run_applications()
+    def answer(self, raw: bytes, fcs_ok: bool) -> None:
+        bus = self.bus
+        if _pass(bus, raw, fcs_ok, bus.clock(), self.onward, self.out.send):
+            self.answered += 1
+        bus.run_applications()
 
     def close(self) -> None:
         if self.onward is not None:
@@ -157,7 +138,7 @@ class SplitTransport:
                 pass
         if self.out is not self.sock:
             self.out.close()
-        self.sock.close()
+        super().close()
 
 
 def _worker(bus: Bus, inbound: socket.socket, onward: socket.socket | None, out: socket.socket) -> int:
