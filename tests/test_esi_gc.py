@@ -20,7 +20,7 @@ def test_the_model_goes_to_the_oldest_generation_and_the_collector_is_back_on() 
     assert gc.get_count()[0] < 100  # no pass owed for the thousands of objects just made
     assert all(gc.is_tracked(x) for x in built[:10])
     # still collectable: a cycle made in the build is found by a full pass
-    cycle = without_gc(lambda: [[]])
+    cycle: list[list[object]] = without_gc(lambda: [[]])
     cycle[0].append(cycle)
     del cycle
     assert gc.collect() >= 1
