@@ -21,6 +21,7 @@ import select
 import signal
 import socket
 import struct
+import sys
 from collections.abc import Callable, Sequence
 from types import FrameType
 
@@ -124,8 +125,12 @@ class SplitTransport(RawTransport):
 
     def answer(self, raw: bytes, fcs_ok: bool) -> None:
         bus = self.bus
-        if _pass(bus, raw, fcs_ok, bus.clock(), self.onward, self.out.send):
-            self.answered += 1
+        try:
+            if _pass(bus, raw, fcs_ok, bus.clock(), self.onward, self.out.send):
+                self.answered += 1
+        except (BrokenPipeError, ConnectionResetError):
+            raise TargetError("a process serving the later slaves of the line has ended (see its message above)") \
+                from None
         bus.run_applications()
 
     def close(self) -> None:
@@ -164,7 +169,11 @@ def _worker(bus: Bus, inbound: socket.socket, onward: socket.socket | None, out:
             _pass(bus, msg[_HEAD.size:], fcs_ok, t0, onward, send)
             bus.run_applications()
     except (BrokenPipeError, ConnectionResetError):
-        return 0
+        return 0  # the next process has ended (the server is stopping)
+    except Exception as exc:  # noqa: BLE001 - a worker must not die silently: one line, and the server stops
+        print(f"ecattool sim serve: the process serving slaves {bus.offset}-{bus.offset + len(bus.escs) - 1} "
+              f"failed: {type(exc).__name__}: {exc}", file=sys.stderr, flush=True)
+        return 1
     finally:
         if onward is not None:
             onward.close()
