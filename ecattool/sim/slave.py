@@ -106,6 +106,8 @@ class VirtualSlave(EscApplication):
         mailbox_on = state in (EcState.PREOP, EcState.SAFEOP, EcState.OP, EcState.BOOT)
         pd_on = state in (EcState.SAFEOP, EcState.OP)
         self._no_outputs = pd_on and self.drive.process_image_sizes()[0] == 0
+        if not pd_on:
+            self._outputs = None  # below SAFE-OP the process image may change: a SYNC0 cycle waits for new outputs
         for n in range(self.esc.sm_count):
             sm = self.esc.sm(n)
             if n in (MBX_OUT, MBX_IN) or (sm.mailbox and n < 2):
