@@ -72,6 +72,20 @@ def _send_only(ifname: str) -> socket.socket:
     return sock
 
 
+def _priority_above(step: int) -> None:
+    """Where the server runs at a real-time priority (``chrt -f 10 ecattool sim serve``), segment ``step`` runs
+    ``step`` above it: a frame always moves on to a process of higher priority, which takes a core from the
+    drives' cycles an earlier segment runs after passing the frame on (at one priority, SCHED_FIFO would let
+    those cycles finish first, and the frame would wait for them). Nothing where it is not permitted."""
+    try:
+        policy = os.sched_getscheduler(0)
+        if policy in (os.SCHED_FIFO, os.SCHED_RR):
+            prio = os.sched_getparam(0).sched_priority + step
+            os.sched_setscheduler(0, policy, os.sched_param(min(prio, os.sched_get_priority_max(policy))))
+    except (AttributeError, OSError):
+        pass
+
+
 def _pass(bus: Bus, raw: bytes, fcs_ok: bool, t0: int, onward: socket.socket | None,
           out: Callable[[bytes], object]) -> bool:
     """Answer ``raw`` for this segment; hand it on to the next process, or send it back to the master where it
@@ -107,6 +121,7 @@ class SplitTransport(RawTransport):
             if pid == 0:  # the worker of segment j: never returns into the caller's code
                 code = 1
                 try:
+                    _priority_above(j)
                     self.sock.close()
                     for k, (a, b) in enumerate(links):
                         if k != j - 1:
