@@ -118,5 +118,6 @@ def test_the_split_is_consecutive_and_chosen_from_drives_and_cores() -> None:
     assert split(5, 3) == [range(0, 2), range(2, 4), range(4, 5)]
     assert split(3, 8) == [range(0, 1), range(1, 2), range(2, 3)]
     assert split(16, 2) == [range(0, 8), range(8, 16)]
-    assert choose_workers(8, cores=2) == 1 and choose_workers(16, cores=2) == 2
-    assert choose_workers(40, cores=2) == 2 and choose_workers(16, cores=1) == 1 and choose_workers(1, cores=8) == 1
+    assert choose_workers(8, cores=2) == 1 and choose_workers(16, cores=2) == 1 and choose_workers(17, cores=2) == 2
+    assert choose_workers(40, cores=2) == 2 and choose_workers(40, cores=1) == 1 and choose_workers(1, cores=8) == 1
+    assert choose_workers(40, cores=8) == 3

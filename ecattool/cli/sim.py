@@ -200,7 +200,7 @@ Run it inside a private network namespace with a veth pair (never on the host's 
               help="Stop after this many frames (default: until SIGINT/SIGTERM).")
 @click.option("--list", "list_only", is_flag=True, help="Print the slaves in bus order and exit (no interface).")
 @click.option("--workers", type=click.IntRange(min=1), default=None,
-              help="Processes serving the line, each a segment of consecutive slaves (default: one per 8 drives, "
+              help="Processes serving the line, each a segment of consecutive slaves (default: one per 16 drives, "
                    "at most one per core).")
 @json_option
 def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, revision: str | None,

@@ -32,8 +32,10 @@ from ecattool.sim.bus.raw import MAX_FRAME, POLL_S, RawTransport
 from ecattool.sim.esc import Esc
 
 _HEAD = struct.Struct("<Q?")
-#: drives one process serves at 1 kHz with room to spare on the 2-core build machine (docs/performance.md)
-DRIVES_PER_PROCESS = 8
+#: drives one process serves at 1 kHz on the 2-core build machine (docs/performance.md: 16 idle HDTs take ~0.5-0.7
+#: ms of CPU per cycle; served by two processes their latency was higher, since the frame waits for a second
+#: process to wake up, and the total CPU ~30 % more)
+DRIVES_PER_PROCESS = 16
 
 
 def available_cores() -> int:
