@@ -419,6 +419,7 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, wh
         latency: list[int] = []
         lateness: list[int] = []
         short_wkc = overruns = 0
+        missed_at: list[list[Any]] = []  # the first 50: [cycle, "late" (start, us) or "wkc" (latency, us)]
         _realtime()
         cpu0 = _cpu_s(server.pid)
         next_t = time.perf_counter_ns() + period
@@ -437,12 +438,16 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, wh
             lateness.append(late)
             if late >= period:
                 overruns += 1
+                if len(missed_at) < 50:
+                    missed_at.append([k, "late", late // 1000])
                 next_t += (late // period) * period  # skip the cycles that passed, as a real-time loop would
             master.send_processdata()
             wkc = master.receive_processdata(timeout_us)
             latency.append(time.perf_counter_ns() - t0)
             if wkc != master.expected_wkc:
                 short_wkc += 1
+                if len(missed_at) < 50:
+                    missed_at.append([k, "wkc", latency[-1] // 1000])
             next_t += period
         server_cpu = _cpu_s(server.pid) - cpu0
         state_ok = master.read_state() == pysoem.OP_STATE
@@ -456,7 +461,8 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, wh
             "lateness_p50_us": _pct(lateness, 0.5), "lateness_p99_us": _pct(lateness, 0.99),
             "short_wkc": short_wkc, "overruns": overruns, "missed": short_wkc + overruns,
             "still_op": state_ok, "expected_wkc": master.expected_wkc, "back_to_back_per_s": back_to_back,
-            "server_cpu_per_frame_us": server_cpu / cycles * 1e6, "workers": workers, "server": where or "current"}
+            "server_cpu_per_frame_us": server_cpu / cycles * 1e6, "workers": workers, "server": where or "current",
+            "missed_at": missed_at}
 
 
 def inside(args: argparse.Namespace) -> None:
