@@ -5,6 +5,7 @@ other jobs share the machine)."""
 from __future__ import annotations
 
 import os
+import resource
 import statistics
 import subprocess
 import time
@@ -26,15 +27,30 @@ def env_for(package_dir: Path | None = None) -> dict[str, str]:
     return env
 
 
+#: CPU time (user + system, s) of every process :func:`run_once` ran, per command line, in order
+CPU: dict[tuple[str, ...], list[float]] = {}
+
+
+def _children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def run_once(cmd: list[str], package_dir: Path | None = None) -> float:
-    """Wall time of one process; another revision's package runs in its own directory so it is found first."""
+    """Wall time of one process; another revision's package runs in its own directory so it is found first.
+    Its CPU time goes to :data:`CPU` (less disturbed by other jobs on the machine than the wall time)."""
+    c0 = _children_cpu()
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True, cwd=package_dir or ROOT, stdout=subprocess.DEVNULL, env=env_for(package_dir))
-    return time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    CPU.setdefault((*cmd, str(package_dir)), []).append(_children_cpu() - c0)
+    return wall
 
 
-def interleaved(variants: dict[str, Variant], runs: int, warmups: int = 1) -> dict[str, list[float]]:
-    """``runs`` wall times of each variant, one of each in turn, after warming the OS file cache and .pyc files."""
+def interleaved(variants: dict[str, Variant], runs: int, warmups: int = 1,
+                cpu: dict[str, list[float]] | None = None) -> dict[str, list[float]]:
+    """``runs`` wall times of each variant, one of each in turn, after warming the OS file cache and .pyc files;
+    with ``cpu``, each run's CPU time (user + system of the process) goes there under the variant's name."""
     for _ in range(warmups):
         for cmd, package_dir in variants.values():
             run_once(cmd, package_dir)
@@ -42,15 +58,25 @@ def interleaved(variants: dict[str, Variant], runs: int, warmups: int = 1) -> di
     for _ in range(runs):
         for name, (cmd, package_dir) in variants.items():
             times[name].append(run_once(cmd, package_dir))
+            if cpu is not None:
+                cpu.setdefault(name, []).append(CPU[(*cmd, str(package_dir))][-1])
     return times
 
 
-def report(times: dict[str, list[float]], baseline: str) -> None:
+def report(times: dict[str, list[float]], baseline: str, cpu: dict[str, list[float]] | None = None) -> None:
+    """Median wall time per variant and its ratio to ``baseline``'s (ratio of minima too); with ``cpu``, also
+    the median CPU time and the median of the per-round CPU ratios (each run against the baseline's run of the
+    same round)."""
     base, base_min = statistics.median(times[baseline]), min(times[baseline])
     for name, ts in times.items():
         med = statistics.median(ts)
-        print(f"  {name:16s} {med * 1000:7.1f} ms   ratio {med / base:4.2f}x   "
-              f"(min {min(ts) * 1000:.1f} ms, ratio of minima {min(ts) / base_min:4.2f}x)")
+        line = (f"  {name:16s} {med * 1000:7.1f} ms   ratio {med / base:4.2f}x   "
+                f"(min {min(ts) * 1000:.1f} ms, ratio of minima {min(ts) / base_min:4.2f}x)")
+        if cpu is not None and name in cpu:
+            ratios = [c / b for c, b in zip(cpu[name], cpu[baseline])]
+            line += (f"   CPU {statistics.median(cpu[name]) * 1000:6.1f} ms, median ratio "
+                     f"{statistics.median(ratios):4.2f}x")
+        print(line)
 
 
 def has_package(directory: Path) -> bool:

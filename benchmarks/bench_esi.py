@@ -57,9 +57,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"no ecattool package in {args.against}", file=sys.stderr)
             return 1
         variants["esi-full@" + args.against.name] = (variants["esi-full"][0], args.against.resolve())
-    times = interleaved(variants, args.runs)
-    print(f"file: {args.file.name} ({args.file.stat().st_size} bytes), {args.runs} runs each, median wall time per process")
-    report(times, "bare-parse")
+    cpu: dict[str, list[float]] = {}
+    times = interleaved(variants, args.runs, cpu=cpu)
+    print(f"file: {args.file.name} ({args.file.stat().st_size} bytes), {args.runs} runs each, median wall time per "
+          "process; CPU time (user + system) per process")
+    report(times, "bare-parse", cpu)
     return 0
 
 

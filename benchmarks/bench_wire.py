@@ -176,17 +176,29 @@ def bench_bus(drives: int, seconds: float, motion: bool = False) -> dict[str, fl
         frames = [frame(0, 0)] * 100
     wall: list[float] = []
     cpu: list[float] = []
-    start = time.perf_counter()
-    while (time.perf_counter() - start < seconds or len(wall) < 5) and len(wall) < MAX_COUNT:
-        t0, c0 = time.perf_counter(), time.thread_time()
+    reply: list[float] = []
+    # since issue 26 the drives' cycles run after the reply (Bus.run_applications); an older revision runs them
+    # inside Bus.process, so there the reply waits for everything
+    after = getattr(bus, "run_applications", lambda: None)
+    clock = time.perf_counter
+    start = clock()
+    while (clock() - start < seconds or len(wall) < 5) and len(wall) < MAX_COUNT:
+        t0, c0 = clock(), time.thread_time()
+        waited = 0.0
         for raw in frames:
+            f0 = clock()
             bus.process(raw)
-        wall.append((time.perf_counter() - t0) / len(frames))
+            waited += clock() - f0
+            after()
+        wall.append((clock() - t0) / len(frames))
         cpu.append((time.thread_time() - c0) / len(frames))
+        reply.append(waited / len(frames))
         for s in slaves:
             s.drive.events.clear()
     return {"drives": drives, "motion": motion, "median_us": statistics.median(wall) * 1e6,
-            "min_us": min(wall) * 1e6, "cpu_min_us": min(cpu) * 1e6, "frame_octets": drives * (out_len + in_len)}
+            "min_us": min(wall) * 1e6, "cpu_min_us": min(cpu) * 1e6, "cpu_median_us": statistics.median(cpu) * 1e6,
+            "reply_min_us": min(reply) * 1e6, "reply_median_us": statistics.median(reply) * 1e6,
+            "frame_octets": drives * (out_len + in_len)}
 
 
 #: the in-process bus measurements: (drives, motion)
@@ -218,6 +230,9 @@ def bus_side_by_side(seconds: float, against: str | None, rounds: int = 3) -> di
     for who, results in runs.items():
         out[who] = [dict(results[0][i], min_us=min(r[i]["min_us"] for r in results),
                          cpu_min_us=min(r[i]["cpu_min_us"] for r in results),
+                         cpu_median_us=statistics.median(r[i]["cpu_median_us"] for r in results),
+                         reply_min_us=min(r[i]["reply_min_us"] for r in results),
+                         reply_median_us=statistics.median(r[i]["reply_median_us"] for r in results),
                          median_us=statistics.median(r[i]["median_us"] for r in results))
                     for i in range(len(BUS_CASES))]
     return out
@@ -250,10 +265,13 @@ def _realtime() -> None:
         pass
 
 
-def _start_server(sources: list[str]) -> subprocess.Popen[str]:
-    server = subprocess.Popen([sys.executable, "-m", "ecattool", "sim", "serve", *sources, "--iface", SLAVE_IF],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_realtime,
-                              cwd=ROOT)
+def _start_server(sources: list[str], where: str | None = None, workers: int | None = None) -> subprocess.Popen[str]:
+    """``ecattool sim serve`` of this checkout or of the package in ``where`` (``--against``), with ``--workers``."""
+    env = dict(os.environ, PYTHONPATH=where or str(ROOT))
+    extra = ["--workers", str(workers)] if workers else []
+    server = subprocess.Popen([sys.executable, "-m", "ecattool", "sim", "serve", *sources, "--iface", SLAVE_IF,
+                               *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              preexec_fn=_realtime, cwd=where or ROOT, env=env)  # -m puts the cwd first
     assert server.stdout is not None
     ready, _, _ = select.select([server.stdout], [], [], 60)
     if not ready or not server.stdout.readline():
@@ -328,12 +346,33 @@ def wire_one_drive(seconds: float) -> dict[str, Any]:
     return out
 
 
+def _cpu_s(pid: int) -> float:
+    """CPU time (user + system, s) of process ``pid`` and its children (a split server's workers) so far."""
+    tick = os.sysconf("SC_CLK_TCK")
+    total = 0.0
+    pids = [pid]
+    try:
+        with open(f"/proc/{pid}/task/{pid}/children") as f:
+            pids += [int(p) for p in f.read().split()]
+    except OSError:
+        pass
+    for p in pids:
+        try:
+            with open(f"/proc/{p}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            total += (int(fields[11]) + int(fields[12])) / tick
+        except (OSError, IndexError, ValueError):
+            pass
+    return total
+
+
 def _pct(values: list[int], q: float) -> float:
     ordered = sorted(values)
     return ordered[min(len(ordered) - 1, int(q * len(ordered)))] / 1000.0  # ns -> us
 
 
-def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False) -> dict[str, Any]:
+def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, where: str | None = None,
+                workers: int | None = None) -> dict[str, Any]:
     """``drives`` HDTs in OP, one process data frame per cycle at ``hz`` for ``seconds`` (absolute deadlines,
     sleep then a short spin); latency = send to receive of a cycle's frame, lateness = start after deadline.
     ``motion``: the drives are put in CSP (6060h = 8 by SDO in PRE-OP), enabled through the controlword and
@@ -347,7 +386,7 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False) ->
     probe.request_state(EcState.PREOP)
     probe.request_state(EcState.SAFEOP)
     out_len = probe.process_image_sizes()[0]
-    server = _start_server(["hdt"] * drives)
+    server = _start_server(["hdt"] * drives, where, workers)
     try:
         master = pysoem.Master()
         master.open(MASTER_IF)
@@ -380,7 +419,9 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False) ->
         latency: list[int] = []
         lateness: list[int] = []
         short_wkc = overruns = 0
+        missed_at: list[list[Any]] = []  # the first 50: [cycle, "late" (start, us) or "wkc" (latency, us)]
         _realtime()
+        cpu0 = _cpu_s(server.pid)
         next_t = time.perf_counter_ns() + period
         for k in range(cycles):
             if motion:
@@ -397,13 +438,18 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False) ->
             lateness.append(late)
             if late >= period:
                 overruns += 1
+                if len(missed_at) < 50:
+                    missed_at.append([k, "late", late // 1000])
                 next_t += (late // period) * period  # skip the cycles that passed, as a real-time loop would
             master.send_processdata()
             wkc = master.receive_processdata(timeout_us)
             latency.append(time.perf_counter_ns() - t0)
             if wkc != master.expected_wkc:
                 short_wkc += 1
+                if len(missed_at) < 50:
+                    missed_at.append([k, "wkc", latency[-1] // 1000])
             next_t += period
+        server_cpu = _cpu_s(server.pid) - cpu0
         state_ok = master.read_state() == pysoem.OP_STATE
         master.state = pysoem.INIT_STATE
         master.write_state()
@@ -414,7 +460,9 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False) ->
             "latency_p99_us": _pct(latency, 0.99), "latency_max_us": max(latency) / 1000.0,
             "lateness_p50_us": _pct(lateness, 0.5), "lateness_p99_us": _pct(lateness, 0.99),
             "short_wkc": short_wkc, "overruns": overruns, "missed": short_wkc + overruns,
-            "still_op": state_ok, "expected_wkc": master.expected_wkc, "back_to_back_per_s": back_to_back}
+            "still_op": state_ok, "expected_wkc": master.expected_wkc, "back_to_back_per_s": back_to_back,
+            "server_cpu_per_frame_us": server_cpu / cycles * 1e6, "workers": workers, "server": where or "current",
+            "missed_at": missed_at}
 
 
 def inside(args: argparse.Namespace) -> None:
@@ -424,7 +472,11 @@ def inside(args: argparse.Namespace) -> None:
         pass
     out: dict[str, Any] = {"one": wire_one_drive(args.seconds)} if not args.cyclic_only else {}
     if args.drives:
-        out["cyclic"] = wire_cyclic(args.drives, args.hz, args.pd_seconds, args.motion)
+        # with --against: this checkout's server and the other revision's, alternately, --rounds times each
+        servers: list[str | None] = [None] + ([str(Path(args.against).resolve())] if args.against else [])
+        out["cyclic"] = [wire_cyclic(args.drives, args.hz, args.pd_seconds, args.motion, where,
+                                     args.workers if where is None else None)
+                         for _ in range(args.rounds) for where in servers]
     print(json.dumps(out))
 
 
@@ -442,8 +494,10 @@ def on_the_wire(args: argparse.Namespace) -> dict[str, Any] | str:
         return reason
     argv = [sys.executable, str(Path(__file__).resolve()), "--inside", "--seconds", str(args.seconds),
             "--drives", str(args.drives), "--hz", str(args.hz), "--pd-seconds", str(args.pd_seconds),
-            *(["--motion"] if args.motion else []), *(["--cyclic-only"] if args.cyclic_only else [])]
-    budget = 120 + 3 * args.seconds + args.pd_seconds * 2
+            "--rounds", str(args.rounds), *(["--motion"] if args.motion else []),
+            *(["--cyclic-only"] if args.cyclic_only else []), *(["--against", args.against] if args.against else []),
+            *(["--workers", str(args.workers)] if args.workers else [])]
+    budget = 120 + 3 * args.seconds + (args.pd_seconds * 2 + 60) * args.rounds * (2 if args.against else 1)
     done = subprocess.run(netns.command(argv), capture_output=True, text=True, timeout=budget, cwd=ROOT)
     if done.returncode != 0:
         raise SystemExit(f"the wire benchmark failed: {done.stderr[-3000:]}")
@@ -463,6 +517,12 @@ def main() -> None:
                     help="on the wire, only the cyclic bus (no SDO and one-drive frame rates)")
     ap.add_argument("--against", metavar="DIR",
                     help="also measure the server's time per frame with the ecattool package in DIR, interleaved")
+    ap.add_argument("--workers", type=int, default=None,
+                    help="cyclic bus: sim serve --workers N (default: sim serve chooses)")
+    ap.add_argument("--rounds", type=int, default=1,
+                    help="cyclic bus: runs of each server (with --against: alternating with the other revision)")
+    ap.add_argument("--bus", action=argparse.BooleanOptionalAction, default=True,
+                    help="the in-process server time per frame (default on)")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--inside", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--bus-only", action="store_true", help=argparse.SUPPRESS)
@@ -473,7 +533,7 @@ def main() -> None:
     if args.bus_only:
         print(json.dumps(bus_figures(args.seconds)))
         return
-    res: dict[str, Any] = {"bus": bus_side_by_side(min(args.seconds, 1.0), args.against),
+    res: dict[str, Any] = {"bus": bus_side_by_side(min(args.seconds, 1.0), args.against) if args.bus else {},
                            "canopen": bench_canopen(args.seconds), "drive": bench_drive(args.seconds),
                            "loop": bench_loop_frames(args.seconds), "wire": on_the_wire(args),
                            "loadavg": os.getloadavg()}
@@ -483,11 +543,13 @@ def main() -> None:
     co, dr, wire = res["canopen"], res["drive"], res["wire"]
     print(f"load average {res['loadavg'][0]:.2f} {res['loadavg'][1]:.2f} {res['loadavg'][2]:.2f}, "
           f"{os.cpu_count()} CPUs")
-    print("server time per LRW frame (Bus.process in process; min / median of 100-frame batches, CPU min), us")
+    print("server time per LRW frame in process, us (100-frame batches): the whole frame (answer and the drives'\n"
+          "  cycles) min / median, its CPU min / median, and how long the master waits for the answer min / median")
     for who, figures in res["bus"].items():
         for f in figures:
             print(f"  {who:8s} {f['drives']:.0f} HDT {'CSP moving' if f['motion'] else 'idle':10s} "
-                  f"{f['min_us']:8.0f} {f['median_us']:8.0f} {f['cpu_min_us']:8.0f}")
+                  f"{f['min_us']:7.0f} {f['median_us']:7.0f} | {f['cpu_min_us']:7.0f} {f['cpu_median_us']:7.0f} | "
+                  f"{f['reply_min_us']:7.0f} {f['reply_median_us']:7.0f}")
     print("SDO round trips/s            upload     download")
     print(f"  python-canopen LocalNode {co['upload']:10,.0f} {co['download']:12,.0f}")
     print(f"  ecattool Drive in process {dr['upload']:9,.0f} {dr['download']:12,.0f}")
@@ -504,10 +566,10 @@ def main() -> None:
         print(f"  pysoem over veth          {wire['one']['frames_per_s']:10,.0f}"
               f"  (short working counter: {wire['one']['frames_short_wkc']})")
     if not isinstance(wire, str):
-        cyc = wire.get("cyclic")
-        if cyc:
+        for cyc in wire.get("cyclic", []):
             print(f"process data, {cyc['drives']} drives at {cyc['hz']:.0f} Hz, {cyc['cycles']} cycles, "
-                  f"{'enabled in CSP, moving' if cyc['motion'] else 'idle'}")
+                  f"{'enabled in CSP, moving' if cyc['motion'] else 'idle'}; server {cyc['server']}, "
+                  f"workers {cyc['workers'] or 'chosen'}; server CPU {cyc['server_cpu_per_frame_us']:.0f} us/frame")
             print(f"  latency p50 {cyc['latency_p50_us']:.0f} us, p99 {cyc['latency_p99_us']:.0f} us, "
                   f"max {cyc['latency_max_us']:.0f} us; start lateness p50 {cyc['lateness_p50_us']:.0f} us, "
                   f"p99 {cyc['lateness_p99_us']:.0f} us")

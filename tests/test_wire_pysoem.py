@@ -60,6 +60,15 @@ def test_soem_brings_up_the_bus_and_commissions_every_sample(wire: None) -> None
     _check_commission(result["commission"])
 
 
+def test_soem_brings_up_a_line_served_by_three_processes(wire: None) -> None:
+    """Issue 26, item 2: five drives, ``sim serve --workers 3`` (segments of 2, 2 and 1 slaves, each its own
+    process): SOEM finds them in bus order by position addressing through all three, reads their SII and SDOs,
+    maps the process data and reaches OP with the full working counter; SIGTERM stops every process."""
+    sources = ["hdt", "technosoft-ipos", "controltechniques", str(GENERIC_ESI), "hdt"]
+    result = _scenario("--workers", "3", *sources, timeout=300)
+    _check_bringup(sources, result["bringup"])
+
+
 def _check_bringup(sources: list[str], out: dict[str, Any]) -> None:
     expected = virtual_slaves([device_source(s) for s in sources])  # the same drives, in process
     drives = [s.slave.drive for s in expected]

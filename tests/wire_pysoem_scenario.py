@@ -26,6 +26,9 @@ SDO_READS = [(0x1018, 1), (0x1018, 2), (0x1018, 3), (0x1018, 4), (0x1C12, 0), (0
              (0x1C13, 1), (0x1600, 0), (0x1A00, 0), (0x1A00, 1), (0x6041, 0), (0x6060, 0), (0x6064, 0)]
 
 
+#: extra arguments of ``sim serve`` (``--workers N``)
+WORKERS: list[str] = []
+
 #: the served bus's real-time priority (SCHED_FIFO) where permitted
 SERVER_PRIORITY = 10
 
@@ -60,7 +63,8 @@ def _server_child() -> None:
 
 def start_server(sources: list[str], argv: list[str] | None = None) -> tuple[subprocess.Popen[str], dict[str, Any]]:
     """``ecattool sim serve SOURCES`` on the slave end, or ``argv``: a server that prints the same ready line."""
-    argv = argv or [sys.executable, "-m", "ecattool", "sim", "serve", *sources, "--iface", SLAVE_IF, "--json"]
+    argv = argv or [sys.executable, "-m", "ecattool", "sim", "serve", *sources, "--iface", SLAVE_IF, "--json",
+                    *WORKERS]
     server = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_server_child)
     assert server.stdout is not None
     ready, _, _ = select.select([server.stdout], [], [], 60)
@@ -156,5 +160,8 @@ if __name__ == "__main__":
     master_priority()
     # "bringup SOURCE... -- PROJECT...": one after the other (never two buses at once on a small machine)
     args = sys.argv[1:]
+    if args[:1] == ["--workers"]:  # "--workers N bringup...": the line served by N processes
+        WORKERS[:] = args[:2]
+        args = args[2:]
     split = args.index("--") if "--" in args else len(args)
     print(json.dumps({"bringup": bringup(args[:split]), "commission": commission(args[split + 1:])}))

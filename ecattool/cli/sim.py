@@ -184,6 +184,7 @@ Examples:
   ecattool sim serve hdt --product tomcat technosoft-ipos --iface ecat1 --json
   ecattool sim serve drive.xml --device 2 --iface ecat1
   ecattool sim serve samples/hdt/project.yaml --list --json
+  ecattool sim serve hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt --iface ecat1 --workers 2
 \b
 Run it inside a private network namespace with a veth pair (never on the host's network):
   unshare -n sh -c 'ip link add ecat0 type veth peer name ecat1 &&
@@ -198,10 +199,14 @@ Run it inside a private network namespace with a veth pair (never on the host's 
 @click.option("--frames", type=click.IntRange(min=1), default=None,
               help="Stop after this many frames (default: until SIGINT/SIGTERM).")
 @click.option("--list", "list_only", is_flag=True, help="Print the slaves in bus order and exit (no interface).")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Processes serving the line, each a segment of consecutive slaves (default: one per 16 drives, "
+                   "at most one per core).")
 @click.option("--allow-errors", is_flag=True, help="Serve a project even when lint reports errors for it.")
 @json_option
 def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, revision: str | None,
-              selector: str | None, frames: int | None, list_only: bool, allow_errors: bool, as_json: bool) -> None:
+              selector: str | None, frames: int | None, list_only: bool, workers: int | None, allow_errors: bool,
+              as_json: bool) -> None:
     """Serve simulated drives as EtherCAT slaves on a network interface, for a real master (SOEM/pysoem).
 
     SOURCES, in bus order: a project file (every drive of the project, in its bus order), a built-in profile
@@ -246,4 +251,4 @@ def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, 
             click.echo(f"serving {len(slaves)} slave{'s' if len(slaves) != 1 else ''} on {iface} ({names})")
         sys.stdout.flush()
 
-    serve(slaves, iface, ready, frames)
+    serve(slaves, iface, ready, frames, workers=workers)

@@ -8,7 +8,8 @@ of the drive's public API, so the in-process :class:`~ecattool.sim.Drive` and th
 - the sync managers the master configured are checked against the state it asks for: the mailbox SMs at
   INIT -> PRE-OP (0x0016; 0x0015 for BOOT), the process data SMs and FMMUs at PRE-OP -> SAFE-OP against the
   drive's PDO assignment (0x001D outputs, 0x001E inputs); SMs not valid in a state are deactivated;
-- SM0 -> mailbox server -> SM1 (with the repeat request), SM2 outputs -> ``drive.exchange`` -> SM3 inputs;
+- SM0 -> mailbox server -> SM1 (with the repeat request), SM2 outputs -> ``drive.exchange`` -> SM3 inputs,
+  after the frame has passed (:meth:`after_frame`): the master reads the inputs of this cycle in its next frame;
 - DC activation (0x0981, SYNC0 cycle 0x09A0, start time 0x0990) -> ``drive.configure_dc``;
 - the process data watchdog expiring in OP -> ``drive.lose_communication`` (the family's reaction, 6007h):
   SAFE-OP with the error indication and AL status code 0x001B until the master acknowledges it.
@@ -75,6 +76,15 @@ class VirtualSlave(EscApplication):
         self.refusals: list[Refusal] = []
         #: host time (ns) before which the mailbox answer waits (a slow mailbox, ``Faults.slow_mailbox``)
         self._reply_due: int | None = None
+        #: the outputs of the last complete SM2 write (b"" for a drive without outputs, whose SM3 read counts)
+        self._outputs: bytes | None = None
+        #: a process data event fired since the drive last ran (SM2 written, SM3 read without outputs)
+        self._pd_event = False
+        #: the last SYNC0 pulse (its number since the start time) the drive ran for, while DC is on
+        self._sync0_seen = -1
+        #: SAFE-OP or OP without outputs: each complete read of SM3 is the drive's event (kept by _sync_state,
+        #: which every state change passes, instead of asking the drive on every read of SM3)
+        self._no_outputs = False
         self._sync_state()
 
     # ------------------------------------------------------------------------------------------
@@ -97,6 +107,9 @@ class VirtualSlave(EscApplication):
         self.esc.set_al_status(state.code, error=error, code=code)
         mailbox_on = state in (EcState.PREOP, EcState.SAFEOP, EcState.OP, EcState.BOOT)
         pd_on = state in (EcState.SAFEOP, EcState.OP)
+        self._no_outputs = pd_on and self.drive.process_image_sizes()[0] == 0
+        if not pd_on:
+            self._outputs = None  # below SAFE-OP the process image may change: a SYNC0 cycle waits for new outputs
         for n in range(self.esc.sm_count):
             sm = self.esc.sm(n)
             if n in (MBX_OUT, MBX_IN) or (sm.mailbox and n < 2):
@@ -220,14 +233,35 @@ class VirtualSlave(EscApplication):
     # ------------------------------------------------------------------------------------------
     def buffer_written(self, esc: Esc, sm: int, data: bytes) -> None:
         if sm == PD_OUT:
-            self._exchange(data)
+            self._outputs = data
+            self._pd_event = True
 
     def buffer_read(self, esc: Esc, sm: int) -> None:
-        if sm == PD_IN and self._out_size() == 0:
-            self._exchange(b"")
+        if sm == PD_IN and self._no_outputs:
+            self._outputs = b""
+            self._pd_event = True
 
-    def _out_size(self) -> int:
-        return self.drive.process_image_sizes()[0] if self.drive.state() in (EcState.SAFEOP, EcState.OP) else 0
+    def after_frame(self, esc: Esc) -> None:
+        """The drive's cycle, after the frame: when SM2 was written (SM3 read, for a drive without outputs) or,
+        with SYNC0 on, when a SYNC0 pulse has come since its last cycle (then on the last outputs it got). Once
+        per frame however many pulses passed: the served drive's cycle is paced by the master's frames."""
+        fired = self._pd_event
+        self._pd_event = False
+        if self._outputs is not None and esc.mem[R.DC_ACTIVATION] & 0x03 == 0x03:
+            pulse = self._sync0_pulse(esc)
+            if pulse > self._sync0_seen:
+                fired = fired or self._sync0_seen >= 0
+                self._sync0_seen = pulse
+        if fired:
+            self._exchange(self._outputs)
+
+    def _sync0_pulse(self, esc: Esc) -> int:
+        """The number of the last SYNC0 pulse before now (-1 before the first or with SYNC0 off)."""
+        act, cycle, start = esc.dc_sync0()
+        if not act & 0x01 or not act & 0x02 or not cycle:
+            return -1
+        now = (esc.local_time(esc.clock.host_ns()) + esc.u64(R.DC_SYSTEM_OFFSET)) & 0xFFFFFFFFFFFFFFFF
+        return (now - start) // cycle if now >= start else -1
 
     def _exchange(self, outputs: bytes | None) -> None:
         """One process data cycle: outputs to the drive (None: the first inputs at SAFE-OP), inputs to SM3."""
@@ -248,6 +282,7 @@ class VirtualSlave(EscApplication):
     # distributed clocks, frames
     # ------------------------------------------------------------------------------------------
     def dc_activation(self, esc: Esc, activation: int) -> None:
+        self._sync0_seen = -1
         act, cycle, start = esc.dc_sync0()
         if act & 0x01 and act & 0x06:
             shift = start % cycle if cycle else 0

@@ -33,17 +33,33 @@ _NOP, _LRD, _LWR, _LRW, _ARMW, _FRMW = int(Cmd.NOP), int(Cmd.LRD), int(Cmd.LWR),
 
 class Bus:
     """A line of slaves behind one master port (slave 0 first). ``process`` takes a frame as the master sent
-    it and returns it as it comes back, or None when it is not an EtherCAT frame."""
+    it and returns it as it comes back, or None when it is not an EtherCAT frame.
+
+    The frame is answered from the ESCs' memory alone (registers, sync manager buffers, FMMU copies, mailbox
+    buffers); the slave applications whose events fired while it passed (SM2 written, a SYNC0 pulse) run
+    afterwards, in :meth:`run_applications`, as a drive's processor runs on its interrupt after the ESC has
+    forwarded the frame. A transport calls it once the reply is on its way; ``process`` calls it itself first
+    when the previous frame's applications have not run yet, so they always run before the next frame."""
 
     def __init__(self, escs: Sequence[Esc], *, hop_ns: int = HOP_NS,
-                 clock: Callable[[], int] = time.monotonic_ns) -> None:
+                 clock: Callable[[], int] = time.monotonic_ns, offset: int = 0, line: int | None = None) -> None:
+        """``offset``/``line``: this is a segment of a longer line served by several processes
+        (:mod:`ecattool.sim.bus.split`): ``offset`` slaves come before it, ``line`` slaves in all."""
         self.escs = list(escs)
         self.hop_ns = hop_ns
         self.clock = clock
+        self.offset = offset
+        self.line = offset + len(self.escs) if line is None else line
         for i, esc in enumerate(self.escs):
             esc.link[0] = True
-            esc.link[1] = i < len(self.escs) - 1
+            esc.link[1] = offset + i < self.line - 1
         self.frames = 0
+        #: the last frame turned back inside this segment (a closed port 1): the slaves after it never saw it
+        self.turned_back = False
+        #: the last frame (good or spoilt) goes on to the slaves after this segment
+        self.passed_on = False
+        #: a frame has passed since the applications last ran
+        self.pending = False
 
     def _reach(self) -> int:
         """How many slaves a frame passes (it turns back at a slave whose port 1 is closed)."""
@@ -52,7 +68,18 @@ class Bus:
                 return i + 1
         return len(self.escs)
 
-    def process(self, raw: bytes, *, fcs_ok: bool = True) -> bytes | None:
+    def run_applications(self) -> None:
+        """The slave applications run after the frame: each does what its events since its last run ask."""
+        if self.pending:
+            self.pending = False
+            for esc in self.escs:
+                esc.app.after_frame(esc)
+
+    def process(self, raw: bytes, *, fcs_ok: bool = True, t0: int | None = None) -> bytes | None:
+        """``t0``: host time (ns) the frame left the master, when an earlier segment took it (else now)."""
+        if self.pending:
+            self.run_applications()
+        self.passed_on = False
         try:
             frame = parse_frame(raw)
         except FrameError:
@@ -61,16 +88,24 @@ class Bus:
         if frame is None and fcs_ok:
             return None
         reach = self._reach()
+        self.turned_back = reach < len(self.escs) or (bool(self.escs) and not self.escs[-1].port_open(1))
+        self.passed_on = not self.turned_back
         if not fcs_ok or frame is None:
             # a slave that sees a bad frame counts it and spoils the frame further (the master drops it)
             for esc in self.escs[:reach]:
                 esc.count_rx_error(0)
             return None
         self.frames += 1
-        t0 = self.clock()
+        self.pending = True
+        if t0 is None:
+            t0 = self.clock()
+        # the frame turns at the last slave it reaches: in this segment, or (as far as this process knows) at
+        # the end of the line
+        last = self.offset + reach - 1 if self.turned_back else self.line - 1
         for k, esc in enumerate(self.escs[:reach]):
-            arrive = t0 + (k + 1) * self.hop_ns
-            back = arrive + 2 * (reach - 1 - k) * self.hop_ns if k < reach - 1 else None
+            at = self.offset + k
+            arrive = t0 + (at + 1) * self.hop_ns
+            back = arrive + 2 * (last - at) * self.hop_ns if at < last else None
             esc.begin_frame([arrive, back, None, None])
             for d in frame.datagrams:
                 self._datagram(esc, d)

@@ -32,6 +32,7 @@ class Loop:
         reply = self.bus.process(raw, fcs_ok=fcs_ok)
         if reply is not None:
             self._replies.append(reply)
+        self.bus.run_applications()  # the frame is back at the master: the drives run after it
 
     def recv(self) -> bytes | None:
         return self._replies.popleft() if self._replies else None

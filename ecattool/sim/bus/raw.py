@@ -70,10 +70,17 @@ class RawTransport:
                 if delivered is None:
                     continue
                 raw = delivered
-            reply = self.bus.process(raw, fcs_ok=fcs_ok)
-            if reply is not None:
-                sock.send(reply)
-                self.answered += 1
+            self.answer(raw, fcs_ok)
+
+    def answer(self, raw: bytes, fcs_ok: bool) -> None:
+        """One frame as the master sent it: through the bus and back out of the interface; then, the frame on
+        its way back, the slave applications whose events fired run (the drives' cycles), while the master
+        works with the reply, instead of before the reply."""
+        reply = self.bus.process(raw, fcs_ok=fcs_ok)
+        if reply is not None:
+            self.sock.send(reply)
+            self.answered += 1
+        self.bus.run_applications()
 
     def close(self) -> None:
         self.sock.close()

@@ -88,24 +88,32 @@ def stop_on_signals() -> Iterator[Callable[[], bool]]:
 
 
 def serve(served: list[Served], ifname: str, on_ready: Callable[[], None],
-          max_frames: int | None = None, fault: "FrameFault | None" = None) -> int:
+          max_frames: int | None = None, fault: "FrameFault | None" = None, workers: int | None = None) -> int:
     """Serve the slaves on ``ifname`` until SIGINT/SIGTERM (or ``max_frames``); returns the frames answered.
-    ``fault`` sees every frame before the bus (tests: lost and spoilt frames, see RawTransport).
+    ``fault`` sees every frame before the bus (tests: lost and spoilt frames, see RawTransport). ``workers``:
+    how many processes serve the line (:mod:`ecattool.sim.bus.split`); None chooses from the number of drives
+    and the cores (:func:`~ecattool.sim.bus.split.choose_workers`).
 
     While it serves, the drives keep no event log (nobody can read it from the wire, and it would grow for as
     long as the server runs), and what exists when serving starts (the drives, their dictionaries and SII
     images, the imported modules) is moved out of the garbage collector's way (``gc.freeze``): a full
     collection over 8 drives' objects takes ~12 ms, twelve cycles of a 1 kHz bus; frozen, microseconds.
     Both come back as they were when serving stops."""
-    from ecattool.sim.bus.raw import RawTransport
+    from ecattool.sim.bus import raw, split
 
-    transport = RawTransport(bus_of(served), ifname, fault)
+    count = split.choose_workers(len(served)) if workers is None else max(1, min(workers, len(served)))
     logging = [s.slave.drive.record_events for s in served]
     for s in served:
         s.slave.drive.record_events = False
     gc.collect()
-    gc.freeze()
+    gc.freeze()  # before the workers are forked: they inherit the frozen set-up
+    transport: "raw.RawTransport | split.SplitTransport | None" = None
     try:
+        if count == 1:
+            transport = raw.RawTransport(bus_of(served), ifname, fault)
+        else:
+            transport = split.SplitTransport([s.slave.esc for s in served], split.split(len(served), count),
+                                             ifname, fault)
         with stop_on_signals() as stop:
             on_ready()
             transport.serve(stop, max_frames)
@@ -113,5 +121,6 @@ def serve(served: list[Served], ifname: str, on_ready: Callable[[], None],
         gc.unfreeze()
         for s, on in zip(served, logging):
             s.slave.drive.record_events = on
-        transport.close()
+        if transport is not None:
+            transport.close()
     return transport.answered

@@ -56,7 +56,12 @@ class EscApplication:
         goes to SAFE-OP with AL status code 0x001B (ETG.1000.6, as the slave stack code does)."""
 
     def frame_done(self, esc: "Esc") -> None:
-        """A frame has passed this slave."""
+        """A frame has passed this slave (still inside the frame: only ESC memory may change here)."""
+
+    def after_frame(self, esc: "Esc") -> None:
+        """The frame has left the slave: the application's processor runs what its events asked for since its
+        last run (an SM2 write, a SYNC0 pulse), as a slave's microcontroller does on its PDI interrupt after the
+        ESC has answered the frame. What it writes into the ESC is read by the master's next frame."""
 
 
 @dataclass(slots=True)
