@@ -30,7 +30,7 @@ import click
 import pytest
 
 from ecattool.cli import cli
-from tests.conftest import CORPUS, ROOT, corpus_path, run
+from tests.conftest import CORPUS, ROOT, corpus_path, need_corpus, run
 
 
 def _leaves(group: click.Group, path: tuple[str, ...] = ()) -> Iterator[tuple[tuple[str, ...], click.Command]]:
@@ -225,6 +225,8 @@ def resolve(where: str, gen: Path) -> Path:
         return corpus_path(*where[len("corpus:"):].split("/"))
     if where.startswith("gen:"):
         return gen / where[len("gen:"):]
+    if where.startswith("samples/sw/"):  # the sample build spec names corpus files
+        need_corpus()
     return ROOT / where
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from ecattool.errors import SdoAbort
-from tests.conftest import CORPUS, ROOT, corpus_path, run
+from tests.conftest import CORPUS, ROOT, corpus_path, need_corpus, run
 
 #: Placeholder names used in the docs -> the file that stands for them (relative to ROOT or the corpus).
 PLACEHOLDERS: dict[str, Path] = {
@@ -63,7 +63,7 @@ def section_block(page: str, heading: str) -> str:
 @pytest.fixture
 def docs_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
     """A working directory holding every file name the docs use."""
-    assert CORPUS.is_dir(), f"corpus directory missing: {CORPUS}"
+    need_corpus()
     for sub in ("esi", "sii", "sw", "configs", "eds"):
         for f in (CORPUS / sub).iterdir():
             (tmp_path / f.name).symlink_to(f)

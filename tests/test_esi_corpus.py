@@ -12,9 +12,9 @@ from ecattool.errors import SelectionError
 from ecattool.esi import load, load_device, materialize, select
 from ecattool.esi.model import Direction
 from ecattool.od.model import EcState, ObjectCode
-from tests.conftest import CORPUS, corpus_path
+from tests.conftest import corpus_path
 
-ESI_FILES = sorted((CORPUS / "esi").glob("*.xml")) + sorted((CORPUS / "sii").glob("*.xml"))
+ESI_FILES = sorted(corpus_path("esi").glob("*.xml")) + sorted(corpus_path("sii").glob("*.xml"))
 
 
 def _ids(p: Path) -> str:

@@ -46,9 +46,10 @@ DIGESTS = {
 
 
 def _esi_files() -> list[str]:
-    files = sorted(p.relative_to(CORPUS / "esi").as_posix() for p in (CORPUS / "esi").rglob("*.xml"))
+    esi = corpus_path("esi")
+    files = sorted(p.relative_to(esi).as_posix() for p in esi.rglob("*.xml"))
     if not files:
-        raise FileNotFoundError(f"no ESI files under {CORPUS / 'esi'} (the tests need ../shared/corpus)")
+        raise FileNotFoundError(f"no ESI files under {esi}")
     return files
 
 

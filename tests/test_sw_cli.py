@@ -155,6 +155,7 @@ def test_patch_needs_name_equals_value(capsys):
     assert code == 2
 
 
+@pytest.mark.corpus  # samples/sw/build.yaml names corpus files
 def test_build_sample(capsys, tmp_path):
     out = tmp_path / "axis1.sw"
     assert run(capsys, "sw", "build", str(ROOT / "samples/sw/build.yaml"), "-o", str(out))[0] == 0

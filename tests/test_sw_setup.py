@@ -180,6 +180,7 @@ def test_diff_by_address_outside_the_setup_table():
 
 
 # ------------------------------------------------------------------------------------------------ build
+@pytest.mark.corpus  # samples/sw/build.yaml names corpus files
 def test_sample_build_spec(tmp_path):
     image = build(ROOT / "samples/sw/build.yaml")
     kinds = [i.kind for i in describe(image)]

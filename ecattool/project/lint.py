@@ -131,8 +131,8 @@ def lint_project(path: str | Path) -> ProjectResult:
     except EcatToolError as exc:
         result.findings.append(Finding("PRJ001", Severity.ERROR, exc.message, exc.location or Location(str(p))))
         return result
-    if project is None:
-        result.findings.extend(schema_findings)
+    result.findings.extend(schema_findings)
+    if project is None:  # else the drives that are well-formed (schema errors in others) are still checked
         return result
     lp = LoadedProject(project, p, doc)
     result.loaded = lp
