@@ -69,6 +69,13 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
         fb.update(steps=s, microsteps=m)
     if feedback_on:
         fb["on"] = feedback_on
+    if transmission:  # a mechanics string the user typed: its error names the option
+        from ecattool.scaling.model import length_unit, transmission_from
+
+        try:
+            transmission_from(transmission, meant=length_unit(pos_unit or (base.axis.position if base else None)))
+        except InputError as exc:
+            raise click.BadParameter(exc.message, param_hint="'--transmission'") from None
     if base is None:
         if not fb or not any(k in fb for k in ("counts_per_rev", "lines", "steps")):
             raise InputError("give a SPEC file or the feedback (--counts, --lines or --steps)")

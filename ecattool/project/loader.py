@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 import typing
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -12,7 +11,7 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 from pydantic_core import ErrorDetails
 
-from ecattool.errors import EcatToolError, InputError, Location
+from ecattool.errors import EcatToolError, InputError, Location, did_you_mean
 from ecattool.fileio import read_bytes
 from ecattool.findings import Finding, Severity
 from ecattool.project.model import Project
@@ -72,12 +71,6 @@ def known_keys(path: tuple[str | int, ...]) -> list[str]:
         if model is None:
             return []
     return list(model.model_fields) if model is not None else []
-
-
-def did_you_mean(word: str, choices: Iterable[str]) -> str:
-    """`` (did you mean 'x'?)`` for the nearest of ``choices``, or "" when none is near."""
-    near = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
-    return f" (did you mean {near[0]!r}?)" if near else ""
 
 
 def _message(err: ErrorDetails, path: tuple[str | int, ...]) -> str:

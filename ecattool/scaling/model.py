@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any
 
-from ecattool.errors import InputError, Location
+from ecattool.errors import InputError, Location, did_you_mean
 from ecattool.scaling.exact import Exact
 from ecattool.scaling.units import Unit, parse_unit, quantity, time_seconds
 
@@ -249,7 +249,7 @@ def feedback_from(data: Any, locate: Any = None) -> Feedback:
         micro = _frac(data.get("microsteps", 1), "microsteps", _loc(locate, "feedback", "microsteps"))
         return Feedback.stepper(int(steps), int(micro))
     if "resolution" in data:
-        res, _ = quantity(data["resolution"], ("length",), _loc(locate, "feedback", "resolution"))
+        res, _ = quantity(data["resolution"], ("length",), _loc(locate, "feedback", "resolution"), what="resolution")
         return Feedback.linear_scale(res)
     raise InputError("feedback needs counts_per_rev, lines, steps (+ microsteps) or resolution (linear scale)", loc)
 
@@ -267,7 +267,9 @@ def gear_from(data: Any, locate: Any = None) -> Gear:
     return Gear(_frac(data, "gear ratio", loc))
 
 
-def transmission_from(data: Any, locate: Any = None) -> Transmission:
+def transmission_from(data: Any, locate: Any = None, meant: str | None = None) -> Transmission:
+    """The transmission of a spec mapping or a ``type key=value …`` string. Every length needs its unit; an error
+    for a bare number suggests ``meant`` (the axis's length unit), else mm."""
     loc = _loc(locate, "transmission")
     if data is None:
         return Transmission.rotary()
@@ -281,7 +283,7 @@ def transmission_from(data: Any, locate: Any = None) -> Transmission:
             "linear": "linear_motor", "hollow": "hollow_shaft", "custom_label": "label"}.get(kind, kind)
 
     def q(key: str) -> Exact:
-        return quantity(data[key], ("length",), _loc(locate, "transmission", key))[0]
+        return quantity(data[key], ("length",), _loc(locate, "transmission", key), what=key, meant=meant)[0]
 
     def n(key: str, default: Any = None) -> Fraction:
         return _frac(data.get(key, default), key, _loc(locate, "transmission", key))
@@ -345,7 +347,8 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
              "firmware", "approximation", "device", "vl_setpoint"}
     for key in data:
         if key not in known:
-            raise InputError(f"unknown key {key!r} (expected one of {', '.join(sorted(known))})", _loc(locate, key) or source)
+            hint = did_you_mean(str(key), known) or f" (expected one of {', '.join(sorted(known))})"
+            raise InputError(f"unknown key {key!r}{hint}", _loc(locate, key) or source)
     if "feedback" not in data:
         raise InputError("spec needs 'feedback' (e.g. feedback: {lines: 500})", source)
     units = data.get("units") or {}
@@ -357,7 +360,7 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
         raise InputError(f"polarity must be normal or reversed, got {polarity!r}", _loc(locate, "polarity"))
     axis = Axis(
         feedback=feedback_from(data["feedback"], locate),
-        transmission=transmission_from(data.get("transmission"), locate),
+        transmission=transmission_from(data.get("transmission"), locate, length_unit(units.get("position"))),
         gear=gear_from(data.get("gear"), locate),
         position=str(units.get("position", "rev")),
         velocity=None if units.get("velocity") is None else str(units["velocity"]),
@@ -375,6 +378,15 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
         except InputError as exc:
             raise InputError(exc.message, _loc(locate, "units", key) or source) from None
     return axis
+
+
+def length_unit(text: Any) -> str | None:
+    """The name of ``text`` when it is a length unit (``inch``, ``mm``): what a bare length probably meant."""
+    try:
+        unit = parse_unit(str(text), order=0) if text is not None else None
+    except InputError:
+        return None
+    return unit.position.name if unit is not None and unit.kind == "length" else None
 
 
 def _article(kind: str) -> str:
