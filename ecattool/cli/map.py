@@ -12,6 +12,9 @@ from ecattool.cli.common import (console, file_output_option, json_option, outpu
                                  table, write_output)
 from ecattool.cli.paths import InputFile
 
+#: the startup formats ecattool writes (lcec is read only), as ecattool.startup.formats says
+WRITE_FORMATS = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv")
+
 _EXAMPLES = """\b
 Examples:
   ecattool map {cmd} --profile technosoft-ipos --rx "0x1600=controlword,0x607A:00/32"
@@ -31,8 +34,9 @@ name (controlword, "modes of operation"), a raw value 0x60400010, or gap/8. A PD
 def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
     opts: list[Callable[..., Any]] = [
         click.option("--esi", type=InputFile(), help="ESI file of the device."),
-        click.option("--device", "selector", help="Device in the ESI (type, product[:revision]); "
-                     "without --esi: a built-in profile name."),
+        # without --esi, --device NAME still names a built-in profile, as it did before --profile existed
+        click.option("--device", "selector", metavar="SEL",
+                     help="Device in the ESI (type name, product[:revision] or list index)."),
         click.option("--profile", help="Built-in drive family (technosoft-ipos, hdt, controltechniques)."),
         click.option("--product", help="Model of the built-in family."),
         click.option("--revision", help="Revision/firmware of the built-in family or ESI device."),
@@ -226,8 +230,8 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
               help="standard: sub-index 0 = 0, entries, count; count-first: the Control Techniques quick start order.")
 @click.option("--transition", default="PS", show_default=True, help="Transition the writes belong to.")
 @click.option("--force", is_flag=True, help="Print the sequence even when the mapping has errors.")
-@click.option("--format", "fmt", help="Write the sequence as a startup list for a master: eni, twincat, igh, "
-              "pysoem, ros2, ecmc, json, csv, lcec (see `ecattool startup`).")
+@click.option("--format", "fmt", type=click.Choice(WRITE_FORMATS, case_sensitive=False),
+              help="Write the sequence as a startup list for a master (see `ecattool startup`).")
 @json_option
 @output_option()
 def sdo(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
@@ -245,6 +249,7 @@ def sdo(esi: str | None, selector: str | None, profile: str | None, product: str
     if has_errors(findings) and not force:
         for f in findings:
             click.echo(str(f), err=True)
+        click.echo("map sdo: the mapping has errors (above); --force prints the writes anyway", err=True)
         raise SystemExit(1)
     seq = pdo.program(device, mapping, complete_access=complete_access, transition=transition.upper(), order=order)
     coe = device.mailbox.coe if device.mailbox is not None else None

@@ -129,34 +129,35 @@ Script (YAML or JSON list):
     expect_abort: 0x06010002
   - state: OP
     expect_al_status: 0x0011""")
-@click.argument("target")
+@click.argument("source")
 @click.argument("script", type=InputFile())
 @click.option("--product", help="Model of a built-in family.")
 @click.option("--revision", help="Firmware revision of a built-in family.")
-@click.option("--device", "selector", help="Device selector when TARGET is an ESI file with several devices.")
+@click.option("--device", "selector", help="Device selector when SOURCE is an ESI file with several devices.")
 @policy_option
 @output_option()
 @json_option
-def run_cmd(target: str, script: str, product: str | None, revision: str | None, selector: str | None, policy: str,
+def run_cmd(source: str, script: str, product: str | None, revision: str | None, selector: str | None, policy: str,
             output: str | None, as_json: bool) -> None:
     """Run SCRIPT (SDO reads/writes, state requests, cycles) on a simulated drive and print the transcript.
 
-    TARGET is a built-in profile name or an ESI (or CANopen EDS) file. Exits 1 at the first unexpected abort, timeout or
+    SOURCE is a built-in profile name or an ESI (or CANopen EDS) file, as in `sim serve` (a --target
+    elsewhere is where a command runs: sim or pysoem:IF). Exits 1 at the first unexpected abort, timeout or
     refused state change.
     """
     from ecattool.sim import Drive
     from ecattool.sim.script import load_script, run_script
 
-    if Path(target).is_file():
-        drive = Drive.from_esi(target, selector, policy=policy)
+    if Path(source).is_file():
+        drive = Drive.from_esi(source, selector, policy=policy)
     else:
-        drive = Drive.from_profile(target, product=product, revision=revision)
+        drive = Drive.from_profile(source, product=product, revision=revision)
     steps, locations = load_script(script)
     tr = run_script(drive, steps, locations, script, Path(script).parent)
     if as_json:
         from ecattool.cli.common import dump_json
 
-        write_output(output, dump_json(tr.to_json()) + "\n", [script, target])
+        write_output(output, dump_json(tr.to_json()) + "\n", [script, source])
     else:
         lines = []
         for ln in tr.lines:
@@ -168,7 +169,7 @@ def run_cmd(target: str, script: str, product: str | None, revision: str | None,
             lines.append(f"{mark} {ln.step:3d} {ln.op:8s} {ln.target:10s} {ln.result}{code}{val}{data}"
                          + (f"  {ln.detail}" if ln.detail else ""))
         text = "\n".join(lines) + "\n"
-        write_output(output, text, [script, target])
+        write_output(output, text, [script, source])
     failure = tr.failure
     if failure is not None:
         from ecattool.errors import Location, TargetError

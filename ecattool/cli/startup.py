@@ -135,15 +135,21 @@ Examples:
 @click.argument("input_file", type=InputFile())
 @click.option("--format", "fmt", required=True, type=click.Choice(_FORMAT_NAMES[:-1]), help="Format to write.")
 @click.option("--from-format", type=click.Choice(_READ_FORMATS), help="Format of INPUT_FILE (default: detect).")
+@click.option("--drive", "drives", multiple=True,
+              help="Only this slave of INPUT_FILE: name or bus position; repeatable. TwinCAT and ros2 files hold "
+                   "one slave.")
 @_sync0_option
-@output_option(required=True)
-def convert_cmd(input_file: str, fmt: str, from_format: str | None, sync0_cycle: int | None, output: str) -> None:
-    """Convert INPUT_FILE into another startup format, written to -o OUT.
+@output_option()
+def convert_cmd(input_file: str, fmt: str, from_format: str | None, drives: tuple[str, ...], sync0_cycle: int | None,
+                output: str | None) -> None:
+    """Convert INPUT_FILE into another startup format (stdout unless -o, as `startup export`).
 
     Every note of the import (what the source holds that was not converted) is printed to stderr; a
     source with nothing to convert is an error (exit 1).
     """
-    configs = _read(input_file, from_format)
+    from ecattool.startup import select_slaves
+
+    configs = select_slaves(_read(input_file, from_format), drives)
     _report_import(configs, input_file)
     _write(_with_cycle(configs, sync0_cycle), fmt, output, (input_file,))
 
