@@ -270,7 +270,9 @@ def sdo(esi: str | None, selector: str | None, profile: str | None, product: str
         write_output(output, dump_json(rows) + "\n", inputs)
         return
     t = table(f"{device.type_name}: {len(rows)} SDO writes", ["tr", "object", "size", "value", "comment"])
+    from ecattool.od.display import int_text
+
     for c in seq:
-        value = c.data.hex(" ") if c.complete_access else f"0x{c.int_value:0{2 * len(c.data)}X}"
+        value = c.data.hex(" ") if c.complete_access else int_text(c.int_value, len(c.data))
         t.add_row(c.transition, c.address + (" CA" if c.complete_access else ""), str(len(c.data)), value, c.comment)
     console().print(t)

@@ -155,7 +155,8 @@ def _html_prerequisites(html: str | None, json_to_stdout: bool) -> None:
 
 def _render(group: Any) -> None:
     con = console()
-    t = table(f"Factor group — {group.family} ({group.factor_set})", ["object", "name", "part", "value", "hex", "exact", "meaning"])
+    t = table(f"Factor group — {group.family} ({group.factor_set})", ["object", "name", "part", "value", "hex", "exact", "meaning"],
+              optional=("name", "exact"))
     for o in group.objects:
         a = o.approximation
         exact = "yes" if o.exact else f"≈ {float(a.ppm):+.3g} ppm" if a else "no"

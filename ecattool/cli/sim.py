@@ -113,6 +113,30 @@ def show_cmd(profile: str, product: str | None, revision: str | None, objects: b
         c.print(t)
 
 
+def _value_text(drive: Any, ln: Any) -> tuple[str, bool]:
+    """A value read or written, as people read it, and whether it was decoded from the raw bytes: ``= 1600
+    (0x0640): switch on disabled, remote, target reached — SWITCH_ON_DISABLED`` (decimal and hex by the entry's
+    data type; the statusword's bits and state named)."""
+    plain = f" = {ln.value!r}" if ln.value is not None else ""
+    if not ln.data or not (isinstance(ln.value, int) or (ln.value is None and ln.op == "write")):
+        return plain, False
+    from ecattool.errors import EcatToolError
+    from ecattool.od.display import value_text
+    from ecattool.od.numbers import parse_address
+    from ecattool.sim.cia402 import decode_statusword
+
+    try:
+        index, sub = parse_address(ln.target)
+        raw = bytes.fromhex(ln.data)
+    except (ValueError, EcatToolError):
+        return plain, False
+    entry = drive.device.dictionary.entry(index, sub)
+    text = value_text(raw, entry.datatype if entry else None, entry.bit_size if entry else None, index)
+    if index == 0x6041 and isinstance(ln.value, int):
+        text += f" — {decode_statusword(ln.value).value}"
+    return f" = {text}", True
+
+
 @sim.command("run", epilog="""\b
 Examples:
   ecattool sim run technosoft-ipos rxpdo3.yaml
@@ -164,8 +188,8 @@ def run_cmd(source: str, script: str, product: str | None, revision: str | None,
             mark = "ok " if ln.expected else "ERR"
             code = f" 0x{ln.code:08X}" if ln.code is not None and ln.code > 0xFFFF else (
                 f" 0x{ln.code:04X}" if ln.code is not None else "")
-            val = f" = {ln.value!r}" if ln.value is not None else ""
-            data = f" [{ln.data}]" if ln.data else ""
+            val, decoded = _value_text(drive, ln)
+            data = f" [{ln.data}]" if ln.data and not decoded else ""
             lines.append(f"{mark} {ln.step:3d} {ln.op:8s} {ln.target:10s} {ln.result}{code}{val}{data}"
                          + (f"  {ln.detail}" if ln.detail else ""))
         text = "\n".join(lines) + "\n"

@@ -164,6 +164,7 @@ Examples:
 @json_option
 def import_cmd(input_file: str, from_format: str | None, as_json: bool) -> None:
     """Read a startup configuration and show what was read: slaves, commands, PDOs, notes."""
+    from ecattool.od.display import value_text
     from ecattool.startup.formats.jsonfmt import slave_to_json
 
     configs, fmt = _read_with_format(input_file, from_format)
@@ -182,10 +183,12 @@ def import_cmd(input_file: str, from_format: str | None, as_json: bool) -> None:
             out.print(f"  DC assign activate 0x{c.dc_assign_activate:04X}"
                       + (f", cycle {c.dc_cycle_ns} ns" if c.dc_cycle_ns else ""))
         if c.commands:
-            t = table(f"{len(c.commands)} startup command(s)", ["line", "tr", "object", "data", "CA", "comment"])
+            t = table(f"{len(c.commands)} startup command(s)", ["line", "tr", "object", "value", "CA", "comment"])
             for cmd in c.commands:
+                # decoded by size (2000 (0x000007D0), not d0070000); complete-access data stays bytes
+                value = cmd.data.hex(" ") if cmd.complete_access else value_text(cmd.data, index=cmd.index)
                 t.add_row(str(cmd.source.line if cmd.source and cmd.source.line else ""), cmd.transition,
-                          cmd.address, cmd.data.hex(), "CA" if cmd.complete_access else "", cmd.comment)
+                          cmd.address, value, "CA" if cmd.complete_access else "", cmd.comment)
             out.print(t)
         for direction, pdos in (("RxPDO", c.rx_pdos), ("TxPDO", c.tx_pdos)):
             for p in pdos:
