@@ -192,7 +192,7 @@ def _default(o: Any, e: Any) -> str:
     """An entry's ESI default as a value (``10000 (0x2710)``), decoded by its data type; --json keeps the hex."""
     from ecattool.od.display import value_text
 
-    return value_text(e.default, e.datatype, e.bit_size, o.index) if e.default is not None else ""
+    return value_text(e.default, e.datatype, e.bit_size, o.index, e.unit) if e.default is not None else ""
 
 
 def _render_objects(con: Any, dev: Any) -> None:

@@ -131,7 +131,8 @@ def _value_text(drive: Any, ln: Any) -> tuple[str, bool]:
     except (ValueError, EcatToolError):
         return plain, False
     entry = drive.device.dictionary.entry(index, sub)
-    text = value_text(raw, entry.datatype if entry else None, entry.bit_size if entry else None, index)
+    text = value_text(raw, entry.datatype if entry else None, entry.bit_size if entry else None, index,
+                      entry.unit if entry else "")
     if index == 0x6041 and isinstance(ln.value, int):
         text += f" — {decode_statusword(ln.value).value}"
     return f" = {text}", True
