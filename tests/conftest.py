@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import NoReturn
+from collections.abc import Callable
+from typing import Any, NoReturn
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -60,6 +61,20 @@ def corpus_path(*parts: str) -> Path:
     if not p.exists():
         raise FileNotFoundError(f"corpus file missing: {p} (compare with `python3 scripts/dev.py corpus --check`)")
     return p
+
+
+def corpus_files(*patterns: str, form: str = "path", keep: Callable[[Path], bool] = lambda p: True) -> list[Any]:
+    """The corpus files matching ``patterns`` (``"sii/*.bin"``), sorted per pattern, for ``parametrize``: as paths,
+    ``form="name"`` file names or ``form="str"`` strings. Without the corpus: one parameter that skips (with the
+    corpus reason), so that a module can list its cases at import time and still run its other tests."""
+    if not have_corpus():
+        return [pytest.param(CORPUS / "missing", marks=pytest.mark.skip(reason=NO_CORPUS), id="no-corpus")]
+    out: list[Any] = []
+    for pattern in patterns:
+        sub, _, glob = pattern.rpartition("/")
+        found = sorted(p for p in CORPUS.joinpath(sub).glob(glob) if keep(p))
+        out += [p.name if form == "name" else str(p) if form == "str" else p for p in found]
+    return out
 
 
 def reference_path(*parts: str) -> Path:

@@ -483,7 +483,7 @@ NESTED: dict[str, tuple[In, str]] = {
                      "      select: InoSV660N\n    move: {{distance: 10000, mode: csp}}\n")),
     "project-sw": (SW, ("ecattool: 1\nname: m\ndrives:\n  - name: y\n    device: {{profile: technosoft-ipos}}\n"
                         "    sw: {ref}\n")),
-    "swspec-base": (SW, "base: {ref}\nsetup:\n  parameters: " + str(corpus_path("sw", PARAMS.where.split("/")[-1]))
+    "swspec-base": (SW, "base: {ref}\nsetup:\n  parameters: " + str(CORPUS / "sw" / PARAMS.where.split("/")[-1])
                         + "\n  values: {{SLPER: 10}}\n"),
 }
 #: The commands that read each nested file; {top} is the naming file, {out} an output, {sw} a good .sw image.
