@@ -23,10 +23,12 @@ ROOT = Path(__file__).resolve().parent.parent
 CORPUS = Path(os.environ.get("ECATTOOL_CORPUS") or ROOT.parent / "shared" / "corpus")
 REFERENCE = Path(os.environ.get("ECATTOOL_REFERENCE") or CORPUS.parent / "reference")
 #: the reason every corpus test gives when it skips (one line in ``pytest -rs``)
-NO_CORPUS = (f"the real-file corpus is not at {CORPUS}: set ECATTOOL_CORPUS=DIR, or fetch it with "
-             "`python3 scripts/dev.py corpus` (origins in tests/corpus-manifest.json)")
 NO_REFERENCE = (f"the manual extracts are not at {REFERENCE} (they come with the corpus beside the checkout, "
                 "../shared/reference; set ECATTOOL_REFERENCE=DIR)")
+NO_CORPUS = (f"the real-file corpus is not at {CORPUS}: set ECATTOOL_CORPUS=DIR, or fetch it with "
+             "`python3 scripts/dev.py corpus` (origins in tests/corpus-manifest.json)"
+             # in a fresh clone neither is there: one reason (one -rs line) for both
+             + ("" if REFERENCE.is_dir() else f"; {NO_REFERENCE}"))
 
 settings.register_profile(
     "ci", max_examples=60, deadline=None, derandomize=True,
@@ -80,7 +82,7 @@ def corpus_files(*patterns: str, form: str = "path", keep: Callable[[Path], bool
 def reference_path(*parts: str) -> Path:
     """A file of the manual extracts (../shared/reference); skips when they are missing."""
     if not REFERENCE.is_dir():
-        _skip(NO_REFERENCE)
+        _skip(NO_REFERENCE if have_corpus() else NO_CORPUS)
     p = REFERENCE.joinpath(*parts)
     if not p.exists():
         raise FileNotFoundError(f"reference file missing: {p}")
