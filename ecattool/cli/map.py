@@ -11,9 +11,7 @@ import click
 from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
                                  table, write_output)
 from ecattool.cli.paths import InputFile
-
-#: the startup formats ecattool writes (lcec is read only), as ecattool.startup.formats says
-WRITE_FORMATS = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv")
+from ecattool.cli.vocab import WRITE_FORMATS
 
 _EXAMPLES = """\b
 Examples:

@@ -10,10 +10,10 @@ import click
 from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
                                  table, write_output)
 from ecattool.cli.paths import InputFile
-from ecattool.cli.vocab import device_option, shared_option
+from ecattool.cli.vocab import WRITE_FORMATS, device_option, shared_option
 
 _FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
-_STARTUP_FORMATS = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv")
+_STARTUP_FORMATS = WRITE_FORMATS
 
 
 def _mechanics_options(f: Any) -> Any:

@@ -11,6 +11,9 @@ from typing import Any
 
 import click
 
+#: the startup formats ecattool writes (``--format`` of map sdo, scale startup; lcec is read only)
+WRITE_FORMATS = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv")
+
 #: canonical option -> the old spellings it still accepts (hidden)
 ALIASES: dict[str, tuple[str, ...]] = {
     "--device": ("--select",),
