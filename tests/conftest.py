@@ -89,6 +89,16 @@ def reference_path(*parts: str) -> Path:
     return p
 
 
+def sample_sw_spec(directory: Path) -> Path:
+    """samples/sw/build.yaml copied into ``directory`` with its corpus paths pointing at the corpus in use (it
+    names them as ../../../shared/corpus, right only for the corpus beside the checkout); skips without it."""
+    need_corpus()
+    spec = directory / "build.yaml"
+    spec.write_text((ROOT / "samples" / "sw" / "build.yaml").read_text(encoding="utf-8")
+                    .replace("../../../shared/corpus", CORPUS.resolve().as_posix()), encoding="utf-8")
+    return spec
+
+
 @pytest.fixture(scope="session")
 def corpus() -> Path:
     need_corpus()
