@@ -18,7 +18,6 @@ import sys
 from pathlib import Path
 from types import ModuleType
 
-import pytest
 
 from tests.conftest import CORPUS, NO_CORPUS, REFERENCE, ROOT, corpus_path
 

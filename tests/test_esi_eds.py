@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from ecattool import esi
 from ecattool.errors import InputError
 from ecattool.esi.model import Direction
-from tests.conftest import CORPUS, ROOT, corpus_path, run
+from tests.conftest import CORPUS, ROOT, run
 
 EDS = CORPUS / "eds" / "technosoft_iPOS.D.v1.04.eds"  # tests that read it are marked corpus
 TEXT = EDS.read_text(encoding="latin-1") if EDS.is_file() else ""
