@@ -30,7 +30,7 @@ import click
 import pytest
 
 from ecattool.cli import cli
-from tests.conftest import CORPUS, ROOT, corpus_path, run
+from tests.conftest import CORPUS, ROOT, corpus_path, have_corpus, need_corpus, run, sample_sw_spec
 
 
 def _leaves(group: click.Group, path: tuple[str, ...] = ()) -> Iterator[tuple[tuple[str, ...], click.Command]]:
@@ -207,7 +207,8 @@ def gen(tmp_path_factory: pytest.TempPathFactory) -> Path:
     d = tmp_path_factory.mktemp("gen")
     (d / "mapping.yaml").write_text(MAPPING)
     (d / "steps.yaml").write_text(STEPS)
-    (d / "axis.sw").write_bytes(corpus_path("sw", "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw").read_bytes())
+    if have_corpus():  # else the tests that use it (and machine.yaml, which names it) skip in resolve()
+        (d / "axis.sw").write_bytes(corpus_path("sw", "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw").read_bytes())
     (d / "machine.yaml").write_text("ecattool: 1\nname: m\ndrives:\n  - name: y\n    device: {profile: technosoft-ipos}\n"
                                     "    sw: axis.sw\n")
     cli.main(["scale", "startup", str(ROOT / SPEC.where), "--format", "csv", "-o", str(d / "factors.csv")],
@@ -225,7 +226,11 @@ def resolve(where: str, gen: Path) -> Path:
     if where.startswith("corpus:"):
         return corpus_path(*where[len("corpus:"):].split("/"))
     if where.startswith("gen:"):
+        if where in ("gen:axis.sw", "gen:machine.yaml"):
+            need_corpus()
         return gen / where[len("gen:"):]
+    if where == "samples/sw/build.yaml":  # it names corpus files: a copy that finds the corpus in use
+        return sample_sw_spec(gen)
     return ROOT / where
 
 
@@ -503,7 +508,7 @@ NESTED: dict[str, tuple[In, str]] = {
                      "      select: InoSV660N\n    move: {{distance: 10000, mode: csp}}\n")),
     "project-sw": (SW, ("ecattool: 1\nname: m\ndrives:\n  - name: y\n    device: {{profile: technosoft-ipos}}\n"
                         "    sw: {ref}\n")),
-    "swspec-base": (SW, "base: {ref}\nsetup:\n  parameters: " + str(corpus_path("sw", PARAMS.where.split("/")[-1]))
+    "swspec-base": (SW, "base: {ref}\nsetup:\n  parameters: " + str(CORPUS / "sw" / PARAMS.where.split("/")[-1])
                         + "\n  values: {{SLPER: 10}}\n"),
 }
 #: The commands that read each nested file; {top} is the naming file, {out} an output, {sw} a good .sw image.

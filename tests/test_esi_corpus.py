@@ -12,9 +12,9 @@ from ecattool.errors import SelectionError
 from ecattool.esi import load, load_device, materialize, select
 from ecattool.esi.model import Direction
 from ecattool.od.model import EcState, ObjectCode
-from tests.conftest import CORPUS, corpus_path
+from tests.conftest import corpus_files, corpus_path
 
-ESI_FILES = sorted((CORPUS / "esi").glob("*.xml")) + sorted((CORPUS / "sii").glob("*.xml"))
+ESI_FILES = corpus_files("esi/*.xml", "sii/*.xml")
 
 
 def _ids(p: Path) -> str:
@@ -245,7 +245,8 @@ def test_loaded_file_pickles_with_its_dictionaries():
     assert len(back.modules) == 8
 
 
-@pytest.mark.parametrize("path", [p for p in ESI_FILES if p.stat().st_size < 1_000_000], ids=_ids)
+@pytest.mark.parametrize("path", corpus_files("esi/*.xml", "sii/*.xml", keep=lambda p: p.stat().st_size < 1_000_000),
+                         ids=_ids)
 def test_missing_object_findings_match_an_independent_count(path: Path):
     from ecattool.esi import check_structure
 

@@ -16,10 +16,10 @@ from hypothesis import strategies as st
 from ecattool import esi
 from ecattool.errors import InputError
 from ecattool.esi.model import Direction
-from tests.conftest import ROOT, corpus_path, run
+from tests.conftest import CORPUS, ROOT, run
 
-EDS = corpus_path("eds", "technosoft_iPOS.D.v1.04.eds")
-TEXT = EDS.read_text(encoding="latin-1")
+EDS = CORPUS / "eds" / "technosoft_iPOS.D.v1.04.eds"  # tests that read it are marked corpus
+TEXT = EDS.read_text(encoding="latin-1") if EDS.is_file() else ""
 
 
 def _line(text: str, marker: str) -> int:
@@ -31,6 +31,7 @@ def doc():
     return esi.load(EDS)
 
 
+@pytest.mark.corpus
 def test_corpus_eds_loads_into_the_device_model(doc):
     assert doc.root == "EDS" and doc.vendor_id == 0x1A3 and doc.vendor_name == "Technosoft"
     dev = doc.devices[0]
@@ -49,6 +50,7 @@ def test_corpus_eds_loads_into_the_device_model(doc):
     assert doc.warnings == [] or all(w.severity.value == "info" for w in doc.warnings)
 
 
+@pytest.mark.corpus
 def test_pdos_derived_from_the_default_mapping_and_cob_id_validity(doc):
     dev = doc.devices[0]
     assert [p.index for p in dev.rx_pdos] == [0x1600, 0x1601, 0x1602, 0x1603]
@@ -147,6 +149,7 @@ def test_without_communication_parameters_every_mapping_pdo_counts_as_valid():
     assert sorted(p.index for p in dev.rx_pdos if p.sm == 2) == [0x1600, 0x1601]
 
 
+@pytest.mark.corpus
 def test_dcf_parameter_values_and_compact_arrays():
     text = TEXT.replace("[6060]\nParameterName=Modes of Operation", "[6060]\nParameterName=Modes of Operation\n"
                         "ParameterValue=8") + "\n[DeviceComissioning]\nNodeID=5\nBaudrate=500\n"
@@ -195,6 +198,7 @@ def test_unread_values_and_unused_sections_are_located_warnings():
     assert any(n == lines.index("[2001sub1]") + 1 and "not used" in m for n, m in warnings)
 
 
+@pytest.mark.corpus
 def test_size_is_bounded(monkeypatch, tmp_path):
     import ecattool.esi.eds as eds
 
@@ -207,6 +211,7 @@ def test_size_is_bounded(monkeypatch, tmp_path):
         esi.load(big)
 
 
+@pytest.mark.corpus
 def test_cli_accepts_an_eds_wherever_an_esi_goes(capsys, tmp_path):
     code, out, _ = run(capsys, "esi", "devices", str(EDS), "--json")
     assert code == 0 and json.loads(out)[0]["vendor_id"] == 0x1A3
@@ -227,6 +232,7 @@ def test_cli_accepts_an_eds_wherever_an_esi_goes(capsys, tmp_path):
     assert code == 0, err
 
 
+@pytest.mark.corpus
 def test_project_drive_from_an_eds_commissions_on_the_simulator(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("ECATTOOL_NO_CACHE", "1")
     shutil.copy(EDS, tmp_path / "ipos.eds")
@@ -250,6 +256,7 @@ drives:
     assert code == 0 and "1 of 1 drive(s) commissioned" in out, out + err
 
 
+@pytest.mark.corpus
 def test_stdin_and_xml_sniffing(capsys, monkeypatch):
     import io
     import sys
@@ -266,6 +273,7 @@ _JUNK = ["x", "[", "]", "[1000sub9]", "DataType=0x9999", "ObjectType=0x8", "Comp
 _VALUES = ["", "0x", "-5", "99999999999999", "1.5", "$NODEID", "abc", "0x80000000", "#x10"]
 
 
+@pytest.mark.corpus
 @settings(max_examples=20, deadline=None)
 @given(st.lists(st.tuples(st.sampled_from(["del", "dup", "junk", "value"]), st.floats(0, 1, exclude_max=True),
                           st.integers(0, 1000)), min_size=1, max_size=4))

@@ -10,7 +10,7 @@ from lxml import etree
 
 from ecattool import esi, profiles, sii
 from ecattool.esi.export import device_to_esi
-from tests.conftest import CORPUS, run
+from tests.conftest import corpus_path, run
 
 SCHEMAS = ("v1.14_ETG2000_1.0.10", "v1.17")
 PRODUCTS = [(info.name, p.name) for info in profiles.list_profiles() for p in info.products]
@@ -23,7 +23,7 @@ AS_RECORD = {"technosoft-ipos": {0x60C2}, "hdt": set(), "controltechniques": {0x
 def schemas():
     out = {}
     for version in SCHEMAS:
-        xsd = CORPUS / "xsd" / version / "EtherCATInfo.xsd"
+        xsd = corpus_path("xsd", version, "EtherCATInfo.xsd")
         assert xsd.is_file(), xsd
         out[version] = etree.XMLSchema(etree.parse(str(xsd)))
     return out
@@ -101,7 +101,7 @@ def test_cli_export_then_read_build_and_commission(capsys, tmp_path, monkeypatch
     code, stdout, _ = run(capsys, "esi", "devices", str(out), "--json")
     summary = json.loads(stdout)[0]
     assert code == 0 and (summary["product_code"], summary["revision"]) == (0x019F418D, 0x35313549)
-    code, stdout, err = run(capsys, "esi", "validate", str(out), "--schema-dir", str(CORPUS / "xsd" / "v1.17"))
+    code, stdout, err = run(capsys, "esi", "validate", str(out), "--schema-dir", str(corpus_path("xsd", "v1.17")))
     assert code == 0 and "0 error(s), 0 warning(s)" in stdout, stdout + err
     code, _, err = run(capsys, "sii", "build", str(out), "-o", str(tmp_path / "ipos.bin"))
     device = profiles.load("technosoft-ipos", product="ipos4808-bx-cat", revision="F515I")

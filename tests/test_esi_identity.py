@@ -19,7 +19,7 @@ from ecattool.errors import InputError
 from ecattool.esi import load, load_bytes, materialize
 from ecattool.od.model import ObjectDictionary
 from ecattool.xmlsafe import parse_xml
-from tests.conftest import CORPUS, corpus_path
+from tests.conftest import CORPUS, corpus_files, corpus_path
 
 # sha256 of _dictionary_facts(file), by the reader before issue 2's fast paths
 DIGESTS = {
@@ -47,9 +47,9 @@ DIGESTS = {
 
 
 def _esi_files() -> list[str]:
-    files = sorted(p.relative_to(CORPUS / "esi").as_posix() for p in (CORPUS / "esi").rglob("*.xml"))
+    files = corpus_files("esi/*.xml", form="name")
     if not files:
-        raise FileNotFoundError(f"no ESI files under {CORPUS / 'esi'} (the tests need ../shared/corpus)")
+        raise FileNotFoundError(f"no ESI files under {CORPUS / 'esi'}")
     return files
 
 
@@ -194,6 +194,7 @@ def test_materialised_dictionaries_are_unchanged(name: str) -> None:
 
 
 def test_every_corpus_esi_has_a_digest() -> None:
+    corpus_path("esi")
     assert sorted(DIGESTS) == _esi_files()
 
 

@@ -15,16 +15,13 @@ from ecattool import profiles
 from ecattool.errors import SelectionError
 from ecattool.profiles import _build_data as build
 from ecattool.profiles._common import load_data
-from tests.conftest import REFERENCE
+from tests.conftest import reference_path
 
 DATA = Path(build.__file__).resolve().parent / "data"
 
 
 def reference(*parts: str) -> Path:
-    p = REFERENCE.joinpath(*parts)
-    if not p.exists():
-        raise FileNotFoundError(f"reference file missing: {p} (the tests need ../shared/reference)")
-    return p
+    return reference_path(*parts)
 
 
 def csv_subs(family: str) -> tuple[int, dict[int, set[int]]]:
@@ -46,7 +43,7 @@ def json_subs(family_file: str) -> dict[int, set[int]]:
 @pytest.mark.parametrize("name,family", [("technosoft", "technosoft"), ("hdt", "hdt"), ("controltechniques", "controltechniques")])
 def test_data_files_are_what_the_build_script_makes(name, family):
     fn = {"technosoft": build.build_technosoft, "hdt": build.build_hdt, "controltechniques": build.build_controltechniques}[name]
-    fresh = json.loads(json.dumps(fn(REFERENCE)))
+    fresh = json.loads(json.dumps(fn(reference_path())))
     assert fresh == json.loads((DATA / f"{name}.json").read_text(encoding="utf-8")), \
         "data file out of date: run python -m ecattool.profiles._build_data"
 

@@ -142,3 +142,44 @@ def test_an_unknown_yaml_tag_is_one_located_line(tmp_path):
         load_yaml(b"ecattool: 1\ndrives:\n  - name: !!python/object:os.system a\n", "t.yaml")
     assert "\n" not in exc.value.message and "python/object:os.system" in exc.value.message
     assert (exc.value.location.line, exc.value.location.column) == (3, 11)
+
+
+TWO_DRIVES = """\
+ecattool: 1
+drives:
+  - name: x
+    device: {profile: technosoft-ipos}
+    paramters:
+      - {object: 6060:00, value: 8}
+  - name: y
+    device: {profile: technosoft-ipos}
+    parameters:
+      - {object: 0x5FFF:00, value: 8}
+"""
+
+
+def test_unknown_key_names_the_nearest_known_key():
+    _, _, findings = parse_project(TWO_DRIVES, "p.yaml")
+    assert [f.message for f in findings] == \
+        ["drives.0.paramters: unknown field 'paramters' (did you mean 'parameters'?)"]
+    _, _, findings = parse_project(GOOD.replace("{profile: technosoft-ipos}", "{profile: technosoft-ipos, revison: F515K}"), "p.yaml")
+    assert "(did you mean 'revision'?)" in findings[0].message
+    _, _, findings = parse_project(GOOD.replace("name: test", "nmae: test"), "p.yaml")
+    assert "(did you mean 'name'?)" in findings[0].message
+    # nothing near: no guess
+    _, _, findings = parse_project(GOOD.replace("name: test", "zzzzzz: test"), "p.yaml")
+    assert "did you mean" not in findings[0].message
+
+
+def test_a_schema_error_in_one_drive_does_not_hide_the_others(tmp_path):
+    from ecattool.project.lint import lint_project
+
+    p = tmp_path / "p.yaml"
+    p.write_text(TWO_DRIVES)
+    result = lint_project(p)
+    got = [(f.rule, f.location.line) for f in result.findings]
+    # the typo in drive x (line 5), and drive y's own finding, located in the file as written (line 10)
+    assert ("PRJ001", 5) in got and ("PRJ010", 10) in got, got
+    # a file with a schema error is never loaded for use, however many drives are well-formed
+    with pytest.raises(InputError, match="paramters"):
+        load_project(p)

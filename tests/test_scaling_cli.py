@@ -168,3 +168,35 @@ def test_esi_device_is_chosen_with_device_as_in_every_other_command(capsys) -> N
     # device 0 is the boot device (9 objects, no factor group): refused, not a table nobody can write
     code, _, err = run(capsys, "scale", "compute", spec, "--esi", esi, "--device", "0", "--json")
     assert code == 1 and "none of the scaling objects that set user units" in err
+
+
+@pytest.mark.parametrize("mechanics, meant", [
+    ("transmission: {type: ballscrew, pitch: 5}", "pitch 5 has no unit: a length needs one (did you mean 5 mm?)"),
+    ("transmission: {type: belt, diameter: 30.5}", "diameter 30.5 has no unit: a length needs one (did you mean 30.5 mm?)"),
+    ("transmission: {type: rack, teeth: 20, module: 2}", "module 2 has no unit"),
+    ("transmission: {type: linear_motor, pole_pitch: 32}", "pole_pitch 32 has no unit"),
+    ("transmission: 'ballscrew pitch=5'", "pitch 5 has no unit"),
+    # on an inch axis a bare number was silently millimetres (25/127 inch): the guess is the axis's own unit
+    ("transmission: {type: ballscrew, pitch: 0.2}\nunits: {position: inch}", "(did you mean 0.2 inch?)"),
+])
+def test_a_length_without_a_unit_is_a_located_error(capsys, tmp_path: Path, mechanics: str, meant: str) -> None:
+    spec = tmp_path / "axis.yaml"
+    spec.write_text(f"feedback: {{counts_per_rev: 2000}}\n{mechanics}\n")
+    code, out, err = run(capsys, "scale", "compute", str(spec))
+    assert code == 1 and out == "" and f"{spec}:2:" in err and meant in err, err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_the_mechanics_option_needs_units_too(capsys) -> None:
+    code, _, err = run(capsys, "scale", "compute", "--counts", "2000", "--transmission", "ballscrew pitch=5",
+                       "--position", "inch")
+    assert code == 2 and "'--transmission'" in err and "pitch 5 has no unit" in err and "5 inch" in err, err
+    code, out, err = run(capsys, "scale", "compute", "--counts", "2000", "--transmission", "ballscrew pitch=5mm")
+    assert code == 0, err
+
+
+def test_an_unknown_spec_key_names_the_nearest(capsys, tmp_path: Path) -> None:
+    spec = tmp_path / "axis.yaml"
+    spec.write_text("feedback: {counts_per_rev: 2000}\ntransmision: {type: ballscrew, pitch: 5 mm}\n")
+    code, _, err = run(capsys, "scale", "compute", str(spec))
+    assert code == 1 and "unknown key 'transmision' (did you mean 'transmission'?)" in err, err

@@ -15,7 +15,7 @@ from ecattool.scaling import (
     Axis, Exact, Feedback, Gear, Transmission, approximate, compute, decode_si_unit, encode_si_unit, explain,
 )
 from ecattool.scaling.units import describe_dimension
-from tests.conftest import REFERENCE
+from tests.conftest import reference_path
 
 MM = Fraction(1, 1000)
 
@@ -32,7 +32,7 @@ def ipos() -> object:
 
 def test_reference_oracles_present() -> None:
     for fam in ("technosoft", "hdt", "controltechniques"):
-        assert (REFERENCE / fam / "oracles.md").is_file(), f"reference oracles missing for {fam}"
+        assert reference_path(fam, "oracles.md").is_file(), f"reference oracles missing for {fam}"
 
 
 # --- Technosoft D: internal-unit conversions ---------------------------------------------------------------

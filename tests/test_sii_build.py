@@ -17,7 +17,7 @@ from ecattool.esi import load as load_esi
 from ecattool.sii import build, load
 from ecattool.sii.builder import data_type_code, physical_port
 from ecattool.sii.compare import diff
-from tests.conftest import corpus_path
+from tests.conftest import corpus_files, corpus_path
 
 # reasons shared by several pairs
 NO_FILL = "the generator writes only the used bytes; ecattool fills the EEPROM (ByteSize) with 0xFF like real dumps"
@@ -295,8 +295,7 @@ def test_elmo_boot_device_general_and_syncm_from_the_esi_replace_the_generated_o
     assert parse(img.to_bytes()) == img
 
 
-ESI_FILES = sorted(p.name for p in corpus_path("esi").glob("*.xml")) + sorted(
-    p.name for p in corpus_path("sii").glob("*.xml"))
+ESI_FILES = corpus_files("esi/*.xml", "sii/*.xml", form="name")
 
 
 @pytest.mark.parametrize("name", ESI_FILES)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import glob
 import os
 
 import pytest
@@ -12,7 +11,7 @@ from hypothesis import strategies as st
 from ecattool.esi import load as load_esi
 from ecattool.findings import Severity, has_errors
 from ecattool.sii import check_against, check_file, fix_crc, load, parse, set_alias
-from tests.conftest import corpus_path
+from tests.conftest import corpus_files, corpus_path
 
 #: images that must fail, with the rule that fails them and why
 FAILING = {
@@ -23,7 +22,7 @@ FAILING = {
 }
 
 
-@pytest.mark.parametrize("path", sorted(glob.glob(str(corpus_path("sii") / "*.bin"))))
+@pytest.mark.parametrize("path", corpus_files("sii/*.bin", form="str"))
 def test_corpus_image_passes_or_fails_as_it_should(path: str) -> None:
     image, findings = check_file(path)
     assert image is not None

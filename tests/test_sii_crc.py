@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import glob
 
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
 from ecattool.sii import crc8, load, preamble_crc
-from tests.conftest import corpus_path
+from tests.conftest import corpus_files, corpus_path
 
 
 def test_check_value_123456789() -> None:
@@ -25,7 +24,7 @@ def test_siitool_example_image_carries_0x2f() -> None:
     assert raw[14] == 0x2F == preamble_crc(raw)
 
 
-@pytest.mark.parametrize("path", sorted(glob.glob(str(corpus_path("sii") / "*.bin"))))
+@pytest.mark.parametrize("path", corpus_files("sii/*.bin", form="str"))
 def test_every_corpus_image_has_a_valid_crc(path: str) -> None:
     raw = open(path, "rb").read()
     assert raw[14] == preamble_crc(raw)

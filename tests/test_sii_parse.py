@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import glob
 
 import pytest
 from hypothesis import given
@@ -30,12 +29,13 @@ from ecattool.sii import (
     write_intel_hex,
 )
 from ecattool.sii.image import read_intel_hex
-from tests.conftest import corpus_path
+from tests.conftest import corpus_files, corpus_path
 
-IMAGES = sorted(glob.glob(str(corpus_path("sii") / "*.bin")))
+IMAGES = corpus_files("sii/*.bin", form="str")
 
 
 def test_corpus_has_all_sixteen_images() -> None:
+    corpus_path("sii")
     assert len(IMAGES) == 16
 
 

@@ -21,14 +21,14 @@ from ecattool.errors import EncodeError
 from ecattool.esi.model import Identity
 from ecattool.startup import SlaveConfig, StartupCommand, StartupList, export, import_bytes, import_file
 from ecattool.startup.model import is_pdo_programming
-from tests.conftest import ROOT, corpus_path, run
+from tests.conftest import ROOT, corpus_files, corpus_path, run
 from tests.test_startup_export import ECRT_H, _gcc, _run_pysoem_module
 
 SAMPLES = sorted(p.parent.name for p in (ROOT / "samples").glob("*/project.yaml"))
 ROS2_SIZES = {"int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4, "uint32": 4, "int64": 8, "uint64": 8}
-CORPUS_CONFIGS = sorted(p.name for p in corpus_path("configs").iterdir()
-                        if p.suffix in (".yaml", ".xml", ".cmd") and not p.name.startswith("hwdevmgr")
-                        and p.name not in ("lcec_initcmds_AX5206-AM8032-async.xml", "ecmc_ecmciPOS4808.cmd"))
+CORPUS_CONFIGS = corpus_files("configs/*", form="name", keep=lambda p: (
+    p.suffix in (".yaml", ".xml", ".cmd") and not p.name.startswith("hwdevmgr")
+    and p.name not in ("lcec_initcmds_AX5206-AM8032-async.xml", "ecmc_ecmciPOS4808.cmd")))
 
 
 def _sample_configs(name: str) -> list[SlaveConfig]:

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from ecattool.sw import read, write
-from tests.conftest import ROOT, corpus_path, run
+from tests.conftest import ROOT, corpus_path, run, sample_sw_spec
 
 SW = "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw"
 PARAMS = "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.ems_parameters.cfg"
@@ -157,7 +157,7 @@ def test_patch_needs_name_equals_value(capsys):
 
 def test_build_sample(capsys, tmp_path):
     out = tmp_path / "axis1.sw"
-    assert run(capsys, "sw", "build", str(ROOT / "samples/sw/build.yaml"), "-o", str(out))[0] == 0
+    assert run(capsys, "sw", "build", str(sample_sw_spec(tmp_path)), "-o", str(out))[0] == 0
     image = read(out)
     assert [b.start for b in image] == [0x7ABD, 0x7FBF, 0x7FFF, 0x4000, 0x5638]
     assert write(image) == out.read_bytes()

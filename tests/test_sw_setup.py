@@ -15,7 +15,7 @@ from ecattool.sw import (build, describe, diff, fix_integrity, integrity_finding
 from ecattool.sw.layout import (IDENT_START, SETUP_LAST_ADDRESS, cam_table_words, cam_tables, decode_section3,
                                 parse_identification)
 from ecattool.sw.setup import decode, encode
-from tests.conftest import ROOT, corpus_path
+from tests.conftest import ROOT, corpus_path, sample_sw_spec
 
 SETUP_FILES = [
     "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw", "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A_plusTML.sw",
@@ -181,7 +181,7 @@ def test_diff_by_address_outside_the_setup_table():
 
 # ------------------------------------------------------------------------------------------------ build
 def test_sample_build_spec(tmp_path):
-    image = build(ROOT / "samples/sw/build.yaml")
+    image = build(sample_sw_spec(tmp_path))
     kinds = [i.kind for i in describe(image)]
     assert kinds == ["setup", "identification", "pointer", "tml", "cam"]
     assert integrity_findings(image) == []

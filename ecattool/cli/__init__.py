@@ -59,7 +59,7 @@ class LazyGroup(click.Group):
     epilog="""\b
 Examples:
   ecattool esi devices beckhoff_EL1xxx.xml
-  ecattool map check --device technosoft-ipos --rx "0x6040:00/16,0x607A:00/32"
+  ecattool map check --profile technosoft-ipos --rx "0x6040:00/16,0x607A:00/32"
   ecattool commission samples/technosoft_ipos/project.yaml
 
 Shell completion (bash): eval "$(_ECATTOOL_COMPLETE=bash_source ecattool)"
@@ -77,6 +77,29 @@ def cli(ctx: click.Context, debug: bool) -> None:
     """
     ctx.ensure_object(dict)
     ctx.obj["debug"] = debug
+
+
+def _command_of(argv: list[str]) -> click.Command:
+    """The (sub)command ``argv`` runs, as far as its words name one."""
+    command: click.Command = cli
+    ctx = click.Context(cli)
+    for word in argv:
+        if not isinstance(command, click.Group):
+            break
+        sub = command.get_command(ctx, word) if not word.startswith("-") else None
+        if sub is not None:
+            command = sub
+    return command
+
+
+def _name_the_flag(message: str, argv: list[str]) -> str:
+    """An error the library words for every caller ("choose one with a selector") names the option of the
+    command that was run where that option would fix it."""
+    if "with a selector" in message:
+        opts = {o for p in _command_of(argv).params for o in getattr(p, "opts", ())}
+        if "--device" in opts:
+            return message.replace("with a selector", "with --device SEL")
+    return message
 
 
 def main(argv: list[str] | None = None) -> Any:
@@ -97,7 +120,7 @@ def main(argv: list[str] | None = None) -> Any:
     except EcatToolError as exc:
         if debug:
             raise
-        text = " ".join(str(exc).split())  # one line, whatever a message holds, and not a page long
+        text = " ".join(_name_the_flag(str(exc), argv if argv is not None else sys.argv[1:]).split())  # one line
         click.echo(f"ecattool: error: {text if len(text) <= 600 else text[:400] + ' … ' + text[-150:]}", err=True)
         sys.exit(1)
     except BrokenPipeError:

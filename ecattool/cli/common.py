@@ -143,13 +143,34 @@ def console(stderr: bool = False) -> Any:
                    width=None if is_tty else 200)
 
 
-def table(title: str | None, columns: list[str]) -> Any:
+#: columns that hold identifiers a person types back (``--device 0x00030924``, an object address, a value): never
+#: cut or broken on a narrow terminal; the other columns wrap (or fold) to make room
+IDENTIFIER_COLUMNS = frozenset({
+    "#", "type", "product", "productcode", "product code", "revision", "vendor", "index", "sub", "object", "address",
+    "offset", "PDO", "hex", "value", "start", "end", "SM", "tr", "transition", "data", "default", "profile",
+})
+
+
+#: below this terminal width a table leaves out the columns its command marks as optional
+NARROW = 120
+
+
+def table(title: str | None, columns: list[str], optional: tuple[str, ...] = ()) -> Any:
+    """A rich table. At any width (80 columns too) identifier columns stay whole and the others wrap; on a
+    terminal narrower than :data:`NARROW` the ``optional`` columns are left out (rows are given in full)."""
     from rich import box
     from rich.table import Table
 
-    t = Table(title=title, box=box.SIMPLE_HEAD if sys.stdout.isatty() else box.ASCII2, title_justify="left")
-    for c in columns:
-        t.add_column(c)
+    narrow = sys.stdout.isatty() and console().width < NARROW
+    keep = [i for i, c in enumerate(columns) if not (narrow and c in optional)]
+
+    class _Table(Table):
+        def add_row(self, *cells: Any, **kwargs: Any) -> None:
+            super().add_row(*(cells[i] for i in keep if i < len(cells)), **kwargs)
+
+    t = _Table(title=title, box=box.SIMPLE_HEAD if sys.stdout.isatty() else box.ASCII2, title_justify="left")
+    for i in keep:
+        t.add_column(columns[i], no_wrap=columns[i] in IDENTIFIER_COLUMNS, overflow="fold")
     return t
 
 

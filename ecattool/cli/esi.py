@@ -103,7 +103,8 @@ def devices_cmd(file: str, as_json: bool) -> None:
     elif doc.root != "EtherCATInfo":
         title += f" [{doc.root}: {len(doc.modules)} module(s)"
         title += f", {len(doc.dictionary)} object(s)]" if doc.dictionary is not None else "]"
-    t = table(title, ["#", "type", "product", "revision", "RxPDO", "TxPDO", "objects", "mailbox", "name"])
+    t = table(title, ["#", "type", "product", "revision", "RxPDO", "TxPDO", "objects", "mailbox", "name"],
+              optional=("RxPDO", "TxPDO", "objects", "mailbox"))
     for r in rows:
         t.add_row(str(r["index"]), r["type"], _hex(r["product_code"]), _hex(r["revision"]), str(r["rx_pdo_count"]),
                   str(r["tx_pdo_count"]), str(r["object_count"]), ",".join(r["protocols"]), r["name"])
@@ -189,6 +190,13 @@ def _render_pdos(con: Any, dev: Any) -> None:
         con.print(t)
 
 
+def _default(o: Any, e: Any) -> str:
+    """An entry's ESI default as a value (``10000 (0x2710)``), decoded by its data type; --json keeps the hex."""
+    from ecattool.od.display import value_text
+
+    return value_text(e.default, e.datatype, e.bit_size, o.index, e.unit) if e.default is not None else ""
+
+
 def _render_objects(con: Any, dev: Any) -> None:
     od = dev.dictionary
     t = table(f"Objects: {len(od)}", ["index", "sub", "name", "type", "bits", "access", "map", "default"])
@@ -196,12 +204,11 @@ def _render_objects(con: Any, dev: Any) -> None:
         t.add_row(_hex(o.index, 4), "", o.name, f"{o.object_code.value} {o.type_name}".strip(), str(o.bit_size), "", "", "")
         if o.object_code.value == "VAR" and len(o.entries) == 1:
             e = next(iter(o))
-            t.add_row("", "00", "", e.type_name, str(e.bit_size), e.access.text, e.pdo_mapping,
-                      e.default.hex() if e.default is not None else "")
+            t.add_row("", "00", "", e.type_name, str(e.bit_size), e.access.text, e.pdo_mapping, _default(o, e))
             continue
         for e in o:
             t.add_row("", f"{e.subindex:02X}", e.name, e.type_name, str(e.bit_size), e.access.text, e.pdo_mapping,
-                      e.default.hex() if e.default is not None else "")
+                      _default(o, e))
     con.print(t)
 
 
@@ -228,11 +235,13 @@ def _render_dc(con: Any, dev: Any) -> None:
 
 
 def _render_init(con: Any, dev: Any) -> None:
+    from ecattool.od.display import value_text
+
     t = table("Init commands", ["transition", "protocol", "address", "data", "CA", "comment"])
     for c in _init_cmds(dev):
         addr = f"IDN {c.index}" if c.protocol == "SoE" else f"{c.index:04X}:{c.subindex:02X}"
-        t.add_row(",".join(c.transitions), c.protocol, addr, c.data.hex(), "yes" if c.complete_access else "",
-                  c.comment)
+        data = c.data.hex(" ") if c.protocol == "SoE" or c.complete_access else value_text(c.data, index=c.index)
+        t.add_row(",".join(c.transitions), c.protocol, addr, data, "yes" if c.complete_access else "", c.comment)
     con.print(t)
 
 

@@ -10,6 +10,7 @@ import click
 from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
                                  store_force, table, write_output)
 from ecattool.cli.paths import InputFile
+from ecattool.cli.vocab import WRITE_FORMATS
 
 _EXAMPLES = """\b
 Examples:
@@ -30,8 +31,9 @@ name (controlword, "modes of operation"), a raw value 0x60400010, or gap/8. A PD
 def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
     opts: list[Callable[..., Any]] = [
         click.option("--esi", type=InputFile(), help="ESI file of the device."),
-        click.option("--device", "selector", help="Device in the ESI (type, product[:revision]); "
-                     "without --esi: a built-in profile name."),
+        # without --esi, --device NAME still names a built-in profile, as it did before --profile existed
+        click.option("--device", "selector", metavar="SEL",
+                     help="Device in the ESI (type name, product[:revision] or list index)."),
         click.option("--profile", help="Built-in drive family (technosoft-ipos, hdt, controltechniques)."),
         click.option("--product", help="Model of the built-in family."),
         click.option("--revision", help="Revision/firmware of the built-in family or ESI device."),
@@ -226,8 +228,8 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
 @click.option("--transition", default="PS", show_default=True, help="Transition the writes belong to.")
 @click.option("--force", is_flag=True, callback=store_force,
               help="Print the sequence even when the mapping has errors; overwrite an existing output file.")
-@click.option("--format", "fmt", help="Write the sequence as a startup list for a master: eni, twincat, igh, "
-              "pysoem, ros2, ecmc, json, csv, lcec (see `ecattool startup`).")
+@click.option("--format", "fmt", type=click.Choice(WRITE_FORMATS, case_sensitive=False),
+              help="Write the sequence as a startup list for a master (see `ecattool startup`).")
 @json_option
 @output_option(force=False)
 def sdo(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
@@ -245,6 +247,7 @@ def sdo(esi: str | None, selector: str | None, profile: str | None, product: str
     if has_errors(findings) and not force:
         for f in findings:
             click.echo(str(f), err=True)
+        click.echo("map sdo: the mapping has errors (above); --force prints the writes anyway", err=True)
         raise SystemExit(1)
     seq = pdo.program(device, mapping, complete_access=complete_access, transition=transition.upper(), order=order)
     coe = device.mailbox.coe if device.mailbox is not None else None
@@ -265,7 +268,9 @@ def sdo(esi: str | None, selector: str | None, profile: str | None, product: str
         write_output(output, dump_json(rows) + "\n", inputs)
         return
     t = table(f"{device.type_name}: {len(rows)} SDO writes", ["tr", "object", "size", "value", "comment"])
+    from ecattool.od.display import int_text
+
     for c in seq:
-        value = c.data.hex(" ") if c.complete_access else f"0x{c.int_value:0{2 * len(c.data)}X}"
+        value = c.data.hex(" ") if c.complete_access else int_text(c.int_value, len(c.data))
         t.add_row(c.transition, c.address + (" CA" if c.complete_access else ""), str(len(c.data)), value, c.comment)
     console().print(t)

@@ -6,6 +6,7 @@ import click
 
 from ecattool.cli.common import dump_json, output_option, policy_option, write_output
 from ecattool.cli.paths import InputFile
+from ecattool.cli.vocab import shared_option
 
 
 @click.group("project", epilog="""\b
@@ -48,13 +49,13 @@ def schema(output: str | None, check: str | None) -> None:
     epilog="""\b
 Examples:
   ecattool project new --profile technosoft-ipos -o machine.yaml
-  ecattool project new --esi drives/elmo.xml --select 0x00030924:1 -o machine.yaml
-  ecattool project new --esi beckhoff_EL1xxx.xml --select EL1008 --policy newest -o io.yaml""",
+  ecattool project new --esi drives/elmo.xml --device 0x00030924:1 -o machine.yaml
+  ecattool project new --esi beckhoff_EL1xxx.xml --device EL1008 --policy newest -o io.yaml""",
 )
 @click.option("--profile", help="Built-in drive family (technosoft-ipos, hdt, controltechniques).")
 @click.option("--product", help="Product of the family.")
 @click.option("--esi", "esi_path", help="ESI file of the drive (relative to where the project will be).")
-@click.option("--select", help="Device selector in the ESI.")
+@shared_option("--device", "select", metavar="SEL", help="Device in the ESI (type name, product[:revision] or list index).")
 @policy_option
 @click.option("--name", default=None, help="Name of the first drive (default: axis1, or io1 for an I/O slave).")
 @output_option()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import click
@@ -9,17 +10,19 @@ import click
 from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
                                  table, write_output)
 from ecattool.cli.paths import InputFile
+from ecattool.cli.vocab import WRITE_FORMATS, device_option, shared_option
 
 _FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
-_STARTUP_FORMATS = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv")
+_STARTUP_FORMATS = WRITE_FORMATS
 
 
 def _mechanics_options(f: Any) -> Any:
-    opts = [
+    opts: list[Callable[..., Any]] = [
         click.argument("spec", required=False, type=InputFile(allow_dash=True)),
-        click.option("--family", type=click.Choice(_FAMILIES), help="Drive family (default: the spec's, else technosoft-ipos)."),
+        shared_option("--profile", "family", type=click.Choice(_FAMILIES),
+                      help="Drive family (default: the spec's, else technosoft-ipos)."),
         click.option("--firmware", help="Technosoft firmware, e.g. F515I (obsolete factors) or F515K (CiA-402-2)."),
-        click.option("--counts", help="Feedback increments per revolution (e.g. 2000)."),
+        shared_option("--counts-per-rev", "counts", help="Feedback increments per revolution (e.g. 2000)."),
         click.option("--lines", help="Quadrature encoder lines (x4 = counts), e.g. 500."),
         click.option("--steps", help="Stepper: STEPSxMICROSTEPS, e.g. 200x256."),
         click.option("--feedback-on", type=click.Choice(["motor", "load"]), help="Where the feedback sits (default motor)."),
@@ -37,8 +40,7 @@ def _mechanics_options(f: Any) -> Any:
         click.option("--vl/--no-vl", default=None, help="Add the vl velocity factors 604Bh/604Ch (default: Control Techniques only)."),
         click.option("--esi", type=InputFile(),
                      help="ESI file of the drive: object types from its dictionary, objects it lacks left out."),
-        click.option("--device", "--select", "selector",
-                     help="Device in the ESI (type name, product[:revision] or list index) when it has several."),
+        device_option(),
         policy_option,
     ]
     for o in reversed(opts):
@@ -69,9 +71,16 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
         fb.update(steps=s, microsteps=m)
     if feedback_on:
         fb["on"] = feedback_on
+    if transmission:  # a mechanics string the user typed: its error names the option
+        from ecattool.scaling.model import length_unit, transmission_from
+
+        try:
+            transmission_from(transmission, meant=length_unit(pos_unit or (base.axis.position if base else None)))
+        except InputError as exc:
+            raise click.BadParameter(exc.message, param_hint="'--transmission'") from None
     if base is None:
         if not fb or not any(k in fb for k in ("counts_per_rev", "lines", "steps")):
-            raise InputError("give a SPEC file or the feedback (--counts, --lines or --steps)")
+            raise InputError("give a SPEC file or the feedback (--counts-per-rev, --lines or --steps)")
         data["feedback"] = fb
         data["gear"] = gear
         data["transmission"] = transmission
@@ -145,7 +154,8 @@ def _html_prerequisites(html: str | None, json_to_stdout: bool) -> None:
 
 def _render(group: Any) -> None:
     con = console()
-    t = table(f"Factor group — {group.family} ({group.factor_set})", ["object", "name", "part", "value", "hex", "exact", "meaning"])
+    t = table(f"Factor group — {group.family} ({group.factor_set})", ["object", "name", "part", "value", "hex", "exact", "meaning"],
+              optional=("name", "exact"))
     for o in group.objects:
         a = o.approximation
         exact = "yes" if o.exact else f"≈ {float(a.ppm):+.3g} ppm" if a else "no"
@@ -168,7 +178,7 @@ Examples:
   ecattool scale compute samples/scaling/ballscrew.yaml
   ecattool scale compute --lines 500 --position rad --firmware F515I
   ecattool scale startup samples/scaling/belt.yaml --format twincat
-  ecattool scale explain --family technosoft-ipos 6093:01=4294967295 6093:02=13493038
+  ecattool scale explain --profile technosoft-ipos 6093:01=4294967295 6093:02=13493038
   ecattool scale si mm rpm 0x03105700""")
 def scale() -> None:
     """Compute CiA-402 factor groups from mechanics and units, exactly.
@@ -183,10 +193,10 @@ def scale() -> None:
 @scale.command("compute", epilog="""\b
 Examples:
   ecattool scale compute samples/scaling/ballscrew.yaml
-  ecattool scale compute samples/scaling/belt.yaml --family hdt --json
+  ecattool scale compute samples/scaling/belt.yaml --profile hdt --json
   ecattool scale compute --lines 500 --position rev --velocity rpm --acceleration rev/s^2
-  ecattool scale compute --counts 4096 --gear 3:1 --transmission 'ballscrew pitch=10mm' \\
-      --position mm --family controltechniques
+  ecattool scale compute --counts-per-rev 4096 --gear 3:1 --transmission 'ballscrew pitch=10mm' \\
+      --position mm --profile controltechniques
   ecattool scale compute --lines 500 --position rad --firmware F515I   # 4294967295 / 13493038
   ecattool scale compute samples/scaling/rotary_table.yaml --esi copley_XE2_4.60.xml
   ecattool scale compute samples/scaling/ballscrew.yaml --html scaling.html   # the chain as a page""")
@@ -308,16 +318,17 @@ def _values_from_file(path: str) -> dict[tuple[int, int], int]:
 
 @scale.command("explain", epilog="""\b
 Examples:
-  ecattool scale explain --family technosoft-ipos 6093:01=4294967295 6093:02=13493038
-  ecattool scale explain --family hdt 6093:01=65536 6093:02=360 6094:01=65536 6094:02=60
-  ecattool scale explain --family controltechniques 608F:01=4096 6091:01=3 6092:01=10 604C:01=60
-  ecattool scale explain --family technosoft-ipos --from drive_startup.xml --json
-  ecattool scale explain --family hdt --target sim
-  ecattool scale explain --family technosoft-ipos --target pysoem:eth0 --slave 2
-  ecattool scale explain --family hdt 6093:01=16384 6093:02=25 --html scaling.html
+  ecattool scale explain --profile technosoft-ipos 6093:01=4294967295 6093:02=13493038
+  ecattool scale explain --profile hdt 6093:01=65536 6093:02=360 6094:01=65536 6094:02=60
+  ecattool scale explain --profile controltechniques 608F:01=4096 6091:01=3 6092:01=10 604C:01=60
+  ecattool scale explain --profile technosoft-ipos --from drive_startup.xml --json
+  ecattool scale explain --profile hdt --target sim
+  ecattool scale explain --profile technosoft-ipos --target pysoem:eth0 --slave 2
+  ecattool scale explain --profile hdt 6093:01=16384 6093:02=25 --html scaling.html
   ecattool scale explain --project samples/hdt/project.yaml           # what the project's startup list sets""")
 @click.argument("assignments", nargs=-1)
-@click.option("--family", type=click.Choice(_FAMILIES), default="technosoft-ipos", show_default=True)
+@shared_option("--profile", "family", type=click.Choice(_FAMILIES), default="technosoft-ipos", show_default=True,
+               help="Drive family the values are for.")
 @click.option("--from", "source", type=InputFile(),
               help="Read values from a startup file (any format), a `scale compute --json` file or a YAML mapping.")
 @click.option("--target", help="Read the values from a drive: 'sim' (the family's simulated drive) or 'pysoem:IFACE'.")
@@ -328,7 +339,7 @@ Examples:
 @click.option("--allow-errors", is_flag=True, help="With --project: explain even when lint reports errors for the drive.")
 @click.option("--firmware", help="Technosoft firmware (F515I → obsolete factor set).")
 @click.option("--slow-loop", default="1ms", show_default=True, help="Technosoft slow-loop period.")
-@click.option("--counts-per-rev", help="Increments per motor revolution, to express velocities in rpm.")
+@shared_option("--counts-per-rev", "counts_per_rev", help="Increments per motor revolution, to express velocities in rpm.")
 @json_option
 @file_output_option("--html", "html", help=_HTML_HELP)
 def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, target: str | None, slave: int,

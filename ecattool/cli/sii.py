@@ -74,6 +74,15 @@ def _findings_out(findings: list[Any], as_json: bool, extra: dict[str, Any] | No
         click.echo(f"{'FAILED' if n_err else 'OK'}: {n_err} error(s), {n_warn} warning(s)")
 
 
+def _mailbox_text(box: dict[str, int]) -> str:
+    """``{'rx_offset': 4096, 'rx_size': 128, …}`` as an engineer writes it: ``out 0x1000 (128 bytes), in 0x1080
+    (128 bytes)`` (rx = master to slave = mailbox out, SM0; tx = mailbox in, SM1)."""
+    if not any(box.values()):
+        return "none"
+    return (f"out 0x{box.get('rx_offset', 0):04X} ({box.get('rx_size', 0)} bytes), "
+            f"in 0x{box.get('tx_offset', 0):04X} ({box.get('tx_size', 0)} bytes)")
+
+
 @sii.command("info", epilog="""\b
 Examples:
   ecattool sii info slave.bin
@@ -96,7 +105,8 @@ def info(image: str, as_json: bool) -> None:
                      ("checksum", "0x{:02X}"), ("crc_ok", "{}"), ("protocols", "{}"), ("mailbox", "{}"),
                      ("bootstrap", "{}"), ("eeprom_bytes", "{}"), ("image_bytes", "{}"), ("version", "{}")):
         v = d[key]
-        t.add_row(key, ", ".join(v) if isinstance(v, list) else fmt.format(v))
+        t.add_row(key, ", ".join(v) if isinstance(v, list) else _mailbox_text(v) if isinstance(v, dict)
+                  else fmt.format(v))
     c.print(t)
     ct = table("Categories", ["offset", "type", "name", "words"])
     for cat in d["categories"]:

@@ -113,6 +113,31 @@ def show_cmd(profile: str, product: str | None, revision: str | None, objects: b
         c.print(t)
 
 
+def _value_text(drive: Any, ln: Any) -> tuple[str, bool]:
+    """A value read or written, as people read it, and whether it was decoded from the raw bytes: ``= 1600
+    (0x0640): switch on disabled, remote, target reached — SWITCH_ON_DISABLED`` (decimal and hex by the entry's
+    data type; the statusword's bits and state named)."""
+    plain = f" = {ln.value!r}" if ln.value is not None else ""
+    if not ln.data or not (isinstance(ln.value, int) or (ln.value is None and ln.op == "write")):
+        return plain, False
+    from ecattool.errors import EcatToolError
+    from ecattool.od.display import value_text
+    from ecattool.od.numbers import parse_address
+    from ecattool.sim.cia402 import decode_statusword
+
+    try:
+        index, sub = parse_address(ln.target)
+        raw = bytes.fromhex(ln.data)
+    except (ValueError, EcatToolError):
+        return plain, False
+    entry = drive.device.dictionary.entry(index, sub)
+    text = value_text(raw, entry.datatype if entry else None, entry.bit_size if entry else None, index,
+                      entry.unit if entry else "")
+    if index == 0x6041 and isinstance(ln.value, int):
+        text += f" — {decode_statusword(ln.value).value}"
+    return f" = {text}", True
+
+
 @sim.command("run", epilog="""\b
 Examples:
   ecattool sim run technosoft-ipos rxpdo3.yaml
@@ -129,46 +154,47 @@ Script (YAML or JSON list):
     expect_abort: 0x06010002
   - state: OP
     expect_al_status: 0x0011""")
-@click.argument("target")
+@click.argument("source")
 @click.argument("script", type=InputFile())
 @click.option("--product", help="Model of a built-in family.")
 @click.option("--revision", help="Firmware revision of a built-in family.")
-@click.option("--device", "selector", help="Device selector when TARGET is an ESI file with several devices.")
+@click.option("--device", "selector", help="Device selector when SOURCE is an ESI file with several devices.")
 @policy_option
 @output_option()
 @json_option
-def run_cmd(target: str, script: str, product: str | None, revision: str | None, selector: str | None, policy: str,
+def run_cmd(source: str, script: str, product: str | None, revision: str | None, selector: str | None, policy: str,
             output: str | None, as_json: bool) -> None:
     """Run SCRIPT (SDO reads/writes, state requests, cycles) on a simulated drive and print the transcript.
 
-    TARGET is a built-in profile name or an ESI (or CANopen EDS) file. Exits 1 at the first unexpected abort, timeout or
+    SOURCE is a built-in profile name or an ESI (or CANopen EDS) file, as in `sim serve` (a --target
+    elsewhere is where a command runs: sim or pysoem:IF). Exits 1 at the first unexpected abort, timeout or
     refused state change.
     """
     from ecattool.sim import Drive
     from ecattool.sim.script import load_script, run_script
 
-    if Path(target).is_file():
-        drive = Drive.from_esi(target, selector, policy=policy)
+    if Path(source).is_file():
+        drive = Drive.from_esi(source, selector, policy=policy)
     else:
-        drive = Drive.from_profile(target, product=product, revision=revision)
+        drive = Drive.from_profile(source, product=product, revision=revision)
     steps, locations = load_script(script)
     tr = run_script(drive, steps, locations, script, Path(script).parent)
     if as_json:
         from ecattool.cli.common import dump_json
 
-        write_output(output, dump_json(tr.to_json()) + "\n", [script, target])
+        write_output(output, dump_json(tr.to_json()) + "\n", [script, source])
     else:
         lines = []
         for ln in tr.lines:
             mark = "ok " if ln.expected else "ERR"
             code = f" 0x{ln.code:08X}" if ln.code is not None and ln.code > 0xFFFF else (
                 f" 0x{ln.code:04X}" if ln.code is not None else "")
-            val = f" = {ln.value!r}" if ln.value is not None else ""
-            data = f" [{ln.data}]" if ln.data else ""
+            val, decoded = _value_text(drive, ln)
+            data = f" [{ln.data}]" if ln.data and not decoded else ""
             lines.append(f"{mark} {ln.step:3d} {ln.op:8s} {ln.target:10s} {ln.result}{code}{val}{data}"
                          + (f"  {ln.detail}" if ln.detail else ""))
         text = "\n".join(lines) + "\n"
-        write_output(output, text, [script, target])
+        write_output(output, text, [script, source])
     failure = tr.failure
     if failure is not None:
         from ecattool.errors import Location, TargetError

@@ -152,17 +152,22 @@ Examples:
 @click.argument("input_file", type=InputFile())
 @click.option("--format", "fmt", required=True, type=click.Choice(_FORMAT_NAMES[:-1]), help="Format to write.")
 @click.option("--from-format", type=click.Choice(_READ_FORMATS), help="Format of INPUT_FILE (default: detect).")
+@click.option("--drive", "drives", multiple=True,
+              help="Only this slave of INPUT_FILE: name or bus position; repeatable. TwinCAT and ros2 files hold "
+                   "one slave.")
 @_sync0_option
 @_lossy_option
-@output_option(required=True)
-def convert_cmd(input_file: str, fmt: str, from_format: str | None, sync0_cycle: int | None, lossy: bool,
-                output: str) -> None:
-    """Convert INPUT_FILE into another startup format, written to -o OUT.
+@output_option()
+def convert_cmd(input_file: str, fmt: str, from_format: str | None, drives: tuple[str, ...], sync0_cycle: int | None,
+                lossy: bool, output: str | None) -> None:
+    """Convert INPUT_FILE into another startup format (stdout unless -o, as `startup export`).
 
     Every note of the import (what the source holds that was not converted) is printed to stderr; a
     source with nothing to convert is an error (exit 1).
     """
-    configs = _read(input_file, from_format)
+    from ecattool.startup import select_slaves
+
+    configs = select_slaves(_read(input_file, from_format), drives)
     _report_import(configs, input_file)
     _write(_with_cycle(configs, sync0_cycle), fmt, output, (input_file,), lossy)
 
@@ -177,6 +182,7 @@ Examples:
 @json_option
 def import_cmd(input_file: str, from_format: str | None, as_json: bool) -> None:
     """Read a startup configuration and show what was read: slaves, commands, PDOs, notes."""
+    from ecattool.od.display import value_text
     from ecattool.startup.formats.jsonfmt import slave_to_json
 
     configs, fmt = _read_with_format(input_file, from_format)
@@ -195,10 +201,12 @@ def import_cmd(input_file: str, from_format: str | None, as_json: bool) -> None:
             out.print(f"  DC assign activate 0x{c.dc_assign_activate:04X}"
                       + (f", cycle {c.dc_cycle_ns} ns" if c.dc_cycle_ns else ""))
         if c.commands:
-            t = table(f"{len(c.commands)} startup command(s)", ["line", "tr", "object", "data", "CA", "comment"])
+            t = table(f"{len(c.commands)} startup command(s)", ["line", "tr", "object", "value", "CA", "comment"])
             for cmd in c.commands:
+                # decoded by size (2000 (0x000007D0), not d0070000); complete-access data stays bytes
+                value = cmd.data.hex(" ") if cmd.complete_access else value_text(cmd.data, index=cmd.index)
                 t.add_row(str(cmd.source.line if cmd.source and cmd.source.line else ""), cmd.transition,
-                          cmd.address, cmd.data.hex(), "CA" if cmd.complete_access else "", cmd.comment)
+                          cmd.address, value, "CA" if cmd.complete_access else "", cmd.comment)
             out.print(t)
         for direction, pdos in (("RxPDO", c.rx_pdos), ("TxPDO", c.tx_pdos)):
             for p in pdos:

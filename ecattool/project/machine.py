@@ -165,8 +165,8 @@ def load_machine(path: str | Path) -> Machine:
     except EcatToolError as exc:
         machine.findings.append(Finding("PRJ001", Severity.ERROR, exc.message, exc.location or Location(str(p))))
         return machine
-    if project is None:
-        machine.findings.extend(schema_findings)
+    machine.findings.extend(schema_findings)
+    if project is None:  # else the drives that are well-formed (schema errors in others) are still checked
         return machine
     lp = LoadedProject(project, p, doc)
     machine.loaded = lp

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any
 
-from ecattool.errors import InputError, Location
+from ecattool.errors import InputError, Location, did_you_mean
 from ecattool.od.numbers import check_exponent, parse_fraction
 from ecattool.scaling.exact import Exact
 from ecattool.scaling.units import Unit, parse_unit, quantity, time_seconds
@@ -57,12 +57,13 @@ def _frac(value: Any, what: str, location: Location | None, positive: bool = Tru
     return f
 
 
-def _length(value: Any, what: str, location: Location | None) -> Exact:
-    """A length from a spec or an option, within :data:`MIN_LENGTH` .. :data:`MAX_LENGTH`."""
+def _length(value: Any, what: str, location: Location | None, meant: str | None = None) -> Exact:
+    """A length from a spec or an option, within :data:`MIN_LENGTH` .. :data:`MAX_LENGTH` (a bare number is an
+    error that shows it with ``meant``, the unit it probably meant)."""
     if isinstance(value, bool):
         raise InputError(f"{what} must be a length, not {str(value).lower()}", location)
     check_exponent(value, location, what)
-    q = quantity(value, ("length",), location)[0]
+    q = quantity(value, ("length",), location, what=what, meant=meant)[0]
     _bounded(q.coef, value, what, location, MIN_LENGTH, MAX_LENGTH, " m")
     return q
 
@@ -305,7 +306,9 @@ def gear_from(data: Any, locate: Any = None) -> Gear:
     return Gear(_frac(data, "gear ratio", loc))
 
 
-def transmission_from(data: Any, locate: Any = None) -> Transmission:
+def transmission_from(data: Any, locate: Any = None, meant: str | None = None) -> Transmission:
+    """The transmission of a spec mapping or a ``type key=value …`` string. Every length needs its unit; an error
+    for a bare number suggests ``meant`` (the axis's length unit), else mm."""
     loc = _loc(locate, "transmission")
     if data is None:
         return Transmission.rotary()
@@ -319,7 +322,7 @@ def transmission_from(data: Any, locate: Any = None) -> Transmission:
             "linear": "linear_motor", "hollow": "hollow_shaft", "custom_label": "label"}.get(kind, kind)
 
     def q(key: str) -> Exact:
-        return _length(data[key], key, _loc(locate, "transmission", key))
+        return _length(data[key], key, _loc(locate, "transmission", key), meant)
 
     def n(key: str, default: Any = None) -> Fraction:
         return _frac(data.get(key, default), key, _loc(locate, "transmission", key))
@@ -381,7 +384,8 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
              "firmware", "approximation", "device", "vl_setpoint"}
     for key in data:
         if key not in known:
-            raise InputError(f"unknown key {key!r} (expected one of {', '.join(sorted(known))})", _loc(locate, key) or source)
+            hint = did_you_mean(str(key), known) or f" (expected one of {', '.join(sorted(known))})"
+            raise InputError(f"unknown key {key!r}{hint}", _loc(locate, key) or source)
     if "feedback" not in data:
         raise InputError("spec needs 'feedback' (e.g. feedback: {lines: 500})", source)
     units = data.get("units") or {}
@@ -393,7 +397,7 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
         raise InputError(f"polarity must be normal or reversed, got {polarity!r}", _loc(locate, "polarity"))
     axis = Axis(
         feedback=feedback_from(data["feedback"], locate),
-        transmission=transmission_from(data.get("transmission"), locate),
+        transmission=transmission_from(data.get("transmission"), locate, length_unit(units.get("position"))),
         gear=gear_from(data.get("gear"), locate),
         position=str(units.get("position", "rev")),
         velocity=None if units.get("velocity") is None else str(units["velocity"]),
@@ -430,6 +434,15 @@ def slow_loop_from(value: Any, location: Location | None = None) -> Fraction:
     t = time_seconds(value, location)
     _bounded(t, value, "slow_loop", location, MIN_SLOW_LOOP, MAX_SLOW_LOOP, " s")
     return t
+
+
+def length_unit(text: Any) -> str | None:
+    """The name of ``text`` when it is a length unit (``inch``, ``mm``): what a bare length probably meant."""
+    try:
+        unit = parse_unit(str(text), order=0) if text is not None else None
+    except InputError:
+        return None
+    return unit.position.name if unit is not None and unit.kind == "length" else None
 
 
 def _article(kind: str) -> str:

@@ -252,14 +252,22 @@ def time_seconds(text: str, location: Location | None = None) -> Fraction:
     return value
 
 
-def quantity(text: str | int | float, kinds: tuple[str, ...] = ("length",), location: Location | None = None) -> tuple[Exact, str]:
-    """``5 mm``, ``0.2 inch``, ``12.5mm``, ``30 deg`` → (size in the kind's base, kind). Numbers are read exactly."""
+def quantity(text: str | int | float, kinds: tuple[str, ...] = ("length",), location: Location | None = None,
+             what: str = "", meant: str | None = None) -> tuple[Exact, str]:
+    """``5 mm``, ``0.2 inch``, ``12.5mm``, ``30 deg`` → (size in the kind's base, kind). Numbers are read exactly.
+
+    A number without a unit is an error that names ``what`` it is and shows it with the unit it probably meant
+    (``meant``: the axis's own length unit where there is one, else mm; deg for an angle)."""
     s = str(text).strip()
     m = re.fullmatch(r"([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(.*)", s)
     if not m:
         raise InputError(f"{text!r} is not a quantity (write e.g. 5 mm)", location)
     number = Fraction(m.group(1))
-    unit_text = m.group(2) or ("mm" if "length" in kinds else "rev")
+    if not m.group(2):  # a bare number is not silently millimetres (nor inches on an inch axis): ask for the unit
+        meant = meant or ("mm" if "length" in kinds else "deg")
+        raise InputError(f"{what + ' ' if what else ''}{s} has no unit: a {' or '.join(kinds)} needs one "
+                         f"(did you mean {s} {meant}?)", location)
+    unit_text = m.group(2)
     unit = parse_unit(unit_text, order=0, location=location)
     if unit.kind not in kinds:
         raise InputError(f"{text!r}: expected a {' or '.join(kinds)}, got {unit.kind}", location)
