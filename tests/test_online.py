@@ -140,11 +140,11 @@ def test_sii_write_refuses_a_bad_crc_and_a_wrong_identity(tmp_path, capsys: pyte
     for image, word in ((bad_crc, "CRC-8"), (other, "vendor_id")):
         path, backup = tmp_path / "new.bin", tmp_path / "old.bin"
         path.write_bytes(bytes(image))
-        code, out, _ = run(capsys, "sii", "write", str(path), "--target", "sim:hdt", "--backup", str(backup))
-        assert code == 1 and word in out and not backup.exists()  # refused before anything, even the back-up
+        code, _, err = run(capsys, "sii", "write", str(path), "--target", "sim:hdt", "--backup", str(backup))
+        assert code == 1 and word in err and len(err.splitlines()) == 1 and not backup.exists()  # refused before anything, even the back-up
     path.write_bytes(good)
-    code, out, _ = run(capsys, "sii", "write", str(path), "--target", "sim:hdt", "--backup", str(backup), "--json")
-    assert code == 0 and json.loads(out)["written"] and backup.read_bytes() == good
+    code, out, _ = run(capsys, "sii", "write", str(path), "--target", "sim:hdt", "--backup", str(backup))
+    assert code == 0 and "written" in out and backup.read_bytes() == good
 
 
 def test_sii_write_goes_to_the_eeprom_word_by_word_after_the_backup(tmp_path) -> None:

@@ -31,12 +31,17 @@ def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool
     from ecattool.online.audit import audit as do_audit
     from ecattool.online.targets import open_bus
 
+    from ecattool.errors import InputError
+    from ecattool.project.export import refuse_errors
+    from ecattool.project.lint import lint_project
+
+    result = lint_project(project)  # a project that does not load or lint is refused before the bus is opened
+    if result.loaded is None:
+        first = result.findings[0]
+        raise InputError(first.message, first.location)
+    refuse_errors(result, "audit")
     devices = []
     if target.strip().lower() == "sim":
-        from ecattool.project.export import slave_configs  # noqa: F401  (lint errors are reported by audit)
-        from ecattool.project.lint import lint_project
-
-        result = lint_project(project)
         devices = [rd.device for rd in sorted(result.drives, key=lambda r: r.position) if rd.device is not None]
     with open_bus(target, devices) as live:
         report = do_audit(project, live, sw_checksums=sw_checksums)

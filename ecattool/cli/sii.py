@@ -274,21 +274,18 @@ def diff_cmd(a: str, b: str, as_json: bool) -> None:
 @sii.command("read", epilog="""\b
 Examples:
   ecattool sii read --target pysoem:eth0 --slave 1 -o axis2.sii.bin
-  ecattool sii read --target sim:hdt -o hdt.bin --json""")
+  ecattool sii read --target sim:hdt -o hdt.bin""")
 @click.option("--target", required=True, metavar="TARGET",
               help="pysoem:IF, or the simulator sim:PROFILE,ESI… (KickCAT's binding has no SII access).")
 @click.option("--slave", type=int, default=0, show_default=True, help="Position of the slave on the bus.")
 @output_option(required=True, help="The image file (binary; written atomically, never over an input).")
-@json_option
-def read_cmd(target: str, slave: int, output: str, as_json: bool) -> None:
+def read_cmd(target: str, slave: int, output: str) -> None:
     """Read a slave's SII EEPROM (the fixed area and the category chain to its end marker) into a file."""
     from ecattool.online.targets import open_bus
 
     with open_bus(target) as live:
         data = live.slave(slave).sii_read()
     write_output(output, data)
-    if as_json and output != "-":
-        click.echo(dump_json({"target": target, "slave": slave, "bytes": len(data), "output": output}))
 
 
 @sii.command("write", epilog="""\b
@@ -305,10 +302,9 @@ area, the category chain up to its end marker, the size, and the identity agains
 @click.option("--backup", required=True, type=click.Path(dir_okay=False), metavar="FILE",
               help="Where the slave's current image is written before anything is written to it.")
 @click.option("--force", is_flag=True, help="Write even when the image's identity is not the slave's.")
-@json_option
-def write_cmd(image: str, target: str, slave: int, backup: str, force: bool, as_json: bool) -> None:
+def write_cmd(image: str, target: str, slave: int, backup: str, force: bool) -> None:
     """Write IMAGE to a slave's SII EEPROM, after the checks and a back-up of the old image. Exit status 1 when a
-    check refuses the image (nothing is written then)."""
+    check refuses the image: one line naming the first problem, and nothing is written (not even the back-up)."""
     from ecattool.fileio import read_bytes, refuse_input
     from ecattool.online.targets import open_bus
     from ecattool.online.sii_access import sii_write
@@ -317,11 +313,9 @@ def write_cmd(image: str, target: str, slave: int, backup: str, force: bool, as_
     refuse_input(backup, (image,))
     with open_bus(target) as live:
         problems = sii_write(live.slave(slave), data, image, backup, force)
-    if as_json:
-        click.echo(dump_json({"image": image, "slave": slave, "written": not problems, "problems": problems,
-                              "backup": None if problems else backup}))
-    else:
-        for p in problems:
-            click.echo(p)
-        click.echo("refused: nothing written" if problems else f"written; the old image is in {backup}")
-    raise SystemExit(1 if problems else 0)
+    if problems:
+        from ecattool.errors import InputError
+
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise InputError(f"refused, nothing written: {problems[0]}{more}")
+    click.echo(f"written; the old image is in {backup}")
