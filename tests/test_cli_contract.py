@@ -66,6 +66,7 @@ NO_JSON: dict[tuple[str, ...], str] = {
     ("sw", "build"): "writes a .sw image (-o required)",
     ("sdo", "dump"): "writes a JSON dictionary snapshot (JSON is its only form)",
     ("sii", "read"): "writes a binary SII image (-o required)",
+    ("backup",): "writes a folder (-o required) of images and JSON snapshots; prints the names of its files",
     ("sii", "write"): "writes to a slave's EEPROM; prints one line (a refusal is an error)",
     ("sw", "foe"): "writes a FoE file (-o required)",
     ("sw", "from-foe"): "writes .sw text",
@@ -195,6 +196,9 @@ HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
     ("sii", "read"): [("--target", "sim:hdt", "-o", Out("slave.bin"))],
     ("sii", "write"): [(SII, "--target", "sim:hdt", "--force", "--backup", Out("old.bin"))],
     ("audit",): [(In("project", "gen:plain.yaml"), "--target", "sim", "-o", Out("audit.txt"))],
+    ("backup",): [(In("project", "gen:plain.yaml"), "--target", "sim", "-o", Out("backup-folder"))],
+    ("sw", "upload"): [("--like", SW, "--target", "sim", "--preload", SW, "-o", Out("back.sw")),
+                       ("--project", In("project", "gen:machine.yaml"), "--preload", SW, "-o", Out("back.sw"))],
 }
 
 #: One real file of every input kind the valid invocations use (the first In of that kind): the "other:KIND"

@@ -30,6 +30,7 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "bus": ("ecattool.cli.bus", "bus", "Look at a live bus: scan the slaves (read only)."),
     "sdo": ("ecattool.cli.sdo", "sdo", "Read and write a live slave's objects, typed by its dictionary."),
     "audit": ("ecattool.cli.audit", "audit", "Compare what the drives on a bus hold with a project (drift)."),
+    "backup": ("ecattool.cli.backup", "backup", "Back up what the drives of a project hold (SII, dictionary, .sw)."),
 }
 
 

@@ -7,7 +7,7 @@ import sys
 import click
 
 from ecattool.cli.common import dump_json, output_option, write_output
-from ecattool.cli.online import target_option
+from ecattool.cli.online import project_bus, target_option
 from ecattool.cli.paths import InputFile
 
 
@@ -29,21 +29,8 @@ def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool
     """Read back every object the project's startup list would write, and each drive's identity, and report
     where the drives differ from the project (drift). Reads only. Exit status 1 on drift."""
     from ecattool.online.audit import audit as do_audit
-    from ecattool.online.targets import open_bus
 
-    from ecattool.errors import InputError
-    from ecattool.project.export import refuse_errors
-    from ecattool.project.lint import lint_project
-
-    result = lint_project(project)  # a project that does not load or lint is refused before the bus is opened
-    if result.loaded is None:
-        first = result.findings[0]
-        raise InputError(first.message, first.location)
-    refuse_errors(result, "audit")
-    devices = []
-    if target.strip().lower() == "sim":
-        devices = [rd.device for rd in sorted(result.drives, key=lambda r: r.position) if rd.device is not None]
-    with open_bus(target, devices) as live:
+    with project_bus(project, target) as live:
         report = do_audit(project, live, sw_checksums=sw_checksums)
     fmt = "json" if as_json else fmt
     if fmt == "json":

@@ -50,3 +50,22 @@ def open_live(target: str) -> Any:
     from ecattool.online.targets import open_bus
 
     return open_bus(target)
+
+
+def project_bus(project: str, target: str) -> Any:
+    """The live bus of ``target`` for a project: the project is linted first (one that does not load or lint is
+    refused before the bus is opened); ``sim`` simulates the project's drives."""
+    from ecattool.errors import InputError
+    from ecattool.online.targets import open_bus
+    from ecattool.project.export import refuse_errors
+    from ecattool.project.lint import lint_project
+
+    result = lint_project(project)
+    if result.loaded is None:
+        first = result.findings[0]
+        raise InputError(first.message, first.location)
+    refuse_errors(result, f"use {project} on a bus")
+    devices = []
+    if target.strip().lower() == "sim":
+        devices = [rd.device for rd in sorted(result.drives, key=lambda r: r.position) if rd.device is not None]
+    return open_bus(target, devices)
