@@ -103,16 +103,18 @@ class CoeObjectEntry:
     """An entry of SOEM's OE list (``pysoem.CdefCoeObjectEntry``)."""
 
     def __init__(self, name, data_type, bit_length, obj_access):
-        self.name, self.data_type, self.bit_length, self.obj_access = name, data_type, bit_length, obj_access
+        self.name, self.data_type, self.bit_length, self.obj_access = (name.encode("latin-1", "replace"), data_type, bit_length,
+                                                                      obj_access)
 
 
 class CoeObject:
-    """An object of SOEM's OD list (what ``slave.od`` returns): for a VAR the type, size and access are the
-    object's own; for an ARRAY/RECORD ``entries`` lists every sub-index up to the highest."""
+    """An object of SOEM's OD list (what ``slave.od`` returns), as the virtual bus shows it to the real pysoem
+    (tests/test_wire_mailbox.py): names as bytes; a VAR has its data type and no entries; an ARRAY/RECORD lists
+    every sub-index up to the highest."""
 
-    def __init__(self, index, object_code, name, data_type=0, bit_length=0, obj_access=0, entries=()):
-        self.index, self.object_code, self.name = index, object_code, name
-        self.data_type, self.bit_length, self.obj_access = data_type, bit_length, obj_access
+    def __init__(self, index, object_code, name, data_type=0, entries=()):
+        self.index, self.object_code, self.name = index, object_code, name.encode("latin-1", "replace")
+        self.data_type = data_type
         self.entries = list(entries)
 
 
@@ -132,8 +134,7 @@ def soem_od(dictionary):
         code = codes.get(obj.object_code.name, 7)
         if code == 7:
             e = obj.entry(0)
-            out.append(CoeObject(obj.index, 7, obj.name, e.datatype.code if e and e.datatype else 0,
-                                 e.bit_size if e else 0, _object_access(e) if e else 0))
+            out.append(CoeObject(obj.index, 7, obj.name, e.datatype.code if e and e.datatype else 0))
             continue
         entries = []
         for sub in range(obj.max_subindex + 1):

@@ -10,7 +10,12 @@ words; the identity is read from 1018h), the AL status code, and the SDO Informa
 
 from __future__ import annotations
 
+import ctypes
+import os
 import re
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from types import ModuleType
 from typing import Any
 
@@ -113,11 +118,30 @@ class KickcatLiveSlave:
                           "objects with --library/--device)")
 
 
+@contextmanager
+def _stdout_to_stderr() -> Iterator[None]:
+    """KickCAT prints "Opening nominal interface…" on the process's stdout (fd 1), where a command's --json
+    document goes: while it opens the link, fd 1 is the stderr stream."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        try:
+            ctypes.CDLL(None).fflush(None)  # the C library's buffer, before fd 1 is stdout again
+        except (OSError, AttributeError):
+            pass
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 def open_kickcat(ifname: str, module: ModuleType | None = None) -> LiveBus:
     """A KickCAT master on ``ifname``, every slave in PRE-OP."""
     kc = module or _import()
     try:
-        link = kc.create_link(ifname, "")
+        with _stdout_to_stderr():
+            link = kc.create_link(ifname, "")
     except Exception as exc:  # noqa: BLE001 - RuntimeError/OSError from the binding
         raise TargetError(f"cannot open EtherCAT interface {ifname!r} with KickCAT: {exc}") from None
     bus = kc.Bus(link)

@@ -25,27 +25,40 @@ def access_of(word: int) -> Access:
                   frozenset(s for i, s in enumerate(_STATES) if word & (8 << i)))
 
 
-def _entry(sub: int, name: str, data_type: int, bits: int, access: int) -> Entry:
+def _text(value: Any) -> str:
+    """pysoem gives names as bytes (the slave's VISIBLE_STRING)."""
+    return value.decode("latin-1") if isinstance(value, (bytes, bytearray)) else str(value)
+
+
+def _entry(sub: int, name: str, data_type: int, bits: int | None, access: int | None) -> Entry:
+    dt = lookup(int(data_type))
+    if bits is None:
+        bits = dt.bits if dt is not None and dt.bits is not None else 0
+    if access is None:  # SOEM reads no entry description of a VAR: its access is not known, PRE-OP..OP assumed
+        return Entry(sub, name, dt, int(bits))
     mapping = ("R" if access & 0x40 else "") + ("T" if access & 0x80 else "")
-    return Entry(sub, name, lookup(int(data_type)), int(bits), access=access_of(int(access)), pdo_mapping=mapping)
+    return Entry(sub, name, dt, int(bits), access=access_of(int(access)), pdo_mapping=mapping)
 
 
 def dictionary_from_soem(objects: Any) -> ObjectDictionary:
-    """pysoem's ``slave.od`` (objects with index, name, object_code, data_type, bit_length, obj_access and
-    entries) as an ecattool dictionary."""
+    """pysoem's ``slave.od`` as an ecattool dictionary: objects with index, name, object code and data type, and
+    for an ARRAY/RECORD its entries (name, data type, bit length, access word; SOEM lists every sub-index up to
+    the highest, a gap with an empty name and no bits). A VAR comes without entries: its size is its type's."""
     od = ObjectDictionary()
     for o in objects:
         code = _CODES.get(int(o.object_code), ObjectCode.VAR)
+        name = _text(o.name)
         entries: dict[int, Entry] = {}
         subs = list(o.entries or [])
         if code is ObjectCode.VAR or not subs:
-            entries[0] = _entry(0, str(o.name), int(o.data_type), int(o.bit_length), int(o.obj_access))
+            bits, access = getattr(o, "bit_length", None), getattr(o, "obj_access", None)
+            entries[0] = _entry(0, name, int(o.data_type), bits or None, access if bits else None)
         else:
             for sub, e in enumerate(subs):
                 if not e.name and not e.bit_length:
-                    continue  # a gap in a record (SOEM lists every sub-index up to the highest)
-                entries[sub] = _entry(sub, str(e.name), int(e.data_type), int(e.bit_length), int(e.obj_access))
-        od.add(OdObject(int(o.index), str(o.name), code, entries))
+                    continue
+                entries[sub] = _entry(sub, _text(e.name), int(e.data_type), int(e.bit_length), int(e.obj_access))
+        od.add(OdObject(int(o.index), name, code, entries))
     return od
 
 
