@@ -140,3 +140,12 @@ def test_sw_upload_equals_the_sw_and_backup_holds_everything(result: dict[str, A
     assert sorted(p.name for p in (work / "backup").iterdir()) == ["00-z_axis.dict.json", "00-z_axis.sii.bin",
                                                                    "00-z_axis.sw"]
     assert (work / "backup" / "00-z_axis.sw").read_bytes() == sw
+
+
+def test_frames_lost_half_way_give_one_line_and_no_backup(result: dict[str, Any]) -> None:
+    """The bus goes quiet during a backup (the server stops answering): a one-line error, exit 1, no folder."""
+    b = result["lost_frames"]["backup"]
+    lines = b["stderr"].strip().splitlines()
+    assert b["returncode"] == 1 and len(lines) == 1 and "Traceback" not in b["stderr"], b
+    assert any(w in lines[0] for w in ("SDO timeout", "no reply", "no answer", "did not come back")), lines
+    assert not (Path(result["work"]) / "lost").exists()

@@ -105,7 +105,25 @@ def technosoft(work: Path) -> dict[str, Any]:
     return r
 
 
+#: the server stops answering after this many frames: enough for SOEM's bus init (a few hundred), far too few
+#: for a backup (thousands): the bus goes quiet half-way through it
+LOST_AFTER_FRAMES = 3000
+
+
+def lost_frames(work: Path) -> dict[str, Any]:
+    argv = [sys.executable, "-m", "ecattool", "sim", "serve", TECHNOSOFT, "--iface", "ecat1", "--json", "--frames",
+            str(LOST_AFTER_FRAMES)]
+    server, _ = start_server([], argv)
+    r: dict[str, Any] = {}
+    try:
+        r["backup"] = ecattool("backup", TECHNOSOFT, "--target", PYSOEM, "-o", str(work / "lost"))
+    finally:
+        r["server"] = stop_server(server)
+    return r
+
+
 if __name__ == "__main__":
     master_priority()
     work = Path(sys.argv[1])
-    print(json.dumps({"four": four(work), "sdo_info": sdo_info(), "technosoft": technosoft(work)}))
+    print(json.dumps({"four": four(work), "sdo_info": sdo_info(), "technosoft": technosoft(work),
+                      "lost_frames": lost_frames(work)}))
