@@ -193,6 +193,11 @@ def _target_and_image(file: str | None, target: str | None, slave: int | None, p
             raise click.UsageError("give the .sw FILE (or --project with a drive that has 'sw:')")
         image = _image(file)
     spec = target or "sim"
+    return _open_preloaded(spec, slave, device, rules, preload), image, name or "", spec
+
+
+def _open_preloaded(spec: str, slave: int | None, device: Any, rules: Any, preload: str | None) -> Any:
+    """The slave of ``spec``; on the simulator with ``preload`` programmed into its EEPROM first."""
     tgt = _open_target(spec, slave or 0, device, rules)
     if preload:
         if spec != "sim":
@@ -201,7 +206,7 @@ def _target_and_image(file: str | None, target: str | None, slave: int | None, p
 
         if not download(_image(preload), tgt, reset=True).ok:
             raise InputError(f"could not preload {preload} into the simulator", Location(preload))
-    return tgt, image, name or "", spec
+    return tgt
 
 
 def _checks_table(title: str, checks: list[Any]) -> Any:
@@ -449,15 +454,7 @@ def upload(like: str | None, ranges: tuple[str, ...], target: str | None, slave:
         ref = ref or rd.sw_image
     spans = [parse_range(r) for r in ranges] or ([(b.start, b.end) for b in ref.blocks] if ref is not None else [])
     spec = target or "sim"
-    tgt = _open_target(spec, slave or 0, device, rules)
-    if preload:
-        if spec != "sim":
-            raise InputError("--preload is for the simulator only")
-        from ecattool.sw.apply import download as do_download
-
-        if not do_download(_image(preload), tgt, reset=True).ok:
-            raise InputError(f"could not preload {preload} into the simulator", Location(preload))
-    image, checks = do_upload(tgt, spans)
+    image, checks = do_upload(_open_preloaded(spec, slave, device, rules, preload), spans)
     ok = all(c.ok for c in checks)
     text = write(image)
     to_file = output not in (None, "-")
