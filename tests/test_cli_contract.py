@@ -192,6 +192,7 @@ HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
     ("sdo", "read"): [("0x1018:01", "--target", "sim:hdt")],
     ("sdo", "write"): [("0x6060:00", "1", "--target", "sim:technosoft-ipos", "--device", "technosoft-ipos")],
     ("sdo", "info"): [("--target", "sim:hdt")],
+    ("sdo", "diff"): [(In("snapshot", "gen:hdt.dict.json"), In("snapshot", "gen:hdt.dict.json"))],
     ("sdo", "dump"): [("--target", "sim:hdt", "-o", Out("dict.json"))],
     ("sii", "read"): [("--target", "sim:hdt", "-o", Out("slave.bin"))],
     ("sii", "write"): [(SII, "--target", "sim:hdt", "--force", "--backup", Out("old.bin"))],
@@ -225,6 +226,7 @@ def gen(tmp_path_factory: pytest.TempPathFactory) -> Path:
     (d / "axis.sw").write_bytes(corpus_path("sw", "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw").read_bytes())
     (d / "machine.yaml").write_text("ecattool: 1\nname: m\ndrives:\n  - name: y\n    device: {profile: technosoft-ipos}\n"
                                     "    sw: axis.sw\n")
+    cli.main(["sdo", "dump", "--target", "sim:hdt", "-o", str(d / "hdt.dict.json")], standalone_mode=False)
     cli.main(["scale", "startup", str(ROOT / SPEC.where), "--format", "csv", "-o", str(d / "factors.csv")],
              standalone_mode=False)
     return d

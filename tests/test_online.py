@@ -101,6 +101,14 @@ def test_dump_snapshot_has_every_readable_object(tmp_path, capsys: pytest.Captur
     snap = json.loads(out.read_text())
     assert code == 0 and snap["format"] == "ecattool-dictionary-snapshot" and snap["dictionary"] == "family"
     assert snap["objects"]["0x1018:01"]["value"] == 0x289 and len(snap["objects"]) > 50
+    assert run(capsys, "sdo", "diff", str(out), str(out))[0] == 0
+    snap["objects"]["0x6081:00"].update(hex="01000000", value=1)
+    del snap["objects"]["0x1018:01"]
+    other = tmp_path / "other.json"
+    other.write_text(json.dumps(snap))
+    code, text, _ = run(capsys, "sdo", "diff", str(out), str(other), "--json")
+    diffs = json.loads(text)["differences"]
+    assert code == 1 and [(d["address"], d["b"]) for d in diffs] == [("0x1018:01", None), ("0x6081:00", 1)]
 
 
 def test_fake_pysoem_scan_sdo_info_and_sii() -> None:

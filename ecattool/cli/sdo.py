@@ -7,6 +7,7 @@ from typing import Any
 import click
 
 from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.paths import InputFile
 from ecattool.cli.online import (
     device_option,
     library_option,
@@ -38,7 +39,8 @@ def _typed(slave: Any, library: str | None, device: str | None) -> Any:
 Examples:
   ecattool sdo read 0x6060:00 --target pysoem:eth0
   ecattool sdo write 0x6081:00 50000 --target pysoem:eth0 --slave 1
-  ecattool sdo dump --target pysoem:eth0 -o axis1.dict.json""")
+  ecattool sdo dump --target pysoem:eth0 -o axis1.dict.json
+  ecattool sdo diff axis1-old.dict.json axis1.dict.json""")
 def sdo() -> None:
     """Read and write a live slave's objects over SDO, typed by its dictionary (ESI, EDS, built-in family or
     the slave's SDO Information service); abort codes are named."""
@@ -145,3 +147,26 @@ def dump(target: str, slave: int, library: str | None, device: str | None, outpu
         s = live.slave(slave)
         snapshot = do_dump(s, _typed(s, library, device), target)
     write_output(output, dump_json(snapshot) + "\n")
+
+
+@sdo.command("diff", epilog="""\b
+Examples:
+  ecattool sdo diff axis2-2026-01.dict.json axis2-2026-11.dict.json
+  ecattool sdo diff before.dict.json after.dict.json --json""")
+@click.argument("a", type=InputFile())
+@click.argument("b", type=InputFile())
+@json_option
+def diff(a: str, b: str, as_json: bool) -> None:
+    """Compare two dictionary snapshots ('sdo dump', 'backup'): the objects whose value or abort differs, and
+    those only one of them has. Exit status 1 when they differ."""
+    from ecattool.online.objects import diff_snapshots, load_snapshot
+
+    sa, sb = load_snapshot(a), load_snapshot(b)
+    diffs = diff_snapshots(sa, sb)
+    if as_json:
+        print_json({"a": a, "b": b, "identical": not diffs, "differences": [d.to_json() for d in diffs]})
+    else:
+        for d in diffs:
+            click.echo(str(d))
+        click.echo(f"{len(diffs)} difference(s)" if diffs else "no differences")
+    raise SystemExit(1 if diffs else 0)

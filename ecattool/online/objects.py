@@ -96,4 +96,42 @@ def load_snapshot(path: str) -> dict[str, Any]:
         raise InputError(f"not a JSON dictionary snapshot: {exc}", Location(path)) from None
     if not isinstance(data, dict) or data.get("format") != SNAPSHOT_FORMAT:
         raise InputError(f"not an ecattool dictionary snapshot (format {SNAPSHOT_FORMAT!r} expected)", Location(path))
+    objects = data.get("objects")
+    if not isinstance(objects, dict) or not all(isinstance(v, dict) for v in objects.values()):
+        raise InputError("the snapshot's 'objects' is not a mapping of 0xIIII:SS to objects", Location(path))
     return data
+
+
+@dataclass
+class SnapshotDifference:
+    """One object whose value differs between two snapshots, or that only one of them has."""
+
+    address: str
+    name: str
+    a: Any
+    b: Any
+
+    def to_json(self) -> dict[str, Any]:
+        return {"address": self.address, "name": self.name, "a": self.a, "b": self.b}
+
+    def __str__(self) -> str:
+        return f"{self.address} {self.name}: {self.a!r} -> {self.b!r}"
+
+
+def _shown(row: dict[str, Any] | None) -> Any:
+    if row is None:
+        return None
+    return f"abort {row['abort']}" if "abort" in row else row.get("value")
+
+
+def diff_snapshots(a: dict[str, Any], b: dict[str, Any]) -> list[SnapshotDifference]:
+    """Objects whose value (or abort) differs between snapshot ``a`` and ``b``, and those only one has."""
+    out = []
+    objs_a, objs_b = a.get("objects", {}), b.get("objects", {})
+    for key in sorted(set(objs_a) | set(objs_b)):
+        ra, rb = objs_a.get(key), objs_b.get(key)
+        if ra is not None and rb is not None and (ra.get("hex"), ra.get("abort")) == (rb.get("hex"), rb.get("abort")):
+            continue
+        name = (ra or rb or {}).get("name", "")
+        out.append(SnapshotDifference(key, name, _shown(ra), _shown(rb)))
+    return out
