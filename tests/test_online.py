@@ -68,15 +68,18 @@ def test_audit_reports_exactly_the_three_changed_objects() -> None:
     assert any(d.actual == 12345 for d in report.drifts)  # decoded by the dictionary
 
 
-def test_audit_cli_on_an_uncommissioned_bus_is_drift_in_every_format(capsys: pytest.CaptureFixture[str]) -> None:
+def test_audit_cli_on_an_uncommissioned_bus_is_drift_in_every_format(tmp_path,
+                                                                    capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run(capsys, "audit", TECHNOSOFT, "--target", "sim", "--json")
     report = json.loads(out)
     assert code == 1 and not report["ok"] and report["drifts"]
     assert report["drifts"][0]["location"]  # the project line that sets the value
     code, out, _ = run(capsys, "audit", TECHNOSOFT, "--target", "sim", "--format", "sarif")
     assert code == 1 and json.loads(out)["runs"][0]["results"][0]["ruleId"].startswith("audit.")
-    code, out, _ = run(capsys, "audit", TECHNOSOFT, "--target", "sim")
+    code, out, _ = run(capsys, "audit", TECHNOSOFT, "--target", "sim", "--html", str(tmp_path / "audit.html"))
     assert code == 1 and "drifted" in out
+    page = (tmp_path / "audit.html").read_text()
+    assert "drifted" in page and "0x1C12:00" in page and "project.yaml:" in page
 
 
 def test_sdo_read_write_are_typed_and_aborts_named(capsys: pytest.CaptureFixture[str]) -> None:

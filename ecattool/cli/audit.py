@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from ecattool.cli.common import dump_json, output_option, write_output
+from ecattool.cli.common import dump_json, file_output_option, output_option, write_output
 from ecattool.cli.online import project_bus, target_option
 from ecattool.cli.paths import InputFile
 
@@ -15,7 +15,7 @@ from ecattool.cli.paths import InputFile
 Examples:
   ecattool audit machine.yaml --target pysoem:eth0
   ecattool audit machine.yaml --target pysoem:eth0 --format sarif -o audit.sarif
-  ecattool audit machine.yaml --target sim --json""")
+  ecattool audit machine.yaml --target sim --json --html audit.html""")
 @click.argument("project", type=InputFile())
 @target_option()
 @click.option("--format", "fmt", type=click.Choice(["text", "json", "sarif"]), default="text", show_default=True,
@@ -25,7 +25,9 @@ Examples:
               help="Also have each Technosoft drive checksum its .sw blocks (writes the request object 2069h; "
                    "without this flag the audit never writes).")
 @output_option()
-def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool, output: str | None) -> None:
+@file_output_option("--html", "html", "Also write the drift report as an HTML page (the report extra).")
+def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool, output: str | None,
+          html: str | None) -> None:
     """Read back every object the project's startup list would write, and each drive's identity, and report
     where the drives differ from the project (drift). Reads only. Exit status 1 on drift."""
     from ecattool.online.audit import audit as do_audit
@@ -45,5 +47,9 @@ def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool
         lines += [f"  {d.drive} (slave {d.position}) {d.address}: {d.message}" for d in report.drifts]
         text = "\n".join(lines) + "\n"
     write_output(output, text, (project,))
+    if html is not None:
+        from ecattool.report.audit import audit_html
+
+        write_output(html, audit_html(report), (project,))
     if not report.ok:
         sys.exit(1)
