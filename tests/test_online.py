@@ -289,3 +289,13 @@ def test_backup_cli(tmp_path, capsys: pytest.CaptureFixture[str]) -> None:
         "00-table.dict.json", "00-table.sii.bin"]
     code, _, err = run(capsys, "backup", "samples/hdt/project.yaml", "--target", "sim", "-o", str(tmp_path / "b"))
     assert code == 1 and "exists" in err and len(err.splitlines()) == 1
+
+
+def test_audit_against_another_device_is_identity_drift_and_the_write_log_would_see_a_write() -> None:
+    with open_bus("sim:technosoft-ipos") as bus:
+        report = audit("samples/hdt/project.yaml", bus)
+        assert {d.address for d in report.drifts if d.kind == "identity"} == {"vendor_id", "product_code"}
+        assert bus.write_log == []
+        with pytest.raises(SdoAbort):  # the witness: a write, even one the drive refuses, is in the log
+            bus.slaves[0].sdo_download(0x1018, 1, b"\0\0\0\0")
+        assert len(bus.write_log) == 1

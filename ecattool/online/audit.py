@@ -95,9 +95,14 @@ def audit_drive(rd: Any, slave: Any, report: AuditReport, sw_checksums: bool = F
         report.drifts.append(Drift(name, rd.position, "unreadable", "identity", None, None, f"identity: {exc}"))
         ident = None
     if ident is not None:
-        for f in ("vendor_id", "product_code", "revision"):
+        check = rd.drive.identity  # what the project checks: vendor, product, revision exact/at-least/ignore
+        fields = [f for f, on in (("vendor_id", check.vendor), ("product_code", check.product),
+                                  ("revision", check.revision != "ignore")) if on]
+        for f in fields:
             want, got = getattr(dev_ident, f), getattr(ident, f)
-            if want != got and not (f == "revision" and want == 0):
+            if f == "revision" and (want == 0 or (check.revision == "at-least" and got >= want)):
+                continue
+            if want != got:
                 report.drifts.append(Drift(name, rd.position, "identity", f, f"0x{want:08X}", f"0x{got:08X}",
                                            f"{f} is 0x{got:08X} on the bus, the project's device has 0x{want:08X}"))
     for (index, sub, ca), cmd in expected_values(rd).items():

@@ -129,7 +129,8 @@ class SimLiveSlave:
 
     def _note_writes(self) -> None:
         for e in self.drive.events[self._seen:]:
-            if e.kind in ("sdo_download", "foe", "eeprom"):
+            # a write the drive refused was still sent: it counts
+            if e.kind in ("sdo_download", "foe", "eeprom") or (e.kind == "sdo_abort" and e.data.get("op") != "upload"):
                 self._log.append(f"slave {self.position}: {e.kind} {e.data}")
         self._seen = len(self.drive.events)
 
