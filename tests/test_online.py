@@ -299,3 +299,47 @@ def test_audit_against_another_device_is_identity_drift_and_the_write_log_would_
         with pytest.raises(SdoAbort):  # the witness: a write, even one the drive refuses, is in the log
             bus.slaves[0].sdo_download(0x1018, 1, b"\0\0\0\0")
         assert len(bus.write_log) == 1
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+
+@settings(max_examples=40)
+@given(header=st.binary(min_size=128, max_size=128),
+       cats=st.lists(st.tuples(st.integers(0, 0xFFFE), st.binary(max_size=40).map(lambda b: b + b"\0" * (len(b) % 2))),
+                     max_size=6),
+       tail=st.binary(max_size=64), width=st.sampled_from([4, 8]))
+def test_sii_read_takes_the_chain_to_its_end_marker(header: bytes, cats: list[tuple[int, bytes]], tail: bytes,
+                                                    width: int) -> None:
+    """Whatever the categories, the reader stops right after the end marker, reading 4 or 8 bytes at a time."""
+    from ecattool.online.live import read_sii
+
+    body = b"".join(t.to_bytes(2, "little") + (len(d) // 2).to_bytes(2, "little") + d for t, d in cats)
+    image = header + body + b"\xff\xff"
+    eeprom = image + tail
+    reads = []
+
+    def words(w: int) -> bytes:
+        reads.append(w)
+        return eeprom[2 * w:2 * w + width].ljust(width, b"\xff")
+
+    assert read_sii(words) == image
+    assert max(reads) * 2 < len(image)  # never a read that starts past the end marker
+
+
+@settings(max_examples=40)
+@given(st.sampled_from(["SINT", "INT", "DINT", "USINT", "UINT", "UDINT", "ULINT", "LINT"]), st.data())
+def test_typed_values_encode_and_decode_back(type_name: str, data: st.DataObject) -> None:
+    from ecattool.od.model import Entry
+    from ecattool.od.types import require
+    from ecattool.online.dictionary import decode, encode
+
+    dt = require(type_name)
+    lo, hi = dt.range()
+    value = data.draw(st.integers(lo, hi))
+    e = Entry(0, "x", dt, dt.bits)
+    raw = encode(e, str(value), 0x2000, 0)
+    assert len(raw) == dt.bits // 8 and decode(e, raw) == value
+    assert encode(e, hex(value) if value >= 0 else str(value), 0x2000, 0) == raw
+    with pytest.raises(Exception, match="range|fit"):
+        encode(e, str(hi + 1), 0x2000, 0)

@@ -105,11 +105,12 @@ def read_sii(read_words: Any, max_bytes: int = SII_MAX_BYTES) -> bytes:
     fill(SII_HEADER_BYTES)
     offset = SII_HEADER_BYTES
     while offset + 4 <= max_bytes:
-        fill(offset + 4)
+        fill(offset + 2)  # the type first: nothing is read past an end marker
         cat_type = int.from_bytes(data[offset:offset + 2], "little")
         if cat_type == 0xFFFF:
             offset += 2
             break
+        fill(offset + 4)
         size_words = int.from_bytes(data[offset + 2:offset + 4], "little")
         offset += 4 + 2 * size_words
         fill(min(offset, max_bytes))
