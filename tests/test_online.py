@@ -17,6 +17,7 @@ from ecattool.online.pysoem_bus import open_pysoem
 from ecattool.online.sii_access import write_checks
 from ecattool.project.lint import lint_project
 from ecattool.sii.crc import preamble_crc
+from ecattool.sii.image import parse_header
 from ecattool.target.sim import SimTarget
 from tests import fake_pysoem
 from tests.conftest import ROOT, run
@@ -148,6 +149,8 @@ def test_sii_write_refuses_a_bad_crc_and_a_wrong_identity(tmp_path, capsys: pyte
     assert any("CRC-8" in p for p in write_checks(bytes(bad_crc), good, "x.bin"))
     assert any("vendor_id" in p for p in write_checks(bytes(other), good, "x.bin"))
     assert write_checks(bytes(other), good, "x.bin", force=True) == []
+    big = bytes(good) + b"\xff" * (parse_header(good).eeprom_bytes + 2 - len(good))
+    assert any("do not fit the slave's" in p for p in write_checks(big, good, "x.bin"))
     for image, word in ((bad_crc, "CRC-8"), (other, "vendor_id")):
         path, backup = tmp_path / "new.bin", tmp_path / "old.bin"
         path.write_bytes(bytes(image))

@@ -34,6 +34,12 @@ def write_checks(image_bytes: bytes, current: bytes | None, source: str, force: 
             problems.append(f"{source}: {f.message} [{f.rule}]")
     if not image.end_marker:
         problems.append(f"{source}: the category chain has no end marker 0xFFFF")
+    if current is not None and len(current) >= 128:
+        from ecattool.sii.image import parse_header
+
+        size = parse_header(current).eeprom_bytes  # the EEPROM the slave's own image declares
+        if parse_header(current).size_word != 0xFFFF and len(image_bytes) > size:
+            problems.append(f"{source}: {len(image_bytes)} bytes do not fit the slave's {size}-byte EEPROM")
     if current is not None and not force:
         from ecattool.sii.image import parse_header
 
