@@ -149,3 +149,19 @@ def test_frames_lost_half_way_give_one_line_and_no_backup(result: dict[str, Any]
     assert b["returncode"] == 1 and len(lines) == 1 and "Traceback" not in b["stderr"], b
     assert any(w in lines[0] for w in ("SDO timeout", "no reply", "no answer", "did not come back")), lines
     assert not (Path(result["work"]) / "lost").exists()
+
+
+def test_a_master_program_installs_the_projects_startup_list(result: dict[str, Any]) -> None:
+    """install_pysoem / install_kickcat: the IO map each master reads from the drive is the project's mapping."""
+    from ecattool.commission.runner import commission
+    from ecattool.project.lint import lint_project
+    from ecattool.target.sim import SimTarget
+
+    r = result["install"]
+    assert "pysoem_error" not in r and "kickcat_error" not in r, r
+    project = ROOT / "samples" / "controltechniques" / "project.yaml"  # its mapping is not the drive's default
+    target = SimTarget.from_devices([rd.device for rd in lint_project(project).drives])
+    commission(project, target)  # the same startup list, in process: the sizes it leads to
+    want = [list(d.process_image_sizes()) for d in target.slaves()]
+    assert r["pysoem_positions"] == r["kickcat_positions"] == [0]
+    assert r["pysoem_sizes"] == r["kickcat_sizes"] == want == [[6, 7]]  # the default would be [4, 4]

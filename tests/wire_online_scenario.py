@@ -105,6 +105,49 @@ def technosoft(work: Path) -> dict[str, Any]:
     return r
 
 
+#: the project whose startup list a master program installs
+INSTALL_PROJECT = "samples/controltechniques/project.yaml"
+
+
+def install() -> dict[str, Any]:
+    """A master program that imports ecattool: the project's startup list attached to pysoem's slaves (written
+    by config_map), and written through KickCAT's mailboxes before create_mapping; the IO map sizes each master
+    then reads from the drives show the project's PDO mapping arrived."""
+    r: dict[str, Any] = {}
+    server, _ = start_server([INSTALL_PROJECT])
+    try:
+        import pysoem
+
+        from ecattool.online.install import install_pysoem
+
+        master = pysoem.Master()
+        master.open(MASTER_IF)
+        master.config_init()
+        r["pysoem_positions"] = install_pysoem(INSTALL_PROJECT, master)
+        master.config_map()
+        r["pysoem_sizes"] = [[len(s.output), len(s.input)] for s in master.slaves]
+        master.close()
+    except Exception as exc:  # noqa: BLE001 - reported, the test fails on it
+        r["pysoem_error"] = f"{type(exc).__name__}: {exc}"
+    finally:
+        r["server_pysoem"] = stop_server(server)
+    server, _ = start_server([INSTALL_PROJECT])
+    try:
+        from ecattool.online.install import install_kickcat
+        from ecattool.online.kickcat_bus import open_kickcat
+
+        live = open_kickcat(MASTER_IF)  # bus init with the timeouts the virtual bus needs
+        bus = live.slaves[0]._bus
+        r["kickcat_positions"] = install_kickcat(INSTALL_PROJECT, bus)
+        bus.create_mapping()
+        r["kickcat_sizes"] = [[s.output_size, s.input_size] for s in bus.slaves()]
+    except Exception as exc:  # noqa: BLE001
+        r["kickcat_error"] = f"{type(exc).__name__}: {exc}"
+    finally:
+        r["server_kickcat"] = stop_server(server)
+    return r
+
+
 #: the server stops answering after this many frames: enough for SOEM's bus init (a few hundred), far too few
 #: for a backup (thousands): the bus goes quiet half-way through it
 LOST_AFTER_FRAMES = 3000
@@ -126,4 +169,4 @@ if __name__ == "__main__":
     master_priority()
     work = Path(sys.argv[1])
     print(json.dumps({"four": four(work), "sdo_info": sdo_info(), "technosoft": technosoft(work),
-                      "lost_frames": lost_frames(work)}))
+                      "lost_frames": lost_frames(work), "install": install()}))
