@@ -346,3 +346,12 @@ def test_typed_values_encode_and_decode_back(type_name: str, data: st.DataObject
     assert encode(e, hex(value) if value >= 0 else str(value), 0x2000, 0) == raw
     with pytest.raises(Exception, match="range|fit"):
         encode(e, str(hi + 1), 0x2000, 0)
+
+
+def test_an_eds_given_as_the_device_types_the_objects(capsys: pytest.CaptureFixture[str]) -> None:
+    from tests.conftest import corpus_path
+
+    eds = str(corpus_path("eds", "technosoft_iPOS.D.v1.04.eds"))
+    code, out, _ = run(capsys, "sdo", "read", "0x6060:00", "--target", "sim:technosoft-ipos", "--device", eds, "--json")
+    got = json.loads(out)
+    assert code == 0 and got["dictionary"] == "device" and got["type"] == "SINT"

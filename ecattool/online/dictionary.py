@@ -16,8 +16,8 @@ from ecattool.online.library import Library, Match, family_device, family_match
 
 @dataclass
 class Typed:
-    """A slave's dictionary and where it came from (``esi``, ``eds``, ``family``, ``project``, ``sdo-info`` or
-    ``none``)."""
+    """A slave's dictionary and where it came from: ``device`` (given: ``--device``, or the project's), ``esi`` or
+    ``eds`` (the library), ``family``, ``sdo-info`` (the slave's own), or ``none``."""
 
     dictionary: ObjectDictionary
     source: str
@@ -39,7 +39,7 @@ def typed(slave: Any, library: Library | None = None, device: Device | None = No
           sdo_info: bool = True) -> Typed:
     """The dictionary of ``slave`` (see the module text for the order of the sources)."""
     if device is not None:
-        return Typed(device.dictionary, "project", Match("project", device.source, device.type_name, True), device)
+        return Typed(device.dictionary, "device", Match("device", device.source, device.type_name, True), device)
     ident, match = identify(slave, library)
     if match is not None:
         dev = library.device(match) if match.kind == "esi" and library is not None else family_device(match)

@@ -32,8 +32,8 @@ class LibraryDevice:
 
 @dataclass(frozen=True, slots=True)
 class Match:
-    """What a slave's identity matched: ``kind`` is ``esi`` (a library file), ``family`` (a built-in profile),
-    ``project`` (the project's device) or ``unknown``; ``exact`` is False where only vendor and product match."""
+    """What a slave's identity matched: ``kind`` is ``esi`` (a library file), ``family`` (a built-in profile) or
+    ``device`` (one given); ``exact`` is False where only vendor and product match."""
 
     kind: str
     source: str
