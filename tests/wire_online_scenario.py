@@ -50,6 +50,8 @@ def four(work: Path) -> dict[str, Any]:
         r["write_kickcat"] = ecattool("sdo", "write", "0x6081:00", "4321", "--target", KICKCAT, "--slave", "0")
         r["read_back"] = ecattool("sdo", "read", "0x6081:00", "--target", PYSOEM, "--slave", "0", "--json")
         r["abort"] = ecattool("sdo", "write", "0x1018:01", "5", "--target", PYSOEM, "--slave", "0")
+        r["abort_kickcat"] = ecattool("sdo", "read", "0x5FFF:00", "--target", KICKCAT, "--slave", "0")
+        r["abort_kickcat_write"] = ecattool("sdo", "write", "0x1018:01", "5", "--target", KICKCAT, "--slave", "0")
         r["info"] = ecattool("sdo", "info", "--target", PYSOEM, "--slave", "2", "--json")
         sii = work / "hdt.bin"
         r["sii_read"] = ecattool("sii", "read", "--target", PYSOEM, "--slave", "0", "-o", str(sii))

@@ -6,6 +6,11 @@ not: the SII EEPROM (no EEPROM access is bound, so no SII identity, ``sii read/w
 words; the identity is read from 1018h), the AL status code, and the SDO Information service's OD list (only
 ``read_object_description``/``read_entry_description`` of an index already known are bound). Those raise
 :class:`~ecattool.online.live.Unsupported`.
+
+SDO aborts: against the virtual bus (whose abort frames SOEM decodes with their codes), KickCAT 2.5's ``read_sdo``
+raises ``RuntimeError("… Error while reading SDO - Timeout")`` for an aborted upload, and the message of a refused
+download stays RUNNING; so through KickCAT an abort shows as an SDO timeout, without its code. A message status
+that does carry an abort code is reported as one.
 """
 
 from __future__ import annotations
@@ -119,13 +124,14 @@ class KickcatLiveSlave:
 
 
 @contextmanager
-def _stdout_to_stderr() -> Iterator[None]:
+def _quiet_stdout() -> Iterator[None]:
     """KickCAT prints "Opening nominal interface…" on the process's stdout (fd 1), where a command's --json
-    document goes: while it opens the link, fd 1 is the stderr stream."""
+    document goes (and an error stays one line on stderr): while it opens the link, fd 1 is /dev/null."""
     sys.stdout.flush()
     saved = os.dup(1)
+    null = os.open(os.devnull, os.O_WRONLY)
     try:
-        os.dup2(2, 1)
+        os.dup2(null, 1)
         yield
     finally:
         try:
@@ -134,13 +140,14 @@ def _stdout_to_stderr() -> Iterator[None]:
             pass
         os.dup2(saved, 1)
         os.close(saved)
+        os.close(null)
 
 
 def open_kickcat(ifname: str, module: ModuleType | None = None) -> LiveBus:
     """A KickCAT master on ``ifname``, every slave in PRE-OP."""
     kc = module or _import()
     try:
-        with _stdout_to_stderr():
+        with _quiet_stdout():
             link = kc.create_link(ifname, "")
     except Exception as exc:  # noqa: BLE001 - RuntimeError/OSError from the binding
         raise TargetError(f"cannot open EtherCAT interface {ifname!r} with KickCAT: {exc}") from None
