@@ -89,6 +89,62 @@ class NetworkInterfaceNotOpenError(Exception):
     pass
 
 
+class EepromError(Exception):
+    def __init__(self, message):
+        self.message = message
+
+
+class SdoInfoError(Exception):
+    def __init__(self, message):
+        self.message = message
+
+
+class CoeObjectEntry:
+    """An entry of SOEM's OE list (``pysoem.CdefCoeObjectEntry``)."""
+
+    def __init__(self, name, data_type, bit_length, obj_access):
+        self.name, self.data_type, self.bit_length, self.obj_access = (name.encode("latin-1", "replace"), data_type, bit_length,
+                                                                      obj_access)
+
+
+class CoeObject:
+    """An object of SOEM's OD list (what ``slave.od`` returns), as the virtual bus shows it to the real pysoem
+    (tests/test_wire_mailbox.py): names as bytes; a VAR has its data type and no entries; an ARRAY/RECORD lists
+    every sub-index up to the highest."""
+
+    def __init__(self, index, object_code, name, data_type=0, entries=()):
+        self.index, self.object_code, self.name = index, object_code, name.encode("latin-1", "replace")
+        self.data_type = data_type
+        self.entries = list(entries)
+
+
+def _object_access(e):
+    bits = 0
+    for i, s in enumerate((EcState.PREOP, EcState.SAFEOP, EcState.OP)):
+        bits |= (1 << i) if s in e.access.read else 0
+        bits |= (8 << i) if s in e.access.write else 0
+    return bits | (0x40 if e.rx_mappable else 0) | (0x80 if e.tx_mappable else 0)
+
+
+def soem_od(dictionary):
+    """The OD list SOEM reads over the SDO Information service, from a drive's dictionary."""
+    codes = {"VAR": 7, "ARRAY": 8, "RECORD": 9}
+    out = []
+    for obj in dictionary:
+        code = codes.get(obj.object_code.name, 7)
+        if code == 7:
+            e = obj.entry(0)
+            out.append(CoeObject(obj.index, 7, obj.name, e.datatype.code if e and e.datatype else 0))
+            continue
+        entries = []
+        for sub in range(obj.max_subindex + 1):
+            e = obj.entry(sub)
+            entries.append(CoeObjectEntry("", 0, 0, 0) if e is None else
+                           CoeObjectEntry(e.name, e.datatype.code if e.datatype else 0, e.bit_size, _object_access(e)))
+        out.append(CoeObject(obj.index, code, obj.name, entries=entries))
+    return out
+
+
 class CdefSlave:
     """``pysoem.CdefSlave`` backed by a simulated drive (``ecattool.sim.Drive``)."""
 
@@ -109,6 +165,10 @@ class CdefSlave:
         self.pending_emergencies = []  # (error_code, error_reg) the next mailbox transfer pops
         self.dc = None  # what dc_sync wrote: (activation 0x0981, sync0 cycle, shift, sync1 cycle)
         self.config_func = None  # pysoem: called by config_map() with the 0-based position (SOEM's PO2SOconfig)
+        from ecattool.sii.builder import build
+
+        self.sii = bytearray(build(drive.device).to_bytes())  # the EEPROM words (what sim serve gives the ESC)
+        self.sii_writes = []  # (word address, 2 bytes) in the order they were written
 
     # -- identity and images (read-only properties, as in pysoem) --
     man = property(lambda self: self._man)
@@ -169,6 +229,27 @@ class CdefSlave:
         if not isinstance(data, bytes):
             raise TypeError(f"Argument 'data' has incorrect type (expected bytes, got {type(data).__name__})")
         self._mailbox(self.drive.sdo_download, index, subindex, data, bool(ca))
+
+    # -- SII EEPROM and SDO Information --
+    def eeprom_read(self, word_address, timeout=20000):
+        self._master.check_context_is_initialized()
+        if not 0 <= 2 * word_address < len(self.sii):
+            raise EepromError(f"EEPROM read at word {word_address} failed")
+        return bytes(self.sii[2 * word_address:2 * word_address + 4]).ljust(4, b"\xff")
+
+    def eeprom_write(self, word_address, data, timeout=20000):
+        self._master.check_context_is_initialized()
+        if len(data) != 2:
+            raise AttributeError("data size must be 2")
+        if not 0 <= 2 * word_address < len(self.sii):
+            raise EepromError(f"EEPROM write at word {word_address} failed")
+        self.sii[2 * word_address:2 * word_address + 2] = data
+        self.sii_writes.append((word_address, bytes(data)))
+
+    @property
+    def od(self):
+        self._master.check_context_is_initialized()
+        return soem_od(self.drive.device.dictionary)
 
     def add_emergency_callback(self, callback):
         self._master.check_context_is_initialized()
@@ -358,7 +439,8 @@ def make_module(drives, interfaces=("eth0", "eth-test")):
     return types.SimpleNamespace(
         Master=Master, CdefMaster=Master, CdefSlave=CdefSlave, SdoError=SdoError, Emergency=Emergency,
         MailboxError=MailboxError, PacketError=PacketError, ConfigMapError=ConfigMapError, WkcError=WkcError,
-        NetworkInterfaceNotOpenError=NetworkInterfaceNotOpenError, NONE_STATE=NONE_STATE, INIT_STATE=INIT_STATE,
+        NetworkInterfaceNotOpenError=NetworkInterfaceNotOpenError, EepromError=EepromError,
+        SdoInfoError=SdoInfoError, NONE_STATE=NONE_STATE, INIT_STATE=INIT_STATE,
         PREOP_STATE=PREOP_STATE, BOOT_STATE=BOOT_STATE, SAFEOP_STATE=SAFEOP_STATE, OP_STATE=OP_STATE,
         STATE_ACK=STATE_ACK, STATE_ERROR=STATE_ERROR)
 

@@ -64,6 +64,10 @@ NO_JSON: dict[tuple[str, ...], str] = {
     ("startup", "convert"): "writes the startup list in --format (json is one) to -o",
     ("startup", "export"): "writes the startup list in --format (json is one)",
     ("sw", "build"): "writes a .sw image (-o required)",
+    ("sdo", "dump"): "writes a JSON dictionary snapshot (JSON is its only form)",
+    ("sii", "read"): "writes a binary SII image (-o required)",
+    ("backup",): "writes a folder (-o required) of images and JSON snapshots; prints the names of its files",
+    ("sii", "write"): "writes to a slave's EEPROM; prints one line (a refusal is an error)",
     ("sw", "foe"): "writes a FoE file (-o required)",
     ("sw", "from-foe"): "writes .sw text",
     ("sw", "patch"): "writes the patched .sw image (-o required)",
@@ -185,6 +189,19 @@ HAPPY: dict[tuple[str, ...], list[tuple[object, ...]]] = {
     ("sw", "patch"): [(SW, "-p", PARAMS, "--set", "PWMPER=2251", "-o", Out("patched.sw"))],
     ("sw", "diff"): [(SW, SW, "-p", PARAMS)],
     ("sw", "build"): [(In("swspec", "samples/sw/build.yaml"), "-o", Out("built.sw"))],
+    ("bus", "scan"): [("--target", "sim:hdt,technosoft-ipos", "--library", "samples/generic_esi")],
+    ("sdo", "read"): [("0x1018:01", "--target", "sim:hdt")],
+    ("sdo", "write"): [("0x6060:00", "1", "--target", "sim:technosoft-ipos", "--device", "technosoft-ipos")],
+    ("sdo", "info"): [("--target", "sim:hdt")],
+    ("sdo", "diff"): [(In("snapshot", "gen:hdt.dict.json"), In("snapshot", "gen:hdt.dict.json"))],
+    ("sdo", "dump"): [("--target", "sim:hdt", "-o", Out("dict.json"))],
+    ("sii", "read"): [("--target", "sim:hdt", "-o", Out("slave.bin"))],
+    ("sii", "write"): [(SII, "--target", "sim:hdt", "--force", "--backup", Out("old.bin"))],
+    ("audit",): [(In("project", "gen:plain.yaml"), "--target", "sim", "-o", Out("audit.txt"), "--html",
+                  Out("audit.html"))],
+    ("backup",): [(In("project", "gen:plain.yaml"), "--target", "sim", "-o", Out("backup-folder"))],
+    ("sw", "upload"): [("--like", SW, "--target", "sim", "--preload", SW, "-o", Out("back.sw")),
+                       ("--project", In("project", "gen:machine.yaml"), "--preload", SW, "-o", Out("back.sw"))],
 }
 
 #: One real file of every input kind the valid invocations use (the first In of that kind): the "other:KIND"
@@ -207,10 +224,12 @@ def gen(tmp_path_factory: pytest.TempPathFactory) -> Path:
     d = tmp_path_factory.mktemp("gen")
     (d / "mapping.yaml").write_text(MAPPING)
     (d / "steps.yaml").write_text(STEPS)
+    (d / "plain.yaml").write_text("ecattool: 1\nname: m\ndrives:\n  - name: y\n    device: {profile: hdt}\n")
     if have_corpus():  # else the tests that use it (and machine.yaml, which names it) skip in resolve()
         (d / "axis.sw").write_bytes(corpus_path("sw", "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw").read_bytes())
     (d / "machine.yaml").write_text("ecattool: 1\nname: m\ndrives:\n  - name: y\n    device: {profile: technosoft-ipos}\n"
                                     "    sw: axis.sw\n")
+    cli.main(["sdo", "dump", "--target", "sim:hdt", "-o", str(d / "hdt.dict.json")], standalone_mode=False)
     cli.main(["scale", "startup", str(ROOT / SPEC.where), "--format", "csv", "-o", str(d / "factors.csv")],
              standalone_mode=False)
     return d
@@ -249,7 +268,7 @@ def argv(inv: tuple[object, ...], gen: Path, out_dir: Path, swap: dict[int, Path
 
 
 #: parameters naming a file a command writes (besides -o): written atomically and swept like -o
-OUTPUT_PARAMS = {"output", "svg", "report", "html"}
+OUTPUT_PARAMS = {"output", "svg", "report", "html", "backup"}
 
 
 def _is_read_path(p: click.Parameter) -> bool:

@@ -11,7 +11,8 @@ from tests import fake_pysoem
 pysoem = pytest.importorskip("pysoem")
 
 #: attributes of the fake that exist only for the tests (the simulated drive behind a slave, call records)
-TEST_ONLY = {"drive", "pending_emergencies", "dc", "map_calls", "dc_configured", "opened", "clock", "sent_at"}
+TEST_ONLY = {"drive", "pending_emergencies", "dc", "map_calls", "dc_configured", "opened", "clock", "sent_at", "sii",
+             "sii_writes"}
 
 
 def params(fn):
@@ -30,7 +31,7 @@ def test_names_and_constants():
 
 
 @pytest.mark.parametrize("name", ["SdoError", "Emergency", "MailboxError", "PacketError", "ConfigMapError",
-                                  "WkcError", "NetworkInterfaceNotOpenError"])
+                                  "WkcError", "NetworkInterfaceNotOpenError", "EepromError", "SdoInfoError"])
 def test_exceptions(name):
     fake, real = getattr(fake_pysoem, name), getattr(pysoem, name)
     assert issubclass(real, Exception)
@@ -69,3 +70,9 @@ def test_the_adapter_uses_only_real_names():
     for name in fake_pysoem.public_surface():
         if f"mod.{name}" in source or f'"{name}"' in source:
             assert hasattr(pysoem, name), name
+
+
+def test_the_od_objects_of_the_fake_have_the_real_entry_attributes():
+    """``slave.od`` entries: the attributes ecattool.online reads exist on pysoem's CdefCoeObjectEntry."""
+    for attr in vars(fake_pysoem.CoeObjectEntry("", 0, 0, 0)):
+        assert hasattr(pysoem.CdefCoeObjectEntry, attr), attr

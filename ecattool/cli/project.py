@@ -50,7 +50,8 @@ def schema(output: str | None, check: str | None) -> None:
 Examples:
   ecattool project new --profile technosoft-ipos -o machine.yaml
   ecattool project new --esi drives/elmo.xml --device 0x00030924:1 -o machine.yaml
-  ecattool project new --esi beckhoff_EL1xxx.xml --device EL1008 --policy newest -o io.yaml""",
+  ecattool project new --esi beckhoff_EL1xxx.xml --device EL1008 --policy newest -o io.yaml
+  ecattool project new --from-bus pysoem:eth0 --library esi/ -o machine.yaml""",
 )
 @click.option("--profile", help="Built-in drive family (technosoft-ipos, hdt, controltechniques).")
 @click.option("--product", help="Product of the family.")
@@ -58,14 +59,30 @@ Examples:
 @shared_option("--device", "select", metavar="SEL", help="Device in the ESI (type name, product[:revision] or list index).")
 @policy_option
 @click.option("--name", default=None, help="Name of the first drive (default: axis1, or io1 for an I/O slave).")
+@click.option("--from-bus", "from_bus", metavar="TARGET",
+              help="Every slave of a live bus (pysoem:IF, kickcat:IF, sim:PROFILE,…): devices, PDO mappings and the "
+                   "current values of the usual objects, as read from the drives.")
+@click.option("--library", type=click.Path(file_okay=False), metavar="DIR",
+              help="With --from-bus: a folder of ESI/EDS files to match the slaves against.")
 @output_option()
 def new(profile: str | None, product: str | None, esi_path: str | None, select: str | None, policy: str,
-        name: str | None, output: str | None) -> None:
+        name: str | None, from_bus: str | None, library: str | None, output: str | None) -> None:
     """Write a minimal project file for one drive that lints clean (a vendor ESI's own flaws aside, which it
     points out with a commented-out disable_rules): the device is resolved first (unknown
     profile, product, ESI or selector: exit 1), and the PP move is only proposed where the drive has mode 1."""
+    if from_bus is not None:
+        if profile is not None or esi_path is not None:
+            raise click.UsageError("give --from-bus, or --profile/--esi, not both")
+        from ecattool.online.from_bus import project_from_bus
+        from ecattool.online.library import Library
+        from ecattool.online.targets import open_bus
+
+        with open_bus(from_bus) as live:
+            text = project_from_bus(live, Library(library) if library else None, output)
+        write_output(output, text)
+        return
     if (profile is None) == (esi_path is None):
-        raise click.UsageError("give --profile or --esi")
+        raise click.UsageError("give --profile or --esi (or --from-bus)")
     from pathlib import Path
 
     from ecattool.project.skeleton import esi_flaws, new_project, resolve

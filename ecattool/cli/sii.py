@@ -287,3 +287,54 @@ def diff_cmd(a: str, b: str, as_json: bool) -> None:
             click.echo(str(d))
         click.echo(f"{len(diffs)} difference(s)" if diffs else "no differences")
     raise SystemExit(1 if diffs else 0)
+
+
+# ------------------------------------------------------------------------------------------ on a live bus
+@sii.command("read", epilog="""\b
+Examples:
+  ecattool sii read --target pysoem:eth0 --slave 1 -o axis2.sii.bin
+  ecattool sii read --target sim:hdt -o hdt.bin""")
+@click.option("--target", required=True, metavar="TARGET",
+              help="pysoem:IF, or the simulator sim:PROFILE,ESI… (KickCAT's binding has no SII access).")
+@click.option("--slave", type=int, default=0, show_default=True, help="Position of the slave on the bus.")
+@output_option(required=True, help="The image file (binary; written atomically, never over an input).")
+def read_cmd(target: str, slave: int, output: str) -> None:
+    """Read a slave's SII EEPROM (the fixed area and the category chain to its end marker) into a file."""
+    from ecattool.online.targets import open_bus
+
+    with open_bus(target) as live:
+        data = live.slave(slave).sii_read()
+    write_output(output, data)
+
+
+@sii.command("write", epilog="""\b
+Examples:
+  ecattool sii write fixed.bin --target pysoem:eth0 --slave 1 --backup old.bin
+  ecattool sii write other-device.bin --target pysoem:eth0 --force --backup old.bin
+\b
+Checks before writing (as IgH's 'ethercat sii_write'): a whole number of words, the CRC of the configuration
+area, the category chain up to its end marker, the size, and the identity against the slave's (unless --force).""")
+@click.argument("image", type=InputFile())
+@click.option("--target", required=True, metavar="TARGET",
+              help="pysoem:IF, or the simulator sim:PROFILE,ESI… (KickCAT's binding has no SII access).")
+@click.option("--slave", type=int, default=0, show_default=True, help="Position of the slave on the bus.")
+@click.option("--backup", required=True, type=click.Path(dir_okay=False), metavar="FILE",
+              help="Where the slave's current image is written before anything is written to it.")
+@click.option("--force", is_flag=True, help="Write even when the image's identity is not the slave's.")
+def write_cmd(image: str, target: str, slave: int, backup: str, force: bool) -> None:
+    """Write IMAGE to a slave's SII EEPROM, after the checks and a back-up of the old image. Exit status 1 when a
+    check refuses the image: one line naming the first problem, and nothing is written (not even the back-up)."""
+    from ecattool.fileio import read_bytes, refuse_input
+    from ecattool.online.targets import open_bus
+    from ecattool.online.sii_access import sii_write
+
+    data = read_bytes(image)
+    refuse_input(backup, (image,))
+    with open_bus(target) as live:
+        problems = sii_write(live.slave(slave), data, image, backup, force)
+    if problems:
+        from ecattool.errors import InputError
+
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise InputError(f"refused, nothing written: {problems[0]}{more}")
+    click.echo(f"written; the old image is in {backup}")

@@ -190,6 +190,11 @@ def _target_and_image(file: str | None, target: str | None, slave: int | None, p
             raise click.UsageError("give the .sw FILE (or --project with a drive that has 'sw:')")
         image = _image(file)
     spec = target or "sim"
+    return _open_preloaded(spec, slave, device, preload), image, name or "", spec
+
+
+def _open_preloaded(spec: str, slave: int | None, device: Any, preload: str | None) -> Any:
+    """The slave of ``spec``; on the simulator with ``preload`` programmed into its EEPROM first."""
     tgt = _open_target(spec, slave or 0, device)
     if preload:
         if spec != "sim":
@@ -198,7 +203,7 @@ def _target_and_image(file: str | None, target: str | None, slave: int | None, p
 
         if not download(_image(preload), tgt, reset=True).ok:
             raise InputError(f"could not preload {preload} into the simulator", Location(preload))
-    return tgt, image, name or "", spec
+    return tgt
 
 
 def _checks_table(title: str, checks: list[Any]) -> Any:
@@ -414,3 +419,48 @@ def build(spec: str, output: str) -> None:
     named: list[Path] = []  # the files the spec names (base, blocks, parameters): -o must not be one of them
     image = build_image(spec, named)
     write_output(output, write(image), (spec, *map(str, named)))
+
+
+@sw.command(epilog="""\b
+Examples:
+  ecattool sw upload --project machine.yaml --target pysoem:eth0 -o axis1-backup.sw
+  ecattool sw upload --like axis1.sw --target pysoem:eth0 --slave 1 -o axis2.sw
+  ecattool sw upload --range 0x5638-0x5A37 --target sim --preload axis1.sw -o back.sw --json""")
+@click.option("--like", "like", type=InputFile(), help="Read the block ranges of this .sw.")
+@click.option("--range", "ranges", multiple=True, metavar="START-END",
+              help="An EEPROM word range to read (inclusive), e.g. 0x5638-0x5A37; repeatable.")
+@_target_options
+@output_option(help="The .sw file to write (CRLF, as the vendor tools write it); default: stdout, or with --json "
+                   "inside the JSON document.")
+@json_option
+def upload(like: str | None, ranges: tuple[str, ...], target: str | None, slave: int | None, project: str | None,
+           drive_name: str | None, preload: str | None, allow_errors: bool, output: str | None, as_json: bool) -> None:
+    """Read a Technosoft drive's EEPROM setup into a .sw: the block ranges of the project's .sw (--project), of
+    another .sw (--like) or given (--range). Every block is checked by the drive's own checksum (2069h/206Ah);
+    the file is written only when all of them match (exit status 1 otherwise)."""
+    from ecattool.sw.image import write
+    from ecattool.sw.upload import parse_range, upload as do_upload
+
+    ref = _image(like) if like else None
+    device = None
+    if project is not None:
+        rd, project_target = _project_drive(project, drive_name, allow_errors)
+        device = rd.device
+        target = target or project_target
+        slave = rd.position if slave is None else slave
+        ref = ref or rd.sw_image
+    spans = [parse_range(r) for r in ranges] or ([(b.start, b.end) for b in ref.blocks] if ref is not None else [])
+    spec = target or "sim"
+    image, checks = do_upload(_open_preloaded(spec, slave, device, preload), spans)
+    ok = all(c.ok for c in checks)
+    text = write(image)
+    to_file = output not in (None, "-")
+    if ok and (to_file or not as_json):
+        write_output(output, text, tuple(x for x in (like, project, preload) if x))
+    if as_json:
+        print_json({"ok": ok, "output": output if ok and to_file else None, "blocks": [c.to_json() for c in checks],
+                    **({} if to_file or not ok else {"sw": text.decode("ascii", "replace")})})
+    elif to_file:
+        console().print(_checks_table(f"read from {spec}" + ("" if ok else ": NOT written"), checks))
+    if not ok:
+        sys.exit(1)

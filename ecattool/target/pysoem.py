@@ -117,6 +117,11 @@ class PysoemSlave:
     def _mod(self) -> ModuleType:
         return self._master.pysoem
 
+    @property
+    def raw(self) -> Any:
+        """The pysoem slave itself (SII EEPROM, SDO Information, AL status: ``ecattool.online`` reads them)."""
+        return self._slave
+
     def identity(self) -> Identity:
         return Identity(int(self._slave.man), int(self._slave.id), int(self._slave.rev))
 

@@ -1,0 +1,55 @@
+"""``ecattool audit``: compare what the drives hold with the project."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from ecattool.cli.common import dump_json, file_output_option, output_option, write_output
+from ecattool.cli.online import project_bus, target_option
+from ecattool.cli.paths import InputFile
+
+
+@click.command(epilog="""\b
+Examples:
+  ecattool audit machine.yaml --target pysoem:eth0
+  ecattool audit machine.yaml --target pysoem:eth0 --format sarif -o audit.sarif
+  ecattool audit machine.yaml --target sim --json --html audit.html""")
+@click.argument("project", type=InputFile())
+@target_option()
+@click.option("--format", "fmt", type=click.Choice(["text", "json", "sarif"]), default="text", show_default=True,
+              help="Report format.")
+@click.option("--json", "as_json", is_flag=True, help="Same as --format json.")
+@click.option("--sw-checksums", is_flag=True,
+              help="Also have each Technosoft drive checksum its .sw blocks (writes the request object 2069h; "
+                   "without this flag the audit never writes).")
+@output_option()
+@file_output_option("--html", "html", "Also write the drift report as an HTML page (the report extra).")
+def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool, output: str | None,
+          html: str | None) -> None:
+    """Read back every object the project's startup list would write, and each drive's identity, and report
+    where the drives differ from the project (drift). Reads only. Exit status 1 on drift."""
+    from ecattool.online.audit import audit as do_audit
+
+    with project_bus(project, target) as live:
+        report = do_audit(project, live, sw_checksums=sw_checksums)
+    fmt = "json" if as_json else fmt
+    if fmt == "json":
+        text = dump_json(report.to_json()) + "\n"
+    elif fmt == "sarif":
+        from ecattool.project.report import to_sarif
+
+        text = dump_json(to_sarif(report.findings())) + "\n"
+    else:
+        lines = [f"{project} on {target}: {report.checked} values checked, "
+                 + ("no drift" if report.ok else f"{len(report.drifts)} drifted")]
+        lines += [f"  {d.drive} (slave {d.position}) {d.address}: {d.message}" for d in report.drifts]
+        text = "\n".join(lines) + "\n"
+    write_output(output, text, (project,))
+    if html is not None:
+        from ecattool.report.audit import audit_html
+
+        write_output(html, audit_html(report), (project,))
+    if not report.ok:
+        sys.exit(1)

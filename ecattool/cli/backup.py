@@ -1,0 +1,31 @@
+"""``ecattool backup``: what the drives hold, into one folder."""
+
+from __future__ import annotations
+
+import click
+
+from ecattool.cli.common import console
+from ecattool.cli.online import project_bus, target_option
+from ecattool.cli.paths import InputFile
+
+
+@click.command(epilog="""\b
+Examples:
+  ecattool backup machine.yaml --target pysoem:eth0 -o backup-2026-11-26
+  ecattool backup machine.yaml --target sim -o /tmp/sim-backup""")
+@click.argument("project", type=InputFile())
+@target_option()
+@click.option("-o", "--output", "folder", required=True, type=click.Path(), metavar="DIR",
+              help="A new folder (it must not exist; it appears complete or not at all).")
+def backup(project: str, target: str, folder: str) -> None:
+    """Per drive of the project: its SII image, a snapshot of its dictionary and (Technosoft, where the project
+    has a .sw) its EEPROM setup read back into a .sw, all in one new folder."""
+    from ecattool.online.backup import backup as do_backup
+    with project_bus(project, target) as live:
+        report = do_backup(project, live, folder)
+    c = console()
+    c.print(f"{report.folder}: {len(report.files)} files")
+    for f in report.files:
+        c.print(f"  {f}")
+    for s in report.skipped:
+        c.print(f"  skipped: {s}")

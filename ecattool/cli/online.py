@@ -1,0 +1,71 @@
+"""Options and helpers shared by the commands that read a live bus (``bus``, ``sdo``, ``audit``, ``sii read/write``)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import click
+
+TARGET_HELP = ("Where the bus is: pysoem:IF or kickcat:IF (a real master on a network interface), or the simulator: "
+               "sim:PROFILE,ESI… (e.g. sim:hdt,technosoft-ipos).")
+
+
+def target_option(required: bool = True) -> Callable[..., Any]:
+    return click.option("--target", "target", required=required, metavar="TARGET", help=TARGET_HELP)
+
+
+def slave_option(f: Callable[..., Any]) -> Callable[..., Any]:
+    return click.option("--slave", "slave", type=int, default=0, show_default=True,
+                        help="Position of the slave on the bus (0 = first).")(f)
+
+
+def library_option(f: Callable[..., Any]) -> Callable[..., Any]:
+    return click.option("--library", "library", type=click.Path(file_okay=False), metavar="DIR",
+                        help="A folder of ESI/EDS files to match the slaves against (cached as lint caches ESI).")(f)
+
+
+def device_option(f: Callable[..., Any]) -> Callable[..., Any]:
+    return click.option("--device", "device", metavar="DEVICE",
+                        help="The slave's device: an ESI file (FILE or FILE@SELECTOR) or a built-in profile name "
+                             "(overrides the library and the slave's SDO Information).")(f)
+
+
+def load_library(folder: str | None) -> Any:
+    from ecattool.online.library import Library
+
+    return Library(folder) if folder else None
+
+
+def load_device(text: str | None) -> Any:
+    if not text:
+        return None
+    from ecattool.sim.bus.serve import device_source
+
+    source, _, selector = text.partition("@")
+    return device_source(source, selector=selector or None)[1]
+
+
+def open_live(target: str) -> Any:
+    from ecattool.online.targets import open_bus
+
+    return open_bus(target)
+
+
+def project_bus(project: str, target: str) -> Any:
+    """The live bus of ``target`` for a project: the project is linted first (one that does not load or lint is
+    refused before the bus is opened); ``sim`` simulates the project's drives."""
+    from ecattool.errors import InputError
+    from ecattool.online.targets import open_bus
+    from ecattool.project.export import refuse_errors
+    from ecattool.project.lint import lint_project
+
+    result = lint_project(project)
+    if result.loaded is None:
+        first = result.findings[0]
+        raise InputError(first.message, first.location)
+    refuse_errors(result, f"use {project} on a bus")
+    devices = []
+    if target.strip().lower() == "sim":
+        devices = [rd.device for rd in sorted(result.drives, key=lambda r: r.position) if rd.device is not None]
+    return open_bus(target, devices)

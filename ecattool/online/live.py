@@ -1,0 +1,205 @@
+"""A live bus: the slaves behind a master as ecattool reads them (identity, state, AL status, SDO, SDO
+Information, SII), on every target: the embedded simulator, SOEM through pysoem, KickCAT.
+
+Every target implements the same :class:`LiveSlave`; what a master's binding cannot do raises
+:class:`Unsupported` naming the target and what is missing (docs/at-the-machine.md, "What each target can do").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+from ecattool.errors import InputError, TargetError
+from ecattool.esi.model import Device, Identity
+from ecattool.od.model import EcState, ObjectDictionary
+
+#: the SII EEPROM is read up to this many bytes at most (a 32 kbit EEPROM; IgH reads to the end marker too)
+SII_MAX_BYTES = 4096
+#: the fixed area of the SII (words 0x00-0x3F)
+SII_HEADER_BYTES = 128
+
+
+class Unsupported(TargetError):
+    """The target's master binding cannot do what was asked (e.g. SII access through KickCAT's Python module)."""
+
+
+@runtime_checkable
+class LiveSlave(Protocol):
+    """One slave on a live bus."""
+
+    position: int
+
+    def identity(self) -> Identity:
+        """The identity the master read from the slave's SII (KickCAT: from 1018h, it gives no SII access)."""
+        ...
+
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes: ...
+
+    def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
+                     expect_reply: bool = True) -> None: ...
+
+    def state(self) -> EcState: ...
+
+    def al_status_code(self) -> int | None:
+        """The AL status code register (0x0134), or None where the master does not give it."""
+        ...
+
+    def sii_read(self) -> bytes:
+        """The SII image, from word 0 to the end of the category list."""
+        ...
+
+    def sii_write(self, image: bytes) -> None:
+        """Write ``image`` to the SII EEPROM word by word (the caller has checked it)."""
+        ...
+
+    def sdo_info(self) -> ObjectDictionary:
+        """The dictionary the slave describes through the SDO Information service (raises SdoAbort/Unsupported
+        where it offers none)."""
+        ...
+
+
+@dataclass
+class LiveBus:
+    """The slaves of one target, in bus order. ``spec`` names the target (``sim``, ``pysoem:eth0``…)."""
+
+    spec: str
+    slaves: list[Any]
+    closer: Any = None
+    #: the simulator's log of writes (SDO downloads, SII writes) since the bus was opened; None on a real master
+    write_log: list[str] | None = None
+    #: the devices a simulator bus was made of (its own dictionaries), by position
+    devices: list[Device] = field(default_factory=list)
+
+    def slave(self, position: int) -> Any:
+        if not 0 <= position < len(self.slaves):
+            raise InputError(f"no slave at position {position}: the bus on {self.spec} has {len(self.slaves)}")
+        return self.slaves[position]
+
+    def close(self) -> None:
+        if self.closer is not None:
+            self.closer()
+            self.closer = None
+
+    def __enter__(self) -> "LiveBus":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def read_sii(read_words: Any, max_bytes: int = SII_MAX_BYTES) -> bytes:
+    """An SII image read through ``read_words(word_address) -> bytes`` (4 or 8 bytes per read, as the ESC
+    gives them): the fixed area, then category headers until the end marker 0xFFFF (IgH's ``sii_read`` reads
+    the same range). A chain that runs past ``max_bytes`` ends there."""
+    data = bytearray()
+
+    def fill(upto: int) -> None:
+        while len(data) < upto:
+            chunk = bytes(read_words(len(data) // 2))
+            if not chunk or len(chunk) % 2:
+                raise TargetError(f"the SII read at word 0x{len(data) // 2:04X} returned {len(chunk)} bytes")
+            data.extend(chunk)
+
+    fill(SII_HEADER_BYTES)
+    offset = SII_HEADER_BYTES
+    while offset + 4 <= max_bytes:
+        fill(offset + 2)  # the type first: nothing is read past an end marker
+        cat_type = int.from_bytes(data[offset:offset + 2], "little")
+        if cat_type == 0xFFFF:
+            offset += 2
+            break
+        fill(offset + 4)
+        size_words = int.from_bytes(data[offset + 2:offset + 4], "little")
+        offset += 4 + 2 * size_words
+        fill(min(offset, max_bytes))
+    return bytes(data[:min(max(offset, SII_HEADER_BYTES), max_bytes)])
+
+
+# --------------------------------------------------------------------------------------------- simulator
+class SimLiveSlave:
+    """A simulated drive (:class:`ecattool.sim.Drive`) with its SII, as the virtual bus serves them."""
+
+    def __init__(self, drive: Any, sii: bytes, log: list[str]) -> None:
+        self.drive = drive
+        self.position = int(drive.position)
+        self.sii = bytes(sii)
+        self._log = log
+        self._seen = len(drive.events)
+
+    def _note_writes(self) -> None:
+        for e in self.drive.events[self._seen:]:
+            # a write the drive refused was still sent: it counts
+            if e.kind in ("sdo_download", "foe", "eeprom") or (e.kind == "sdo_abort" and e.data.get("op") != "upload"):
+                self._log.append(f"slave {self.position}: {e.kind} {e.data}")
+        self._seen = len(self.drive.events)
+
+    def identity(self) -> Identity:
+        from ecattool.sii.image import parse_header
+
+        h = parse_header(self.sii)
+        return Identity(h.vendor_id, h.product_code, h.revision, h.serial)
+
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
+        try:
+            return bytes(self.drive.sdo_upload(index, subindex, complete_access))
+        finally:
+            self._note_writes()
+
+    def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
+                     expect_reply: bool = True) -> None:
+        try:
+            self.drive.sdo_download(index, subindex, data, complete_access, expect_reply)
+        finally:
+            self._note_writes()
+
+    def state(self) -> EcState:
+        state: EcState = self.drive.state()
+        return state
+
+    def request_state(self, state: EcState) -> None:
+        self.drive.request_state(state)
+
+    def al_status_code(self) -> int | None:
+        for e in reversed(self.drive.events):
+            if e.kind in ("state", "state_refused"):
+                return int(e.data.get("al_status", 0))
+        return 0
+
+    def sii_read(self) -> bytes:
+        return read_sii(lambda word: self.sii[2 * word:2 * word + 8].ljust(8, b"\xff"))
+
+    def sii_write(self, image: bytes) -> None:
+        self._log.append(f"slave {self.position}: SII write of {len(image)} bytes")
+        self.sii = bytes(image) + self.sii[len(image):]
+
+    def sdo_info(self) -> ObjectDictionary:
+        dictionary: ObjectDictionary = self.drive.device.dictionary
+        return dictionary
+
+
+def sim_bus(drives: Iterable[Any], spec: str = "sim") -> LiveBus:
+    """A live bus of simulated drives (e.g. those of a ``SimTarget`` a test commissioned), each with the SII
+    ``ecattool sii build`` makes of its device (as ``sim serve`` gives it)."""
+    from ecattool.sii.builder import build
+
+    log: list[str] = []
+    slaves = []
+    for i, d in enumerate(drives):
+        d.position = i
+        if d.state() is EcState.INIT:  # as a master's bus init does: the mailbox works from PRE-OP
+            d.request_state(EcState.PREOP)
+        slaves.append(SimLiveSlave(d, build(d.device).to_bytes(), log))
+    return LiveBus(spec, slaves, write_log=log, devices=[s.drive.device for s in slaves])
+
+
+def sim_devices(spec: str) -> list[Device]:
+    """The devices of a ``sim:SOURCE,SOURCE…`` spec: built-in profile names or ESI files, in bus order."""
+    from ecattool.sim.bus.serve import device_source
+
+    sources = [s.strip() for s in spec.split(":", 1)[1].split(",") if s.strip()] if ":" in spec else []
+    if not sources:
+        raise InputError(f"target {spec!r} names no drives: use sim:PROFILE,ESI… (e.g. sim:hdt,technosoft-ipos) "
+                         "or give a project")
+    return [device_source(s)[1] for s in sources]

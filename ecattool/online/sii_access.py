@@ -1,0 +1,74 @@
+"""SII read and write on a live slave, with the checks IgH's ``ethercat sii_write`` makes before writing: the
+image's size (a whole number of words, fits the EEPROM), the CRC of the configuration area, a category chain
+that parses to its end marker, and (unless forced) the identity against the slave's. The old image is read and
+written to a back-up file before the first word of the new one goes out."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from ecattool.errors import InputError, Location
+from ecattool.findings import Finding, Severity
+
+
+def write_checks(image_bytes: bytes, current: bytes | None, source: str, force: bool = False) -> list[str]:
+    """What stops ``image_bytes`` from being written over the slave's ``current`` image (empty: write it)."""
+    from ecattool.sii.checks import check
+    from ecattool.sii.crc import preamble_crc
+    from ecattool.sii.image import parse
+
+    problems: list[str] = []
+    if len(image_bytes) < 128 or len(image_bytes) % 2:
+        return [f"{source}: {len(image_bytes)} bytes is not an SII image (a whole number of words, at least the "
+                "128-byte configuration area)"]
+    if preamble_crc(image_bytes) != image_bytes[14]:
+        problems.append(f"{source}: checksum 0x{image_bytes[14]:02X} does not match the CRC-8 of bytes 0-13 "
+                        f"(0x{preamble_crc(image_bytes):02X}); fix it with 'ecattool sii fix-crc'")
+    try:
+        image = parse(image_bytes, source=source)
+    except InputError as exc:
+        return [*problems, f"{source}: the category chain does not parse: {exc.message}"]
+    for f in check(image):
+        if f.severity is Severity.ERROR and f.rule in ("sii.size", "sii.category", "sii.length", "sii.blank"):
+            problems.append(f"{source}: {f.message} [{f.rule}]")
+    if not image.end_marker:
+        problems.append(f"{source}: the category chain has no end marker 0xFFFF")
+    if current is not None and len(current) >= 128:
+        from ecattool.sii.image import parse_header
+
+        size = parse_header(current).eeprom_bytes  # the EEPROM the slave's own image declares
+        if parse_header(current).size_word != 0xFFFF and len(image_bytes) > size:
+            problems.append(f"{source}: {len(image_bytes)} bytes do not fit the slave's {size}-byte EEPROM")
+    if current is not None and not force:
+        from ecattool.sii.image import parse_header
+
+        old, new = parse_header(current), image.header
+        for field in ("vendor_id", "product_code", "revision"):
+            a, b = getattr(old, field), getattr(new, field)
+            if a != b:
+                problems.append(f"{source}: {field} 0x{b:08X} is not the slave's 0x{a:08X} (--force writes it "
+                                "anyway)")
+    return problems
+
+
+def sii_write(slave: Any, image_bytes: bytes, source: str, backup: str | Path, force: bool = False) -> list[str]:
+    """Check ``image_bytes`` against the slave, write the slave's current image to ``backup``, then write the
+    new one and read it back. Returns the problems that stopped the write (nothing was written then)."""
+    from ecattool.fileio import write_atomic
+
+    current = slave.sii_read()
+    problems = write_checks(image_bytes, current, source, force)
+    if problems:
+        return problems
+    write_atomic(backup, current, (source,))
+    slave.sii_write(image_bytes)
+    back = slave.sii_read()
+    if back[:len(image_bytes)] != image_bytes[:len(back)] or len(back) < min(len(image_bytes), 128):
+        raise InputError(f"slave {slave.position}: the SII read back differs from {source} (the old image is in "
+                         f"{backup})", Location(source))
+    return []
+
+
+def findings_of(problems: list[str]) -> list[Finding]:
+    return [Finding("sii.write", Severity.ERROR, p) for p in problems]
