@@ -59,16 +59,16 @@ def test_axis_or_io_is_what_the_device_says():
 
 
 def test_the_el1008_example_of_the_docs_commissions_as_written(capsys, tmp_path, monkeypatch):
-    """docs/project.md: `project new --esi beckhoff_EL1xxx.xml --select EL1008 --policy newest -o io.yaml`."""
+    """docs/project.md: `project new --esi beckhoff_EL1xxx.xml --select EL1008 --policy newest -o io.ecattool.yaml`."""
     shutil.copy(corpus_path("esi", EL1XXX), tmp_path / EL1XXX)
     monkeypatch.chdir(tmp_path)
     code, _, err = run(capsys, "project", "new", "--esi", EL1XXX, "--select", "EL1008", "--policy", "newest",
-                       "-o", "io.yaml")
+                       "-o", "io.ecattool.yaml")
     assert code == 0, err
-    assert "enable" not in Path("io.yaml").read_text().replace("# ", "")
-    code, out, err = run(capsys, "lint", "io.yaml")
+    assert "enable" not in Path("io.ecattool.yaml").read_text().replace("# ", "")
+    code, out, err = run(capsys, "lint", "io.ecattool.yaml")
     assert code == 0, out + err
-    code, out, err = run(capsys, "commission", "io.yaml", "--json")
+    code, out, err = run(capsys, "commission", "io.ecattool.yaml", "--json")
     assert code == 0, out + err
     (drive,) = json.loads(out)["projects"][0]["drives"]
     assert drive["ok"] and drive["kind"] == "io" and drive["final_state"] == "OP"

@@ -50,7 +50,7 @@ def schema(output: str | None, check: str | None) -> None:
 Examples:
   ecattool project new --profile technosoft-ipos -o machine.yaml
   ecattool project new --esi drives/elmo.xml --device 0x00030924:1 -o machine.yaml
-  ecattool project new --esi beckhoff_EL1xxx.xml --device EL1008 --policy newest -o io.yaml
+  ecattool project new --esi beckhoff_EL1xxx.xml --device EL1008 --policy newest -o io.ecattool.yaml
   ecattool project new --from-bus pysoem:eth0 --library esi/ -o machine.yaml""",
 )
 @click.option("--profile", help="Built-in drive family (technosoft-ipos, hdt, controltechniques).")

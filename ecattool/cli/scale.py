@@ -10,6 +10,7 @@ import click
 from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
                                  table, write_output)
 from ecattool.cli.paths import InputFile
+from ecattool.cli.startup import lossy_option, write_startup
 from ecattool.cli.vocab import WRITE_FORMATS, device_option, shared_option
 
 _FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
@@ -245,15 +246,18 @@ def compute_cmd(with_startup: bool, as_json: bool, output: str | None, html: str
 Examples:
   ecattool scale startup samples/scaling/ballscrew.yaml
   ecattool scale startup samples/scaling/rotary_table.yaml --format igh -o scaling.c
+  ecattool scale startup samples/scaling/ballscrew.yaml --format eni --lossy -o drive_startup.xml
   ecattool scale startup --lines 500 --position deg --format json""")
 @_mechanics_options
 @click.option("--format", "fmt", type=click.Choice(_STARTUP_FORMATS), default="twincat", show_default=True,
               help="Startup-list format (the master's).")
 @click.option("--transition", default="PS", show_default=True, help="EtherCAT transition of the writes.")
+@lossy_option
 @output_option()
-def startup_cmd(fmt: str, transition: str, output: str | None, **kwargs: Any) -> None:
-    """The SDO writes that set the factor group, in a master's startup-list format."""
-    from ecattool.startup import TRANSITIONS, export
+def startup_cmd(fmt: str, transition: str, lossy: bool, output: str | None, **kwargs: Any) -> None:
+    """The SDO writes that set the factor group, in a master's startup-list format (an ENI needs the drive's
+    identity, which a spec without --esi does not give: --lossy writes it without)."""
+    from ecattool.startup import TRANSITIONS
 
     if transition.upper() not in TRANSITIONS:
         raise click.BadParameter(f"one of {', '.join(TRANSITIONS)}", param_hint="--transition")
@@ -266,7 +270,7 @@ def startup_cmd(fmt: str, transition: str, output: str | None, **kwargs: Any) ->
 
         raise InputError("the device has none of the scaling objects (608Fh, 6091h-6097h, 60A2h, 60A8h-60ABh); "
                          "no startup list to write", Location(esi) if esi else None)
-    write_output(output, export(commands, fmt), inputs)
+    write_startup([commands], fmt, output, inputs, lossy)
 
 
 def _values_from_file(path: str) -> dict[tuple[int, int], int]:

@@ -72,7 +72,7 @@ def _with_cycle(configs: list[Any], sync0_cycle: int | None) -> list[Any]:
     return configs
 
 
-def _write(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, ...], lossy: bool = False) -> None:
+def write_startup(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, ...], lossy: bool = False) -> None:
     """Write ``configs`` in ``fmt``; what the format cannot carry refuses the export, or with ``--lossy`` is
     printed to stderr, one line each, with the count."""
     from ecattool.startup import export, losses
@@ -86,7 +86,7 @@ def _write(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, 
         click.echo(f"{len(lost)} part(s) of the configuration are not in the {fmt} output (--lossy)", err=True)
 
 
-def _lossy_option(f: Any) -> Any:
+def lossy_option(f: Any) -> Any:
     return click.option("--lossy", is_flag=True,
                         help="Write the output even where the format cannot carry part of the configuration "
                              "(one-shot writes, DC, SoE, PDO tables, identity); each loss is printed. Without "
@@ -119,7 +119,7 @@ Examples:
                    "TwinCAT and ros2 files hold one slave.")
 @_sync0_option
 @click.option("--allow-errors", is_flag=True, help="With --project: export even when lint reports errors.")
-@_lossy_option
+@lossy_option
 @output_option()
 def export_cmd(source: str | None, project: str | None, from_format: str | None, fmt: str, drives: tuple[str, ...],
                sync0_cycle: int | None, allow_errors: bool, lossy: bool, output: str | None) -> None:
@@ -135,13 +135,13 @@ def export_cmd(source: str | None, project: str | None, from_format: str | None,
         from ecattool.project.export import slave_configs
         from ecattool.project.loader import project_inputs
 
-        _write(_with_cycle(select_slaves(slave_configs(project, allow_errors), drives), sync0_cycle), fmt, output,
+        write_startup(_with_cycle(select_slaves(slave_configs(project, allow_errors), drives), sync0_cycle), fmt, output,
                tuple(project_inputs([project])), lossy)
         return
     assert source is not None
     configs = select_slaves(_read(source, from_format), drives)
     _report_import(configs, source)
-    _write(_with_cycle(configs, sync0_cycle), fmt, output, (source,), lossy)
+    write_startup(_with_cycle(configs, sync0_cycle), fmt, output, (source,), lossy)
 
 
 @startup.command("convert", epilog="""\b
@@ -156,7 +156,7 @@ Examples:
               help="Only this slave of INPUT_FILE: name or bus position; repeatable. TwinCAT and ros2 files hold "
                    "one slave.")
 @_sync0_option
-@_lossy_option
+@lossy_option
 @output_option()
 def convert_cmd(input_file: str, fmt: str, from_format: str | None, drives: tuple[str, ...], sync0_cycle: int | None,
                 lossy: bool, output: str | None) -> None:
@@ -169,7 +169,7 @@ def convert_cmd(input_file: str, fmt: str, from_format: str | None, drives: tupl
 
     configs = select_slaves(_read(input_file, from_format), drives)
     _report_import(configs, input_file)
-    _write(_with_cycle(configs, sync0_cycle), fmt, output, (input_file,), lossy)
+    write_startup(_with_cycle(configs, sync0_cycle), fmt, output, (input_file,), lossy)
 
 
 @startup.command("import", epilog="""\b
