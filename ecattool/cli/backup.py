@@ -16,13 +16,14 @@ Examples:
 @click.argument("project", type=InputFile())
 @target_option()
 @click.option("-o", "--output", "folder", required=True, type=click.Path(), metavar="DIR",
-              help="A new folder (it must not exist; it appears complete or not at all).")
-def backup(project: str, target: str, folder: str) -> None:
+              help="A new folder (it appears complete or not at all); an existing one only with --force.")
+@click.option("--force", is_flag=True, help="Replace an existing backup folder (after the new one is complete).")
+def backup(project: str, target: str, folder: str, force: bool) -> None:
     """Per drive of the project: its SII image, a snapshot of its dictionary and (Technosoft, where the project
     has a .sw) its EEPROM setup read back into a .sw, all in one new folder."""
     from ecattool.online.backup import backup as do_backup
     with project_bus(project, target) as live:
-        report = do_backup(project, live, folder)
+        report = do_backup(project, live, folder, overwrite=force)
     c = console()
     c.print(f"{report.folder}: {len(report.files)} files")
     for f in report.files:

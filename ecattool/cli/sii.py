@@ -7,11 +7,14 @@ from typing import Any
 import click
 
 from ecattool.cli.common import (
+    check_output,
     console,
     dump_json,
+    force_requested,
     json_option,
     output_option,
     parse_int_arg,
+    store_force,
     table,
     write_output,
 )
@@ -320,18 +323,19 @@ area, the category chain up to its end marker, the size, and the identity agains
 @click.option("--slave", type=int, default=0, show_default=True, help="Position of the slave on the bus.")
 @click.option("--backup", required=True, type=click.Path(dir_okay=False), metavar="FILE",
               help="Where the slave's current image is written before anything is written to it.")
-@click.option("--force", is_flag=True, help="Write even when the image's identity is not the slave's.")
+@click.option("--force", is_flag=True, callback=store_force,
+              help="Write even when the image's identity is not the slave's; replace an existing --backup file.")
 def write_cmd(image: str, target: str, slave: int, backup: str, force: bool) -> None:
     """Write IMAGE to a slave's SII EEPROM, after the checks and a back-up of the old image. Exit status 1 when a
     check refuses the image: one line naming the first problem, and nothing is written (not even the back-up)."""
-    from ecattool.fileio import read_bytes, refuse_input
+    from ecattool.fileio import read_bytes
     from ecattool.online.targets import open_bus
     from ecattool.online.sii_access import sii_write
 
     data = read_bytes(image)
-    refuse_input(backup, (image,))
+    check_output(backup, (image,))  # never over the image, an existing back-up only with --force
     with open_bus(target) as live:
-        problems = sii_write(live.slave(slave), data, image, backup, force)
+        problems = sii_write(live.slave(slave), data, image, backup, force, overwrite_backup=force_requested())
     if problems:
         from ecattool.errors import InputError
 

@@ -67,19 +67,31 @@ def collect(project: str | Path, bus: LiveBus) -> tuple[dict[str, bytes], list[s
     return files, skipped
 
 
-def backup(project: str | Path, bus: LiveBus, folder: str | Path) -> BackupReport:
-    """Read everything (:func:`collect`), then write it into the new folder ``folder`` in one rename."""
+def backup(project: str | Path, bus: LiveBus, folder: str | Path, overwrite: bool = False) -> BackupReport:
+    """Read everything (:func:`collect`), then write it into the new folder ``folder`` in one rename. An existing
+    ``folder`` is refused unless ``overwrite``: then the complete new folder takes its place, and the old one is
+    removed only after that rename (an interrupted run leaves the old folder or the new one, never half of one)."""
     target = Path(folder)
-    if target.exists():
-        raise InputError("the backup folder exists already; give a new one", Location(str(target)))
+    if target.exists() and not (overwrite and (target.is_dir() or target.is_file()) and not target.is_symlink()):
+        raise InputError("file exists; use --force to replace the backup folder (or give a new one)",
+                         Location(str(target)))
     files, skipped = collect(project, bus)
     tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    old = target.with_name(f".{target.name}.{os.getpid()}.old")
     try:
         tmp.mkdir(parents=False)
         for name, data in files.items():
             (tmp / name).write_bytes(data)
+        if target.exists():
+            os.replace(target, old)
         os.replace(tmp, target)
     except OSError as exc:
         shutil.rmtree(tmp, ignore_errors=True)
+        if old.exists() and not target.exists():
+            os.replace(old, target)
         raise InputError(f"cannot write the backup folder: {exc.strerror or exc}", Location(str(target))) from None
+    if old.is_dir():
+        shutil.rmtree(old, ignore_errors=True)
+    elif old.exists():
+        old.unlink()
     return BackupReport(str(target), sorted(files), skipped)

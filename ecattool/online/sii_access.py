@@ -52,7 +52,8 @@ def write_checks(image_bytes: bytes, current: bytes | None, source: str, force: 
     return problems
 
 
-def sii_write(slave: Any, image_bytes: bytes, source: str, backup: str | Path, force: bool = False) -> list[str]:
+def sii_write(slave: Any, image_bytes: bytes, source: str, backup: str | Path, force: bool = False,
+              overwrite_backup: bool = False) -> list[str]:
     """Check ``image_bytes`` against the slave, write the slave's current image to ``backup``, then write the
     new one and read it back. Returns the problems that stopped the write (nothing was written then)."""
     from ecattool.fileio import write_atomic
@@ -61,7 +62,7 @@ def sii_write(slave: Any, image_bytes: bytes, source: str, backup: str | Path, f
     problems = write_checks(image_bytes, current, source, force)
     if problems:
         return problems
-    write_atomic(backup, current, (source,))
+    write_atomic(backup, current, (source,), overwrite=overwrite_backup)
     slave.sii_write(image_bytes)
     back = slave.sii_read()
     if back[:len(image_bytes)] != image_bytes[:len(back)] or len(back) < min(len(image_bytes), 128):
