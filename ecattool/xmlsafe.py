@@ -66,9 +66,9 @@ def parse_xml(data: bytes, source: str | None = None, drop_blank_text: bool = Fa
     except etree.XMLSyntaxError as exc:
         line, col = exc.position if exc.position else (None, None)
         msg = str(exc.msg if hasattr(exc, "msg") else exc)
-        msg = re.sub(r", line \d+, column \d+$", "", msg)
-        # libxml2 quotes raw document text in some messages (an unfinished CDATA section, a bad character): one
-        # line, printable, bounded
+        # libxml2 appends raw document text on further lines of some messages (an unfinished CDATA section, a bad
+        # character): the first line only, printable, bounded
+        msg = re.sub(r", line \d+, column \d+$", "", msg.splitlines()[0] if msg.strip() else msg)
         msg = " ".join(msg.split())
         msg = "".join(c if c.isprintable() else f"\\x{ord(c):02x}" for c in msg)[:200]
         raise InputError(f"not well-formed XML: {msg}", Location(source, line, col)) from None

@@ -7,6 +7,7 @@ text that was written.
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import yaml
@@ -142,9 +143,10 @@ def _convert(node: yaml.Node, path: Path_, locs: dict[Path_, Location], keys: di
         raise InputError(f"invalid YAML value: {what}", _loc(node, source)) from None
     except (ValueError, TypeError, OverflowError, IndexError, KeyError) as exc:  # a tag the text does not fit: !!int x
         kind = tag.rsplit(":", 1)[-1]
-        what = str(exc).splitlines()[0] if "digits" in str(exc) else f"{node.value!r} is not a valid {kind}"
-        raise InputError(f"invalid YAML value: {what}", _loc(node, source)) from None
+        if "digits" in str(exc):  # Python's int() refuses more than 4300 decimal digits
+            raise InputError(f"a number of more than {sys.get_int_max_str_digits()} digits", _loc(node, source)) from None
+        raise InputError(f"invalid YAML value: {node.value[:40]!r} is not a valid {kind}", _loc(node, source)) from None
     if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 256:
-        raise InputError(f"integer {node.value[:20]!r}... is absurdly large ({value.bit_length()} bits)",
+        raise InputError(f"number of {value.bit_length()} bits is absurdly large ({node.value[:20]!r}...)",
                          _loc(node, source))
     return value

@@ -66,7 +66,7 @@ ENTRIES: tuple[Entry, ...] = (
           ("corpus:sw/ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.ems_parameters.cfg",), ".cfg"),
     Entry("startup import (ENI)", ("startup", "import", "{f}"), ("corpus:configs/eni_kpierczy_test_eni.xml",), ".xml"),
     Entry("startup import (other formats)", ("startup", "import", "{f}"),
-          ("corpus:configs/ros2_elmo_gold.yaml", "corpus:configs/ecmc_ecmciPOS4808.cmd",
+          ("corpus:configs/ros2_elmo_gold.yaml", "corpus:configs/ecmc_ecmciPOSXXXX.cmd",
            "corpus:configs/lcec_initcmds_ethercat-conf.xml", "corpus:configs/ros2_beckhoff_el3104.yaml"), ".txt"),
     Entry("lint (project)", ("lint", "{f}"),
           ("samples/technosoft_ipos/project.yaml", "samples/hdt/project.yaml", "samples/controltechniques/project.yaml",

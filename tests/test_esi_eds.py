@@ -207,7 +207,7 @@ def test_size_is_bounded(monkeypatch, tmp_path):
         esi.load_bytes(TEXT.encode("latin-1"), "big.eds")
     big = tmp_path / "big.eds"
     big.write_bytes(TEXT.encode("latin-1"))
-    with pytest.raises(InputError, match="larger than 1000 bytes"):
+    with pytest.raises(InputError, match="larger than the 1000 byte limit"):
         esi.load(big)
 
 

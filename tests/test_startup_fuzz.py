@@ -155,7 +155,7 @@ _JSON = '{"format": "ecattool-startup", "version": 1, "slaves": %s}'
      '"commands": []}]' % (1 << 80), "number of 81 bits"),
     ("inf.json", _JSON % '[{"name": "a", "dc": {"cycle_ns": 1e999}, "commands": []}]', "must be an integer"),
     ("hex.yaml", "vendor_id: 0x" + "F" * 5000 + "\nproduct_id: 2\n", "hex.yaml:1:12: number of 20000 bits"),
-    ("digits.yaml", "vendor_id: 1\nproduct_id: " + "9" * 4400 + "\n", "digits.yaml:2: a number of more"),
+    ("digits.yaml", "vendor_id: 1\nproduct_id: " + "9" * 4400 + "\n", "digits.yaml:2:13: a number of more"),
     ("deep.yaml", "vendor_id: 1\nproduct_id: 2\nsdo: " + "[" * 3000 + "]" * 3000 + "\n", "deep.yaml"),
     ("sm.yaml", "vendor_id: 1\nproduct_id: 2\nsm: [[1]]\n", "sm.yaml:3:6: an sm entry is a mapping"),
     ("type.json", _JSON % '[{"name": "a", "commands": [{"transition": "PS", "index": 1, "subindex": 0, "data": "01", '
