@@ -172,7 +172,7 @@ def test_cli_export_of_an_eds_and_option_misuse(capsys, tmp_path):
 
 def _eds_with_shared_names(tmp_path):
     """The corpus EDS with two sub-items of 1018h named "Reserved", as EDS files often have them."""
-    text = (CORPUS / "eds" / "technosoft_iPOS.D.v1.04.eds").read_text(encoding="latin-1")
+    text = corpus_path("eds", "technosoft_iPOS.D.v1.04.eds").read_text(encoding="latin-1")
     for sub in ("Revision number", "Serial number"):
         text = text.replace(f"ParameterName={sub}", "ParameterName=Reserved", 1)
     path = tmp_path / "shared_names.eds"

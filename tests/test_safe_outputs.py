@@ -195,6 +195,8 @@ def test_signal_while_writing_leaves_no_temporary(tmp_path: Path, signum: int) -
         "fileio.write_atomic(sys.argv[1], b'x' * 100000)\n"
     )
     out = tmp_path / "big.bin"
-    proc = subprocess.run([sys.executable, "-c", script, str(out)], cwd=ROOT, capture_output=True, timeout=120)
+    # the default disposition in the child: a test runner's worker may ignore SIGINT, and a child inherits that
+    proc = subprocess.run([sys.executable, "-c", script, str(out)], cwd=ROOT, capture_output=True, timeout=120,
+                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert proc.returncode != 0
     assert list(tmp_path.iterdir()) == []
