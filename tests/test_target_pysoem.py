@@ -124,11 +124,29 @@ def test_mapping_errors_are_target_errors():
         s.request_state(EcState.SAFEOP)
 
 
-def test_open_failures_are_target_errors():
+def test_open_failures_are_target_errors(monkeypatch):
+    import ecattool.target.pysoem as adapter
+
+    monkeypatch.setattr(adapter, "LINK_WAIT_S", 0.3)
     with pytest.raises(TargetError, match="cannot open"):
         PysoemTarget("nope", pysoem_module=make_module([Drive.from_profile("hdt")]))
     with pytest.raises(TargetError, match="no EtherCAT slaves"):
         PysoemTarget("eth0", pysoem_module=make_module([]))
+
+
+def test_a_link_that_drops_the_first_frames_is_asked_again():
+    """A veth pair or a NIC just brought up loses the first frames: the first config_init finds nobody."""
+    module = make_module([Drive.from_profile("hdt")])
+    real = module.Master.config_init
+    calls = []
+
+    def late(self, *a, **k):
+        calls.append(1)
+        return -1 if len(calls) < 3 else real(self, *a, **k)
+
+    module.Master.config_init = late
+    t = PysoemTarget("eth0", pysoem_module=module)
+    assert len(t.slaves()) == 1 and len(calls) == 3
 
 
 def test_process_data_is_paced_to_the_sync0_cycle():

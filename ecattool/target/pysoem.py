@@ -49,6 +49,8 @@ from ecattool.target.base import SlaveTarget
 
 #: how long a state change may take, in microseconds (SOEM's own EC_TIMEOUTSTATE is 2 s)
 STATE_TIMEOUT_US = 2_000_000
+#: how long an empty bus is asked again before it counts as empty (a link just brought up drops the first frames)
+LINK_WAIT_S = 2.0
 #: how long one process data cycle may take to come back, in microseconds (pysoem's default)
 PROCESSDATA_TIMEOUT_US = 2000
 #: the process data cycle when no DC cycle is configured, in nanoseconds
@@ -296,9 +298,15 @@ class PysoemTarget:
         except Exception as exc:  # noqa: BLE001 - ConnectionError, or an OS error on some platforms
             raise TargetError(f"cannot open EtherCAT interface {ifname!r}: {exc}") from None
         count = self.master.config_init()
+        # a link that was just brought up (a NIC negotiating, a fresh veth pair) drops the first frames: ask again
+        # for up to LINK_WAIT_S before saying the bus is empty
+        deadline = time.monotonic() + LINK_WAIT_S
+        while count <= 0 and time.monotonic() < deadline:
+            time.sleep(0.2)
+            count = self.master.config_init()
         if count <= 0:
             self.master.close()
-            raise TargetError(f"no EtherCAT slaves found on {ifname!r}")
+            raise TargetError(f"no EtherCAT slaves found on {ifname!r} (asked for {LINK_WAIT_S:g} s)")
         # config_init has requested PRE-OP (without waiting for it); from here on ecattool requests every state
         self.master.state_check(int(self.pysoem.PREOP_STATE), STATE_TIMEOUT_US)
         self.master.manual_state_change = 1
