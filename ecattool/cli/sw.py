@@ -166,6 +166,14 @@ def _target_options(f: Any) -> Any:
     return f
 
 
+def _project_slave(project: str, drive_name: str | None, allow_errors: bool, target: str | None,
+                   slave: int | None) -> tuple[Any, str | None, int | None]:
+    """(the project's slave, the target: the option's else the project's, the position: the option's else the
+    slave's) for the commands that take --project."""
+    rd, project_target = _project_drive(project, drive_name, allow_errors)
+    return rd, target or project_target, rd.position if slave is None else slave
+
+
 def _target_and_image(file: str | None, target: str | None, slave: int | None, project: str | None,
                       drive_name: str | None, preload: str | None,
                       allow_errors: bool = False) -> tuple[Any, Any, str, str]:
@@ -174,10 +182,8 @@ def _target_and_image(file: str | None, target: str | None, slave: int | None, p
     image = None
     name = file
     if project is not None:
-        rd, project_target = _project_drive(project, drive_name, allow_errors)
+        rd, target, slave = _project_slave(project, drive_name, allow_errors, target, slave)
         device = rd.device
-        target = target or project_target
-        slave = rd.position if slave is None else slave
         if file is None:
             cfg = rd.drive.sw_config
             if cfg is None or rd.sw_image is None:
@@ -444,10 +450,8 @@ def upload(like: str | None, ranges: tuple[str, ...], target: str | None, slave:
     ref = _image(like) if like else None
     device = None
     if project is not None:
-        rd, project_target = _project_drive(project, drive_name, allow_errors)
+        rd, target, slave = _project_slave(project, drive_name, allow_errors, target, slave)
         device = rd.device
-        target = target or project_target
-        slave = rd.position if slave is None else slave
         ref = ref or rd.sw_image
     spans = [parse_range(r) for r in ranges] or ([(b.start, b.end) for b in ref.blocks] if ref is not None else [])
     spec = target or "sim"
