@@ -89,6 +89,19 @@ def reference_path(*parts: str) -> Path:
     return p
 
 
+SEEDS = Path(os.environ.get("ECATTOOL_SEEDS") or CORPUS.parent / "seeds")
+
+
+def seeds_path(*parts: str) -> Path:
+    """A file of the manuals' seed texts (../shared/seeds); skips when they are missing, like the corpus."""
+    if not SEEDS.is_dir():
+        _skip(NO_CORPUS if not have_corpus() else f"the manuals' seed texts are not at {SEEDS} (set ECATTOOL_SEEDS=DIR)")
+    p = SEEDS.joinpath(*parts)
+    if not p.exists():
+        raise FileNotFoundError(f"seed file missing: {p}")
+    return p
+
+
 def sample_sw_spec(directory: Path) -> Path:
     """samples/sw/build.yaml copied into ``directory`` with its corpus paths pointing at the corpus in use (it
     names them as ../../../shared/corpus, right only for the corpus beside the checkout); skips without it."""

@@ -23,7 +23,7 @@ from pathlib import Path
 from hypothesis import strategies as st
 
 ROOT = Path(__file__).resolve().parent.parent
-CORPUS = Path(os.environ.get("ECATTOOL_CORPUS", ROOT.parent / "shared" / "corpus"))
+from tests.conftest import CORPUS  # noqa: E402  (the one place that knows where the corpus is)
 
 STEPS = ("- state: PREOP\n- read: '1018:01'\n- write: '6060:00'\n  value: 1\n- state: SAFEOP\n- state: OP\n"
          "- exchange: '0600 00000000'\n- cycles: 10\n- foe: FOESW_X.bin\n  data: '0102'\n  password: 0\n  expect_abort: 0x8004\n")

@@ -15,7 +15,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-SEEDS = Path(__file__).resolve().parents[1].parent / "shared" / "seeds"
+from tests.conftest import seeds_path
+
 TS_SEED, HDT_SEED, CT_SEED = "000_a0ab57c0bda88c2c.txt", "003_8679b1dde0e37523.txt", "004_b59360cba58a7982.txt"
 
 
@@ -30,7 +31,7 @@ class Row:
 
 
 def _lines(seed: str) -> list[str]:
-    return (SEEDS / seed).read_text(encoding="utf-8").splitlines()
+    return seeds_path(seed).read_text(encoding="utf-8").splitlines()
 
 
 _SUPERSCRIPT = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹", "0123456789")

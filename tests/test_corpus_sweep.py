@@ -28,7 +28,9 @@ from ecattool.project.machine import load_machine
 from ecattool.project.skeleton import esi_flaws, new_project, resolve
 
 ROOT = Path(__file__).resolve().parent.parent
-CORPUS = ROOT.parent / "shared" / "corpus"
+from tests.conftest import CORPUS, need_corpus  # noqa: E402
+
+need_corpus()
 DECISIONS = ROOT / "docs" / "decisions.md"
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from ecattool import profiles
+from tests.conftest import seeds_path
 
 from ecattool.od.model import EcState
 from ecattool.profiles._build_data import parse_range_spec
@@ -15,7 +16,6 @@ from ecattool.sim import Drive, FoeError
 from ecattool.sim.cia402 import State
 from sim_helpers import OP, PRE, SAFE, at, code_of, r, w
 
-SEEDS = Path(__file__).resolve().parents[1].parent / "shared" / "seeds"
 TS_TEXT, HDT_TEXT, CT_TEXT = "000_a0ab57c0bda88c2c.txt", "003_8679b1dde0e37523.txt", "004_b59360cba58a7982.txt"
 
 VALUE_TOO_HIGH, VALUE_TOO_LOW, INVALID_VALUE = 0x06090031, 0x06090032, 0x06090030
@@ -23,7 +23,7 @@ VALUE_TOO_HIGH, VALUE_TOO_LOW, INVALID_VALUE = 0x06090031, 0x06090032, 0x0609003
 
 def manual_says(seed: str, line: int, text: str) -> None:
     """The quoted text is on (or within 40 lines of) the seed line cited: the test follows the manual."""
-    lines = (SEEDS / seed).read_text(encoding="utf-8").splitlines()
+    lines = seeds_path(seed).read_text(encoding="utf-8").splitlines()
     window = "\n".join(lines[max(0, line - 41):line + 40])
     assert text in window, f"{seed}:{line} does not say {text!r}"
 

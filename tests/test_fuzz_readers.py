@@ -14,7 +14,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 
+from tests.conftest import CORPUS, need_corpus
 from tests.fuzz_readers import ENTRIES, Entry, check, mutants, place, workdir
+
+need_corpus()  # the seeds are corpus files and samples that name them
 
 EXAMPLES = int(os.environ.get("ECATTOOL_FUZZ_EXAMPLES", "12"))
 LONG_RUN = "ECATTOOL_FUZZ_EXAMPLES" in os.environ
@@ -53,7 +56,7 @@ def test_the_seeds_themselves_pass(work: Path) -> None:
     for entry in ENTRIES:
         for seed in entry.seeds:
             path = place(work, entry, seed, seed_bytes(seed))
-            sw = Path(os.environ.get("ECATTOOL_CORPUS", Path(__file__).resolve().parents[2] / "shared" / "corpus"))
+            sw = CORPUS
             argv = [a.format(f=path, o=work / "fuzz-output", sw=sw / "sw" / "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw",
                              script=work / "steps.yaml") for a in entry.argv]
             code, out, err, escaped = invoke(argv)

@@ -11,7 +11,7 @@ import pytest
 
 from ecattool.findings import Severity
 from ecattool.project.lint import PROJECT_RULES, lint_project
-from tests.conftest import ROOT, corpus_path
+from tests.conftest import ROOT, corpus_path, need_corpus
 from tests.project_helpers import BELT_PROJECT, DATA, SAMPLES, sample, write_project
 
 E, W = Severity.ERROR, Severity.WARNING
@@ -67,6 +67,8 @@ def _found(findings) -> set:
 @pytest.mark.parametrize("name", sorted(EXPECTED))
 def test_broken_project_is_reported_at_its_line(name):
     path = DATA / name
+    if "shared/corpus" in path.read_text(encoding="utf-8"):
+        need_corpus()
     result = lint_project(path)
     assert _found(result.findings) == EXPECTED[name]
     assert all(f.location.file == str(path) for f in result.findings)
