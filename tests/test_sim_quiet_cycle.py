@@ -1,7 +1,7 @@
-"""The drive skips a process data cycle that would change nothing (issue 26): the same outputs as the cycle
-before, from the state that cycle left unchanged. These tests run the same sequences of outputs (and SDO writes
-between cycles) through a drive that may skip and one that never does, and compare everything after every
-cycle: the inputs, the store, the CiA-402 model, the events and the emergencies."""
+"""The drive skips a process data cycle that would change nothing (issue 26): the same outputs as the
+cycle before, from the state that cycle left unchanged. These tests run the same sequences of outputs (and
+SDO writes between cycles) through a drive that may skip and one that never does, and compare everything
+after every cycle: the inputs, the store, the CiA-402 model, the events and the emergencies."""
 
 from __future__ import annotations
 
@@ -88,9 +88,9 @@ def test_an_idle_drive_skips_and_still_follows_what_changes_between_cycles() -> 
     first = fast.exchange(idle)
     fast.exchange(idle)
     cached = fast._quiet
-    assert cached is not None and cached[1] is not None, "a cycle at standstill on the same outputs is a fixed point"
+    assert cached is not None and cached[1] is not None, "standstill on the same outputs: a fixed point"
     assert fast.exchange(idle) == first and fast._quiet is cached  # skipped
-    changes = (lambda d: d.sdo_download(0x6060, 0, b"\x09"),  # CSV: the mode display and the statusword change
+    changes = (lambda d: d.sdo_download(0x6060, 0, b"\x09"),  # CSV: the mode display and statusword change
                lambda d: d.set_limit_switches(negative=True),  # 60FDh and statusword bit 11
                lambda d: d.set_limit_switches())
     for change in changes:

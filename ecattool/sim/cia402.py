@@ -313,7 +313,7 @@ class Cia402:
         if self.controlword & HALT:
             self._halt_step(mode, dt, halt_deceleration, inc_per_s, vel_from_inc_per_s)
             return
-        if profile is None and (mode == PV or mode == PP):  # the modes that move by a profile (built per cycle)
+        if profile is None and (mode == PV or mode == PP):  # only these modes move by a profile
             acc = abs(inc_per_s2(acceleration))
             profile = Profile(inc_per_s(profile_velocity), acc, acc)
         if mode == HOMING:

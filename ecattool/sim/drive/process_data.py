@@ -139,8 +139,9 @@ class ProcessData(PdoConfig):
         cia = self.cia
         rx, tx = self.layout[RX], self.layout[TX]
         store = self._store
-        return (store, store.changes, cia, None if cia.move is None else object(), *vars(cia).values(), self.units, self._entries,
-                len(self._entries), rx, tx, tuple(rx.entries), tuple(tx.entries), rx.bits, tx.bits,
+        return (store, store.changes, cia, None if cia.move is None else object(), *vars(cia).values(),
+                self.units, self._entries, len(self._entries), rx, tx, tuple(rx.entries), tuple(tx.entries),
+                rx.bits, tx.bits,
                 self.limit_active, self.limit_switches, self.homing_warning, self.behaviour, self.family,
                 self.has_cia402, self.homing_search_s, self.record_events, self._seq, len(self.emergencies))
 
