@@ -313,7 +313,7 @@ class Cia402:
         if self.controlword & HALT:
             self._halt_step(mode, dt, halt_deceleration, inc_per_s, vel_from_inc_per_s)
             return
-        if profile is None:
+        if profile is None and (mode == PV or mode == PP):  # only these modes move by a profile
             acc = abs(inc_per_s2(acceleration))
             profile = Profile(inc_per_s(profile_velocity), acc, acc)
         if mode == HOMING:
@@ -338,6 +338,7 @@ class Cia402:
             self.velocity = target_velocity
             self.position += inc_per_s(target_velocity) * dt
         elif mode == PV:
+            assert profile is not None
             if profile.acceleration == 0:
                 self.velocity = target_velocity  # no ramp configured: the set-point at once
             else:
@@ -346,6 +347,7 @@ class Cia402:
             self.position += inc_per_s(self.velocity) * dt
             self.target_reached = self.velocity == target_velocity
         elif mode == PP:
+            assert profile is not None
             self._profile_position_step(dt, profile, inc_per_s, vel_from_inc_per_s)
 
     def _profile_position_step(self, dt: Fraction, profile: Profile, inc_per_s: _Convert,

@@ -18,6 +18,8 @@ from ecattool.sim.bus.loop import FrameFault
 
 #: the largest Ethernet frame (without FCS) the socket reads
 MAX_FRAME = 1514
+#: Linux: SOL_PACKET and its option PACKET_IGNORE_OUTGOING (since 4.20; Python 3.11's socket names neither)
+_SOL_PACKET, _PACKET_IGNORE_OUTGOING = 263, 23
 #: how long one wait for a frame lasts before the stop condition is checked again, in seconds
 POLL_S = 0.2
 
@@ -37,6 +39,13 @@ def open_raw(ifname: str) -> socket.socket:
     except OSError as exc:
         sock.close()
         raise TargetError(f"cannot open interface {ifname!r}: {exc.strerror or exc}") from None
+    try:
+        # a socket does not receive what it sends itself, but it does receive what another socket sends out of
+        # the same interface (the answers of `sim serve --workers N`, sent by the last worker): without this
+        # option the first worker woke up for each of them to drop it; older kernels: dropped as before
+        sock.setsockopt(_SOL_PACKET, _PACKET_IGNORE_OUTGOING, 1)
+    except OSError:
+        pass
     return sock
 
 

@@ -114,26 +114,58 @@ _VERSIONS = itertools.count(1)
 
 class Store(dict[tuple[int, int], bytes]):
     """The drive's object values by (index, subindex). ``version`` is new for every store and after every write
-    to an object the unit conversions derive from (FACTOR_OBJECTS), so they can be cached between writes."""
+    to an object the unit conversions derive from (FACTOR_OBJECTS), so they can be cached between writes.
+    ``changes`` counts the writes that changed what the store holds (a value written again as it was is no
+    change): the cyclic exchange compares it to know that nothing was written between two cycles."""
 
-    __slots__ = ("version",)
+    __slots__ = ("version", "changes")
 
     def __init__(self, *args: Any) -> None:
         super().__init__(*args)
         self.version = next(_VERSIONS)
+        self.changes = 0
 
     def __setitem__(self, key: tuple[int, int], value: bytes) -> None:
         if key[0] in FACTOR_OBJECTS:
             self.version = next(_VERSIONS)
+        if dict.get(self, key) != value:
+            self.changes += 1
         super().__setitem__(key, value)
 
     def setdefault(self, key: tuple[int, int], default: bytes) -> bytes:
         self.version = next(_VERSIONS)
+        self.changes += 1
         return super().setdefault(key, default)
 
     def __delitem__(self, key: tuple[int, int]) -> None:
         self.version = next(_VERSIONS)
+        self.changes += 1
         super().__delitem__(key)
+
+    # the other ways a dict changes, counted too (the drive does not use them; a test or a caller might)
+    def update(self, *args: Any, **kwargs: Any) -> None:
+        self.version = next(_VERSIONS)
+        self.changes += 1
+        super().update(*args, **kwargs)
+
+    def pop(self, *args: Any) -> Any:
+        self.version = next(_VERSIONS)
+        self.changes += 1
+        return super().pop(*args)
+
+    def popitem(self) -> tuple[tuple[int, int], bytes]:
+        self.version = next(_VERSIONS)
+        self.changes += 1
+        return super().popitem()
+
+    def clear(self) -> None:
+        self.version = next(_VERSIONS)
+        self.changes += 1
+        super().clear()
+
+    def __ior__(self, other: Any) -> Store:  # type: ignore[override,misc]
+        self.update(other)
+        return self
 
 
 def sdo_abort(index: int, sub: int, code: int) -> SdoAbort:
@@ -226,14 +258,19 @@ class DriveCore:
             plan = self._put_plan = (keys, entries, len(entries), slots)
         store = self._store
         plain = dict.__setitem__
+        held = store.get
+        changed = 0
         for slot, value in zip(plan[3], values):
             if slot is None:
                 continue
             key, size, mask, factor = slot
+            raw = (value & mask).to_bytes(size, "little")
             if factor:
-                store[key] = (value & mask).to_bytes(size, "little")
-            else:
-                plain(store, key, (value & mask).to_bytes(size, "little"))
+                store[key] = raw
+            elif held(key) != raw:
+                plain(store, key, raw)
+                changed += 1
+        store.changes += changed
 
     def value(self, index: int, sub: int = 0) -> Any:
         """The decoded value of an entry (no SDO rules, no side effects): for tests and inspection."""

@@ -270,11 +270,12 @@ class Esc:
         """The master reads ``n`` bytes at ``addr``; False when the ESC refuses (no working counter)."""
         out = bytearray()
         ok = True
+        sms = self.sms()  # the list the segments come from (only an ECAT write of the SM registers renews it)
         for lo, hi, smn in self._segments(addr, n):
             if smn is None:
                 out += self._read_plain(lo, hi - lo)
                 continue
-            sm = self.sm(smn)
+            sm = sms[smn]
             if self._sm_pdi_off[smn]:
                 ok = False
                 out += bytes(hi - lo)
@@ -329,13 +330,14 @@ class Esc:
         ok = True
         touched_registers = False
         done: list[tuple[int, bool]] = []
+        sms = self.sms()  # as in ecat_read; the loop below renews nothing (registers are handled after it)
         for lo, hi, smn in self._segments(addr, len(data)):
             chunk = data[lo - addr:hi - addr]
             if smn is None:
                 self._write_plain(lo, chunk)
                 touched_registers = touched_registers or lo < R.PROCESS_RAM
                 continue
-            sm = self.sm(smn)
+            sm = sms[smn]
             if self._sm_pdi_off[smn] or not sm.ecat_writes or (sm.mailbox and self._sm_full[smn]):
                 ok = False
                 continue
