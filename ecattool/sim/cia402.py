@@ -5,8 +5,12 @@ Table 4.1.1, HDT §4.03.1, Control Techniques Table 7.2); the family differences
 :class:`Cia402`:
 * Control Techniques: in PRE-OP/SAFE-OP, Shutdown must not leave SWITCH ON DISABLED (7.3.1); modes of
   operation cannot change in OPERATION ENABLED or QUICK STOP ACTIVE.
-* quick stop option code 605Ah: 0..4 end in SWITCH ON DISABLED, 5..8 stay in QUICK STOP ACTIVE (and allow
+* quick stop option code 605Ah: 0 disables the drive function at once (SWITCH ON DISABLED); 1..4 ramp down in
+  QUICK STOP ACTIVE and then make transition 12 to SWITCH ON DISABLED by themselves ("automatic transition when
+  the quick stop function is completed", CT Table 7.7); 5..8 ramp down and stay in QUICK STOP ACTIVE (and allow
   transition 16 back to OPERATION ENABLED).
+* fault reaction (605Eh, the drive passes the ramp in): a fault while the axis moves holds FAULT REACTION ACTIVE
+  while it ramps down, then FAULT (transition 14); without a ramp (0: disable drive, motor free) FAULT at once.
 
 Halt (controlword bit 8) and homing (mode 6) keep their state here; what the option codes and homing methods
 mean per family is decided by the drive application (``ecattool.sim.drive``), which reads the dictionary.
@@ -110,8 +114,14 @@ class Cia402:
         self.target: Fraction | None = None
         #: the profile move running towards ``target`` (planned on the first step after the set-point)
         self.move: ProfileMove | None = None
-        #: the quick-stop ramp of QUICK STOP ACTIVE (option codes 5-8), increments/s² (None: within the cycle)
+        #: the ramp of QUICK STOP ACTIVE (option codes 1-8), increments/s² (None: within the cycle)
         self.quick_stop_ramp: Fraction | None = None
+        #: the quick stop option code the running quick stop follows (1-4 leave QUICK STOP ACTIVE at standstill)
+        self.quick_stop_option = 2
+        #: the ramp of FAULT REACTION ACTIVE (605Eh), increments/s² (None: FAULT at once)
+        self.fault_ramp: Fraction | None = None
+        #: transitions the drive made by itself during :meth:`step` (12, 14), for the drive to report
+        self.automatic: list[tuple[State, State]] = []
         #: the homing acceleration 609Ah in increments/s² (None: the search starts at full speed)
         self.homing_acceleration: Fraction | None = None
         self.target_reached = True
@@ -229,8 +239,9 @@ class Cia402:
                 self.move = None
                 if self.homing is Homing.IN_PROGRESS:
                     self.homing = Homing.NOT_STARTED
-                if quick_stop_option in (0, 1, 2, 3, 4):
-                    go(State.SWITCH_ON_DISABLED)
+                self.quick_stop_option = quick_stop_option
+                if quick_stop_option not in (5, 6, 7, 8) and not (self.quick_stop_ramp and self.velocity):
+                    go(State.SWITCH_ON_DISABLED)  # 0 (disable drive function), or already at standstill
             elif shutdown:
                 go(State.READY)
             elif switch_on:
@@ -246,13 +257,26 @@ class Cia402:
             self._stop()
         return moves
 
-    def fault(self, code: int) -> list[tuple[State, State]]:
+    def fault(self, code: int, ramp: Fraction | None = None) -> list[tuple[State, State]]:
+        """A fault: FAULT REACTION ACTIVE, then FAULT — at once, or (``ramp`` increments/s², the fault reaction
+        605Eh, while the power stage is on and the axis moves) once :meth:`step` has ramped it to standstill."""
         moves: list[tuple[State, State]] = []
+        self.fault_code = code
+        if self.state is State.FAULT_REACTION:
+            return moves  # the running reaction goes on
         if self.state is not State.FAULT:
             moves.append((self.state, State.FAULT_REACTION))
+            powered = self.state in (State.OPERATION_ENABLED, State.QUICK_STOP)
+            if ramp and powered and self.velocity:
+                self.state = State.FAULT_REACTION
+                self.fault_ramp = ramp
+                self.target = None
+                self.move = None
+                if self.homing is Homing.IN_PROGRESS:
+                    self.homing = Homing.NOT_STARTED
+                return moves
             moves.append((State.FAULT_REACTION, State.FAULT))
             self.state = State.FAULT
-        self.fault_code = code
         self._stop()
         return moves
 
@@ -304,8 +328,8 @@ class Cia402:
         convert them to increments per second (per second²) and back. ``profile`` is what PP and PV move by
         (increments; without it PP runs at ``profile_velocity`` with ``acceleration`` both ways);
         ``halt_deceleration`` (increments/s²) is the ramp a halt uses; None or 0 stops within the cycle."""
-        if self.state is State.QUICK_STOP and self.quick_stop_ramp and self.velocity:
-            self._slow_down(dt, self.quick_stop_ramp, inc_per_s, vel_from_inc_per_s)
+        if self.state is State.QUICK_STOP or self.state is State.FAULT_REACTION:
+            self._reaction_step(dt, inc_per_s, vel_from_inc_per_s)
             return
         if self.state is not State.OPERATION_ENABLED:
             self.velocity = Fraction(0)
@@ -385,6 +409,27 @@ class Cia402:
             self.target = None
             self.move = None
             self.target_reached = True
+
+    def _reaction_step(self, dt: Fraction, inc_per_s: _Convert, vel_from_inc_per_s: _Convert) -> None:
+        """One cycle of a quick stop or a fault reaction: ramp down, and at standstill make the automatic
+        transition — 12 (QUICK STOP ACTIVE -> SWITCH ON DISABLED, option codes 1-4) or 14 (FAULT REACTION ACTIVE
+        -> FAULT)."""
+        ramp = self.quick_stop_ramp if self.state is State.QUICK_STOP else self.fault_ramp
+        if ramp and self.velocity:
+            self._slow_down(dt, ramp, inc_per_s, vel_from_inc_per_s)
+        else:
+            self.velocity = Fraction(0)
+        if self.velocity:
+            return
+        if self.state is State.FAULT_REACTION:
+            self.automatic.append((State.FAULT_REACTION, State.FAULT))
+            self.state = State.FAULT
+            self.fault_ramp = None
+            self._stop()
+        elif self.quick_stop_option not in (5, 6, 7, 8):
+            self.automatic.append((State.QUICK_STOP, State.SWITCH_ON_DISABLED))
+            self.state = State.SWITCH_ON_DISABLED
+            self._stop()
 
     def _halt_step(self, mode: int, dt: Fraction, deceleration: Fraction | None, inc_per_s: _Convert,
                    vel_from_inc_per_s: _Convert) -> None:

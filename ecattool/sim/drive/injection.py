@@ -17,7 +17,7 @@ class Injection(DriveCore):
 
     def inject_fault(self, code: int, data: bytes = b"") -> None:
         """A drive fault: FAULT REACTION ACTIVE -> FAULT, 603Fh = code, EMCY with the code."""
-        self._cia_moves(self.cia.fault(code), f"fault 0x{code:04X}")
+        self._cia_moves(self.cia.fault(code, hh.fault_reaction_ramp(self, code)), f"fault 0x{code:04X}")
         self.emcy(code, data)
         self._refresh_inputs()
 
@@ -45,7 +45,7 @@ class Injection(DriveCore):
         elif end == "SWITCH_ON_DISABLED":
             self._cia_moves(self.cia.communication_lost(), "communication lost")
         elif end == "QUICK_STOP" and self.cia.state is State.OPERATION_ENABLED:
-            option = self._read_int(0x605A, 0) or 2
+            option = hh.quick_stop_option(self)
             self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
             self._cia_moves(self.cia.controlword_written(self.cia.controlword & ~0x04 | 0x02, ecat_op=False,
                                                         quick_stop_option=option),

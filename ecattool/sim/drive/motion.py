@@ -47,8 +47,9 @@ class Motion(DriveCore):
     def _on_controlword(self, sub: int, value: int | None) -> None:
         cw = value or 0
         prev = self.cia.controlword
-        option = self._read_int(0x605A, 0) or 2
-        self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
+        option = hh.quick_stop_option(self)
+        if self.cia.state is not State.QUICK_STOP:  # a running quick stop keeps its ramp
+            self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
         moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP, quick_stop_option=option)
         self._cia_moves(moves, f"controlword 0x{cw:04X}")
         if self.cia.state is State.OPERATION_ENABLED and self.mode() == PP:
@@ -131,6 +132,10 @@ class Motion(DriveCore):
             )
             if homing_before is not self.cia.homing:
                 hh.after_step(self, homing_before)
+            if self.cia.automatic:
+                done, self.cia.automatic = self.cia.automatic, []
+                self._cia_moves(done, "fault reaction completed" if done[0][0] is State.FAULT_REACTION
+                                else f"quick stop completed, 605Ah = {self.cia.quick_stop_option}")
         self._refresh_inputs(mode)  # the step changes no mode (6061h)
 
     def _profile(self, mode: int) -> Profile:
