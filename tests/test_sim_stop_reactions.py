@@ -186,3 +186,76 @@ def test_ct_fault_reaction_is_ignored_for_trips():
     w(d, 0x605E, 0, 2, 2)
     d.inject_trip(31)
     assert d.cia402_state is State.FAULT and d.internal_velocity == 0
+
+
+# --- HDT profile type -1: linear ramp with torque limit ---------------------------------------------------------
+REV = 65536  # HDT: 65536 pulses per motor revolution with the default factors
+
+
+def _hdt_move_into_an_obstacle(profile_type: int) -> Drive:
+    """10 revolutions at 600 rpm, 6000 rpm/s both ways, with an obstacle 3 revolutions out."""
+    d = at("hdt", OP)
+    w(d, 0x6060, 0, 1, 1)
+    for index, value, size in ((0x6086, profile_type, 2), (0x6081, 600, 4), (0x6083, 6000, 4), (0x6084, 6000, 4)):
+        w(d, index, 0, value, size)
+    for cw in (0x06, 0x07, 0x0F):
+        w(d, 0x6040, 0, cw, 2)
+    d.set_obstacle(3 * REV)
+    w(d, 0x607A, 0, 10 * REV, 4)
+    w(d, 0x6040, 0, 0x1F, 2)
+    return d
+
+
+def test_hdt_profile_type_minus_1_stops_at_an_obstacle_and_resumes():
+    manual_says(HDT_TEXT, 4188, "a trapezoidal shape. However, if the positioning is blocked by an obstacle, the "
+                                "algorithm")
+    manual_says(HDT_TEXT, 4191, "When the torque falls below its limit, the positioning is resumed to reach the "
+                                "chosen")
+    manual_says(HDT_TEXT, 4194, "In this mode the position error may not be detected since the position profile "
+                                "adapts to the")
+    d = _hdt_move_into_an_obstacle(-1)
+    d.step(1000)  # 2 s, far longer than the move takes
+    assert r(d, 0x6064, signed=True) == 3 * REV  # held at the obstacle
+    assert r(d, 0x60F4, signed=True) == 0 and r(d, 0x6062, signed=True) == 3 * REV  # the profile adapts
+    sw = r(d, 0x6041)
+    assert sw & 0x6F == 0x27 and not sw & 0x0400 and not sw & 0x2000  # enabled, target not reached, no error
+    d.set_obstacle(None)
+    n = 0
+    while not r(d, 0x6041) & 0x0400 and n < 2000:
+        d.step(1)
+        n += 1
+    assert r(d, 0x6064, signed=True) == 10 * REV
+    # resumed from standstill: 7 revolutions at 10 rev/s with 0.1 s ramps = 0.7 + 0.1 s = 400 cycles of 2 ms
+    assert abs(n - 400) <= 1, n
+
+
+def test_hdt_linear_ramp_at_an_obstacle_runs_into_the_following_error():
+    """Profile type 0 against the same obstacle: the profile runs on, the position error 60F4h passes the window
+    6065h (910 pulses) and after 6066h (200 ms) the drive faults with bit 13 (§4.06.5) and 8611h."""
+    manual_says(HDT_TEXT, 3725, "error window\" (index 6065h). If this period is surpassed the bit 13 of the "
+                                "statusword is set to 1 and the Drive")
+    d = _hdt_move_into_an_obstacle(0)
+    n = 0
+    while d.cia402_state is State.OPERATION_ENABLED and n < 2000:
+        d.step(1)
+        n += 1
+        if d.cia402_state is State.OPERATION_ENABLED and r(d, 0x6064, signed=True) == 3 * REV:
+            assert r(d, 0x6062, signed=True) - 3 * REV == r(d, 0x60F4, signed=True) >= 0
+    assert d.cia402_state is State.FAULT and r(d, 0x603F) == 0x8611
+    assert r(d, 0x6041) & 0x2000
+    assert r(d, 0x6064, signed=True) == 3 * REV
+    w(d, 0x6040, 0, 0x80, 2)
+    assert not r(d, 0x6041) & 0x2000
+
+
+def test_hdt_profile_type_0_without_an_obstacle_moves_as_minus_1():
+    times = {}
+    for kind in (0, -1):
+        d = _hdt_move_into_an_obstacle(kind)
+        d.set_obstacle(None)
+        n = 0
+        while not r(d, 0x6041) & 0x0400 and n < 2000:
+            d.step(1)
+            n += 1
+        times[kind] = n
+    assert times[0] == times[-1] and abs(times[0] - 550) <= 1  # 10 rev: 1.0 + 0.1 s

@@ -39,14 +39,17 @@ class Profile:
     increments/s, acceleration (6083h) and deceleration (6084h, or the family's choice) in increments/s², and
     the jerk time in s of a jerk-limited ramp (0: trapezoidal)."""
 
-    __slots__ = ("velocity", "acceleration", "deceleration", "jerk_time")
+    __slots__ = ("velocity", "acceleration", "deceleration", "jerk_time", "torque_limited")
 
     def __init__(self, velocity: Fraction, acceleration: Fraction, deceleration: Fraction,
-                 jerk_time: Fraction = Fraction(0)) -> None:
+                 jerk_time: Fraction = Fraction(0), torque_limited: bool = False) -> None:
         self.velocity = abs(velocity)
         self.acceleration = abs(acceleration)
         self.deceleration = abs(deceleration)
         self.jerk_time = jerk_time
+        #: the profile generator stops while the axis is blocked and adapts to the measured position (HDT
+        #: §4.07.8 profile type -1, "linear ramp with torque limit")
+        self.torque_limited = torque_limited
 
 
 class State(str, Enum):
@@ -126,7 +129,17 @@ class Cia402:
         self.homing_acceleration: Fraction | None = None
         self.target_reached = True
         self.setpoint_ack = False
+        #: position demand minus actual position, increments (non-zero only while an obstacle blocks the axis)
         self.following_error = Fraction(0)
+        #: an obstacle the axis cannot pass (internal position), and the side of it the axis is on
+        self.obstacle: Fraction | None = None
+        self.obstacle_side = 0
+        #: the profile's position demand where it differs from the actual position (the axis is blocked)
+        self.demand: Fraction | None = None
+        #: statusword bit 13 in profile position: the following error is outside its window too long
+        self.following_error_bit = False
+        #: how long the following error has been outside its window, s
+        self.following_error_s = Fraction(0)
         self.voltage = True
         self.homing = Homing.NOT_STARTED
         #: internal velocity of the homing search (set by the drive when it starts a search)
@@ -146,6 +159,9 @@ class Cia402:
         self.velocity = Fraction(0)
         self.target = None
         self.move = None
+        self.demand = None
+        self.following_error = Fraction(0)
+        self.following_error_s = Fraction(0)
         if self.homing is Homing.IN_PROGRESS:
             self.homing = Homing.NOT_STARTED
 
@@ -200,6 +216,7 @@ class Cia402:
         if s is State.FAULT:
             if fault_reset:
                 self.fault_code = 0
+                self.following_error_bit = False
                 go(State.SWITCH_ON_DISABLED)
             return moves
         if s is State.FAULT_REACTION or cw & 0x80:
@@ -309,6 +326,8 @@ class Cia402:
             sw |= 0x0400
         if mode == PP and self.setpoint_ack:
             sw |= 0x1000
+        if mode == PP and self.following_error_bit:
+            sw |= 0x2000
         if mode in (CSP, CSV) and self.state is State.OPERATION_ENABLED and not self.halted:
             sw |= 0x1000  # the drive follows the command value (0 = target ignored, e.g. while halted)
         return sw
@@ -402,6 +421,11 @@ class Cia402:
                                     profile.acceleration, profile.deceleration or profile.acceleration,
                                     profile.jerk_time, dt)
         position, velocity, done = self.move.step(dt)
+        if self.blocked_at(position):
+            self._blocked_step(position, done, profile.torque_limited)
+            return
+        self.demand = None
+        self.following_error = Fraction(0)
         self.position = position
         self.velocity = vel_from_inc_per_s(velocity)
         if done:
@@ -430,6 +454,44 @@ class Cia402:
             self.automatic.append((State.QUICK_STOP, State.SWITCH_ON_DISABLED))
             self.state = State.SWITCH_ON_DISABLED
             self._stop()
+
+    # --- an obstacle in the way ---------------------------------------------------------------------------
+    def set_obstacle(self, position: Fraction | None) -> None:
+        """Put an obstacle at ``position`` (internal units; None: take it away). It blocks the axis on the side
+        it is on now. Taken away, a plain profile's axis is pulled to the demand it kept (the model has no
+        position-loop dynamics: within the cycle); a torque-limited one plans on from where it stands."""
+        self.obstacle = position
+        self.obstacle_side = 0 if position is None else (1 if position > self.position else -1)
+        if position is None and self.demand is not None:
+            self.position = self.demand
+            self.demand = None
+            self.following_error = Fraction(0)
+            if self.target is None:
+                self.target_reached = True
+
+    def blocked_at(self, position: Fraction) -> bool:
+        """Whether ``position`` lies beyond the obstacle, seen from the axis's side of it."""
+        return self.obstacle is not None and (position - self.obstacle) * self.obstacle_side > 0
+
+    def _blocked_step(self, demand: Fraction, done: bool, torque_limited: bool) -> None:
+        """The profile wants ``demand`` but the obstacle holds the axis. Torque-limited (HDT 6086h = -1): "the
+        algorithm generating the position profile stops" and "adapts to the measured position" — the move is
+        dropped and planned again from standstill at the obstacle next cycle, the set-point kept, no following
+        error. Otherwise the profile runs on: the demand leaves the axis behind (following error)."""
+        assert self.obstacle is not None
+        self.position = self.obstacle
+        self.velocity = Fraction(0)
+        self.target_reached = False
+        if torque_limited:
+            self.move = None
+            self.demand = None
+            self.following_error = Fraction(0)
+            return
+        self.demand = demand
+        self.following_error = demand - self.obstacle
+        if done:  # the generator has finished at the set-point; the axis never got there
+            self.move = None
+            self.target = None
 
     def _halt_step(self, mode: int, dt: Fraction, deceleration: Fraction | None, inc_per_s: _Convert,
                    vel_from_inc_per_s: _Convert) -> None:

@@ -97,6 +97,16 @@ class Injection(DriveCore):
         hh.on_limit_switches(self)
         self._refresh_inputs()
 
+    def set_obstacle(self, position: int | None) -> None:
+        """An obstacle at ``position`` (user units, as 6064h reads; None: taken away) that the axis cannot pass,
+        on the side of it the axis is on now. A profile position move runs into it: with HDT's profile type -1
+        (torque-limited ramp, §4.07.8) the profile stops and resumes once the obstacle is gone; otherwise the
+        profile runs on, the following error 60F4h grows, and past 6065h for 6066h ms the drive faults (8611h)."""
+        internal = None if position is None else self.units.position_to_internal(position - self._home_offset())
+        self.cia.set_obstacle(internal)
+        self._log("inputs", obstacle=position)
+        self._refresh_inputs()
+
     def inject_hdt_alarm(self, alarm: int, code: int) -> None:
         """HDT: alarm FA_n with EMCY ``code``; EMCY bytes 3..6 carry the alarm bitmap (bit n-1)."""
         self.inject_fault(code, (1 << (alarm - 1)).to_bytes(4, "little") + b"\x00")
