@@ -259,3 +259,19 @@ def test_hdt_profile_type_0_without_an_obstacle_moves_as_minus_1():
             n += 1
         times[kind] = n
     assert times[0] == times[-1] and abs(times[0] - 550) <= 1  # 10 rev: 1.0 + 0.1 s
+
+
+def test_communication_lost_with_quick_stop_ramps_to_its_end_without_cycles():
+    """Technosoft 6007h = 3 "Quick stop command" (TS line ~2650) with 605Ah = 2: out of OP no cycle comes, yet
+    the drive ramps down by itself and ends in SWITCH ON DISABLED; with 6007h = 1 the fault 8100h (a non-fatal
+    error, §4.4.11) ramps in FAULT REACTION ACTIVE and ends in FAULT."""
+    manual_says(TS_TEXT, 2650, "+3\tQuick stop command")
+    d = _moving("technosoft-ipos", 2)
+    w(d, 0x6007, 0, 3, 2)
+    d.lose_communication()
+    assert d.cia402_state is State.SWITCH_ON_DISABLED and d.internal_velocity == 0
+    d = _moving("technosoft-ipos", 2)
+    w(d, 0x6007, 0, 1, 2)
+    d.lose_communication()
+    assert d.cia402_state is State.FAULT and d.internal_velocity == 0 and r(d, 0x603F) == 0x8100
+    assert any(e.data.get("reason") == "fault reaction completed" for e in d.events if e.kind == "cia402")

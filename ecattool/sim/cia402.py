@@ -298,7 +298,13 @@ class Cia402:
         return moves
 
     def communication_lost(self) -> list[tuple[State, State]]:
-        """Leaving OP with the power stage on: the drive falls back to SWITCH ON DISABLED."""
+        """Leaving OP with the power stage on: the drive falls back to SWITCH ON DISABLED (a running fault
+        reaction ends in FAULT at once)."""
+        if self.state is State.FAULT_REACTION:
+            self.state = State.FAULT
+            self.fault_ramp = None
+            self._stop()
+            return [(State.FAULT_REACTION, State.FAULT)]
         if self.state in (State.READY, State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP):
             old = self.state
             self.state = State.SWITCH_ON_DISABLED

@@ -54,7 +54,18 @@ class Injection(DriveCore):
             self.cia.velocity = Fraction(0)
             self.cia.target = None
             self.cia.interrupt_homing()
+        self._finish_reaction()
         self._refresh_inputs()
+
+    def _finish_reaction(self) -> None:
+        """Out of OP no process-data cycle steps the model, yet the drive ramps down by itself: a quick stop or
+        fault reaction the lost communication started runs to its end at once (the axis's cycles, counted by
+        the drive's own clock)."""
+        for _ in range(10**6):  # bounded: the slowest documented ramp (HDT 6050h 60 s at 250 us) is 240000
+            if self.esm is EcState.OP or self.cia.state not in (State.QUICK_STOP, State.FAULT_REACTION) \
+                    or not self.cia.velocity:
+                return
+            self.step()
 
     def set_motor_supply(self, present: bool) -> None:
         """The motor supply (+Vmot) is switched on or off. Technosoft (§4.2.2 Remark 2): statusword bit 4
