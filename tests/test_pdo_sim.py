@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import lru_cache
+from pathlib import Path
 
 import pytest
 from hypothesis import given, settings
@@ -106,11 +107,19 @@ def _entry_candidates(device: Device, rules: FamilyRules, d: Direction) -> list[
         bad.append((f"0x{arr.index:04X}:{arr.max_subindex + 1:02X}/32", False))
     bad.append(("gap/8", rules.gaps_allowed))
     bad.append(("gap/4", False))  # legal only if the image is padded back to whole bytes
-    for dummy in sorted(rules.dummy_indices)[:1] + sorted(i for i in rules.dummy_indices if i > 7)[:1]:
-        size = {1: 1, 2: 8, 3: 16, 4: 32, 5: 8, 6: 16, 7: 32}.get(dummy) or device.dictionary.entry(dummy, 0).bit_size
-        allowed = rules.dummies_in_rx if d is Direction.RX else rules.dummies_in_tx
-        bad.append((f"0x{dummy:04X}:00/{size}", allowed))
+    bad.extend(_dummy_candidates(device, rules, d))
     return legal + bad
+
+
+def _dummy_candidates(device: Device, rules: FamilyRules, d: Direction) -> list[tuple[str, bool]]:
+    """Dummy entries for direction ``d``, legal where the family rules allow them there: a CiA-301 data type
+    (0005h, also for a family without dummies, whose drive must refuse it as well) and the family's own dummy
+    objects (Technosoft 207Dh)."""
+    allowed = bool(rules.dummy_indices) and (rules.dummies_in_rx if d is Direction.RX else rules.dummies_in_tx)
+    out = [("0x0005:00/8", allowed)]
+    for dummy in sorted(i for i in rules.dummy_indices if i > 7)[:1]:
+        out.append((f"0x{dummy:04X}:00/{device.dictionary.entry(dummy, 0).bit_size}", allowed))
+    return out
 
 
 def _pdo_candidates(device: Device, rules: FamilyRules, d: Direction) -> list[int]:
@@ -230,6 +239,42 @@ def test_checker_and_simulator_agree(name: str) -> None:
 
     run()
     assert stats["accepted"] > 0 and stats["rejected"] > 0, stats
+
+
+@pytest.mark.parametrize("name", TARGETS)
+def test_dummy_entries_lint_and_simulator_agree_in_both_directions(name: str) -> None:
+    """A dummy entry in each direction, by single writes and (where the device has it) complete access: lint's
+    PDO013 and the simulated drive agree, and both follow the family rules (``dummies_in_rx``/``dummies_in_tx``)
+    — Technosoft §2.3.1 (seed line 1224): "If data types (index 01h - 07h) are mapped, they serve as 'dummy
+    entries' ... This feature is only valid for receive PDOs"; HDT and Control Techniques document no dummies;
+    generic drives CiA-301 dummies in RxPDOs only. A complete access write of a Fixed PDO's mapping that carries
+    a dummy was once passed over silently by the simulator (its read-only entries were skipped)."""
+    seed = (Path(__file__).resolve().parents[1].parent / "shared" / "seeds" / "000_a0ab57c0bda88c2c.txt")
+    assert "This feature is only valid for receive PDOs." in seed.read_text(encoding="utf-8").splitlines()[1223]
+    t = target(name)
+    coe = t.device.mailbox.coe if t.device.mailbox is not None else None
+    accesses = [False] + ([True] if coe is not None and coe.complete_access else [])
+    stats = {"accepted": 0, "rejected": 0, "not witnessed": 0}
+    for d in Direction:
+        legal = [c for c in t.entries[d] if c[1] and not c[0].startswith("0x0005")]
+        own = list(t.rules.rx_mapping_indices if d is Direction.RX else t.rules.tx_mapping_indices)
+        own = own or [p.index for p in t.device.pdos(d)]
+        pdo = own[0] if own else None
+        if pdo is None or not legal:
+            continue
+        for text, allowed in _dummy_candidates(t.device, t.rules, d):
+            spec = f"0x{pdo:04X}={legal[0][0]},{text}"
+            mapping = Mapping.from_text(rx=spec if d is Direction.RX else None,
+                                        tx=spec if d is Direction.TX else None, device=t.device, source="dummy")
+            errors = {f.rule for f in check(t.device, mapping, rules=t.rules) if f.severity is Severity.ERROR}
+            if bool(t.rules.dummy_indices) and not allowed:
+                assert "PDO013" in errors, (name, d, text, errors)
+            if allowed:
+                assert "PDO013" not in errors, (name, d, text, errors)
+            for ca in accesses:
+                _compare(t, mapping, stats, complete_access=ca)
+    # the three families and most ESIs are witnessed; EL1xxx/EM7xxx mappings all omit a Mandatory PDO (PDO015)
+    assert stats["accepted"] + stats["rejected"] > 0 or (stats["not witnessed"] and name.endswith(".xml")), stats
 
 
 def test_complete_access_agrees_with_single_writes() -> None:

@@ -5,8 +5,12 @@ Table 4.1.1, HDT §4.03.1, Control Techniques Table 7.2); the family differences
 :class:`Cia402`:
 * Control Techniques: in PRE-OP/SAFE-OP, Shutdown must not leave SWITCH ON DISABLED (7.3.1); modes of
   operation cannot change in OPERATION ENABLED or QUICK STOP ACTIVE.
-* quick stop option code 605Ah: 0..4 end in SWITCH ON DISABLED, 5..8 stay in QUICK STOP ACTIVE (and allow
+* quick stop option code 605Ah: 0 disables the drive function at once (SWITCH ON DISABLED); 1..4 ramp down in
+  QUICK STOP ACTIVE and then make transition 12 to SWITCH ON DISABLED by themselves ("automatic transition when
+  the quick stop function is completed", CT Table 7.7); 5..8 ramp down and stay in QUICK STOP ACTIVE (and allow
   transition 16 back to OPERATION ENABLED).
+* fault reaction (605Eh, the drive passes the ramp in): a fault while the axis moves holds FAULT REACTION ACTIVE
+  while it ramps down, then FAULT (transition 14); without a ramp (0: disable drive, motor free) FAULT at once.
 
 Halt (controlword bit 8) and homing (mode 6) keep their state here; what the option codes and homing methods
 mean per family is decided by the drive application (``ecattool.sim.drive``), which reads the dictionary.
@@ -35,14 +39,17 @@ class Profile:
     increments/s, acceleration (6083h) and deceleration (6084h, or the family's choice) in increments/s², and
     the jerk time in s of a jerk-limited ramp (0: trapezoidal)."""
 
-    __slots__ = ("velocity", "acceleration", "deceleration", "jerk_time")
+    __slots__ = ("velocity", "acceleration", "deceleration", "jerk_time", "torque_limited")
 
     def __init__(self, velocity: Fraction, acceleration: Fraction, deceleration: Fraction,
-                 jerk_time: Fraction = Fraction(0)) -> None:
+                 jerk_time: Fraction = Fraction(0), torque_limited: bool = False) -> None:
         self.velocity = abs(velocity)
         self.acceleration = abs(acceleration)
         self.deceleration = abs(deceleration)
         self.jerk_time = jerk_time
+        #: the profile generator stops while the axis is blocked and adapts to the measured position (HDT
+        #: §4.07.8 profile type -1, "linear ramp with torque limit")
+        self.torque_limited = torque_limited
 
 
 class State(str, Enum):
@@ -110,13 +117,29 @@ class Cia402:
         self.target: Fraction | None = None
         #: the profile move running towards ``target`` (planned on the first step after the set-point)
         self.move: ProfileMove | None = None
-        #: the quick-stop ramp of QUICK STOP ACTIVE (option codes 5-8), increments/s² (None: within the cycle)
+        #: the ramp of QUICK STOP ACTIVE (option codes 1-8), increments/s² (None: within the cycle)
         self.quick_stop_ramp: Fraction | None = None
+        #: the quick stop option code the running quick stop follows (1-4 leave QUICK STOP ACTIVE at standstill)
+        self.quick_stop_option = 2
+        #: the ramp of FAULT REACTION ACTIVE (605Eh), increments/s² (None: FAULT at once)
+        self.fault_ramp: Fraction | None = None
+        #: transitions the drive made by itself during :meth:`step` (12, 14), for the drive to report
+        self.automatic: list[tuple[State, State]] = []
         #: the homing acceleration 609Ah in increments/s² (None: the search starts at full speed)
         self.homing_acceleration: Fraction | None = None
         self.target_reached = True
         self.setpoint_ack = False
+        #: position demand minus actual position, increments (non-zero only while an obstacle blocks the axis)
         self.following_error = Fraction(0)
+        #: an obstacle the axis cannot pass (internal position), and the side of it the axis is on
+        self.obstacle: Fraction | None = None
+        self.obstacle_side = 0
+        #: the profile's position demand where it differs from the actual position (the axis is blocked)
+        self.demand: Fraction | None = None
+        #: statusword bit 13 in profile position: the following error is outside its window too long
+        self.following_error_bit = False
+        #: how long the following error has been outside its window, s
+        self.following_error_s = Fraction(0)
         self.voltage = True
         self.homing = Homing.NOT_STARTED
         #: internal velocity of the homing search (set by the drive when it starts a search)
@@ -136,6 +159,9 @@ class Cia402:
         self.velocity = Fraction(0)
         self.target = None
         self.move = None
+        self.demand = None
+        self.following_error = Fraction(0)
+        self.following_error_s = Fraction(0)
         if self.homing is Homing.IN_PROGRESS:
             self.homing = Homing.NOT_STARTED
 
@@ -190,6 +216,7 @@ class Cia402:
         if s is State.FAULT:
             if fault_reset:
                 self.fault_code = 0
+                self.following_error_bit = False
                 go(State.SWITCH_ON_DISABLED)
             return moves
         if s is State.FAULT_REACTION or cw & 0x80:
@@ -229,8 +256,9 @@ class Cia402:
                 self.move = None
                 if self.homing is Homing.IN_PROGRESS:
                     self.homing = Homing.NOT_STARTED
-                if quick_stop_option in (0, 1, 2, 3, 4):
-                    go(State.SWITCH_ON_DISABLED)
+                self.quick_stop_option = quick_stop_option
+                if quick_stop_option not in (5, 6, 7, 8) and not (self.quick_stop_ramp and self.velocity):
+                    go(State.SWITCH_ON_DISABLED)  # 0 (disable drive function), or already at standstill
             elif shutdown:
                 go(State.READY)
             elif switch_on:
@@ -246,18 +274,37 @@ class Cia402:
             self._stop()
         return moves
 
-    def fault(self, code: int) -> list[tuple[State, State]]:
+    def fault(self, code: int, ramp: Fraction | None = None) -> list[tuple[State, State]]:
+        """A fault: FAULT REACTION ACTIVE, then FAULT — at once, or (``ramp`` increments/s², the fault reaction
+        605Eh, while the power stage is on and the axis moves) once :meth:`step` has ramped it to standstill."""
         moves: list[tuple[State, State]] = []
+        self.fault_code = code
+        if self.state is State.FAULT_REACTION:
+            return moves  # the running reaction goes on
         if self.state is not State.FAULT:
             moves.append((self.state, State.FAULT_REACTION))
+            powered = self.state in (State.OPERATION_ENABLED, State.QUICK_STOP)
+            if ramp and powered and self.velocity:
+                self.state = State.FAULT_REACTION
+                self.fault_ramp = ramp
+                self.target = None
+                self.move = None
+                if self.homing is Homing.IN_PROGRESS:
+                    self.homing = Homing.NOT_STARTED
+                return moves
             moves.append((State.FAULT_REACTION, State.FAULT))
             self.state = State.FAULT
-        self.fault_code = code
         self._stop()
         return moves
 
     def communication_lost(self) -> list[tuple[State, State]]:
-        """Leaving OP with the power stage on: the drive falls back to SWITCH ON DISABLED."""
+        """Leaving OP with the power stage on: the drive falls back to SWITCH ON DISABLED (a running fault
+        reaction ends in FAULT at once)."""
+        if self.state is State.FAULT_REACTION:
+            self.state = State.FAULT
+            self.fault_ramp = None
+            self._stop()
+            return [(State.FAULT_REACTION, State.FAULT)]
         if self.state in (State.READY, State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP):
             old = self.state
             self.state = State.SWITCH_ON_DISABLED
@@ -285,6 +332,8 @@ class Cia402:
             sw |= 0x0400
         if mode == PP and self.setpoint_ack:
             sw |= 0x1000
+        if mode == PP and self.following_error_bit:
+            sw |= 0x2000
         if mode in (CSP, CSV) and self.state is State.OPERATION_ENABLED and not self.halted:
             sw |= 0x1000  # the drive follows the command value (0 = target ignored, e.g. while halted)
         return sw
@@ -304,8 +353,8 @@ class Cia402:
         convert them to increments per second (per second²) and back. ``profile`` is what PP and PV move by
         (increments; without it PP runs at ``profile_velocity`` with ``acceleration`` both ways);
         ``halt_deceleration`` (increments/s²) is the ramp a halt uses; None or 0 stops within the cycle."""
-        if self.state is State.QUICK_STOP and self.quick_stop_ramp and self.velocity:
-            self._slow_down(dt, self.quick_stop_ramp, inc_per_s, vel_from_inc_per_s)
+        if self.state is State.QUICK_STOP or self.state is State.FAULT_REACTION:
+            self._reaction_step(dt, inc_per_s, vel_from_inc_per_s)
             return
         if self.state is not State.OPERATION_ENABLED:
             self.velocity = Fraction(0)
@@ -380,6 +429,11 @@ class Cia402:
                                     profile.acceleration, profile.deceleration or profile.acceleration,
                                     profile.jerk_time, dt)
         position, velocity, done = self.move.step(dt)
+        if self.blocked_at(position):
+            self._blocked_step(position, done, profile.torque_limited)
+            return
+        self.demand = None
+        self.following_error = Fraction(0)
         self.position = position
         self.velocity = vel_from_inc_per_s(velocity)
         if done:
@@ -387,6 +441,65 @@ class Cia402:
             self.target = None
             self.move = None
             self.target_reached = True
+
+    def _reaction_step(self, dt: Fraction, inc_per_s: _Convert, vel_from_inc_per_s: _Convert) -> None:
+        """One cycle of a quick stop or a fault reaction: ramp down, and at standstill make the automatic
+        transition — 12 (QUICK STOP ACTIVE -> SWITCH ON DISABLED, option codes 1-4) or 14 (FAULT REACTION ACTIVE
+        -> FAULT)."""
+        ramp = self.quick_stop_ramp if self.state is State.QUICK_STOP else self.fault_ramp
+        if ramp and self.velocity:
+            self._slow_down(dt, ramp, inc_per_s, vel_from_inc_per_s)
+        else:
+            self.velocity = Fraction(0)
+        if self.velocity:
+            return
+        if self.state is State.FAULT_REACTION:
+            self.automatic.append((State.FAULT_REACTION, State.FAULT))
+            self.state = State.FAULT
+            self.fault_ramp = None
+            self._stop()
+        elif self.quick_stop_option not in (5, 6, 7, 8):
+            self.automatic.append((State.QUICK_STOP, State.SWITCH_ON_DISABLED))
+            self.state = State.SWITCH_ON_DISABLED
+            self._stop()
+
+    # --- an obstacle in the way ---------------------------------------------------------------------------
+    def set_obstacle(self, position: Fraction | None) -> None:
+        """Put an obstacle at ``position`` (internal units; None: take it away). It blocks the axis on the side
+        it is on now. Taken away, a plain profile's axis is pulled to the demand it kept (the model has no
+        position-loop dynamics: within the cycle); a torque-limited one plans on from where it stands."""
+        self.obstacle = position
+        self.obstacle_side = 0 if position is None else (1 if position > self.position else -1)
+        if position is None and self.demand is not None:
+            self.position = self.demand
+            self.demand = None
+            self.following_error = Fraction(0)
+            if self.target is None:
+                self.target_reached = True
+
+    def blocked_at(self, position: Fraction) -> bool:
+        """Whether ``position`` lies beyond the obstacle, seen from the axis's side of it."""
+        return self.obstacle is not None and (position - self.obstacle) * self.obstacle_side > 0
+
+    def _blocked_step(self, demand: Fraction, done: bool, torque_limited: bool) -> None:
+        """The profile wants ``demand`` but the obstacle holds the axis. Torque-limited (HDT 6086h = -1): "the
+        algorithm generating the position profile stops" and "adapts to the measured position" — the move is
+        dropped and planned again from standstill at the obstacle next cycle, the set-point kept, no following
+        error. Otherwise the profile runs on: the demand leaves the axis behind (following error)."""
+        assert self.obstacle is not None
+        self.position = self.obstacle
+        self.velocity = Fraction(0)
+        self.target_reached = False
+        if torque_limited:
+            self.move = None
+            self.demand = None
+            self.following_error = Fraction(0)
+            return
+        self.demand = demand
+        self.following_error = demand - self.obstacle
+        if done:  # the generator has finished at the set-point; the axis never got there
+            self.move = None
+            self.target = None
 
     def _halt_step(self, mode: int, dt: Fraction, deceleration: Fraction | None, inc_per_s: _Convert,
                    vel_from_inc_per_s: _Convert) -> None:

@@ -47,6 +47,11 @@ class Behaviour:
     #: loss there is an undervoltage fault with this code (Technosoft §4.2.2 Remark 2, EMCY 3220h); None: bit 4
     #: is the CiA-402 "voltage enabled" of the power stage
     supply_undervoltage_fault: int | None = None
+    #: the error codes whose fault reaction follows 605Eh (a ramp before FAULT); None: every fault
+    #: (CiA-402). Technosoft §4.4.11 "non-fatal errors": under-/over-voltage, drive and motor over-temperature,
+    #: communication error (EMCY codes of Table 3.1.3); HDT §4.03.10's table: 3220h, 8611h; Control Techniques
+    #: 7.3.5 "ignored if the drive is tripped" (every simulated fault is a trip): none
+    fault_reaction_codes: frozenset[int] | None = None
 
     @property
     def supply_bit_always(self) -> bool:
@@ -58,12 +63,12 @@ BEHAVIOURS: dict[str, Behaviour] = {
         mapping_busy=A.DATA_CANNOT_BE_STORED_STATE, assign_busy=A.DATA_CANNOT_BE_STORED_STATE,
         unsupported_mode_emcy=0xFF04, mode_display_on_enable=True, pdo_length_emcy=0x8220,
         homing_stop_on_bit4_clear=False, homing_unavailable_emcy=0xFF03, homing_busy_warning=True,
-        supply_undervoltage_fault=0x3220,
+        supply_undervoltage_fault=0x3220, fault_reaction_codes=frozenset({0x3210, 0x3220, 0x4280, 0x4310, 0x8100}),
     ),
     "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
-                     home_offset_continuous=True),
+                     home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611})),
     "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
-                                   homing_current_outside_enabled=True),
+                                   homing_current_outside_enabled=True, fault_reaction_codes=frozenset()),
     "generic": Behaviour(homing_current_outside_enabled=True),
 }
 

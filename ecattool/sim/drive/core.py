@@ -333,7 +333,13 @@ class DriveCore:
     def _user_position(self) -> int:  # motion
         raise NotImplementedError
 
+    def _home_offset(self) -> int:  # motion
+        raise NotImplementedError
+
     def option_end_state(self, index: int, option: int, default: str) -> str:  # injection
+        raise NotImplementedError
+
+    def inject_fault(self, code: int, data: bytes = b"") -> None:  # injection
         raise NotImplementedError
 
     def _esm_effects(self, previous: EcState, state: EcState) -> None:  # family

@@ -1,4 +1,5 @@
-"""Halt (controlword bit 8) and homing mode (6) of the simulated drive, per family.
+"""Halt (controlword bit 8), quick stop (605Ah), fault reaction (605Eh) and homing mode (6) of the simulated drive,
+per family.
 
 The state of both lives in :class:`~ecattool.sim.cia402.Cia402`; this module decides what the option codes
 and homing methods mean, reading the drive's dictionary the way the manuals describe it:
@@ -260,10 +261,39 @@ def halt_decel_for_step(drive: DriveCore, mode: int) -> Fraction | None:
     return halt_deceleration(drive)
 
 
+def quick_stop_option(drive: DriveCore) -> int:
+    """The quick stop option code 605Ah a quick stop follows: 0-8 as stored (CiA-402 meanings; a family whose
+    manual leaves 3, 4, 7 or 8 out refuses them by its value list — HDT, Control Techniques Table 7.9 — or
+    stores them as reserved — Technosoft §4.4.7 — and then they act as CiA-402 defines them); a drive without
+    605Ah, and any other (manufacturer-specific or reserved) value, acts as the default 2."""
+    value = drive._read_int(0x605A, 0) if (0x605A, 0) in drive._entries else None
+    return value if value is not None and 0 <= value <= 8 else 2
+
+
 def quick_stop_ramp(drive: DriveCore, option: int) -> Fraction | None:
-    """The ramp of QUICK STOP ACTIVE for quick stop option codes 5-8 (605Ah; CiA-402: 5 slow-down ramp, 6 quick-
-    stop ramp, 7/8 current/voltage limit — the model has no torque: the quick-stop ramp), increments/s²; None
-    where the state ends at once (0-4: SWITCH ON DISABLED)."""
-    if option not in (5, 6, 7, 8):
+    """The ramp of QUICK STOP ACTIVE for quick stop option code ``option`` (605Ah), increments/s²; None where the
+    drive function is disabled at once (0). 1 and 5 the slow-down ramp, 2 and 6 the quick-stop ramp, each as the
+    family's manual names them (:func:`halt_deceleration`: Technosoft §4.4.7 6083h / 6085h, HDT §4.03.6 604Eh
+    over 6050h / 6051h, Control Techniques 7.3.2 "the deceleration value of the used mode of operations" = 6084h
+    / 6085h); 3, 4, 7, 8 (current / voltage limit) the quick-stop ramp: the model has no torque
+    (docs/decisions.md, "Simulator: quick stop and fault reaction")."""
+    if option == 0:
         return None
-    return halt_deceleration(drive, 1 if option == 5 else 2)
+    return halt_deceleration(drive, 1 if option in (1, 5) else 2)
+
+
+def fault_reaction_ramp(drive: DriveCore, code: int) -> Fraction | None:
+    """The ramp a fault with error code ``code`` stops the axis with before FAULT (605Eh), increments/s²; None:
+    FAULT at once. Only the faults the family's manual gives a reaction (``Behaviour.fault_reaction_codes``:
+    Technosoft §4.4.11's non-fatal errors, HDT §4.03.10's alarm table; Control Techniques 7.3.5 "ignored if the
+    drive is tripped", and each of its simulated faults is a trip). 0 disables the drive (motor free); 1 the
+    slow-down ramp, 2 the quick-stop ramp; 3 (HDT: stop within the fault torque limit 201Dh; CiA-402 3/4
+    current / voltage limit) the quick-stop ramp as a stand-in; Technosoft's −1 "no action" and other values:
+    FAULT at once."""
+    codes = drive.behaviour.fault_reaction_codes
+    if (0x605E, 0) not in drive._entries or (codes is not None and code not in codes):
+        return None
+    option = drive._read_int(0x605E, 0)
+    if option not in (1, 2, 3, 4):
+        return None
+    return halt_deceleration(drive, 1 if option == 1 else 2) or None

@@ -17,7 +17,7 @@ class Injection(DriveCore):
 
     def inject_fault(self, code: int, data: bytes = b"") -> None:
         """A drive fault: FAULT REACTION ACTIVE -> FAULT, 603Fh = code, EMCY with the code."""
-        self._cia_moves(self.cia.fault(code), f"fault 0x{code:04X}")
+        self._cia_moves(self.cia.fault(code, hh.fault_reaction_ramp(self, code)), f"fault 0x{code:04X}")
         self.emcy(code, data)
         self._refresh_inputs()
 
@@ -45,7 +45,7 @@ class Injection(DriveCore):
         elif end == "SWITCH_ON_DISABLED":
             self._cia_moves(self.cia.communication_lost(), "communication lost")
         elif end == "QUICK_STOP" and self.cia.state is State.OPERATION_ENABLED:
-            option = self._read_int(0x605A, 0) or 2
+            option = hh.quick_stop_option(self)
             self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
             self._cia_moves(self.cia.controlword_written(self.cia.controlword & ~0x04 | 0x02, ecat_op=False,
                                                         quick_stop_option=option),
@@ -54,7 +54,18 @@ class Injection(DriveCore):
             self.cia.velocity = Fraction(0)
             self.cia.target = None
             self.cia.interrupt_homing()
+        self._finish_reaction()
         self._refresh_inputs()
+
+    def _finish_reaction(self) -> None:
+        """Out of OP no process-data cycle steps the model, yet the drive ramps down by itself: a quick stop or
+        fault reaction the lost communication started runs to its end at once (the axis's cycles, counted by
+        the drive's own clock)."""
+        for _ in range(10**6):  # bounded: the slowest documented ramp (HDT 6050h 60 s at 250 us) is 240000
+            if self.esm is EcState.OP or self.cia.state not in (State.QUICK_STOP, State.FAULT_REACTION) \
+                    or not self.cia.velocity:
+                return
+            self.step()
 
     def set_motor_supply(self, present: bool) -> None:
         """The motor supply (+Vmot) is switched on or off. Technosoft (§4.2.2 Remark 2): statusword bit 4
@@ -95,6 +106,16 @@ class Injection(DriveCore):
                 elif was and not now:
                     self.emcy(0x0000)
         hh.on_limit_switches(self)
+        self._refresh_inputs()
+
+    def set_obstacle(self, position: int | None) -> None:
+        """An obstacle at ``position`` (user units, as 6064h reads; None: taken away) that the axis cannot pass,
+        on the side of it the axis is on now. A profile position move runs into it: with HDT's profile type -1
+        (torque-limited ramp, §4.07.8) the profile stops and resumes once the obstacle is gone; otherwise the
+        profile runs on, the following error 60F4h grows, and past 6065h for 6066h ms the drive faults (8611h)."""
+        internal = None if position is None else self.units.position_to_internal(position - self._home_offset())
+        self.cia.set_obstacle(internal)
+        self._log("inputs", obstacle=position)
         self._refresh_inputs()
 
     def inject_hdt_alarm(self, alarm: int, code: int) -> None:

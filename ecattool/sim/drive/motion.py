@@ -17,7 +17,7 @@ from ecattool.sim.units import to_int
 _ZERO = Fraction(0)
 _ENABLED = State.OPERATION_ENABLED
 #: the actual values every cycle refreshes, in the order :meth:`Motion._refresh_inputs` gives them
-_ACTUAL_VALUES = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0))
+_ACTUAL_VALUES = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0), (0x60F4, 0))
 
 
 class Motion(DriveCore):
@@ -47,8 +47,9 @@ class Motion(DriveCore):
     def _on_controlword(self, sub: int, value: int | None) -> None:
         cw = value or 0
         prev = self.cia.controlword
-        option = self._read_int(0x605A, 0) or 2
-        self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
+        option = hh.quick_stop_option(self)
+        if self.cia.state is not State.QUICK_STOP:  # a running quick stop keeps its ramp
+            self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
         moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP, quick_stop_option=option)
         self._cia_moves(moves, f"controlword 0x{cw:04X}")
         if self.cia.state is State.OPERATION_ENABLED and self.mode() == PP:
@@ -131,7 +132,32 @@ class Motion(DriveCore):
             )
             if homing_before is not self.cia.homing:
                 hh.after_step(self, homing_before)
+            if self.cia.following_error:
+                self._supervise_following_error(dt)
+            if self.cia.automatic:
+                done, self.cia.automatic = self.cia.automatic, []
+                self._cia_moves(done, "fault reaction completed" if done[0][0] is State.FAULT_REACTION
+                                else f"quick stop completed, 605Ah = {self.cia.quick_stop_option}")
         self._refresh_inputs(mode)  # the step changes no mode (6061h)
+
+    def _supervise_following_error(self, dt: Fraction) -> None:
+        """A following error beyond the window 6065h (user position units) for longer than 6066h ms sets
+        statusword bit 13 and faults the drive with 8611h (HDT §4.06.5: "If this period is surpassed the bit 13
+        of the statusword is set to 1 and the Drive switch to the Fault state"; CiA-402 for the others). A drive
+        without both objects, or 6065h = FFFFFFFFh (CiA-402: supervision off), does not supervise."""
+        cia = self.cia
+        window, timeout = self._read_int(0x6065, 0), self._read_int(0x6066, 0)
+        if window is None or timeout is None or window == 0xFFFFFFFF or cia.state is not _ENABLED:
+            return
+        if abs(self.units.position_to_user(cia.following_error)) <= window:
+            cia.following_error_s = _ZERO
+            return
+        cia.following_error_s += dt
+        if cia.following_error_s * 1000 > timeout:
+            cia.following_error_bit = True
+            self._log("following_error", window=window, timeout_ms=timeout,
+                      error=self.units.position_to_user_int(cia.following_error))
+            self.inject_fault(0x8611)
 
     def _profile(self, mode: int) -> Profile:
         """What a profile move runs by, in increments (the family's reading of its manual):
@@ -161,7 +187,10 @@ class Motion(DriveCore):
                 else:
                     jerk = acc(0x2011)
                     jerk_time = up / jerk if jerk else _ZERO
-        return Profile(velocity, up, down, jerk_time)
+        # HDT §4.07.8 profile type -1, "linear ramp with torque limit": the trapezoid of 0, whose generator stops
+        # while an obstacle blocks the axis (the model has no torque: :meth:`set_obstacle` is the obstacle)
+        torque_limited = mode == PP and self.family == "hdt" and read(0x6086, 0) == -1
+        return Profile(velocity, up, down, jerk_time, torque_limited)
 
     def _refresh_inputs(self, mode: int | None = None) -> None:
         """Actual values from the state: 6041h, 6063h/6064h, 606Ch, 603Fh (``mode``: 6061h, where the caller
@@ -175,8 +204,9 @@ class Motion(DriveCore):
         if self.family == "technosoft-ipos" and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
         user_position = self._user_position()
-        self._put_all(_ACTUAL_VALUES, (sw, to_int(cia.position), user_position, user_position,
-                                       self.units.velocity_to_user_int(cia.velocity), cia.fault_code))
+        error = self.units.position_to_user_int(cia.following_error) if cia.following_error else 0
+        self._put_all(_ACTUAL_VALUES, (sw, to_int(cia.position), user_position, user_position + error,
+                                       self.units.velocity_to_user_int(cia.velocity), cia.fault_code, error))
 
     def _home_offset(self) -> int:
         """607Ch where the family adds it to the measured position at all times (HDT), else 0."""

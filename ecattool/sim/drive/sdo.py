@@ -171,6 +171,14 @@ class SdoServer(PdoConfig):
             self._after_write[index](sub, value)
         return False
 
+    def _ca_unchanged(self, index: int, sub: int, chunk: bytes) -> None:
+        """A read-only entry inside a complete access download: passed over when the data carries the value it
+        holds, refused (0601 0002h) when the write would change it — a Fixed PDO's mapping written by complete
+        access is not silently left as it was (as a single write of it is refused)."""
+        held = self._store.get((index, sub), b"")
+        if int.from_bytes(chunk, "little") != int.from_bytes(held[:len(chunk)], "little"):
+            raise sdo_abort(index, sub, A.READ_ONLY)
+
     def _ca_download(self, index: int, sub: int, data: bytes) -> None:
         """Complete access download: applied as the single writes a master would make, all or nothing."""
         self._ca_supported(index, sub)
@@ -197,8 +205,12 @@ class SdoServer(PdoConfig):
                 for s, chunk in writes[1:]:
                     if self._entries[(index, s)].access.write:
                         self._download(index, s, chunk)
+                    else:
+                        self._ca_unchanged(index, s, chunk)
                 if e0.access.write:
                     self._download(index, 0, count)
+                else:
+                    self._ca_unchanged(index, 0, count)
             else:
                 for s, chunk in writes:
                     self._download(index, s, chunk)
