@@ -20,6 +20,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 from ecattool.errors import EcatToolError, InputError, Location
 from ecattool.esi.model import Device
@@ -29,6 +31,8 @@ from ecattool.project import familycycle
 from ecattool.project.loader import LoadedProject, parse_project
 from ecattool.project.resolve import Slave, SlaveKind, is_axis, resolve_device, resolve_parameters
 from ecattool.project.rules import disable
+from ecattool.startup.config import SlaveConfig
+from ecattool.startup.install import MasterKind
 from ecattool.startup.model import StartupList
 
 __all__ = ["ALLOW_ERRORS_HELP", "Machine", "Slave", "SlaveKind", "is_axis", "load_machine"]
@@ -118,6 +122,41 @@ class Machine:
         """(name, device as it runs) of every slave in bus order (an InputError for one that did not resolve)."""
         self._refuse_unresolved("put the project's devices on a bus", self.slaves)
         return [(s.name, s.device) for s in self.in_bus_order() if s.device is not None]
+
+    def configs(self, *, allow_errors: bool = False) -> list[SlaveConfig]:
+        """One slave configuration per slave, in bus order (refused on lint errors unless ``allow_errors``)."""
+        self.refuse_errors("export the startup configuration", allow_errors=allow_errors)
+        return [slave_config(s) for s in self.in_bus_order()]
+
+    def install(self, master: Any, *, kind: MasterKind | None = None, exact_revision: bool = False,
+                allow_errors: bool = False, module: ModuleType | None = None) -> list[int]:
+        """Attach every slave's startup list to ``master`` in a master program, with the identity check
+        (:func:`ecattool.startup.install.install`): a ``pysoem.Master`` after ``config_init()`` gets a
+        ``config_func`` per slave; a ``kickcat.Bus`` after ``init()`` is written at once. Returns the positions
+        configured; refused on lint errors unless ``allow_errors``."""
+        from ecattool.startup.install import install
+
+        self.refuse_errors("install the startup list", allow_errors=allow_errors)
+        return install([slave_config(s) for s in self.in_bus_order()], master, kind=kind,
+                       exact_revision=exact_revision, module=module)
+
+
+def slave_config(s: Slave) -> SlaveConfig:
+    """The slave configuration (identity, startup list, assigned PDOs, sync managers, DC) of one resolved slave."""
+    if s.device is None:
+        raise InputError(f"drive {s.drive.name!r}: the device did not resolve (see lint)")
+    from ecattool.project.steps import dc_assign_activate
+
+    dc = s.drive.dc
+    cfg = SlaveConfig.from_device(
+        s.device, s.startup, mapping=s.mapping, position=s.position, name=s.drive.name,
+        dc_opmode=dc.opmode if dc is not None else None,
+        dc_cycle_ns=dc.cycle_ns if dc is not None else None,
+        dc_shift_ns=dc.shift_ns if dc is not None else None,
+    )
+    if dc is not None and dc.assign_activate is not None:
+        cfg.dc_assign_activate = dc_assign_activate(s)
+    return cfg
 
 
 def build_slave(lp: LoadedProject, i: int) -> Slave:
