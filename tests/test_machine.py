@@ -245,3 +245,30 @@ def test_a_project_wide_disable_holds_for_commission_too(tmp_path):
     machine = load_machine(p)
     assert machine.findings == []
     assert commission(machine).ok
+
+
+def test_dc_is_resolved_once_per_slave_and_consumers_read_it() -> None:
+    """DC is a typed field of the slave: AssignActivate from the project or its ESI OpMode, the SYNC0 cycle and
+    shift (the project's, else the OpMode's), SYNC1 where the OpMode gives a cycle; export writes that."""
+    import copy
+
+    from ecattool.esi.model import DcOpMode
+    from ecattool.project.machine import SlaveDc, slave_config
+    from ecattool.project.model import DcConfig
+    from ecattool.project.resolve import resolve_dc
+
+    (s,) = load_machine(sample("generic_esi")).slaves  # dc: {opmode: DC, cycle_ns: 1000000}; the ESI: #x300, shift 0
+    assert s.dc == SlaveDc(0x0300, "DC", 1_000_000, 0, None, None) and s.dc.active
+    cfg = slave_config(s)
+    assert (cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns) == (0x0300, 1_000_000, 0)
+    (ct,) = load_machine(sample("controltechniques")).slaves  # dc: {assign_activate: 0x0300, cycle_ns: 1000000}
+    assert ct.dc == SlaveDc(0x0300, None, 1_000_000, None)
+    (hdt,) = load_machine(sample("hdt")).slaves
+    assert hdt.dc is None and slave_config(hdt).dc_assign_activate is None
+    device = copy.copy(s.device)
+    device.dc_opmodes = [DcOpMode("Sync01", "", 0x0700, 2_000_000, None, 1000, None, 500_000, None, 100, None)]
+    dc = resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="Sync01")}), device)
+    assert dc == SlaveDc(0x0700, "Sync01", 2_000_000, 1000, 500_000, 100)
+    assert resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="nope")}), device) is None  # PRJ040's
+    assert resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="nope", assign_activate=0)}),
+                      device) == SlaveDc(0, "nope", None, None)

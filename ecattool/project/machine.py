@@ -29,13 +29,21 @@ from ecattool.fileio import read_bytes
 from ecattool.findings import Finding, Severity
 from ecattool.project import familycycle
 from ecattool.project.loader import LoadedProject, parse_project
-from ecattool.project.resolve import Slave, SlaveKind, is_axis, resolve_device, resolve_parameters
+from ecattool.project.resolve import (
+    Slave,
+    SlaveDc,
+    SlaveKind,
+    is_axis,
+    resolve_dc,
+    resolve_device,
+    resolve_parameters,
+)
 from ecattool.project.rules import disable
 from ecattool.startup.config import SlaveConfig
 from ecattool.startup.install import MasterKind
 from ecattool.startup.model import StartupList
 
-__all__ = ["ALLOW_ERRORS_HELP", "Machine", "Slave", "SlaveKind", "is_axis", "load_machine"]
+__all__ = ["ALLOW_ERRORS_HELP", "Machine", "Slave", "SlaveDc", "SlaveKind", "is_axis", "load_machine", "slave_config"]
 
 #: the help of the ``--allow-errors`` option every command that acts on a project has
 ALLOW_ERRORS_HELP = ("Act on the project even when lint reports errors (by default a project with lint errors is "
@@ -145,17 +153,10 @@ def slave_config(s: Slave) -> SlaveConfig:
     """The slave configuration (identity, startup list, assigned PDOs, sync managers, DC) of one resolved slave."""
     if s.device is None:
         raise InputError(f"drive {s.drive.name!r}: the device did not resolve (see lint)")
-    from ecattool.project.steps import dc_assign_activate
-
-    dc = s.drive.dc
-    cfg = SlaveConfig.from_device(
-        s.device, s.startup, mapping=s.mapping, position=s.position, name=s.drive.name,
-        dc_opmode=dc.opmode if dc is not None else None,
-        dc_cycle_ns=dc.cycle_ns if dc is not None else None,
-        dc_shift_ns=dc.shift_ns if dc is not None else None,
-    )
-    if dc is not None and dc.assign_activate is not None:
-        cfg.dc_assign_activate = dc_assign_activate(s)
+    cfg = SlaveConfig.from_device(s.device, s.startup, mapping=s.mapping, position=s.position, name=s.drive.name)
+    if s.dc is not None:
+        cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns = s.dc.assign_activate, s.dc.cycle_ns, s.dc.shift_ns
+        cfg.dc_sync1_cycle_ns, cfg.dc_sync1_shift_ns = s.dc.sync1_cycle_ns, s.dc.sync1_shift_ns
     return cfg
 
 
@@ -169,6 +170,7 @@ def build_slave(lp: LoadedProject, i: int) -> Slave:
     resolve_device(lp, i, s)
     if s.device is None:
         return s
+    s.dc = resolve_dc(drive, s.device)
     startup = StartupList(name=drive.name, vendor_id=s.device.vendor_id,
                           product_code=s.device.product_code, revision=s.device.revision)
     params = resolve_parameters(lp, i, s)
@@ -187,7 +189,7 @@ def build_slave(lp: LoadedProject, i: int) -> Slave:
     steps.check_factor_defaults(lp, i, s)
     steps.check_interpolation_period(lp, i, s)
     steps.check_dc(lp, i, s)
-    familycycle.check_dc_cycle(lp, i, s, bool(steps.dc_assign_activate(s)))
+    familycycle.check_dc_cycle(lp, i, s)
     if s.device.source and not s.device.source.startswith("profile:"):
         steps.check_esi(lp, i, s)
     s.findings = disable(s.findings, drive.disable_rules, lp, ("drives", i, "disable_rules"))
