@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ecattool.findings import Finding, Severity
 from ecattool.project.machine import Machine, load_machine, slave_config
 from ecattool.project.resolve import ResolvedDrive
 from ecattool.startup.config import SlaveConfig
@@ -39,3 +40,24 @@ def slave_configs(path: str | Path | Machine, allow_errors: bool = False) -> lis
     """
     machine = path if isinstance(path, Machine) else load_machine(path)
     return machine.configs(allow_errors=allow_errors)
+
+
+#: lint rules whose warnings concern what an export writes (the identity a master checks)
+EXPORT_RULES = frozenset({"esi-product-zero"})
+
+
+def export_warnings(machine: Machine, names: set[str] | None = None) -> list[Finding]:
+    """The lint warnings of the slaves called ``names`` (all by default) that concern what an export writes: a
+    product code 0 the configuration will expect (an EDS without ProductNumber). ``startup export --project``
+    prints them, one line each, so that a warning lint gives is not lost in a file written without a word."""
+    seen: set[tuple[str, str, str]] = set()
+    out = []
+    for s in machine.in_bus_order():
+        if names is not None and s.name not in names:
+            continue
+        for f in s.findings:
+            key = (f.rule, f.message, str(f.location))
+            if f.rule in EXPORT_RULES and f.severity is Severity.WARNING and key not in seen:
+                seen.add(key)
+                out.append(f)
+    return out
