@@ -290,3 +290,32 @@ def test_a_changed_dictionary_file_invalidates_the_esi_entries(cache_dir, tmp_pa
     cache._DEVICES.clear()
     lint_project(p)
     assert len(_entries(cache_dir, "device")) == 2
+
+
+def test_changed_reader_code_is_a_new_entry(cache_dir, monkeypatch, tmp_path):
+    """A development checkout whose esi/od/profiles code changed since an entry was written (same version, same
+    model fields) must not be served the device the old code parsed."""
+    lint_project(ESI_PROJECT)
+    assert len(_entries(cache_dir, "device")) == 1
+    # the digest follows the code: one changed byte in a copy of the packages gives another digest
+    copy = tmp_path / "pkg"
+    for part in ("esi", "od"):
+        for f in (cache.PACKAGE / part).glob("*.py"):
+            (copy / part).mkdir(parents=True, exist_ok=True)
+            (copy / part / f.name).write_bytes(f.read_bytes())
+    before = cache.code_digest(copy, ("esi", "od"))
+    assert cache.code_digest(copy, ("esi", "od")) == before
+    reader = copy / "esi" / "reader.py"
+    reader.write_bytes(reader.read_bytes() + b"\n# changed\n")
+    after = cache.code_digest(copy, ("esi", "od"))
+    assert after != before
+    # another code digest: the entries written before are not read, new ones are written beside them
+    fresh_process(monkeypatch)
+    monkeypatch.setattr(cache, "_code", lambda: after)
+    from ecattool import profiles
+
+    completed = []
+    real = profiles.complete_generic
+    monkeypatch.setattr(profiles, "complete_generic", lambda *a, **k: completed.append(1) or real(*a, **k))
+    assert lint_project(ESI_PROJECT).findings == []
+    assert completed and len(_entries(cache_dir, "device")) == 2 and len(_entries(cache_dir, "check")) == 2

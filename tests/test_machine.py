@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from ecattool.commission import commission
-from ecattool.errors import InputError, SelectionError
+from ecattool.errors import EcatToolError, InputError, SelectionError
 from ecattool.findings import Severity
 from ecattool.pdo.model import Mapping
 from ecattool.profiles.rules import FamilyRules
@@ -111,10 +111,18 @@ def test_an_esi_whose_mapping_objects_contradict_its_pdos_is_refused(tmp_path, c
     assert f.rule == "PRJ027" and f.location.file.endswith("beckhoff_EM7xxx.xml") and f.location.line
     report = commission(machine)
     assert not report.ok and "PRJ027" in report.drives[0].error and "--allow-errors" in report.drives[0].error
-    # acting anyway: the slave runs the dictionary's mapping, another image than the one lint checked
+    # acting anyway: the slave powers on with the dictionary's mapping (as a slave stack does), another layout
+    # than the one lint checked (here of the same 28 bytes, so one I/O cycle cannot tell them apart)
+    from ecattool.od.model import EcState
+    from ecattool.sim import Drive
+
+    drive = Drive.from_device(machine.slaves[0].device)
+    drive.request_state(EcState.PREOP)
+    assert drive.sdo_upload(0x1601, 0) == b"\x01" and drive.sdo_upload(0x1601, 1) == (0x70200B10).to_bytes(4, "little")
+    assert len(machine.slaves[0].mapping.rx[0].entries) == 16
     code, out, _ = run(capsys, "commission", str(p), "--allow-errors", "--json")
-    (drive,) = json.loads(out)["projects"][0]["drives"]
-    assert code == 1 and "output image is 28 bytes, the drive expects 23" in drive["error"]
+    (reported,) = json.loads(out)["projects"][0]["drives"]
+    assert code == 0 and reported["ok"]
 
 
 def test_the_simulators_refusal_reason_reaches_text_json_and_html(tmp_path, capsys):
@@ -211,6 +219,18 @@ def test_a_mapping_object_the_slave_cannot_map_is_a_lint_error_at_the_object(tmp
     errors = [f for f in load_machine(p).findings if f.severity is Severity.ERROR]
     assert [f.rule for f in errors] == ["PRJ027"] and "0x00060120" in errors[0].message
     assert errors[0].location.file.endswith(name) and errors[0].location.line == text[:at].count("\n")
+    # the simulated slave powers on with its dictionary's mapping, as a slave stack does, and refuses it
+    from ecattool.od.model import EcState
+    from ecattool.sim import Drive
+
+    machine = load_machine(p)
+    drive = Drive.from_device(machine.slaves[0].device)
+    drive.request_state(EcState.PREOP)
+    assert drive.sdo_upload(0x1B01, 1) == (0x00060120).to_bytes(4, "little")
+    with pytest.raises(EcatToolError, match=r"0x001E.*PDO 0x1B01 maps an invalid entry 0x00060120"):
+        drive.request_state(EcState.SAFEOP)
+    report = commission(machine, allow_errors=True)
+    assert not report.ok and "0x00060120" in report.drives[0].error
 
 
 def test_a_failed_enable_names_the_setting_that_skips_it(monkeypatch):
@@ -245,3 +265,30 @@ def test_a_project_wide_disable_holds_for_commission_too(tmp_path):
     machine = load_machine(p)
     assert machine.findings == []
     assert commission(machine).ok
+
+
+def test_dc_is_resolved_once_per_slave_and_consumers_read_it() -> None:
+    """DC is a typed field of the slave: AssignActivate from the project or its ESI OpMode, the SYNC0 cycle and
+    shift (the project's, else the OpMode's), SYNC1 where the OpMode gives a cycle; export writes that."""
+    import copy
+
+    from ecattool.esi.model import DcOpMode
+    from ecattool.project.machine import SlaveDc, slave_config
+    from ecattool.project.model import DcConfig
+    from ecattool.project.resolve import resolve_dc
+
+    (s,) = load_machine(sample("generic_esi")).slaves  # dc: {opmode: DC, cycle_ns: 1000000}; the ESI: #x300, shift 0
+    assert s.dc == SlaveDc(0x0300, "DC", 1_000_000, 0, None, None) and s.dc.active
+    cfg = slave_config(s)
+    assert (cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns) == (0x0300, 1_000_000, 0)
+    (ct,) = load_machine(sample("controltechniques")).slaves  # dc: {assign_activate: 0x0300, cycle_ns: 1000000}
+    assert ct.dc == SlaveDc(0x0300, None, 1_000_000, None)
+    (hdt,) = load_machine(sample("hdt")).slaves
+    assert hdt.dc is None and slave_config(hdt).dc_assign_activate is None
+    device = copy.copy(s.device)
+    device.dc_opmodes = [DcOpMode("Sync01", "", 0x0700, 2_000_000, None, 1000, None, 500_000, None, 100, None)]
+    dc = resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="Sync01")}), device)
+    assert dc == SlaveDc(0x0700, "Sync01", 2_000_000, 1000, 500_000, 100)
+    assert resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="nope")}), device) is None  # PRJ040's
+    assert resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="nope", assign_activate=0)}),
+                      device) == SlaveDc(0, "nope", None, None)

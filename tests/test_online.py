@@ -5,6 +5,8 @@ SOEM and KickCAT: tests/test_wire_online.py."""
 from __future__ import annotations
 
 import json
+import sys
+import types
 
 import pytest
 
@@ -260,30 +262,107 @@ def test_project_from_the_bus_lints_clean_and_commissions_the_same_bus(tmp_path)
     assert report.ok, report.to_json()
 
 
-def test_install_pysoem_checks_identity_and_attaches_the_startup_list() -> None:
+def test_machine_install_checks_identity_and_attaches_the_startup_list() -> None:
     from ecattool.errors import TargetError
-    from ecattool.online.install import install_pysoem
+    from ecattool.project.machine import load_machine
     from ecattool.sim import Drive
 
     project = "samples/hdt/project.yaml"
-    (rd,) = lint_project(project).drives
+    machine = load_machine(project)
+    (rd,) = machine.drives
     drive = Drive.from_device(rd.device)
     mod = fake_pysoem.make_module([drive])
     master = mod.Master()
     master.open("eth0")
     master.config_init()
-    assert install_pysoem(project, master, pysoem_module=mod) == [0]
+    assert machine.install(master, module=mod) == [0]  # a pysoem master, told by its type
+    assert master.manual_state_change == 1
     assert not any(e.kind == "sdo_download" for e in drive.events)  # nothing before config_map
     master.config_map()
     sent = [(e.data["index"], e.data["subindex"]) for e in drive.events if e.kind == "sdo_download"]
-    assert sent == [(c.index, c.subindex) for c in rd.startup.commands]
+    assert sent == [(c.index, c.subindex) for c in rd.startup.commands] and sent
     wrong = fake_pysoem.make_module([Drive.from_profile("technosoft-ipos")])
     m2 = wrong.Master()
     m2.open("eth0")
     m2.config_init()
     with pytest.raises(TargetError, match="slave 0"):
-        install_pysoem(project, m2, pysoem_module=wrong)
+        machine.install(m2, module=wrong)
     assert m2.slaves[0].config_func is None
+    with pytest.raises(TargetError, match="pysoem.Master"):
+        machine.install(object())
+
+
+def test_online_install_delegates_to_the_machine() -> None:
+    from ecattool.online.install import install_pysoem
+    from ecattool.sim import Drive
+
+    project = "samples/hdt/project.yaml"
+    (rd,) = lint_project(project).drives
+    mod = fake_pysoem.make_module([Drive.from_device(rd.device)])
+    master = mod.Master()
+    master.open("eth0")
+    master.config_init()
+    assert install_pysoem(project, master, pysoem_module=mod) == [0]
+    assert master.slaves[0].config_func is not None
+
+
+def test_install_kickcat_writes_through_the_mailbox_after_checking_1018h() -> None:
+    """KickCAT has no per-slave hook: the identity is read from 1018h, then the list is written at once."""
+    from ecattool.errors import TargetError
+    from ecattool.project.machine import load_machine
+    from ecattool.od.model import EcState
+    from ecattool.sim import Drive
+    from ecattool.startup.install import master_kind
+
+    machine = load_machine("samples/hdt/project.yaml")
+    (rd,) = machine.drives
+    drive = Drive.from_device(rd.device)
+    drive.request_state(EcState.PREOP)  # where kickcat's bus.init() leaves it
+
+    class Msg:
+        def status(self) -> int:
+            return 0
+
+    class Mailbox:
+        def write_sdo(self, index, subindex, ca, data, timeout):
+            drive.sdo_download(index, subindex, data, ca)
+            return Msg()
+
+    class KSlave:
+        mailbox = Mailbox()
+
+    class Bus:  # the part of kickcat.Bus the installer uses
+        def slaves(self):
+            return [KSlave()]
+
+        def read_sdo(self, slave, index, subindex, access, size, timeout):
+            return drive.sdo_upload(index, subindex)
+
+        def create_mapping(self):  # pragma: no cover - only its presence tells the master's kind
+            raise AssertionError
+
+    class Status:
+        RUNNING, SUCCESS = 1, 0
+
+    class Access:
+        PARTIAL, COMPLETE = 0, 1
+
+    kc = types.ModuleType("kickcat")
+    kc.Access = Access
+    request = types.ModuleType("kickcat.mailbox.request")
+    request.MessageStatus = Status
+    assert master_kind(Bus()) == "kickcat"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(sys.modules, "kickcat", kc)
+        mp.setitem(sys.modules, "kickcat.mailbox", types.ModuleType("kickcat.mailbox"))
+        mp.setitem(sys.modules, "kickcat.mailbox.request", request)
+        before = len(drive.events)
+        assert machine.install(Bus(), module=kc) == [0]
+        sent = [(e.data["index"], e.data["subindex"]) for e in drive.events[before:] if e.kind == "sdo_download"]
+        assert sent == [(c.index, c.subindex) for c in rd.startup.commands]
+        other = load_machine("samples/technosoft_ipos/project.yaml")
+        with pytest.raises(TargetError, match="slave 0"):
+            other.install(Bus(), module=kc)
 
 
 def test_backup_cli(tmp_path, capsys: pytest.CaptureFixture[str]) -> None:

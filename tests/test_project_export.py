@@ -274,3 +274,23 @@ drives:
     result = _gcc(text, tmp_path)
     assert result.returncode == 0, result.stderr
     assert text.count("ecrt_master_slave_config(") == 3 and "2000000U" in text
+
+
+def test_export_prints_the_identity_warnings_of_what_it_writes(capsys, tmp_path):
+    """An EDS without ProductNumber: lint warns (esi-product-zero); the export writes product 0 and says so on
+    stderr, one line, at the EDS's line."""
+    from tests.conftest import corpus_path
+
+    eds = corpus_path("eds", "technosoft_iPOS.D.v1.04.eds")
+    p = tmp_path / "m.yaml"
+    code, _, err = run(capsys, "project", "new", "--esi", str(eds), "-o", str(p))
+    assert code == 0, err
+    code, out, err = run(capsys, "startup", "export", "--project", str(p), "--format", "json")
+    import json
+
+    assert code == 0 and json.loads(out)["slaves"][0]["identity"]["product_code"] == 0
+    lines = [line for line in err.splitlines() if "[esi-product-zero]" in line]
+    assert len(lines) == 1 and "technosoft_iPOS.D.v1.04.eds:14" in lines[0], err
+    # a sample with a real product code exports without a word
+    code, _, err = run(capsys, "startup", "export", "--project", str(sample("hdt")), "--format", "json")
+    assert code == 0 and "esi-product-zero" not in err

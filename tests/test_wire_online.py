@@ -155,7 +155,7 @@ def test_frames_lost_half_way_give_one_line_and_no_backup(result: dict[str, Any]
 
 
 def test_a_master_program_installs_the_projects_startup_list(result: dict[str, Any]) -> None:
-    """install_pysoem / install_kickcat: the IO map each master reads from the drive is the project's mapping."""
+    """Machine.install on a pysoem.Master and a kickcat.Bus: the IO map each master reads from the drive is the project's mapping."""
     from ecattool.commission.runner import commission
     from ecattool.project.lint import lint_project
     from ecattool.target.sim import SimTarget

@@ -120,12 +120,12 @@ def install() -> dict[str, Any]:
     try:
         import pysoem
 
-        from ecattool.online.install import install_pysoem
+        from ecattool.project.machine import load_machine
 
         master = pysoem.Master()
         master.open(MASTER_IF)
         master.config_init()
-        r["pysoem_positions"] = install_pysoem(INSTALL_PROJECT, master)
+        r["pysoem_positions"] = load_machine(INSTALL_PROJECT).install(master)  # a pysoem.Master, by its type
         master.config_map()
         r["pysoem_sizes"] = [[len(s.output), len(s.input)] for s in master.slaves]
         master.close()
@@ -135,12 +135,12 @@ def install() -> dict[str, Any]:
         r["server_pysoem"] = stop_server(server)
     server, _ = start_server([INSTALL_PROJECT])
     try:
-        from ecattool.online.install import install_kickcat
         from ecattool.online.kickcat_bus import open_kickcat
+        from ecattool.project.machine import load_machine
 
         live = open_kickcat(MASTER_IF)  # bus init with the timeouts the virtual bus needs
         bus = live.slaves[0]._bus
-        r["kickcat_positions"] = install_kickcat(INSTALL_PROJECT, bus)
+        r["kickcat_positions"] = load_machine(INSTALL_PROJECT).install(bus)  # a kickcat.Bus, by its type
         bus.create_mapping()
         r["kickcat_sizes"] = [[s.output_size, s.input_size] for s in bus.slaves()]
     except Exception as exc:  # noqa: BLE001

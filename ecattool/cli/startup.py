@@ -132,11 +132,15 @@ def export_cmd(source: str | None, project: str | None, from_format: str | None,
     if project is not None:
         if from_format is not None:
             raise click.UsageError("--from-format belongs to --from, not --project")
-        from ecattool.project.export import slave_configs
+        from ecattool.project.export import export_warnings, slave_configs
         from ecattool.project.loader import project_inputs
+        from ecattool.project.machine import load_machine
 
-        write_startup(_with_cycle(select_slaves(slave_configs(project, allow_errors), drives), sync0_cycle), fmt, output,
-               tuple(project_inputs([project])), lossy)
+        machine = load_machine(project)
+        configs = select_slaves(slave_configs(machine, allow_errors), drives)
+        for f in export_warnings(machine, {c.name for c in configs}):
+            click.echo(str(f), err=True)
+        write_startup(_with_cycle(configs, sync0_cycle), fmt, output, tuple(project_inputs([project])), lossy)
         return
     assert source is not None
     configs = select_slaves(_read(source, from_format), drives)

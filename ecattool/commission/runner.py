@@ -500,13 +500,11 @@ def _check_readbacks(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport)
 
 
 def _dc(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
-    from ecattool.project.steps import dc_assign_activate
-
-    act = dc_assign_activate(rd)
-    if act is None or rd.drive.dc is None:
+    if rd.dc is None:
         return
-    cycle = rd.drive.dc.cycle_ns or 0
-    shift = rd.drive.dc.shift_ns or 0
+    act = rd.dc.assign_activate
+    cycle = rd.dc.cycle_ns or 0
+    shift = rd.dc.shift_ns or 0
     _sdo_step("dc", lambda: slave.configure_dc(act, cycle, shift))
     what = f"SYNC0 cycle {cycle} ns" if cycle else "SYNC0 at the target's bus cycle (the project gives no cycle_ns)"
     report.steps.append(Step("dc", True, f"AssignActivate 0x{act:04X}, {what}" + (f", shift {shift} ns" if shift else "")))

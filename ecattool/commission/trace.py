@@ -157,8 +157,8 @@ class DriveTrace:
         for what in ("position", "velocity"):
             if summary.get(f"{what} unit"):
                 trace.units[what] = str(summary[f"{what} unit"])
-        if rd.drive.dc is not None and rd.drive.dc.cycle_ns:
-            trace.cycle_s = rd.drive.dc.cycle_ns / 1e9
+        if rd.dc is not None and rd.dc.cycle_ns:
+            trace.cycle_s = rd.dc.cycle_ns / 1e9
         return trace
 
     # ------------------------------------------------------------------ startup list, .sw image

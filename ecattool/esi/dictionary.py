@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from ecattool.errors import EcatToolError, InputError
-from ecattool.esi.values import Context, fast_number, is_english, lc_text, name_step
+from ecattool.esi.values import NO_NAME, Context, fast_number, lc_text, name_step
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import BY_CODE, DataType, Kind, lookup, parse_array_name
@@ -376,7 +376,7 @@ class DictionaryBuilder:
         loc = ctx.loc(el)
         index_t = type_name = bits_t = None
         name: str | None = None
-        final = False
+        rank = NO_NAME
         flags_el = info = None
         comment = ""
         idx_el = el
@@ -385,7 +385,7 @@ class DictionaryBuilder:
             if tag == "Index":
                 index_t, idx_el = c.text, c
             elif tag == "Name":
-                name, final = name_step(c, name, final)
+                name, rank = name_step(c, name, rank)
             elif tag == "Type":
                 type_name = (c.text or "").strip()
             elif tag == "BitSize":
@@ -456,13 +456,13 @@ class DictionaryBuilder:
         for si in sub_items:
             si_type = ""
             si_name: str | None = None
-            final = False
+            rank = NO_NAME
             sidx_t = bits_t = offs_t = flags_el = None
             has_info = False
             for c in si[:]:
                 tag = c.tag
                 if tag == "Name":
-                    si_name, final = name_step(c, si_name, final)
+                    si_name, rank = name_step(c, si_name, rank)
                 elif tag == "Type":
                     si_type = (c.text or "").strip()
                 elif tag == "SubIdx":
@@ -532,7 +532,7 @@ class DictionaryBuilder:
     def _apply_subitem_infos(self, entries: list[Entry], first_by_name: dict[str, int], info: Any, index: int) -> None:
         # one pass per Info/SubItem of every record object (7518 in the largest corpus file): children are read
         # from slices (el[:] builds the proxies in one call; a child iterator per element costs more than its
-        # proxies) and the Name rule of values.name_step is written out
+        # proxies); the Name rule is values.name_step
         ctx = self.ctx
         pos = -1
         for si in info[:]:
@@ -540,17 +540,12 @@ class DictionaryBuilder:
                 continue
             pos += 1
             n_opt: str | None = None
-            final = False
+            rank = NO_NAME
             sub_info = None
             for c in si[:]:
                 tag = c.tag
                 if tag == "Name":
-                    if not final:
-                        lcid = c.get("LcId")
-                        if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
-                            n_opt, final = (c.text or "").strip(), True
-                        elif n_opt is None:
-                            n_opt = (c.text or "").strip()
+                    n_opt, rank = name_step(c, n_opt, rank)
                 elif tag == "Info" and sub_info is None:
                     sub_info = c
             n = n_opt or ""

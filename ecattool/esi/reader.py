@@ -36,7 +36,7 @@ from ecattool.esi.model import (
     Slot,
     SyncManager,
 )
-from ecattool.esi.values import Context, is_english, lc_text, name_step
+from ecattool.esi.values import NO_NAME, Context, lc_text, name_step
 from ecattool.esi.values import fast_number as _fast_number  # the name it had here (tests use it)
 from ecattool.od.model import ObjectDictionary, OdObject
 from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
@@ -481,7 +481,7 @@ class Reader:
         pdo = Pdo(direction, _NO_INDEX)
         pdo.at_line(self.source, el.sourceline)
         name: str | None = None
-        final = False
+        rank = NO_NAME
         entries = pdo.entries
         known = self._numbers
         for child in el[:]:
@@ -499,7 +499,7 @@ class Reader:
                 if child.get("DependOnSlot") is not None:
                     pdo.depend_on_slot = ctx.boolean(child.get("DependOnSlot"), child, "DependOnSlot")
             elif tag == "Name":
-                name, final = name_step(child, name, final)
+                name, rank = name_step(child, name, rank)
         pdo.name = name or ""
         if not 0 <= pdo.index <= 0xFFFF:
             if pdo.index == _NO_INDEX:
@@ -539,12 +539,12 @@ class Reader:
 
     def entry(self, en: Any) -> PdoEntry:
         # the hot loop of a large file (one call per PDO entry): numbers seen before are a dict look-up, and
-        # the Name rule of values.name_step is written out
+        # the Name rule is values.name_step
         known = self._numbers
         index = sub = bits = None
         dtype = ""
         name: str | None = None
-        final = False
+        rank = NO_NAME
         dep = None
         for c in en[:]:
             tag = c.tag
@@ -565,12 +565,7 @@ class Reader:
                 if bits is None:
                     bits = self._number(t, c, "Entry/BitLen")
             elif tag == "Name":
-                if not final:
-                    lcid = c.get("LcId")
-                    if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
-                        name, final = (c.text or "").strip(), True
-                    elif name is None:
-                        name = (c.text or "").strip()
+                name, rank = name_step(c, name, rank)
             elif tag == "DataType":
                 dtype = (c.text or "").strip()
         if index is None:
@@ -860,6 +855,7 @@ class Reader:
         sm_no = 0
         sm_elements: list[Any] = []
         profile_seen = False
+        url_rank = NO_NAME
         for child in el[:]:
             tag = child.tag
             if tag == "TxPdo":
@@ -890,8 +886,8 @@ class Reader:
             elif tag == "Slots":
                 dev.slots = self.slots(child)
             elif tag == "URL":
-                if not dev.url or is_english(child.get("LcId")):
-                    dev.url = (child.text or "").strip()
+                url, url_rank = name_step(child, dev.url or None, url_rank)
+                dev.url = url or ""
             elif tag == "ImageData16x14":  # xs:hexBinary: kept in its canonical form (lower case, no blanks)
                 dev.image = "".join((child.text or "").split()).lower()
             elif tag == "Image16x14":  # a file name

@@ -139,38 +139,53 @@ def fast_number(t: str | None) -> int | None:
     return None
 
 
-def is_english(lcid: str | None) -> bool:
-    """``LcId`` (xs:integer: sign, leading zeros and blanks allowed) is 1033, English (United States)."""
-    if lcid is None:
-        return False
+#: :func:`lang_rank` of nothing seen yet (worse than any element)
+NO_NAME = 3
+
+
+def lang_rank(lcid: str | None) -> int:
+    """How well an element with this ``LcId`` gives the English text ecattool shows (the one rule for every
+    language-tagged ESI element: Name, Desc, Text, Comment, URL): 0 for 1033 (English, United States); 1 for
+    another English (primary language 09h of the Windows LCID: 2057 en-GB, 3081 en-AU, 4105 en-CA…); 2 for any
+    other language or none. The best rank wins, the first element among equals. ``LcId`` is xs:integer: a sign,
+    leading zeros and blanks are allowed."""
     if lcid == "1033":
-        return True
-    t = lcid.strip()
-    return t[:1] == "+" and t[1:].lstrip("0") == "1033" or t.lstrip("0") == "1033"
+        return 0
+    if lcid is None or lcid == "1031":  # the two spellings almost every file uses, without parsing
+        return 2
+    t = lcid.strip().lstrip("+")
+    if not t.isdigit():
+        return 2
+    n = int(t)
+    return 0 if n == 1033 else 1 if n & 0x3FF == 0x09 else 2
+
+
+def is_english(lcid: str | None) -> bool:
+    """``LcId`` is 1033, English (United States)."""
+    return lang_rank(lcid) == 0
+
+
+def name_step(c: Any, name: str | None, rank: int) -> tuple[str | None, int]:
+    """One language-tagged element ``c`` seen after the best so far (``name`` of ``rank``; start with None and
+    :data:`NO_NAME`): the new best by :func:`lang_rank` (stop at rank 0)."""
+    if rank == 0:
+        return name, 0
+    r = lang_rank(c.get("LcId"))
+    if r < rank:
+        return (c.text or "").strip(), r
+    return name, rank
 
 
 def lc_text(parent: Any, tag: str) -> str:
-    """Text of the ``tag`` child with LcId 1033 (English), else the first one; '' when absent."""
-    first = None
+    """Text of the ``tag`` child in English by :func:`lang_rank` (1033, else another English, else the first);
+    '' when absent."""
+    name: str | None = None
+    rank = NO_NAME
     for el in parent.iterchildren(tag):
-        if first is None:
-            first = el
-        lcid = el.get("LcId")
-        if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
-            return (el.text or "").strip()
-    return (first.text or "").strip() if first is not None else ""
+        name, rank = name_step(el, name, rank)
+        if rank == 0:
+            break
+    return name or ""
 
 
-def name_step(c: Any, name: str | None, final: bool) -> tuple[str | None, bool]:
-    """One ``Name`` element seen, by the rule of :func:`lc_text` (LcId 1033, else the first): (name, final)."""
-    if final:
-        return name, True
-    lcid = c.get("LcId")
-    if lcid == "1033" or (lcid is not None and lcid != "1031" and is_english(lcid)):
-        return (c.text or "").strip(), True
-    if name is None:
-        return (c.text or "").strip(), False
-    return name, False
-
-
-__all__ = ["Context", "fast_number", "is_english", "lc_text", "name_step"]
+__all__ = ["NO_NAME", "Context", "fast_number", "is_english", "lang_rank", "lc_text", "name_step"]

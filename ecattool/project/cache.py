@@ -1,7 +1,10 @@
 """Caches that keep linting a large project fast the second time, keyed by file content.
 
 Entries live in ``$ECATTOOL_CACHE_DIR`` (default ``~/.cache/ecattool``) as pickles named by a SHA-256 of the
-ESI bytes, the ecattool version and what else the entry depends on:
+ESI bytes, the ecattool version, the code that decides what a cached object holds (:func:`code_digest`: the
+source files of ``esi``, ``od`` and ``profiles``, ``record`` and this module, read once per process, so a
+development checkout between two versions does not serve devices parsed by older code) and what else the entry
+depends on:
 
 - ``device/<key>.pickle``: a device selected from an ESI and completed for use (default modules in its
   slots, synthesised mapping and assignment objects), keyed also by the selector, the policy and the path
@@ -21,6 +24,7 @@ uses it (callers treat devices as read-only). A damaged or foreign entry is igno
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import pickle
@@ -61,10 +65,33 @@ def _model_layout() -> bytes:
 
 
 _LAYOUT = hashlib.sha256(_model_layout()).digest()
+#: the ecattool package directory
+PACKAGE = Path(__file__).resolve().parent.parent
+#: what decides what a cached device or finding list holds: the reader (esi), the dictionary model (od), the
+#: completion of a device (profiles), the record classes pickled, and this module
+CODE = ("esi", "od", "profiles", "record.py", "project/cache.py")
+
+
+def code_digest(root: Path = PACKAGE, parts: tuple[str, ...] = CODE) -> bytes:
+    """A SHA-256 of the names and bytes of every file (sources and package data) under ``parts`` of ``root``,
+    in sorted order; compiled and cached files (``__pycache__``) are left out."""
+    h = hashlib.sha256()
+    for part in parts:
+        top = root / part
+        files = [top] if top.is_file() else sorted(p for p in top.rglob("*")
+                                                   if p.is_file() and "__pycache__" not in p.parts)
+        for f in files:
+            h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
+    return h.digest()
+
+
+@functools.cache
+def _code() -> bytes:
+    return code_digest()
 
 
 def _key(*parts: bytes) -> str:
-    return hashlib.sha256(b"\0".join((*parts, b"ecattool " + __version__.encode(), _LAYOUT))).hexdigest()
+    return hashlib.sha256(b"\0".join((*parts, b"ecattool " + __version__.encode(), _LAYOUT, _code()))).hexdigest()
 
 
 def _disk_get(kind: str, key: str, cls: type) -> object | None:

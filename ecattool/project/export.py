@@ -16,28 +16,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ecattool.errors import InputError
-from ecattool.project.machine import Machine, load_machine
+from ecattool.findings import Finding, Severity
+from ecattool.project.machine import Machine, load_machine, slave_config
 from ecattool.project.resolve import ResolvedDrive
 from ecattool.startup.config import SlaveConfig
 
 
 def drive_config(rd: ResolvedDrive) -> SlaveConfig:
     """The slave configuration of one resolved (lint-clean) drive."""
-    if rd.device is None:
-        raise InputError(f"drive {rd.drive.name!r}: the device did not resolve (see lint)")
-    dc = rd.drive.dc
-    cfg = SlaveConfig.from_device(
-        rd.device, rd.startup, mapping=rd.mapping, position=rd.position, name=rd.drive.name,
-        dc_opmode=dc.opmode if dc is not None else None,
-        dc_cycle_ns=dc.cycle_ns if dc is not None else None,
-        dc_shift_ns=dc.shift_ns if dc is not None else None,
-    )
-    if dc is not None and dc.assign_activate is not None:
-        from ecattool.project.steps import dc_assign_activate
-
-        cfg.dc_assign_activate = dc_assign_activate(rd)
-    return cfg
+    return slave_config(rd)
 
 
 def refuse_errors(result: Machine, what: str) -> None:
@@ -52,5 +39,25 @@ def slave_configs(path: str | Path | Machine, allow_errors: bool = False) -> lis
     ``allow_errors``.
     """
     machine = path if isinstance(path, Machine) else load_machine(path)
-    machine.refuse_errors("export the startup configuration", allow_errors=allow_errors)
-    return [drive_config(rd) for rd in machine.in_bus_order()]
+    return machine.configs(allow_errors=allow_errors)
+
+
+#: lint rules whose warnings concern what an export writes (the identity a master checks)
+EXPORT_RULES = frozenset({"esi-product-zero"})
+
+
+def export_warnings(machine: Machine, names: set[str] | None = None) -> list[Finding]:
+    """The lint warnings of the slaves called ``names`` (all by default) that concern what an export writes: a
+    product code 0 the configuration will expect (an EDS without ProductNumber). ``startup export --project``
+    prints them, one line each, so that a warning lint gives is not lost in a file written without a word."""
+    seen: set[tuple[str, str, str]] = set()
+    out = []
+    for s in machine.in_bus_order():
+        if names is not None and s.name not in names:
+            continue
+        for f in s.findings:
+            key = (f.rule, f.message, str(f.location))
+            if f.rule in EXPORT_RULES and f.severity is Severity.WARNING and key not in seen:
+                seen.add(key)
+                out.append(f)
+    return out

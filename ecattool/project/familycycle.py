@@ -48,11 +48,11 @@ def _ip_period_ns(rd: ResolvedDrive) -> Fraction | None:
     return interpolation_period_ns(state[1], state[2])
 
 
-def check_dc_cycle(lp: LoadedProject, i: int, rd: ResolvedDrive, active: bool) -> None:
+def check_dc_cycle(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     """PRJ080 for a drive whose DC (SYNC0) is active."""
-    dc = rd.drive.dc
+    dc = rd.dc
     rules = rd.rules
-    if not active or dc is None or not dc.cycle_ns or rules is None or rd.device is None:
+    if dc is None or not dc.active or not dc.cycle_ns or rules is None or rd.device is None:
         return
     for what, message in rules.dc_cycle_problems(dc.cycle_ns, _ip_period_ns(rd), _slow_loop_ns(rd)):
         if what == "sync0":  # "must be equal or a multiple": the drive's control loop does not synchronise

@@ -20,6 +20,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 from ecattool.errors import EcatToolError, InputError, Location
 from ecattool.esi.model import Device
@@ -27,11 +29,21 @@ from ecattool.fileio import read_bytes
 from ecattool.findings import Finding, Severity
 from ecattool.project import familycycle
 from ecattool.project.loader import LoadedProject, parse_project
-from ecattool.project.resolve import Slave, SlaveKind, is_axis, resolve_device, resolve_parameters
+from ecattool.project.resolve import (
+    Slave,
+    SlaveDc,
+    SlaveKind,
+    is_axis,
+    resolve_dc,
+    resolve_device,
+    resolve_parameters,
+)
 from ecattool.project.rules import disable
+from ecattool.startup.config import SlaveConfig
+from ecattool.startup.install import MasterKind
 from ecattool.startup.model import StartupList
 
-__all__ = ["ALLOW_ERRORS_HELP", "Machine", "Slave", "SlaveKind", "is_axis", "load_machine"]
+__all__ = ["ALLOW_ERRORS_HELP", "Machine", "Slave", "SlaveDc", "SlaveKind", "is_axis", "load_machine", "slave_config"]
 
 #: the help of the ``--allow-errors`` option every command that acts on a project has
 ALLOW_ERRORS_HELP = ("Act on the project even when lint reports errors (by default a project with lint errors is "
@@ -119,6 +131,34 @@ class Machine:
         self._refuse_unresolved("put the project's devices on a bus", self.slaves)
         return [(s.name, s.device) for s in self.in_bus_order() if s.device is not None]
 
+    def configs(self, *, allow_errors: bool = False) -> list[SlaveConfig]:
+        """One slave configuration per slave, in bus order (refused on lint errors unless ``allow_errors``)."""
+        self.refuse_errors("export the startup configuration", allow_errors=allow_errors)
+        return [slave_config(s) for s in self.in_bus_order()]
+
+    def install(self, master: Any, *, kind: MasterKind | None = None, exact_revision: bool = False,
+                allow_errors: bool = False, module: ModuleType | None = None) -> list[int]:
+        """Attach every slave's startup list to ``master`` in a master program, with the identity check
+        (:func:`ecattool.startup.install.install`): a ``pysoem.Master`` after ``config_init()`` gets a
+        ``config_func`` per slave; a ``kickcat.Bus`` after ``init()`` is written at once. Returns the positions
+        configured; refused on lint errors unless ``allow_errors``."""
+        from ecattool.startup.install import install
+
+        self.refuse_errors("install the startup list", allow_errors=allow_errors)
+        return install([slave_config(s) for s in self.in_bus_order()], master, kind=kind,
+                       exact_revision=exact_revision, module=module)
+
+
+def slave_config(s: Slave) -> SlaveConfig:
+    """The slave configuration (identity, startup list, assigned PDOs, sync managers, DC) of one resolved slave."""
+    if s.device is None:
+        raise InputError(f"drive {s.drive.name!r}: the device did not resolve (see lint)")
+    cfg = SlaveConfig.from_device(s.device, s.startup, mapping=s.mapping, position=s.position, name=s.drive.name)
+    if s.dc is not None:
+        cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns = s.dc.assign_activate, s.dc.cycle_ns, s.dc.shift_ns
+        cfg.dc_sync1_cycle_ns, cfg.dc_sync1_shift_ns = s.dc.sync1_cycle_ns, s.dc.sync1_shift_ns
+    return cfg
+
 
 def build_slave(lp: LoadedProject, i: int) -> Slave:
     """Resolve one slave: device, rules, startup list (PDO, ESI init commands, scaling, parameters), .sw image,
@@ -130,6 +170,7 @@ def build_slave(lp: LoadedProject, i: int) -> Slave:
     resolve_device(lp, i, s)
     if s.device is None:
         return s
+    s.dc = resolve_dc(drive, s.device)
     startup = StartupList(name=drive.name, vendor_id=s.device.vendor_id,
                           product_code=s.device.product_code, revision=s.device.revision)
     params = resolve_parameters(lp, i, s)
@@ -148,7 +189,7 @@ def build_slave(lp: LoadedProject, i: int) -> Slave:
     steps.check_factor_defaults(lp, i, s)
     steps.check_interpolation_period(lp, i, s)
     steps.check_dc(lp, i, s)
-    familycycle.check_dc_cycle(lp, i, s, bool(steps.dc_assign_activate(s)))
+    familycycle.check_dc_cycle(lp, i, s)
     if s.device.source and not s.device.source.startswith("profile:"):
         steps.check_esi(lp, i, s)
     s.findings = disable(s.findings, drive.disable_rules, lp, ("drives", i, "disable_rules"))

@@ -55,6 +55,45 @@ def is_axis(device: Device) -> bool:
     return declared or od.entry(0x6060, 0) is not None
 
 
+@dataclass(frozen=True, slots=True)
+class SlaveDc:
+    """Distributed clocks of a slave as the project sets them, resolved once (:func:`resolve_dc`): the
+    AssignActivate word (the project's, else its ESI OpMode's), the SYNC0 cycle and shift (the project's, else
+    the OpMode's), and SYNC1 where the OpMode gives a cycle for it."""
+
+    assign_activate: int
+    opmode: str | None = None
+    cycle_ns: int | None = None
+    shift_ns: int | None = None
+    sync1_cycle_ns: int | None = None
+    sync1_shift_ns: int | None = None
+
+    @property
+    def active(self) -> bool:
+        """Whether the slave's SYNC signals are activated (a non-zero AssignActivate)."""
+        return bool(self.assign_activate)
+
+
+def resolve_dc(drive: Drive, device: Device) -> SlaveDc | None:
+    """The DC of ``drive`` on ``device``; None where the project has no ``dc`` or names an OpMode the device does
+    not have (lint's PRJ040)."""
+    dc = drive.dc
+    if dc is None:
+        return None
+    mode = next((m for m in device.dc_opmodes if m.name == dc.opmode), None) if dc.opmode is not None else None
+    if dc.assign_activate is not None:
+        act = parse_int(dc.assign_activate)
+    elif mode is not None:
+        act = mode.assign_activate
+    else:
+        return None
+    cycle = dc.cycle_ns if dc.cycle_ns is not None else (mode.cycle_time_sync0 or None if mode is not None else None)
+    shift = dc.shift_ns if dc.shift_ns is not None else (mode.shift_time_sync0 if mode is not None else None)
+    sync1 = mode.cycle_time_sync1 or None if mode is not None else None
+    sync1_shift = mode.shift_time_sync1 if mode is not None and sync1 else None
+    return SlaveDc(act, dc.opmode, cycle, shift, sync1, sync1_shift)
+
+
 @dataclass(slots=True)
 class Slave:
     """One slave of the machine as the project sets it up: the device as it runs (default modules plugged in,
@@ -72,6 +111,7 @@ class Slave:
     factor_group: FactorGroup | None = None  # when the scaling section resolved
     counts_per_unit: Fraction | None = None  # internal position units per position user unit (ideal)
     sw_image: SwImage | None = None  # when an image is configured and readable
+    dc: SlaveDc | None = None  # when the project's dc section resolves on the device
 
     @property
     def position(self) -> int:

@@ -418,8 +418,7 @@ def check_interpolation_period(lp: LoadedProject, i: int, rd: ResolvedDrive) -> 
     # the guide expects the interpolation cycle to equal the sync interval (Control Techniques 8.1); a 1 ms
     # SYNC0 with the 250 us default period interpolates each set-point as if it came four times as often
     period = interpolation_period_ns(state[1], state[2])
-    dc = rd.drive.dc
-    cycle = dc.cycle_ns if dc is not None and dc_assign_activate(rd) else None
+    cycle = rd.dc.cycle_ns if rd.dc is not None and rd.dc.active else None
     needs = rules.dc_required_modes
     if cycle and period != cycle and any(mode in needs for mode, _ in _modes_run(lp, i, rd)):
         hint = (f"60C2:02 = -3, then 60C2:01 = {cycle // 1_000_000}" if cycle % 1_000_000 == 0
@@ -441,7 +440,7 @@ def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
                      lp.drive_location(i, "dc", "opmode"))
             return
     rules = rd.rules
-    active = bool(dc_assign_activate(rd))
+    active = rd.dc is not None and rd.dc.active
     needs = tuple(getattr(rules, "dc_required_modes", ()) or ())
     if not active:
         for mode, loc in _modes_run(lp, i, rd):
@@ -461,28 +460,14 @@ def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         return
     step = getattr(rules, "dc_sync0_step_ns", None)
     most = getattr(rules, "dc_sync0_max_steps", None)
-    assert dc is not None
+    assert dc is not None and rd.dc is not None
     if step and most:
-        cycle = dc.cycle_ns or 0
+        cycle = rd.dc.cycle_ns or 0
         if cycle <= 0 or cycle % step or not 1 <= cycle // step <= most:
-            what = f"SYNC0 cycle {cycle} ns" if dc.cycle_ns is not None else "dc: gives no SYNC0 cycle_ns"
+            what = f"SYNC0 cycle {cycle} ns" if rd.dc.cycle_ns is not None else "dc: gives no SYNC0 cycle_ns"
             rd.error("PRJ042", f"{what}: {rd.device.type_name} accepts n x {step} ns for n = 1..{most} "
                                f"(e.g. cycle_ns: 1000000)",
                      lp.drive_location(i, "dc", "cycle_ns") if dc.cycle_ns is not None else lp.drive_location(i, "dc"))
-
-
-def dc_assign_activate(rd: ResolvedDrive) -> int | None:
-    dc = rd.drive.dc
-    if dc is None or rd.device is None:
-        return None
-    if dc.assign_activate is not None:
-        from ecattool.od.numbers import parse_int
-
-        return parse_int(dc.assign_activate)
-    for m in rd.device.dc_opmodes:
-        if m.name == dc.opmode:
-            return m.assign_activate
-    return None
 
 
 def check_esi(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:

@@ -29,20 +29,53 @@ class PdoConfig(DriveCore):
     """The SDO side of the PDO configuration: defaults at power-on, mapping and assignment writes."""
 
     def _known_pdo_entries(self) -> dict[Direction, set[tuple[int, int, int]]]:
+        """The entries the slave maps whatever the dictionary's flags say: those of the ESI's PDO list, and those
+        of its dictionary's own default mapping that name an object of the dictionary at its size (a vendor ESI
+        often leaves PdoMapping off objects its firmware maps by default: Synapticon's 607Ah). A default entry
+        of a data type index (a dummy) or of an object that does not exist is not known: it is checked, and
+        refused, as any written entry is."""
         known: dict[Direction, set[tuple[int, int, int]]] = {RX: set(), TX: set()}
+        od = self.device.dictionary
         for d in (RX, TX):
             for pdo in self.device.pdos(d):
                 for e in pdo.entries:
                     if e.index:
                         known[d].add((e.index, e.subindex, e.bit_len))
+            first = 0x1600 if d is RX else 0x1A00
+            for obj in od:
+                if not first <= obj.index <= first + 0x1FF:
+                    continue
+                for sub, me in obj.entries.items():
+                    if not sub or me.default is None or len(me.default) != 4:
+                        continue
+                    v = int.from_bytes(me.default, "little")
+                    idx, s, bits = v >> 16, (v >> 8) & 0xFF, v & 0xFF
+                    target = od.entry(idx, s) if idx >= 0x20 else None
+                    if target is not None and target.bit_size == bits:
+                        known[d].add((idx, s, bits))
         return known
 
+    def _own_mapping(self, index: int) -> bool:
+        """Whether the dictionary's mapping object ``index`` gives its own power-on mapping: a default for the
+        count and for every entry it counts. A slave stack (SOES and the like) powers on with its dictionary, not
+        with the ESI's PDO list, so where the two differ the slave runs the dictionary's mapping and refuses
+        SAFE-OP for an entry it cannot map (lint's PRJ027). Only the CoE mapping objects (1600h-17FFh,
+        1A00h-1BFFh) count: a PDO list that names another index (an EL1262's 1C00h) is the ESI's alone."""
+        if not (0x1600 <= index <= 0x17FF or 0x1A00 <= index <= 0x1BFF):
+            return False
+        count = self._entries.get((index, 0))
+        if count is None or not count.default:
+            return False
+        n = int.from_bytes(count.default, "little")
+        return all((e := self._entries.get((index, s))) is not None and bool(e.default) for s in range(1, n + 1))
+
     def _pdo_defaults(self) -> None:
-        """Mapping objects hold the device's PDO entries; 1C12h/1C13h its default assignment (PDO@Sm)."""
+        """Mapping objects hold the dictionary's own defaults where it gives them (:meth:`_own_mapping`), else the
+        device's PDO entries; 1C12h/1C13h its default assignment (PDO@Sm)."""
         for d in (RX, TX):
             pdos = self.device.pdos(d)
             for pdo in pdos:
-                if (pdo.index, 0) not in self._entries:
+                if (pdo.index, 0) not in self._entries or self._own_mapping(pdo.index):
                     continue
                 for i, e in enumerate(pdo.entries, start=1):
                     if (pdo.index, i) in self._entries:

@@ -1,0 +1,119 @@
+"""Slave configurations attached to a master inside a master program that imports ecattool instead of generating
+code (``Machine.install(master)`` gives them from a project).
+
+pysoem (:func:`install_pysoem`), after ``master.config_init()`` and before ``master.config_map()``: checks each
+slave's identity against its configuration (vendor and product code, and the revision with ``exact_revision``)
+and attaches a ``config_func`` that writes the slave's startup SDOs when SOEM maps the slave (in PRE-OP), as the
+module ``startup export --format pysoem`` writes does. KickCAT (:func:`install_kickcat`), after ``bus.init()`` and
+before ``bus.create_mapping()``: KickCAT's binding has no per-slave hook, so the same identity check (through
+1018h) and the writes happen at once, through each slave's mailbox. :func:`install` tells the two apart by the
+master's type.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from types import ModuleType
+from typing import Any, Literal
+
+from ecattool.errors import TargetError
+from ecattool.esi.model import Identity
+from ecattool.startup.config import SlaveConfig
+
+#: the masters :func:`install` attaches to
+MasterKind = Literal["pysoem", "kickcat"]
+
+
+def check_identity(cfg: SlaveConfig, position: int, found: Identity, exact_revision: bool = False) -> None:
+    """A TargetError when the slave at ``position`` is not the device ``cfg`` was made for."""
+    want = cfg.identity
+    if want is None:
+        return
+    if (found.vendor_id, found.product_code) != (want.vendor_id, want.product_code) or (
+            exact_revision and want.revision and found.revision != want.revision):
+        raise TargetError(f"slave {position} ({cfg.name or 'unnamed'}): found vendor 0x{found.vendor_id:08X} product "
+                          f"0x{found.product_code:08X} revision 0x{found.revision:08X}, the project expects vendor "
+                          f"0x{want.vendor_id:08X} product 0x{want.product_code:08X}"
+                          + (f" revision 0x{want.revision:08X}" if exact_revision else ""))
+
+
+def _placed(configs: Sequence[SlaveConfig], count: int) -> list[tuple[int, SlaveConfig]]:
+    """(bus position, configuration) of each configuration (its position, else its place in the list)."""
+    out = []
+    for i, cfg in enumerate(configs):
+        pos = cfg.position if cfg.position is not None else i
+        if not 0 <= pos < count:
+            raise TargetError(f"the project places {cfg.name or 'a drive'} at position {pos}; the bus has {count}")
+        out.append((pos, cfg))
+    return out
+
+
+def _writer(cfg: SlaveConfig, wkc_error: type[BaseException]) -> Callable[[Any], None]:
+    def write(slave: Any) -> None:
+        for cmd in cfg.commands:
+            try:
+                slave.sdo_write(cmd.index, cmd.subindex, bytes(cmd.data), cmd.complete_access)
+            except wkc_error:
+                if cmd.expect_reply:
+                    raise  # only a write the drive answers by resetting may go without a reply
+    return write
+
+
+def install_pysoem(configs: Sequence[SlaveConfig], master: Any, *, exact_revision: bool = False,
+                   pysoem_module: ModuleType | None = None) -> list[int]:
+    """Attach each configuration's startup list to its pysoem slave (identity checked first, every slave before
+    any is touched). Returns the positions configured. Sets ``manual_state_change`` so that ``config_map()``
+    leaves the state changes to the program."""
+    if pysoem_module is None:
+        from ecattool.target.pysoem import _import_pysoem
+
+        pysoem_module = _import_pysoem()
+    wkc_error = pysoem_module.WkcError
+    slaves = master.slaves
+    placed = _placed(configs, len(slaves))
+    for pos, cfg in placed:
+        s = slaves[pos]
+        check_identity(cfg, pos, Identity(int(s.man), int(s.id), int(s.rev)), exact_revision)
+    for pos, cfg in placed:
+        write = _writer(cfg, wkc_error)
+        slaves[pos].config_func = lambda p, _w=write: _w(master.slaves[p])
+    master.manual_state_change = 1
+    return [p for p, _ in placed]
+
+
+def install_kickcat(configs: Sequence[SlaveConfig], bus: Any, *, exact_revision: bool = False,
+                    kickcat_module: ModuleType | None = None) -> list[int]:
+    """Write each configuration's startup list to its KickCAT slave now (identity through 1018h checked first for
+    every slave). Call between ``bus.init()`` and ``bus.create_mapping()``."""
+    from ecattool.target.kickcat import KickcatSlave, import_kickcat
+
+    kc = kickcat_module or import_kickcat()
+    slaves = bus.slaves()
+    live = [(KickcatSlave(bus, slaves[pos], pos, kc), cfg) for pos, cfg in _placed(configs, len(slaves))]
+    for s, cfg in live:
+        check_identity(cfg, s.position, s.identity(), exact_revision)
+    for s, cfg in live:
+        for cmd in cfg.commands:
+            s.sdo_download(cmd.index, cmd.subindex, cmd.data, cmd.complete_access, cmd.expect_reply)
+    return [s.position for s, _ in live]
+
+
+def master_kind(master: Any) -> MasterKind:
+    """``pysoem`` for a ``pysoem.Master`` (a ``slaves`` list and ``config_map``), ``kickcat`` for a
+    ``kickcat.Bus`` (``slaves()`` a method and ``create_mapping``); a TargetError for anything else."""
+    if hasattr(master, "create_mapping") and callable(getattr(master, "slaves", None)):
+        return "kickcat"
+    if hasattr(master, "config_map") and not callable(getattr(master, "slaves", None)):
+        return "pysoem"
+    raise TargetError(f"cannot install a startup list on a {type(master).__name__}: give a pysoem.Master (after "
+                      "config_init) or a kickcat.Bus (after init), or kind='pysoem'/'kickcat'")
+
+
+def install(configs: Sequence[SlaveConfig], master: Any, *, kind: MasterKind | None = None,
+            exact_revision: bool = False, module: ModuleType | None = None) -> list[int]:
+    """:func:`install_pysoem` or :func:`install_kickcat`, by ``kind`` or else by the master's type
+    (:func:`master_kind`); ``module`` is the pysoem or kickcat module to use (tests pass a fake)."""
+    chosen = kind or master_kind(master)
+    if chosen == "kickcat":
+        return install_kickcat(configs, master, exact_revision=exact_revision, kickcat_module=module)
+    return install_pysoem(configs, master, exact_revision=exact_revision, pysoem_module=module)
