@@ -249,8 +249,11 @@ def test_dummy_entries_lint_and_simulator_agree_in_both_directions(name: str) ->
     entries' ... This feature is only valid for receive PDOs"; HDT and Control Techniques document no dummies;
     generic drives CiA-301 dummies in RxPDOs only. A complete access write of a Fixed PDO's mapping that carries
     a dummy was once passed over silently by the simulator (its read-only entries were skipped)."""
-    seed = (Path(__file__).resolve().parents[1].parent / "shared" / "seeds" / "000_a0ab57c0bda88c2c.txt")
-    assert "This feature is only valid for receive PDOs." in seed.read_text(encoding="utf-8").splitlines()[1223]
+    from tests.conftest import SEEDS
+
+    if SEEDS.is_dir():  # the quote, where the manuals are beside the checkout (the rest needs no manual)
+        seed = SEEDS / "000_a0ab57c0bda88c2c.txt"
+        assert "This feature is only valid for receive PDOs." in seed.read_text(encoding="utf-8").splitlines()[1223]
     t = target(name)
     coe = t.device.mailbox.coe if t.device.mailbox is not None else None
     accesses = [False] + ([True] if coe is not None and coe.complete_access else [])

@@ -80,7 +80,9 @@ def check_move_time(io: _Io, rd: ResolvedDrive, trace: DriveTrace, mode: str, di
     need = trapezoid_time(float(distance * rd.counts_per_unit), float(velocity * per_velocity),
                           float(acceleration * per_acceleration), float(deceleration * per_acceleration))
     start, end = trace.move_cycles
-    took = (end - start) * trace.cycle_s
+    # the drive's cycles as the master counted them; on a real bus a late master counts fewer than the drive
+    # ran, and then its own clock is the longer (and true) measure: the longer of the two is never too short
+    took = max((end - start) * trace.cycle_s, trace.move_wall_s or 0.0)
     ramps = f"6083h {acceleration}, 6084h {deceleration}" if has_6084 else f"6083h {acceleration} both ways"
     text = f"; took {took:.4g} s, the profile (6081h {velocity}, {ramps}) allows {need:.4g} s at the least"
     if took < need * (1 - SLACK) - trace.cycle_s:

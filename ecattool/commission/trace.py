@@ -10,6 +10,8 @@ object that cannot be sampled is dropped from the samples, not reported as a fai
 
 from __future__ import annotations
 
+import time
+
 from collections.abc import Container
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -136,11 +138,15 @@ class DriveTrace:
     channels: list[Channel] = field(default_factory=list)
     move: str = ""  # "PP move of 1000 user units" once the move started
     move_cycles: tuple[int, int] | None = None
+    #: the move's duration by the master's clock (on a real bus the drive moves in real time, and a master that
+    #: is late for a cycle counts fewer cycles than the drive ran)
+    move_wall_s: float | None = None
     cycles: int = 0
     _written: dict[tuple[int, int], int] = field(default_factory=dict)
     _every: int = 1
     _sampling: bool = False
     _move_start: int = 0
+    _move_start_wall: float = 0.0
 
     @classmethod
     def for_drive(cls, rd: ResolvedDrive) -> DriveTrace:
@@ -212,6 +218,7 @@ class DriveTrace:
         self.channels = [c for c in CHANNELS if io.has(c.index, c.subindex)]
         self.cycle_s = self._drive_period(io) or self.cycle_s
         self._move_start = self.cycles
+        self._move_start_wall = time.monotonic()
         self._sampling = True
         self._sample(io)
 
@@ -234,6 +241,7 @@ class DriveTrace:
             self._sample(io)
         self._sampling = False
         self.move_cycles = (self._move_start, self.cycles)
+        self.move_wall_s = time.monotonic() - self._move_start_wall
 
     def _sample(self, io: ProcessImage) -> None:
         values: dict[str, int] = {}
