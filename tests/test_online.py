@@ -292,8 +292,8 @@ def test_machine_install_checks_identity_and_attaches_the_startup_list() -> None
         machine.install(object())
 
 
-def test_online_install_delegates_to_the_machine() -> None:
-    from ecattool.online.install import install_pysoem
+def test_a_project_file_installs_through_its_machine() -> None:
+    from ecattool.project.machine import load_machine
     from ecattool.sim import Drive
 
     project = "samples/hdt/project.yaml"
@@ -302,7 +302,7 @@ def test_online_install_delegates_to_the_machine() -> None:
     master = mod.Master()
     master.open("eth0")
     master.config_init()
-    assert install_pysoem(project, master, pysoem_module=mod) == [0]
+    assert load_machine(project).install(master, module=mod) == [0]
     assert master.slaves[0].config_func is not None
 
 
