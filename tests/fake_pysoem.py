@@ -169,6 +169,7 @@ class CdefSlave:
 
         self.sii = bytearray(build(drive.device).to_bytes())  # the EEPROM words (what sim serve gives the ESC)
         self.sii_writes = []  # (word address, 2 bytes) in the order they were written
+        self.watchdog_ms = {"pdi": 100.0, "processdata": 100.0}  # the ESC defaults (0x0400 = 2498, 0x410/0x420)
 
     # -- identity and images (read-only properties, as in pysoem) --
     man = property(lambda self: self._man)
@@ -250,6 +251,12 @@ class CdefSlave:
     def od(self):
         self._master.check_context_is_initialized()
         return soem_od(self.drive.device.dictionary)
+
+    def get_watchdog(self, wd_type):
+        return self.watchdog_ms[wd_type]
+
+    def set_watchdog(self, wd_type, wd_time_ms):
+        self.watchdog_ms[wd_type] = float(wd_time_ms)
 
     def add_emergency_callback(self, callback):
         self._master.check_context_is_initialized()

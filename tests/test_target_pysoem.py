@@ -203,11 +203,31 @@ def test_the_keeper_cycles_while_the_caller_waits_for_an_sdo():
         s.sdo_upload(0x6041, 0)
         kept = t.kept_cycles
         assert kept > 0 and len(t.master.sent_at) - before >= kept
+        # one cycle per 10 ms (a tenth of the 100 ms watchdog), not one per bus cycle: 300 ms hold about 30
+        assert t.keep_interval_s == pytest.approx(0.010) and kept <= 0.3 / 0.010 + 3
         assert s._slave.output == outputs and drive.value(0x6040) == 6  # the last outputs, held
         assert s.state() is EcState.OP
     finally:
         t.close()
     assert t._keeper is not None and not t._keeper.is_alive()  # close() ends it
+
+
+@pytest.mark.parametrize(("watchdogs_ms", "interval_s"), [
+    ((100.0, 100.0), 0.010),  # the ESC default: a tenth of it
+    ((100.0, 30.0), 0.003),  # the shortest watchdog on the bus counts
+    ((0.0, 50.0), 0.005),  # a switched-off watchdog (0) does not
+    ((1.0, 100.0), 0.002),  # never less than two bus cycles
+])
+def test_the_keeper_rests_a_tenth_of_the_shortest_watchdog(watchdogs_ms, interval_s):
+    """The keeper does not send every bus cycle: SOEM polls its socket without sleeping while it waits for a
+    frame, and a keeper at 1 kHz beside a waiting SDO kept two cores busy (the frames then came back too late
+    on a 2-core machine and the SDO failed with no reply)."""
+    drives = [Drive.from_profile("hdt"), Drive.from_profile("hdt")]
+    t = PysoemTarget("eth0", pysoem_module=make_module(drives), keep_cycling=False)
+    for slave, ms in zip(t.master.slaves, watchdogs_ms):
+        slave.set_watchdog("processdata", ms)
+    t.map()
+    assert t.keep_interval_s == pytest.approx(interval_s)
 
 
 def test_the_keeper_stops_by_itself_when_the_caller_is_gone():

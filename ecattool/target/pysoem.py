@@ -24,9 +24,13 @@ What pysoem (1.1, over SOEM) requires, and how the adapter meets it:
   ``Emergency`` from the SDO call that happened to pop it and the SDO's own result is lost.
 - Once the IO map exists the process data never stops for long: a drive in OP leaves OP (AL status code
   0x001B) when its sync manager watchdog (100 ms by default) sees no outputs. A keeper thread sends a cycle
-  with the last outputs whenever the caller has not cycled for two bus cycles (while it waits for an SDO, a
-  state change or its own work), as SOEM's examples keep a process data thread. SDO and process data calls
-  release the GIL (pysoem ``always_release_gil``); SOEM serialises its frames itself. The keeper stops with
+  with the last outputs whenever the caller has not cycled for a tenth of the shortest process data watchdog
+  on the bus (10 ms by default; never less than two bus cycles), while it waits for an SDO, a state change or
+  its own work, as SOEM's examples keep a process data thread. Not every bus cycle: SOEM waits for a frame by
+  polling its socket without sleeping, and a keeper at 1 kHz beside an SDO that waits for its answer keeps two
+  cores busy, so that on a small machine the frames themselves come back too late (an SDO then fails with no
+  reply). SDO and process data calls release the GIL (pysoem ``always_release_gil``); SOEM serialises its
+  frames itself. The keeper stops with
   :meth:`PysoemTarget.close`, or by itself once the caller has not used the target for ``KEEPER_IDLE_S``.
 - A drive that leaves OP by itself (its watchdog, a fault) is noticed: every ``STATE_POLL_S`` of process data
   the adapter reads the AL status and raises a TargetError naming the state and the AL status code.
@@ -58,8 +62,13 @@ DEFAULT_CYCLE_NS = 1_000_000
 #: how long one state check waits before the GIL is given back (the keeper thread may cycle) or, on the way to OP,
 #: the next process data cycle goes out, in microseconds
 OP_POLL_US = 10_000
-#: the keeper thread sends a cycle when the caller has not for this many bus cycles
+#: the keeper thread sends a cycle when the caller has not for this many bus cycles, or for WATCHDOG_SHARE of the
+#: shortest process data watchdog on the bus if that is longer (see PysoemTarget.keep_interval_s)
 KEEP_CYCLING_AFTER = 2
+#: the share of a process data watchdog the keeper lets pass without a cycle
+WATCHDOG_SHARE = 0.1
+#: the process data watchdog of an ESC that has not been told otherwise (0x0400 = 2498, 0x0420 = 1000), in seconds
+DEFAULT_WATCHDOG_S = 0.1
 #: the keeper thread stops by itself when the target has not been used for this long, in seconds (a drive still in
 #: OP then leaves OP through its own watchdog: the safe end)
 KEEPER_IDLE_S = 5.0
@@ -290,6 +299,7 @@ class PysoemTarget:
         self._used = clock()
         self._stop = threading.Event()
         self._keeper: threading.Thread | None = None
+        self._watchdog_s = DEFAULT_WATCHDOG_S
         self.master = self.pysoem.Master()
         # SDO and process data calls wait in SOEM without the GIL: the keeper thread runs meanwhile
         self.master.always_release_gil = True
@@ -328,22 +338,41 @@ class PysoemTarget:
             raise TargetError(f"reading the PDO mappings failed ({len(exc.error_list)} errors, "
                               f"first: {detail})") from None
         self.mapped = True
+        self._watchdog_s = self._shortest_watchdog_s()
         if self.keep_cycling and self._keeper is None:
             self._keeper = threading.Thread(target=self._keep, name="ecattool-pysoem-keeper", daemon=True)
             self._keeper.start()
+
+    def _shortest_watchdog_s(self) -> float:
+        """The shortest process data watchdog the slaves run (0 = switched off does not count); the ESC default
+        where none says."""
+        times = []
+        for slave in self.master.slaves:
+            try:
+                ms = float(slave.get_watchdog("processdata"))
+            except self.pysoem.WkcError:  # the registers did not answer: the default stands
+                continue
+            if ms > 0:
+                times.append(ms / 1000)
+        return min(times, default=DEFAULT_WATCHDOG_S)
+
+    @property
+    def keep_interval_s(self) -> float:
+        """How long the keeper thread lets the process data rest while the caller does something else."""
+        return max(KEEP_CYCLING_AFTER * self.cycle_s, WATCHDOG_SHARE * self._watchdog_s)
 
     def touch(self) -> None:
         """The caller uses the target (the keeper's idle time starts again)."""
         self._used = self.clock()
 
     def _keep(self) -> None:
-        """The keeper thread: a cycle with the last outputs whenever the caller has not sent one for
-        KEEP_CYCLING_AFTER bus cycles. Ends with close(), or once the caller has been idle for keeper_idle_s."""
+        """The keeper thread: a cycle with the last outputs whenever none has gone out for ``keep_interval_s``.
+        Ends with close(), or once the caller has been idle for keeper_idle_s."""
         while not self._stop.wait(self.cycle_s):
             now = self.clock()
             if now - self._used > self.keeper_idle_s:
                 return
-            caller_late = now >= self._next_cycle + (KEEP_CYCLING_AFTER - 1) * self.cycle_s
+            caller_late = now >= self._next_cycle - self.cycle_s + self.keep_interval_s
             if not caller_late or not self.lock.acquire(blocking=False):
                 continue
             try:
