@@ -175,9 +175,52 @@ def test_one_target_opener():
     assert slave_at(target, 1).position == 1
     with pytest.raises(SelectionError, match="the bus has 2"):
         slave_at(target, 2)
-    for spec in ("simulator", "pysoem:", "eth0"):
-        with pytest.raises(SelectionError, match="'sim' or 'pysoem:<interface>'"):
+    for spec in ("simulator", "pysoem:", "eth0", "kickcat", "sim:", "sim: , "):
+        with pytest.raises(SelectionError, match="unknown target|names no slaves"):
             open_target(spec)
+    # sim:SOURCES: its own slaves, the devices given are not used; KickCAT reads a bus, it is no slave target
+    target = open_target("sim:hdt, technosoft-ipos", [load_profile_cached("hdt", None, None)])
+    assert [s.identity().vendor_id for s in target.slaves()] == [0x289, 0x1A3]
+    with pytest.raises(SelectionError, match="KickCAT reads a live bus"):
+        open_target("kickcat:eth0")
+
+
+def test_one_target_parser_for_every_command():
+    """The live-bus commands and the slave commands read a spec the same way (target.opener.parse_target)."""
+    from ecattool.online import open_bus
+    from ecattool.target.opener import TargetSpec, parse_target
+
+    assert parse_target(" SIM ") == TargetSpec(" SIM ", "sim")
+    assert parse_target("sim:hdt,x.xml") == TargetSpec("sim:hdt,x.xml", "sim", sources=("hdt", "x.xml"))
+    assert parse_target("pysoem: eth0") == TargetSpec("pysoem: eth0", "pysoem", interface="eth0")
+    assert parse_target("KickCAT:ecat0").interface == "ecat0"
+    for spec in ("canbus:0", "sim:", "pysoem"):
+        with pytest.raises(SelectionError) as slave_cmd:
+            parse_target(spec)
+        with pytest.raises(SelectionError) as bus_cmd:
+            open_bus(spec)
+        assert bus_cmd.value.message == slave_cmd.value.message
+    with open_bus("sim:hdt") as bus:
+        assert len(bus.slaves) == 1
+    with pytest.raises(SelectionError, match="without a project has no slaves"):
+        open_bus("sim")
+
+
+@pytest.mark.parametrize(("target", "ok"), [("sim", True), ("pysoem:eth0", True), ("canbus:0", False),
+                                            ("kickcat:eth0", False), ("sim:hdt", False)])
+def test_a_project_target_commission_cannot_open_fails_lint(tmp_path, target, ok):
+    """A project that lints clean must commission: its target: is checked at lint (PRJ001, with its line)."""
+    from ecattool.project.lint import lint_project
+
+    path = tmp_path / "machine.yaml"
+    path.write_text(f"ecattool: 1\ntarget: {target}\ndrives:\n  - name: x\n    device: {{profile: hdt}}\n")
+    findings = [f for f in lint_project(path).findings if f.rule == "PRJ001"]
+    if ok:
+        assert findings == []
+    else:
+        (f,) = findings
+        assert f.location is not None and f.location.line == 2
+        assert "a project's target is 'sim' (its own drives, simulated) or 'pysoem:<interface>'" in f.message
 
 
 def test_the_simulator_serves_the_modular_device_lint_checks():

@@ -65,7 +65,6 @@ def project_bus(project: str, target: str) -> Any:
         first = result.findings[0]
         raise InputError(first.message, first.location)
     refuse_errors(result, f"use {project} on a bus")
-    devices = []
-    if target.strip().lower() == "sim":
-        devices = [rd.device for rd in sorted(result.drives, key=lambda r: r.position) if rd.device is not None]
+    # what a bare 'sim' simulates (open_bus reads the spec; a real master or sim:SOURCES ignore them)
+    devices = [rd.device for rd in sorted(result.drives, key=lambda r: r.position) if rd.device is not None]
     return open_bus(target, devices)

@@ -410,23 +410,24 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
 
 def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> Any:
     from ecattool.errors import InputError, SelectionError
-    from ecattool.target.opener import TARGET_FORMS, open_target, slave_at
+    from ecattool.target.opener import SLAVE_TARGET_FORMS, open_target, parse_target, slave_at
 
     devices = []
-    if spec.strip().lower() == "sim":
-        from ecattool import profiles
-
-        if family == "generic":
-            raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
-        devices = [profiles.load(family, revision=firmware) if firmware else profiles.load(family)]
-        slave = 0  # the simulated bus has the one drive of the family
     try:
+        parsed = parse_target(spec)
+        if parsed.kind == "sim" and not parsed.sources:  # the one drive of the family
+            from ecattool import profiles
+
+            if family == "generic":
+                raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
+            devices = [profiles.load(family, revision=firmware) if firmware else profiles.load(family)]
+            slave = 0
         found = slave_at(open_target(spec, devices), slave)
     except SelectionError as exc:
         if exc.message.startswith("unknown target"):
-            raise click.BadParameter(f"use {TARGET_FORMS}", param_hint="--target") from None
+            raise click.BadParameter(f"use {SLAVE_TARGET_FORMS}", param_hint="--target") from None
         raise InputError(f"--slave {slave}: {exc.message}") from None
-    if spec.strip().lower() == "sim":
+    if parsed.kind == "sim":
         from ecattool.od.model import EcState
 
         found.request_state(EcState.PREOP)

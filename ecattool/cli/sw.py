@@ -112,9 +112,10 @@ def from_foe_cmd(file: str, output: str | None) -> None:
 def _open_target(spec: str, slave: int, device: Any = None) -> Any:
     """The slave at ``slave`` of the target ``spec`` (ecattool.target.opener): with ``sim``, a simulated bus of
     ``device`` at that position (a Technosoft iPOS without one)."""
-    from ecattool.target.opener import open_target, slave_at
+    from ecattool.target.opener import open_target, parse_target, slave_at
 
-    if spec.strip().lower() == "sim":
+    parsed = parse_target(spec)
+    if parsed.kind == "sim" and not parsed.sources:
         if device is None:
             from ecattool import profiles
 
@@ -203,7 +204,9 @@ def _open_preloaded(spec: str, slave: int | None, device: Any, preload: str | No
     """The slave of ``spec``; on the simulator with ``preload`` programmed into its EEPROM first."""
     tgt = _open_target(spec, slave or 0, device)
     if preload:
-        if spec != "sim":
+        from ecattool.target.opener import parse_target
+
+        if parse_target(spec).kind != "sim":
             raise InputError("--preload is for the simulator only")
         from ecattool.sw.apply import download
 

@@ -639,9 +639,11 @@ def open_target(spec: str, drives: list[Slave]) -> tuple[Target, str]:
     simulator; and the target's name for the report. A slave whose device did not resolve cannot be simulated:
     an InputError naming it and why (the file and line lint names)."""
     from ecattool.target.opener import open_target as open_spec
+    from ecattool.target.opener import parse_target
 
-    machine = Machine("", slaves=list(drives))
-    devices = [d for _, d in machine.devices()] if spec.strip().lower() == "sim" else []
+    parsed = parse_target(spec)
+    own = parsed.kind == "sim" and not parsed.sources  # a bare 'sim' simulates the project's slaves
+    devices = [d for _, d in Machine("", slaves=list(drives)).devices()] if own else []
     return open_spec(spec, devices), spec
 
 

@@ -193,13 +193,3 @@ def sim_bus(drives: Iterable[Any], spec: str = "sim") -> LiveBus:
         slaves.append(SimLiveSlave(d, build(d.device).to_bytes(), log))
     return LiveBus(spec, slaves, write_log=log, devices=[s.drive.device for s in slaves])
 
-
-def sim_devices(spec: str) -> list[Device]:
-    """The devices of a ``sim:SOURCE,SOURCE…`` spec: built-in profile names or ESI files, in bus order."""
-    from ecattool.sim.bus.serve import device_source
-
-    sources = [s.strip() for s in spec.split(":", 1)[1].split(",") if s.strip()] if ":" in spec else []
-    if not sources:
-        raise InputError(f"target {spec!r} names no drives: use sim:PROFILE,ESI… (e.g. sim:hdt,technosoft-ipos) "
-                         "or give a project")
-    return [device_source(s)[1] for s in sources]

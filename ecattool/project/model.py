@@ -229,9 +229,28 @@ class Project(_Strict):
     ecattool: Literal[1] = Field(description="Project file format version (1)")
     name: str = ""
     description: str = ""
-    target: str = Field(default="sim", description="Default target of commission: 'sim' or 'pysoem:<ifname>'")
+    target: str = Field(default="sim", description="Default target of commission: 'sim' (the project's drives, "
+                                                   "simulated) or 'pysoem:<interface>'")
     drives: list[Drive] = Field(min_length=1)
     disable_rules: list[RuleOff] = Field(default_factory=list)
+
+    @field_validator("target")
+    @classmethod
+    def _target(cls, v: str) -> str:
+        """A spec commission can open for this project (ecattool.target.opener): its own drives simulated, or a
+        real master; lint says so, not commission."""
+        from ecattool.errors import SelectionError
+        from ecattool.target.opener import parse_target
+
+        try:
+            spec = parse_target(v)
+            ok = spec.kind == "pysoem" or (spec.kind == "sim" and not spec.sources)
+        except SelectionError:
+            ok = False
+        if not ok:
+            raise ValueError(f"target {v!r}: a project's target is 'sim' (its own drives, simulated) or "
+                             "'pysoem:<interface>'")
+        return v
 
     @model_validator(mode="after")
     def _unique(self) -> "Project":

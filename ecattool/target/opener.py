@@ -1,12 +1,16 @@
-"""The one place a target spec becomes a target: ``open_target("sim", devices)`` or ``open_target("pysoem:eth0")``.
+"""The one place a target spec is read: :func:`parse_target` for every command, :func:`open_target` for those
+that act on slaves (``commission``, ``sw verify/download``, ``scale explain --target``), and
+``ecattool.online.open_bus`` for those that read a live bus (``bus scan/audit/backup``, ``project new
+--from-bus``, ``sii read``). A spec means the same everywhere:
 
-Every command that talks to slaves (``commission``, ``sw verify/download``, ``scale explain --target``, and
-the bus commands) opens its target here, so a spec means the same everywhere:
-
-* ``sim`` — the embedded simulator: one simulated slave per device in ``devices``, in that (bus) order;
-  each ESI device runs as it would on a bus (default modules plugged in, communication objects completed);
-* ``pysoem:<interface>`` — a real master on that network interface (the optional ``pysoem`` extra); the
-  slaves are whatever the bus has, ``devices`` is not used.
+* ``sim`` — the embedded simulator: one simulated slave per device the command has (a project's), in bus
+  order; each ESI device runs as it would on a bus (default modules plugged in, communication objects
+  completed);
+* ``sim:SOURCE,SOURCE…`` — the simulator with these slaves: built-in profile names or ESI files, in bus order;
+* ``pysoem:<interface>`` — SOEM through pysoem on that network interface (the optional ``pysoem`` extra); the
+  slaves are whatever the bus has;
+* ``kickcat:<interface>`` — KickCAT's master on that interface (the optional ``kickcat`` package); it reads a
+  live bus (identity, states, SDOs) and does not commission.
 
 Anything else is a :class:`~ecattool.errors.SelectionError` naming the forms. The caller owns the target and
 closes it (``Target.close``).
@@ -15,28 +19,68 @@ closes it (``Target.close``).
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import dataclass
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
 from ecattool.target.base import SlaveTarget, Target
 
 #: the forms of a target spec, for help texts and errors
-TARGET_FORMS = "'sim' or 'pysoem:<interface>'"
+TARGET_FORMS = "'sim', 'sim:PROFILE,ESI…', 'pysoem:<interface>' or 'kickcat:<interface>'"
+#: the forms :func:`open_target` opens (KickCAT reads a live bus only)
+SLAVE_TARGET_FORMS = "'sim', 'sim:PROFILE,ESI…' or 'pysoem:<interface>'"
+#: the kinds of a spec that name a real master on a network interface
+MASTERS = ("pysoem", "kickcat")
+
+
+@dataclass(frozen=True)
+class TargetSpec:
+    """A target spec as read: ``kind`` ('sim', 'pysoem' or 'kickcat'), the network ``interface`` of a real
+    master, the ``sources`` of a ``sim:`` spec (empty: the slaves the command has)."""
+
+    text: str
+    kind: str
+    interface: str = ""
+    sources: tuple[str, ...] = ()
+
+
+def parse_target(spec: str) -> TargetSpec:
+    """``spec`` read (see the module docs); a SelectionError naming the forms when it is none of them."""
+    kind, colon, rest = spec.partition(":")
+    kind = kind.strip().lower()
+    if kind == "sim":
+        sources = tuple(s.strip() for s in rest.split(",") if s.strip())
+        if colon and not sources:
+            raise SelectionError(f"target {spec!r} names no slaves: use sim:PROFILE,ESI… "
+                                 "(e.g. sim:hdt,technosoft-ipos), or 'sim' with a project")
+        return TargetSpec(spec, "sim", sources=sources)
+    if kind in MASTERS and rest.strip():
+        return TargetSpec(spec, kind, interface=rest.strip())
+    raise SelectionError(f"unknown target {spec!r} (use {TARGET_FORMS})")
+
+
+def sim_devices(spec: TargetSpec, devices: Iterable[Device] = ()) -> list[Device]:
+    """The devices a simulator of ``spec`` has: its sources' (profiles or ESI files), else ``devices``."""
+    if not spec.sources:
+        return list(devices)
+    from ecattool.sim.bus.serve import device_source
+
+    return [device_source(s)[1] for s in spec.sources]
 
 
 def open_target(spec: str, devices: Iterable[Device] = ()) -> Target:
-    """The target ``spec`` names (see the module docs); ``devices``: the slaves a simulator has, in bus order."""
-    kind, _, rest = spec.partition(":")
-    kind = kind.strip().lower()
-    if kind == "sim" and not rest:
+    """The target ``spec`` names (see the module docs); ``devices``: the slaves a bare ``sim`` has, in bus order."""
+    parsed = parse_target(spec)
+    if parsed.kind == "sim":
         from ecattool.target.sim import SimTarget
 
-        return SimTarget.from_devices(devices)
-    if kind == "pysoem" and rest.strip():
+        return SimTarget.from_devices(sim_devices(parsed, devices))
+    if parsed.kind == "pysoem":
         from ecattool.target.pysoem import PysoemTarget
 
-        return PysoemTarget(rest.strip())
-    raise SelectionError(f"unknown target {spec!r} (use {TARGET_FORMS})")
+        return PysoemTarget(parsed.interface)
+    raise SelectionError(f"target {spec!r}: KickCAT reads a live bus (ecattool bus scan, audit, backup; sii read) "
+                         f"and does not act on slaves here: use {SLAVE_TARGET_FORMS}")
 
 
 def slave_at(target: Target, position: int) -> SlaveTarget:
