@@ -38,7 +38,7 @@ RAW = "https://raw.githubusercontent.com/{repository}/{commit}/{source}"
 #: another interpreter puts its compiled lxml before the venv's own): cleared for everything run in the venv
 _FOREIGN = ("PYTHONPATH", "PYTHONHOME", "PYTHONSTARTUP", "PYTHONUSERBASE")
 #: the compiled and pure dependencies every test module needs, checked right after the install
-_CORE = ("lxml.etree", "pydantic", "yaml", "click", "rich", "canopen", "hypothesis", "xdist")
+_CORE = ("lxml.etree", "pydantic", "yaml", "click", "rich", "canopen", "hypothesis", "xdist", "pytest_rerunfailures")
 
 
 def venv_env() -> dict[str, str]:

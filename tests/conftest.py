@@ -122,6 +122,20 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "corpus: the test reads the real-file corpus indirectly (skips without it)")
 
 
+#: a test that runs frames through a private network namespace (a served bus and a real master) runs once more
+#: when it fails: both ends are processes the host schedules, and on a shared 2-core CI machine a frame may come
+#: back late once. A rerun is listed in the summary (pytest-rerunfailures, "R"); failing twice fails the suite.
+WIRE_RERUNS = 1
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if not config.pluginmanager.hasplugin("rerunfailures"):
+        return
+    for item in items:
+        if item.path.name.startswith("test_wire_") and item.get_closest_marker("flaky") is None:
+            item.add_marker(pytest.mark.flaky(reruns=WIRE_RERUNS))
+
+
 def pytest_runtest_setup(item: pytest.Item) -> None:
     if item.get_closest_marker("corpus") is not None:
         need_corpus()
@@ -138,6 +152,8 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]):  
 
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter, exitstatus: int, config: pytest.Config) -> None:
+    for report in terminalreporter.stats.get("rerun", []):
+        terminalreporter.write_line(f"rerun once (a wire test failed, see WIRE_RERUNS): {report.nodeid}")
     # with -rs pytest prints the folded reason itself; without it, say once why tests were skipped
     if have_corpus() or "s" in (config.option.reportchars or "") or "a" in (config.option.reportchars or ""):
         return
