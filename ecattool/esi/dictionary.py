@@ -364,7 +364,7 @@ class DictionaryBuilder:
         for obj_el in objects.iterchildren("Object"):
             try:
                 obj = self.object(obj_el)
-                total += _bounded_size(obj, total, self.ctx.loc(obj_el))
+                total += _bounded_size(obj, total, obj.location)  # the object's Location: ctx.loc(obj_el)
             except EcatToolError as exc:
                 self.ctx.warnings.append(Finding("esi-object-skipped", Severity.WARNING,
                                                  f"object skipped: {exc.message}", exc.location or self.ctx.loc(obj_el)))
