@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from ecattool.errors import EcatToolError, InputError
-from ecattool.esi.values import NO_NAME, Context, fast_number, lc_text, name_step
+from ecattool.esi.values import NO_NAME, Context, fast_number, lang_rank, lc_text, name_step
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import BY_CODE, DataType, Kind, lookup, parse_array_name
@@ -188,14 +188,15 @@ _ENTRY_SLOTS = tuple(Entry.__slots__)
 
 
 def _make_clone() -> Any:
-    """``_clone(e, location)``: a shallow copy of a template entry (objects of one record type share the
-    template) at the object's location.
+    """``_clone(entries, location)``: shallow copies of a template's entries (objects of one record type share
+    the template) at the object's location, in one call per object.
 
     Generated from ``Entry.__slots__`` so that fields added to the shared model are copied too.
     """
-    body = "\n".join(f"    c.{n} = e.{n}" for n in _ENTRY_SLOTS if n != "location")
+    body = "\n".join(f"        c.{n} = e.{n}" for n in _ENTRY_SLOTS if n != "location")
     ns: dict[str, Any] = {"_new": object.__new__, "Entry": Entry}
-    source = f"def _clone(e, location):\n    c = _new(Entry)\n{body}\n    c.location = location\n    return c\n"
+    source = (f"def _clone(entries, location):\n    out = []\n    for e in entries:\n        c = _new(Entry)\n{body}\n"
+              "        c.location = location\n        out.append(c)\n    return out\n")
     exec(source, ns)  # noqa: S102 - fixed template
     return ns["_clone"]
 
@@ -363,7 +364,7 @@ class DictionaryBuilder:
         for obj_el in objects.iterchildren("Object"):
             try:
                 obj = self.object(obj_el)
-                total += _bounded_size(obj, total, self.ctx.loc(obj_el))
+                total += _bounded_size(obj, total, obj.location)  # the object's Location: ctx.loc(obj_el)
             except EcatToolError as exc:
                 self.ctx.warnings.append(Finding("esi-object-skipped", Severity.WARNING,
                                                  f"object skipped: {exc.message}", exc.location or self.ctx.loc(obj_el)))
@@ -411,7 +412,7 @@ class DictionaryBuilder:
             template = self._templates.get(key)
             if template is None:
                 template = self._templates[key] = self._template(t, flags)
-            entries = [_clone(e, loc) for e in template.entries]
+            entries = _clone(template.entries, loc)
             if info is not None:
                 self._apply_subitem_infos(entries, template.first_by_name, info, index)
             return OdObject(index, name, template.code, dict(zip(template.subindices, entries)), type_name=type_name,
@@ -535,22 +536,28 @@ class DictionaryBuilder:
         # proxies); the Name rule is values.name_step
         ctx = self.ctx
         pos = -1
+        n_entries = len(entries)
         for si in info[:]:
             if si.tag != "SubItem":
                 continue
             pos += 1
-            n_opt: str | None = None
-            rank = NO_NAME
-            sub_info = None
-            for c in si[:]:
-                tag = c.tag
-                if tag == "Name":
-                    n_opt, rank = name_step(c, n_opt, rank)
-                elif tag == "Info" and sub_info is None:
-                    sub_info = c
-            n = n_opt or ""
+            kids = si[:]
+            if len(kids) == 2 and kids[0].tag == "Name" and kids[1].tag == "Info" and kids[0].get("LcId") is None:
+                n = (kids[0].text or "").strip()  # the common shape (every one of the largest file's 7518)
+                sub_info = kids[1]
+            else:
+                n_opt: str | None = None
+                rank = NO_NAME
+                sub_info = None
+                for c in kids:
+                    tag = c.tag
+                    if tag == "Name":
+                        n_opt, rank = name_step(c, n_opt, rank)
+                    elif tag == "Info" and sub_info is None:
+                        sub_info = c
+                n = n_opt or ""
             at = first_by_name.get(n, pos)
-            if at >= len(entries):
+            if at >= n_entries:
                 ctx.warn("esi-info-subitem", f"object 0x{index:04X}: Info/SubItem {n!r} matches no sub-index", si)
                 continue
             e = entries[at]

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import re
-from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from ecattool.errors import InputError, Location
+
+if TYPE_CHECKING:
+    from fractions import Fraction
 
 _ADDR = re.compile(r"^\s*(?:0x|#x)?([0-9A-Fa-f]{1,4})(?:h)?\s*[:.]\s*(?:0x|#x)?([0-9A-Fa-f]{1,2})(?:h)?\s*$")
 
@@ -52,6 +55,8 @@ def check_exponent(text: object, location: Location | None = None, what: str = "
 def parse_fraction(text: object, location: Location | None = None, what: str = "number") -> Fraction:
     """``12.5``, ``1/3``, ``2.5e-3``, an int or a Fraction → an exact :class:`~fractions.Fraction`; a boolean, a
     non-finite float, a huge exponent or anything else is an :class:`InputError`."""
+    from fractions import Fraction  # on first use: fractions (and decimal) cost ~4 ms of every process's start
+
     if isinstance(text, bool):
         raise InputError(f"{what} must be a number, not {str(text).lower()}", location)
     if isinstance(text, (int, Fraction)):
