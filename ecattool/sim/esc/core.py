@@ -18,6 +18,9 @@ from ecattool.sim.esc.eeprom import SiiEeprom
 from ecattool.sim.esc.mapping import Derived, Piece, Segment, pieces, segments
 
 _WRITABLE = R.writable_mask()
+_WD_DIV, _WD_PD = R.WD_DIVIDER, R.WD_TIME_PD
+#: the loop settings: DL control bits 8..15, two per port
+_LOOP = R.DL_CONTROL + 1
 
 #: SM control register: operation mode (bits 0..1) and direction (bits 2..3)
 SM_MODE_BUFFERED, SM_MODE_MAILBOX = 0x0, 0x2
@@ -104,6 +107,31 @@ class _Fmmu:
         return self.logical * 8 + self.start_bit, (self.logical + self.length - 1) * 8 + self.stop_bit + 1
 
 
+#: what a logical access may map: the datagram's data (a bytearray, or a view of the frame being answered)
+Buffer = bytearray | memoryview
+
+#: one FMMU share of a planned logical access: the :data:`~ecattool.sim.esc.mapping.Piece` fields, then the SM
+#: whose area it is in (-1: plain process RAM), whether the master may write that SM, the SM's first byte where
+#: the share reaches its last byte (its buffer completes; else -1), and whether such a write triggers the process
+#: data watchdog
+PlanOp = tuple[bool, bool, int, int, int, int, bool, int, int, int, int, bool, int, bool]
+_PLAN_LIMIT = 64
+
+
+@dataclass(frozen=True, slots=True)
+class _Plan:
+    """A logical access whose every FMMU share lies inside one buffered sync manager or one run of plain process
+    RAM; ``copy``: a read share comes before a write share over the same datagram bytes. ``general``: the
+    access is not such a one (:meth:`Esc.logical_general` serves it)."""
+
+    ops: tuple[PlanOp, ...]
+    copy: bool
+    general: bool
+
+
+_GENERAL = _Plan((), False, True)
+
+
 @lru_cache(maxsize=None)
 def _dl_status(loop: int, *links: bool) -> int:
     """DL status 0x0110 from the loop settings (DL control bits 8..15) and the link of each port; a pure
@@ -139,6 +167,8 @@ class Esc:
         #: per (address, length): its pieces at SM boundaries / its FMMU geometry, until the SMs / FMMUs change
         self._segment_memo: Derived[tuple[int, int], tuple[Segment, ...]] = Derived()
         self._piece_memo: Derived[tuple[int, int], tuple[Piece, ...]] = Derived()
+        #: per (logical address, length): its :class:`_Plan`, until the SMs / FMMUs change
+        self._plans: dict[tuple[int, int], _Plan] = {}
         self._al_event = False
         self.frame_ns = 0
         #: host time (ns) of the last process data watchdog trigger while the watchdog runs, else None
@@ -251,12 +281,17 @@ class Esc:
     # ------------------------------------------------------------------------------------------
     # the ECAT side (datagram engine)
     # ------------------------------------------------------------------------------------------
-    def begin_frame(self, arrival_ns: list[int | None]) -> None:
-        """A frame arrives; ``arrival_ns`` per port (host time in ns, None where it does not pass)."""
-        self._arrival = arrival_ns
-        self.frame_ns = arrival_ns[0] if arrival_ns[0] is not None else self.clock.host_ns()
-        if self._wd_pd_since is not None:
-            self.watchdog_check(self.frame_ns)
+    def begin_frame(self, arrive_ns: int, back_ns: int | None) -> None:
+        """A frame arrives at port 0 at host time ``arrive_ns`` (ns) and, where it comes back through port 1 from
+        the slaves after this one, passes port 1 at ``back_ns`` (None: it turns back here)."""
+        self._arrival = (arrive_ns, back_ns)
+        self.frame_ns = arrive_ns
+        since = self._wd_pd_since
+        if since is not None:
+            m = self.mem  # watchdog_pd_ns() from the register bytes (every frame asks while the watchdog runs)
+            timeout = ((m[_WD_DIV] | m[_WD_DIV + 1] << 8) + 2) * 40 * (m[_WD_PD] | m[_WD_PD + 1] << 8)
+            if timeout and arrive_ns - since > timeout:
+                self.watchdog_check(arrive_ns)
 
     def end_frame(self) -> None:
         self.app.frame_done(self)
@@ -373,6 +408,7 @@ class Esc:
         old_sms = list(self.sms())
         if hit(R.SM, R.SM_SIZE * 16):
             self._sms = None
+            self._plans.clear()
             for n, old in enumerate(old_sms):
                 new = self.sm(n)
                 if (old.enabled, old.start, old.length, old.control) != (new.enabled, new.start, new.length,
@@ -385,6 +421,7 @@ class Esc:
                         self.app.mailbox_repeat(self, n)
         if hit(R.FMMU, R.FMMU_SIZE * 16):
             self._fmmus = None
+            self._plans.clear()
         if hit(R.RX_ERROR_COUNTER, 0x14):
             # writing an error counter clears it
             for a in range(max(addr, R.RX_ERROR_COUNTER), min(end, R.RX_ERROR_COUNTER + 0x14)):
@@ -410,10 +447,81 @@ class Esc:
     # ------------------------------------------------------------------------------------------
     # logical addressing (LRD / LWR / LRW) through the FMMUs, bit granular
     # ------------------------------------------------------------------------------------------
-    def logical(self, address: int, data: bytearray, read: bool, write: bool) -> tuple[bool, bool]:
+    def logical(self, address: int, data: Buffer, read: bool, write: bool) -> tuple[bool, bool]:
         """Map the datagram bytes at logical ``address``: FMMUs of read type copy physical bits into
         ``data`` (when ``read``), those of write type copy ``data`` bits into the ESC (when ``write``).
-        Returns (read happened, write happened) for the working counter."""
+        Returns (read happened, write happened) for the working counter.
+
+        The common access (each FMMU's share inside one buffered sync manager or in plain process RAM) runs a
+        :class:`_Plan` made once per (address, length) until an SM or FMMU register is written: a few slice
+        copies and the sync manager's bookkeeping, no segment search. Every other access (registers, mailbox
+        areas, shares across SM boundaries or past the memory) takes :meth:`logical_general`, which the plan
+        equals wherever it applies (tests/test_esc_logical_plan.py)."""
+        key = (address, len(data))
+        plan = self._plans.get(key)
+        if plan is None:
+            if len(self._plans) >= _PLAN_LIMIT:
+                self._plans.clear()
+            plan = self._plans[key] = self._plan(address, len(data))
+        if plan.general:
+            return self.logical_general(address, data, read, write)
+        mem = self.mem
+        pdi_off = self._sm_pdi_off
+        incoming = bytes(data) if write and read and plan.copy else data
+        did_read = did_write = False
+        for f_read, f_write, p0, p1, d0, d1, whole, mask, pshift, dshift, smn, ecat_writes, first, wd in plan.ops:
+            if write and f_write and (smn < 0 or (ecat_writes and not pdi_off[smn])):
+                if whole:
+                    mem[p0:p1] = incoming[d0:d1]
+                else:
+                    bits = (int.from_bytes(incoming[d0:d1], "little") >> dshift) & mask
+                    current = int.from_bytes(mem[p0:p1], "little")
+                    mem[p0:p1] = ((current & ~(mask << pshift)) | (bits << pshift)).to_bytes(p1 - p0, "little")
+                did_write = True
+                if first >= 0:  # the write reached the SM's last byte: the buffer is complete
+                    self._sm_full[smn] = True
+                    if wd:
+                        self._wd_pd_since = self.frame_ns
+                    self.app.buffer_written(self, smn, bytes(mem[first:p1]))
+            if read and f_read and (smn < 0 or not pdi_off[smn]):
+                if whole:
+                    data[d0:d1] = mem[p0:p1]
+                else:
+                    bits = (int.from_bytes(mem[p0:p1], "little") >> pshift) & mask
+                    current = int.from_bytes(data[d0:d1], "little")
+                    data[d0:d1] = ((current & ~(mask << dshift)) | (bits << dshift)).to_bytes(d1 - d0, "little")
+                did_read = True
+                if first >= 0 and not ecat_writes:
+                    self.app.buffer_read(self, smn)
+        return did_read, did_write
+
+    def _plan(self, address: int, n: int) -> "_Plan":
+        """The plan of a logical access of ``n`` bytes at ``address``; :data:`_GENERAL` where it needs the
+        general way: a share that is not inside one buffered SM's area or one run of plain process RAM."""
+        fmmus = self.fmmus()
+        sms = self.sms()
+        ops: list[PlanOp] = []
+        for f_read, f_write, p0, p1, d0, d1, whole, mask, pshift, dshift in pieces(fmmus, address, n):
+            segs = self._segments(p0, p1 - p0)
+            if len(segs) != 1:
+                return _GENERAL
+            smn = segs[0][2]
+            if smn is None:
+                if p0 < R.PROCESS_RAM or p1 > len(self.mem):
+                    return _GENERAL
+                ops.append((f_read, f_write, p0, p1, d0, d1, whole, mask, pshift, dshift, -1, True, -1, False))
+                continue
+            sm = sms[smn]
+            if sm.mailbox:
+                return _GENERAL
+            ops.append((f_read, f_write, p0, p1, d0, d1, whole, mask, pshift, dshift, smn, sm.ecat_writes,
+                        sm.start if p1 == sm.end else -1, bool(sm.control & SM_WATCHDOG_TRIGGER)))
+        # a write FMMU takes the datagram's bytes as they came, whatever a read FMMU before it put there
+        copy = any(a[0] and b[1] and a[4] < b[5] and b[4] < a[5] for i, a in enumerate(ops) for b in ops[i + 1:])
+        return _Plan(tuple(ops), copy, False)
+
+    def logical_general(self, address: int, data: Buffer, read: bool, write: bool) -> tuple[bool, bool]:
+        """:meth:`logical` through the ECAT read and write of each FMMU's share (any access)."""
         fmmus = self.fmmus()
         n = len(data)
         incoming = bytes(data)  # what a write FMMU takes, whatever a read FMMU put into ``data`` before it
@@ -482,8 +590,9 @@ class Esc:
         return _dl_status(self.mem[R.DL_CONTROL + 1], link[0], link[1], link[2], link[3])
 
     def port_open(self, port: int) -> bool:
-        """Whether frames leave through ``port`` (the loop is open and a link is there)."""
-        return bool(self._dl_status() & (1 << (9 + 2 * port)))
+        """Whether frames leave through ``port`` (the loop is open and a link is there): DL status bit 9 + 2 x
+        ``port`` (:func:`_dl_status`), which with a link is set unless the loop setting is 3, always closed."""
+        return self.link[port] and (self.mem[_LOOP] >> (2 * port)) & 0x3 != 3
 
     def _sync_events(self) -> None:
         req = 0x08 if self._al_event else 0
