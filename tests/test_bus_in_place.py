@@ -114,3 +114,29 @@ def test_the_port_test_equals_the_dl_status() -> None:
             esc.link = [bool(links >> p & 1) for p in range(4)]
             status = _dl_status(setting, *esc.link)
             assert [esc.port_open(p) for p in range(4)] == [bool(status >> (9 + 2 * p) & 1) for p in range(4)]
+
+
+# --- the register path's shortcuts ------------------------------------------------------------------
+@settings(max_examples=60, deadline=None)
+@given(addr=st.integers(0, 0x1010), n=st.integers(0, 40))
+def test_the_writable_runs_are_the_writable_bytes(addr: int, n: int) -> None:
+    from ecattool.sim.esc.core import _WRITABLE, _writable_runs
+
+    covered = [a for lo, hi in _writable_runs(addr, addr + n) for a in range(lo, hi)]
+    assert covered == [a for a in range(addr, addr + n) if a >= R.PROCESS_RAM or _WRITABLE[a]]
+
+
+@settings(max_examples=40, deadline=None)
+@given(time=st.integers(0, 2**64 - 1), offset=st.integers(0, 2**64 - 1))
+def test_a_whole_system_time_write_compares_as_a_wider_one(time: int, offset: int) -> None:
+    """SOEM writes the 8 octets of 0x0910 (the shortcut); a write from 0x090F to 0x0918 covers them too and takes
+    the byte-wise way: the difference register and the system time must come out the same."""
+    escs = [Esc(_IMAGE, clock=Clock(offset_ns=offset, host=lambda: _T0)) for _ in range(2)]
+    payload = time.to_bytes(8, "little")
+    for esc, addr, data in ((escs[0], R.DC_SYSTEM_TIME, payload),
+                            (escs[1], R.DC_SYSTEM_TIME - 1, b"\x00" + payload + b"\x00")):
+        esc.begin_frame(_T0, None)
+        esc.ecat_write(R.DC_SYSTEM_DELAY, (offset % 1000).to_bytes(4, "little"))
+        assert esc.ecat_write(addr, data)
+    assert escs[0].mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_DIFFERENCE + 4] == \
+        escs[1].mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_DIFFERENCE + 4]

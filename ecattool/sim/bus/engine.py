@@ -21,17 +21,23 @@ from ecattool.sim.esc import registers as R
 #: cable + processing delay of one slave, in ns (a forwarding ESC with 100BASE-TX PHYs: some hundred ns)
 HOP_NS = 600
 
-_AUTO = {Cmd.APRD, Cmd.APWR, Cmd.APRW}
-_FIXED = {Cmd.FPRD, Cmd.FPWR, Cmd.FPRW}
-_BROADCAST = {Cmd.BRD, Cmd.BWR, Cmd.BRW}
-_READS = {Cmd.APRD, Cmd.FPRD, Cmd.BRD, Cmd.APRW, Cmd.FPRW, Cmd.BRW}
-_WRITES = {Cmd.APWR, Cmd.FPWR, Cmd.BWR, Cmd.APRW, Cmd.FPRW, Cmd.BRW}
-_READ_WRITE = {Cmd.APRW, Cmd.FPRW, Cmd.BRW}
-_LOGICAL = {Cmd.LRD, Cmd.LWR, Cmd.LRW}
-_RMW = {Cmd.ARMW, Cmd.FRMW}
 # plain ints: comparing with them costs a fraction of looking up an enum member on every datagram and slave
-_NOP, _LRD, _LWR, _LRW, _ARMW, _FRMW = int(Cmd.NOP), int(Cmd.LRD), int(Cmd.LWR), int(Cmd.LRW), int(Cmd.ARMW), \
-    int(Cmd.FRMW)
+_NOP, _LRD, _LWR, _LRW = int(Cmd.NOP), int(Cmd.LRD), int(Cmd.LWR), int(Cmd.LRW)
+#: addressing of a command: by position (the slave that sees ADP 0; every slave increments ADP), by node (station
+#: address or alias), broadcast (every slave; ADP incremented), or logical (through the FMMUs)
+_POSITION, _NODE, _BROADCAST, _LOGICAL = range(4)
+#: per command: (addressing, reads, writes, working counter of a write, read-modify-write)
+_COMMANDS: dict[int, tuple[int, bool, bool, int, bool]] = {
+    int(Cmd.APRD): (_POSITION, True, False, 0, False), int(Cmd.APWR): (_POSITION, False, True, 1, False),
+    int(Cmd.APRW): (_POSITION, True, True, 2, False),
+    int(Cmd.FPRD): (_NODE, True, False, 0, False), int(Cmd.FPWR): (_NODE, False, True, 1, False),
+    int(Cmd.FPRW): (_NODE, True, True, 2, False),
+    int(Cmd.BRD): (_BROADCAST, True, False, 0, False), int(Cmd.BWR): (_BROADCAST, False, True, 1, False),
+    int(Cmd.BRW): (_BROADCAST, True, True, 2, False),
+    _LRD: (_LOGICAL, True, False, 0, False), _LWR: (_LOGICAL, False, True, 0, False),
+    _LRW: (_LOGICAL, True, True, 0, False),
+    int(Cmd.ARMW): (_POSITION, True, True, 1, True), int(Cmd.FRMW): (_NODE, True, True, 1, True),
+}
 _EVENT_MASK = R.ECAT_EVENT_MASK
 _DG_PACK = struct.Struct("<BBIHH").pack_into
 _U16_PACK = struct.Struct("<H").pack_into
@@ -130,7 +136,7 @@ class Bus:
             mem = esc.mem
             for d in passing:
                 c = d.cmd
-                if c == _LRW or c == _LRD or c == _LWR:
+                if c == _LRW or c == _LRD or c == _LWR:  # as in _datagram, without its look-ups
                     if mem[_EVENT_MASK] or mem[_EVENT_MASK + 1]:
                         d.irq |= esc.irq()
                     did_read, did_write = esc.logical(d.address, d.data, c != _LWR, c != _LRD)
@@ -162,23 +168,28 @@ class Bus:
         c = d.cmd
         if c == _NOP:
             return
-        d.irq |= esc.irq()
-        if c in _LOGICAL:
-            did_read, did_write = esc.logical(d.address, d.data, c != _LWR, c != _LRD)
+        mem = esc.mem
+        if mem[_EVENT_MASK] or mem[_EVENT_MASK + 1]:  # Esc.irq() is 0 under an empty mask
+            d.irq |= esc.irq()
+        kind = _COMMANDS.get(c)
+        if kind is None:
+            return  # an unknown command passes untouched
+        addressing, reads, writes, write_wkc, rmw = kind
+        if addressing == _LOGICAL:
+            did_read, did_write = esc.logical(d.address, d.data, reads, writes)
             if c == _LRW:
                 d.wkc += (1 if did_read else 0) + (2 if did_write else 0)
-            else:
-                d.wkc += 1 if did_read or did_write else 0
+            elif did_read or did_write:
+                d.wkc += 1
             return
-        adp, ado = d.address & 0xFFFF, (d.address >> 16) & 0xFFFF
-        if c in _AUTO or c in _BROADCAST or c == _ARMW:
-            addressed = adp == 0 or c in _BROADCAST
-            d.address = (d.address & 0xFFFF0000) | ((adp + 1) & 0xFFFF)
-        elif c == _FRMW or c in _FIXED:
+        address = d.address
+        adp, ado = address & 0xFFFF, (address >> 16) & 0xFFFF
+        if addressing == _NODE:
             addressed = esc.addressed_fixed(adp)
         else:
-            return  # an unknown command passes untouched
-        if c in _RMW:
+            addressed = adp == 0 or addressing == _BROADCAST
+            d.address = (address & 0xFFFF0000) | ((adp + 1) & 0xFFFF)
+        if rmw:  # ARMW/FRMW: the addressed slave reads, every other one writes
             if addressed:
                 data, ok = esc.ecat_read(ado, len(d.data))
                 if ok:
@@ -190,16 +201,18 @@ class Bus:
         if not addressed:
             return
         incoming = bytes(d.data)
-        if c in _READS:
+        if reads:
             data, ok = esc.ecat_read(ado, len(d.data))
             if ok:
-                if c in _BROADCAST:
-                    d.data[:] = bytes(a | b for a, b in zip(d.data, data))
+                if addressing == _BROADCAST:  # a broadcast read ORs what each slave has into the data
+                    n = len(data)
+                    d.data[:] = (int.from_bytes(d.data, "little") | int.from_bytes(data, "little")).to_bytes(
+                        n, "little")
                 else:
                     d.data[:] = data
                 d.wkc += 1
-        if c in _WRITES and esc.ecat_write(ado, incoming):
-            d.wkc += 2 if c in _READ_WRITE else 1
+        if writes and esc.ecat_write(ado, incoming):
+            d.wkc += write_wkc
 
 
 class _Passing:

@@ -132,6 +132,50 @@ class _Plan:
 _GENERAL = _Plan((), False, True)
 
 
+def _hits(addr: int, end: int, *areas: tuple[int, int]) -> tuple[bool, ...]:
+    """For each (first, size) of ``areas``: whether [addr, end) covers a byte of it."""
+    return tuple(addr < first + size and end > first for first, size in areas)
+
+
+@lru_cache(maxsize=1024)
+def _read_hits(addr: int, end: int) -> tuple[bool, bool, bool, bool, bool, bool, bool, bool]:
+    """Which registers whose value is computed when read a read of [addr, end) covers: DL status, the SMs, the
+    system time, the event request, the DC activation status to the next SYNC1 pulse, the watchdog status;
+    then the EEPROM control/status (a busy EEPROM advances), and the AL status (its event is cleared). Once per
+    (addr, end): a master reads the same few places every cycle."""
+    dl, sm, time, events, dc, wd, eeprom, al = _hits(
+        addr, end, (R.DL_STATUS, 2), (R.SM, R.SM_SIZE * 16), (R.DC_SYSTEM_TIME, 8), (R.ECAT_EVENT_REQUEST, 4),
+        (R.DC_ACTIVATION_STATUS, R.DC_SYNC1_CYCLE - R.DC_ACTIVATION_STATUS), (R.WD_STATUS_PD, 2),
+        (R.EEPROM_CONTROL, 2), (R.AL_STATUS, 1))
+    return dl, sm, time, events, dc, wd, eeprom, al
+
+
+@lru_cache(maxsize=1024)
+def _write_hits(addr: int, end: int) -> tuple[bool, bool, bool, bool, bool, bool, bool, bool, bool, bool]:
+    """Which registers with an effect a write of [addr, end) covers: the SMs, the FMMUs, the error counters, the
+    watchdog divider and times, the watchdog counters, the EEPROM control, the receive time latch, the system
+    time, the DC activation, the AL control. Once per (addr, end)."""
+    sms, fmmus, rx, wd, wd_counter, eeprom, receive, time, activation, al = _hits(
+        addr, end, (R.SM, R.SM_SIZE * 16), (R.FMMU, R.FMMU_SIZE * 16), (R.RX_ERROR_COUNTER, 0x14),
+        (R.WD_DIVIDER, R.WD_TIME_PD + 2 - R.WD_DIVIDER), (R.WD_COUNTER_PD, 2), (R.EEPROM_CONTROL, 2),
+        (R.DC_RECEIVE_TIME, 4), (R.DC_SYSTEM_TIME, 8), (R.DC_ACTIVATION, 1), (R.AL_CONTROL, 2))
+    return sms, fmmus, rx, wd, wd_counter, eeprom, receive, time, activation, al
+
+
+@lru_cache(maxsize=1024)
+def _writable_runs(addr: int, end: int) -> tuple[tuple[int, int], ...]:
+    """The runs [lo, hi) of [addr, end) the master may write: every byte of the process RAM, the registers of
+    :data:`_WRITABLE`."""
+    runs: list[tuple[int, int]] = []
+    for a in range(addr, end):
+        if a >= R.PROCESS_RAM or _WRITABLE[a]:
+            if runs and runs[-1][1] == a:
+                runs[-1] = (runs[-1][0], a + 1)
+            else:
+                runs.append((a, a + 1))
+    return tuple(runs)
+
+
 @lru_cache(maxsize=None)
 def _dl_status(loop: int, *links: bool) -> int:
     """DL status 0x0110 from the loop settings (DL control bits 8..15) and the link of each port; a pure
@@ -303,10 +347,13 @@ class Esc:
 
     def ecat_read(self, addr: int, n: int) -> tuple[bytes, bool]:
         """The master reads ``n`` bytes at ``addr``; False when the ESC refuses (no working counter)."""
+        sms = self.sms()  # the list the segments come from (only an ECAT write of the SM registers renews it)
+        segs = self._segments(addr, n)
+        if len(segs) == 1 and segs[0][2] is None:
+            return self._read_plain(addr, n), True  # registers or RAM outside every SM: the common case
         out = bytearray()
         ok = True
-        sms = self.sms()  # the list the segments come from (only an ECAT write of the SM registers renews it)
-        for lo, hi, smn in self._segments(addr, n):
+        for lo, hi, smn in segs:
             if smn is None:
                 out += self._read_plain(lo, hi - lo)
                 continue
@@ -332,41 +379,51 @@ class Esc:
 
     def _read_plain(self, addr: int, n: int) -> bytes:
         end = addr + n
+        mem = self.mem
         if addr < R.PROCESS_RAM:
-            self._refresh(addr, end)
-        if addr >= len(self.mem):
+            dl, sm, time, events, dc, wd, eeprom, al = _read_hits(addr, end)
+            self._refresh(dl, sm, time, events, dc, wd)
+        else:
+            eeprom = al = False
+        if addr >= len(mem):
             return bytes(n)
-        data = bytes(self.mem[addr:min(end, len(self.mem))])
-        if addr < R.EEPROM_CONTROL + 2 and end > R.EEPROM_CONTROL:
+        data = bytes(mem[addr:end])
+        if eeprom:
             self.eeprom_poll()  # a busy EEPROM finishes after the status has been read busy
-        if addr <= R.AL_STATUS < end:
+        if al:
             self._al_event = False
             self._sync_events()
-        return data + bytes(n - len(data))
+        return data + bytes(n - len(data)) if len(data) < n else data
 
-    def _refresh(self, addr: int, end: int) -> None:
-        """Registers whose value is computed when they are read."""
-        if addr < R.DL_STATUS + 2 and end > R.DL_STATUS:
+    def _refresh(self, dl: bool, sm: bool, time: bool, events: bool, dc: bool, wd: bool) -> None:
+        """Registers whose value is computed when they are read (which a read covers: :func:`_read_hits`)."""
+        if dl:
             self._put16(R.DL_STATUS, self._dl_status())
-        if addr < R.SM + R.SM_SIZE * 16 and end > R.SM:
+        if sm:
             self._sync_sm_registers()
-        if addr < R.DC_SYSTEM_TIME + 8 and end > R.DC_SYSTEM_TIME:
+        if time:
             self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = self.system_time().to_bytes(8, "little")
-        if addr < R.ECAT_EVENT_REQUEST + 4 and end > R.ECAT_EVENT_REQUEST:
+        if events:
             self._sync_events()
-        if addr < R.DC_SYNC1_CYCLE and end > R.DC_ACTIVATION_STATUS:
+        if dc:
             self._sync_dc_status()
-        if addr < R.WD_STATUS_PD + 2 and end > R.WD_STATUS_PD:
+        if wd:
             running = self._wd_pd_since is not None or not self.watchdog_pd_ns()
             self._put16(R.WD_STATUS_PD, 1 if running else 0)
 
     def ecat_write(self, addr: int, data: bytes) -> bool:
         """The master writes ``data`` at ``addr``; False when the ESC refuses (no working counter)."""
+        sms = self.sms()  # as in ecat_read; the loop below renews nothing (registers are handled after it)
+        segs = self._segments(addr, len(data))
+        if len(segs) == 1 and segs[0][2] is None:  # registers or RAM outside every SM: the common case
+            self._write_plain(addr, data)
+            if addr < R.PROCESS_RAM:
+                self._after_register_write(addr, addr + len(data), data)
+            return True
         ok = True
         touched_registers = False
         done: list[tuple[int, bool]] = []
-        sms = self.sms()  # as in ecat_read; the loop below renews nothing (registers are handled after it)
-        for lo, hi, smn in self._segments(addr, len(data)):
+        for lo, hi, smn in segs:
             chunk = data[lo - addr:hi - addr]
             if smn is None:
                 self._write_plain(lo, chunk)
@@ -396,17 +453,15 @@ class Esc:
         return ok
 
     def _write_plain(self, addr: int, data: bytes) -> None:
-        end = min(addr + len(data), len(self.mem))
-        for a in range(addr, end):
-            if a >= R.PROCESS_RAM or _WRITABLE[a]:
-                self.mem[a] = data[a - addr]
+        mem = self.mem
+        for lo, hi in _writable_runs(addr, min(addr + len(data), len(mem))):
+            mem[lo:hi] = data[lo - addr:hi - addr]
 
     def _after_register_write(self, addr: int, end: int, data: bytes) -> None:
-        def hit(first: int, size: int) -> bool:
-            return addr < first + size and end > first
-
-        old_sms = list(self.sms())
-        if hit(R.SM, R.SM_SIZE * 16):
+        """What a write of the registers [addr, end) sets off (which of them it covers: :func:`_write_hits`)."""
+        sms, fmmus, rx, wd, wd_counter, eeprom, receive, time, activation, al = _write_hits(addr, end)
+        if sms:
+            old_sms = list(self.sms())
             self._sms = None
             self._plans.clear()
             for n, old in enumerate(old_sms):
@@ -415,33 +470,33 @@ class Esc:
                                                                           new.control):
                     self._sm_reset(n)
                 a = R.SM + R.SM_SIZE * n + 6
-                if hit(a, 1):
+                if addr <= a < end:
                     request = bool(self.mem[a] & 0x02)
                     if request != bool(self.mem[a + 1] & 0x02):
                         self.app.mailbox_repeat(self, n)
-        if hit(R.FMMU, R.FMMU_SIZE * 16):
+        if fmmus:
             self._fmmus = None
             self._plans.clear()
-        if hit(R.RX_ERROR_COUNTER, 0x14):
+        if rx:
             # writing an error counter clears it
             for a in range(max(addr, R.RX_ERROR_COUNTER), min(end, R.RX_ERROR_COUNTER + 0x14)):
                 self.mem[a] = 0
-        if hit(R.WD_DIVIDER, R.WD_TIME_PD + 2 - R.WD_DIVIDER) and self._wd_pd_since is not None:
+        if wd and self._wd_pd_since is not None:
             self._wd_pd_since = self.frame_ns  # a new watchdog time counts from its write
-        if hit(R.WD_COUNTER_PD, 2):
+        if wd_counter:
             # writing either watchdog counter clears both
             self.mem[R.WD_COUNTER_PD] = self.mem[R.WD_COUNTER_PDI] = 0
-        if hit(R.EEPROM_CONTROL, 2):
+        if eeprom:
             self._eeprom_command()
-        if hit(R.DC_RECEIVE_TIME, 4):
+        if receive:
             self._latch_receive_times()
-        if hit(R.DC_SYSTEM_TIME, 8):
+        if time:
             self._compare_system_time(addr, data)
-        if hit(R.DC_ACTIVATION, 1):
+        if activation:
             # the cyclic unit takes the start time when it is switched on (0x0990 is writable only while it is off)
             self._dc_start = self.u64(R.DC_START_TIME) if self.mem[R.DC_ACTIVATION] & 0x01 else None
             self.app.dc_activation(self, self.mem[R.DC_ACTIVATION])
-        if hit(R.AL_CONTROL, 2):
+        if al:
             self.app.al_control(self, self.u16(R.AL_CONTROL))
 
     # ------------------------------------------------------------------------------------------
@@ -596,11 +651,12 @@ class Esc:
 
     def _sync_events(self) -> None:
         req = 0x08 if self._al_event else 0
-        for n in range(self.sm_count):
-            sm = self.sm(n)
-            if sm.active and sm.mailbox and not sm.ecat_writes and self._sm_full[n]:
+        full = self._sm_full
+        for n, sm in enumerate(self.sms()):
+            if full[n] and sm.active and sm.mailbox and not sm.ecat_writes:
                 req |= 0x10 << n
-        self._put16(R.ECAT_EVENT_REQUEST, req)
+        self.mem[R.ECAT_EVENT_REQUEST] = req & 0xFF
+        self.mem[R.ECAT_EVENT_REQUEST + 1] = (req >> 8) & 0xFF
 
     def irq(self) -> int:
         """The bits this slave ORs into a datagram's IRQ field: event requests under the event mask."""
@@ -716,12 +772,14 @@ class Esc:
     def _compare_system_time(self, addr: int, data: bytes) -> None:
         """A write of the system time is compared with the local copy (drift control input); the register
         keeps the local system time."""
-        first = max(addr, R.DC_SYSTEM_TIME)
-        written = bytearray(self.system_time().to_bytes(8, "little"))
-        for a in range(first, min(addr + len(data), R.DC_SYSTEM_TIME + 8)):
-            written[a - R.DC_SYSTEM_TIME] = data[a - addr]
-        received = int.from_bytes(written, "little")
-        local = self.system_time()
+        local = self.system_time()  # the frame's time: the same for the bytes written and the comparison
+        if addr == R.DC_SYSTEM_TIME and len(data) >= 8:
+            received = int.from_bytes(data[:8], "little")  # all of it (as SOEM's ARMW/FRMW write it)
+        else:
+            written = bytearray(local.to_bytes(8, "little"))
+            for a in range(max(addr, R.DC_SYSTEM_TIME), min(addr + len(data), R.DC_SYSTEM_TIME + 8)):
+                written[a - R.DC_SYSTEM_TIME] = data[a - addr]
+            received = int.from_bytes(written, "little")
         diff = (received - local + self.u32(R.DC_SYSTEM_DELAY)) & 0xFFFFFFFF
         # 0x092C: bits 0..30 the difference's magnitude, bit 31 set when the local copy is ahead
         signed = diff - (1 << 32) if diff & 0x80000000 else diff
