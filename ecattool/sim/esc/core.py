@@ -8,7 +8,6 @@ clock are modelled as the ET1100 data sheet describes them; see docs/virtual-bus
 
 from __future__ import annotations
 
-import struct
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -21,6 +20,7 @@ _WRITABLE = R.writable_mask()
 _WD_DIV, _WD_PD = R.WD_DIVIDER, R.WD_TIME_PD
 #: the loop settings: DL control bits 8..15, two per port
 _LOOP = R.DL_CONTROL + 1
+_DC_OFFSET, _DC_DELAY = R.DC_SYSTEM_OFFSET, R.DC_SYSTEM_DELAY
 
 #: SM control register: operation mode (bits 0..1) and direction (bits 2..3)
 SM_MODE_BUFFERED, SM_MODE_MAILBOX = 0x0, 0x2
@@ -209,7 +209,9 @@ class Esc:
         self._sms: list[_Sm] | None = None
         self._fmmus: list[_Fmmu] | None = None
         #: per (address, length): its pieces at SM boundaries / its FMMU geometry, until the SMs / FMMUs change
-        self._segment_memo: Derived[tuple[int, int], tuple[Segment, ...]] = Derived()
+        self._segment_cache: dict[tuple[int, int], tuple[Segment, ...]] = {}
+        #: the active mailbox SMs the master reads (their "full" is an event request), with the SM list
+        self._read_mailboxes: tuple[int, ...] = ()
         self._piece_memo: Derived[tuple[int, int], tuple[Piece, ...]] = Derived()
         #: per (logical address, length): its :class:`_Plan`, until the SMs / FMMUs change
         self._plans: dict[tuple[int, int], _Plan] = {}
@@ -281,6 +283,8 @@ class Esc:
                 active = enabled and length > 0 and start >= R.PROCESS_RAM and start + length <= size
                 out.append(_Sm(start, length, self.mem[a + 4], enabled, active))
             self._sms = out
+            self._read_mailboxes = tuple(n for n, sm in enumerate(out)
+                                         if sm.active and sm.mailbox and not sm.ecat_writes)
         return self._sms
 
     def sm(self, n: int) -> _Sm:
@@ -341,9 +345,15 @@ class Esc:
         self.app.frame_done(self)
 
     def _segments(self, addr: int, n: int) -> tuple[Segment, ...]:
-        """Split [addr, addr+n) into pieces outside (None) and inside an enabled sync manager's area."""
-        sms = self.sms()
-        return self._segment_memo.get(sms, (addr, n), lambda: segments(sms, addr, n))
+        """Split [addr, addr+n) into pieces outside (None) and inside an enabled sync manager's area (kept per
+        (addr, n) until the SM registers are written)."""
+        cache = self._segment_cache
+        found = cache.get((addr, n))
+        if found is None:
+            if len(cache) >= _PLAN_LIMIT:
+                cache.clear()
+            found = cache[addr, n] = segments(self.sms(), addr, n)
+        return found
 
     def ecat_read(self, addr: int, n: int) -> tuple[bytes, bool]:
         """The master reads ``n`` bytes at ``addr``; False when the ESC refuses (no working counter)."""
@@ -382,7 +392,8 @@ class Esc:
         mem = self.mem
         if addr < R.PROCESS_RAM:
             dl, sm, time, events, dc, wd, eeprom, al = _read_hits(addr, end)
-            self._refresh(dl, sm, time, events, dc, wd)
+            if dl or sm or time or events or dc or wd:
+                self._refresh(dl, sm, time, events, dc, wd)
         else:
             eeprom = al = False
         if addr >= len(mem):
@@ -464,6 +475,7 @@ class Esc:
             old_sms = list(self.sms())
             self._sms = None
             self._plans.clear()
+            self._segment_cache.clear()
             for n, old in enumerate(old_sms):
                 new = self.sm(n)
                 if (old.enabled, old.start, old.length, old.control) != (new.enabled, new.start, new.length,
@@ -652,8 +664,9 @@ class Esc:
     def _sync_events(self) -> None:
         req = 0x08 if self._al_event else 0
         full = self._sm_full
-        for n, sm in enumerate(self.sms()):
-            if full[n] and sm.active and sm.mailbox and not sm.ecat_writes:
+        self.sms()  # brings _read_mailboxes up to date
+        for n in self._read_mailboxes:
+            if full[n]:
                 req |= 0x10 << n
         self.mem[R.ECAT_EVENT_REQUEST] = req & 0xFF
         self.mem[R.ECAT_EVENT_REQUEST + 1] = (req >> 8) & 0xFF
@@ -772,7 +785,10 @@ class Esc:
     def _compare_system_time(self, addr: int, data: bytes) -> None:
         """A write of the system time is compared with the local copy (drift control input); the register
         keeps the local system time."""
-        local = self.system_time()  # the frame's time: the same for the bytes written and the comparison
+        mem = self.mem
+        # the frame's system time (system_time()): the same for the bytes written and the comparison
+        local = (self.clock.local_ns(self.frame_ns) + int.from_bytes(mem[_DC_OFFSET:_DC_OFFSET + 8], "little")) \
+            & 0xFFFFFFFFFFFFFFFF
         if addr == R.DC_SYSTEM_TIME and len(data) >= 8:
             received = int.from_bytes(data[:8], "little")  # all of it (as SOEM's ARMW/FRMW write it)
         else:
@@ -780,12 +796,12 @@ class Esc:
             for a in range(max(addr, R.DC_SYSTEM_TIME), min(addr + len(data), R.DC_SYSTEM_TIME + 8)):
                 written[a - R.DC_SYSTEM_TIME] = data[a - addr]
             received = int.from_bytes(written, "little")
-        diff = (received - local + self.u32(R.DC_SYSTEM_DELAY)) & 0xFFFFFFFF
+        diff = (received - local + int.from_bytes(mem[_DC_DELAY:_DC_DELAY + 4], "little")) & 0xFFFFFFFF
         # 0x092C: bits 0..30 the difference's magnitude, bit 31 set when the local copy is ahead
         signed = diff - (1 << 32) if diff & 0x80000000 else diff
-        self.mem[R.DC_SYSTEM_DIFFERENCE:R.DC_SYSTEM_DIFFERENCE + 4] = struct.pack(
-            "<I", (min(abs(signed), 0x7FFFFFFF)) | (0x80000000 if signed < 0 else 0))
-        self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = local.to_bytes(8, "little")
+        mem[R.DC_SYSTEM_DIFFERENCE:R.DC_SYSTEM_DIFFERENCE + 4] = (
+            (min(abs(signed), 0x7FFFFFFF)) | (0x80000000 if signed < 0 else 0)).to_bytes(4, "little")
+        mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = local.to_bytes(8, "little")
 
     def _sync_dc_status(self) -> None:
         """0x0984 activation status (bit 0/1: the first SYNC0/SYNC1 pulse is still pending), 0x098E/0x098F SYNC0/1
