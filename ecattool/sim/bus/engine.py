@@ -87,7 +87,8 @@ class Bus:
             for esc in self.escs:
                 esc.app.after_frame(esc)
 
-    def process(self, raw: bytes, *, fcs_ok: bool = True, t0: int | None = None) -> bytes | None:
+    def process(self, raw: bytes | bytearray | memoryview, *, fcs_ok: bool = True,
+                t0: int | None = None) -> bytes | None:
         """``t0``: host time (ns) the frame left the master, when an earlier segment took it (else now).
 
         The frame is answered in a copy of ``raw``: each datagram's data are a view of that copy the ESCs read
