@@ -137,6 +137,15 @@ def _hits(addr: int, end: int, *areas: tuple[int, int]) -> tuple[bool, ...]:
     return tuple(addr < first + size and end > first for first, size in areas)
 
 
+def _put_bits(source: Buffer | bytes, source_shift: int, target: Buffer | bytes, target_shift: int,
+              mask: int) -> bytes:
+    """``target`` (little-endian bytes) with the ``mask`` bits of ``source`` from bit ``source_shift`` on put at
+    bit ``target_shift``, the other bits as they were: an FMMU share that is not on whole bytes."""
+    bits = (int.from_bytes(source, "little") >> source_shift) & mask
+    current = int.from_bytes(target, "little")
+    return ((current & ~(mask << target_shift)) | (bits << target_shift)).to_bytes(len(target), "little")
+
+
 @lru_cache(maxsize=1024)
 def _read_hits(addr: int, end: int) -> tuple[bool, bool, bool, bool, bool, bool, bool, bool]:
     """Which registers whose value is computed when read a read of [addr, end) covers: DL status, the SMs, the
@@ -541,9 +550,7 @@ class Esc:
                 if whole:
                     mem[p0:p1] = incoming[d0:d1]
                 else:
-                    bits = (int.from_bytes(incoming[d0:d1], "little") >> dshift) & mask
-                    current = int.from_bytes(mem[p0:p1], "little")
-                    mem[p0:p1] = ((current & ~(mask << pshift)) | (bits << pshift)).to_bytes(p1 - p0, "little")
+                    mem[p0:p1] = _put_bits(incoming[d0:d1], dshift, mem[p0:p1], pshift, mask)
                 did_write = True
                 if first >= 0:  # the write reached the SM's last byte: the buffer is complete
                     self._sm_full[smn] = True
@@ -554,9 +561,7 @@ class Esc:
                 if whole:
                     data[d0:d1] = mem[p0:p1]
                 else:
-                    bits = (int.from_bytes(mem[p0:p1], "little") >> pshift) & mask
-                    current = int.from_bytes(data[d0:d1], "little")
-                    data[d0:d1] = ((current & ~(mask << dshift)) | (bits << dshift)).to_bytes(d1 - d0, "little")
+                    data[d0:d1] = _put_bits(mem[p0:p1], pshift, data[d0:d1], dshift, mask)
                 did_read = True
                 if first >= 0 and not ecat_writes:
                     self.app.buffer_read(self, smn)
@@ -599,9 +604,7 @@ class Esc:
                 if whole:
                     chunk = incoming[d0:d1]
                 else:
-                    bits = (int.from_bytes(incoming[d0:d1], "little") >> dshift) & mask
-                    current = int.from_bytes(self.mem[p0:p1], "little")
-                    chunk = ((current & ~(mask << pshift)) | (bits << pshift)).to_bytes(p1 - p0, "little")
+                    chunk = _put_bits(incoming[d0:d1], dshift, self.mem[p0:p1], pshift, mask)
                 if self.ecat_write(p0, chunk):
                     did_write = True
             if read and f_read:
@@ -610,9 +613,7 @@ class Esc:
                     if whole:
                         data[d0:d1] = raw
                     else:
-                        bits = (int.from_bytes(raw, "little") >> pshift) & mask
-                        current = int.from_bytes(data[d0:d1], "little")
-                        data[d0:d1] = ((current & ~(mask << dshift)) | (bits << dshift)).to_bytes(d1 - d0, "little")
+                        data[d0:d1] = _put_bits(raw, pshift, data[d0:d1], dshift, mask)
                     did_read = True
         return did_read, did_write
 
