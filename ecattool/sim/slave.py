@@ -217,8 +217,7 @@ class VirtualSlave(EscApplication):
 
     def _push_mailbox(self) -> None:
         esc = self.esc
-        sm = esc.sm(MBX_IN)
-        if not sm.active or esc.sm_full(MBX_IN) or esc.sm_deactivated(MBX_IN):
+        if esc.sm_full(MBX_IN) or esc.sm_deactivated(MBX_IN) or not esc.sm(MBX_IN).active:
             return
         if self._reply_due is not None:
             if esc.frame_ns < self._reply_due:
@@ -265,17 +264,19 @@ class VirtualSlave(EscApplication):
 
     def _exchange(self, outputs: bytes | None) -> None:
         """One process data cycle: outputs to the drive (None: the first inputs at SAFE-OP), inputs to SM3."""
-        state = self.drive.state()
+        drive = self.drive
+        state = drive.state()
         if state is not _OP and state is not _SAFEOP:
             return
-        out_size, in_size = self.drive.process_image_sizes()
+        if outputs is None or state is not _OP:
+            outputs = bytes(drive.process_image_sizes()[0])
         try:
-            inputs = self.drive.exchange(bytes(out_size) if outputs is None or state is not _OP else outputs)
+            inputs = drive.exchange(outputs)
         except TargetError:
             self._sync_state()  # e.g. power lost during an EEPROM write: the drive is back in INIT
             return
         sm = self.esc.sm(PD_IN)
-        if in_size and sm.active:
+        if inputs and sm.active:  # the input image of the drive's layout: empty for a drive without inputs
             self.esc.pdi_write(sm.start, inputs[:sm.length])
 
     # ------------------------------------------------------------------------------------------

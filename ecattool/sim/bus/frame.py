@@ -87,32 +87,48 @@ def encode_datagrams(datagrams: list[Datagram]) -> bytes:
     return struct.pack("<H", len(body) | (TYPE_DATAGRAMS << 12)) + bytes(body)
 
 
-def decode_datagrams(payload: bytes) -> list[Datagram]:
-    """The datagrams of an EtherCAT payload (header first). Raises FrameError on inconsistent lengths."""
-    if len(payload) < 2:
+#: where one datagram lies in a frame: (offset of its header, command, index, address, length word, IRQ, working
+#: counter); its data follow the 10-octet header, as many as the length word's bits 0..10 say
+Head = tuple[int, int, int, int, int, int, int]
+DG_HEAD_SIZE = _DG_HEAD.size
+
+
+def datagram_heads(payload: bytes | bytearray, at: int = 0) -> list[Head]:
+    """The datagrams of the EtherCAT payload (header first) that starts at offset ``at`` of ``payload``, where
+    they lie. Raises FrameError on inconsistent lengths."""
+    if len(payload) - at < 2:
         raise FrameError("no EtherCAT header")
-    (head,) = struct.unpack_from("<H", payload)
+    (head,) = struct.unpack_from("<H", payload, at)
     length, ftype = head & 0x7FF, head >> 12
     if ftype != TYPE_DATAGRAMS:
         raise FrameError(f"EtherCAT header type {ftype} is not 1 (datagrams)")
-    if length + 2 > len(payload):
-        raise FrameError(f"the header announces {length} bytes, the frame has {len(payload) - 2}")
-    out: list[Datagram] = []
-    pos, end = 2, 2 + length
+    if at + length + 2 > len(payload):
+        raise FrameError(f"the header announces {length} bytes, the frame has {len(payload) - at - 2}")
+    out: list[Head] = []
+    pos, end = at + 2, at + 2 + length
+    unpack = _DG_HEAD.unpack_from
     while True:
         if pos + _DG_HEAD.size + 2 > end:
             raise FrameError(f"datagram {len(out)} is cut short")
-        cmd, index, address, dlen, irq = _DG_HEAD.unpack_from(payload, pos)
+        cmd, index, address, dlen, irq = unpack(payload, pos)
         n = dlen & 0x7FF
         data_at = pos + _DG_HEAD.size
         if data_at + n + 2 > end:
             raise FrameError(f"datagram {len(out)} announces {n} data bytes past the end of the frame")
-        (wkc,) = struct.unpack_from("<H", payload, data_at + n)
-        out.append(Datagram(cmd, index, address, bytearray(payload[data_at:data_at + n]), irq, wkc,
-                            bool(dlen & 0x4000)))
+        out.append((pos, cmd, index, address, dlen, irq, payload[data_at + n] | payload[data_at + n + 1] << 8))
         pos = data_at + n + 2
         if not dlen & 0x8000:
             return out
+
+
+def decode_datagrams(payload: bytes) -> list[Datagram]:
+    """The datagrams of an EtherCAT payload (header first). Raises FrameError on inconsistent lengths."""
+    out: list[Datagram] = []
+    for pos, cmd, index, address, dlen, irq, wkc in datagram_heads(payload):
+        data_at = pos + _DG_HEAD.size
+        out.append(Datagram(cmd, index, address, bytearray(payload[data_at:data_at + (dlen & 0x7FF)]), irq, wkc,
+                            bool(dlen & 0x4000)))
+    return out
 
 
 @dataclass(slots=True)
@@ -132,17 +148,18 @@ class Frame:
 BROADCAST = b"\xff" * 6
 
 
+def carries_datagrams(raw: bytes | bytearray) -> bool:
+    """Whether ``raw`` (an Ethernet frame) is an EtherCAT frame of datagrams: EtherType 0x88A4 (no VLAN tag) and
+    an EtherCAT header of type 1."""
+    return len(raw) >= ETH_HEADER + 2 and raw[12] == ETHERTYPE_ECAT >> 8 and raw[13] == ETHERTYPE_ECAT & 0xFF \
+        and raw[ETH_HEADER + 1] >> 4 == TYPE_DATAGRAMS
+
+
 def parse_frame(raw: bytes) -> Frame | None:
     """The EtherCAT frame in ``raw`` (an Ethernet frame without FCS), or None when it is not EtherCAT
     (another EtherType, a VLAN tag, a header of another type). Raises FrameError when it is EtherCAT but
     its lengths are inconsistent."""
-    if len(raw) < ETH_HEADER + 2:
-        return None
-    (etype,) = struct.unpack_from("!H", raw, 12)
-    if etype != ETHERTYPE_ECAT:
-        return None
-    (head,) = struct.unpack_from("<H", raw, ETH_HEADER)
-    if head >> 12 != TYPE_DATAGRAMS:
+    if not carries_datagrams(raw):
         return None
     return Frame(bytes(raw[0:6]), bytes(raw[6:12]), decode_datagrams(raw[ETH_HEADER:]))
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import math
 import os
-import select
 import signal
 import socket
 import struct
@@ -28,7 +27,7 @@ from types import FrameType
 from ecattool.errors import TargetError
 from ecattool.sim.bus.engine import Bus
 from ecattool.sim.bus.loop import FrameFault
-from ecattool.sim.bus.raw import MAX_FRAME, POLL_S, RawTransport
+from ecattool.sim.bus.raw import MAX_FRAME, POLL_S, RawTransport, wait_at_most
 from ecattool.sim.esc import Esc
 
 _HEAD = struct.Struct("<Q?")
@@ -88,7 +87,7 @@ def _priority_above(step: int) -> None:
         pass
 
 
-def _pass(bus: Bus, raw: bytes, fcs_ok: bool, t0: int, onward: socket.socket | None,
+def _pass(bus: Bus, raw: bytes | memoryview, fcs_ok: bool, t0: int, onward: socket.socket | None,
           out: Callable[[bytes], object]) -> bool:
     """Answer ``raw`` for this segment; hand it on to the next process, or send it back to the master where it
     turns back here. True when it went anywhere."""
@@ -140,7 +139,7 @@ class SplitTransport(RawTransport):
             if k:
                 a.close()
 
-    def answer(self, raw: bytes, fcs_ok: bool) -> None:
+    def answer(self, raw: bytes | memoryview, fcs_ok: bool) -> None:
         bus = self.bus
         try:
             if _pass(bus, raw, fcs_ok, bus.clock(), self.onward, self.out.send):
@@ -174,16 +173,19 @@ def _worker(bus: Bus, inbound: socket.socket, onward: socket.socket | None, out:
     for s in (signal.SIGINT, signal.SIGTERM):
         signal.signal(s, handler)
     send = out.send
+    wait_at_most(inbound, POLL_S)
+    buf = bytearray(_HEAD.size + MAX_FRAME + 4)
+    view = memoryview(buf)
     try:
         while not stopped[0]:
-            ready, _, _ = select.select([inbound], [], [], POLL_S)
-            if not ready:
-                continue
-            msg = inbound.recv(_HEAD.size + MAX_FRAME + 4)
-            if not msg:
+            try:
+                n = inbound.recv_into(buf)
+            except BlockingIOError:
+                continue  # POLL_S without a frame: check whether a signal asked to stop
+            if not n:
                 return 0
-            t0, fcs_ok = _HEAD.unpack_from(msg)
-            _pass(bus, msg[_HEAD.size:], fcs_ok, t0, onward, send)
+            t0, fcs_ok = _HEAD.unpack_from(buf)
+            _pass(bus, view[_HEAD.size:n], fcs_ok, t0, onward, send)
             bus.run_applications()
     except (BrokenPipeError, ConnectionResetError):
         return 0  # the next process has ended (the server is stopping)

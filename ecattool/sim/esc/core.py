@@ -8,7 +8,6 @@ clock are modelled as the ET1100 data sheet describes them; see docs/virtual-bus
 
 from __future__ import annotations
 
-import struct
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -18,6 +17,10 @@ from ecattool.sim.esc.eeprom import SiiEeprom
 from ecattool.sim.esc.mapping import Derived, Piece, Segment, pieces, segments
 
 _WRITABLE = R.writable_mask()
+_WD_DIV, _WD_PD = R.WD_DIVIDER, R.WD_TIME_PD
+#: the loop settings: DL control bits 8..15, two per port
+_LOOP = R.DL_CONTROL + 1
+_DC_OFFSET, _DC_DELAY = R.DC_SYSTEM_OFFSET, R.DC_SYSTEM_DELAY
 
 #: SM control register: operation mode (bits 0..1) and direction (bits 2..3)
 SM_MODE_BUFFERED, SM_MODE_MAILBOX = 0x0, 0x2
@@ -104,6 +107,84 @@ class _Fmmu:
         return self.logical * 8 + self.start_bit, (self.logical + self.length - 1) * 8 + self.stop_bit + 1
 
 
+#: what a logical access may map: the datagram's data (a bytearray, or a view of the frame being answered)
+Buffer = bytearray | memoryview
+
+#: one FMMU share of a planned logical access: the :data:`~ecattool.sim.esc.mapping.Piece` fields, then the SM
+#: whose area it is in (-1: plain process RAM), whether the master may write that SM, the SM's first byte where
+#: the share reaches its last byte (its buffer completes; else -1), and whether such a write triggers the process
+#: data watchdog
+PlanOp = tuple[bool, bool, int, int, int, int, bool, int, int, int, int, bool, int, bool]
+_PLAN_LIMIT = 64
+
+
+@dataclass(frozen=True, slots=True)
+class _Plan:
+    """A logical access whose every FMMU share lies inside one buffered sync manager or one run of plain process
+    RAM; ``copy``: a read share comes before a write share over the same datagram bytes. ``general``: the
+    access is not such a one (:meth:`Esc.logical_general` serves it)."""
+
+    ops: tuple[PlanOp, ...]
+    copy: bool
+    general: bool
+
+
+_GENERAL = _Plan((), False, True)
+
+
+def _hits(addr: int, end: int, *areas: tuple[int, int]) -> tuple[bool, ...]:
+    """For each (first, size) of ``areas``: whether [addr, end) covers a byte of it."""
+    return tuple(addr < first + size and end > first for first, size in areas)
+
+
+def _put_bits(source: Buffer | bytes, source_shift: int, target: Buffer | bytes, target_shift: int,
+              mask: int) -> bytes:
+    """``target`` (little-endian bytes) with the ``mask`` bits of ``source`` from bit ``source_shift`` on put at
+    bit ``target_shift``, the other bits as they were: an FMMU share that is not on whole bytes."""
+    bits = (int.from_bytes(source, "little") >> source_shift) & mask
+    current = int.from_bytes(target, "little")
+    return ((current & ~(mask << target_shift)) | (bits << target_shift)).to_bytes(len(target), "little")
+
+
+@lru_cache(maxsize=1024)
+def _read_hits(addr: int, end: int) -> tuple[bool, bool, bool, bool, bool, bool, bool, bool]:
+    """Which registers whose value is computed when read a read of [addr, end) covers: DL status, the SMs, the
+    system time, the event request, the DC activation status to the next SYNC1 pulse, the watchdog status;
+    then the EEPROM control/status (a busy EEPROM advances), and the AL status (its event is cleared). Once per
+    (addr, end): a master reads the same few places every cycle."""
+    dl, sm, time, events, dc, wd, eeprom, al = _hits(
+        addr, end, (R.DL_STATUS, 2), (R.SM, R.SM_SIZE * 16), (R.DC_SYSTEM_TIME, 8), (R.ECAT_EVENT_REQUEST, 4),
+        (R.DC_ACTIVATION_STATUS, R.DC_SYNC1_CYCLE - R.DC_ACTIVATION_STATUS), (R.WD_STATUS_PD, 2),
+        (R.EEPROM_CONTROL, 2), (R.AL_STATUS, 1))
+    return dl, sm, time, events, dc, wd, eeprom, al
+
+
+@lru_cache(maxsize=1024)
+def _write_hits(addr: int, end: int) -> tuple[bool, bool, bool, bool, bool, bool, bool, bool, bool, bool]:
+    """Which registers with an effect a write of [addr, end) covers: the SMs, the FMMUs, the error counters, the
+    watchdog divider and times, the watchdog counters, the EEPROM control, the receive time latch, the system
+    time, the DC activation, the AL control. Once per (addr, end)."""
+    sms, fmmus, rx, wd, wd_counter, eeprom, receive, time, activation, al = _hits(
+        addr, end, (R.SM, R.SM_SIZE * 16), (R.FMMU, R.FMMU_SIZE * 16), (R.RX_ERROR_COUNTER, 0x14),
+        (R.WD_DIVIDER, R.WD_TIME_PD + 2 - R.WD_DIVIDER), (R.WD_COUNTER_PD, 2), (R.EEPROM_CONTROL, 2),
+        (R.DC_RECEIVE_TIME, 4), (R.DC_SYSTEM_TIME, 8), (R.DC_ACTIVATION, 1), (R.AL_CONTROL, 2))
+    return sms, fmmus, rx, wd, wd_counter, eeprom, receive, time, activation, al
+
+
+@lru_cache(maxsize=1024)
+def _writable_runs(addr: int, end: int) -> tuple[tuple[int, int], ...]:
+    """The runs [lo, hi) of [addr, end) the master may write: every byte of the process RAM, the registers of
+    :data:`_WRITABLE`."""
+    runs: list[tuple[int, int]] = []
+    for a in range(addr, end):
+        if a >= R.PROCESS_RAM or _WRITABLE[a]:
+            if runs and runs[-1][1] == a:
+                runs[-1] = (runs[-1][0], a + 1)
+            else:
+                runs.append((a, a + 1))
+    return tuple(runs)
+
+
 @lru_cache(maxsize=None)
 def _dl_status(loop: int, *links: bool) -> int:
     """DL status 0x0110 from the loop settings (DL control bits 8..15) and the link of each port; a pure
@@ -137,8 +218,12 @@ class Esc:
         self._sms: list[_Sm] | None = None
         self._fmmus: list[_Fmmu] | None = None
         #: per (address, length): its pieces at SM boundaries / its FMMU geometry, until the SMs / FMMUs change
-        self._segment_memo: Derived[tuple[int, int], tuple[Segment, ...]] = Derived()
+        self._segment_cache: dict[tuple[int, int], tuple[Segment, ...]] = {}
+        #: the active mailbox SMs the master reads (their "full" is an event request), with the SM list
+        self._read_mailboxes: tuple[int, ...] = ()
         self._piece_memo: Derived[tuple[int, int], tuple[Piece, ...]] = Derived()
+        #: per (logical address, length): its :class:`_Plan`, until the SMs / FMMUs change
+        self._plans: dict[tuple[int, int], _Plan] = {}
         self._al_event = False
         self.frame_ns = 0
         #: host time (ns) of the last process data watchdog trigger while the watchdog runs, else None
@@ -207,6 +292,8 @@ class Esc:
                 active = enabled and length > 0 and start >= R.PROCESS_RAM and start + length <= size
                 out.append(_Sm(start, length, self.mem[a + 4], enabled, active))
             self._sms = out
+            self._read_mailboxes = tuple(n for n, sm in enumerate(out)
+                                         if sm.active and sm.mailbox and not sm.ecat_writes)
         return self._sms
 
     def sm(self, n: int) -> _Sm:
@@ -251,27 +338,41 @@ class Esc:
     # ------------------------------------------------------------------------------------------
     # the ECAT side (datagram engine)
     # ------------------------------------------------------------------------------------------
-    def begin_frame(self, arrival_ns: list[int | None]) -> None:
-        """A frame arrives; ``arrival_ns`` per port (host time in ns, None where it does not pass)."""
-        self._arrival = arrival_ns
-        self.frame_ns = arrival_ns[0] if arrival_ns[0] is not None else self.clock.host_ns()
-        if self._wd_pd_since is not None:
-            self.watchdog_check(self.frame_ns)
+    def begin_frame(self, arrive_ns: int, back_ns: int | None) -> None:
+        """A frame arrives at port 0 at host time ``arrive_ns`` (ns) and, where it comes back through port 1 from
+        the slaves after this one, passes port 1 at ``back_ns`` (None: it turns back here)."""
+        self._arrival = (arrive_ns, back_ns)
+        self.frame_ns = arrive_ns
+        since = self._wd_pd_since
+        if since is not None:
+            m = self.mem  # watchdog_pd_ns() from the register bytes (every frame asks while the watchdog runs)
+            timeout = ((m[_WD_DIV] | m[_WD_DIV + 1] << 8) + 2) * 40 * (m[_WD_PD] | m[_WD_PD + 1] << 8)
+            if timeout and arrive_ns - since > timeout:
+                self.watchdog_check(arrive_ns)
 
     def end_frame(self) -> None:
         self.app.frame_done(self)
 
     def _segments(self, addr: int, n: int) -> tuple[Segment, ...]:
-        """Split [addr, addr+n) into pieces outside (None) and inside an enabled sync manager's area."""
-        sms = self.sms()
-        return self._segment_memo.get(sms, (addr, n), lambda: segments(sms, addr, n))
+        """Split [addr, addr+n) into pieces outside (None) and inside an enabled sync manager's area (kept per
+        (addr, n) until the SM registers are written)."""
+        cache = self._segment_cache
+        found = cache.get((addr, n))
+        if found is None:
+            if len(cache) >= _PLAN_LIMIT:
+                cache.clear()
+            found = cache[addr, n] = segments(self.sms(), addr, n)
+        return found
 
     def ecat_read(self, addr: int, n: int) -> tuple[bytes, bool]:
         """The master reads ``n`` bytes at ``addr``; False when the ESC refuses (no working counter)."""
+        sms = self.sms()  # the list the segments come from (only an ECAT write of the SM registers renews it)
+        segs = self._segments(addr, n)
+        if len(segs) == 1 and segs[0][2] is None:
+            return self._read_plain(addr, n), True  # registers or RAM outside every SM: the common case
         out = bytearray()
         ok = True
-        sms = self.sms()  # the list the segments come from (only an ECAT write of the SM registers renews it)
-        for lo, hi, smn in self._segments(addr, n):
+        for lo, hi, smn in segs:
             if smn is None:
                 out += self._read_plain(lo, hi - lo)
                 continue
@@ -297,41 +398,52 @@ class Esc:
 
     def _read_plain(self, addr: int, n: int) -> bytes:
         end = addr + n
+        mem = self.mem
         if addr < R.PROCESS_RAM:
-            self._refresh(addr, end)
-        if addr >= len(self.mem):
+            dl, sm, time, events, dc, wd, eeprom, al = _read_hits(addr, end)
+            if dl or sm or time or events or dc or wd:
+                self._refresh(dl, sm, time, events, dc, wd)
+        else:
+            eeprom = al = False
+        if addr >= len(mem):
             return bytes(n)
-        data = bytes(self.mem[addr:min(end, len(self.mem))])
-        if addr < R.EEPROM_CONTROL + 2 and end > R.EEPROM_CONTROL:
+        data = bytes(mem[addr:end])
+        if eeprom:
             self.eeprom_poll()  # a busy EEPROM finishes after the status has been read busy
-        if addr <= R.AL_STATUS < end:
+        if al:
             self._al_event = False
             self._sync_events()
-        return data + bytes(n - len(data))
+        return data + bytes(n - len(data)) if len(data) < n else data
 
-    def _refresh(self, addr: int, end: int) -> None:
-        """Registers whose value is computed when they are read."""
-        if addr < R.DL_STATUS + 2 and end > R.DL_STATUS:
+    def _refresh(self, dl: bool, sm: bool, time: bool, events: bool, dc: bool, wd: bool) -> None:
+        """Registers whose value is computed when they are read (which a read covers: :func:`_read_hits`)."""
+        if dl:
             self._put16(R.DL_STATUS, self._dl_status())
-        if addr < R.SM + R.SM_SIZE * 16 and end > R.SM:
+        if sm:
             self._sync_sm_registers()
-        if addr < R.DC_SYSTEM_TIME + 8 and end > R.DC_SYSTEM_TIME:
+        if time:
             self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = self.system_time().to_bytes(8, "little")
-        if addr < R.ECAT_EVENT_REQUEST + 4 and end > R.ECAT_EVENT_REQUEST:
+        if events:
             self._sync_events()
-        if addr < R.DC_SYNC1_CYCLE and end > R.DC_ACTIVATION_STATUS:
+        if dc:
             self._sync_dc_status()
-        if addr < R.WD_STATUS_PD + 2 and end > R.WD_STATUS_PD:
+        if wd:
             running = self._wd_pd_since is not None or not self.watchdog_pd_ns()
             self._put16(R.WD_STATUS_PD, 1 if running else 0)
 
     def ecat_write(self, addr: int, data: bytes) -> bool:
         """The master writes ``data`` at ``addr``; False when the ESC refuses (no working counter)."""
+        sms = self.sms()  # as in ecat_read; the loop below renews nothing (registers are handled after it)
+        segs = self._segments(addr, len(data))
+        if len(segs) == 1 and segs[0][2] is None:  # registers or RAM outside every SM: the common case
+            self._write_plain(addr, data)
+            if addr < R.PROCESS_RAM:
+                self._after_register_write(addr, addr + len(data), data)
+            return True
         ok = True
         touched_registers = False
         done: list[tuple[int, bool]] = []
-        sms = self.sms()  # as in ecat_read; the loop below renews nothing (registers are handled after it)
-        for lo, hi, smn in self._segments(addr, len(data)):
+        for lo, hi, smn in segs:
             chunk = data[lo - addr:hi - addr]
             if smn is None:
                 self._write_plain(lo, chunk)
@@ -361,59 +473,127 @@ class Esc:
         return ok
 
     def _write_plain(self, addr: int, data: bytes) -> None:
-        end = min(addr + len(data), len(self.mem))
-        for a in range(addr, end):
-            if a >= R.PROCESS_RAM or _WRITABLE[a]:
-                self.mem[a] = data[a - addr]
+        mem = self.mem
+        for lo, hi in _writable_runs(addr, min(addr + len(data), len(mem))):
+            mem[lo:hi] = data[lo - addr:hi - addr]
 
     def _after_register_write(self, addr: int, end: int, data: bytes) -> None:
-        def hit(first: int, size: int) -> bool:
-            return addr < first + size and end > first
-
-        old_sms = list(self.sms())
-        if hit(R.SM, R.SM_SIZE * 16):
+        """What a write of the registers [addr, end) sets off (which of them it covers: :func:`_write_hits`)."""
+        sms, fmmus, rx, wd, wd_counter, eeprom, receive, time, activation, al = _write_hits(addr, end)
+        if sms:
+            old_sms = list(self.sms())
             self._sms = None
+            self._plans.clear()
+            self._segment_cache.clear()
             for n, old in enumerate(old_sms):
                 new = self.sm(n)
                 if (old.enabled, old.start, old.length, old.control) != (new.enabled, new.start, new.length,
                                                                           new.control):
                     self._sm_reset(n)
                 a = R.SM + R.SM_SIZE * n + 6
-                if hit(a, 1):
+                if addr <= a < end:
                     request = bool(self.mem[a] & 0x02)
                     if request != bool(self.mem[a + 1] & 0x02):
                         self.app.mailbox_repeat(self, n)
-        if hit(R.FMMU, R.FMMU_SIZE * 16):
+        if fmmus:
             self._fmmus = None
-        if hit(R.RX_ERROR_COUNTER, 0x14):
+            self._plans.clear()
+        if rx:
             # writing an error counter clears it
             for a in range(max(addr, R.RX_ERROR_COUNTER), min(end, R.RX_ERROR_COUNTER + 0x14)):
                 self.mem[a] = 0
-        if hit(R.WD_DIVIDER, R.WD_TIME_PD + 2 - R.WD_DIVIDER) and self._wd_pd_since is not None:
+        if wd and self._wd_pd_since is not None:
             self._wd_pd_since = self.frame_ns  # a new watchdog time counts from its write
-        if hit(R.WD_COUNTER_PD, 2):
+        if wd_counter:
             # writing either watchdog counter clears both
             self.mem[R.WD_COUNTER_PD] = self.mem[R.WD_COUNTER_PDI] = 0
-        if hit(R.EEPROM_CONTROL, 2):
+        if eeprom:
             self._eeprom_command()
-        if hit(R.DC_RECEIVE_TIME, 4):
+        if receive:
             self._latch_receive_times()
-        if hit(R.DC_SYSTEM_TIME, 8):
+        if time:
             self._compare_system_time(addr, data)
-        if hit(R.DC_ACTIVATION, 1):
+        if activation:
             # the cyclic unit takes the start time when it is switched on (0x0990 is writable only while it is off)
             self._dc_start = self.u64(R.DC_START_TIME) if self.mem[R.DC_ACTIVATION] & 0x01 else None
             self.app.dc_activation(self, self.mem[R.DC_ACTIVATION])
-        if hit(R.AL_CONTROL, 2):
+        if al:
             self.app.al_control(self, self.u16(R.AL_CONTROL))
 
     # ------------------------------------------------------------------------------------------
     # logical addressing (LRD / LWR / LRW) through the FMMUs, bit granular
     # ------------------------------------------------------------------------------------------
-    def logical(self, address: int, data: bytearray, read: bool, write: bool) -> tuple[bool, bool]:
+    def logical(self, address: int, data: Buffer, read: bool, write: bool) -> tuple[bool, bool]:
         """Map the datagram bytes at logical ``address``: FMMUs of read type copy physical bits into
         ``data`` (when ``read``), those of write type copy ``data`` bits into the ESC (when ``write``).
-        Returns (read happened, write happened) for the working counter."""
+        Returns (read happened, write happened) for the working counter.
+
+        The common access (each FMMU's share inside one buffered sync manager or in plain process RAM) runs a
+        :class:`_Plan` made once per (address, length) until an SM or FMMU register is written: a few slice
+        copies and the sync manager's bookkeeping, no segment search. Every other access (registers, mailbox
+        areas, shares across SM boundaries or past the memory) takes :meth:`logical_general`, which the plan
+        equals wherever it applies (tests/test_esc_logical_plan.py)."""
+        key = (address, len(data))
+        plan = self._plans.get(key)
+        if plan is None:
+            if len(self._plans) >= _PLAN_LIMIT:
+                self._plans.clear()
+            plan = self._plans[key] = self._plan(address, len(data))
+        if plan.general:
+            return self.logical_general(address, data, read, write)
+        mem = self.mem
+        pdi_off = self._sm_pdi_off
+        incoming = bytes(data) if write and read and plan.copy else data
+        did_read = did_write = False
+        for f_read, f_write, p0, p1, d0, d1, whole, mask, pshift, dshift, smn, ecat_writes, first, wd in plan.ops:
+            if write and f_write and (smn < 0 or (ecat_writes and not pdi_off[smn])):
+                if whole:
+                    mem[p0:p1] = incoming[d0:d1]
+                else:
+                    mem[p0:p1] = _put_bits(incoming[d0:d1], dshift, mem[p0:p1], pshift, mask)
+                did_write = True
+                if first >= 0:  # the write reached the SM's last byte: the buffer is complete
+                    self._sm_full[smn] = True
+                    if wd:
+                        self._wd_pd_since = self.frame_ns
+                    self.app.buffer_written(self, smn, bytes(mem[first:p1]))
+            if read and f_read and (smn < 0 or not pdi_off[smn]):
+                if whole:
+                    data[d0:d1] = mem[p0:p1]
+                else:
+                    data[d0:d1] = _put_bits(mem[p0:p1], pshift, data[d0:d1], dshift, mask)
+                did_read = True
+                if first >= 0 and not ecat_writes:
+                    self.app.buffer_read(self, smn)
+        return did_read, did_write
+
+    def _plan(self, address: int, n: int) -> "_Plan":
+        """The plan of a logical access of ``n`` bytes at ``address``; :data:`_GENERAL` where it needs the
+        general way: a share that is not inside one buffered SM's area or one run of plain process RAM."""
+        fmmus = self.fmmus()
+        sms = self.sms()
+        ops: list[PlanOp] = []
+        for f_read, f_write, p0, p1, d0, d1, whole, mask, pshift, dshift in pieces(fmmus, address, n):
+            segs = self._segments(p0, p1 - p0)
+            if len(segs) != 1:
+                return _GENERAL
+            smn = segs[0][2]
+            if smn is None:
+                if p0 < R.PROCESS_RAM or p1 > len(self.mem):
+                    return _GENERAL
+                ops.append((f_read, f_write, p0, p1, d0, d1, whole, mask, pshift, dshift, -1, True, -1, False))
+                continue
+            sm = sms[smn]
+            if sm.mailbox:
+                return _GENERAL
+            ops.append((f_read, f_write, p0, p1, d0, d1, whole, mask, pshift, dshift, smn, sm.ecat_writes,
+                        sm.start if p1 == sm.end else -1, bool(sm.control & SM_WATCHDOG_TRIGGER)))
+        # a write FMMU takes the datagram's bytes as they came, whatever a read FMMU before it put there
+        copy = any(a[0] and b[1] and a[4] < b[5] and b[4] < a[5] for i, a in enumerate(ops) for b in ops[i + 1:])
+        return _Plan(tuple(ops), copy, False)
+
+    def logical_general(self, address: int, data: Buffer, read: bool, write: bool) -> tuple[bool, bool]:
+        """:meth:`logical` through the ECAT read and write of each FMMU's share (any access)."""
         fmmus = self.fmmus()
         n = len(data)
         incoming = bytes(data)  # what a write FMMU takes, whatever a read FMMU put into ``data`` before it
@@ -424,9 +604,7 @@ class Esc:
                 if whole:
                     chunk = incoming[d0:d1]
                 else:
-                    bits = (int.from_bytes(incoming[d0:d1], "little") >> dshift) & mask
-                    current = int.from_bytes(self.mem[p0:p1], "little")
-                    chunk = ((current & ~(mask << pshift)) | (bits << pshift)).to_bytes(p1 - p0, "little")
+                    chunk = _put_bits(incoming[d0:d1], dshift, self.mem[p0:p1], pshift, mask)
                 if self.ecat_write(p0, chunk):
                     did_write = True
             if read and f_read:
@@ -435,9 +613,7 @@ class Esc:
                     if whole:
                         data[d0:d1] = raw
                     else:
-                        bits = (int.from_bytes(raw, "little") >> pshift) & mask
-                        current = int.from_bytes(data[d0:d1], "little")
-                        data[d0:d1] = ((current & ~(mask << dshift)) | (bits << dshift)).to_bytes(d1 - d0, "little")
+                        data[d0:d1] = _put_bits(raw, pshift, data[d0:d1], dshift, mask)
                     did_read = True
         return did_read, did_write
 
@@ -482,16 +658,19 @@ class Esc:
         return _dl_status(self.mem[R.DL_CONTROL + 1], link[0], link[1], link[2], link[3])
 
     def port_open(self, port: int) -> bool:
-        """Whether frames leave through ``port`` (the loop is open and a link is there)."""
-        return bool(self._dl_status() & (1 << (9 + 2 * port)))
+        """Whether frames leave through ``port`` (the loop is open and a link is there): DL status bit 9 + 2 x
+        ``port`` (:func:`_dl_status`), which with a link is set unless the loop setting is 3, always closed."""
+        return self.link[port] and (self.mem[_LOOP] >> (2 * port)) & 0x3 != 3
 
     def _sync_events(self) -> None:
         req = 0x08 if self._al_event else 0
-        for n in range(self.sm_count):
-            sm = self.sm(n)
-            if sm.active and sm.mailbox and not sm.ecat_writes and self._sm_full[n]:
+        full = self._sm_full
+        self.sms()  # brings _read_mailboxes up to date
+        for n in self._read_mailboxes:
+            if full[n]:
                 req |= 0x10 << n
-        self._put16(R.ECAT_EVENT_REQUEST, req)
+        self.mem[R.ECAT_EVENT_REQUEST] = req & 0xFF
+        self.mem[R.ECAT_EVENT_REQUEST + 1] = (req >> 8) & 0xFF
 
     def irq(self) -> int:
         """The bits this slave ORs into a datagram's IRQ field: event requests under the event mask."""
@@ -607,18 +786,23 @@ class Esc:
     def _compare_system_time(self, addr: int, data: bytes) -> None:
         """A write of the system time is compared with the local copy (drift control input); the register
         keeps the local system time."""
-        first = max(addr, R.DC_SYSTEM_TIME)
-        written = bytearray(self.system_time().to_bytes(8, "little"))
-        for a in range(first, min(addr + len(data), R.DC_SYSTEM_TIME + 8)):
-            written[a - R.DC_SYSTEM_TIME] = data[a - addr]
-        received = int.from_bytes(written, "little")
-        local = self.system_time()
-        diff = (received - local + self.u32(R.DC_SYSTEM_DELAY)) & 0xFFFFFFFF
+        mem = self.mem
+        # the frame's system time (system_time()): the same for the bytes written and the comparison
+        local = (self.clock.local_ns(self.frame_ns) + int.from_bytes(mem[_DC_OFFSET:_DC_OFFSET + 8], "little")) \
+            & 0xFFFFFFFFFFFFFFFF
+        if addr == R.DC_SYSTEM_TIME and len(data) >= 8:
+            received = int.from_bytes(data[:8], "little")  # all of it (as SOEM's ARMW/FRMW write it)
+        else:
+            written = bytearray(local.to_bytes(8, "little"))
+            for a in range(max(addr, R.DC_SYSTEM_TIME), min(addr + len(data), R.DC_SYSTEM_TIME + 8)):
+                written[a - R.DC_SYSTEM_TIME] = data[a - addr]
+            received = int.from_bytes(written, "little")
+        diff = (received - local + int.from_bytes(mem[_DC_DELAY:_DC_DELAY + 4], "little")) & 0xFFFFFFFF
         # 0x092C: bits 0..30 the difference's magnitude, bit 31 set when the local copy is ahead
         signed = diff - (1 << 32) if diff & 0x80000000 else diff
-        self.mem[R.DC_SYSTEM_DIFFERENCE:R.DC_SYSTEM_DIFFERENCE + 4] = struct.pack(
-            "<I", (min(abs(signed), 0x7FFFFFFF)) | (0x80000000 if signed < 0 else 0))
-        self.mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = local.to_bytes(8, "little")
+        mem[R.DC_SYSTEM_DIFFERENCE:R.DC_SYSTEM_DIFFERENCE + 4] = (
+            (min(abs(signed), 0x7FFFFFFF)) | (0x80000000 if signed < 0 else 0)).to_bytes(4, "little")
+        mem[R.DC_SYSTEM_TIME:R.DC_SYSTEM_TIME + 8] = local.to_bytes(8, "little")
 
     def _sync_dc_status(self) -> None:
         """0x0984 activation status (bit 0/1: the first SYNC0/SYNC1 pulse is still pending), 0x098E/0x098F SYNC0/1
