@@ -29,6 +29,7 @@ from enum import Enum
 from fractions import Fraction
 
 from ecattool.sim.ramp import ProfileMove
+from ecattool.sim.units import reduced
 
 #: a unit conversion of the drive (internal velocity/acceleration units <-> increments per second)
 _Convert = Callable[[Fraction], Fraction]
@@ -101,7 +102,17 @@ def decode_statusword(sw: int) -> State:
 
 
 class Cia402:
-    """State, controlword handling and the motion model of one axis (internal units as Fractions)."""
+    """State, controlword handling and the motion model of one axis (internal units as exact rationals).
+
+    The position and the velocity are carried as integers, numerator and denominator in lowest terms
+    (``pos_n``/``pos_d``, ``vel_n``/``vel_d``): the cyclic modes (CSP, CSV: :meth:`follow_position`,
+    :meth:`follow_velocity`) and the actual values compute on them without a ``Fraction`` per operation.
+    :attr:`position` and :attr:`velocity` are the same values as ``Fraction`` for everything else (made when
+    first read after a change, and kept out of ``vars()``, which holds the state only)."""
+
+    # the Fractions made from the integer pairs, cached; slots, so that vars() (the state the process data cycle
+    # compares to skip a quiet cycle) holds only the pairs they are made from
+    __slots__ = ("__dict__", "_position", "_velocity")
 
     def __init__(self, *, enable_needs_op: bool = False, supply_bit_always: bool = False) -> None:
         self.enable_needs_op = enable_needs_op
@@ -111,8 +122,10 @@ class Cia402:
         self.state = State.SWITCH_ON_DISABLED
         self.controlword = 0
         self.fault_code = 0
-        self.position = Fraction(0)  # internal units
-        self.velocity = Fraction(0)  # internal velocity units
+        self.pos_n, self.pos_d = 0, 1  # internal units
+        self._position: Fraction | None = None
+        self.vel_n, self.vel_d = 0, 1  # internal velocity units
+        self._velocity: Fraction | None = None
         self.acceleration = Fraction(0)
         self.target: Fraction | None = None
         #: the profile move running towards ``target`` (planned on the first step after the set-point)
@@ -148,6 +161,59 @@ class Cia402:
         self.homing_search_left = Fraction(0)
         #: what a search is looking for: "switch", "leave" (moving off a limit switch) or "index"
         self.homing_phase = ""
+
+    @property
+    def position(self) -> Fraction:
+        """The position in internal units (increments)."""
+        f = self._position
+        if f is None:
+            f = self._position = Fraction(self.pos_n, self.pos_d)
+        return f
+
+    @position.setter
+    def position(self, value: Fraction) -> None:
+        self.pos_n, self.pos_d = value.numerator, value.denominator
+        self._position = value
+
+    @property
+    def velocity(self) -> Fraction:
+        """The velocity in internal velocity units."""
+        f = self._velocity
+        if f is None:
+            f = self._velocity = Fraction(self.vel_n, self.vel_d)
+        return f
+
+    @velocity.setter
+    def velocity(self, value: Fraction) -> None:
+        self.vel_n, self.vel_d = value.numerator, value.denominator
+        self._velocity = value
+
+    def follow_position(self, num: int, den: int, dt: Fraction, per_inc_n: int, per_inc_d: int) -> None:
+        """One cycle of CSP in integers: the axis is at the target ``num / den`` (internal units, ``den`` > 0),
+        its velocity what took it there in ``dt`` s, ``(target - position) / dt`` increments/s times
+        ``per_inc_n / per_inc_d`` (internal velocity units per increment/s, ``per_inc_d`` > 0)."""
+        pn, pd = self.pos_n, self.pos_d
+        dn = dt.numerator
+        if dn:
+            self.vel_n, self.vel_d = reduced((num * pd - pn * den) * dt.denominator * per_inc_n,
+                                             den * pd * dn * per_inc_d)
+        else:
+            self.vel_n, self.vel_d = 0, 1
+        self._velocity = None
+        self.pos_n, self.pos_d = reduced(num, den)
+        self._position = None
+        self.target_reached = True
+
+    def follow_velocity(self, num: int, den: int, dt: Fraction, inc_n: int, inc_d: int) -> None:
+        """One cycle of CSV in integers: the velocity is the target ``num / den`` (internal velocity units,
+        ``den`` > 0) and the axis moves by it for ``dt`` s (``inc_n / inc_d``: increments/s per internal velocity
+        unit, ``inc_d`` > 0)."""
+        self.vel_n, self.vel_d = reduced(num, den)
+        self._velocity = None
+        pn, pd = self.pos_n, self.pos_d
+        step_d = den * inc_d * dt.denominator
+        self.pos_n, self.pos_d = reduced(pn * step_d + num * inc_n * dt.numerator * pd, pd * step_d)
+        self._position = None
 
     @property
     def halted(self) -> bool:
@@ -379,13 +445,13 @@ class Cia402:
             if self.homing_search_left <= 0:
                 self.homing_failed()
         elif mode == CSP:
-            delta = target_position - self.position
-            self.velocity = vel_from_inc_per_s(delta / dt) if dt else Fraction(0)
-            self.position = target_position
-            self.target_reached = True
+            per_inc = Fraction(vel_from_inc_per_s(Fraction(1)))
+            self.follow_position(target_position.numerator, target_position.denominator, dt, per_inc.numerator,
+                                 per_inc.denominator)
         elif mode == CSV:
-            self.velocity = target_velocity
-            self.position += inc_per_s(target_velocity) * dt
+            inc = Fraction(inc_per_s(Fraction(1)))
+            self.follow_velocity(target_velocity.numerator, target_velocity.denominator, dt, inc.numerator,
+                                 inc.denominator)
         elif mode == PV:
             assert profile is not None
             if profile.acceleration == 0:
