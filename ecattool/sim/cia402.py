@@ -77,6 +77,9 @@ STATUS_BITS = {
 }
 
 PP, PV, HOMING, CSP, CSV = 1, 3, 6, 8, 9
+#: looked up once (the statusword is made every cycle)
+_NOT_READY, _DISABLED, _ENABLED = State.NOT_READY, State.SWITCH_ON_DISABLED, State.OPERATION_ENABLED
+_FAULT_REACTION, _FAULT = State.FAULT_REACTION, State.FAULT
 
 HALT = 0x0100  # controlword bit 8
 
@@ -379,28 +382,31 @@ class Cia402:
         return []
 
     def statusword(self, *, mode: int) -> int:
-        sw = STATUS_BITS[self.state] | 0x0200  # bit 9 remote
-        if self.voltage and (self.supply_bit_always or self.state not in (State.NOT_READY, State.SWITCH_ON_DISABLED)):
+        state = self.state
+        sw = STATUS_BITS[state] | 0x0200  # bit 9 remote
+        if self.voltage and (self.supply_bit_always or (state is not _NOT_READY and state is not _DISABLED)):
             sw |= 0x0010
-        if self.state is State.FAULT_REACTION or self.state is State.FAULT:
+        if state is _FAULT_REACTION or state is _FAULT:
             sw |= 0x0008
         reached = self.target_reached
         if mode == HOMING:
             # bits 13/12/10 (Technosoft Table 6.3.3, Control Techniques Table 7.54 with bit 13 per CiA-402)
-            reached = self.homing is not Homing.IN_PROGRESS and (self.homing is not Homing.ERROR or self.velocity == 0)
+            reached = self.homing is not Homing.IN_PROGRESS and (self.homing is not Homing.ERROR or self.vel_n == 0)
             if self.homing is Homing.ATTAINED:
                 sw |= 0x1000
             elif self.homing is Homing.ERROR:
                 sw |= 0x2000
-        if self.halted:
-            reached = self.velocity == 0  # halt: 0 = decelerating, 1 = axis at standstill (HDT §4.07.2)
+        halted = state is _ENABLED and self.controlword & HALT  # :attr:`halted`
+        if halted:
+            reached = self.vel_n == 0  # halt: 0 = decelerating, 1 = axis at standstill (HDT §4.07.2)
         if reached:
             sw |= 0x0400
-        if mode == PP and self.setpoint_ack:
-            sw |= 0x1000
-        if mode == PP and self.following_error_bit:
-            sw |= 0x2000
-        if mode in (CSP, CSV) and self.state is State.OPERATION_ENABLED and not self.halted:
+        if mode == PP:
+            if self.setpoint_ack:
+                sw |= 0x1000
+            if self.following_error_bit:
+                sw |= 0x2000
+        elif (mode == CSP or mode == CSV) and state is _ENABLED and not halted:
             sw |= 0x1000  # the drive follows the command value (0 = target ignored, e.g. while halted)
         return sw
 

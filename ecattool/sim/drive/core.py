@@ -184,6 +184,20 @@ def decode_int(e: Entry | None, raw: bytes) -> int:
     return v
 
 
+_UNKNOWN = (0, 0)
+
+
+def _int_codec(e: Entry | None) -> tuple[int, int] | None:
+    """:func:`decode_int` of the entry as (mask, sign bit; 0 for an unsigned entry), applied as ``v & mask``, minus
+    twice the sign bit where it is set; None where the length comes from the bytes (no bit size)."""
+    if e is None or e.datatype is None:
+        return -1, 0
+    bits = e.bit_size
+    if not bits:
+        return None
+    return (1 << bits) - 1, (1 << (bits - 1)) if e.datatype.kind is Kind.SIGNED else 0
+
+
 class DriveCore:
     """The state every piece of the drive reads, the store helpers, and the methods pieces offer each other."""
 
@@ -229,11 +243,26 @@ class DriveCore:
     # helpers on the store
     # ------------------------------------------------------------------------------------------
     def _read_int(self, index: int, sub: int) -> int | None:
-        e = self._entries.get((index, sub))
-        raw = self._store.get((index, sub))
+        key = (index, sub)
+        raw = self._store.get(key)
         if raw is None:
             return None
-        return decode_int(e, raw)
+        entries = self._entries
+        codecs = self._int_codecs
+        if codecs[0] is not entries or codecs[1] != len(entries):
+            codecs = self._int_codecs = (entries, len(entries), {})
+        codec = codecs[2].get(key, _UNKNOWN)
+        if codec is _UNKNOWN:
+            codec = codecs[2][key] = _int_codec(entries.get(key))
+        if codec is None:
+            return decode_int(entries.get(key), raw)
+        mask, sign = codec
+        v = int.from_bytes(raw, "little") & mask
+        return v - (sign << 1) if v & sign else v
+
+    #: :meth:`_read_int`'s :func:`_int_codec` per key, for one dictionary (and its length)
+    _int_codecs: tuple[dict[tuple[int, int], Entry] | None, int, dict[tuple[int, int], tuple[int, int] | None]] \
+        = (None, 0, {})
 
     def _put(self, index: int, sub: int, value: int) -> None:
         e = self._entries.get((index, sub))
