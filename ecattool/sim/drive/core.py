@@ -105,9 +105,11 @@ class Layout:
 
 
 #: what :meth:`DriveCore._put_all` keeps: the keys and the dictionary (and its length) it was made for, and per
-#: key (key, byte size, mask, a factor object) or None where the dictionary lacks the key
-_PutPlan = tuple[tuple[tuple[int, int], ...], dict[tuple[int, int], Entry], int,
-                 list[tuple[tuple[int, int], int, int, bool] | None]]
+#: key the dictionary has (its place among the values, key, byte size, mask): the keys of no factor object, then
+#: those of factor objects (stored through the store's version check)
+_PutSlot = tuple[int, tuple[int, int], int, int]
+_PutPlan = tuple[tuple[tuple[int, int], ...], dict[tuple[int, int], Entry], int, tuple[_PutSlot, ...],
+                 tuple[_PutSlot, ...]]
 
 _VERSIONS = itertools.count(1)
 
@@ -279,26 +281,26 @@ class DriveCore:
         entries = self._entries
         plan: _PutPlan | None = getattr(self, "_put_plan", None)
         if plan is None or plan[0] is not keys or plan[1] is not entries or plan[2] != len(entries):
-            slots: list[tuple[tuple[int, int], int, int, bool] | None] = []
-            for key in keys:
+            plain_slots: list[tuple[int, tuple[int, int], int, int]] = []
+            factor_slots: list[tuple[int, tuple[int, int], int, int]] = []
+            for at, key in enumerate(keys):
                 e = entries.get(key)
-                size = 0 if e is None else (e.bit_size + 7) >> 3
-                slots.append(None if e is None else (key, size, (1 << (size << 3)) - 1, key[0] in FACTOR_OBJECTS))
-            plan = self._put_plan = (keys, entries, len(entries), slots)
+                if e is not None:
+                    size = (e.bit_size + 7) >> 3
+                    (factor_slots if key[0] in FACTOR_OBJECTS else plain_slots).append(
+                        (at, key, size, (1 << (size << 3)) - 1))
+            plan = self._put_plan = (keys, entries, len(entries), tuple(plain_slots), tuple(factor_slots))
         store = self._store
         plain = dict.__setitem__
         held = store.get
         changed = 0
-        for slot, value in zip(plan[3], values):
-            if slot is None:
-                continue
-            key, size, mask, factor = slot
-            raw = (value & mask).to_bytes(size, "little")
-            if factor:
-                store[key] = raw
-            elif held(key) != raw:
+        for at, key, size, mask in plan[3]:
+            raw = (values[at] & mask).to_bytes(size, "little")
+            if held(key) != raw:
                 plain(store, key, raw)
                 changed += 1
+        for at, key, size, mask in plan[4]:
+            store[key] = (values[at] & mask).to_bytes(size, "little")
         store.changes += changed
 
     def value(self, index: int, sub: int = 0) -> Any:
