@@ -125,7 +125,8 @@ def test_csp_and_csv_in_integers_are_the_fraction_steps(start: Fraction, target:
 
 class FractionDrive(Drive):
     """The motion step and the actual values as they were computed before the integer cycle: ``Fraction``
-    conversions (``Units.position_to_internal`` & co.), CSP and CSV on ``Fraction`` positions, ``to_int``."""
+    conversions (``Units.position_to_internal`` & co.), CSP and CSV on ``Fraction`` positions, ``to_int``, and
+    the profile of PP and PV made afresh every cycle (the shipped drive keeps it while nothing it reads changes)."""
 
     def step(self, cycles: int = 1) -> None:
         if not self.has_cia402:
@@ -153,7 +154,7 @@ class FractionDrive(Drive):
                          profile_velocity=Fraction(0), acceleration=Fraction(0),
                          inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
                          inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
-                         profile=self._profile(mode) if moving and mode in (PP, PV) else None)
+                         profile=self._make_profile(mode) if moving and mode in (PP, PV) else None)
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
             if cia.following_error:
@@ -216,11 +217,17 @@ def _pair(family: str, writes: list[tuple[int, int, int]]) -> tuple[Drive, Drive
     return drives
 
 
-def _outputs(d: Drive, controlword: int, position: int, velocity: int, home: int = 0) -> bytes:
+def _outputs(d: Drive, controlword: int, position: int, velocity: int, home: int = 0,
+             profile: tuple[int, int] = (0, 0)) -> bytes:
     """The output image with these values where the mapping has them; those it lacks (Control Techniques maps
-    no target, Technosoft no 60FFh) are written by SDO, as a master does it."""
+    no target, Technosoft no 60FFh) are written by SDO, as a master does it. ``profile``: the profile velocity
+    and acceleration (6081h, 6083h, 6084h), left alone where (0, 0) and not mapped."""
     out = bytearray(d.process_image_sizes()[0])
-    values = {0x607A: position, 0x60FF: velocity, 0x607C: home}
+    values = {0x607A: position, 0x60FF: velocity, 0x607C: home, 0x6081: profile[0], 0x6083: profile[1],
+              0x6084: profile[1]}
+    if profile == (0, 0):
+        mapped = {e[0] for e in d.layout[Direction.RX].entries}
+        values = {i: v for i, v in values.items() if i < 0x6081 or i > 0x6084 or i in mapped}
     for index, _sub, offset, bits in d.layout[Direction.RX].entries:
         at = offset // 8
         if index == 0x6040 and bits == 16:
@@ -244,10 +251,13 @@ FACTOR_WRITES = st.lists(st.tuples(st.sampled_from((0x6093, 0x6094, 0x6097, 0x60
 #: controlwords: enable, enable + halt, enable + new set-point (PP), quick stop, shutdown, fault reset
 CONTROLWORDS = (0x0F, 0x0F, 0x0F, 0x10F, 0x1F, 0x02, 0x06, 0x80)
 TARGETS = st.one_of(st.integers(-1000, 1000), st.integers(-(2**31), 2**31 - 1))
-#: (controlword, target position, target velocity, cycles, mode written before, home offset written before)
+#: (controlword, target position, target velocity, cycles, mode written before, home offset written before,
+#: profile velocity and acceleration)
 STEP = st.tuples(st.sampled_from(CONTROLWORDS), TARGETS, TARGETS, st.integers(1, 5),
                  st.one_of(st.none(), st.sampled_from((CSP, CSP, CSV, PP, PV))),
-                 st.one_of(st.none(), st.integers(-5000, 5000)))
+                 st.one_of(st.none(), st.integers(-5000, 5000)),
+                 st.one_of(st.just((0, 0)), st.tuples(st.sampled_from((1000, 50_000, 7)),
+                                                       st.sampled_from((10_000, 2_000_000, 3)))))
 
 
 @settings(max_examples=40, deadline=None)
@@ -256,16 +266,16 @@ STEP = st.tuples(st.sampled_from(CONTROLWORDS), TARGETS, TARGETS, st.integers(1,
 def test_a_drive_cycle_in_integers_is_the_fraction_cycle(family: str, sample: bool,
                                                          writes: list[tuple[int, int, int]],
                                                          steps: list[tuple[int, int, int, int, int | None,
-                                                                           int | None]]) -> None:
+                                                                           int | None, tuple[int, int]]]) -> None:
     fast, ref = _pair(family, (SAMPLE_FACTORS[family] if sample else []) + writes)
     for d in (fast, ref):
         for cw in (0x06, 0x07, 0x0F):
             d.exchange(_outputs(d, cw, 0, 0))
-    for controlword, position, velocity, cycles, mode, home in steps:
+    for controlword, position, velocity, cycles, mode, home, profile in steps:
         if mode is not None:
             assert _write(fast, 0x6060, 0, mode) == _write(ref, 0x6060, 0, mode)
-        outputs = _outputs(fast, controlword, position, velocity, home or 0)
-        assert _outputs(ref, controlword, position, velocity, home or 0) == outputs
+        outputs = _outputs(fast, controlword, position, velocity, home or 0, profile)
+        assert _outputs(ref, controlword, position, velocity, home or 0, profile) == outputs
         for _ in range(cycles):
             assert fast.exchange(outputs) == ref.exchange(outputs)
             assert _observed(fast) == _observed(ref)
@@ -291,3 +301,29 @@ def test_moving_with_the_sample_factors_for_many_cycles(family: str, speed: int,
         assert fast.exchange(outputs) == ref.exchange(outputs)
         assert _observed(fast) == _observed(ref)
     assert fast.cia.position != 0 and fast.cia.velocity != 0
+
+
+@settings(max_examples=12, deadline=None)
+@given(family=st.sampled_from(("hdt", "technosoft-ipos")), mode=st.sampled_from((PP, PV)),  # CT has neither
+       changes=st.lists(st.tuples(st.sampled_from((1000, 200_000)), st.integers(1, 5_000_000),
+                                  st.sampled_from((0, 5000, -(10**6))), st.integers(1, 25)), min_size=1, max_size=4))
+def test_profile_moves_see_every_change_of_their_profile(family: str, mode: int,
+                                                         changes: list[tuple[int, int, int, int]]) -> None:
+    """PP and PV with the profile velocity, acceleration and target changed during the motion (PP: a new
+    set-point with each change): the drive that keeps its profile between changes moves as the one that makes
+    it every cycle."""
+    fast, ref = _pair(family, SAMPLE_FACTORS[family])
+    for d in (fast, ref):
+        assert _write(d, 0x6060, 0, mode) is None
+        for cw in (0x06, 0x07, 0x0F):
+            d.exchange(_outputs(d, cw, 0, 0))
+    moved = False
+    for velocity, acceleration, target, cycles in changes:
+        for k in range(cycles):
+            cw = 0x1F if mode == PP and k == 1 else 0x0F  # a rising set-point bit on the second cycle
+            outputs = _outputs(fast, cw, target, target, 0, (velocity, acceleration))
+            assert _outputs(ref, cw, target, target, 0, (velocity, acceleration)) == outputs
+            assert fast.exchange(outputs) == ref.exchange(outputs)
+            assert _observed(fast) == _observed(ref)
+            moved = moved or fast.cia.velocity != 0
+    assert moved or all(t == 0 for _, _, t, _ in changes) or fast.cia402_state is not State.OPERATION_ENABLED

@@ -17,6 +17,9 @@ from ecattool.sim.units import floor_ratio
 _ZERO = Fraction(0)
 _ENABLED = State.OPERATION_ENABLED
 #: the actual values every cycle refreshes, in the order :meth:`Motion._refresh_inputs` gives them
+#: every object :meth:`Motion._make_profile` reads
+_PROFILE_OBJECTS = ((0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6086, 0), (0x2023, 0), (0x201A, 0), (0x2021, 0),
+                    (0x2011, 0))
 _ACTUAL_VALUES = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0), (0x60F4, 0))
 
 
@@ -182,6 +185,21 @@ class Motion(DriveCore):
             self.inject_fault(0x8611)
 
     def _profile(self, mode: int) -> Profile:
+        """:meth:`_make_profile`, made again only when something it reads has changed: the mode, the objects of
+        :data:`_PROFILE_OBJECTS` (compared by their stored bytes), the factor objects and the dictionary (the
+        store's version). A profile is never changed once made, so the same one serves every cycle between (a
+        PP or PV cycle converted six values in ``Fraction``s to make it)."""
+        store = self._store
+        get = store.get
+        key = (mode, store.version, *[get(k) for k in _PROFILE_OBJECTS])
+        cached: tuple[tuple[object, ...], Profile] | None = getattr(self, "_profile_cache", None)
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        profile = self._make_profile(mode)
+        self._profile_cache = (key, profile)
+        return profile
+
+    def _make_profile(self, mode: int) -> Profile:
         """What a profile move runs by, in increments (the family's reading of its manual):
 
         * profile velocity 6081h (PP), profile acceleration 6083h;
