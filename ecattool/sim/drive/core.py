@@ -132,7 +132,7 @@ class Store(dict[tuple[int, int], bytes]):
             self.version = next(_VERSIONS)
         if dict.get(self, key) != value:
             self.changes += 1
-        super().__setitem__(key, value)
+        dict.__setitem__(self, key, value)  # without super(): every cycle stores its changed outputs
 
     def setdefault(self, key: tuple[int, int], default: bytes) -> bytes:
         self.version = next(_VERSIONS)
