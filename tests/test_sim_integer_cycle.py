@@ -3,7 +3,7 @@ converted, on exact rationals carried as integer numerator and denominator inste
 These tests hold it to the ``Fraction`` computation it replaced, kept here as the reference:
 
 * the integer pieces (:func:`floor_ratio`, :func:`reduced`, :meth:`Units.ratios`, :meth:`Cia402.follow_position`,
-  :meth:`Cia402.follow_velocity`) against ``Fraction`` arithmetic on random values: negative, zero, huge, and
+  :meth:`Cia402.follow_velocity`, :meth:`Trapezoid.at`) against ``Fraction`` arithmetic on random values: negative, zero, huge, and
   values on, just below and just above every integer a floor can land on;
 * whole drives of the three families, with the factor groups of the sample projects and random ones: a drive as
   shipped and one whose cycle and actual values are the ``Fraction`` code of before, run through the same random
@@ -26,6 +26,7 @@ from ecattool.project.export import slave_configs
 from ecattool.sim import Drive
 from ecattool.sim.cia402 import CSP, CSV, HALT, PP, PV, Cia402, State
 from ecattool.sim.drive import halt_homing as hh
+from ecattool.sim.ramp import Trapezoid
 from ecattool.sim.units import (FACTOR_OBJECTS, HdtUnits, Reader, TechnosoftUnits, Units, floor_ratio, reduced,
                                 to_int)
 
@@ -119,6 +120,37 @@ def test_csp_and_csv_in_integers_are_the_fraction_steps(start: Fraction, target:
     assert (cia.pos_n, cia.pos_d) == (cia.position.numerator, cia.position.denominator)
     cia.velocity = velocity  # the Fraction way in still works, and reads back as set
     assert (cia.vel_n, cia.vel_d) == (velocity.numerator, velocity.denominator) and cia.velocity is velocity
+
+
+def _fraction_at(ramp: Trapezoid, time: Fraction) -> tuple[Fraction, Fraction]:
+    """``Trapezoid.at`` as it was, in Fractions."""
+    if time >= ramp.duration or not ramp.segments:
+        return ramp.target, Fraction(0)
+    seg = ramp.segments[0]
+    for s in ramp.segments:
+        if s[0] > time:
+            break
+        seg = s
+    t0, p0, v0, a = seg
+    tau = time - t0
+    return p0 + v0 * tau + a * tau * tau / 2, v0 + a * tau
+
+
+POSITIVE = rationals().filter(lambda r: r > 0)
+
+
+@settings(max_examples=100, deadline=None)
+@given(start=rationals(), v0=rationals(), target=rationals(), vmax=POSITIVE, acc=POSITIVE, dec=POSITIVE,
+       times=st.lists(st.one_of(rationals().map(abs), st.integers(0, 50).map(lambda k: Fraction(k, 1000))),
+                      min_size=1, max_size=8))
+def test_a_trapezoid_in_integers_is_the_fraction_one(start: Fraction, v0: Fraction, target: Fraction,
+                                                     vmax: Fraction, acc: Fraction, dec: Fraction,
+                                                     times: list[Fraction]) -> None:
+    ramp = Trapezoid(start, v0, target, vmax, acc, dec)
+    for time in times + [t for t, _, _, _ in ramp.segments] + [ramp.duration]:  # every segment's edges too
+        got = ramp.at(time)
+        assert got == _fraction_at(ramp, time)
+        assert all(isinstance(x, Fraction) for x in got)
 
 
 # --- whole drives: the shipped cycle against the Fraction cycle of before ------------------------------------
