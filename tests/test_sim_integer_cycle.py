@@ -189,12 +189,7 @@ class FractionDrive(Drive):
                          profile=self._make_profile(mode) if moving and mode in (PP, PV) else None)
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
-            if cia.following_error:
-                self._supervise_following_error(dt)
-            if cia.automatic:
-                done, cia.automatic = cia.automatic, []
-                self._cia_moves(done, "fault reaction completed" if done[0][0] is State.FAULT_REACTION
-                                else f"quick stop completed, 605Ah = {cia.quick_stop_option}")
+            self._after_step(dt)  # following error, automatic transitions: no arithmetic of the cycle's own
         self._refresh_inputs(mode)
 
     def _refresh_inputs(self, mode: int | None = None) -> None:

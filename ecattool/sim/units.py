@@ -232,9 +232,7 @@ def to_int(value: Fraction) -> int:
 
 def floor_div(value: Fraction | int, factor: Fraction) -> int:
     """``to_int(value / factor)``, 0 where the factor is 0 (as the conversions to user units), in integers."""
-    if not factor:
-        return 0
-    return (value.numerator * factor.denominator) // (value.denominator * factor.numerator)
+    return floor_ratio(value.numerator, value.denominator, factor.numerator, factor.denominator)
 
 
 def floor_ratio(num: int, den: int, factor_num: int, factor_den: int) -> int:

@@ -16,10 +16,10 @@ from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
 _ENABLED = State.OPERATION_ENABLED
-#: the actual values every cycle refreshes, in the order :meth:`Motion._refresh_inputs` gives them
 #: every object :meth:`Motion._make_profile` reads
 _PROFILE_OBJECTS = ((0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6086, 0), (0x2023, 0), (0x201A, 0), (0x2021, 0),
                     (0x2011, 0))
+#: the actual values every cycle refreshes, in the order :meth:`Motion._refresh_inputs` gives them
 _ACTUAL_VALUES = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0), (0x60F4, 0))
 
 
