@@ -29,6 +29,7 @@ from enum import Enum
 from fractions import Fraction
 
 from ecattool.sim.ramp import ProfileMove
+from ecattool.sim.units import reduced
 
 #: a unit conversion of the drive (internal velocity/acceleration units <-> increments per second)
 _Convert = Callable[[Fraction], Fraction]
@@ -76,6 +77,9 @@ STATUS_BITS = {
 }
 
 PP, PV, HOMING, CSP, CSV = 1, 3, 6, 8, 9
+#: looked up once (the statusword is made every cycle)
+_NOT_READY, _DISABLED, _ENABLED = State.NOT_READY, State.SWITCH_ON_DISABLED, State.OPERATION_ENABLED
+_FAULT_REACTION, _FAULT = State.FAULT_REACTION, State.FAULT
 
 HALT = 0x0100  # controlword bit 8
 
@@ -101,7 +105,17 @@ def decode_statusword(sw: int) -> State:
 
 
 class Cia402:
-    """State, controlword handling and the motion model of one axis (internal units as Fractions)."""
+    """State, controlword handling and the motion model of one axis (internal units as exact rationals).
+
+    The position and the velocity are carried as integers, numerator and denominator in lowest terms
+    (``pos_n``/``pos_d``, ``vel_n``/``vel_d``): the cyclic modes (CSP, CSV: :meth:`follow_position`,
+    :meth:`follow_velocity`) and the actual values compute on them without a ``Fraction`` per operation.
+    :attr:`position` and :attr:`velocity` are the same values as ``Fraction`` for everything else (made when
+    first read after a change, and kept out of ``vars()``, which holds the state only)."""
+
+    # the Fractions made from the integer pairs, cached; slots, so that vars() (the state the process data cycle
+    # compares to skip a quiet cycle) holds only the pairs they are made from
+    __slots__ = ("__dict__", "_position", "_velocity")
 
     def __init__(self, *, enable_needs_op: bool = False, supply_bit_always: bool = False) -> None:
         self.enable_needs_op = enable_needs_op
@@ -111,8 +125,10 @@ class Cia402:
         self.state = State.SWITCH_ON_DISABLED
         self.controlword = 0
         self.fault_code = 0
-        self.position = Fraction(0)  # internal units
-        self.velocity = Fraction(0)  # internal velocity units
+        self.pos_n, self.pos_d = 0, 1  # internal units
+        self._position: Fraction | None = None
+        self.vel_n, self.vel_d = 0, 1  # internal velocity units
+        self._velocity: Fraction | None = None
         self.acceleration = Fraction(0)
         self.target: Fraction | None = None
         #: the profile move running towards ``target`` (planned on the first step after the set-point)
@@ -148,6 +164,59 @@ class Cia402:
         self.homing_search_left = Fraction(0)
         #: what a search is looking for: "switch", "leave" (moving off a limit switch) or "index"
         self.homing_phase = ""
+
+    @property
+    def position(self) -> Fraction:
+        """The position in internal units (increments)."""
+        f = self._position
+        if f is None:
+            f = self._position = Fraction(self.pos_n, self.pos_d)
+        return f
+
+    @position.setter
+    def position(self, value: Fraction) -> None:
+        self.pos_n, self.pos_d = value.numerator, value.denominator
+        self._position = value
+
+    @property
+    def velocity(self) -> Fraction:
+        """The velocity in internal velocity units."""
+        f = self._velocity
+        if f is None:
+            f = self._velocity = Fraction(self.vel_n, self.vel_d)
+        return f
+
+    @velocity.setter
+    def velocity(self, value: Fraction) -> None:
+        self.vel_n, self.vel_d = value.numerator, value.denominator
+        self._velocity = value
+
+    def follow_position(self, num: int, den: int, dt: Fraction, per_inc_n: int, per_inc_d: int) -> None:
+        """One cycle of CSP in integers: the axis is at the target ``num / den`` (internal units, ``den`` > 0),
+        its velocity what took it there in ``dt`` s, ``(target - position) / dt`` increments/s times
+        ``per_inc_n / per_inc_d`` (internal velocity units per increment/s, ``per_inc_d`` > 0)."""
+        pn, pd = self.pos_n, self.pos_d
+        dn = dt.numerator
+        if dn:
+            self.vel_n, self.vel_d = reduced((num * pd - pn * den) * dt.denominator * per_inc_n,
+                                             den * pd * dn * per_inc_d)
+        else:
+            self.vel_n, self.vel_d = 0, 1
+        self._velocity = None
+        self.pos_n, self.pos_d = reduced(num, den)
+        self._position = None
+        self.target_reached = True
+
+    def follow_velocity(self, num: int, den: int, dt: Fraction, inc_n: int, inc_d: int) -> None:
+        """One cycle of CSV in integers: the velocity is the target ``num / den`` (internal velocity units,
+        ``den`` > 0) and the axis moves by it for ``dt`` s (``inc_n / inc_d``: increments/s per internal velocity
+        unit, ``inc_d`` > 0)."""
+        self.vel_n, self.vel_d = reduced(num, den)
+        self._velocity = None
+        pn, pd = self.pos_n, self.pos_d
+        step_d = den * inc_d * dt.denominator
+        self.pos_n, self.pos_d = reduced(pn * step_d + num * inc_n * dt.numerator * pd, pd * step_d)
+        self._position = None
 
     @property
     def halted(self) -> bool:
@@ -313,28 +382,31 @@ class Cia402:
         return []
 
     def statusword(self, *, mode: int) -> int:
-        sw = STATUS_BITS[self.state] | 0x0200  # bit 9 remote
-        if self.voltage and (self.supply_bit_always or self.state not in (State.NOT_READY, State.SWITCH_ON_DISABLED)):
+        state = self.state
+        sw = STATUS_BITS[state] | 0x0200  # bit 9 remote
+        if self.voltage and (self.supply_bit_always or (state is not _NOT_READY and state is not _DISABLED)):
             sw |= 0x0010
-        if self.state is State.FAULT_REACTION or self.state is State.FAULT:
+        if state is _FAULT_REACTION or state is _FAULT:
             sw |= 0x0008
         reached = self.target_reached
         if mode == HOMING:
             # bits 13/12/10 (Technosoft Table 6.3.3, Control Techniques Table 7.54 with bit 13 per CiA-402)
-            reached = self.homing is not Homing.IN_PROGRESS and (self.homing is not Homing.ERROR or self.velocity == 0)
+            reached = self.homing is not Homing.IN_PROGRESS and (self.homing is not Homing.ERROR or self.vel_n == 0)
             if self.homing is Homing.ATTAINED:
                 sw |= 0x1000
             elif self.homing is Homing.ERROR:
                 sw |= 0x2000
-        if self.halted:
-            reached = self.velocity == 0  # halt: 0 = decelerating, 1 = axis at standstill (HDT §4.07.2)
+        halted = state is _ENABLED and self.controlword & HALT  # :attr:`halted`
+        if halted:
+            reached = self.vel_n == 0  # halt: 0 = decelerating, 1 = axis at standstill (HDT §4.07.2)
         if reached:
             sw |= 0x0400
-        if mode == PP and self.setpoint_ack:
-            sw |= 0x1000
-        if mode == PP and self.following_error_bit:
-            sw |= 0x2000
-        if mode in (CSP, CSV) and self.state is State.OPERATION_ENABLED and not self.halted:
+        if mode == PP:
+            if self.setpoint_ack:
+                sw |= 0x1000
+            if self.following_error_bit:
+                sw |= 0x2000
+        elif (mode == CSP or mode == CSV) and state is _ENABLED and not halted:
             sw |= 0x1000  # the drive follows the command value (0 = target ignored, e.g. while halted)
         return sw
 
@@ -379,13 +451,13 @@ class Cia402:
             if self.homing_search_left <= 0:
                 self.homing_failed()
         elif mode == CSP:
-            delta = target_position - self.position
-            self.velocity = vel_from_inc_per_s(delta / dt) if dt else Fraction(0)
-            self.position = target_position
-            self.target_reached = True
+            per_inc = Fraction(vel_from_inc_per_s(Fraction(1)))
+            self.follow_position(target_position.numerator, target_position.denominator, dt, per_inc.numerator,
+                                 per_inc.denominator)
         elif mode == CSV:
-            self.velocity = target_velocity
-            self.position += inc_per_s(target_velocity) * dt
+            inc = Fraction(inc_per_s(Fraction(1)))
+            self.follow_velocity(target_velocity.numerator, target_velocity.denominator, dt, inc.numerator,
+                                 inc.denominator)
         elif mode == PV:
             assert profile is not None
             if profile.acceleration == 0:

@@ -30,7 +30,7 @@ class Trapezoid:
     at velocity ``v0`` to rest at ``target``, never faster than ``vmax``, speeding up at ``acc`` and slowing
     down at ``dec``."""
 
-    __slots__ = ("segments", "target", "duration")
+    __slots__ = ("segments", "target", "duration", "_ints")
 
     def __init__(self, start: Fraction, v0: Fraction, target: Fraction, vmax: Fraction, acc: Fraction,
                  dec: Fraction) -> None:
@@ -71,19 +71,29 @@ class Trapezoid:
             add(peak / dec, -sign * dec)
             break
         self.duration = t
+        #: the segments as integers (each value's numerator and denominator) for :meth:`at`, every cycle
+        self._ints = [(t0.numerator, t0.denominator, p0.numerator, p0.denominator, v0.numerator, v0.denominator,
+                       a.numerator, a.denominator) for t0, p0, v0, a in self.segments]
 
     def at(self, time: Fraction) -> tuple[Fraction, Fraction]:
         """(position, velocity) ``time`` seconds after the plan started; at rest on the target at the end."""
         if time >= self.duration or not self.segments:
             return self.target, _ZERO
-        seg = self.segments[0]
-        for s in self.segments:
-            if s[0] > time:
+        # the segment running at ``time``: the last that starts at or before it (t0 <= time, in integers)
+        n, d = time.numerator, time.denominator
+        ints = self._ints
+        seg = ints[0]
+        for s in ints:
+            if s[0] * d > n * s[1]:
                 break
             seg = s
-        t0, p0, v0, a = seg
-        tau = time - t0
-        return p0 + v0 * tau + a * tau * tau / 2, v0 + a * tau
+        tn, td, pn, pd, vn, vd, an, ad = seg
+        # tau = time - t0; p0 + v0 tau + a tau^2 / 2 and v0 + a tau over common denominators, made a Fraction
+        # once (the same values as the Fraction arithmetic, which normalises after every operation)
+        un, ud = n * td - tn * d, d * td
+        position = Fraction(pn * vd * ad * 2 * ud * ud + vn * un * pd * ad * 2 * ud + an * un * un * pd * vd,
+                            pd * vd * ad * 2 * ud * ud)
+        return position, Fraction(vn * ad * ud + an * un * vd, vd * ad * ud)
 
 
 class ProfileMove:
@@ -110,7 +120,7 @@ class ProfileMove:
         """Advance one cycle: (position, velocity, done)."""
         self.elapsed += dt
         raw, now = self.ramp.at(self.elapsed)
-        step = raw - self.raw
+        step = raw - self.raw if self.window != 1 else _ZERO  # only the smoothing window uses the step
         self.raw = raw
         if self.window == 1:
             self.position = raw

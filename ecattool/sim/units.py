@@ -17,17 +17,23 @@ every target value written by the master into internal units, and every actual v
   default 1); velocities are position units per second.
 
 Internal values are exact :class:`fractions.Fraction`; the drive truncates towards minus infinity when it
-stores an integer (``floor``), as the Technosoft IU examples do (0x28F for 655.36).
+stores an integer (``floor``), as the Technosoft IU examples do (0x28F for 655.36). The process data cycle
+computes with the same rationals carried as integer numerator and denominator (:meth:`Units.ratios`,
+:func:`floor_ratio`): the same values and the same floor, without a ``Fraction`` object per operation.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from fractions import Fraction
-from math import floor
+from math import floor, gcd
 
 #: reads (index, subindex) from the drive's dictionary as an integer, or None when the entry is missing
 Reader = Callable[[int, int], int | None]
+
+#: what the cyclic conversions multiply by, as integers (numerator, denominator > 0): the position factor, the
+#: velocity factor, and increments per second per internal velocity unit (see :meth:`Units.ratios`)
+Ratios = tuple[int, int, int, int, int, int]
 
 #: every object a conversion factor (or the cycle, 60C2h) is derived from: a write to one of them changes the
 #: store's version, so the factors are computed once per change instead of on every cycle
@@ -65,6 +71,7 @@ class Units:
         self.version: Callable[[], int] | None = None
         self._cache: dict[str, Fraction] = {}
         self._cached_version = -1
+        self._ratios: tuple[int, Ratios] | None = None
 
     def _factor(self, name: str) -> Fraction:
         """``position_factor()`` & co. by name, computed once per version of the factor objects."""
@@ -78,6 +85,22 @@ class Units:
         if f is None:
             f = self._cache[name] = getattr(self, name)()
         return f
+
+    def ratios(self) -> Ratios:
+        """(position factor num, den, velocity factor num, den, increments/s per internal velocity unit num,
+        den), each denominator > 0: what the process data cycle converts by in integers, computed once per
+        version of the factor objects. The last pair is ``increments_per_second(1)``: every family's
+        conversion of internal velocity is a multiplication by a constant (and its inverse the division)."""
+        v = self.version() if self.version is not None else None
+        cached = self._ratios
+        if cached is not None and v is not None and cached[0] == v:
+            return cached[1]
+        pf, vf = self._factor("position_factor"), self._factor("velocity_factor")
+        speed = Fraction(self.increments_per_second(Fraction(1)))
+        out = (pf.numerator, pf.denominator, vf.numerator, vf.denominator, speed.numerator, speed.denominator)
+        if v is not None:
+            self._ratios = (v, out)
+        return out
 
     # --- factors (internal units per user unit) -----------------------------------------------
     def position_factor(self) -> Fraction:
@@ -209,9 +232,24 @@ def to_int(value: Fraction) -> int:
 
 def floor_div(value: Fraction | int, factor: Fraction) -> int:
     """``to_int(value / factor)``, 0 where the factor is 0 (as the conversions to user units), in integers."""
-    if not factor:
+    return floor_ratio(value.numerator, value.denominator, factor.numerator, factor.denominator)
+
+
+def floor_ratio(num: int, den: int, factor_num: int, factor_den: int) -> int:
+    """``floor((num / den) / (factor_num / factor_den))`` for ``den``, ``factor_den`` > 0, and 0 where the factor
+    is 0: :func:`floor_div` on integer numerators and denominators (Python's ``//`` floors for either sign)."""
+    if not factor_num:
         return 0
-    return (value.numerator * factor.denominator) // (value.denominator * factor.numerator)
+    return (num * factor_den) // (den * factor_num)
+
+
+def reduced(num: int, den: int) -> tuple[int, int]:
+    """``num / den`` in lowest terms with a positive denominator (``den`` != 0): what ``Fraction(num, den)``
+    holds, so that equal values compare equal as pairs."""
+    g = gcd(num, den)
+    if den < 0:
+        g = -g
+    return num // g, den // g
 
 
 def technosoft_cia402_2(revision: int, has_210f: bool) -> bool:

@@ -105,9 +105,11 @@ class Layout:
 
 
 #: what :meth:`DriveCore._put_all` keeps: the keys and the dictionary (and its length) it was made for, and per
-#: key (key, byte size, mask, a factor object) or None where the dictionary lacks the key
-_PutPlan = tuple[tuple[tuple[int, int], ...], dict[tuple[int, int], Entry], int,
-                 list[tuple[tuple[int, int], int, int, bool] | None]]
+#: key the dictionary has (its place among the values, key, byte size, mask): the keys of no factor object, then
+#: those of factor objects (stored through the store's version check)
+_PutSlot = tuple[int, tuple[int, int], int, int]
+_PutPlan = tuple[tuple[tuple[int, int], ...], dict[tuple[int, int], Entry], int, tuple[_PutSlot, ...],
+                 tuple[_PutSlot, ...]]
 
 _VERSIONS = itertools.count(1)
 
@@ -130,7 +132,7 @@ class Store(dict[tuple[int, int], bytes]):
             self.version = next(_VERSIONS)
         if dict.get(self, key) != value:
             self.changes += 1
-        super().__setitem__(key, value)
+        dict.__setitem__(self, key, value)  # without super(): every cycle stores its changed outputs
 
     def setdefault(self, key: tuple[int, int], default: bytes) -> bytes:
         self.version = next(_VERSIONS)
@@ -184,6 +186,20 @@ def decode_int(e: Entry | None, raw: bytes) -> int:
     return v
 
 
+_UNKNOWN = (0, 0)
+
+
+def _int_codec(e: Entry | None) -> tuple[int, int] | None:
+    """:func:`decode_int` of the entry as (mask, sign bit; 0 for an unsigned entry), applied as ``v & mask``, minus
+    twice the sign bit where it is set; None where the length comes from the bytes (no bit size)."""
+    if e is None or e.datatype is None:
+        return -1, 0
+    bits = e.bit_size
+    if not bits:
+        return None
+    return (1 << bits) - 1, (1 << (bits - 1)) if e.datatype.kind is Kind.SIGNED else 0
+
+
 class DriveCore:
     """The state every piece of the drive reads, the store helpers, and the methods pieces offer each other."""
 
@@ -229,11 +245,26 @@ class DriveCore:
     # helpers on the store
     # ------------------------------------------------------------------------------------------
     def _read_int(self, index: int, sub: int) -> int | None:
-        e = self._entries.get((index, sub))
-        raw = self._store.get((index, sub))
+        key = (index, sub)
+        raw = self._store.get(key)
         if raw is None:
             return None
-        return decode_int(e, raw)
+        entries = self._entries
+        codecs = self._int_codecs
+        if codecs[0] is not entries or codecs[1] != len(entries):
+            codecs = self._int_codecs = (entries, len(entries), {})
+        codec = codecs[2].get(key, _UNKNOWN)
+        if codec is _UNKNOWN:
+            codec = codecs[2][key] = _int_codec(entries.get(key))
+        if codec is None:
+            return decode_int(entries.get(key), raw)
+        mask, sign = codec
+        v = int.from_bytes(raw, "little") & mask
+        return v - (sign << 1) if v & sign else v
+
+    #: :meth:`_read_int`'s :func:`_int_codec` per key, for one dictionary (and its length)
+    _int_codecs: tuple[dict[tuple[int, int], Entry] | None, int, dict[tuple[int, int], tuple[int, int] | None]] \
+        = (None, 0, {})
 
     def _put(self, index: int, sub: int, value: int) -> None:
         e = self._entries.get((index, sub))
@@ -250,26 +281,26 @@ class DriveCore:
         entries = self._entries
         plan: _PutPlan | None = getattr(self, "_put_plan", None)
         if plan is None or plan[0] is not keys or plan[1] is not entries or plan[2] != len(entries):
-            slots: list[tuple[tuple[int, int], int, int, bool] | None] = []
-            for key in keys:
+            plain_slots: list[tuple[int, tuple[int, int], int, int]] = []
+            factor_slots: list[tuple[int, tuple[int, int], int, int]] = []
+            for at, key in enumerate(keys):
                 e = entries.get(key)
-                size = 0 if e is None else (e.bit_size + 7) >> 3
-                slots.append(None if e is None else (key, size, (1 << (size << 3)) - 1, key[0] in FACTOR_OBJECTS))
-            plan = self._put_plan = (keys, entries, len(entries), slots)
+                if e is not None:
+                    size = (e.bit_size + 7) >> 3
+                    (factor_slots if key[0] in FACTOR_OBJECTS else plain_slots).append(
+                        (at, key, size, (1 << (size << 3)) - 1))
+            plan = self._put_plan = (keys, entries, len(entries), tuple(plain_slots), tuple(factor_slots))
         store = self._store
         plain = dict.__setitem__
         held = store.get
         changed = 0
-        for slot, value in zip(plan[3], values):
-            if slot is None:
-                continue
-            key, size, mask, factor = slot
-            raw = (value & mask).to_bytes(size, "little")
-            if factor:
-                store[key] = raw
-            elif held(key) != raw:
+        for at, key, size, mask in plan[3]:
+            raw = (values[at] & mask).to_bytes(size, "little")
+            if held(key) != raw:
                 plain(store, key, raw)
                 changed += 1
+        for at, key, size, mask in plan[4]:
+            store[key] = (values[at] & mask).to_bytes(size, "little")
         store.changes += changed
 
     def value(self, index: int, sub: int = 0) -> Any:

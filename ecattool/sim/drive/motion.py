@@ -12,10 +12,13 @@ from ecattool.profiles.rules import interpolation_period_ns
 from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile, State
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.core import DriveCore, sdo_abort
-from ecattool.sim.units import to_int
+from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
 _ENABLED = State.OPERATION_ENABLED
+#: every object :meth:`Motion._make_profile` reads
+_PROFILE_OBJECTS = ((0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6086, 0), (0x2023, 0), (0x201A, 0), (0x2021, 0),
+                    (0x2011, 0))
 #: the actual values every cycle refreshes, in the order :meth:`Motion._refresh_inputs` gives them
 _ACTUAL_VALUES = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0), (0x60F4, 0))
 
@@ -112,33 +115,55 @@ class Motion(DriveCore):
             return
         dt = self.cycle_time()
         u = self.units
+        cia = self.cia
         mode: int | None = None
         for _ in range(cycles):
             mode = self.mode()
-            homing_before = self.cia.homing
-            # only the targets the mode moves by are converted (the conversions are exact fractions; a drive
-            # that is not enabled, or halted, moves by none of them)
-            moving = self.cia.state is _ENABLED and not self.cia.controlword & HALT
-            self.cia.step(
+            # an enabled axis without halt follows the target of its mode; CSP and CSV in integers (the same
+            # rationals as the Fraction conversions, numerator and denominator apart), the others through
+            # Cia402.step, which converts only the targets the mode moves by
+            if cia.state is _ENABLED and not cia.controlword & HALT:
+                if mode == CSP:
+                    pn, pd, _, _, sn, sd = u.ratios()
+                    # internal velocity units per increment/s: the inverse of increments/s per unit (sn > 0)
+                    cia.follow_position(((self._read_int(0x607A, 0) or 0) - self._home_offset()) * pn, pd, dt,
+                                        sd, sn)
+                    self._after_step(dt)
+                    continue
+                if mode == CSV:
+                    _, _, vn, vd, sn, sd = u.ratios()
+                    cia.follow_velocity((self._read_int(0x60FF, 0) or 0) * vn, vd, dt, sn, sd)
+                    self._after_step(dt)
+                    continue
+                moving = True
+            else:
+                moving = False
+            homing_before = cia.homing
+            cia.step(
                 mode, dt,
-                target_position=u.position_to_internal((self._read_int(0x607A, 0) or 0) - self._home_offset())
-                if moving and mode == CSP else _ZERO,
+                target_position=_ZERO,
                 target_velocity=u.velocity_to_internal(self._read_int(0x60FF, 0) or 0)
-                if moving and mode in (CSV, PV) else _ZERO,
+                if moving and mode == PV else _ZERO,
                 profile_velocity=_ZERO, acceleration=_ZERO,
                 inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
                 inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
                 profile=self._profile(mode) if moving and mode in (PP, PV) else None,
             )
-            if homing_before is not self.cia.homing:
+            if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
-            if self.cia.following_error:
-                self._supervise_following_error(dt)
-            if self.cia.automatic:
-                done, self.cia.automatic = self.cia.automatic, []
-                self._cia_moves(done, "fault reaction completed" if done[0][0] is State.FAULT_REACTION
-                                else f"quick stop completed, 605Ah = {self.cia.quick_stop_option}")
+            self._after_step(dt)
         self._refresh_inputs(mode)  # the step changes no mode (6061h)
+
+    def _after_step(self, dt: Fraction) -> None:
+        """What follows every cycle's motion: the following error's supervision, and the transitions the drive
+        made by itself (the end of a quick stop or of a fault reaction)."""
+        cia = self.cia
+        if cia.following_error:
+            self._supervise_following_error(dt)
+        if cia.automatic:
+            done, cia.automatic = cia.automatic, []
+            self._cia_moves(done, "fault reaction completed" if done[0][0] is State.FAULT_REACTION
+                            else f"quick stop completed, 605Ah = {cia.quick_stop_option}")
 
     def _supervise_following_error(self, dt: Fraction) -> None:
         """A following error beyond the window 6065h (user position units) for longer than 6066h ms sets
@@ -160,6 +185,21 @@ class Motion(DriveCore):
             self.inject_fault(0x8611)
 
     def _profile(self, mode: int) -> Profile:
+        """:meth:`_make_profile`, made again only when something it reads has changed: the mode, the objects of
+        :data:`_PROFILE_OBJECTS` (compared by their stored bytes), the factor objects and the dictionary (the
+        store's version). A profile is never changed once made, so the same one serves every cycle between (a
+        PP or PV cycle converted six values in ``Fraction``s to make it)."""
+        store = self._store
+        get = store.get
+        key = (mode, store.version, *[get(k) for k in _PROFILE_OBJECTS])
+        cached: tuple[tuple[object, ...], Profile] | None = getattr(self, "_profile_cache", None)
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        profile = self._make_profile(mode)
+        self._profile_cache = (key, profile)
+        return profile
+
+    def _make_profile(self, mode: int) -> Profile:
         """What a profile move runs by, in increments (the family's reading of its manual):
 
         * profile velocity 6081h (PP), profile acceleration 6083h;
@@ -203,10 +243,16 @@ class Motion(DriveCore):
         sw = cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
         if self.family == "technosoft-ipos" and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
-        user_position = self._user_position()
+        pn, pd, vn, vd, _, _ = self.units.ratios()
+        # 6063h, 6064h, 606Ch: floor(position), floor(position / factor) (+ the home offset), floor(velocity /
+        # factor), in integers (floor_ratio, written out: this runs every cycle)
+        position_n, position_d = cia.pos_n, cia.pos_d
+        user_position = (position_n * pd) // (position_d * pn) if pn else 0
+        if self.behaviour.home_offset_continuous:  # _home_offset
+            user_position += self._read_int(0x607C, 0) or 0
         error = self.units.position_to_user_int(cia.following_error) if cia.following_error else 0
-        self._put_all(_ACTUAL_VALUES, (sw, to_int(cia.position), user_position, user_position + error,
-                                       self.units.velocity_to_user_int(cia.velocity), cia.fault_code, error))
+        self._put_all(_ACTUAL_VALUES, (sw, position_n // position_d, user_position, user_position + error,
+                                       (cia.vel_n * vd) // (cia.vel_d * vn) if vn else 0, cia.fault_code, error))
 
     def _home_offset(self) -> int:
         """607Ch where the family adds it to the measured position at all times (HDT), else 0."""
@@ -216,17 +262,18 @@ class Motion(DriveCore):
 
     def _user_position(self) -> int:
         """6064h: the position in user units (HDT: sensor position + home offset 607Ch, §4.06.6)."""
-        return self.units.position_to_user_int(self.cia.position) + self._home_offset()
+        pn, pd = self.units.ratios()[:2]
+        return floor_ratio(self.cia.pos_n, self.cia.pos_d, pn, pd) + self._home_offset()
 
     @property
     def internal_position(self) -> int:
         """Position in the drive's internal units (increments), truncated as the drive stores it."""
-        return to_int(self.cia.position)
+        return self.cia.pos_n // self.cia.pos_d
 
     @property
     def internal_velocity(self) -> int:
         """Velocity in internal units (Technosoft: 16.16 increments per slow-loop sample)."""
-        return to_int(self.cia.velocity)
+        return self.cia.vel_n // self.cia.vel_d
 
     @property
     def cia402_state(self) -> State:

@@ -148,12 +148,13 @@ class ProcessData(PdoConfig):
     def _pdo_write(self, index: int, sub: int, raw: bytes) -> bool:
         """Store one mapped output that changed; True when the object has a reaction to run once the image is
         latched."""
-        handler = self._handlers_down.get(index)
-        if index in (0x2065, 0x2067) and handler is not None:
-            try:
-                handler(sub, raw, int.from_bytes(raw, "little"))
-            except SdoAbort:
-                return False
+        if index == 0x2065 or index == 0x2067:
+            handler = self._handlers_down.get(index)
+            if handler is not None:
+                try:
+                    handler(sub, raw, int.from_bytes(raw, "little"))
+                except SdoAbort:
+                    return False
         self._store[(index, sub)] = raw
         return index in self._after_write
 
