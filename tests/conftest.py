@@ -153,7 +153,10 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]):  
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter, exitstatus: int, config: pytest.Config) -> None:
     for report in terminalreporter.stats.get("rerun", []):
-        terminalreporter.write_line(f"rerun once (a wire test failed, see WIRE_RERUNS): {report.nodeid}")
+        crash = getattr(report.longrepr, "reprcrash", None)
+        reason = str(getattr(crash, "message", "") or "").strip().splitlines()
+        why = f" — the first run: {reason[0][:200]}" if reason else ""
+        terminalreporter.write_line(f"rerun once (a wire test failed, see WIRE_RERUNS): {report.nodeid}{why}")
     # with -rs pytest prints the folded reason itself; without it, say once why tests were skipped
     if have_corpus() or "s" in (config.option.reportchars or "") or "a" in (config.option.reportchars or ""):
         return
