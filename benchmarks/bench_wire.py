@@ -7,7 +7,8 @@ Side by side in the same run:
   ``sdo_download``) and python-canopen's ``RemoteNode`` -> ``LocalNode`` on python-can's virtual bus;
 * process data: N drives (default 8 HDT) in OP, one LRW frame per cycle at 1 kHz for 10 s through pysoem, with
   the p50/p99 round-trip latency of a cycle (send to receive), the p50/p99 cycle start lateness and the missed
-  cycles (a working counter short of the expected one, or a cycle started a whole period late);
+  cycles (a working counter short of the expected one, or a cycle started a whole period late), and what stalled
+  the master's loop meanwhile (its collector passes, its involuntary switches, the machine's steal time);
 * frames per second for one drive in OP: process data frames through the in-process loop (``Loop``, frame
   encoding and decoding included) and through pysoem over the veth pair, back to back;
 * the server's time per frame: ``Bus.process`` of one LRW frame for 1 and 8 HDTs (idle, and enabled in CSP
@@ -28,8 +29,10 @@ Prints a table, and one JSON document with ``--json``.
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import os
+import resource
 import select
 import signal
 import statistics
@@ -346,6 +349,52 @@ def wire_one_drive(seconds: float) -> dict[str, Any]:
     return out
 
 
+def _steal_s() -> float:
+    """The machine's steal time so far, s (``/proc/stat``: time a virtual machine's CPUs were runnable but the
+    hypervisor ran something else); 0 where it is not reported."""
+    try:
+        with open("/proc/stat", encoding="ascii") as f:
+            fields = f.readline().split()
+        return int(fields[8]) / os.sysconf("SC_CLK_TCK") if len(fields) > 8 else 0.0
+    except (OSError, ValueError):
+        return 0.0
+
+
+class _MasterStalls:
+    """What can hold the master's own loop up, recorded over the timed cycles: its garbage collector's passes
+    (count and longest), the times the kernel switched it out while it could run, and the machine's steal time."""
+
+    def __init__(self) -> None:
+        self.passes = 0
+        self.longest_ns = 0
+        self.switches = 0
+        self.steal_s = 0.0
+        self._t0 = self._switches = 0
+        self._steal = 0.0
+
+    def _probe(self, phase: str, info: dict[str, int]) -> None:
+        if phase == "start":
+            self._t0 = time.perf_counter_ns()
+        else:
+            self.passes += 1
+            self.longest_ns = max(self.longest_ns, time.perf_counter_ns() - self._t0)
+
+    def __enter__(self) -> "_MasterStalls":
+        self._switches = resource.getrusage(resource.RUSAGE_SELF).ru_nivcsw
+        self._steal = _steal_s()
+        gc.callbacks.append(self._probe)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        gc.callbacks.remove(self._probe)
+        self.switches = resource.getrusage(resource.RUSAGE_SELF).ru_nivcsw - self._switches
+        self.steal_s = _steal_s() - self._steal
+
+    def figures(self) -> dict[str, Any]:
+        return {"master_gc_passes": self.passes, "master_gc_longest_us": self.longest_ns / 1000.0,
+                "master_involuntary_switches": self.switches, "steal_ms": self.steal_s * 1000.0}
+
+
 def _cpu_s(pid: int) -> float:
     """CPU time (user + system, s) of process ``pid`` and its children (a split server's workers) so far."""
     tick = os.sysconf("SC_CLK_TCK")
@@ -422,33 +471,34 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, wh
         missed_at: list[list[Any]] = []  # the first 50: [cycle, "late" (start, us) or "wkc" (latency, us)]
         _realtime()
         cpu0 = _cpu_s(server.pid)
-        next_t = time.perf_counter_ns() + period
-        for k in range(cycles):
-            if motion:
-                image = _csp_outputs(probe, out_len, 0x0F, 10 * k)
-                for slave in master.slaves:
-                    slave.output = image
-            wait = next_t - time.perf_counter_ns()
-            if wait > 200_000:
-                time.sleep((wait - 150_000) / 1e9)
-            while time.perf_counter_ns() < next_t:
-                pass
-            t0 = time.perf_counter_ns()
-            late = t0 - next_t
-            lateness.append(late)
-            if late >= period:
-                overruns += 1
-                if len(missed_at) < 50:
-                    missed_at.append([k, "late", late // 1000])
-                next_t += (late // period) * period  # skip the cycles that passed, as a real-time loop would
-            master.send_processdata()
-            wkc = master.receive_processdata(timeout_us)
-            latency.append(time.perf_counter_ns() - t0)
-            if wkc != master.expected_wkc:
-                short_wkc += 1
-                if len(missed_at) < 50:
-                    missed_at.append([k, "wkc", latency[-1] // 1000])
-            next_t += period
+        with _MasterStalls() as stalls:
+            next_t = time.perf_counter_ns() + period
+            for k in range(cycles):
+                if motion:
+                    image = _csp_outputs(probe, out_len, 0x0F, 10 * k)
+                    for slave in master.slaves:
+                        slave.output = image
+                wait = next_t - time.perf_counter_ns()
+                if wait > 200_000:
+                    time.sleep((wait - 150_000) / 1e9)
+                while time.perf_counter_ns() < next_t:
+                    pass
+                t0 = time.perf_counter_ns()
+                late = t0 - next_t
+                lateness.append(late)
+                if late >= period:
+                    overruns += 1
+                    if len(missed_at) < 50:
+                        missed_at.append([k, "late", late // 1000])
+                    next_t += (late // period) * period  # skip the cycles that passed, as a real-time loop would
+                master.send_processdata()
+                wkc = master.receive_processdata(timeout_us)
+                latency.append(time.perf_counter_ns() - t0)
+                if wkc != master.expected_wkc:
+                    short_wkc += 1
+                    if len(missed_at) < 50:
+                        missed_at.append([k, "wkc", latency[-1] // 1000])
+                next_t += period
         server_cpu = _cpu_s(server.pid) - cpu0
         state_ok = master.read_state() == pysoem.OP_STATE
         master.state = pysoem.INIT_STATE
@@ -462,7 +512,7 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, wh
             "short_wkc": short_wkc, "overruns": overruns, "missed": short_wkc + overruns,
             "still_op": state_ok, "expected_wkc": master.expected_wkc, "back_to_back_per_s": back_to_back,
             "server_cpu_per_frame_us": server_cpu / cycles * 1e6, "workers": workers, "server": where or "current",
-            "missed_at": missed_at}
+            "missed_at": missed_at, **stalls.figures()}
 
 
 def inside(args: argparse.Namespace) -> None:
@@ -575,6 +625,9 @@ def main() -> None:
                   f"p99 {cyc['lateness_p99_us']:.0f} us")
             print(f"  missed cycles {cyc['missed']} (short working counter {cyc['short_wkc']}, "
                   f"overruns {cyc['overruns']}); still in OP: {cyc['still_op']}")
+            print(f"  the master's stalls: {cyc['master_gc_passes']} collector passes (longest "
+                  f"{cyc['master_gc_longest_us']:.0f} us), {cyc['master_involuntary_switches']} involuntary switches; "
+                  f"the machine's steal time {cyc['steal_ms']:.0f} ms")
             print(f"  back to back: {cyc['back_to_back_per_s']:,.0f} cycles/s")
 
 
