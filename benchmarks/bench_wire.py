@@ -395,10 +395,12 @@ class _MasterStalls:
                 "master_involuntary_switches": self.switches, "steal_ms": self.steal_s * 1000.0}
 
 
-def _cpu_s(pid: int) -> float:
-    """CPU time (user + system, s) of process ``pid`` and its children (a split server's workers) so far."""
+def _cpu_s(pid: int) -> tuple[float, float]:
+    """CPU time (user, system; s) of process ``pid`` and its children (a split server's workers) so far. The
+    system time holds the kernel's share of each frame (the raw socket's receive and send, and the veth pair's
+    delivery where it runs in the sender's context)."""
     tick = os.sysconf("SC_CLK_TCK")
-    total = 0.0
+    user = system = 0.0
     pids = [pid]
     try:
         with open(f"/proc/{pid}/task/{pid}/children") as f:
@@ -409,10 +411,11 @@ def _cpu_s(pid: int) -> float:
         try:
             with open(f"/proc/{p}/stat") as f:
                 fields = f.read().rsplit(")", 1)[1].split()
-            total += (int(fields[11]) + int(fields[12])) / tick
+            user += int(fields[11]) / tick
+            system += int(fields[12]) / tick
         except (OSError, IndexError, ValueError):
             pass
-    return total
+    return user, system
 
 
 def _pct(values: list[int], q: float) -> float:
@@ -499,7 +502,8 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, wh
                     if len(missed_at) < 50:
                         missed_at.append([k, "wkc", latency[-1] // 1000])
                 next_t += period
-        server_cpu = _cpu_s(server.pid) - cpu0
+        user1, system1 = _cpu_s(server.pid)
+        server_user, server_system = user1 - cpu0[0], system1 - cpu0[1]
         state_ok = master.read_state() == pysoem.OP_STATE
         master.state = pysoem.INIT_STATE
         master.write_state()
@@ -511,7 +515,8 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, wh
             "lateness_p50_us": _pct(lateness, 0.5), "lateness_p99_us": _pct(lateness, 0.99),
             "short_wkc": short_wkc, "overruns": overruns, "missed": short_wkc + overruns,
             "still_op": state_ok, "expected_wkc": master.expected_wkc, "back_to_back_per_s": back_to_back,
-            "server_cpu_per_frame_us": server_cpu / cycles * 1e6, "workers": workers, "server": where or "current",
+            "server_cpu_per_frame_us": (server_user + server_system) / cycles * 1e6,
+            "server_system_per_frame_us": server_system / cycles * 1e6, "workers": workers, "server": where or "current",
             "missed_at": missed_at, **stalls.figures()}
 
 
@@ -619,7 +624,8 @@ def main() -> None:
         for cyc in wire.get("cyclic", []):
             print(f"process data, {cyc['drives']} drives at {cyc['hz']:.0f} Hz, {cyc['cycles']} cycles, "
                   f"{'enabled in CSP, moving' if cyc['motion'] else 'idle'}; server {cyc['server']}, "
-                  f"workers {cyc['workers'] or 'chosen'}; server CPU {cyc['server_cpu_per_frame_us']:.0f} us/frame")
+                  f"workers {cyc['workers'] or 'chosen'}; server CPU {cyc['server_cpu_per_frame_us']:.0f} us/frame "
+                  f"({cyc['server_system_per_frame_us']:.0f} in the kernel)")
             print(f"  latency p50 {cyc['latency_p50_us']:.0f} us, p99 {cyc['latency_p99_us']:.0f} us, "
                   f"max {cyc['latency_max_us']:.0f} us; start lateness p50 {cyc['lateness_p50_us']:.0f} us, "
                   f"p99 {cyc['lateness_p99_us']:.0f} us")
