@@ -122,6 +122,22 @@ def test_check_a_master_configuration(capsys: pytest.CaptureFixture[str]) -> Non
     assert run(capsys, "map", "check", *TS, "--startup", ecmc, "--rx", "0x1600")[0] == 2
 
 
+def test_a_slave_of_a_master_configuration_by_name_or_position(capsys: pytest.CaptureFixture[str]) -> None:
+    """--drive picks a slave of a --startup file as `startup export` does; --slave N is its old spelling."""
+    eni = str(corpus_path("configs", "eni_kpierczy_test_eni.xml"))
+    base = ("map", "layout", "--profile", "hdt", "--startup", eni, "--json")
+    code, _, err = run(capsys, *base)
+    assert code == 1 and "has 5 slaves; choose one with --drive NAME (Imu at 0, WheelRearLeft at 1," in err
+    outs = [run(capsys, *base, *sel) for sel in (["--drive", "WheelRearLeft"], ["--drive", "1"], ["--slave", "1"])]
+    assert [o[0] for o in outs] == [0, 0, 0] and outs[0][1] == outs[1][1] == outs[2][1]
+    assert outs[0][1] != run(capsys, *base, "--drive", "Imu")[1]
+    code, _, err = run(capsys, *base, "--drive", "Nope")
+    assert code == 1 and "no slave named or at position 'Nope' (slaves: Imu at 0," in err
+    lcec = str(corpus_path("configs", "lcec_generic-complex_ethercat-conf.xml"))
+    code, _, err = run(capsys, "map", "layout", "--profile", "hdt", "--startup", lcec, "--drive", "EL1809")
+    assert code == 1 and "has 2 slaves named 'EL1809'; choose one by its bus position" in err
+
+
 @pytest.mark.parametrize("fmt", ["twincat", "eni", "ecmc", "json"])
 def test_sdo_as_a_master_startup_list_round_trips(capsys: pytest.CaptureFixture[str], tmp_path: Path,
                                                   fmt: str) -> None:

@@ -10,7 +10,7 @@ import click
 from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
                                  store_force, table, write_output)
 from ecattool.cli.paths import InputFile
-from ecattool.cli.vocab import WRITE_FORMATS
+from ecattool.cli.vocab import WRITE_FORMATS, AliasedOption
 
 _EXAMPLES = """\b
 Examples:
@@ -45,7 +45,9 @@ def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
         click.option("--startup", "startup_file", type=InputFile(),
                      help="A master configuration (ENI, TwinCAT, ecmc, ros2, IgH, JSON/CSV startup list): use the "
                      "mapping its SDOs program (or its declared PDOs)."),
-        click.option("--slave", type=int, default=None, help="Which slave of a --startup file (0-based index)."),
+        # --drive as `startup export/convert` spell it; --slave N (a 0-based index) is the old spelling
+        click.option("--drive", "--slave", "drive", metavar="NAME", cls=AliasedOption, aliases=("--slave",),
+                     help="Which slave of a --startup file: its name or bus position."),
     ]
     for opt in reversed(opts):
         f = opt(f)
@@ -98,22 +100,26 @@ def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping
     return pdo.Mapping.from_text(rx=list(rx) if rx else None, tx=list(tx) if tx else None, device=device)
 
 
-def _load_config(startup_file: str, slave: int | None) -> Any:
+def _load_config(startup_file: str, drive: str | None) -> Any:
     from ecattool.errors import SelectionError
-    from ecattool.startup import import_file
+    from ecattool.startup import describe_slaves, import_file, select_slaves
 
     configs = import_file(startup_file)
-    if slave is None and len(configs) == 1:
-        return configs[0]
-    if slave is None or not 0 <= slave < len(configs):
-        names = ", ".join(f"[{i}] {c.label}" for i, c in enumerate(configs))
-        raise SelectionError(f"{startup_file} has {len(configs)} slaves; choose one with --slave N ({names})")
-    return configs[slave]
+    if drive is None:
+        if len(configs) == 1:
+            return configs[0]
+        raise SelectionError(f"{startup_file} has {len(configs)} slaves; choose one with --drive NAME "
+                             f"({describe_slaves(configs)})")
+    chosen = select_slaves(configs, [drive])
+    if len(chosen) > 1:
+        raise SelectionError(f"{startup_file} has {len(chosen)} slaves named {drive!r}; choose one by its bus "
+                             f"position with --drive N ({describe_slaves(configs)})")
+    return chosen[0]
 
 
 def _setup(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
            rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None = None,
-           slave: int | None = None, device: Any = None, policy: str = "exact") -> tuple[Any, Any, Any]:
+           drive: str | None = None, device: Any = None, policy: str = "exact") -> tuple[Any, Any, Any]:
     """(device, mapping, master configuration or None)."""
     device = device if device is not None else _load_device(esi, selector, profile, product, revision, policy)
     if startup_file:
@@ -121,7 +127,7 @@ def _setup(esi: str | None, selector: str | None, profile: str | None, product: 
             raise click.UsageError("give the mapping with one of --rx/--tx, --mapping or --startup")
         from ecattool import pdo
 
-        config = _load_config(startup_file, slave)
+        config = _load_config(startup_file, drive)
         return device, pdo.mapping_from_config(config, device), config
     return device, _load_mapping(device, rx, tx, mapping_file), None
 
@@ -141,7 +147,7 @@ def map_() -> None:
 @json_option
 def check(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
           policy: str, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
-          slave: int | None, strict: bool, as_json: bool) -> None:
+          drive: str | None, strict: bool, as_json: bool) -> None:
     """Check a PDO mapping statically; exit 1 when an error-level finding exists."""
     from ecattool import pdo
     from ecattool.findings import has_errors
@@ -151,7 +157,7 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
     device = _load_device(esi, selector, profile, product, revision, policy)
     try:
         _, mapping, config = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file,
-                                    slave, device)
+                                    drive, device)
     except InputError as exc:
         if not as_json:
             raise
@@ -184,7 +190,7 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
                     "entry with object, name and byte.bit; gaps shown). Needs: pip install 'ecattool[report]'.")
 def layout(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
            policy: str, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
-           slave: int | None, as_json: bool, output: str | None, svg: str | None) -> None:
+           drive: str | None, as_json: bool, output: str | None, svg: str | None) -> None:
     """Show the process image per sync manager: byte.bit offsets, sizes, names and types."""
     from ecattool import pdo
     from ecattool.cli.common import dump_json
@@ -195,7 +201,7 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
         if svg == "-" and (as_json or output == "-"):
             raise click.UsageError("--svg - and the JSON layout cannot both go to stdout")
         require("jinja2")  # before any work: a missing extra is one line, not a half-done run
-    device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, slave,
+    device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, drive,
                                 policy=policy)
     lay = pdo.layout(device, mapping)
     inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
@@ -234,14 +240,14 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
 @output_option(force=False)
 def sdo(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
         policy: str, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None,
-        slave: int | None, complete_access: bool, order: str, transition: str, force: bool, fmt: str | None,
+        drive: str | None, complete_access: bool, order: str, transition: str, force: bool, fmt: str | None,
         as_json: bool, output: str | None) -> None:
     """Print the SDO writes that program the mapping, in the order drives require, with exact sizes."""
     from ecattool import pdo
     from ecattool.cli.common import dump_json
     from ecattool.findings import has_errors
 
-    device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, slave,
+    device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, drive,
                                 policy=policy)
     findings = pdo.check(device, mapping)
     if has_errors(findings) and not force:

@@ -8,6 +8,7 @@
 
 from ecattool.startup.api import (
     as_configs,
+    describe_slaves,
     detect_format,
     export,
     import_bytes,
@@ -20,4 +21,4 @@ from ecattool.startup.formats import FORMATS, Format
 from ecattool.startup.model import KINDS, TRANSITIONS, StartupCommand, StartupList
 
 __all__ = ["FORMATS", "Format", "KINDS", "SlaveConfig", "SoeCommand", "StartupCommand", "StartupList", "TRANSITIONS",
-           "as_configs", "detect_format", "export", "import_bytes", "import_file", "losses", "select_slaves"]
+           "as_configs", "describe_slaves", "detect_format", "export", "import_bytes", "import_file", "losses", "select_slaves"]

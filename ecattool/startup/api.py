@@ -131,6 +131,13 @@ def import_file(path: str | Path, fmt: str | None = None) -> list[SlaveConfig]:
     return import_bytes(read_bytes(path), str(path), fmt)
 
 
+def describe_slaves(configs: Sequence[SlaveConfig]) -> str:
+    """``name at position, ...`` of ``configs`` (the index where a slave has no position), for an error that asks
+    the user to choose one; ``none`` for no slaves."""
+    return ", ".join(f"{c.name or '(no name)'} at {c.position if c.position is not None else i}"
+                     for i, c in enumerate(configs)) or "none"
+
+
 def select_slaves(configs: Sequence[SlaveConfig], selectors: Sequence[str]) -> list[SlaveConfig]:
     """The slaves ``selectors`` name, in bus order: a slave (project drive) name, else a bus position.
 
@@ -144,8 +151,6 @@ def select_slaves(configs: Sequence[SlaveConfig], selectors: Sequence[str]) -> l
             c for i, c in enumerate(configs)
             if sel.strip().isdigit() and (c.position if c.position is not None else i) == int(sel)]
         if not found:
-            known = ", ".join(f"{c.name or '(no name)'} at {c.position if c.position is not None else i}"
-                              for i, c in enumerate(configs)) or "none"
-            raise SelectionError(f"no slave named or at position {sel!r} (slaves: {known})")
+            raise SelectionError(f"no slave named or at position {sel!r} (slaves: {describe_slaves(configs)})")
         chosen += [c for c in found if all(c is not x for x in chosen)]
     return [c for c in configs if any(c is x for x in chosen)]
