@@ -418,6 +418,16 @@ def _cpu_s(pid: int) -> tuple[float, float]:
     return user, system
 
 
+def _interpolation_period(hz: float) -> tuple[int, int] | None:
+    """60C2h (value 1..255, power of ten) of one cycle at ``hz``; None where no such pair gives it exactly."""
+    period_ns = round(1e9 / hz)
+    for exponent in (-3, -4, -5, -6):
+        unit = 10 ** (9 + exponent)
+        if period_ns % unit == 0 and 1 <= period_ns // unit <= 255:
+            return period_ns // unit, exponent
+    return None
+
+
 def _pct(values: list[int], q: float) -> float:
     ordered = sorted(values)
     return ordered[min(len(ordered) - 1, int(q * len(ordered)))] / 1000.0  # ns -> us
@@ -427,7 +437,8 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, wh
                 workers: int | None = None) -> dict[str, Any]:
     """``drives`` HDTs in OP, one process data frame per cycle at ``hz`` for ``seconds`` (absolute deadlines,
     sleep then a short spin); latency = send to receive of a cycle's frame, lateness = start after deadline.
-    ``motion``: the drives are put in CSP (6060h = 8 by SDO in PRE-OP), enabled through the controlword and
+    In PRE-OP each drive's interpolation period 60C2h is set to the cycle, so that a drive on its own clock
+    runs one cycle per frame. ``motion``: the drives are put in CSP (6060h = 8 by SDO in PRE-OP), enabled through the controlword and
     follow a target position that moves 10 units per cycle; else they stay idle (controlword 0)."""
     import pysoem
 
@@ -446,8 +457,12 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, wh
         if found != drives:
             raise SystemExit(f"pysoem found {found} drives, not {drives}")
         master.state_check(pysoem.PREOP_STATE, 2_000_000)
-        if motion:
-            for slave in master.slaves:
+        period = _interpolation_period(hz)
+        for slave in master.slaves:
+            if period is not None:  # the drive's cycle is the bus cycle, as a master sets it (HDT's default: 2 ms)
+                slave.sdo_write(0x60C2, 1, bytes([period[0]]))
+                slave.sdo_write(0x60C2, 2, period[1].to_bytes(1, "little", signed=True))
+            if motion:
                 slave.sdo_write(0x6060, 0, b"\x08")
         _op(master)
         if motion:

@@ -209,6 +209,11 @@ def test_commission_refuses_a_move_faster_than_its_profile():
     trace = SimpleNamespace(move_cycles=(0, 20), cycle_s=0.001, move_wall_s=0.02)
     ok, text = check_move_time(io, rd, trace, "pp", Fraction(1000))  # type: ignore[arg-type]
     assert not ok and "0.08944 s" in text
+    # through a master (this io is not a Drive) the margin is the same 5 %: a drive on a bus runs on its own clock
+    # (sim serve's as well), so a move at 80 % of its profile's time fails there too
+    trace.move_cycles, trace.move_wall_s = (0, 70), 0.07
+    assert not check_move_time(io, rd, trace, "pp", Fraction(1000))[0]  # type: ignore[arg-type]
+    trace.move_cycles = (0, 20)
     # on a real bus a late master counts fewer cycles than the drive ran: its own clock is the measure then
     trace.move_wall_s = 0.095
     assert check_move_time(io, rd, trace, "pp", Fraction(1000))[0]  # type: ignore[arg-type]

@@ -156,6 +156,19 @@ def test_the_frame_is_answered_before_the_drive_runs() -> None:
     assert parsed is not None and parsed.datagrams[0].wkc == len(slaves)
 
 
+def _counting(slave: VirtualSlave) -> list[bytes]:
+    """The drive cycles ``slave`` runs from now on (each the outputs it ran on)."""
+    cycles: list[bytes] = []
+    original = slave.drive.exchange
+
+    def counting(outputs: bytes) -> bytes:
+        cycles.append(bytes(outputs))
+        return original(outputs)
+
+    slave.drive.exchange = counting  # type: ignore[method-assign]
+    return cycles
+
+
 def test_with_sync0_on_the_drive_runs_on_each_pulse_even_without_new_outputs() -> None:
     """DC synchronous: a SYNC0 pulse is the drive's event too. A frame that does not write SM2 (a mailbox poll)
     after a pulse lets the drive run its cycle on the last outputs; within one SYNC0 cycle it runs once."""
@@ -168,14 +181,7 @@ def test_with_sync0_on_the_drive_runs_on_each_pulse_even_without_new_outputs() -
     loop.one(Datagram.make(Cmd.FPWR, st, R.DC_START_TIME, struct.pack("<Q", now + 500_000)))
     loop.one(Datagram.make(Cmd.FPWR, st, R.DC_ACTIVATION, b"\x03"))
     total = sum(o + i for o, i in sizes)
-    cycles: list[int] = []
-    original = slave.drive.exchange
-
-    def counting(outputs: bytes) -> bytes:
-        cycles.append(len(outputs))
-        return original(outputs)
-
-    slave.drive.exchange = counting  # type: ignore[method-assign]
+    cycles = _counting(slave)
     poll = Datagram.make(Cmd.FPRD, st, R.AL_STATUS, 2)
     loop.one(Datagram.logical(Cmd.LRW, 0, bytes(total)))  # SM2 written: one cycle
     assert len(cycles) == 1
@@ -189,4 +195,71 @@ def test_with_sync0_on_the_drive_runs_on_each_pulse_even_without_new_outputs() -
     time.ns += 3_000_000
     loop.one(poll)
     assert len(cycles) == 3  # once per frame, however many pulses passed
-    assert all(n == sizes[0][0] for n in cycles)
+    assert all(len(n) == sizes[0][0] for n in cycles)
+
+
+def test_on_its_own_clock_the_drive_runs_the_cycles_its_time_holds() -> None:
+    """``sim serve`` runs each drive on its own clock: without SYNC0 the drive runs as many cycles of its cycle
+    time (60C2h: HDT 2 ms, Technosoft 1 ms) as ended since its last one, whatever the master's frames do -- a late
+    master does not slow the drive's motion down, frames faster than its cycle do not speed it up; an event
+    before the next cycle waits for it; a long silence is made up to MAX_CATCH_UP cycles. Paced by frames (the
+    default) the same frames give one cycle each."""
+    from ecattool.sim.slave import MAX_CATCH_UP
+
+    gaps_us = [1000, 3000, 500, 500, 400, 5000, 250_000, 1000, 999, 2]
+    own = {"technosoft": [1, 3, 0, 1, 0, 5, MAX_CATCH_UP, 1, 0, 1],  # after a first frame that runs one cycle
+           "hdt": [0, 2, 0, 0, 0, 3, MAX_CATCH_UP, 0, 0, 1]}
+    for own_clock in (True, False):
+        time = FakeTime()
+        loop, slaves, sizes = _bus_in_op(time)
+        for s in slaves:
+            s.own_clock = own_clock
+        cycles = [_counting(s) for s in slaves]
+        frame = [Datagram.logical(Cmd.LRW, 0, bytes(sum(o + i for o, i in sizes)))]
+        loop.transact(frame)
+        assert [len(c) for c in cycles] == [1] * len(slaves)
+        ran: list[list[int]] = [[] for _ in slaves]
+        for gap in gaps_us:
+            time.ns += gap * 1000
+            before = [len(c) for c in cycles]
+            loop.transact(frame)
+            for r, c, b in zip(ran, cycles, before):
+                r.append(len(c) - b)
+        for profile, r in zip(PROFILES, ran):
+            assert r == (own[profile] if own_clock else [1] * len(gaps_us)), (own_clock, profile)
+    assert MAX_CATCH_UP < 125
+
+
+def test_on_its_own_clock_with_sync0_each_pulse_is_a_cycle() -> None:
+    """DC synchronous on its own clock: the drive runs one cycle per SYNC0 pulse that came since its last one
+    (several after a late frame), and outputs written between two pulses wait for the next pulse."""
+    time = FakeTime()
+    loop, slaves, sizes = _bus_in_op(time)
+    slave = slaves[0]
+    slave.own_clock = True
+    st = 0x1001
+    now = int.from_bytes(bytes(loop.one(Datagram.make(Cmd.FPRD, st, R.DC_SYSTEM_TIME, 8)).data), "little")
+    loop.one(Datagram.make(Cmd.FPWR, st, R.DC_SYNC0_CYCLE, struct.pack("<I", 1_000_000)))
+    loop.one(Datagram.make(Cmd.FPWR, st, R.DC_START_TIME, struct.pack("<Q", now + 500_000)))
+    loop.one(Datagram.make(Cmd.FPWR, st, R.DC_ACTIVATION, b"\x03"))
+    cycles = _counting(slave)
+    total = sum(o + i for o, i in sizes)
+    lrw = [Datagram.logical(Cmd.LRW, 0, bytes(total))]
+    loop.transact(lrw)
+    assert len(cycles) == 0  # outputs before the first pulse: they wait for it
+    time.ns += 1_000_000  # the first pulse has come
+    loop.transact(lrw)
+    assert len(cycles) == 1
+    time.ns += 300_000
+    loop.transact(lrw)
+    assert len(cycles) == 1  # no new pulse: the new outputs wait
+    time.ns += 700_000  # the next pulse
+    loop.transact(lrw)
+    assert len(cycles) == 2
+    time.ns += 4_000_000  # four pulses, and new outputs: the pulses before they came ran on the old ones
+    new = bytearray(total)
+    new[0] = 0x06  # the first drive's first output byte changes
+    loop.transact([Datagram.logical(Cmd.LRW, 0, bytes(new))])
+    assert len(cycles) == 6
+    old = bytes(sizes[0][0])
+    assert cycles[2:5] == [old] * 3 and cycles[5] == bytes(new[:sizes[0][0]])

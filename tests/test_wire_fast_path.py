@@ -198,17 +198,17 @@ def test_serving_freezes_the_set_up_and_stops_the_event_log_until_it_ends(monkey
             self.bus = bus
 
         def serve(self, stop: object, max_frames: int | None) -> None:
-            seen.append((served[0].slave.drive.record_events, gc.get_freeze_count()))
+            seen.append((served[0].slave.drive.record_events, gc.get_freeze_count(), served[0].slave.own_clock))
 
         def close(self) -> None:
             pass
 
     monkeypatch.setattr(raw, "RawTransport", FakeTransport)
     served = virtual_slaves([("hdt", profiles.load("hdt"))])
-    assert served[0].slave.drive.record_events and gc.get_freeze_count() == 0
+    assert served[0].slave.drive.record_events and gc.get_freeze_count() == 0 and not served[0].slave.own_clock
     assert serve(served, "ecat1", lambda: None) == 7
-    assert len(seen) == 1 and seen[0][0] is False and seen[0][1] > 0
-    assert served[0].slave.drive.record_events and gc.get_freeze_count() == 0
+    assert len(seen) == 1 and seen[0][0] is False and seen[0][1] > 0 and seen[0][2] is True  # the drive's own clock
+    assert served[0].slave.drive.record_events and gc.get_freeze_count() == 0 and not served[0].slave.own_clock
 
 
 def test_put_all_stores_as_put_does_and_renews_the_version_for_factor_objects() -> None:

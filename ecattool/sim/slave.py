@@ -56,6 +56,12 @@ class ConfigRefused(Exception):
         self.code = code
 
 
+#: the most cycles a drive on its own clock runs after one frame to make up for the time since its last cycle
+#: (100 ms at 1 kHz, the default process data watchdog): a longer silence is not made up, which bounds what one
+#: frame can cost the server
+MAX_CATCH_UP = 100
+
+
 @dataclass(frozen=True, slots=True)
 class Refusal:
     """The last state change the slave refused: AL status code and why (for logs and tests)."""
@@ -68,8 +74,16 @@ class Refusal:
 class VirtualSlave(EscApplication):
     """``drive`` behind an ESC serving ``sii`` (bytes of an SII image)."""
 
-    def __init__(self, drive: Drive, sii: bytes, *, clock: Clock | None = None) -> None:
+    def __init__(self, drive: Drive, sii: bytes, *, clock: Clock | None = None, own_clock: bool = False) -> None:
         self.drive = drive
+        #: the drive runs on its own clock (``sim serve``): as many cycles as its cycle time (60C2h), or the
+        #: SYNC0 pulses, fit into the host time since its last cycle; else one cycle per event (in process: the
+        #: caller's frames are the drive's time, which keeps traces exact). See :meth:`after_frame`.
+        self.own_clock = own_clock
+        #: own clock without SYNC0: host time (ns) of the drive's last cycle boundary (None: not run yet)
+        self._cycle_at: int | None = None
+        #: own clock: the outputs of the drive's last cycle (None: none yet)
+        self._ran_on: bytes | None = None
         self.esc = Esc(sii, app=self, clock=clock)
         mbx = self._mailbox_defaults()
         self.mailbox = MailboxServer(drive, mbx[0], mbx[1])
@@ -90,10 +104,10 @@ class VirtualSlave(EscApplication):
     # ------------------------------------------------------------------------------------------
     @classmethod
     def from_drive(cls, drive: Drive, *, esi: str | Path | None = None, selector: str | None = None,
-                   clock: Clock | None = None) -> "VirtualSlave":
+                   clock: Clock | None = None, own_clock: bool = False) -> "VirtualSlave":
         """The slave of ``drive``; its SII is built from ``esi`` (the file the drive came from) when given,
         else from the drive's device model (a built-in profile)."""
-        return cls(drive, sii_image(drive, esi, selector), clock=clock)
+        return cls(drive, sii_image(drive, esi, selector), clock=clock, own_clock=own_clock)
 
     def _mailbox_defaults(self) -> tuple[int, int]:
         words = self.esc.eeprom.words(0x18, 4)  # standard receive / send mailbox offset and size
@@ -242,23 +256,61 @@ class VirtualSlave(EscApplication):
 
     def after_frame(self, esc: Esc) -> None:
         """The drive's cycle, after the frame: when SM2 was written (SM3 read, for a drive without outputs) or,
-        with SYNC0 on, when a SYNC0 pulse has come since its last cycle (then on the last outputs it got). Once
-        per frame however many pulses passed: the served drive's cycle is paced by the master's frames."""
+        with SYNC0 on, when a SYNC0 pulse has come since its last cycle (then on the last outputs it got).
+
+        Paced by the frames (the default, in process): one cycle per frame however much time passed. On its own
+        clock (``own_clock``, what ``sim serve`` gives each drive), as a drive's processor runs on its timer or on
+        SYNC0 whatever the master does: the cycles that fit into the time since the drive's last cycle run, on
+        the last outputs (at most :data:`MAX_CATCH_UP`; a longer silence is not made up), and an event that
+        comes before the drive's next cycle waits for it. A master that is late or sends frames back to back
+        then neither slows the drive's motion down nor speeds it up."""
         fired = self._pd_event
         self._pd_event = False
+        pulses = -1  # with a SYNC0 train: how many pulses came since the drive's last cycle (-1: none runs)
         if self._outputs is not None and esc.mem[R.DC_ACTIVATION] & 0x03 == 0x03:
             pulse = self._sync0_pulse(esc)
-            if pulse > self._sync0_seen:
-                fired = fired or self._sync0_seen >= 0
-                self._sync0_seen = pulse
-        if fired:
+            if pulse is not None:
+                seen = self._sync0_seen
+                # before the first pulse it sees, the drive's first cycle is the first pulse after an event
+                pulses = pulse - seen if seen >= 0 else int(fired and pulse >= 0)
+                if pulse > seen:
+                    fired = fired or seen >= 0
+                    self._sync0_seen = pulse
+        if not fired:
+            return
+        if not self.own_clock:
             self._exchange(self._outputs)
+            return
+        cycles = pulses if pulses >= 0 else self._timer_cycles(esc.clock.host_ns())
+        if cycles <= 0:
+            self._pd_event = True  # before the drive's next cycle: the event waits for it
+            return
+        # the cycles that ended before this frame came ran on the outputs the drive had then; this frame's
+        # outputs are for its last cycle only (a set-point counts from when it arrived, not from the silence)
+        before = self._ran_on if self._ran_on is not None else self._outputs
+        for _ in range(min(cycles, MAX_CATCH_UP) - 1):
+            self._exchange(before)
+        self._exchange(self._outputs)
+        self._ran_on = self._outputs
 
-    def _sync0_pulse(self, esc: Esc) -> int:
-        """The number of the last SYNC0 pulse before now (-1 before the first or with SYNC0 off)."""
+    def _timer_cycles(self, now: int) -> int:
+        """Own clock without SYNC0: how many of the drive's cycles (60C2h) ended since its last one; the first
+        event runs one cycle at once."""
+        at = self._cycle_at
+        if at is None:
+            self._cycle_at = now
+            return 1
+        period = max(1, int(self.drive.cycle_time() * 1_000_000_000))
+        cycles = (now - at) // period
+        # a silence longer than MAX_CATCH_UP cycles is not made up: the cycles restart from now
+        self._cycle_at = now if cycles > MAX_CATCH_UP else at + cycles * period
+        return cycles
+
+    def _sync0_pulse(self, esc: Esc) -> int | None:
+        """The number of the last SYNC0 pulse before now (-1 before the first; None without a SYNC0 train)."""
         act, cycle, start = esc.dc_sync0()
         if not act & 0x01 or not act & 0x02 or not cycle:
-            return -1
+            return None
         now = (esc.local_time(esc.clock.host_ns()) + esc.u64(R.DC_SYSTEM_OFFSET)) & 0xFFFFFFFFFFFFFFFF
         return (now - start) // cycle if now >= start else -1
 
@@ -284,6 +336,7 @@ class VirtualSlave(EscApplication):
     # ------------------------------------------------------------------------------------------
     def dc_activation(self, esc: Esc, activation: int) -> None:
         self._sync0_seen = -1
+        self._cycle_at = None
         act, cycle, start = esc.dc_sync0()
         if act & 0x01 and act & 0x06:
             shift = start % cycle if cycle else 0

@@ -94,17 +94,20 @@ def serve(served: list[Served], ifname: str, on_ready: Callable[[], None],
     how many processes serve the line (:mod:`ecattool.sim.bus.split`); None chooses from the number of drives
     and the cores (:func:`~ecattool.sim.bus.split.choose_workers`).
 
-    While it serves, the drives keep no event log (nobody can read it from the wire, and it would grow for as
-    long as the server runs), and what exists when serving starts (the drives, their dictionaries and SII
-    images, the imported modules) is moved out of the garbage collector's way (``gc.freeze``): a full
-    collection over 8 drives' objects takes ~12 ms, twelve cycles of a 1 kHz bus; frozen, microseconds.
-    Both come back as they were when serving stops."""
+    While it serves, each drive runs on its own clock (:attr:`VirtualSlave.own_clock`: its cycle time or SYNC0
+    paces its motion, not the master's frames), the drives keep no event log (nobody can read it from the wire,
+    and it would grow for as long as the server runs), and what exists when serving starts (the drives, their
+    dictionaries and SII images, the imported modules) is moved out of the garbage collector's way
+    (``gc.freeze``): a full collection over 8 drives' objects takes ~12 ms, twelve cycles of a 1 kHz bus;
+    frozen, microseconds. All come back as they were when serving stops."""
     from ecattool.sim.bus import raw, split
 
     count = split.choose_workers(len(served)) if workers is None else max(1, min(workers, len(served)))
     logging = [s.slave.drive.record_events for s in served]
+    clocks = [s.slave.own_clock for s in served]
     for s in served:
         s.slave.drive.record_events = False
+        s.slave.own_clock = True  # on the wire a drive runs on its own clock, not on the master's frames
     gc.collect()
     gc.freeze()  # before the workers are forked: they inherit the frozen set-up
     transport: "raw.RawTransport | split.SplitTransport | None" = None
@@ -119,8 +122,9 @@ def serve(served: list[Served], ifname: str, on_ready: Callable[[], None],
             transport.serve(stop, max_frames)
     finally:
         gc.unfreeze()
-        for s, on in zip(served, logging):
+        for s, on, own in zip(served, logging, clocks):
             s.slave.drive.record_events = on
+            s.slave.own_clock = own
         if transport is not None:
             transport.close()
     return transport.answered
