@@ -124,6 +124,8 @@ class VirtualSlave(EscApplication):
         self._no_outputs = pd_on and self.drive.process_image_sizes()[0] == 0
         if not pd_on:
             self._outputs = None  # below SAFE-OP the process image may change: a SYNC0 cycle waits for new outputs
+            self._ran_on = None  # and the drive's own cycles start again with the first event in SAFE-OP
+            self._cycle_at = None
         for n in range(self.esc.sm_count):
             sm = self.esc.sm(n)
             if n in (MBX_OUT, MBX_IN) or (sm.mailbox and n < 2):
@@ -260,9 +262,10 @@ class VirtualSlave(EscApplication):
 
         Paced by the frames (the default, in process): one cycle per frame however much time passed. On its own
         clock (``own_clock``, what ``sim serve`` gives each drive), as a drive's processor runs on its timer or on
-        SYNC0 whatever the master does: the cycles that fit into the time since the drive's last cycle run, on
-        the last outputs (at most :data:`MAX_CATCH_UP`; a longer silence is not made up), and an event that
-        comes before the drive's next cycle waits for it. A master that is late or sends frames back to back
+        SYNC0 whatever the master does: the cycles that ended since the drive's last cycle run (at most
+        :data:`MAX_CATCH_UP`; a longer silence is not made up), those before the frame came on the outputs the
+        drive had then and the last on the frame's, and an event that comes before the drive's next cycle waits
+        for it. A master that is late or sends frames back to back
         then neither slows the drive's motion down nor speeds it up."""
         fired = self._pd_event
         self._pd_event = False
