@@ -45,7 +45,7 @@ def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
         click.option("--startup", "startup_file", type=InputFile(),
                      help="A master configuration (ENI, TwinCAT, ecmc, ros2, IgH, JSON/CSV startup list): use the "
                      "mapping its SDOs program (or its declared PDOs)."),
-        # --drive as `startup export/convert` spell it; --slave N (a 0-based index) is the old spelling
+        # --drive as `startup export/convert` spell it; --slave N, its old spelling, still takes the number
         click.option("--drive", "--slave", "drive", metavar="NAME", cls=AliasedOption, aliases=("--slave",),
                      help="Which slave of a --startup file: its name or bus position."),
     ]
