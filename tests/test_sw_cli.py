@@ -101,6 +101,17 @@ def test_download_when_everything_matches_writes_nothing(capsys):
     assert code == 0 and "nothing written" in out
 
 
+def test_preload_on_a_real_master_is_refused_before_it_is_opened(capsys, monkeypatch):
+    from ecattool.target import pysoem as pysoem_target
+
+    def never(*args, **kwargs):
+        raise AssertionError("a real master was opened")
+
+    monkeypatch.setattr(pysoem_target, "PysoemTarget", never)
+    code, _, err = run(capsys, "sw", "verify", c(SW), "--target", "pysoem:ecat0", "--preload", c(SW))
+    assert code == 1 and "--preload is for the simulator only" in err
+
+
 def test_unknown_target_is_an_error(capsys):
     code, _, err = run(capsys, "sw", "verify", c(SW), "--target", "nope")
     assert code == 1 and "unknown target" in err

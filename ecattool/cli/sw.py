@@ -202,12 +202,13 @@ def _target_and_image(file: str | None, target: str | None, slave: int | None, p
 
 def _open_preloaded(spec: str, slave: int | None, device: Any, preload: str | None) -> Any:
     """The slave of ``spec``; on the simulator with ``preload`` programmed into its EEPROM first."""
-    tgt = _open_target(spec, slave or 0, device)
     if preload:
         from ecattool.target.opener import parse_target
 
-        if parse_target(spec).kind != "sim":
+        if parse_target(spec).kind != "sim":  # before a real master is opened for nothing
             raise InputError("--preload is for the simulator only")
+    tgt = _open_target(spec, slave or 0, device)
+    if preload:
         from ecattool.sw.apply import download
 
         if not download(_image(preload), tgt, reset=True).ok:

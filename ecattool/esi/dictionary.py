@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from ecattool.errors import EcatToolError, InputError
-from ecattool.esi.values import NO_NAME, Context, fast_number, lang_rank, lc_text, name_step
+from ecattool.esi.values import NO_NAME, Context, fast_number, lc_text, name_step
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import Access, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import BY_CODE, DataType, Kind, lookup, parse_array_name

@@ -36,7 +36,7 @@ from ecattool.esi.model import (
     Slot,
     SyncManager,
 )
-from ecattool.esi.values import NO_NAME, Context, lang_rank, lc_text, name_step
+from ecattool.esi.values import NO_NAME, Context, lc_text, name_step
 from ecattool.esi.values import fast_number as _fast_number  # the name it had here (tests use it)
 from ecattool.od.model import ObjectDictionary, OdObject
 from ecattool.xmlsafe import MAX_XML_BYTES, parse_xml
@@ -608,11 +608,7 @@ class Reader:
                 if bits is None:
                     bits = self._number(t, c, "Entry/BitLen")
             elif tag == "Name":
-                if rank:  # values.name_step inlined (18,000 names in the largest file): no LcId is rank 2
-                    lc = c.get("LcId")
-                    r = 2 if lc is None else lang_rank(lc)
-                    if r < rank:
-                        name, rank = (c.text or "").strip(), r
+                name, rank = name_step(c, name, rank)
             elif tag == "DataType":
                 dtype = (c.text or "").strip()
         if index is None:

@@ -74,12 +74,12 @@ class Refusal:
 class VirtualSlave(EscApplication):
     """``drive`` behind an ESC serving ``sii`` (bytes of an SII image)."""
 
-    def __init__(self, drive: Drive, sii: bytes, *, clock: Clock | None = None, own_clock: bool = False) -> None:
+    def __init__(self, drive: Drive, sii: bytes, *, clock: Clock | None = None) -> None:
         self.drive = drive
-        #: the drive runs on its own clock (``sim serve``): as many cycles as its cycle time (60C2h), or the
-        #: SYNC0 pulses, fit into the host time since its last cycle; else one cycle per event (in process: the
+        #: the drive runs on its own clock (``sim serve`` sets it): as many cycles as its cycle time (60C2h), or
+        #: the SYNC0 pulses, fit into the host time since its last cycle; else one cycle per event (in process: the
         #: caller's frames are the drive's time, which keeps traces exact). See :meth:`after_frame`.
-        self.own_clock = own_clock
+        self.own_clock = False
         #: own clock without SYNC0: host time (ns) of the drive's last cycle boundary (None: not run yet)
         self._cycle_at: int | None = None
         #: own clock: the outputs of the drive's last cycle (None: none yet)
@@ -104,10 +104,10 @@ class VirtualSlave(EscApplication):
     # ------------------------------------------------------------------------------------------
     @classmethod
     def from_drive(cls, drive: Drive, *, esi: str | Path | None = None, selector: str | None = None,
-                   clock: Clock | None = None, own_clock: bool = False) -> "VirtualSlave":
+                   clock: Clock | None = None) -> "VirtualSlave":
         """The slave of ``drive``; its SII is built from ``esi`` (the file the drive came from) when given,
         else from the drive's device model (a built-in profile)."""
-        return cls(drive, sii_image(drive, esi, selector), clock=clock, own_clock=own_clock)
+        return cls(drive, sii_image(drive, esi, selector), clock=clock)
 
     def _mailbox_defaults(self) -> tuple[int, int]:
         words = self.esc.eeprom.words(0x18, 4)  # standard receive / send mailbox offset and size
@@ -265,8 +265,8 @@ class VirtualSlave(EscApplication):
         SYNC0 whatever the master does: the cycles that ended since the drive's last cycle run (at most
         :data:`MAX_CATCH_UP`; a longer silence is not made up), those before the frame came on the outputs the
         drive had then and the last on the frame's, and an event that comes before the drive's next cycle waits
-        for it. A master that is late or sends frames back to back
-        then neither slows the drive's motion down nor speeds it up."""
+        for it. A master that is late or sends frames back to back then neither slows the drive's motion down nor
+        speeds it up."""
         fired = self._pd_event
         self._pd_event = False
         pulses = -1  # with a SYNC0 train: how many pulses came since the drive's last cycle (-1: none runs)

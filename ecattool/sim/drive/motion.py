@@ -243,16 +243,13 @@ class Motion(DriveCore):
         sw = cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
         if self.family == "technosoft-ipos" and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
-        pn, pd, vn, vd, _, _ = self.units.ratios()
+        vn, vd = self.units.ratios()[2:4]
         # 6063h, 6064h, 606Ch: floor(position), floor(position / factor) (+ the home offset), floor(velocity /
-        # factor), in integers (floor_ratio, written out: this runs every cycle)
-        position_n, position_d = cia.pos_n, cia.pos_d
-        user_position = (position_n * pd) // (position_d * pn) if pn else 0
-        if self.behaviour.home_offset_continuous:  # _home_offset
-            user_position += self._read_int(0x607C, 0) or 0
+        # factor), in integers
+        user_position = self._user_position()
         error = self.units.position_to_user_int(cia.following_error) if cia.following_error else 0
-        self._put_all(_ACTUAL_VALUES, (sw, position_n // position_d, user_position, user_position + error,
-                                       (cia.vel_n * vd) // (cia.vel_d * vn) if vn else 0, cia.fault_code, error))
+        self._put_all(_ACTUAL_VALUES, (sw, cia.pos_n // cia.pos_d, user_position, user_position + error,
+                                       floor_ratio(cia.vel_n, cia.vel_d, vn, vd), cia.fault_code, error))
 
     def _home_offset(self) -> int:
         """607Ch where the family adds it to the measured position at all times (HDT), else 0."""
