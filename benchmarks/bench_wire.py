@@ -99,11 +99,11 @@ def _fmmu(logical: int, length: int, physical: int, kind: int) -> bytes:
     return struct.pack("<IHBBHBBBxxx", logical, length, 0, 7, physical, 0, kind, 1)
 
 
-def _bus_in_op(drives: int, motion: bool = False) -> tuple[Any, list[Any], int, int]:
+def _bus_in_op(drives: int, motion: bool = False, host: Any = None) -> tuple[Any, list[Any], int, int]:
     """``drives`` HDTs brought to OP through the in-process loop the way a master does it (station addresses,
     mailbox SMs, PRE-OP, process data SMs and FMMUs: all outputs first, then all inputs, as SOEM maps them,
-    SAFE-OP, OP). ``motion``: mode 8 (CSP) set in PRE-OP. Returns (loop, slaves, output bytes, input bytes)
-    per drive."""
+    SAFE-OP, OP). ``motion``: mode 8 (CSP) set in PRE-OP. ``host``: the slaves' host clock (ns; default the
+    monotonic clock). Returns (loop, slaves, output bytes, input bytes) per drive."""
     from ecattool.od.model import EcState
     from ecattool.sim import Drive
     from ecattool.sim.bus import Bus, Cmd, Datagram
@@ -112,7 +112,8 @@ def _bus_in_op(drives: int, motion: bool = False) -> tuple[Any, list[Any], int, 
     from ecattool.sim.esc import registers as R
     from ecattool.sim.slave import VirtualSlave
 
-    slaves = [VirtualSlave.from_drive(Drive.from_profile("hdt"), clock=Clock(offset_ns=i * 1_000_000_007))
+    slaves = [VirtualSlave.from_drive(Drive.from_profile("hdt"), clock=Clock(offset_ns=i * 1_000_000_007,
+                                                                             host=host or time.monotonic_ns))
               for i in range(drives)]
     loop = Loop(Bus([s.esc for s in slaves]))
     probe = Drive.from_profile("hdt")  # the image sizes of the default PDO assignment, known from SAFE-OP on
@@ -135,6 +136,8 @@ def _bus_in_op(drives: int, motion: bool = False) -> tuple[Any, list[Any], int, 
         assert al(2) == 2, "PRE-OP refused"
         if motion:
             slave.drive.sdo_download(0x6060, 0, b"\x08")
+        slave.drive.sdo_download(0x60C2, 1, b"\x01")  # the drive's cycle is the bus cycle, 1 ms, as on the wire
+        slave.drive.sdo_download(0x60C2, 2, (-3).to_bytes(1, "little", signed=True))
         wr(R.SM + 16, _sm(0x1100, out_len, 0x64) + _sm(0x1400, in_len, 0x20))
         wr(R.FMMU, _fmmu(i * out_len, out_len, 0x1100, 2) + _fmmu(drives * out_len + i * in_len, in_len, 0x1400, 1))
         assert al(4) == 4, "SAFE-OP refused"
@@ -156,14 +159,20 @@ def _csp_outputs(drive: Any, out_len: int, controlword: int, position: int) -> b
 
 
 def bench_bus(drives: int, seconds: float, motion: bool = False) -> dict[str, float]:
-    """The server's time for one LRW frame of ``drives`` HDTs in OP: ``Bus.process`` alone (frame parsed,
-    every ESC and drive cycle, reply encoded), as ``sim serve`` runs it per frame. Idle drives (controlword 0)
-    or, with ``motion``, drives enabled in CSP following a moving target. Wall time per frame (median and
-    minimum over batches of 100 frames) and CPU time of the thread (minimum)."""
+    """The server's time for one LRW frame of ``drives`` HDTs in OP, as ``sim serve`` runs it per frame:
+    ``Bus.process`` (the ESCs answer) and ``Bus.run_applications`` (the drives' cycles). As in ``sim serve``,
+    each drive runs on its own clock (1 ms, 60C2h set in PRE-OP) and keeps no event log; here the host time the
+    drives read advances one period per frame, so every frame runs one cycle of each drive, as at 1 kHz on the
+    wire. Idle drives (controlword 0) or, with ``motion``, drives enabled in CSP following a moving target. Wall
+    time per frame (median and minimum over batches of 100 frames) and CPU time of the thread (minimum)."""
     from ecattool.sim.bus import Cmd, Datagram, make_frame
 
-    loop, slaves, out_len, in_len = _bus_in_op(drives, motion)
+    host = [time.monotonic_ns()]
+    loop, slaves, out_len, in_len = _bus_in_op(drives, motion, host=lambda: host[0])
     bus = loop.bus
+    for s in slaves:
+        s.own_clock = True  # what sim serve sets (a revision without it runs one cycle per frame anyway)
+        s.drive.record_events = False
 
     def frame(controlword: int, position: int) -> bytes:
         outputs = b"".join(_csp_outputs(s.drive, out_len, controlword, position) for s in slaves)
@@ -172,6 +181,7 @@ def bench_bus(drives: int, seconds: float, motion: bool = False) -> dict[str, fl
     if motion:
         for controlword in (0x06, 0x07, 0x0F):  # shutdown, switch on, enable operation
             for _ in range(3):
+                host[0] += 1_000_000
                 bus.process(frame(controlword, 0))
         frames = [frame(0x0F, k * 10) for k in range(100)]
         assert all(s.drive.cia402_state.name == "OPERATION_ENABLED" for s in slaves)
@@ -189,6 +199,7 @@ def bench_bus(drives: int, seconds: float, motion: bool = False) -> dict[str, fl
         t0, c0 = clock(), time.thread_time()
         waited = 0.0
         for raw in frames:
+            host[0] += 1_000_000
             f0 = clock()
             bus.process(raw)
             waited += clock() - f0
@@ -434,7 +445,7 @@ def _pct(values: list[int], q: float) -> float:
 
 
 def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, where: str | None = None,
-                workers: int | None = None) -> dict[str, Any]:
+                workers: int | None = None, spin: bool = False) -> dict[str, Any]:
     """``drives`` HDTs in OP, one process data frame per cycle at ``hz`` for ``seconds`` (absolute deadlines,
     sleep then a short spin); latency = send to receive of a cycle's frame, lateness = start after deadline.
     In PRE-OP each drive's interpolation period 60C2h is set to the cycle, so that a drive on its own clock
@@ -497,7 +508,7 @@ def wire_cyclic(drives: int, hz: float, seconds: float, motion: bool = False, wh
                     for slave in master.slaves:
                         slave.output = image
                 wait = next_t - time.perf_counter_ns()
-                if wait > 200_000:
+                if wait > 200_000 and not spin:
                     time.sleep((wait - 150_000) / 1e9)
                 while time.perf_counter_ns() < next_t:
                     pass
@@ -545,7 +556,7 @@ def inside(args: argparse.Namespace) -> None:
         # with --against: this checkout's server and the other revision's, alternately, --rounds times each
         servers: list[str | None] = [None] + ([str(Path(args.against).resolve())] if args.against else [])
         out["cyclic"] = [wire_cyclic(args.drives, args.hz, args.pd_seconds, args.motion, where,
-                                     args.workers if where is None else None)
+                                     args.workers if where is None else None, args.spin)
                          for _ in range(args.rounds) for where in servers]
     print(json.dumps(out))
 
@@ -564,7 +575,7 @@ def on_the_wire(args: argparse.Namespace) -> dict[str, Any] | str:
         return reason
     argv = [sys.executable, str(Path(__file__).resolve()), "--inside", "--seconds", str(args.seconds),
             "--drives", str(args.drives), "--hz", str(args.hz), "--pd-seconds", str(args.pd_seconds),
-            "--rounds", str(args.rounds), *(["--motion"] if args.motion else []),
+            "--rounds", str(args.rounds), *(["--motion"] if args.motion else []), *(["--spin"] if args.spin else []),
             *(["--cyclic-only"] if args.cyclic_only else []), *(["--against", args.against] if args.against else []),
             *(["--workers", str(args.workers)] if args.workers else [])]
     budget = 120 + 3 * args.seconds + (args.pd_seconds * 2 + 60) * args.rounds * (2 if args.against else 1)
@@ -593,6 +604,9 @@ def main() -> None:
                     help="cyclic bus: runs of each server (with --against: alternating with the other revision)")
     ap.add_argument("--bus", action=argparse.BooleanOptionalAction, default=True,
                     help="the in-process server time per frame (default on)")
+    ap.add_argument("--spin", action="store_true",
+                    help="the master waits for each cycle's deadline by spinning, not sleeping (a sleeping "
+                         "virtual CPU can wake milliseconds late)")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--inside", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--bus-only", action="store_true", help=argparse.SUPPRESS)

@@ -31,8 +31,17 @@ def test_the_cycle_follows_60c2() -> None:
     d.sdo_download(0x60C2, 1, bytes([2]))
     d.sdo_download(0x60C2, 2, (-3).to_bytes(1, "little", signed=True))
     assert d.cycle_time() == Fraction(2, 1000)
+    assert d.cycle_ns() == 2_000_000
     d.sdo_download(0x60C2, 1, bytes([4]))
     assert d.cycle_time() == Fraction(4, 1000)
+    assert d.cycle_ns() == 4_000_000  # the nanoseconds sim serve paces a drive by follow the same write
+    t = Drive.from_profile("technosoft")  # its 60C2h takes what HDT's range refuses
+    t.request_state(EcState.PREOP)
+    t.sdo_download(0x60C2, 1, bytes([125]))
+    t.sdo_download(0x60C2, 2, (-6).to_bytes(1, "little", signed=True))
+    assert (t.cycle_time(), t.cycle_ns()) == (Fraction(125, 10**6), 125_000)
+    t.sdo_download(0x60C2, 1, bytes([0]))  # no cycle given: the default 1 ms
+    assert (t.cycle_time(), t.cycle_ns()) == (Fraction(1, 1000), 1_000_000)
 
 
 def test_a_restored_store_is_a_new_version() -> None:

@@ -303,7 +303,7 @@ class VirtualSlave(EscApplication):
         if at is None:
             self._cycle_at = now
             return 1
-        period = max(1, int(self.drive.cycle_time() * 1_000_000_000))
+        period = self.drive.cycle_ns()
         cycles = (now - at) // period
         # a silence longer than MAX_CATCH_UP cycles is not made up: the cycles restart from now
         self._cycle_at = now if cycles > MAX_CATCH_UP else at + cycles * period

@@ -11,7 +11,7 @@ from ecattool.od.model import EcState
 from ecattool.profiles.rules import interpolation_period_ns
 from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile, State
 from ecattool.sim.drive import halt_homing as hh
-from ecattool.sim.drive.core import DriveCore, sdo_abort
+from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
 from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
@@ -32,14 +32,24 @@ class Motion(DriveCore):
         store = getattr(self, "_store", None)
         if store is None:
             return Fraction(1, 1000)
-        cached: tuple[int, Fraction] | None = getattr(self, "_cycle_cache", None)
+        return self._cycle(store)[1]
+
+    def cycle_ns(self) -> int:
+        """:meth:`cycle_time` in whole nanoseconds, at least 1 (what a clock counting nanoseconds paces the cycles
+        by; cached with it: converting the ``Fraction`` costs microseconds, and ``sim serve`` asks every frame)."""
+        store = getattr(self, "_store", None)
+        return 1_000_000 if store is None else self._cycle(store)[2]
+
+    def _cycle(self, store: Store) -> tuple[int, Fraction, int]:
+        """(the store's version, the cycle in seconds, in nanoseconds), made again when the version changed."""
+        cached: tuple[int, Fraction, int] | None = getattr(self, "_cycle_cache", None)
         if cached is not None and cached[0] == store.version:
-            return cached[1]
+            return cached
         base, exp = self._read_int(0x60C2, 1), self._read_int(0x60C2, 2)
         cycle = interpolation_period_ns(base, exp) / 10**9 if base and exp is not None and -9 <= exp <= 2 \
             else Fraction(1, 1000)
-        self._cycle_cache = (store.version, cycle)
-        return cycle
+        cached = self._cycle_cache = (store.version, cycle, max(1, int(cycle * 1_000_000_000)))
+        return cached
 
     def _cia_moves(self, moves: list[tuple[State, State]], why: str) -> None:
         for old, new in moves:
