@@ -16,6 +16,18 @@ ROOT = Path(__file__).resolve().parent.parent
 Variant = tuple[list[str], "Path | None"]
 
 
+def steal_s() -> float:
+    """The machine's steal time so far, s (``/proc/stat``: time a virtual machine's CPUs were runnable but the
+    hypervisor ran something else); 0 where it is not reported. Some hypervisors do not report all of it
+    (``machine_stalls.py`` finds the stops it leaves out)."""
+    try:
+        with open("/proc/stat", encoding="ascii") as f:
+            fields = f.readline().split()
+        return int(fields[8]) / os.sysconf("SC_CLK_TCK") if len(fields) > 8 else 0.0
+    except (OSError, ValueError):
+        return 0.0
+
+
 def env_for(package_dir: Path | None = None) -> dict[str, str]:
     # measure ecattool as installed: byte-compiled modules. Where the shell sets PYTHONDONTWRITEBYTECODE every
     # run would recompile every imported module (earlier 2.4-2.9x figures included that); the warm-up run

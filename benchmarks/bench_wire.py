@@ -43,6 +43,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from _procs import steal_s  # benchmarks/ is on sys.path as the script's folder
+
 ROOT = Path(__file__).resolve().parent.parent
 MASTER_IF, SLAVE_IF = "ecat0", "ecat1"
 #: a hard bound on every count loop, whatever --seconds says
@@ -360,17 +362,6 @@ def wire_one_drive(seconds: float) -> dict[str, Any]:
     return out
 
 
-def _steal_s() -> float:
-    """The machine's steal time so far, s (``/proc/stat``: time a virtual machine's CPUs were runnable but the
-    hypervisor ran something else); 0 where it is not reported."""
-    try:
-        with open("/proc/stat", encoding="ascii") as f:
-            fields = f.readline().split()
-        return int(fields[8]) / os.sysconf("SC_CLK_TCK") if len(fields) > 8 else 0.0
-    except (OSError, ValueError):
-        return 0.0
-
-
 class _MasterStalls:
     """What can hold the master's own loop up, recorded over the timed cycles: its garbage collector's passes
     (count and longest), the times the kernel switched it out while it could run, and the machine's steal time."""
@@ -392,14 +383,14 @@ class _MasterStalls:
 
     def __enter__(self) -> "_MasterStalls":
         self._switches = resource.getrusage(resource.RUSAGE_SELF).ru_nivcsw
-        self._steal = _steal_s()
+        self._steal = steal_s()
         gc.callbacks.append(self._probe)
         return self
 
     def __exit__(self, *exc: object) -> None:
         gc.callbacks.remove(self._probe)
         self.switches = resource.getrusage(resource.RUSAGE_SELF).ru_nivcsw - self._switches
-        self.steal_s = _steal_s() - self._steal
+        self.steal_s = steal_s() - self._steal
 
     def figures(self) -> dict[str, Any]:
         return {"master_gc_passes": self.passes, "master_gc_longest_us": self.longest_ns / 1000.0,

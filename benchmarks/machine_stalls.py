@@ -1,11 +1,12 @@
 """How long this machine stops a running program: a loop that only reads the clock, for a while, and the gaps it saw.
 
-A gap is time between two consecutive clock reads of the loop (normally well under a microsecond). The loop runs
-with the garbage collector off and allocates nothing, so a gap of a millisecond is time the process did not run:
-either another task of this system took the CPU (the loop reads its involuntary context switches each time round
-and marks such a gap) or the machine under this system stopped the virtual CPU (a gap with no switch; the kernel's
-steal time may or may not count it). A bus master at 1 kHz that is stopped for a millisecond misses a cycle whatever the served bus does,
-which is why ``bench_wire.py`` reports the master's late starts apart from the frames that came back short.
+A gap is time between two consecutive clock reads of the loop (normally well under a microsecond). The loop
+runs with the garbage collector off and allocates nothing, so a gap of a millisecond is time the process did not
+run: either another task of this system took the CPU (the loop reads its involuntary context switches each time
+round and marks such a gap) or the machine under this system stopped the virtual CPU (a gap with no switch; the
+kernel's steal time may or may not count it). A bus master at 1 kHz that is stopped for a millisecond misses a
+cycle whatever the served bus does, which is why ``bench_wire.py`` reports the master's late starts apart from
+the frames that came back short.
 
     python benchmarks/machine_stalls.py [--seconds 30] [--over-us 200] [--json]
 
@@ -17,25 +18,16 @@ from __future__ import annotations
 import argparse
 import gc
 import json
-import os
 import resource
 import time
 from typing import Any
+
+from _procs import steal_s  # benchmarks/ is on sys.path as the script's folder
 
 #: the longest run --seconds allows
 MAX_SECONDS = 600.0
 #: how many of the longest gaps are listed
 LISTED = 20
-
-
-def steal_ms() -> float:
-    """The machine's steal time so far, in ms (the 8th value of the cpu line of /proc/stat); 0 where unknown."""
-    try:
-        with open("/proc/stat") as f:
-            fields = f.readline().split()
-        return int(fields[8]) * 1000 / os.sysconf("SC_CLK_TCK")
-    except (OSError, IndexError, ValueError):
-        return 0.0
 
 
 def probe(seconds: float, over_ns: int) -> dict[str, Any]:
@@ -46,19 +38,23 @@ def probe(seconds: float, over_ns: int) -> dict[str, Any]:
     me = resource.RUSAGE_SELF
     gaps: list[tuple[int, int, bool]] = []  # (gap ns, at ns from the start, another task ran meanwhile)
     switches0 = usage(me).ru_nivcsw
-    steal0 = steal_ms()
+    steal0 = steal_s() * 1000
     enabled = gc.isenabled()
     gc.disable()
     try:
         start = last = clock()
-        switches = switches0
+        before = switches = switches0
         end = start + int(seconds * 1e9)
         while last < end:
-            now_switches = usage(me).ru_nivcsw  # read each time round: a gap can be told to be a switch or not
+            # the clock, then the count of switches, each time round: a switch inside the gap from the last read
+            # to this one is counted by this count and not by the one read before the last clock read (the kernel
+            # often switches on the way out of a system call, after the count was taken). A switch just before
+            # the gap marks it too: a marked gap may be the machine's, an unmarked one is
             now = clock()
+            counted = usage(me).ru_nivcsw
             if now - last > over_ns and len(gaps) < 100_000:
-                gaps.append((now - last, now - start, now_switches != switches))
-            last, switches = now, now_switches
+                gaps.append((now - last, now - start, counted != before))
+            last, before, switches = now, switches, counted
     finally:
         if enabled:
             gc.enable()
@@ -67,7 +63,7 @@ def probe(seconds: float, over_ns: int) -> dict[str, Any]:
             "gaps_over_1ms_without_switch": sum(1 for g in over_1ms if not g[2]),
             "longest_ms": max((g[0] for g in gaps), default=0) / 1e6,
             "stopped_ms": sum(g[0] for g in gaps) / 1e6, "involuntary_switches": switches - switches0,
-            "steal_ms": steal_ms() - steal0,
+            "steal_ms": steal_s() * 1000 - steal0,
             "longest": [[round(g / 1e6, 3), round(at / 1e9, 3), switched]
                         for g, at, switched in sorted(gaps, reverse=True)[:LISTED]]}
 
