@@ -415,7 +415,7 @@ def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> A
     devices = []
     try:
         parsed = parse_target(spec)
-        if parsed.kind == "sim" and not parsed.sources:  # the one drive of the family
+        if parsed.own_slaves:  # the one drive of the family
             from ecattool import profiles
 
             if family == "generic":

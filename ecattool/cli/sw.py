@@ -115,7 +115,7 @@ def _open_target(spec: str, slave: int, device: Any = None) -> Any:
     from ecattool.target.opener import open_target, parse_target, slave_at
 
     parsed = parse_target(spec)
-    if parsed.kind == "sim" and not parsed.sources:
+    if parsed.own_slaves:
         if device is None:
             from ecattool import profiles
 

@@ -642,8 +642,8 @@ def open_target(spec: str, drives: list[Slave]) -> tuple[Target, str]:
     from ecattool.target.opener import parse_target
 
     parsed = parse_target(spec)
-    own = parsed.kind == "sim" and not parsed.sources  # a bare 'sim' simulates the project's slaves
-    devices = [d for _, d in Machine("", slaves=list(drives)).devices()] if own else []
+    # a bare 'sim' simulates the project's slaves
+    devices = [d for _, d in Machine("", slaves=list(drives)).devices()] if parsed.own_slaves else []
     return open_spec(spec, devices), spec
 
 

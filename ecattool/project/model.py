@@ -244,7 +244,7 @@ class Project(_Strict):
 
         try:
             spec = parse_target(v)
-            ok = spec.kind == "pysoem" or (spec.kind == "sim" and not spec.sources)
+            ok = spec.kind == "pysoem" or spec.own_slaves
         except SelectionError:
             ok = False
         if not ok:

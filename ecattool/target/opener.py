@@ -43,6 +43,11 @@ class TargetSpec:
     interface: str = ""
     sources: tuple[str, ...] = ()
 
+    @property
+    def own_slaves(self) -> bool:
+        """A bare ``sim``: the simulator with the slaves the command has (a project's, a family's drive)."""
+        return self.kind == "sim" and not self.sources
+
 
 def parse_target(spec: str) -> TargetSpec:
     """``spec`` read (see the module docs); a SelectionError naming the forms when it is none of them."""
@@ -61,7 +66,7 @@ def parse_target(spec: str) -> TargetSpec:
 
 def sim_devices(spec: TargetSpec, devices: Iterable[Device] = ()) -> list[Device]:
     """The devices a simulator of ``spec`` has: its sources' (profiles or ESI files), else ``devices``."""
-    if not spec.sources:
+    if spec.own_slaves:
         return list(devices)
     from ecattool.sim.bus.serve import device_source
 
