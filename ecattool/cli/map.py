@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -11,6 +11,9 @@ from ecattool.cli.common import (console, file_output_option, json_option, outpu
                                  store_force, table, write_output)
 from ecattool.cli.paths import InputFile
 from ecattool.cli.vocab import WRITE_FORMATS, AliasedOption
+
+if TYPE_CHECKING:
+    from ecattool.profiles.running import RunningDevice
 
 _EXAMPLES = """\b
 Examples:
@@ -55,22 +58,20 @@ def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
 
 
 def _load_device(esi: str | None, selector: str | None, profile: str | None, product: str | None,
-                 revision: str | None, policy: str = "exact") -> Any:
+                 revision: str | None, policy: str = "exact") -> RunningDevice:
     if esi:
         if profile:
             raise click.UsageError("give either --esi or --profile, not both")
-        from ecattool.esi import load_device
-        from ecattool.profiles import complete_generic
+        from ecattool.profiles.running import device_from_file
 
-        sel = selector if not revision else f"{selector}:{revision}" if selector else None
         # the device as it runs (default modules in its slots, mapping objects), as lint and the simulator see it
-        return complete_generic(load_device(esi, sel, policy))
+        return device_from_file(esi, selector, revision, policy)
     name = profile or selector
     if not name:
         raise click.UsageError("name the device: --esi FILE [--device SEL] or --profile NAME")
-    from ecattool.profiles import load
+    from ecattool.profiles.running import device_from_profile
 
-    return load(name, product=product, revision=revision)
+    return device_from_profile(name, product=product, revision=revision)
 
 
 def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None) -> Any:

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
+
+if TYPE_CHECKING:
+    from ecattool.profiles.running import RunningDevice
 
 TARGET_HELP = ("Where the bus is: pysoem:IF or kickcat:IF (a real master on a network interface), or the simulator: "
                "sim:PROFILE,ESI… (e.g. sim:hdt,technosoft-ipos).")
@@ -37,13 +40,15 @@ def load_library(folder: str | None) -> Any:
     return Library(folder) if folder else None
 
 
-def load_device(text: str | None) -> Any:
+def load_device(text: str | None) -> RunningDevice | None:
+    """The device ``--device`` names (FILE, FILE@SELECTOR or a built-in profile name) as it runs: the dictionary
+    lint and the simulator use (default modules plugged, communication objects completed)."""
     if not text:
         return None
-    from ecattool.sim.bus.serve import device_source
+    from ecattool.profiles.running import resolve_device
 
     source, _, selector = text.partition("@")
-    return device_source(source, selector=selector or None)[1]
+    return resolve_device(source, selector=selector or None)
 
 
 def open_live(target: str) -> Any:

@@ -126,10 +126,10 @@ def _compute(kwargs: dict[str, Any]) -> Any:
     esi, selector, policy = kwargs.pop("esi"), kwargs.pop("selector"), kwargs.pop("policy")
     device = None
     if esi:
-        from ecattool.esi import load_device
         from ecattool.profiles import family_of
+        from ecattool.profiles.running import device_from_file
 
-        device = load_device(esi, selector, policy)
+        device = device_from_file(esi, selector, policy=policy)
         if not kwargs.get("family"):
             kwargs["family"] = family_of(device)
     spec, family, firmware, approximation = _spec(**kwargs)

@@ -40,15 +40,14 @@ class Served:
 
 def device_source(source: str, *, product: str | None = None, revision: str | None = None,
                   selector: str | None = None) -> tuple[str, Device]:
-    """(name, device) of a built-in profile name (``product``/``revision`` choose the model) or an ESI file
-    (``selector`` the device)."""
-    from ecattool import esi, profiles
+    """(name, device as it runs) of a built-in profile name (``product``/``revision`` choose the model) or an
+    ESI/EDS file (``selector`` the device): :func:`ecattool.profiles.running.resolve_device`."""
+    from ecattool.profiles.running import device_from_file, device_from_profile, is_device_file
 
-    path = Path(source)
-    if path.suffix.lower() == ".xml" or path.is_file():
-        device = esi.load_device(path, selector)
-        return device.type_name or path.name, device
-    device = profiles.load(source, product=product, revision=revision)
+    if is_device_file(source):
+        device = device_from_file(source, selector)
+        return device.type_name or Path(source).name, device
+    device = device_from_profile(source, product=product, revision=revision)
     return (source if product is None else f"{source} {product}"), device
 
 
