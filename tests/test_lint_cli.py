@@ -197,18 +197,19 @@ def test_second_lint_reads_the_pickles(cache_dir, monkeypatch):
     (device_entry,) = _entries(cache_dir, "device")
     (check_entry,) = _entries(cache_dir, "check")
     assert len(device_entry.stem) == 64  # a SHA-256
-    assert type(pickle.loads(device_entry.read_bytes())).__name__ == "Device"
+    assert type(pickle.loads(device_entry.read_bytes())).__name__ == "RunningDevice"
     assert pickle.loads(check_entry.read_bytes()) == []  # the Inovance ESI is structurally clean
     # a fresh process: nothing in memory, and reading the ESI or completing the device is not allowed any more
     fresh_process(monkeypatch)
-    from ecattool import esi, profiles
+    from ecattool import esi
+    from ecattool.profiles import running
 
     def no_parse(*a, **k):
         raise AssertionError("the ESI was parsed (or the device completed) again instead of read from the cache")
 
     monkeypatch.setattr(esi, "load_bytes", no_parse)
     monkeypatch.setattr(esi, "check_structure", no_parse)
-    monkeypatch.setattr(profiles, "complete_generic", no_parse)
+    monkeypatch.setattr(running, "complete_generic", no_parse)
     second = lint_project(ESI_PROJECT)
     assert second.findings == first.findings == []
     assert second.drives[0].device.product_code == first.drives[0].device.product_code
@@ -224,7 +225,7 @@ def test_cached_esi_findings_keep_their_locations(cache_dir, monkeypatch, tmp_pa
     assert second == first and any(f.location.line == 898 for f in second)
 
 
-@pytest.mark.parametrize("kind, check", [("device", lambda o: type(o).__name__ == "Device"),
+@pytest.mark.parametrize("kind, check", [("device", lambda o: type(o).__name__ == "RunningDevice"),
                                          ("check", lambda o: o == [])])
 def test_damaged_cache_entry_is_rebuilt(cache_dir, monkeypatch, kind, check):
     lint_project(ESI_PROJECT)
@@ -238,7 +239,7 @@ def test_damaged_cache_entry_is_rebuilt(cache_dir, monkeypatch, kind, check):
     assert check(pickle.loads(entry.read_bytes())) and len(entry.read_bytes()) == len(good)
 
 
-@pytest.mark.parametrize("kind, check", [("device", lambda o: type(o).__name__ == "Device"),
+@pytest.mark.parametrize("kind, check", [("device", lambda o: type(o).__name__ == "RunningDevice"),
                                          ("check", lambda o: o == [])])
 def test_foreign_pickle_is_not_trusted(cache_dir, monkeypatch, kind, check):
     lint_project(ESI_PROJECT)
@@ -312,10 +313,10 @@ def test_changed_reader_code_is_a_new_entry(cache_dir, monkeypatch, tmp_path):
     # another code digest: the entries written before are not read, new ones are written beside them
     fresh_process(monkeypatch)
     monkeypatch.setattr(cache, "_code", lambda: after)
-    from ecattool import profiles
+    from ecattool.profiles import running
 
     completed = []
-    real = profiles.complete_generic
-    monkeypatch.setattr(profiles, "complete_generic", lambda *a, **k: completed.append(1) or real(*a, **k))
+    real = running.complete_generic
+    monkeypatch.setattr(running, "complete_generic", lambda *a, **k: completed.append(1) or real(*a, **k))
     assert lint_project(ESI_PROJECT).findings == []
     assert completed and len(_entries(cache_dir, "device")) == 2 and len(_entries(cache_dir, "check")) == 2

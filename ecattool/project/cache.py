@@ -29,16 +29,20 @@ import hashlib
 import os
 import pickle
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ecattool import __version__
-from ecattool.esi.model import Device, EsiFile
+from ecattool.esi.model import EsiFile
 from ecattool.fileio import read_bytes, write_atomic
 from ecattool.findings import Finding
 
+if TYPE_CHECKING:
+    from ecattool.profiles.running import RunningDevice
+
 _MEMORY: dict[str, EsiFile] = {}
-_DEVICES: dict[str, Device] = {}
+_DEVICES: dict[str, RunningDevice] = {}
 _CHECKS: dict[str, list[Finding]] = {}
-_PROFILES: dict[tuple[str, str | None, str | None], Device] = {}
+_PROFILES: dict[tuple[str, str | None, str | None], RunningDevice] = {}
 #: path -> ((mtime_ns, size), content key): a file used by many drives is read and hashed once per process
 _DIGESTS: dict[str, tuple[tuple[int, int], str]] = {}
 
@@ -170,21 +174,21 @@ def load_esi_cached(path: str | Path) -> EsiFile:
     return _esi(path)
 
 
-def load_device_cached(path: str | Path, select: str | None, policy: str) -> Device:
-    """The device ``select`` of the ESI at ``path``, completed for use (``profiles.complete_generic``), with a
+def load_device_cached(path: str | Path, select: str | None, policy: str) -> RunningDevice:
+    """The device ``select`` of the ESI at ``path`` as it runs (``profiles.running.as_running``), with a
     memory and disk cache keyed by the ESI content, the selector, the policy and the path. Shared: do not
     modify the returned device."""
-    from ecattool import esi, profiles
+    from ecattool import esi
+    from ecattool.profiles.running import RunningDevice, as_running
 
     content, _ = _content_key(path)
     key = _key(content.encode(), str(select).encode(), policy.encode(), str(path).encode())
     hit = _DEVICES.get(key)
     if hit is not None:
         return hit
-    obj = _disk_get("device", key, Device)
-    if not isinstance(obj, Device):
-        selected = esi.select(_esi(path), select, policy=policy)
-        obj = profiles.complete_generic(selected)
+    obj = _disk_get("device", key, RunningDevice)
+    if not isinstance(obj, RunningDevice):
+        obj = as_running(esi.select(_esi(path), select, policy=policy))
         _disk_put("device", key, obj)
     _DEVICES[key] = obj
     return obj
@@ -209,12 +213,13 @@ def esi_findings_cached(path: str | Path, select: str | None, policy: str) -> li
     return obj
 
 
-def load_profile_cached(name: str, product: str | None, revision: str | int | None) -> Device:
-    """``profiles.load`` once per process for each (profile, product, revision). Shared: do not modify."""
-    from ecattool import profiles
+def load_profile_cached(name: str, product: str | None, revision: str | int | None) -> RunningDevice:
+    """A built-in family's device as it runs (``profiles.running.device_from_profile``) once per process for
+    each (profile, product, revision). Shared: do not modify."""
+    from ecattool.profiles.running import device_from_profile
 
     key = (name, product, None if revision is None else str(revision))
     hit = _PROFILES.get(key)
     if hit is None:
-        hit = _PROFILES[key] = profiles.load(name, product=product, revision=revision)
+        hit = _PROFILES[key] = device_from_profile(name, product=product, revision=revision)
     return hit
