@@ -19,7 +19,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ecattool import esi, profiles
+from ecattool import profiles
 from ecattool.errors import SdoAbort, StateChangeError
 from ecattool.esi.model import Device, Direction
 from ecattool.findings import Severity
@@ -27,10 +27,9 @@ from ecattool import abort as A
 from ecattool.od.model import EcState
 from ecattool.pdo import Mapping, check, layout, program
 from ecattool.pdo.model import RX_RANGE, TX_RANGE
-from ecattool.profiles.generic import complete_generic
+from ecattool.profiles.running import device_from_file
 from ecattool.profiles.rules import FamilyRules
 from ecattool.sim import Drive
-from ecattool.sim.drive import expand_default_modules
 from tests.conftest import corpus_path
 
 AL_OUT, AL_IN = 0x001D, 0x001E
@@ -136,7 +135,7 @@ def target(name: str) -> Target:
     if name.endswith(".xml"):
         selector = {"elmo_Elmo_ECAT_00010420_V11.xml": "2", "beckhoff_EM7xxx.xml": "4",
                     "beckhoff_EL1xxx.xml": "16"}.get(name)
-        dev = complete_generic(expand_default_modules(esi.load_device(corpus_path("esi", name), selector)))
+        dev = device_from_file(corpus_path("esi", name), selector)
     else:
         dev = profiles.load(name)
     rules = profiles.rules_for(dev)

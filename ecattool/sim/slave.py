@@ -359,13 +359,8 @@ class VirtualSlave(EscApplication):
 
 
 def drive_for_device(device: Device) -> Drive:
-    """The simulated drive of ``device`` (a built-in profile device, or an ESI device, which gets its default
-    modules plugged in and the communication objects its ESI leaves out, as :meth:`Drive.from_esi` does)."""
-    from ecattool.profiles import complete_generic, family_of
-    from ecattool.sim.drive import expand_default_modules
-
-    if family_of(device) == "generic":
-        device = complete_generic(expand_default_modules(device))
+    """The simulated drive of ``device`` as it runs (:meth:`Drive.from_device`: a built-in profile device as it
+    is, an ESI device with its default modules plugged in and the communication objects its ESI leaves out)."""
     return Drive.from_device(device)
 
 

@@ -10,7 +10,6 @@ module, combined in :class:`Drive` (the in-process API; the virtual slaves on th
 * :mod:`.injection` — faults, trips, alarms, lost communication, limit-switch inputs;
 * :mod:`.family` and :mod:`.behaviour` — where the families differ (object handlers; choices as data);
 * :mod:`.memory` — EEPROM objects, reset, power loss, FoE;
-* :mod:`.modules` — modular devices with their default modules plugged;
 * :mod:`.facade` — :class:`Drive`, construction and power-on.
 """
 
@@ -27,10 +26,9 @@ from ecattool.sim.drive.esm import (
 )
 from ecattool.sim.drive.facade import Drive
 from ecattool.sim.drive.memory import FoeError
-from ecattool.sim.drive.modules import expand_default_modules
 
 __all__ = [
     "AL_BOOTSTRAP_NOT_SUPPORTED", "AL_DC_INVALID_CYCLE", "AL_DC_INVALID_SYNC", "AL_INVALID_INPUT_CONFIG",
     "AL_INVALID_OUTPUT_CONFIG", "AL_INVALID_STATE_CHANGE", "BEHAVIOURS", "Behaviour", "CT_TRIP_CODES", "Drive",
-    "Emergency", "Event", "FoeError", "TRANSITIONS", "expand_default_modules",
+    "Emergency", "Event", "FoeError", "TRANSITIONS",
 ]

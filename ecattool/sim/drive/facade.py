@@ -22,7 +22,6 @@ from ecattool.sim.drive.esm import StateMachine
 from ecattool.sim.drive.family import FamilyQuirks
 from ecattool.sim.drive.injection import Injection
 from ecattool.sim.drive.memory import Memory
-from ecattool.sim.drive.modules import expand_default_modules
 from ecattool.sim.drive.motion import Motion
 from ecattool.sim.drive.process_data import ProcessData
 from ecattool.sim.drive.sdo import SdoServer
@@ -36,14 +35,6 @@ def _rules_for(device: Device) -> FamilyRules:
     except ImportError:
         return FamilyRules("generic", vendor_id=device.vendor_id)
     return rules_for(device)
-
-
-def _complete(device: Device) -> Device:
-    try:
-        from ecattool.profiles import complete_generic
-    except ImportError:
-        return device
-    return complete_generic(device)
 
 
 class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirks, Memory):
@@ -80,26 +71,27 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
     # ------------------------------------------------------------------------------------------
     @classmethod
     def from_device(cls, device: Device, rules: FamilyRules | None = None, **kw: Any) -> "Drive":
-        """A drive of ``device``. ESI devices are completed first (synthesised 1018h, mapping and assignment
-        objects, default modules), exactly as :meth:`from_esi` does; built-in profile devices are complete."""
-        if not device.source.startswith("profile:"):
-            device = _complete(expand_default_modules(device))
-        return cls(device, rules, **kw)
+        """A drive of ``device`` as it runs (:func:`ecattool.profiles.running.as_running`: an ESI device gets its
+        default modules and the communication objects its ESI leaves out, exactly as :meth:`from_esi` does;
+        built-in profile devices, and devices the resolver already gave, are used as they are)."""
+        from ecattool.profiles.running import as_running
+
+        return cls(as_running(device), rules, **kw)
 
     @classmethod
     def from_profile(cls, name: str, product: str | None = None, revision: str | int | None = None,
                      **kw: Any) -> "Drive":
         from ecattool import profiles
+        from ecattool.profiles.running import device_from_profile
 
-        device = profiles.load(name, product=product, revision=revision)
+        device = device_from_profile(name, product=product, revision=revision)
         return cls(device, profiles.rules_for(device), **kw)
 
     @classmethod
     def from_esi(cls, path: str | Path, selector: str | None = None, policy: str = "exact", **kw: Any) -> "Drive":
-        from ecattool import esi
+        from ecattool.profiles.running import device_from_file
 
-        device = esi.load_device(path, selector, policy)
-        return cls(_complete(expand_default_modules(device)), **kw)
+        return cls(device_from_file(path, selector, policy=policy), **kw)
 
     # ------------------------------------------------------------------------------------------
     # power on / reset
