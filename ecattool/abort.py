@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from enum import IntEnum
+
 OBJECT_DOES_NOT_EXIST = 0x06020000
 SUBINDEX_DOES_NOT_EXIST = 0x06090011
 READ_ONLY = 0x06010002
@@ -62,47 +64,100 @@ ABORT_TEXTS: dict[int, str] = {
     0x08000024: "no data available",
 }
 
+
+class AlStatus(IntEnum):
+    """EtherCAT AL status codes (register 0x0134, ETG.1000.6 Table 11): the one definition; the standard text of
+    each is :attr:`text` (:data:`AL_STATUS_TEXTS`)."""
+
+    NO_ERROR = 0x0000
+    UNSPECIFIED_ERROR = 0x0001
+    NO_MEMORY = 0x0002
+    INVALID_STATE_CHANGE = 0x0011
+    UNKNOWN_STATE = 0x0012
+    BOOTSTRAP_NOT_SUPPORTED = 0x0013
+    NO_VALID_FIRMWARE = 0x0014
+    INVALID_MAILBOX_BOOT = 0x0015
+    INVALID_MAILBOX = 0x0016
+    INVALID_SM = 0x0017
+    NO_VALID_INPUTS = 0x0018
+    NO_VALID_OUTPUTS = 0x0019
+    SYNC_ERROR = 0x001A
+    SM_WATCHDOG = 0x001B
+    INVALID_SM_TYPES = 0x001C
+    INVALID_OUTPUT_CONFIG = 0x001D
+    INVALID_INPUT_CONFIG = 0x001E
+    INVALID_WATCHDOG_CONFIG = 0x001F
+    NEEDS_COLD_START = 0x0020
+    NEEDS_INIT = 0x0021
+    NEEDS_PREOP = 0x0022
+    NEEDS_SAFEOP = 0x0023
+    INVALID_INPUT_MAPPING = 0x0024
+    INVALID_OUTPUT_MAPPING = 0x0025
+    INCONSISTENT_SETTINGS = 0x0026
+    FREERUN_NOT_SUPPORTED = 0x0027
+    SYNC_NOT_SUPPORTED = 0x0028
+    FREERUN_NEEDS_3_BUFFER = 0x0029
+    BACKGROUND_WATCHDOG = 0x002A
+    NO_VALID_IO = 0x002B
+    FATAL_SYNC_ERROR = 0x002C
+    NO_SYNC_ERROR = 0x002D
+    DC_INVALID_SYNC = 0x0030
+    DC_INVALID_LATCH = 0x0031
+    PLL_ERROR = 0x0032
+    DC_SYNC_IO_ERROR = 0x0033
+    DC_SYNC_TIMEOUT = 0x0034
+    DC_INVALID_CYCLE = 0x0035
+    DC_SYNC0_CYCLE = 0x0036
+    DC_SYNC1_CYCLE = 0x0037
+
+    @property
+    def text(self) -> str:
+        """The standard text (``invalid requested state change``)."""
+        return AL_STATUS_TEXTS[self]
+
+
+#: the standard text of each AL status code
 AL_STATUS_TEXTS: dict[int, str] = {
-    0x0000: "no error",
-    0x0001: "unspecified error",
-    0x0002: "no memory",
-    0x0011: "invalid requested state change",
-    0x0012: "unknown requested state",
-    0x0013: "bootstrap not supported",
-    0x0014: "no valid firmware",
-    0x0015: "invalid mailbox configuration (bootstrap)",
-    0x0016: "invalid mailbox configuration",
-    0x0017: "invalid sync manager configuration",
-    0x0018: "no valid inputs available",
-    0x0019: "no valid outputs",
-    0x001A: "synchronization error",
-    0x001B: "sync manager watchdog",
-    0x001C: "invalid sync manager types",
-    0x001D: "invalid output configuration",
-    0x001E: "invalid input configuration",
-    0x001F: "invalid watchdog configuration",
-    0x0020: "slave needs cold start",
-    0x0021: "slave needs INIT",
-    0x0022: "slave needs PREOP",
-    0x0023: "slave needs SAFEOP",
-    0x0024: "invalid input mapping",
-    0x0025: "invalid output mapping",
-    0x0026: "inconsistent settings",
-    0x0027: "freerun not supported",
-    0x0028: "synchronization not supported",
-    0x0029: "freerun needs 3-buffer mode",
-    0x002A: "background watchdog",
-    0x002B: "no valid inputs and outputs",
-    0x002C: "fatal sync error",
-    0x002D: "no sync error",
-    0x0030: "invalid DC SYNC configuration",
-    0x0031: "invalid DC latch configuration",
-    0x0032: "PLL error",
-    0x0033: "DC sync IO error",
-    0x0034: "DC sync timeout error",
-    0x0035: "DC invalid sync cycle time",
-    0x0036: "DC sync0 cycle time",
-    0x0037: "DC sync1 cycle time",
+    AlStatus.NO_ERROR: "no error",
+    AlStatus.UNSPECIFIED_ERROR: "unspecified error",
+    AlStatus.NO_MEMORY: "no memory",
+    AlStatus.INVALID_STATE_CHANGE: "invalid requested state change",
+    AlStatus.UNKNOWN_STATE: "unknown requested state",
+    AlStatus.BOOTSTRAP_NOT_SUPPORTED: "bootstrap not supported",
+    AlStatus.NO_VALID_FIRMWARE: "no valid firmware",
+    AlStatus.INVALID_MAILBOX_BOOT: "invalid mailbox configuration (bootstrap)",
+    AlStatus.INVALID_MAILBOX: "invalid mailbox configuration",
+    AlStatus.INVALID_SM: "invalid sync manager configuration",
+    AlStatus.NO_VALID_INPUTS: "no valid inputs available",
+    AlStatus.NO_VALID_OUTPUTS: "no valid outputs",
+    AlStatus.SYNC_ERROR: "synchronization error",
+    AlStatus.SM_WATCHDOG: "sync manager watchdog",
+    AlStatus.INVALID_SM_TYPES: "invalid sync manager types",
+    AlStatus.INVALID_OUTPUT_CONFIG: "invalid output configuration",
+    AlStatus.INVALID_INPUT_CONFIG: "invalid input configuration",
+    AlStatus.INVALID_WATCHDOG_CONFIG: "invalid watchdog configuration",
+    AlStatus.NEEDS_COLD_START: "slave needs cold start",
+    AlStatus.NEEDS_INIT: "slave needs INIT",
+    AlStatus.NEEDS_PREOP: "slave needs PREOP",
+    AlStatus.NEEDS_SAFEOP: "slave needs SAFEOP",
+    AlStatus.INVALID_INPUT_MAPPING: "invalid input mapping",
+    AlStatus.INVALID_OUTPUT_MAPPING: "invalid output mapping",
+    AlStatus.INCONSISTENT_SETTINGS: "inconsistent settings",
+    AlStatus.FREERUN_NOT_SUPPORTED: "freerun not supported",
+    AlStatus.SYNC_NOT_SUPPORTED: "synchronization not supported",
+    AlStatus.FREERUN_NEEDS_3_BUFFER: "freerun needs 3-buffer mode",
+    AlStatus.BACKGROUND_WATCHDOG: "background watchdog",
+    AlStatus.NO_VALID_IO: "no valid inputs and outputs",
+    AlStatus.FATAL_SYNC_ERROR: "fatal sync error",
+    AlStatus.NO_SYNC_ERROR: "no sync error",
+    AlStatus.DC_INVALID_SYNC: "invalid DC SYNC configuration",
+    AlStatus.DC_INVALID_LATCH: "invalid DC latch configuration",
+    AlStatus.PLL_ERROR: "PLL error",
+    AlStatus.DC_SYNC_IO_ERROR: "DC sync IO error",
+    AlStatus.DC_SYNC_TIMEOUT: "DC sync timeout error",
+    AlStatus.DC_INVALID_CYCLE: "DC invalid sync cycle time",
+    AlStatus.DC_SYNC0_CYCLE: "DC sync0 cycle time",
+    AlStatus.DC_SYNC1_CYCLE: "DC sync1 cycle time",
 }
 
 
