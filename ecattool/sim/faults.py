@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from ecattool.abort import AlStatus
 from ecattool.od.model import EcState
 
 
@@ -25,7 +26,7 @@ class Faults:
         """The ``nth`` SDO request from now gets no reply (SdoTimeout); ``execute`` = the drive still did it."""
         self._sdo[self.sdo_count + max(1, nth)] = ("drop", int(execute))
 
-    def refuse_state(self, state: EcState, al_status: int = 0x0011, times: int = 1) -> None:
+    def refuse_state(self, state: EcState, al_status: int = AlStatus.INVALID_STATE_CHANGE, times: int = 1) -> None:
         """The next ``times`` requests for ``state`` are refused with ``al_status``."""
         self._states.setdefault(state, []).extend([al_status] * times)
 

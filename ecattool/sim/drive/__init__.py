@@ -5,7 +5,7 @@ module, combined in :class:`Drive` (the in-process API; the virtual slaves on th
 * :mod:`.sdo` — the SDO server side of the object dictionary (access, length, range, complete access);
 * :mod:`.pdo` — PDO mapping and assignment objects and their rules;
 * :mod:`.process_data` — the SAFE-OP check that yields the process image, the cyclic exchange;
-* :mod:`.esm` — the EtherCAT state machine and its AL status codes, DC settings;
+* :mod:`.esm` — the EtherCAT state machine, the AL status codes of its refusals, DC settings;
 * :mod:`.motion` and :mod:`.halt_homing` — CiA-402 device control, the motion model, halt and homing;
 * :mod:`.injection` — faults, trips, alarms, lost communication, limit-switch inputs;
 * :mod:`.family` and :mod:`.behaviour` — where the families differ (object handlers; choices as data);
@@ -15,20 +15,10 @@ module, combined in :class:`Drive` (the in-process API; the virtual slaves on th
 
 from ecattool.sim.drive.behaviour import BEHAVIOURS, CT_TRIP_CODES, Behaviour
 from ecattool.sim.drive.core import Emergency, Event
-from ecattool.sim.drive.esm import (
-    AL_BOOTSTRAP_NOT_SUPPORTED,
-    AL_DC_INVALID_CYCLE,
-    AL_DC_INVALID_SYNC,
-    AL_INVALID_INPUT_CONFIG,
-    AL_INVALID_OUTPUT_CONFIG,
-    AL_INVALID_STATE_CHANGE,
-    TRANSITIONS,
-)
+from ecattool.sim.drive.esm import TRANSITIONS
 from ecattool.sim.drive.facade import Drive
 from ecattool.sim.drive.memory import FoeError
 
 __all__ = [
-    "AL_BOOTSTRAP_NOT_SUPPORTED", "AL_DC_INVALID_CYCLE", "AL_DC_INVALID_SYNC", "AL_INVALID_INPUT_CONFIG",
-    "AL_INVALID_OUTPUT_CONFIG", "AL_INVALID_STATE_CHANGE", "BEHAVIOURS", "Behaviour", "CT_TRIP_CODES", "Drive",
-    "Emergency", "Event", "FoeError", "TRANSITIONS",
+    "BEHAVIOURS", "Behaviour", "CT_TRIP_CODES", "Drive", "Emergency", "Event", "FoeError", "TRANSITIONS",
 ]

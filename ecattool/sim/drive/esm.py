@@ -3,6 +3,7 @@ settings checked on the way to OP."""
 
 from __future__ import annotations
 
+from ecattool.abort import AlStatus
 from ecattool.od.model import EcState
 from ecattool.sim.drive.core import RX, TX, DriveCore
 
@@ -14,13 +15,6 @@ TRANSITIONS: dict[EcState, frozenset[EcState]] = {
     EcState.OP: frozenset({EcState.INIT, EcState.PREOP, EcState.SAFEOP}),
     EcState.BOOT: frozenset({EcState.INIT}),
 }
-
-AL_INVALID_STATE_CHANGE = 0x0011
-AL_BOOTSTRAP_NOT_SUPPORTED = 0x0013
-AL_INVALID_OUTPUT_CONFIG = 0x001D
-AL_INVALID_INPUT_CONFIG = 0x001E
-AL_DC_INVALID_SYNC = 0x0030
-AL_DC_INVALID_CYCLE = 0x0035
 
 
 class StateMachine(DriveCore):
@@ -38,9 +32,9 @@ class StateMachine(DriveCore):
         if state is current:
             return
         if state not in TRANSITIONS[current]:
-            self._refuse(state, AL_INVALID_STATE_CHANGE, "not an allowed transition")
+            self._refuse(state, AlStatus.INVALID_STATE_CHANGE, "not an allowed transition")
         if state is EcState.BOOT and not (self.device.mailbox and "FoE" in self.device.mailbox.protocols):
-            self._refuse(state, AL_BOOTSTRAP_NOT_SUPPORTED, "the device has no FoE bootstrap")
+            self._refuse(state, AlStatus.BOOTSTRAP_NOT_SUPPORTED, "the device has no FoE bootstrap")
         if current is EcState.PREOP and state is EcState.SAFEOP:
             self.layout = {RX: self._check_sm(RX), TX: self._check_sm(TX)}
         if state is EcState.OP:
@@ -61,9 +55,12 @@ class StateMachine(DriveCore):
 
     def _check_dc(self) -> None:
         active, cycle = getattr(self, "dc", (0, 0))
-        if self.family == "controltechniques" and active:
-            # 8.1.1: SYNC0 = n x 250 us, n = 1..60
-            if cycle <= 0 or cycle % 250_000 or not 1 <= cycle // 250_000 <= 60:
-                self._refuse(EcState.OP, AL_DC_INVALID_CYCLE, f"SYNC0 cycle {cycle} ns is not n x 250 us (n = 1..60)")
+        step, most = self.rules.dc_sync0_step_ns, self.rules.dc_sync0_max_steps
+        if step and active:
+            # the family's SYNC0 rule as data (Control Techniques 8.1.1: SYNC0 = n x 250 us, n = 1..60)
+            if cycle <= 0 or cycle % step or cycle // step < 1 or (most is not None and cycle // step > most):
+                span = f" (n = 1..{most})" if most is not None else ""
+                self._refuse(EcState.OP, AlStatus.DC_INVALID_CYCLE,
+                             f"SYNC0 cycle {cycle} ns is not n x {step / 1000:g} us{span}")
         if not active and self.has_cia402 and self.mode() in self.rules.dc_required_modes:
-            self._refuse(EcState.OP, AL_DC_INVALID_SYNC, f"mode {self.mode()} needs distributed clocks")
+            self._refuse(EcState.OP, AlStatus.DC_INVALID_SYNC, f"mode {self.mode()} needs distributed clocks")

@@ -3,12 +3,12 @@ exchange of the output and input images."""
 
 from __future__ import annotations
 
+from ecattool.abort import AlStatus
 from ecattool.errors import SdoAbort, TargetError
 from ecattool.esi.model import Direction
 from ecattool.od.model import EcState
 from ecattool.sim import eeprom as ee
 from ecattool.sim.drive.core import RX, TX, Layout
-from ecattool.sim.drive.esm import AL_INVALID_INPUT_CONFIG, AL_INVALID_OUTPUT_CONFIG
 from ecattool.sim.drive.pdo import PdoConfig
 
 #: looked up once: every cycle asks (an enum member's lookup costs as much as the comparison's rest)
@@ -25,7 +25,7 @@ class ProcessData(PdoConfig):
 
     def _check_sm(self, d: Direction) -> Layout:
         """The SAFE-OP check of one direction's assigned PDOs; returns the process image layout."""
-        code = AL_INVALID_OUTPUT_CONFIG if d is RX else AL_INVALID_INPUT_CONFIG
+        code = AlStatus.INVALID_OUTPUT_CONFIG if d is RX else AlStatus.INVALID_INPUT_CONFIG
         layout = Layout()
         assigned = self._assigned(d)
         limit = self.rules.max_assigned_rx if d is RX else self.rules.max_assigned_tx
