@@ -23,25 +23,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from ecattool.abort import AlStatus
 from ecattool.errors import StateChangeError, TargetError
 from ecattool.esi.model import Device
 from ecattool.od.model import EcState
 from ecattool.sim.drive import Drive
-from ecattool.sim.drive.esm import AL_INVALID_INPUT_CONFIG, AL_INVALID_OUTPUT_CONFIG
 from ecattool.sim.esc import Clock, Esc, EscApplication
 from ecattool.sim.esc import registers as R
 from ecattool.sim.esc.core import SM_DIR_READ, SM_DIR_WRITE, SM_MODE_BUFFERED, SM_MODE_MAILBOX
 from ecattool.sim.mailbox import MailboxServer
 
-AL_UNKNOWN_STATE = 0x0012
-AL_INVALID_STATE_CHANGE = 0x0011
-AL_INVALID_MAILBOX_BOOT = 0x0015
-AL_INVALID_MAILBOX = 0x0016
-AL_INVALID_SM = 0x0017
-# one name per AL status code: the drive application's (sim.drive.esm)
-AL_INVALID_OUTPUTS = AL_INVALID_OUTPUT_CONFIG
-AL_INVALID_INPUTS = AL_INVALID_INPUT_CONFIG
-AL_SM_WATCHDOG = 0x001B
 
 _BY_CODE = {s.code: s for s in EcState}
 #: looked up once (every frame asks, for every slave)
@@ -141,7 +132,7 @@ class VirtualSlave(EscApplication):
         requested = _BY_CODE.get(control & 0x0F)
         current = self.drive.state()
         if requested is None:
-            self._refuse(f"0x{control & 0x0F:X}", AL_UNKNOWN_STATE, "unknown requested state")
+            self._refuse(f"0x{control & 0x0F:X}", AlStatus.UNKNOWN_STATE, "unknown requested state")
             return
         if requested is current:
             self._sync_state()  # acknowledged (or nothing to do)
@@ -175,7 +166,7 @@ class VirtualSlave(EscApplication):
 
     def _check_config(self, current: EcState, requested: EcState) -> None:
         if current is EcState.INIT and requested in (EcState.PREOP, EcState.BOOT):
-            code = AL_INVALID_MAILBOX_BOOT if requested is EcState.BOOT else AL_INVALID_MAILBOX
+            code = AlStatus.INVALID_MAILBOX_BOOT if requested is EcState.BOOT else AlStatus.INVALID_MAILBOX
             out, inp = self.esc.sm(MBX_OUT), self.esc.sm(MBX_IN)
             for n, sm, direction in ((MBX_OUT, out, SM_DIR_WRITE), (MBX_IN, inp, SM_DIR_READ)):
                 if not sm.enabled or sm.control & 0x3 != SM_MODE_MAILBOX or (sm.control >> 2) & 3 != direction:
@@ -190,8 +181,8 @@ class VirtualSlave(EscApplication):
         gives (the drive has accepted the assignment itself)."""
         out_size, in_size = self.drive.process_image_sizes()
         fmmus = self.esc.fmmus()
-        for n, size, direction, code, what in ((PD_OUT, out_size, SM_DIR_WRITE, AL_INVALID_OUTPUTS, "output"),
-                                               (PD_IN, in_size, SM_DIR_READ, AL_INVALID_INPUTS, "input")):
+        for n, size, direction, code, what in ((PD_OUT, out_size, SM_DIR_WRITE, AlStatus.INVALID_OUTPUT_CONFIG, "output"),
+                                               (PD_IN, in_size, SM_DIR_READ, AlStatus.INVALID_INPUT_CONFIG, "input")):
             sm = self.esc.sm(n)
             if size == 0:
                 if sm.enabled and sm.length:
@@ -350,7 +341,7 @@ class VirtualSlave(EscApplication):
     def pd_watchdog_expired(self, esc: Esc) -> None:
         if self.drive.state() is EcState.OP:
             self.drive.lose_communication()
-            self._sync_state(error=True, code=AL_SM_WATCHDOG)
+            self._sync_state(error=True, code=AlStatus.SM_WATCHDOG)
 
     def frame_done(self, esc: Esc) -> None:
         if _CODES[self.drive.state()] != esc.al_state:
