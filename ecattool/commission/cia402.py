@@ -5,35 +5,21 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ecattool.errors import TargetError
-
-SHUTDOWN = 0x0006
-SWITCH_ON = 0x0007
-ENABLE_OPERATION = 0x000F
-DISABLE_VOLTAGE = 0x0000
-FAULT_RESET = 0x0080
-NEW_SETPOINT = 0x0010  # PP: bit 4
+# the commands, read by the commissioning run from here too
+from ecattool.od.cia402 import DISABLE_VOLTAGE as DISABLE_VOLTAGE
+from ecattool.od.cia402 import ENABLE_OPERATION as ENABLE_OPERATION
+from ecattool.od.cia402 import FAULT_RESET as FAULT_RESET
+from ecattool.od.cia402 import NEW_SETPOINT as NEW_SETPOINT
+from ecattool.od.cia402 import SHUTDOWN as SHUTDOWN
+from ecattool.od.cia402 import SWITCH_ON as SWITCH_ON
+from ecattool.od.cia402 import state_of as _state
 
 
 def state_of(statusword: int) -> str:
-    """The CiA-402 state named by a statusword (bits 0-3, 5, 6)."""
-    s = statusword
-    if s & 0x4F == 0x00:
-        return "not ready to switch on"
-    if s & 0x4F == 0x40:
-        return "switch on disabled"
-    if s & 0x6F == 0x21:
-        return "ready to switch on"
-    if s & 0x6F == 0x23:
-        return "switched on"
-    if s & 0x6F == 0x27:
-        return "operation enabled"
-    if s & 0x6F == 0x07:
-        return "quick stop active"
-    if s & 0x4F == 0x0F:
-        return "fault reaction active"
-    if s & 0x4F == 0x08:
-        return "fault"
-    return f"unknown (0x{s:04X})"
+    """The CiA-402 state a statusword shows, as the manuals write it (``switch on disabled``), or
+    ``unknown (0x….)`` (:func:`ecattool.od.cia402.state_of`)."""
+    state = _state(statusword)
+    return state.text if state is not None else f"unknown (0x{statusword:04X})"
 
 
 def enable(read_sw: Callable[[], int], write_cw: Callable[[int], None], cycle: Callable[[], None], max_cycles: int = 200) -> list[str]:
