@@ -28,6 +28,11 @@ from collections.abc import Callable
 from enum import Enum
 from fractions import Fraction
 
+from ecattool.od.cia402 import CMD_ENABLE_OPERATION, CMD_QUICK_STOP, CMD_SHUTDOWN, CMD_SWITCH_ON, CW_ENABLE_VOLTAGE
+from ecattool.od.cia402 import HALT as HALT  # the definitions, read by the drive application from here too
+from ecattool.od.cia402 import STATUS_BITS
+from ecattool.od.cia402 import State as State
+from ecattool.od.cia402 import decode_statusword as decode_statusword
 from ecattool.sim.ramp import ProfileMove
 from ecattool.sim.units import reduced
 
@@ -53,35 +58,10 @@ class Profile:
         self.torque_limited = torque_limited
 
 
-class State(str, Enum):
-    NOT_READY = "NOT_READY_TO_SWITCH_ON"
-    SWITCH_ON_DISABLED = "SWITCH_ON_DISABLED"
-    READY = "READY_TO_SWITCH_ON"
-    SWITCHED_ON = "SWITCHED_ON"
-    OPERATION_ENABLED = "OPERATION_ENABLED"
-    QUICK_STOP = "QUICK_STOP_ACTIVE"
-    FAULT_REACTION = "FAULT_REACTION_ACTIVE"
-    FAULT = "FAULT"
-
-
-#: statusword low bits per state (bits 0,1,2,3,5,6)
-STATUS_BITS = {
-    State.NOT_READY: 0x0000,
-    State.SWITCH_ON_DISABLED: 0x0040,
-    State.READY: 0x0021,
-    State.SWITCHED_ON: 0x0023,
-    State.OPERATION_ENABLED: 0x0027,
-    State.QUICK_STOP: 0x0007,
-    State.FAULT_REACTION: 0x000F,
-    State.FAULT: 0x0008,
-}
-
 PP, PV, HOMING, CSP, CSV = 1, 3, 6, 8, 9
 #: looked up once (the statusword is made every cycle)
 _NOT_READY, _DISABLED, _ENABLED = State.NOT_READY, State.SWITCH_ON_DISABLED, State.OPERATION_ENABLED
 _FAULT_REACTION, _FAULT = State.FAULT_REACTION, State.FAULT
-
-HALT = 0x0100  # controlword bit 8
 
 
 class Homing(str, Enum):
@@ -91,17 +71,6 @@ class Homing(str, Enum):
     IN_PROGRESS = "in progress"  # 0 0 0 (0 0 1 while halted at standstill)
     ATTAINED = "attained"  # 0 1 1
     ERROR = "error"  # 1 0 0 moving / 1 0 1 at standstill
-
-
-def decode_statusword(sw: int) -> State:
-    """The state a statusword shows (CiA-402 masks 0x004F / 0x006F)."""
-    for state in (State.READY, State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP):
-        if sw & 0x006F == STATUS_BITS[state]:
-            return state
-    for state in (State.NOT_READY, State.SWITCH_ON_DISABLED, State.FAULT_REACTION, State.FAULT):
-        if sw & 0x004F == STATUS_BITS[state]:
-            return state
-    return State.NOT_READY
 
 
 class Cia402:
@@ -290,11 +259,11 @@ class Cia402:
             return moves
         if s is State.FAULT_REACTION or cw & 0x80:
             return moves
-        shutdown = cw & 0x07 == 0x06
-        switch_on = cw & 0x0F == 0x07
-        enable = cw & 0x0F == 0x0F
-        disable_voltage = not cw & 0x02
-        quick_stop = cw & 0x06 == 0x02
+        shutdown = cw & CMD_SHUTDOWN[0] == CMD_SHUTDOWN[1]
+        switch_on = cw & CMD_SWITCH_ON[0] == CMD_SWITCH_ON[1]
+        enable = cw & CMD_ENABLE_OPERATION[0] == CMD_ENABLE_OPERATION[1]
+        disable_voltage = not cw & CW_ENABLE_VOLTAGE
+        quick_stop = cw & CMD_QUICK_STOP[0] == CMD_QUICK_STOP[1]
         if self.supply_bit_always and not self.voltage:
             # Remark 2: "cannot transition to states Switched On and Operation enabled without this bit"
             switch_on = enable = False
