@@ -112,3 +112,8 @@ class FamilyRules:
             return True
         step = self.ip_period_step_ns
         return ns in self.ip_periods_ns or bool(step and ns > 0 and ns % step == 0)
+
+
+#: the rules of a device whose rules are not known (a slave whose device did not resolve): every field at its
+#: "no family rule" default, so ``(rules or NO_RULES).field`` reads a typed field instead of ``getattr``
+NO_RULES = FamilyRules("generic")
