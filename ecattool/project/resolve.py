@@ -18,6 +18,7 @@ from ecattool.od.numbers import parse_address, parse_int
 from ecattool.od.types import Kind
 from ecattool.project.loader import LoadedProject
 from ecattool.project.model import Drive, Parameter
+from ecattool.profiles.rules import NO_RULES
 from ecattool.startup.model import StartupCommand, StartupList
 
 if TYPE_CHECKING:
@@ -262,7 +263,8 @@ def encode_parameter(device: Device, p: Parameter, location: Location, value_loc
     entry = obj.entry(sub)
     if entry is None:
         return err("PRJ011", f"0x{index:04X} ({obj.name}) has no sub-index {sub}")
-    if index in getattr(rules, "pdo_only_indices", ()):
+    known = rules or NO_RULES
+    if index in known.pdo_only_indices:
         return err("PRJ012", f"0x{index:04X}:{sub:02X} ({entry.name}) can only be accessed cyclically on this drive "
                              "(it refuses SDO access with 0601 0000h); map it in an RxPDO instead")
     state = TRANSITION_STATE.get(p.transition, EcState.PREOP)
@@ -291,11 +293,11 @@ def encode_parameter(device: Device, p: Parameter, location: Location, value_loc
         if entry.values is not None and value not in entry.values and (index, sub) != (0x6060, 0):
             # a printed value list (decision Profiles-2); modes of operation are PRJ017's
             return err("PRJ014", f"{value} is not one of the values {sorted(entry.values)} of 0x{index:04X}:{sub:02X} ({entry.name})", value_location)
-        modes = tuple(getattr(rules, "supported_modes", ()) or ())
+        modes = known.supported_modes
         if (index, sub) == (0x6060, 0) and modes and isinstance(value, int) and value not in modes and value != 0:
             # HDT and Control Techniques abort an unsupported mode (0609 0030h); Technosoft accepts it and
             # answers with emergency FF04h (manual §4.2.3)
-            lenient = getattr(rules, "family", "") == "technosoft-ipos"
+            lenient = known.family == "technosoft-ipos"
             out.append(Finding("PRJ017", Severity.WARNING if lenient else Severity.ERROR,
                                f"mode {value} is not supported by {device.type_name} (supported: "
                                + ", ".join(str(m) for m in modes) + ")"

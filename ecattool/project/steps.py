@@ -11,6 +11,7 @@ from typing import Any
 from ecattool.errors import EcatToolError, Location
 from ecattool.esi.model import Device, Direction
 from ecattool.findings import Finding, Severity
+from ecattool.profiles.rules import NO_RULES
 from ecattool.project.loader import LoadedProject
 from ecattool.project.resolve import ResolvedDrive
 from ecattool.startup.model import StartupCommand
@@ -144,7 +145,7 @@ def move_mode(rd: ResolvedDrive) -> str | None:
     move = rd.drive.move
     if move is None:
         return None
-    modes = tuple(getattr(rd.rules, "supported_modes", ()) or ())
+    modes = (rd.rules or NO_RULES).supported_modes
     if move.mode == "pp" and modes and 1 not in modes and 8 in modes:
         return "csp"
     return move.mode
@@ -178,7 +179,7 @@ def check_move(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
                            "(leave out move:)", loc)
         return
     code = MOVE_MODE_CODES[mode]
-    modes = tuple(getattr(rd.rules, "supported_modes", ()) or ())
+    modes = (rd.rules or NO_RULES).supported_modes
     if modes and code not in modes:
         rd.error("PRJ017", f"the {mode} move needs mode {code}, which {rd.device.type_name} does not support "
                            f"(supported: {', '.join(str(m) for m in modes)}); leave out move:", loc)
@@ -359,7 +360,7 @@ def check_factor_defaults(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     startup list writes): the drive cannot convert positions in user units. An error where the drive moves in
     commissioning, a warning otherwise; at the ESI's line (or the write's)."""
     assert rd.device is not None
-    if getattr(rd.rules, "family", "generic") not in ("generic", "controltechniques"):
+    if (rd.rules or NO_RULES).family not in ("generic", "controltechniques"):
         return  # Technosoft and HDT scale through 6093h (from their setup or their own factors)
     found: dict[tuple[int, int], Any] = {}
 
@@ -439,16 +440,16 @@ def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
             rd.error("PRJ040", f"DC OpMode {dc.opmode!r} is not in the device's ESI (has: {', '.join(names) or 'none'})",
                      lp.drive_location(i, "dc", "opmode"))
             return
-    rules = rd.rules
+    rules = rd.rules or NO_RULES
     active = rd.dc is not None and rd.dc.active
-    needs = tuple(getattr(rules, "dc_required_modes", ()) or ())
+    needs = rules.dc_required_modes
     if not active:
         for mode, loc in _modes_run(lp, i, rd):
             if mode in needs:
                 rd.error("PRJ041", f"mode {mode} needs distributed clocks on {rd.device.type_name} (the drive stays in "
                                    "SAFE-OP without them); add dc: {opmode: DC, cycle_ns: 1000000}", loc)
                 break
-            supported = tuple(getattr(rules, "supported_modes", ()) or ())
+            supported = rules.supported_modes
             if mode == 8 and (not supported or 8 in supported):  # csp: set-points taken on SYNC0 each cycle
                 names = [m.name for m in rd.device.dc_opmodes if m.assign_activate]
                 hint = (f"dc: {{opmode: {names[0]}, cycle_ns: 1000000}} (the ESI's DC modes: {', '.join(names)})"
@@ -458,8 +459,7 @@ def check_dc(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
                                      f"SAFE-OP where it needs SYNC0); add {hint}", loc)
                 break
         return
-    step = getattr(rules, "dc_sync0_step_ns", None)
-    most = getattr(rules, "dc_sync0_max_steps", None)
+    step, most = rules.dc_sync0_step_ns, rules.dc_sync0_max_steps
     assert dc is not None and rd.dc is not None
     if step and most:
         cycle = rd.dc.cycle_ns or 0
