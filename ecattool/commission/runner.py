@@ -631,7 +631,7 @@ def _drive_error(slave: SlaveTarget, rd: ResolvedDrive) -> str:
         return ""
     if not code:
         return ""
-    return f"; the drive reports error 603Fh = 0x{code:04X} ({error_text(code, getattr(rd.rules, 'family', None))})"
+    return f"; the drive reports error 603Fh = 0x{code:04X} ({error_text(code, rd.rules.family if rd.rules is not None else None)})"
 
 
 def open_target(spec: str, drives: list[Slave]) -> tuple[Target, str]:
