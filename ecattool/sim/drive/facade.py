@@ -56,8 +56,8 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self._seq = 0
         self._pdo_known = self._known_pdo_entries()
         self._fixed = {p.index for p in (*device.rx_pdos, *device.tx_pdos) if p.fixed}
-        self._pdo_only_set = frozenset(getattr(self.rules, "pdo_only_indices", ()))
-        self._read_only_set = frozenset(getattr(self.rules, "read_only_indices", ()))
+        self._pdo_only_set = self.rules.pdo_only_indices
+        self._read_only_set = self.rules.read_only_indices
         self._handlers_down = {}
         self._handlers_up = {}
         self._after_write = {}

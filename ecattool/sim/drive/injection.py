@@ -81,7 +81,7 @@ class Injection(DriveCore):
 
     def option_end_state(self, index: int, option: int, default: str) -> str:
         """The end state the family rules give an option code (``option_code_end_states``), else ``default``."""
-        for i, v, end in getattr(self.rules, "option_code_end_states", ()):
+        for i, v, end in self.rules.option_code_end_states:
             if i == index and v == option:
                 return str(end)
         return default

@@ -192,7 +192,7 @@ class PdoConfig(DriveCore):
         Inter-Option) may only be in the second (low priority) one; in the first the drive aborts."""
         if not self.rules.priority_rule or len(chosen) < 2:
             return False
-        slow: frozenset[int] = getattr(self.rules, "slow_indices", frozenset())
+        slow = self.rules.slow_indices
         return any(e.index in slow for e in self._pdo_entries(d, chosen[0]) or [])
 
     def _valid_pdo_index(self, d: Direction, pdo: int) -> bool:
