@@ -26,11 +26,11 @@ from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
 from ecattool.profiles._common import ProductInfo, ProfileInfo
 from ecattool.profiles.generic import complete_generic, generic_rules, supported_modes_of
-from ecattool.profiles.rules import FamilyRules
+from ecattool.profiles.rules import NO_RULES, FamilyRules
 
 __all__ = [
-    "FamilyRules", "ProductInfo", "ProfileInfo", "complete_generic", "family_of", "list_profiles", "load",
-    "rules_for", "PROFILE_NAMES",
+    "FamilyRules", "ProductInfo", "ProfileInfo", "complete_generic", "family_of", "family_rules", "list_profiles",
+    "load", "rules_for", "PROFILE_NAMES",
 ]
 
 #: profile name → module name (imported lazily: each family reads its data file on first use)
@@ -86,6 +86,16 @@ def load(name: str, product: str | None = None, revision: str | int | None = Non
 
 
 _BY_VENDOR = {0x000001A3: "technosoft-ipos", 0x00000289: "hdt", 0x000000F9: "controltechniques"}
+
+
+def family_rules(name: str) -> FamilyRules:
+    """The rules of a family by name, without a device: a built-in family's (its defaults where they depend on
+    the model) or, for ``generic``, :data:`~ecattool.profiles.rules.NO_RULES` (a generic device's rules come
+    from its ESI: :func:`rules_for`). Raises :class:`SelectionError` for an unknown name."""
+    if name.strip().lower() == "generic":
+        return NO_RULES
+    rules: Callable[[], FamilyRules] = _module(_resolve(name)).rules
+    return rules()
 
 
 def family_of(device: Device) -> str:

@@ -25,7 +25,6 @@ _FAMILY_ALIASES = {
     "ct": "controltechniques", "control-techniques": "controltechniques", "sm-ethercat": "controltechniques",
     "unidrive": "controltechniques", "tomcat": "hdt", "dgfox": "hdt", "ntt": "hdt", "cia402": "generic",
 }
-HDT_COUNTS_PER_REV = 65536  # HDT §4.05.3 (the family's data: ecattool.profiles.hdt.COUNTS_PER_REV)
 U32 = 0xFFFFFFFF
 TWO16 = 65536
 
@@ -40,9 +39,12 @@ def resolve_family(name: str, location: Location | None = None) -> str:
 
 def fixed_counts_per_rev(family: str) -> int | None:
     """Internal position units per motor revolution where the family fixes them whatever the encoder (HDT:
-    65536, §4.05); None where the feedback's counts are the internal unit. The one place of that rule: the
-    factor group, ``scale explain``, the project's counts per unit and the scaling report all ask here."""
-    return HDT_COUNTS_PER_REV if resolve_family(family) == "hdt" else None
+    65536, §4.05): the family's data, ``FamilyRules.counts_per_rev``; None where the feedback's counts are the
+    internal unit. The one place of that rule: the factor group, ``scale explain``, the project's counts per
+    unit and the scaling report all ask here."""
+    from ecattool.profiles import family_rules
+
+    return family_rules(resolve_family(family)).counts_per_rev
 
 
 def technosoft_factor_set(firmware: str | None) -> str:
