@@ -1,0 +1,275 @@
+"""Fitness tests: each "one place" claim of the architecture (issue 36.5) as a check over the package's source,
+beside tests/test_layering.py (which holds the import layers). Each walks the syntax trees of ``ecattool/`` and
+fails naming the file and line that breaks its claim:
+
+* only the resolver (``profiles/running.py``) completes a device: ``plug_default_modules(``/``complete_generic(``
+  are called nowhere else (``complete_generic`` composes ``plug_default_modules`` where both are defined);
+* the AL status codes are defined once (``abort.AlStatus`` beside its texts): no other ``AL_…`` constant, text
+  table or literal default holds one;
+* the CiA-402 statusword masks, state bits and controlword commands are defined once (``od/cia402.py``);
+* the typed ``FamilyRules`` is read by field, never with ``getattr(rules, "…", default)``;
+* no ``family == "…"`` decision outside the built-in families (``profiles/``) and the simulator's family modules,
+  but for today's remaining places, listed below with their counts: the list may only shrink.
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+from collections.abc import Iterator
+from pathlib import Path
+
+from ecattool.abort import AlStatus
+from tests.test_layering import PKG, _modules
+
+ROOT = PKG.parent
+
+
+@functools.cache
+def _trees() -> dict[str, ast.Module]:
+    """Package-relative path (``sim/slave.py``) → syntax tree, for every module of ``ecattool/``."""
+    return {path.relative_to(PKG).as_posix(): ast.parse(path.read_text(encoding="utf-8"), str(path))
+            for path in _modules().values() if path is not None}
+
+
+def _where(rel: str, node: ast.AST) -> str:
+    return f"ecattool/{rel}:{getattr(node, 'lineno', '?')}"
+
+
+def _called_name(node: ast.Call) -> str | None:
+    f = node.func
+    return f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else None
+
+
+def _functions(tree: ast.AST) -> Iterator[tuple[str, ast.AST]]:
+    """(enclosing function name or "", node) for every node of ``tree``."""
+    def walk(node: ast.AST, owner: str) -> Iterator[tuple[str, ast.AST]]:
+        for child in ast.iter_child_nodes(node):
+            name = child.name if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)) else owner
+            yield name, child
+            yield from walk(child, name)
+    yield from walk(tree, "")
+
+
+# --- only the resolver completes a device ----------------------------------------------------------------------
+
+#: (module, enclosing function) allowed to call each completion function
+COMPLETERS = {
+    "complete_generic": {("profiles/running.py", "as_running")},
+    # the rule composes: completing a device plugs its default modules first
+    "plug_default_modules": {("profiles/generic.py", "complete_generic")},
+}
+
+
+def completion_calls(trees: dict[str, ast.Module]) -> list[str]:
+    found = []
+    for rel, tree in trees.items():
+        for owner, node in _functions(tree):
+            if isinstance(node, ast.Call) and _called_name(node) in COMPLETERS:
+                name = _called_name(node)
+                assert name is not None
+                if (rel, owner) not in COMPLETERS[name]:
+                    found.append(f"{_where(rel, node)} calls {name}() in {owner or 'module level'}")
+    return found
+
+
+def test_only_the_resolver_completes_a_device() -> None:
+    found = completion_calls(_trees())
+    assert not found, ("a device is completed outside the resolver; take it from ecattool.profiles.running "
+                       "(as_running / resolve_device) instead:\n" + "\n".join(found))
+    # and the resolver does call it (else the allowance above is stale)
+    assert not completion_calls({"profiles/running.py": _trees()["profiles/running.py"]})
+    assert any(isinstance(n, ast.Call) and _called_name(n) == "complete_generic"
+               for n in ast.walk(_trees()["profiles/running.py"]))
+
+
+# --- AL status codes defined once ------------------------------------------------------------------------------
+
+AL_CODES = frozenset(int(c) for c in AlStatus)
+
+
+def _int(node: ast.AST | None) -> int | None:
+    return node.value if isinstance(node, ast.Constant) and type(node.value) is int else None
+
+
+def al_code_definitions(trees: dict[str, ast.Module]) -> list[str]:
+    found = []
+    for rel, tree in trees.items():
+        if rel == "abort.py":
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Assign, ast.AnnAssign)):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                names = [t.id for t in targets if isinstance(t, ast.Name)]
+                if any(n.lstrip("_").startswith("AL_") for n in names) and _int(node.value) in AL_CODES:
+                    found.append(f"{_where(rel, node)}: {names[0]} = 0x{_int(node.value):04X}")
+            elif isinstance(node, ast.arguments):
+                params = [*node.posonlyargs, *node.args]
+                defaults = [*([None] * (len(params) - len(node.defaults))), *node.defaults]
+                pairs = [*zip(params, defaults), *zip(node.kwonlyargs, node.kw_defaults)]
+                for arg, default in pairs:
+                    if "al_status" in arg.arg and _int(default) is not None:
+                        found.append(f"{_where(rel, arg)}: parameter {arg.arg} defaults to a literal code")
+            elif isinstance(node, ast.Dict) and len(node.keys) >= 3:
+                keys = [_int(k) for k in node.keys]
+                if (all(k in AL_CODES for k in keys) and any(k is not None and k >= 0x11 for k in keys)
+                        and all(isinstance(v, ast.Constant) and isinstance(v.value, str) for v in node.values)):
+                    found.append(f"{_where(rel, node)}: a table of AL status texts")
+    return found
+
+
+def test_al_status_codes_are_defined_once() -> None:
+    found = al_code_definitions(_trees())
+    assert not found, "AL status codes defined outside ecattool.abort (use AlStatus):\n" + "\n".join(found)
+
+
+# --- CiA-402 statusword masks defined once ---------------------------------------------------------------------
+
+STATE_MASKS = {0x4F, 0x6F}
+#: statusword bits of READY TO SWITCH ON, SWITCHED ON and OPERATION ENABLED: a dict holding them is a state table
+STATE_BITS = {0x21, 0x23, 0x27}
+#: controlword commands by (mask, value) as the state machine reads them
+COMMAND_MASKS = {(0x07, 0x06), (0x0F, 0x07), (0x0F, 0x0F), (0x06, 0x02)}
+
+
+def cia402_definitions(trees: dict[str, ast.Module]) -> list[str]:
+    found = []
+    for rel, tree in trees.items():
+        if rel == "od/cia402.py":
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.BinOp) and isinstance(node.op, ast.BitAnd):
+                if _int(node.left) in STATE_MASKS or _int(node.right) in STATE_MASKS:
+                    found.append(f"{_where(rel, node)}: a statusword state mask")
+            elif isinstance(node, ast.Compare) and len(node.ops) == 1 and isinstance(node.ops[0], ast.Eq):
+                left, right = node.left, node.comparators[0]
+                if isinstance(left, ast.BinOp) and isinstance(left.op, ast.BitAnd):
+                    pair = (_int(left.right), _int(right))
+                    if pair in COMMAND_MASKS:
+                        found.append(f"{_where(rel, node)}: a controlword command mask")
+            elif isinstance(node, ast.Dict):
+                values = {_int(v) for v in node.values}
+                if STATE_BITS <= values:
+                    found.append(f"{_where(rel, node)}: a table of CiA-402 state bits")
+            elif isinstance(node, ast.ClassDef):
+                members = {t.id for s in node.body if isinstance(s, ast.Assign) for t in s.targets
+                           if isinstance(t, ast.Name)}
+                if {"SWITCH_ON_DISABLED", "OPERATION_ENABLED", "FAULT_REACTION"} <= members:
+                    found.append(f"{_where(rel, node)}: a second CiA-402 state enumeration ({node.name})")
+    return found
+
+
+def test_statusword_masks_and_states_are_defined_once() -> None:
+    found = cia402_definitions(_trees())
+    assert not found, "CiA-402 definitions outside ecattool.od.cia402 (import them from there):\n" + "\n".join(found)
+
+
+# --- FamilyRules is read by field ------------------------------------------------------------------------------
+
+def _names_rules(node: ast.AST) -> bool:
+    name = node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute) else ""
+    return name == "rules" or name.endswith("_rules")
+
+
+def rules_getattr(trees: dict[str, ast.Module]) -> list[str]:
+    return [f"{_where(rel, node)}: getattr({ast.unparse(node.args[0])}, …)"
+            for rel, tree in trees.items() for node in ast.walk(tree)
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "getattr"
+            and node.args and _names_rules(node.args[0])]
+
+
+def test_family_rules_are_read_by_field() -> None:
+    found = rules_getattr(_trees())
+    assert not found, ("getattr on the typed FamilyRules: read the field ((rules or NO_RULES).field where the "
+                       "rules may be missing):\n" + "\n".join(found))
+
+
+# --- no family == outside the families ------------------------------------------------------------------------
+
+#: where a decision by family name belongs: the built-in families and the simulator's family modules
+FAMILY_MODULES = ("profiles/", "sim/drive/family.py", "sim/drive/behaviour.py")
+#: today's other places that decide by family name, and how many comparisons each holds. The list may only
+#: shrink: move a rule into FamilyRules (or the family module) and lower or remove its count here.
+FAMILY_COMPARISONS_LEFT = {
+    "cli/scale.py": 2,
+    "pdo/check.py": 1,
+    "project/resolve.py": 1,
+    "project/skeleton.py": 1,
+    "project/steps.py": 1,
+    "scaling/compute.py": 7,
+    "scaling/explain.py": 3,
+    "sim/drive/halt_homing.py": 6,
+    "sim/drive/injection.py": 2,
+    "sim/drive/memory.py": 1,
+    "sim/drive/motion.py": 4,
+    "sim/units.py": 2,
+}
+
+
+def _names_family(node: ast.AST) -> bool:
+    name = node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute) else ""
+    return name in ("family", "fam")
+
+
+def _is_names(node: ast.AST) -> bool:
+    if isinstance(node, ast.Constant):
+        return isinstance(node.value, str)
+    return isinstance(node, (ast.Tuple, ast.List, ast.Set)) and bool(node.elts) and all(_is_names(e) for e in node.elts)
+
+
+def family_comparisons(trees: dict[str, ast.Module]) -> dict[str, list[str]]:
+    """Module → the comparisons of a family name with a literal name (==, !=, in, not in) it holds."""
+    found: dict[str, list[str]] = {}
+    for rel, tree in trees.items():
+        if rel.startswith(FAMILY_MODULES):
+            continue
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.Compare) or len(node.ops) != 1:
+                continue
+            if not isinstance(node.ops[0], (ast.Eq, ast.NotEq, ast.In, ast.NotIn)):
+                continue
+            left, right = node.left, node.comparators[0]
+            if (_names_family(left) and _is_names(right)) or (_names_family(right) and _is_names(left)):
+                found.setdefault(rel, []).append(f"{_where(rel, node)}: {ast.unparse(node)}")
+    return found
+
+
+def test_no_new_family_name_decisions() -> None:
+    found = family_comparisons(_trees())
+    grown = [f"{rel}: {len(lines)} (allowed {FAMILY_COMPARISONS_LEFT.get(rel, 0)})\n  " + "\n  ".join(lines)
+             for rel, lines in sorted(found.items()) if len(lines) > FAMILY_COMPARISONS_LEFT.get(rel, 0)]
+    assert not grown, ("a decision by family name outside profiles/ and the family modules: make it FamilyRules "
+                       "data (or move it into the family module):\n" + "\n".join(grown))
+
+
+# --- one target opener, DC resolved once (the claims two tests of tests/test_machine.py are named after) ----------
+
+#: the classes that are slave targets, and the constructor methods they have
+TARGET_CLASSES = ("SimTarget", "PysoemTarget")
+#: where a target may be constructed: the opener; and, today, the pysoem live bus, which opens its own master
+#: (issue 36.3 gives every master one adapter; the list may only shrink)
+TARGET_CONSTRUCTORS = {"target/opener.py": 2, "online/pysoem_bus.py": 1}
+
+
+def target_constructions(trees: dict[str, ast.Module]) -> dict[str, list[str]]:
+    """Module → the calls that construct a slave target (``SimTarget(…)``, ``SimTarget.from_devices(…)``,
+    ``PysoemTarget(…)``) it holds, the classes' own modules left out."""
+    found: dict[str, list[str]] = {}
+    for rel, tree in trees.items():
+        if rel in ("target/sim.py", "target/pysoem.py"):
+            continue
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.Call):
+                continue
+            f = node.func
+            named = (f.id if isinstance(f, ast.Name) else f.value.id
+                     if isinstance(f, ast.Attribute) and isinstance(f.value, ast.Name) else "")
+            if named in TARGET_CLASSES:
+                found.setdefault(rel, []).append(f"{_where(rel, node)}: {ast.unparse(node.func)}(…)")
+    return found
+
+
+def calls_of(trees: dict[str, ast.Module], name: str) -> list[str]:
+    """Where the package calls the function ``name`` (by its bare or dotted name)."""
+    return [f"{_where(rel, node)} in {owner or 'module level'}" for rel, tree in trees.items()
+            for owner, node in _functions(tree) if isinstance(node, ast.Call) and _called_name(node) == name]
