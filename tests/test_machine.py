@@ -169,6 +169,13 @@ def test_one_policy_for_a_project_with_errors(tmp_path, capsys):
 def test_one_target_opener():
     from ecattool.project.cache import load_profile_cached
     from ecattool.target import SimTarget, open_target, slave_at
+    from tests.test_fitness import TARGET_CONSTRUCTORS, _trees, target_constructions
+
+    # one opener: no module but target.opener constructs a target (the one left over may only go)
+    found = target_constructions(_trees())
+    extra = {rel: lines for rel, lines in found.items() if len(lines) > TARGET_CONSTRUCTORS.get(rel, 0)}
+    assert not extra, f"a target constructed outside target.opener.open_target: {extra}"
+    assert len(found.get("target/opener.py", ())) == 2  # the simulator and pysoem
 
     target = open_target("sim", [load_profile_cached("hdt", None, None)] * 2)
     assert isinstance(target, SimTarget) and len(target.slaves()) == 2
@@ -310,19 +317,29 @@ def test_a_project_wide_disable_holds_for_commission_too(tmp_path):
     assert commission(machine).ok
 
 
-def test_dc_is_resolved_once_per_slave_and_consumers_read_it() -> None:
+def test_dc_is_resolved_once_per_slave_and_consumers_read_it(monkeypatch: pytest.MonkeyPatch) -> None:
     """DC is a typed field of the slave: AssignActivate from the project or its ESI OpMode, the SYNC0 cycle and
     shift (the project's, else the OpMode's), SYNC1 where the OpMode gives a cycle; export writes that."""
     import copy
 
     from ecattool.esi.model import DcOpMode
+    from ecattool.project import machine as machine_module
     from ecattool.project.machine import SlaveDc, slave_config
     from ecattool.project.model import DcConfig
     from ecattool.project.resolve import resolve_dc
+    from tests.test_fitness import _trees, calls_of
 
+    # once: the package resolves DC in one place (building the slave); consumers read the slave's field
+    sites = calls_of(_trees(), "resolve_dc")
+    assert len(sites) == 1 and sites[0].startswith("ecattool/project/machine.py:"), sites
+    assert sites[0].endswith(" in build_slave"), sites
+    resolved: list[object] = []
+    monkeypatch.setattr(machine_module, "resolve_dc", lambda *a: resolved.append(a) or resolve_dc(*a))
     (s,) = load_machine(sample("generic_esi")).slaves  # dc: {opmode: DC, cycle_ns: 1000000}; the ESI: #x300, shift 0
+    assert len(resolved) == 1
     assert s.dc == SlaveDc(0x0300, "DC", 1_000_000, 0, None, None) and s.dc.active
     cfg = slave_config(s)
+    assert len(resolved) == 1  # export's configuration reads s.dc
     assert (cfg.dc_assign_activate, cfg.dc_cycle_ns, cfg.dc_shift_ns) == (0x0300, 1_000_000, 0)
     (ct,) = load_machine(sample("controltechniques")).slaves  # dc: {assign_activate: 0x0300, cycle_ns: 1000000}
     assert ct.dc == SlaveDc(0x0300, None, 1_000_000, None)
