@@ -4,7 +4,11 @@
 Each run is a whole `ecattool lint` process, so start-up and imports count. The baseline in the same run is
 a bare `lxml.etree.parse` of every distinct ESI the project uses (what any tool must at least pay cold).
 
-    python benchmarks/bench_lint.py [--runs 5]
+    python benchmarks/bench_lint.py [--runs 5] [--against DIR]
+
+``--against DIR`` lints the same project with the ``ecattool`` package found in DIR too (another revision,
+unpacked by ``git archive REV ecattool | tar -x -C DIR``), cold and warm with its own cache, interleaved with
+this checkout's runs; both then run as ``python -m ecattool`` so they start the same way.
 """
 
 from __future__ import annotations
@@ -56,28 +60,51 @@ def timed(cmd: list[str], env: dict[str, str]) -> float:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__)
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--against", type=Path, help="a directory holding another revision's ecattool package")
     args = ap.parse_args()
-    ecattool = str(Path(sys.executable).parent / "ecattool")
+    if args.against is not None and not (args.against / "ecattool" / "__init__.py").is_file():
+        print(f"no ecattool package in {args.against}", file=sys.stderr)
+        return 2
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
         project = make_project(d)
-        cache = d / "cache"
-        env = {**os.environ, "ECATTOOL_CACHE_DIR": str(cache)}
+        # (label, command, package directory put first on PYTHONPATH, cache directory)
+        lints: list[tuple[str, list[str], Path | None, Path]] = []
+        if args.against is None:
+            lints.append(("ecattool lint", [str(Path(sys.executable).parent / "ecattool")], None, d / "cache"))
+        else:
+            lints.append(("ecattool lint", [sys.executable, "-m", "ecattool"], None, d / "cache"))
+            lints.append((f"lint@{args.against.name}", [sys.executable, "-m", "ecattool"], args.against.resolve(),
+                          d / "cache-against"))
         baseline_code = "import lxml.etree as e,sys\nfor f in sys.argv[1:]: e.parse(f)"
         esis = [str(d / n) for n, _ in ESIS]
-        base, cold, warm = [], [], []
+        base: list[float] = []
+        cold: dict[str, list[float]] = {label: [] for label, *_ in lints}
+        warm: dict[str, list[float]] = {label: [] for label, *_ in lints}
         for _ in range(args.runs):
-            base.append(timed([sys.executable, "-c", baseline_code, *esis], env))
-            shutil.rmtree(cache, ignore_errors=True)
-            cold.append(timed([ecattool, "lint", str(project)], env))
-            warm.append(timed([ecattool, "lint", str(project)], env))
-        b, c, w = (statistics.median(x) for x in (base, cold, warm))
+            base.append(timed([sys.executable, "-c", baseline_code, *esis], dict(os.environ)))
+            for label, cmd, package, cache in lints:
+                env = {**os.environ, "ECATTOOL_CACHE_DIR": str(cache)}
+                if package is not None:
+                    env["PYTHONPATH"] = str(package)
+                shutil.rmtree(cache, ignore_errors=True)
+                cold[label].append(timed([*cmd, "lint", str(project)], env))
+                warm[label].append(timed([*cmd, "lint", str(project)], env))
+        b = statistics.median(base)
         print(f"64-drive project, median of {args.runs} runs (whole processes)")
         print(f"  bare lxml parse of the {len(esis)} ESI files: {b * 1000:8.1f} ms")
-        print(f"  ecattool lint, cold cache:               {c * 1000:8.1f} ms  ({c / b:.2f}x the bare parse)")
-        print(f"  ecattool lint, warm cache:               {w * 1000:8.1f} ms  ({w / b:.2f}x the bare parse, {c / w:.1f}x faster than cold)")
+        for label, *_ in lints:
+            c, w = statistics.median(cold[label]), statistics.median(warm[label])
+            print(f"  {label + ', cold cache:':<40} {c * 1000:8.1f} ms  ({c / b:.2f}x the bare parse)")
+            print(f"  {label + ', warm cache:':<40} {w * 1000:8.1f} ms  ({w / b:.2f}x the bare parse, "
+                  f"{c / w:.1f}x faster than cold)")
+        if args.against is not None:
+            this, other = (label for label, *_ in lints)
+            for kind, times in (("cold", cold), ("warm", warm)):
+                ratio = statistics.median(times[this]) / statistics.median(times[other])
+                print(f"  {kind}: this checkout / {args.against.name} = {ratio:.3f}")
     return 0
 
 
