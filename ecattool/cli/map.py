@@ -13,7 +13,10 @@ from ecattool.cli.paths import InputFile
 from ecattool.cli.vocab import WRITE_FORMATS, AliasedOption
 
 if TYPE_CHECKING:
+    from ecattool.esi.model import Device
+    from ecattool.pdo import Mapping
     from ecattool.profiles.running import RunningDevice
+    from ecattool.startup import SlaveConfig
 
 _EXAMPLES = """\b
 Examples:
@@ -74,7 +77,7 @@ def _load_device(esi: str | None, selector: str | None, profile: str | None, pro
     return device_from_profile(name, product=product, revision=revision)
 
 
-def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None) -> Any:
+def _load_mapping(device: Device, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None) -> Mapping:
     from ecattool import pdo
 
     if mapping_file:
@@ -101,7 +104,7 @@ def _load_mapping(device: Any, rx: tuple[str, ...], tx: tuple[str, ...], mapping
     return pdo.Mapping.from_text(rx=list(rx) if rx else None, tx=list(tx) if tx else None, device=device)
 
 
-def _load_config(startup_file: str, drive: str | None) -> Any:
+def _load_config(startup_file: str, drive: str | None) -> SlaveConfig:
     from ecattool.errors import SelectionError
     from ecattool.startup import describe_slaves, import_file, select_slaves
 
@@ -120,7 +123,8 @@ def _load_config(startup_file: str, drive: str | None) -> Any:
 
 def _setup(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
            rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None = None,
-           drive: str | None = None, device: Any = None, policy: str = "exact") -> tuple[Any, Any, Any]:
+           drive: str | None = None, device: Device | None = None,
+           policy: str = "exact") -> tuple[Device, Mapping, SlaveConfig | None]:
     """(device, mapping, master configuration or None)."""
     device = device if device is not None else _load_device(esi, selector, profile, product, revision, policy)
     if startup_file:

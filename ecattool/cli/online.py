@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING, Any
 import click
 
 if TYPE_CHECKING:
+    from ecattool.online.library import Library
+    from ecattool.online.live import LiveBus
     from ecattool.profiles.running import RunningDevice
 
 TARGET_HELP = ("Where the bus is: pysoem:IF or kickcat:IF (a real master on a network interface), or the simulator: "
@@ -34,7 +36,7 @@ def device_option(f: Callable[..., Any]) -> Callable[..., Any]:
                              "(overrides the library and the slave's SDO Information).")(f)
 
 
-def load_library(folder: str | None) -> Any:
+def load_library(folder: str | None) -> Library | None:
     from ecattool.online.library import Library
 
     return Library(folder) if folder else None
@@ -51,13 +53,13 @@ def load_device(text: str | None) -> RunningDevice | None:
     return resolve_device(source, selector=selector or None)
 
 
-def open_live(target: str) -> Any:
+def open_live(target: str) -> LiveBus:
     from ecattool.online.targets import open_bus
 
     return open_bus(target)
 
 
-def project_bus(project: str, target: str) -> Any:
+def project_bus(project: str, target: str) -> LiveBus:
     """The live bus of ``target`` for a project: the project is linted first (one that does not load or lint is
     refused before the bus is opened); ``sim`` simulates the project's drives."""
     from ecattool.errors import InputError

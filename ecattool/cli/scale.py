@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -15,6 +15,9 @@ from ecattool.cli.vocab import WRITE_FORMATS, device_option, shared_option
 
 _FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
 _STARTUP_FORMATS = WRITE_FORMATS
+
+if TYPE_CHECKING:
+    from ecattool.scaling.group import FactorGroup
 
 
 def _mechanics_options(f: Any) -> Any:
@@ -119,7 +122,7 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
     return parsed, fam, firmware or parsed.firmware, approximation or parsed.approximation
 
 
-def _compute(kwargs: dict[str, Any]) -> Any:
+def _compute(kwargs: dict[str, Any]) -> FactorGroup:
     from ecattool.scaling import compute
 
     vl = kwargs.pop("vl")
@@ -153,7 +156,7 @@ def _html_prerequisites(html: str | None, json_to_stdout: bool) -> None:
         raise click.UsageError("--html - and the JSON output cannot both go to stdout")
 
 
-def _render(group: Any) -> None:
+def _render(group: FactorGroup) -> None:
     con = console()
     t = table(f"Factor group — {group.family} ({group.factor_set})", ["object", "name", "part", "value", "hex", "exact", "meaning"],
               optional=("name", "exact"))
@@ -170,8 +173,7 @@ def _render(group: Any) -> None:
     for n in group.notes:
         con.print(f"note: {n}")
     for f in group.findings:
-        a = f.data
-        con.print(f"{f.severity.value}: {f.message}" + (f" [{f.rule}]" if not a else ""))
+        con.print(f"{f.severity.value}: {f.message}" + (f" [{f.rule}]" if not f.data else ""))
 
 
 @click.group("scale", epilog="""\b
