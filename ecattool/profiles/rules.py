@@ -91,6 +91,9 @@ class FamilyRules:
     #: (Technosoft §13.2.1); see :func:`dc_cycle_problems`
     sync0_multiple_of_slow_loop: bool = False
     ip_period_equals_sync0: bool = False
+    #: a mode of operation the drive does not support is accepted in 6060h and reported by an emergency
+    #: (Technosoft §4.2.3: FF04h) instead of aborted (0609 0030h, HDT and Control Techniques)
+    unsupported_mode_accepted: bool = False
 
     def dc_cycle_problems(self, sync0_ns: int, ip_period_ns: Fraction | int | None,
                           slow_loop_ns: Fraction | int = 1_000_000) -> list[tuple[str, str]]:

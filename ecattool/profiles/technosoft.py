@@ -231,6 +231,7 @@ def rules(device: Device | None = None) -> FamilyRules:
         mapping_write_needs_sub0_zero=True,
         assign_write_needs_sub0_zero=True,
         supported_modes=tuple(modes),
+        unsupported_mode_accepted=True,
         dc_required_modes=(),
         max_assign_entries=4,
         factor_group=fw.factor_group,
