@@ -193,7 +193,6 @@ FAMILY_MODULES = ("profiles/", "sim/drive/family.py", "sim/drive/behaviour.py")
 FAMILY_COMPARISONS_LEFT = {
     "cli/scale.py": 2,
     "pdo/check.py": 1,
-    "project/resolve.py": 1,
     "project/skeleton.py": 1,
     "project/steps.py": 1,
     "scaling/compute.py": 7,

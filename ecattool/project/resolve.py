@@ -297,7 +297,7 @@ def encode_parameter(device: Device, p: Parameter, location: Location, value_loc
         if (index, sub) == (0x6060, 0) and modes and isinstance(value, int) and value not in modes and value != 0:
             # HDT and Control Techniques abort an unsupported mode (0609 0030h); Technosoft accepts it and
             # answers with emergency FF04h (manual §4.2.3)
-            lenient = known.family == "technosoft-ipos"
+            lenient = known.unsupported_mode_accepted
             out.append(Finding("PRJ017", Severity.WARNING if lenient else Severity.ERROR,
                                f"mode {value} is not supported by {device.type_name} (supported: "
                                + ", ".join(str(m) for m in modes) + ")"
