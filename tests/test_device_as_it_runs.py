@@ -116,6 +116,14 @@ def test_a_running_device_is_not_completed_again(monkeypatch: pytest.MonkeyPatch
     assert as_running(linted) is linted
     assert Drive.from_device(linted).device is linted
     assert drive_for_device(linted).device is linted
+    # the simulator opened on a built machine's devices (commission --target sim, bus --target sim)
+    from ecattool.online import open_bus
+    from ecattool.target import open_target
+
+    target = open_target("sim", [linted, linted])
+    assert [s.device for s in target.slaves()] == [linted, linted]  # type: ignore[attr-defined]
+    with open_bus("sim", [linted]) as bus:
+        assert len(bus.slaves) == 1
 
 
 def test_the_resolver_marks_without_changing_its_input() -> None:
