@@ -7,7 +7,9 @@ Public API (others code against it):
   ``"controltechniques"`` (optionally a product and a revision);
 - :func:`rules_for` — the :class:`FamilyRules` of any device (built-in family by vendor id, else derived
   from its ESI); :func:`family_of` — the family name;
-- :func:`complete_generic` — an ESI device with the communication objects its ESI leaves out.
+- :func:`family_rules` — a family's rules by name, without a device;
+- :func:`complete_generic` — an ESI device with the communication objects its ESI leaves out (the rule; what
+  callers use is :mod:`ecattool.profiles.running`, the one resolver of the device as it runs).
 
 Example::
 
