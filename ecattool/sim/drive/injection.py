@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from fractions import Fraction
 
+from ecattool.abort import AlStatus
 from ecattool.od.model import EcState
 from ecattool.sim.cia402 import State
 from ecattool.sim.drive import halt_homing as hh
@@ -28,7 +29,8 @@ class Injection(DriveCore):
         rules say otherwise (HDT 3: quick-stop ramp and stay enabled); Control Techniques always ends in
         SWITCH ON DISABLED (7.3.1)."""
         if self.esm is EcState.OP:
-            self._log("state", previous="OP", state="SAFEOP", al_status=0x001B, reason="sync manager watchdog")
+            self._log("state", previous="OP", state="SAFEOP", al_status=AlStatus.SM_WATCHDOG,
+                      reason="sync manager watchdog")
             self.esm = EcState.SAFEOP
             self._esm_effects(EcState.OP, EcState.SAFEOP)
         if not self.has_cia402:
