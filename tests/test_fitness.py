@@ -5,7 +5,7 @@ fails naming the file and line that breaks its claim:
 * only the resolver (``profiles/running.py``) completes a device: ``plug_default_modules(``/``complete_generic(``
   are called nowhere else (``complete_generic`` composes ``plug_default_modules`` where both are defined);
 * the AL status codes are defined once (``abort.AlStatus`` beside its texts): no other ``AL_…`` constant, text
-  table or literal default holds one;
+  table, literal default or ``al_status=`` literal argument holds one;
 * the CiA-402 statusword masks, state bits and controlword commands are defined once (``od/cia402.py``);
 * the typed ``FamilyRules`` is read by field, never with ``getattr(rules, "…", default)``;
 * no ``family == "…"`` decision outside the built-in families (``profiles/``) and the simulator's family modules,
@@ -103,6 +103,8 @@ def al_code_definitions(trees: dict[str, ast.Module]) -> list[str]:
                 names = [t.id for t in targets if isinstance(t, ast.Name)]
                 if any(n.lstrip("_").startswith("AL_") for n in names) and _int(node.value) in AL_CODES:
                     found.append(f"{_where(rel, node)}: {names[0]} = 0x{_int(node.value):04X}")
+            elif isinstance(node, ast.keyword) and node.arg and "al_status" in node.arg and _int(node.value) in AL_CODES:
+                found.append(f"{_where(rel, node.value)}: {node.arg}=0x{_int(node.value):04X}")
             elif isinstance(node, ast.arguments):
                 params = [*node.posonlyargs, *node.args]
                 defaults = [*([None] * (len(params) - len(node.defaults))), *node.defaults]
