@@ -135,3 +135,10 @@ def test_the_resolver_marks_without_changing_its_input() -> None:
     assert isinstance(profile, RunningDevice) and profile.source == "profile:hdt"
     assert as_running(profile) is profile
     assert _addresses(device_from_file(ETG2001)) == _addresses(done)
+
+
+def test_a_name_too_long_for_a_path_is_an_unknown_profile() -> None:
+    from ecattool.errors import SelectionError
+
+    with pytest.raises(SelectionError, match="unknown drive profile"):
+        resolve_device("x" * 5000)  # Path.is_file() raises OSError (name too long) on such a name

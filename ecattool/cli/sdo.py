@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import click
 
@@ -18,9 +18,6 @@ from ecattool.cli.online import (
     target_option,
 )
 
-if TYPE_CHECKING:
-    from ecattool.online.dictionary import Typed
-
 
 def _address(text: str) -> tuple[int, int]:
     from ecattool.errors import InputError
@@ -32,7 +29,7 @@ def _address(text: str) -> tuple[int, int]:
         raise click.BadParameter(exc.message) from None
 
 
-def _typed(slave: Any, library: str | None, device: str | None) -> Typed:
+def _typed(slave: Any, library: str | None, device: str | None) -> Any:
     from ecattool.online.dictionary import typed
 
     return typed(slave, load_library(library), load_device(device))
@@ -117,11 +114,10 @@ def info(target: str, slave: int, library: str | None, device: str | None, as_js
     """The slave's dictionary (objects, entries, types, access) and where it comes from."""
     with open_live(target) as live:
         t = _typed(live.slave(slave), library, device)
-    rows: list[dict[str, Any]] = [{"address": f"0x{o.index:04X}:{e.subindex:02X}", "object": o.name, "name": e.name,
-                                   "type": e.type_name, "bits": e.bit_size,
-                                   "read": sorted(s.value for s in e.access.read),
-                                   "write": sorted(s.value for s in e.access.write),
-                                   "pdo": e.pdo_mapping} for o in t.dictionary for e in o]
+    rows = [{"address": f"0x{o.index:04X}:{e.subindex:02X}", "object": o.name, "name": e.name,
+             "type": e.type_name, "bits": e.bit_size,
+             "read": sorted(s.value for s in e.access.read), "write": sorted(s.value for s in e.access.write),
+             "pdo": e.pdo_mapping} for o in t.dictionary for e in o]
     if as_json:
         print_json({"dictionary": t.source, "entries": rows})
         return

@@ -22,6 +22,7 @@ Example::
 from __future__ import annotations
 
 import copy
+import os
 from pathlib import Path
 
 from ecattool.esi.model import Device
@@ -84,7 +85,7 @@ def is_device_file(source: str | Path) -> bool:
     """Whether ``source`` names a device description file (an ``.xml``/``.eds``/``.dcf`` name or an existing
     file) rather than a built-in profile name."""
     path = Path(source)
-    return path.suffix.lower() in _FILE_SUFFIXES or path.is_file()
+    return path.suffix.lower() in _FILE_SUFFIXES or os.path.isfile(path)  # (Path.is_file raises on a name too long)
 
 
 def resolve_device(source: str | Path, *, selector: str | None = None, product: str | None = None,
