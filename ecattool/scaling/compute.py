@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 import re
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import InputError, Location, SelectionError
 from ecattool.findings import Finding, Severity
@@ -18,6 +18,11 @@ from ecattool.scaling.exact import Approximation, Exact, Strategy, approximate
 from ecattool.scaling.group import FactorGroup
 from ecattool.scaling.model import Axis
 from ecattool.scaling.units import Unit, dimension_notation
+
+if TYPE_CHECKING:
+    from ecattool.esi.model import Device
+    from ecattool.od.model import ObjectDictionary
+    from ecattool.scaling.group import FactorObject
 
 FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
 _FAMILY_ALIASES = {
@@ -91,17 +96,17 @@ class _Ctx:
         return self.axis.gear.ratio * self.ipr / self.pf
 
 
-def _types(device: Any, family: str, firmware: str | None = None) -> Any:
+def _types(device: Device | None, family: str, firmware: str | None = None) -> ObjectDictionary | None:
     """The object dictionary to take types from: the given device's, else the built-in profile's, else None."""
     if device is not None:
-        return getattr(device, "dictionary", None)
+        return device.dictionary
     if family == "generic":
         return None
     return _profile_dictionary(family, firmware)
 
 
 @functools.lru_cache(maxsize=16)
-def _profile_dictionary(family: str, firmware: str | None) -> Any:
+def _profile_dictionary(family: str, firmware: str | None) -> ObjectDictionary | None:
     try:
         from ecattool.profiles import load
     except ImportError:
@@ -113,7 +118,8 @@ def _profile_dictionary(family: str, firmware: str | None) -> Any:
 
 
 class _Builder:
-    def __init__(self, group: FactorGroup, dictionary: Any, strategy: Strategy, location: Location | None) -> None:
+    def __init__(self, group: FactorGroup, dictionary: ObjectDictionary | None, strategy: Strategy,
+                 location: Location | None) -> None:
         self.g = group
         self.od = dictionary
         self.strategy = strategy
@@ -176,7 +182,7 @@ def _fmt(x: Exact) -> str:
 
 
 def compute(axis: Axis, family: str = "technosoft-ipos", *, firmware: str | None = None,
-            factor_set: str | None = None, device: Any = None, strategy: Strategy | None = None,
+            factor_set: str | None = None, device: Device | None = None, strategy: Strategy | None = None,
             vl: bool | None = None, vl_setpoint: tuple[int, int] = (1, 1)) -> FactorGroup:
     """Every scaling object of ``axis`` for ``family``.
 
@@ -382,7 +388,7 @@ def _controltechniques(b: _Builder, ctx: _Ctx, vl: bool, setpoint: tuple[int, in
                                     "(or use a negative vl setpoint factor 604Bh for vl mode)", b.loc))
 
 
-def _setpoint_object(index: int, sub: int, value: int) -> Any:
+def _setpoint_object(index: int, sub: int, value: int) -> FactorObject:
     from ecattool.scaling.group import FactorObject
 
     return FactorObject(index, sub, "vl setpoint factor", ("Numerator", "Denominator")[sub - 1], value, "INT",
@@ -392,7 +398,7 @@ def _setpoint_object(index: int, sub: int, value: int) -> Any:
 # --- generic CiA-402-2 drives ---------------------------------------------------------------------------------
 
 
-def _generic(b: _Builder, ctx: _Ctx, od: Any, device: Any = None) -> None:
+def _generic(b: _Builder, ctx: _Ctx, od: ObjectDictionary | None, device: Device | None = None) -> None:
     u = ctx.u
     enc, gear, feed = ctx.ipr, Exact.of(ctx.axis.gear.ratio), ctx.feed
     meanings = {0x608F: "encoder increments per motor revolution",
@@ -408,7 +414,7 @@ def _generic(b: _Builder, ctx: _Ctx, od: Any, device: Any = None) -> None:
         if carrier is None and ctx.pf == 1:
             pass  # the user's position unit is the drive's increment: nothing to set
         elif carrier is None:
-            source = str(getattr(device, "source", "") or "")
+            source = device.source if device is not None else ""
             raise InputError("the device has none of the scaling objects that set user units (608Fh, 6091h, 6092h, "
                              f"6093h): its positions stay in its own units, and 1 {u[0].text} = {_fmt(ctx.pf)} "
                              "increments cannot be set (leave out the scaling, or use the drive's units)",
