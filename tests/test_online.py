@@ -368,7 +368,7 @@ def test_install_kickcat_writes_through_the_mailbox_after_checking_1018h() -> No
 def test_backup_cli(tmp_path, capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run(capsys, "backup", "samples/hdt/project.yaml", "--target", "sim", "-o", str(tmp_path / "b"))
     assert code == 0 and "00-table.dict.json" in out and sorted(p.name for p in (tmp_path / "b").iterdir()) == [
-        "00-table.dict.json", "00-table.sii.bin"]
+        "00-table.dict.json", "00-table.sii.bin", "ecattool-backup.json"]
     code, _, err = run(capsys, "backup", "samples/hdt/project.yaml", "--target", "sim", "-o", str(tmp_path / "b"))
     assert code == 1 and "exists" in err and len(err.splitlines()) == 1
 

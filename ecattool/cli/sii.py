@@ -296,17 +296,37 @@ def diff_cmd(a: str, b: str, as_json: bool) -> None:
 @sii.command("read", epilog="""\b
 Examples:
   ecattool sii read --target pysoem:eth0 --slave 1 -o axis2.sii.bin
-  ecattool sii read --target sim:hdt -o hdt.bin""")
+  ecattool sii read --target sim:hdt -o hdt.bin
+  ecattool sii read --target pysoem:eth0 --slave 2 --unchecked -o damaged.bin""")
 @click.option("--target", required=True, metavar="TARGET",
               help="pysoem:IF, or the simulator sim:PROFILE,ESI… (KickCAT's binding has no SII access).")
 @click.option("--slave", type=int, default=0, show_default=True, help="Position of the slave on the bus.")
 @output_option(required=True, help="The image file (binary; written atomically, never over an input).")
-def read_cmd(target: str, slave: int, output: str) -> None:
-    """Read a slave's SII EEPROM (the fixed area and the category chain to its end marker) into a file."""
+@click.option("--unchecked", is_flag=True,
+              help="Save the image even when it does not check out (a damaged EEPROM to repair); the problem is "
+                   "still printed on stderr.")
+def read_cmd(target: str, slave: int, output: str, unchecked: bool) -> None:
+    """Read a slave's SII EEPROM (the fixed area and the category chain to its end marker) into a file.
+
+    The image is checked before it is written: not blank (0xFF) or all zero (what a read whose working counter
+    failed gives), its checksum the CRC-8 of bytes 0-13, its category chain ending in the end marker. One that does
+    not check out is exit 1 and no file (unless --unchecked)."""
+    from ecattool.online.sii_access import read_problems
     from ecattool.online.targets import open_bus
 
+    check_output(output)  # an existing file without --force: refused before the bus is opened
     with open_bus(target) as live:
-        data = live.slave(slave).sii_read()
+        s = live.slave(slave)
+        data = s.sii_read()
+    problems = read_problems(data)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        text = f"slave {slave}: the SII read does not check out: {problems[0]}{more}"
+        if not unchecked:
+            from ecattool.errors import TargetError
+
+            raise TargetError(f"{text}; nothing written (--unchecked saves it anyway)")
+        click.echo(f"ecattool: warning: {text}; saved as read (--unchecked)", err=True)
     write_output(output, data)
 
 

@@ -52,6 +52,46 @@ def write_checks(image_bytes: bytes, current: bytes | None, source: str, force: 
     return problems
 
 
+def read_problems(data: bytes) -> list[str]:
+    """What makes an SII image read from a slave untrustworthy (empty: it checks out): shorter than the fixed area,
+    blank (every byte of the fixed area 0xFF, an erased EEPROM) or all zero (what a read whose working counter was
+    not checked gives), a checksum that is not the CRC-8 of bytes 0-13, a category chain without its end marker."""
+    from ecattool.sii.crc import preamble_crc
+    from ecattool.sii.image import parse
+
+    if len(data) < 128:
+        return [f"{len(data)} bytes, shorter than the 128-byte fixed area"]
+    head = data[:128]
+    if head == b"\xff" * 128:
+        return ["blank: every byte of the fixed area is 0xFF (an erased EEPROM)"]
+    if not any(head):
+        return ["all zero: every byte of the fixed area is 0x00 (the EEPROM was not read, or is zeroed)"]
+    problems = []
+    if preamble_crc(data) != data[14]:
+        problems.append(f"checksum 0x{data[14]:02X} is not the CRC-8 of bytes 0-13 (0x{preamble_crc(data):02X})")
+    try:
+        end_marker = parse(data).end_marker
+    except InputError as exc:
+        problems.append(f"the category chain does not parse: {exc.message}")
+    else:
+        if not end_marker:
+            problems.append("the category chain has no end marker 0xFFFF")
+    return problems
+
+
+def read_checked(slave: Any) -> bytes:
+    """The slave's SII image, checked by :func:`read_problems`: a :class:`TargetError` naming the slave and the
+    first problem when it does not check out."""
+    from ecattool.errors import TargetError
+
+    data: bytes = slave.sii_read()
+    problems = read_problems(data)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise TargetError(f"slave {slave.position}: the SII read does not check out: {problems[0]}{more}")
+    return data
+
+
 def sii_write(slave: Any, image_bytes: bytes, source: str, backup: str | Path, force: bool = False,
               overwrite_backup: bool = False) -> list[str]:
     """Check ``image_bytes`` against the slave, write the slave's current image to ``backup``, then write the
