@@ -207,3 +207,86 @@ def test_sii_read_of_a_good_slave_checks_out(tmp_path: Path, capsys: pytest.Capt
     code, _, _ = run(capsys, "sii", "check", str(out))
     assert code == 0
 
+
+
+# ---------------------------------------------------------------------------------------------- sii write
+def _other_image(good: bytes) -> bytes:
+    """A valid image with another header and other categories: the station alias (word 4) and the first
+    category's payload changed, the CRC fixed."""
+    new = bytearray(good)
+    new[8:10] = b"\x34\x12"
+    new[0x84] ^= 0x01  # inside the first category (after its type and size words)
+    new[14] = preamble_crc(bytes(new))
+    return bytes(new)
+
+
+def test_a_sii_write_cut_anywhere_never_leaves_an_image_that_checks_out(tmp_path: Path) -> None:
+    """Issue 37.3: 2 of 20 kills during `sii write` left a mixed EEPROM (new header with a valid CRC, old
+    categories) that `sii check` passes. Cut after every single word write: the EEPROM is the old image whole, the
+    new one whole, or fails its CRC."""
+    from ecattool.online.pysoem_bus import open_pysoem
+    from ecattool.online.sii_access import read_problems, sii_write
+    from ecattool.sim import Drive
+    from tests import fake_pysoem
+
+    class Cut(Exception):
+        pass
+
+    total = None
+    n = 0
+    while total is None or n <= total:
+        drive = Drive.from_profile("technosoft-ipos")
+        mod = fake_pysoem.make_module([drive])
+        bus = open_pysoem("eth0", mod)
+        try:
+            raw = bus.slaves[0]._raw
+            old = bytes(raw.sii)
+            new = _other_image(old)
+            real_write = raw.eeprom_write
+            writes = []
+
+            def cut_after_n(word_address: int, data: bytes, timeout: int = 20000, n: int = n) -> None:
+                if len(writes) == n:
+                    raise Cut()
+                writes.append(word_address)
+                real_write(word_address, data, timeout)
+
+            raw.eeprom_write = cut_after_n
+            backup_file = tmp_path / f"old-{n}.bin"
+            try:
+                assert sii_write(bus.slaves[0], new, "new.bin", backup_file) == []
+                total = len(writes)
+                assert bytes(raw.sii[:len(new)]) == new  # not cut: the new image, whole
+            except Cut:
+                eeprom = bytes(raw.sii)
+                problems = read_problems(eeprom)
+                assert eeprom == old or any("CRC-8" in p for p in problems), (n, writes[-3:], problems)
+                assert n == 0 or eeprom != old  # something was written, and it shows
+        finally:
+            bus.close()
+        n += 1 if total is None or n < 8 or n > total - 10 else max(1, (total - 18) // 12)
+    assert total is not None and total > 64  # every word of the image, the checksum word twice
+
+
+def test_sii_write_force_only_overwrites_files_and_any_identity_is_its_own_flag(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    with open_bus("sim:hdt") as bus:
+        good = bus.slaves[0].sii_read()
+    other = bytearray(good)
+    other[0x10:0x14] = (0x1234).to_bytes(4, "little")
+    other[14] = preamble_crc(bytes(other))  # a valid image of another vendor
+    path, backup_file = tmp_path / "new.bin", tmp_path / "old.bin"
+    path.write_bytes(bytes(other))
+    code, _, err = run(capsys, "sii", "write", str(path), "--target", "sim:hdt", "--backup", str(backup_file),
+                       "--force")
+    assert code == 1 and "vendor_id 0x00001234 is not the slave's" in err and "--any-identity" in err, err
+    assert not backup_file.exists()  # --force no longer skips the identity check
+    code, out, err = run(capsys, "sii", "write", str(path), "--target", "sim:hdt", "--backup", str(backup_file),
+                         "--any-identity")
+    assert code == 0 and "written" in out, err
+    code, _, err = run(capsys, "sii", "write", str(path), "--target", "sim:hdt", "--backup", str(backup_file),
+                       "--any-identity")
+    assert code == 1 and err.strip().endswith("file exists; use --force to overwrite it"), err
+    code, out, err = run(capsys, "sii", "write", str(path), "--target", "sim:hdt", "--backup", str(backup_file),
+                         "--any-identity", "--force")
+    assert code == 0 and "written" in out, err

@@ -333,19 +333,26 @@ def read_cmd(target: str, slave: int, output: str, unchecked: bool) -> None:
 @sii.command("write", epilog="""\b
 Examples:
   ecattool sii write fixed.bin --target pysoem:eth0 --slave 1 --backup old.bin
-  ecattool sii write other-device.bin --target pysoem:eth0 --force --backup old.bin
+  ecattool sii write other-device.bin --target pysoem:eth0 --any-identity --backup old.bin
+  ecattool sii write fixed.bin --target pysoem:eth0 --backup old.bin --force   # replace an old old.bin
 \b
 Checks before writing (as IgH's 'ethercat sii_write'): a whole number of words, the CRC of the configuration
-area, the category chain up to its end marker, the size, and the identity against the slave's (unless --force).""")
+area, the category chain up to its end marker, the size, and the identity against the slave's (unless
+--any-identity). The categories are written first and the header with its CRC last (the CRC word is made
+invalid before anything else): a write cut short leaves an image whose CRC fails, never a mixed one that
+checks out. The image is read back and compared at the end.""")
 @click.argument("image", type=InputFile())
 @click.option("--target", required=True, metavar="TARGET",
               help="pysoem:IF, or the simulator sim:PROFILE,ESI… (KickCAT's binding has no SII access).")
 @click.option("--slave", type=int, default=0, show_default=True, help="Position of the slave on the bus.")
 @click.option("--backup", required=True, type=click.Path(dir_okay=False), metavar="FILE",
               help="Where the slave's current image is written before anything is written to it.")
+@click.option("--any-identity", is_flag=True,
+              help="Write even when the image's vendor, product code or revision is not the slave's (another "
+                   "device's image; e.g. a firmware change).")
 @click.option("--force", is_flag=True, callback=store_force,
-              help="Write even when the image's identity is not the slave's; replace an existing --backup file.")
-def write_cmd(image: str, target: str, slave: int, backup: str, force: bool) -> None:
+              help="Replace an existing --backup file (it only ever means overwriting files).")
+def write_cmd(image: str, target: str, slave: int, backup: str, any_identity: bool, force: bool) -> None:
     """Write IMAGE to a slave's SII EEPROM, after the checks and a back-up of the old image. Exit status 1 when a
     check refuses the image: one line naming the first problem, and nothing is written (not even the back-up)."""
     from ecattool.fileio import read_bytes
@@ -355,7 +362,7 @@ def write_cmd(image: str, target: str, slave: int, backup: str, force: bool) -> 
     data = read_bytes(image)
     check_output(backup, (image,))  # never over the image, an existing back-up only with --force
     with open_bus(target) as live:
-        problems = sii_write(live.slave(slave), data, image, backup, force, overwrite_backup=force_requested())
+        problems = sii_write(live.slave(slave), data, image, backup, any_identity, overwrite_backup=force_requested())
     if problems:
         from ecattool.errors import InputError
 
