@@ -82,6 +82,39 @@ def read_bytes(path: str | Path, max_bytes: int | None = None) -> bytes:
         raise InputError(f"cannot read file: {exc.strerror or exc}", Location(str(p))) from None
 
 
+def named_file_problem(path: str | Path) -> str | None:
+    """Why the file a project (or another input) names cannot be read as a file, in a few words, or None when it
+    is a regular file (links followed). Checked before a named file is opened, so that a FIFO never blocks the
+    reader, a device is never read, and a name longer than the system allows, a directory or a loop of links are
+    one-line findings, never a traceback. Says nothing of the file's content."""
+    import errno
+
+    name = str(path)
+    if name == "":
+        return "empty file name"
+    try:
+        st = os.stat(name)
+    except ValueError:
+        return "the file name holds a NUL character"
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            longest = max((len(part.encode("utf-8", "surrogateescape")) for part in Path(name).parts), default=0)
+            return (f"the file name is longer than the system allows ({len(name.encode('utf-8', 'surrogateescape'))} "
+                    f"bytes, the longest part {longest})")
+        if exc.errno in (errno.ENOENT, errno.ENOTDIR):
+            return "not found"
+        if exc.errno == errno.ELOOP:
+            return "too many levels of symbolic links"
+        return f"cannot read file: {exc.strerror or exc}"
+    mode = st.st_mode
+    if stat.S_ISREG(mode):
+        return None
+    kind = ("a directory" if stat.S_ISDIR(mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(mode)
+            else "a character device" if stat.S_ISCHR(mode) else "a block device" if stat.S_ISBLK(mode)
+            else "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
+    return f"is {kind}, not a file"
+
+
 def read_input(path: str | Path, max_bytes: int | None = None) -> bytes:
     """:func:`read_bytes`, or standard input when ``path`` is '-'."""
     return read_stdin(max_bytes) if str(path) == "-" else read_bytes(path, max_bytes)
