@@ -15,7 +15,20 @@ from hypothesis import HealthCheck, given, settings
 
 
 from tests.conftest import CORPUS, need_corpus
-from tests.fuzz_readers import ENTRIES, Entry, check, mutants, place, workdir
+from tests.fuzz_readers import (
+    ENTRIES,
+    INPUT_KINDS,
+    PATH_KINDS,
+    Entry,
+    check,
+    check_named_path,
+    check_output_path,
+    hostile_paths,
+    mutants,
+    place,
+    seed_bytes,
+    workdir,
+)
 
 need_corpus()  # the seeds are corpus files and samples that name them
 
@@ -63,3 +76,41 @@ def test_the_seeds_themselves_pass(work: Path) -> None:
             assert escaped is None and (code == 0 or entry.reporter and code in (0, 1)), f"{argv}: {code} {err}{out[-500:]}"
 
 
+
+
+# --------------------------------------------------------------------- hostile paths (issue 37.4 and 37.5)
+@pytest.mark.parametrize("kind", INPUT_KINDS)
+def test_every_reader_given_a_hostile_path(kind: str, work: Path, tmp_path: Path) -> None:
+    """A name too long, a directory, a device, a dangling link, a loop of links, a socket as a command's input:
+    a result or one located line (``check``'s contract), never a traceback."""
+    path = hostile_paths(tmp_path)[kind]
+    for entry in ENTRIES:
+        check(entry, path, work)
+
+
+@pytest.mark.parametrize("kind", PATH_KINDS)
+def test_every_writer_given_a_hostile_output(kind: str, work: Path, tmp_path: Path) -> None:
+    """The same paths as ``-o``: a socket, a directory, a name too long are one line and never written; /dev/null
+    is written through; a FIFO gets its data when someone reads it."""
+    import threading
+
+    for entry in (e for e in ENTRIES if "{o}" in e.argv):
+        paths = hostile_paths(tmp_path)
+        path = paths[kind]
+        reader = None
+        if kind == "fifo":  # someone reads it (else the writer waits for a reader, as `echo > FIFO` does)
+            def drain(p: Path = path) -> None:
+                with open(p, "rb") as fh:
+                    fh.read()
+
+            reader = threading.Thread(target=drain, daemon=True)
+            reader.start()
+        seed = place(work, entry, entry.seeds[0], seed_bytes(entry.seeds[0]))
+        check_output_path(entry, kind, path, work, seed)
+        if reader is not None:
+            reader.join(60)
+
+
+@pytest.mark.parametrize("kind", PATH_KINDS)
+def test_a_project_naming_a_hostile_path(kind: str, work: Path, tmp_path: Path) -> None:
+    check_named_path(kind, hostile_paths(tmp_path)[kind], work)

@@ -4,6 +4,7 @@ interface, in bus order."""
 from __future__ import annotations
 
 import gc
+import os
 import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -45,7 +46,7 @@ def device_source(source: str, *, product: str | None = None, revision: str | No
     from ecattool import esi, profiles
 
     path = Path(source)
-    if path.suffix.lower() == ".xml" or path.is_file():
+    if path.suffix.lower() == ".xml" or os.path.isfile(path):  # (Path.is_file raises on a name too long)
         device = esi.load_device(path, selector)
         return device.type_name or path.name, device
     device = profiles.load(source, product=product, revision=revision)
