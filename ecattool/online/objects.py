@@ -43,12 +43,14 @@ def size_problem(entry: Entry | None, data: bytes) -> str | None:
     """Why ``data`` cannot be a value of ``entry``'s data type: a type of fixed size (UDINT: 4 octets, BOOL and
     BIT2: 1) answered with another number of octets. None when it fits or the type has no fixed size."""
     dt = entry.datatype if entry is not None else None
-    if dt is None or dt.bits is None:
+    if entry is None or dt is None or dt.bits is None:
         return None
     want = (dt.bits + 7) // 8
-    if len(data) == want:
+    # the size the description gives the entry counts too (an ESI's BitSize that is not its type's, as a few
+    # vendor files have: the drive answers by its own description)
+    if len(data) == want or (entry.bit_size and len(data) == (entry.bit_size + 7) // 8):
         return None
-    return f"answered {len(data)} byte(s), a {entry.type_name if entry is not None else ''} has {want}"
+    return f"answered {len(data)} byte(s), a {entry.type_name} has {want}"
 
 
 class ValueSizeError(TargetError):
