@@ -175,6 +175,9 @@ def test_a_udint_of_the_wrong_size_fails_the_back_up_and_sdo_read(
     assert f"slave 0: 0x6081:00 Profile velocity: answered {size} byte(s), a UDINT has 4" in err, err
     code, out, _ = run(capsys, "sdo", "read", "0x6060:00", "--target", "sim:technosoft-ipos")
     assert code == 0 and "0x6060:00" in out  # a SINT: its size is right
+    snapshot = tmp_path / "axis.dict.json"
+    code, _, err = run(capsys, "sdo", "dump", "--target", "sim:technosoft-ipos", "-o", str(snapshot))
+    assert code == 1 and f"answered {size} byte(s)" in err and not snapshot.exists()
 
 
 def test_a_back_up_of_another_device_than_the_projects_fails(tmp_path: Path) -> None:
