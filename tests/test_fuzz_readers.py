@@ -79,24 +79,41 @@ def test_the_seeds_themselves_pass(work: Path) -> None:
 
 
 # --------------------------------------------------------------------- hostile paths (issue 37.4 and 37.5)
+@pytest.fixture
+def hostile(tmp_path: Path):  # type: ignore[no-untyped-def]
+    """:func:`hostile_paths` as a factory; the folders it made (under /tmp where tmp_path is too long for a socket
+    name) are removed afterwards."""
+    import shutil
+
+    made: list[Path] = []
+
+    def make() -> dict[str, Path]:
+        paths = hostile_paths(tmp_path)
+        made.append(paths["missing"].parent)
+        return paths
+
+    yield make
+    for folder in made:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 @pytest.mark.parametrize("kind", INPUT_KINDS)
-def test_every_reader_given_a_hostile_path(kind: str, work: Path, tmp_path: Path) -> None:
+def test_every_reader_given_a_hostile_path(kind: str, work: Path, hostile) -> None:  # type: ignore[no-untyped-def]
     """A name too long, a directory, a device, a dangling link, a loop of links, a socket as a command's input:
     a result or one located line (``check``'s contract), never a traceback."""
-    path = hostile_paths(tmp_path)[kind]
+    path = hostile()[kind]
     for entry in ENTRIES:
         check(entry, path, work)
 
 
 @pytest.mark.parametrize("kind", PATH_KINDS)
-def test_every_writer_given_a_hostile_output(kind: str, work: Path, tmp_path: Path) -> None:
+def test_every_writer_given_a_hostile_output(kind: str, work: Path, hostile) -> None:  # type: ignore[no-untyped-def]
     """The same paths as ``-o``: a socket, a directory, a name too long are one line and never written; /dev/null
     is written through; a FIFO gets its data when someone reads it."""
     import threading
 
     for entry in (e for e in ENTRIES if "{o}" in e.argv):
-        paths = hostile_paths(tmp_path)
-        path = paths[kind]
+        path = hostile()[kind]
         reader = None
         if kind == "fifo":  # someone reads it (else the writer waits for a reader, as `echo > FIFO` does)
             def drain(p: Path = path) -> None:
@@ -112,5 +129,5 @@ def test_every_writer_given_a_hostile_output(kind: str, work: Path, tmp_path: Pa
 
 
 @pytest.mark.parametrize("kind", PATH_KINDS)
-def test_a_project_naming_a_hostile_path(kind: str, work: Path, tmp_path: Path) -> None:
-    check_named_path(kind, hostile_paths(tmp_path)[kind], work)
+def test_a_project_naming_a_hostile_path(kind: str, work: Path, hostile) -> None:  # type: ignore[no-untyped-def]
+    check_named_path(kind, hostile()[kind], work)
