@@ -165,8 +165,11 @@ ResolvedDrive = Slave
 
 
 def _shown(name: str) -> str:
-    """A file name as a finding quotes it: at most 80 characters (a name of 4,000 is not repeated whole)."""
-    return repr(name) if len(name) <= 80 else repr(name[:60]) + f"… ({len(name)} characters)"
+    """A file name as a finding quotes it: whole up to 160 characters, else its start and its end (where the file's
+    own name is) with the length between (a name of 4,000 is not repeated whole)."""
+    if len(name) <= 160:
+        return repr(name)
+    return f"{name[:40]!r}…{name[-80:]!r} ({len(name)} characters)"
 
 
 def resolve_device(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:

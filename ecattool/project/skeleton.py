@@ -50,8 +50,9 @@ def resolve(profile: str | None, product: str | None, esi: str | None, select: s
 
         if problem == "not found":
             raise InputError(f"ESI file {esi!r} not found (looked in {path}; --esi is relative to the project file)")
-        shown = repr(esi) if len(esi) <= 80 else repr(esi[:60]) + f"… ({len(esi)} characters)"
-        raise InputError(f"ESI file {shown}: {problem}")
+        from ecattool.project.resolve import _shown
+
+        raise InputError(f"ESI file {_shown(esi)}: {problem}")
     return load_device_cached(path, select, policy)
 
 
