@@ -7,11 +7,19 @@ Writing (:func:`write_atomic`):
 
 - a regular file is replaced through a temporary file and a rename: either the complete new content is there
   afterwards or the old file is untouched;
-- a path that is not a regular file (a device such as ``/dev/null``, a FIFO, a socket, ``/dev/stdout``) is written
-  *through*, as a stream: it is never replaced by a regular file;
-- a symbolic link is followed: the file it points to gets the content, the link stays;
+- a path that is not a regular file (a device such as ``/dev/null``, a FIFO, ``/dev/stdout``) is written
+  *through*, as a stream: it is never replaced by a regular file; a UNIX socket is refused (an output is a file
+  or a stream, never a message to whatever listens there);
+- a symbolic link to an existing file is followed: the file it points to gets the content, the link stays; a
+  *dangling* link (its file does not exist) is followed only with ``overwrite=True``: without it, creating a file
+  wherever a link points is refused (resolved in user space, the kernel's ``protected_symlinks`` cannot stop it);
 - an existing file is replaced only with ``overwrite=True`` (the CLI's ``--force``), and never when it is one of
-  the command's inputs (by identity of the file, not by name);
+  the command's inputs (by identity of the file, not by name); the replacement keeps the replaced file's mode
+  (and its owner and group where the process may set them);
+- without ``overwrite``, "the output does not exist yet" is decided atomically: the complete temporary file is
+  hard-linked to the output's name, which fails when the name exists, so of two writers racing for one absent
+  output only one succeeds (on a file system without hard links: an exclusive create of the name, then the
+  rename);
 - the temporary file is removed when the process is interrupted (SIGINT, SIGTERM) while writing, and the
   temporary files of ecattool writers that died (SIGKILL, power loss) are removed at the next write into the same
   folder: ``.NAME.PID.RANDOM.tmp`` whose PID no longer runs.
@@ -74,6 +82,39 @@ def read_bytes(path: str | Path, max_bytes: int | None = None) -> bytes:
         raise InputError(f"cannot read file: {exc.strerror or exc}", Location(str(p))) from None
 
 
+def named_file_problem(path: str | Path) -> str | None:
+    """Why the file a project (or another input) names cannot be read as a file, in a few words, or None when it
+    is a regular file (links followed). Checked before a named file is opened, so that a FIFO never blocks the
+    reader, a device is never read, and a name longer than the system allows, a directory or a loop of links are
+    one-line findings, never a traceback. Says nothing of the file's content."""
+    import errno
+
+    name = str(path)
+    if name == "":
+        return "empty file name"
+    try:
+        st = os.stat(name)
+    except ValueError:
+        return "the file name holds a NUL character"
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            longest = max((len(part.encode("utf-8", "surrogateescape")) for part in Path(name).parts), default=0)
+            return (f"the file name is longer than the system allows ({len(name.encode('utf-8', 'surrogateescape'))} "
+                    f"bytes, the longest part {longest})")
+        if exc.errno in (errno.ENOENT, errno.ENOTDIR):
+            return "not found"
+        if exc.errno == errno.ELOOP:
+            return "too many levels of symbolic links"
+        return f"cannot read file: {exc.strerror or exc}"
+    mode = st.st_mode
+    if stat.S_ISREG(mode):
+        return None
+    kind = ("a directory" if stat.S_ISDIR(mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(mode)
+            else "a character device" if stat.S_ISCHR(mode) else "a block device" if stat.S_ISBLK(mode)
+            else "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
+    return f"is {kind}, not a file"
+
+
 def read_input(path: str | Path, max_bytes: int | None = None) -> bytes:
     """:func:`read_bytes`, or standard input when ``path`` is '-'."""
     return read_stdin(max_bytes) if str(path) == "-" else read_bytes(path, max_bytes)
@@ -105,15 +146,33 @@ def refuse_input(path: str | Path, inputs: Iterable[str | Path]) -> None:
 
 def refuse_existing(path: str | Path, overwrite: bool, flag: str = "--force") -> None:
     """Raise :class:`InputError` when ``path`` is an existing regular file (a link to one counts) and ``overwrite``
-    is false; devices, FIFOs and sockets are streams and never refused."""
-    if overwrite or str(path) in ("", "-"):
+    is false, or a symbolic link whose file does not exist (a dangling link is followed only with ``overwrite``);
+    devices and FIFOs are streams and never refused; a UNIX socket is always refused."""
+    if str(path) in ("", "-"):
         return
     try:
         st = os.stat(path)
     except (OSError, ValueError):
+        st = None
+    if st is not None and stat.S_ISSOCK(st.st_mode):
+        raise InputError("is a UNIX socket, not a file or a stream: choose another output", Location(str(path)))
+    if overwrite:
+        return
+    if st is None:
+        if _dangling(path):
+            raise InputError(f"is a symbolic link to {os.readlink(path)!r}, which does not exist; use {flag} to "
+                             "create the file it points to", Location(str(path)))
         return
     if stat.S_ISREG(st.st_mode) and not _is_stream_path(path):
         raise InputError(f"file exists; use {flag} to overwrite it", Location(str(path)))
+
+
+def _dangling(path: str | Path) -> bool:
+    """Whether ``path`` is a symbolic link whose file (at the end of the chain) does not exist."""
+    try:
+        return stat.S_ISLNK(os.lstat(path).st_mode) and not os.path.exists(path)
+    except (OSError, ValueError):
+        return False
 
 
 def check_output(path: str | Path, inputs: Iterable[str | Path] = (), overwrite: bool = False,
@@ -149,13 +208,8 @@ def _stream_write(target: str, payload: bytes) -> None:
             _write_all(own, payload)
             return
         st = os.stat(target)
-        if stat.S_ISSOCK(st.st_mode):
-            import socket
-
-            with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sk:
-                sk.connect(target)
-                sk.sendall(payload)
-            return
+        if stat.S_ISSOCK(st.st_mode):  # refused before (refuse_existing); a socket that appeared since too
+            raise InputError("is a UNIX socket, not a file or a stream: choose another output", Location(target))
         # another process's descriptor that ends in a regular file: appended to, never truncated
         flags = os.O_WRONLY | getattr(os, "O_BINARY", 0) | (os.O_APPEND if stat.S_ISREG(st.st_mode) else 0)
         fd = os.open(target, flags)
@@ -332,10 +386,15 @@ def write_atomic(path: str | Path, data: bytes | str, inputs: Iterable[str | Pat
             raise InputError("cannot create a temporary file beside the output", Location(name))
         try:
             with os.fdopen(fd, "wb") as fh:
+                if st is not None:
+                    _keep_mode(fh.fileno(), st)
                 fh.write(payload)
                 fh.flush()
                 os.fsync(fh.fileno())
-            os.replace(tmp, target)
+            if overwrite:
+                os.replace(tmp, target)
+            else:
+                _link_new(tmp, target, name, flag)
         except BaseException as exc:
             try:
                 os.unlink(tmp)
@@ -348,3 +407,42 @@ def write_atomic(path: str | Path, data: bytes | str, inputs: Iterable[str | Pat
             _LIVE.discard(str(tmp))
     finally:
         _restore_signals(installed)
+
+
+def _keep_mode(fd: int, old: os.stat_result) -> None:
+    """Give the temporary file (open as ``fd``) the owner, group and mode of the file it replaces: the owner first
+    (a change of owner clears set-user-ID bits), where this process may set them (root; a group it is in)."""
+    if hasattr(os, "fchown"):
+        for uid, gid in ((old.st_uid, old.st_gid), (-1, old.st_gid)):
+            try:
+                os.fchown(fd, uid, gid)
+                break
+            except OSError:
+                continue
+    try:
+        os.fchmod(fd, stat.S_IMODE(old.st_mode))
+    except OSError:
+        pass
+
+
+def _link_new(tmp: Path, target: Path, name: str, flag: str) -> None:
+    """Give the complete temporary file the name ``target`` only if that name does not exist (a hard link fails
+    then, atomically: of two writers racing for one absent output one succeeds), then drop the temporary name."""
+    import errno
+
+    try:
+        os.link(tmp, target)
+    except FileExistsError:
+        raise InputError(f"file exists; use {flag} to overwrite it", Location(name)) from None
+    except OSError as exc:
+        if exc.errno not in (errno.EPERM, errno.EOPNOTSUPP, errno.ENOTSUP, errno.EMLINK, errno.EXDEV,
+                             errno.ENOSYS):
+            raise
+        # a file system without hard links (vfat, some FUSE): claim the name exclusively, then rename over it
+        try:
+            os.close(os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+        except FileExistsError:
+            raise InputError(f"file exists; use {flag} to overwrite it", Location(name)) from None
+        os.replace(tmp, target)
+        return
+    os.unlink(tmp)

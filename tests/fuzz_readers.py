@@ -200,3 +200,72 @@ def check(entry: Entry, path: Path, work: Path) -> None:
     assert len(lines) == 1 and lines[0].startswith("ecattool: error: "), f"{where}: not one error line:\n{err[-2000:]}"
     located = re.match(r"ecattool: error: [^:\s][^:]*(?::\d+)*: ", lines[0])
     assert located, f"{where}: the error names no file: {lines[0]}"
+
+
+# ------------------------------------------------------------------------------------------- hostile paths
+#: The paths that are no ordinary file (issue 37.4/37.5), by name; made by :func:`hostile_paths`.
+PATH_KINDS = ("missing", "long name", "long path", "directory", "char device", "null device", "dangling link",
+              "link loop", "socket", "fifo")
+#: FIFO as a command's own input is left out: with no writer, open() waits for one, as `cat FIFO` does (the user
+#: named it); as a file a project names or as an output it is covered.
+INPUT_KINDS = tuple(k for k in PATH_KINDS if k != "fifo")
+
+
+def hostile_paths(base: Path) -> dict[str, Path]:
+    """One path of each :data:`PATH_KINDS` in a fresh folder under ``base`` (the socket is bound and left open by
+    nobody: connecting to it fails; the FIFO has no writer and no reader)."""
+    import socket
+    import tempfile
+
+    # a short folder name: a UNIX socket's path is at most 107 bytes
+    d = Path(tempfile.mkdtemp(prefix="hp", dir="/tmp" if len(str(base)) > 60 else base))
+    (d / "folder").mkdir()
+    os.mkfifo(d / "pipe")
+    (d / "dangling").symlink_to(d / "nowhere" / "planted")
+    (d / "loop-a").symlink_to(d / "loop-b")
+    (d / "loop-b").symlink_to(d / "loop-a")
+    sk = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    sk.bind(str(d / "sock"))
+    sk.close()  # the socket file stays; nobody listens
+    return {"missing": d / "absent.xml", "long name": d / ("n" * 300), "long path": d / "/".join(["p" * 200] * 30),
+            "directory": d / "folder", "char device": Path("/dev/zero"), "null device": Path("/dev/null"),
+            "dangling link": d / "dangling", "link loop": d / "loop-a", "socket": d / "sock", "fifo": d / "pipe"}
+
+
+def check_output_path(entry: Entry, kind: str, path: Path, work: Path, seed: Path) -> None:
+    """``entry`` (one with ``{o}``) writing to the hostile ``path``: a result or one located line; a socket and a
+    directory are never written, a dangling link is followed only because the entry gives --force."""
+    argv = [a.format(f=seed, o=path, sw=CORPUS / "sw" / "ecmc_ipos4808_BRUSHDC_VOLT_48V_20A.sw",
+                     script=work / "steps.yaml") for a in entry.argv]
+    code, out, err, escaped = invoke(argv)
+    where = f"{kind}: {' '.join(argv)[:300]}"
+    assert escaped is None, f"{where}: raw exception {type(escaped).__name__}: {escaped}"
+    lines = [ln for ln in err.splitlines() if ln.strip() and "warning" not in ln]
+    assert "Traceback" not in out + err, f"{where}: traceback\n{err[-1000:]}"
+    if kind == "directory" and code == 2:  # click's own check of -o (dir_okay=False): a usage error, one message
+        assert "is a directory" in err, f"{where}: {err}"
+        return
+    assert code in (0, 1), f"{where}: exit {code}\n{err[-1000:]}"
+    if kind in ("socket", "directory", "long name", "long path", "link loop"):
+        assert code == 1 and len(lines) == 1 and lines[0].startswith("ecattool: error: "), f"{where}: {err}"
+    if kind == "socket":
+        assert "UNIX socket" in lines[0]
+
+
+def check_named_path(kind: str, path: Path, work: Path) -> None:
+    """A project whose ``esi:`` (then ``sw:``) names the hostile ``path``: lint reports exactly one error finding
+    at that line, one line or none on stderr, exit 1 — no traceback, no hang (a FIFO is never opened)."""
+    import json
+
+    for key, device in (("esi", f"{{esi: {json.dumps(str(path))}}}"), ("sw", "{profile: technosoft-ipos}")):
+        text = f"ecattool: 1\nname: m\ndrives:\n  - name: z\n    device: {device}\n"
+        if key == "sw":
+            text += f"    sw: {json.dumps(str(path))}\n"
+        project = work / "hostile.yaml"
+        project.write_text(text)
+        code, out, err, escaped = invoke(["lint", str(project), "--format", "json"])
+        where = f"{kind} as {key}: {str(path)[:120]}"
+        assert escaped is None, f"{where}: raw exception {type(escaped).__name__}: {escaped}"
+        assert code == 1 and "Traceback" not in out + err and len(err.strip().splitlines()) <= 1, f"{where}: {err}"
+        errors = [f for f in json.loads(out)["findings"] if f["severity"] == "error"]
+        assert len(errors) == 1 and errors[0]["rule"] in ("PRJ002", "PRJ005", "PRJ030"), f"{where}: {errors}"

@@ -523,15 +523,25 @@ def test_existing_output_is_replaced_only_with_force(capsys: pytest.CaptureFixtu
     inv = HAPPY[cmd][n]
     outs = [tmp_path / a.name for a in inv if isinstance(a, Out)]
     assert any("--force" in p.opts for p in LEAVES[cmd].params if isinstance(p, click.Option))
+    earlier = b"an earlier result\n"
     for o in outs:
-        o.write_bytes(b"an earlier result\n")
+        if cmd == ("backup",):  # --force replaces only an earlier back-up (its manifest; issue 37.2)
+            o.mkdir()
+            (o / "ecattool-backup.json").write_text('{"format": "ecattool-backup", "version": 1}\n')
+            (o / "earlier.bin").write_bytes(earlier)
+        else:
+            o.write_bytes(earlier)
+
+    def kept(o: Path) -> bool:
+        return (o / "earlier.bin").is_file() if o.is_dir() else o.read_bytes() == earlier
+
     code, out, err = run(capsys, *cmd, *argv(inv, gen, tmp_path))
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert code == 1 and len(lines) == 1 and "file exists; use --force" in lines[0], f"exit {code}\n{out}\n{err}"
-    assert all(o.read_bytes() == b"an earlier result\n" for o in outs)
+    assert all(kept(o) for o in outs)
     code, out, err = run(capsys, *cmd, *argv(inv, gen, tmp_path), "--force")
     assert code == 0, err or out
-    assert all(o.is_dir() or o.read_bytes() != b"an earlier result\n" for o in outs)  # backup writes a folder
+    assert not any(kept(o) for o in outs)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(o.name for o in outs), "stray files"
 
 

@@ -15,7 +15,20 @@ from hypothesis import HealthCheck, given, settings
 
 
 from tests.conftest import CORPUS, need_corpus
-from tests.fuzz_readers import ENTRIES, Entry, check, mutants, place, workdir
+from tests.fuzz_readers import (
+    ENTRIES,
+    INPUT_KINDS,
+    PATH_KINDS,
+    Entry,
+    check,
+    check_named_path,
+    check_output_path,
+    hostile_paths,
+    mutants,
+    place,
+    seed_bytes,
+    workdir,
+)
 
 need_corpus()  # the seeds are corpus files and samples that name them
 
@@ -63,3 +76,58 @@ def test_the_seeds_themselves_pass(work: Path) -> None:
             assert escaped is None and (code == 0 or entry.reporter and code in (0, 1)), f"{argv}: {code} {err}{out[-500:]}"
 
 
+
+
+# --------------------------------------------------------------------- hostile paths (issue 37.4 and 37.5)
+@pytest.fixture
+def hostile(tmp_path: Path):  # type: ignore[no-untyped-def]
+    """:func:`hostile_paths` as a factory; the folders it made (under /tmp where tmp_path is too long for a socket
+    name) are removed afterwards."""
+    import shutil
+
+    made: list[Path] = []
+
+    def make() -> dict[str, Path]:
+        paths = hostile_paths(tmp_path)
+        made.append(paths["missing"].parent)
+        return paths
+
+    yield make
+    for folder in made:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+@pytest.mark.parametrize("kind", INPUT_KINDS)
+def test_every_reader_given_a_hostile_path(kind: str, work: Path, hostile) -> None:  # type: ignore[no-untyped-def]
+    """A name too long, a directory, a device, a dangling link, a loop of links, a socket as a command's input:
+    a result or one located line (``check``'s contract), never a traceback."""
+    path = hostile()[kind]
+    for entry in ENTRIES:
+        check(entry, path, work)
+
+
+@pytest.mark.parametrize("kind", PATH_KINDS)
+def test_every_writer_given_a_hostile_output(kind: str, work: Path, hostile) -> None:  # type: ignore[no-untyped-def]
+    """The same paths as ``-o``: a socket, a directory, a name too long are one line and never written; /dev/null
+    is written through; a FIFO gets its data when someone reads it."""
+    import threading
+
+    for entry in (e for e in ENTRIES if "{o}" in e.argv):
+        path = hostile()[kind]
+        reader = None
+        if kind == "fifo":  # someone reads it (else the writer waits for a reader, as `echo > FIFO` does)
+            def drain(p: Path = path) -> None:
+                with open(p, "rb") as fh:
+                    fh.read()
+
+            reader = threading.Thread(target=drain, daemon=True)
+            reader.start()
+        seed = place(work, entry, entry.seeds[0], seed_bytes(entry.seeds[0]))
+        check_output_path(entry, kind, path, work, seed)
+        if reader is not None:
+            reader.join(60)
+
+
+@pytest.mark.parametrize("kind", PATH_KINDS)
+def test_a_project_naming_a_hostile_path(kind: str, work: Path, hostile) -> None:  # type: ignore[no-untyped-def]
+    check_named_path(kind, hostile()[kind], work)

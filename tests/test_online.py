@@ -150,7 +150,7 @@ def test_sii_write_refuses_a_bad_crc_and_a_wrong_identity(tmp_path, capsys: pyte
     other[14] = preamble_crc(bytes(other))  # a valid image of another vendor
     assert any("CRC-8" in p for p in write_checks(bytes(bad_crc), good, "x.bin"))
     assert any("vendor_id" in p for p in write_checks(bytes(other), good, "x.bin"))
-    assert write_checks(bytes(other), good, "x.bin", force=True) == []
+    assert write_checks(bytes(other), good, "x.bin", any_identity=True) == []
     big = bytes(good) + b"\xff" * (parse_header(good).eeprom_bytes + 2 - len(good))
     assert any("do not fit the slave's" in p for p in write_checks(big, good, "x.bin"))
     for image, word in ((bad_crc, "CRC-8"), (other, "vendor_id")):
@@ -178,7 +178,9 @@ def test_sii_write_goes_to_the_eeprom_word_by_word_after_the_backup(tmp_path) ->
         new[14] = preamble_crc(bytes(new))
         assert sii_write(bus.slaves[0], bytes(new), "new.bin", tmp_path / "old.bin") == []
         assert (tmp_path / "old.bin").read_bytes() == old[:len((tmp_path / "old.bin").read_bytes())]
-        assert bytes(raw.sii[:len(new)]) == bytes(new) and raw.sii_writes[0][0] == 0
+        # the checksum word first (made invalid), the header's words 0-6 and the right checksum last (issue 37.3)
+        assert bytes(raw.sii[:len(new)]) == bytes(new) and raw.sii_writes[0][0] == 7 and raw.sii_writes[-1] == (
+            7, bytes(new[14:16])) and raw.sii_writes[0][1][0] != new[14]
     finally:
         bus.close()
 
@@ -368,7 +370,7 @@ def test_install_kickcat_writes_through_the_mailbox_after_checking_1018h() -> No
 def test_backup_cli(tmp_path, capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run(capsys, "backup", "samples/hdt/project.yaml", "--target", "sim", "-o", str(tmp_path / "b"))
     assert code == 0 and "00-table.dict.json" in out and sorted(p.name for p in (tmp_path / "b").iterdir()) == [
-        "00-table.dict.json", "00-table.sii.bin"]
+        "00-table.dict.json", "00-table.sii.bin", "ecattool-backup.json"]
     code, _, err = run(capsys, "backup", "samples/hdt/project.yaml", "--target", "sim", "-o", str(tmp_path / "b"))
     assert code == 1 and "exists" in err and len(err.splitlines()) == 1
 

@@ -1,7 +1,8 @@
 """Outputs never harm anything (issue 28.1; docs/cli.md, "Output files").
 
-A device, a FIFO, a socket or /dev/stdout is written through, never replaced by a regular file; a symbolic link is
-followed and stays a link; no command writes over one of its inputs, whatever name it is given by; an existing file
+A device, a FIFO or /dev/stdout is written through, never replaced by a regular file; a UNIX socket is refused; a
+symbolic link is followed and stays a link (a dangling one only with --force); --force keeps the replaced file's
+mode and owner; two writers racing for one absent output never both succeed; no command writes over one of its inputs, whatever name it is given by; an existing file
 is replaced only with --force; the temporary file of an interrupted writer is removed, and a dead writer's is
 removed at the next write into the same folder.
 """
@@ -56,34 +57,35 @@ def test_a_fifo_gets_the_data_and_stays_a_fifo(capsys: pytest.CaptureFixture[str
     assert got and got[0] == (ROOT / "samples" / "sii" / "custom_slave.bin").read_bytes()[:len(got[0])] and got[0]
 
 
-def test_a_unix_socket_gets_the_data_and_stays_a_socket(tmp_path: Path) -> None:
+def test_a_unix_socket_is_refused_and_gets_nothing(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    """Issue 37.5: an output is a file or a stream, never a message to whatever listens on a socket."""
     path = tmp_path / "sock"
     server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     server.bind(str(path))
     server.listen(1)
-    got: list[bytes] = []
-
-    def serve() -> None:
-        conn, _ = server.accept()
-        with conn:
-            chunks = []
-            while chunk := conn.recv(4096):
-                chunks.append(chunk)
-            got.append(b"".join(chunks))
-
-    t = threading.Thread(target=serve, daemon=True)
-    t.start()
-    write_atomic(path, b"through the socket", overwrite=False)
-    t.join(30)
-    server.close()
-    assert got == [b"through the socket"] and stat.S_ISSOCK(os.lstat(path).st_mode)
+    server.setblocking(False)
+    try:
+        with pytest.raises(InputError, match="UNIX socket"):
+            write_atomic(path, b"through the socket", overwrite=False)
+        for force in ((), ("--force",)):
+            code, _, err = run(capsys, "sii", "build", str(SII_XML), "-o", str(path), *force)
+            assert code == 1 and "is a UNIX socket" in err and len(err.strip().splitlines()) == 1, err
+        with pytest.raises(BlockingIOError):
+            server.accept()  # nobody connected
+    finally:
+        server.close()
+    assert stat.S_ISSOCK(os.lstat(path).st_mode)
 
 
 def test_a_symlink_is_followed_and_stays_a_link(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     real = tmp_path / "real.bin"
     link = tmp_path / "link.bin"
     link.symlink_to(real.name)
-    code, _, err = run(capsys, "sii", "build", str(SII_XML), "-o", str(link))  # a dangling link: creates its file
+    # a dangling link: its file is created only with --force (issue 37.5)
+    code, _, err = run(capsys, "sii", "build", str(SII_XML), "-o", str(link))
+    assert code == 1 and "symbolic link to 'real.bin', which does not exist; use --force" in err, err
+    assert not real.exists() and link.is_symlink()
+    code, _, err = run(capsys, "sii", "build", str(SII_XML), "-o", str(link), "--force")
     assert code == 0, err
     assert link.is_symlink() and real.is_file() and real.stat().st_size > 0
     code, _, err = run(capsys, "sii", "build", str(SII_XML), "-o", str(link))
@@ -200,3 +202,74 @@ def test_signal_while_writing_leaves_no_temporary(tmp_path: Path, signum: int) -
                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert proc.returncode != 0
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_dangling_link_is_not_followed_out_of_the_folder(tmp_path: Path) -> None:
+    """Issue 37.5: a link left in a shared folder pointing anywhere (here: another folder) is never a way to make
+    ecattool create a file there without --force; the library refuses it up front too (check_output)."""
+    from ecattool.fileio import check_output
+
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    link = tmp_path / "out.bin"
+    link.symlink_to(elsewhere / "planted")
+    with pytest.raises(InputError, match="does not exist; use --force"):
+        check_output(link)
+    with pytest.raises(InputError, match="does not exist; use --force"):
+        write_atomic(link, b"data", overwrite=False)
+    assert list(elsewhere.iterdir()) == []
+    write_atomic(link, b"data", overwrite=True)
+    assert (elsewhere / "planted").read_bytes() == b"data" and link.is_symlink()
+
+
+def test_force_keeps_the_replaced_files_mode(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    """Issue 37.5: --force replaces the content, not the permissions someone gave the file."""
+    out = tmp_path / "slave.bin"
+    out.write_bytes(b"old")
+    os.chmod(out, 0o640)
+    code, _, err = run(capsys, "sii", "build", str(SII_XML), "-o", str(out), "--force")
+    assert code == 0, err
+    assert stat.S_IMODE(out.stat().st_mode) == 0o640 and out.read_bytes() != b"old"
+    os.chmod(out, 0o755)
+    write_atomic(out, b"new")
+    assert stat.S_IMODE(out.stat().st_mode) == 0o755 and out.read_bytes() == b"new"
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="changing a file's owner needs root")
+def test_force_keeps_the_replaced_files_owner_where_it_can(tmp_path: Path) -> None:
+    out = tmp_path / "owned.bin"
+    out.write_bytes(b"old")
+    os.chown(out, 1234, 5678)
+    write_atomic(out, b"new")
+    st = out.stat()
+    assert (st.st_uid, st.st_gid, out.read_bytes()) == (1234, 5678, b"new")
+
+
+def test_two_writers_racing_for_one_absent_output_one_wins(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 37.5: "the output does not exist" is decided atomically. The second writer is let in exactly between
+    the first one's check and its final step (its fsync): without --force only one of them may succeed, and the
+    file holds the winner's content whole."""
+    from ecattool import fileio
+
+    out = tmp_path / "out.txt"
+    real_fsync = os.fsync
+    results: list[str] = []
+
+    def racing_fsync(fd: int) -> None:
+        monkeypatch.setattr(fileio.os, "fsync", real_fsync)  # the second writer runs unhindered
+        try:
+            write_atomic(out, b"second", overwrite=False)
+            results.append("second")
+        except InputError as exc:
+            results.append(f"second refused: {exc.message}")
+        real_fsync(fd)
+
+    monkeypatch.setattr(fileio.os, "fsync", racing_fsync)
+    try:
+        write_atomic(out, b"first", overwrite=False)
+        results.append("first")
+    except InputError as exc:
+        results.append(f"first refused: {exc.message}")
+    assert results == ["second", "first refused: file exists; use --force to overwrite it"]
+    assert out.read_bytes() == b"second"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.txt"]  # no temporary file left behind

@@ -249,10 +249,11 @@ def test_segments_longer_than_announced_are_refused():
 
 
 def test_an_announced_size_the_object_cannot_have_is_refused_at_the_initiate():
-    """1A00h:00 is one octet: a segmented download announcing 6 is aborted at once (0x06070012), as a slave stack
-    checks it, and the segments that follow belong to no transfer."""
+    """1C12h:00 (writable in PRE-OP) is one octet: a segmented download announcing 6 is aborted at once
+    (0x06070012), as a slave stack checks it, and the segments that follow belong to no transfer. (1A00h:00 of this
+    ESI is read-only: that is refused at the initiate too, with 0x06010002 — tests/test_wire_esc_bounds.py.)"""
     server = MailboxServer(etg(), 20, 128)
-    server.handle(coe(struct.pack("<BHBI", 0x21, 0x1A00, 0, 6) + b"\x01\x02\x03\x04"))
+    server.handle(coe(struct.pack("<BHBI", 0x21, 0x1C12, 0, 6) + b"\x01\x02\x03\x04"))
     assert abort_code(reply(server)[2]) == 0x06070012
     server.handle(coe(bytes([0x01]) + bytes(9), 2))
     assert abort_code(reply(server)[2]) == 0x05040001

@@ -96,6 +96,14 @@ def test_verify_download_verify_on_the_simulator(capsys):
     assert code == 0 and json.loads(out)["ok"] is True
 
 
+def test_no_reset_download_that_checks_out_says_so(capsys):
+    """Issue 37.6: every block written and verified, the reset left out on purpose: not "still different"."""
+    code, out, _ = run(capsys, "sw", "download", c(SW), "--target", "sim", "--no-reset")
+    assert code == 0 and "still different" not in out
+    assert out.strip().splitlines()[-1] == ("every block checks out; drive NOT reset (--no-reset): reset it to load "
+                                            "the new setup")
+
+
 def test_download_when_everything_matches_writes_nothing(capsys):
     code, out, _ = run(capsys, "sw", "download", c(SW), "--preload", c(SW))
     assert code == 0 and "nothing written" in out

@@ -121,23 +121,40 @@ def _preop(profile: str) -> Drive:
 
 
 def test_a_segmented_download_of_4_gib_is_refused_at_the_initiate() -> None:
-    server = MailboxServer(_preop("technosoft-ipos"), 128, 128)
-    # complete access to 1600h announcing 4 GiB - 1: more than any transfer may hold (out of memory)
-    server.handle(_coe(struct.pack("<BHBI", 0x31, 0x1600, 0, 0xFFFFFFFF) + bytes(8)))
+    server = MailboxServer(_preop("hdt"), 128, 128)
+    # 100Ah (a STRING the HDT profile lets a master write in PRE-OP) announcing 4 GiB - 1: more than any
+    # transfer may hold (out of memory). (No built-in profile has complete access: a complete access initiate is
+    # refused with 0601 0004h before its size is looked at.)
+    server.handle(_coe(struct.pack("<BHBI", 0x21, 0x100A, 0, 0xFFFFFFFF) + bytes(8)))
     reply = server.pending()
     assert reply is not None and reply[8] == 0x80 and struct.unpack_from("<I", reply, 12)[0] == 0x05040005
     assert server.sdo._transfer is None
     # the cap itself is allowed to start (and then bounded by what was announced)
-    server.handle(_coe(struct.pack("<BHBI", 0x31, 0x1600, 0, MAX_SDO_BYTES) + bytes(8), 2))
+    server.handle(_coe(struct.pack("<BHBI", 0x21, 0x100A, 0, MAX_SDO_BYTES) + bytes(8), 2))
     reply = server.pending()
     assert reply is not None and reply[8] & 0xE0 == 0x60 and server.sdo._transfer is not None
+
+
+@pytest.mark.parametrize("index, sub, code", [(0x1008, 0, 0x06010002), (0x5FFE, 0, 0x06020000),
+                                              (0x1600, 0, 0x06010004)])
+def test_a_segmented_download_to_what_no_data_can_write_is_refused_at_the_initiate(index: int, sub: int,
+                                                                                    code: int) -> None:
+    """Issue 37.6: a read-only object (1008h device name) or a missing one gets its abort at the initiate, as a
+    slave stack answers; the simulator used to take up to 1 MiB of segments before aborting."""
+    server = MailboxServer(_preop("hdt"), 128, 128)
+    ca = 0x10 if index == 0x1600 else 0  # 1600h by complete access, which the HDT drive does not support
+    server.handle(_coe(struct.pack("<BHBI", 0x21 | ca, index, sub, MAX_SDO_BYTES) + bytes(8)))
+    reply = server.pending()
+    assert reply is not None and reply[8] == 0x80 and struct.unpack_from("<HBI", reply, 9) == (index, sub, code)
+    assert server.sdo._transfer is None
 
 
 def test_a_transfer_a_master_left_is_dropped_at_init(hdt: MiniMaster) -> None:
     hdt.mailbox_config()
     assert hdt.al(2) == (0x02, 0)
-    # a segmented download started and never finished
-    big = struct.pack("<HBHBI", 0x2000, 0x21, 0x1008, 0, 4000) + bytes(100)
+    # a segmented download started and never finished (6081h profile velocity: UDINT, writable in PRE-OP; the
+    # initiate announces its 4 octets and carries none)
+    big = struct.pack("<HBHBI", 0x2000, 0x21, 0x6081, 0, 4)
     assert hdt.send_mbx(big) == 1 and hdt.recv_mbx() is not None
     assert hdt.slave.mailbox.sdo._transfer is not None
     assert hdt.al(1) == (0x01, 0)

@@ -141,8 +141,11 @@ def test_sw_upload_equals_the_sw_and_backup_holds_everything(result: dict[str, A
     assert (work / "back.sw").read_bytes() == sw
     ok(r["backup"])
     assert sorted(p.name for p in (work / "backup").iterdir()) == ["00-z_axis.dict.json", "00-z_axis.sii.bin",
-                                                                   "00-z_axis.sw"]
+                                                                   "00-z_axis.sw", "ecattool-backup.json"]
     assert (work / "backup" / "00-z_axis.sw").read_bytes() == sw
+    manifest = json.loads((work / "backup" / "ecattool-backup.json").read_text())
+    assert manifest["format"] == "ecattool-backup" and sorted(manifest["files"]) == [
+        "00-z_axis.dict.json", "00-z_axis.sii.bin", "00-z_axis.sw"]
 
 
 def test_frames_lost_half_way_give_one_line_and_no_backup(result: dict[str, Any]) -> None:

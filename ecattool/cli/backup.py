@@ -16,12 +16,17 @@ Examples:
 @click.argument("project", type=InputFile())
 @target_option()
 @click.option("-o", "--output", "folder", required=True, type=click.Path(), metavar="DIR",
-              help="A new folder (it appears complete or not at all); an existing one only with --force.")
-@click.option("--force", is_flag=True, help="Replace an existing backup folder (after the new one is complete).")
+              help="A new folder (it appears complete or not at all); never an input, the project's folder or a "
+              "folder holding them; an existing back-up only with --force.")
+@click.option("--force", is_flag=True, help="Replace an existing back-up folder (one with an ecattool-backup.json "
+              "manifest; after the new one is complete). Any other folder or file is never replaced.")
 def backup(project: str, target: str, folder: str, force: bool) -> None:
     """Per drive of the project: its SII image, a snapshot of its dictionary and (Technosoft, where the project
     has a .sw) its EEPROM setup read back into a .sw, all in one new folder."""
     from ecattool.online.backup import backup as do_backup
+    from ecattool.online.backup import check_folder
+
+    check_folder(folder, project, force)  # refused before the bus is opened
     with project_bus(project, target) as live:
         report = do_backup(project, live, folder, overwrite=force)
     c = console()

@@ -296,36 +296,63 @@ def diff_cmd(a: str, b: str, as_json: bool) -> None:
 @sii.command("read", epilog="""\b
 Examples:
   ecattool sii read --target pysoem:eth0 --slave 1 -o axis2.sii.bin
-  ecattool sii read --target sim:hdt -o hdt.bin""")
+  ecattool sii read --target sim:hdt -o hdt.bin
+  ecattool sii read --target pysoem:eth0 --slave 2 --unchecked -o damaged.bin""")
 @click.option("--target", required=True, metavar="TARGET",
               help="pysoem:IF, or the simulator sim:PROFILE,ESI… (KickCAT's binding has no SII access).")
 @click.option("--slave", type=int, default=0, show_default=True, help="Position of the slave on the bus.")
 @output_option(required=True, help="The image file (binary; written atomically, never over an input).")
-def read_cmd(target: str, slave: int, output: str) -> None:
-    """Read a slave's SII EEPROM (the fixed area and the category chain to its end marker) into a file."""
+@click.option("--unchecked", is_flag=True,
+              help="Save the image even when it does not check out (a damaged EEPROM to repair); the problem is "
+                   "still printed on stderr.")
+def read_cmd(target: str, slave: int, output: str, unchecked: bool) -> None:
+    """Read a slave's SII EEPROM (the fixed area and the category chain to its end marker) into a file.
+
+    The image is checked before it is written: not blank (0xFF) or all zero (what a read whose working counter
+    failed gives), its checksum the CRC-8 of bytes 0-13, its category chain ending in the end marker. One that does
+    not check out is exit 1 and no file (unless --unchecked)."""
+    from ecattool.online.sii_access import read_problems
     from ecattool.online.targets import open_bus
 
+    check_output(output)  # an existing file without --force: refused before the bus is opened
     with open_bus(target) as live:
-        data = live.slave(slave).sii_read()
+        s = live.slave(slave)
+        data = s.sii_read()
+    problems = read_problems(data)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        text = f"slave {slave}: the SII read does not check out: {problems[0]}{more}"
+        if not unchecked:
+            from ecattool.errors import TargetError
+
+            raise TargetError(f"{text}; nothing written (--unchecked saves it anyway)")
+        click.echo(f"ecattool: warning: {text}; saved as read (--unchecked)", err=True)
     write_output(output, data)
 
 
 @sii.command("write", epilog="""\b
 Examples:
   ecattool sii write fixed.bin --target pysoem:eth0 --slave 1 --backup old.bin
-  ecattool sii write other-device.bin --target pysoem:eth0 --force --backup old.bin
+  ecattool sii write other-device.bin --target pysoem:eth0 --any-identity --backup old.bin
+  ecattool sii write fixed.bin --target pysoem:eth0 --backup old.bin --force   # replace an old old.bin
 \b
 Checks before writing (as IgH's 'ethercat sii_write'): a whole number of words, the CRC of the configuration
-area, the category chain up to its end marker, the size, and the identity against the slave's (unless --force).""")
+area, the category chain up to its end marker, the size, and the identity against the slave's (unless
+--any-identity). The categories are written first and the header with its CRC last (the CRC word is made
+invalid before anything else): a write cut short leaves an image whose CRC fails, never a mixed one that
+checks out. The image is read back and compared at the end.""")
 @click.argument("image", type=InputFile())
 @click.option("--target", required=True, metavar="TARGET",
               help="pysoem:IF, or the simulator sim:PROFILE,ESI… (KickCAT's binding has no SII access).")
 @click.option("--slave", type=int, default=0, show_default=True, help="Position of the slave on the bus.")
 @click.option("--backup", required=True, type=click.Path(dir_okay=False), metavar="FILE",
               help="Where the slave's current image is written before anything is written to it.")
+@click.option("--any-identity", is_flag=True,
+              help="Write even when the image's vendor, product code or revision is not the slave's (another "
+                   "device's image; e.g. a firmware change).")
 @click.option("--force", is_flag=True, callback=store_force,
-              help="Write even when the image's identity is not the slave's; replace an existing --backup file.")
-def write_cmd(image: str, target: str, slave: int, backup: str, force: bool) -> None:
+              help="Replace an existing --backup file (it only ever means overwriting files).")
+def write_cmd(image: str, target: str, slave: int, backup: str, any_identity: bool, force: bool) -> None:
     """Write IMAGE to a slave's SII EEPROM, after the checks and a back-up of the old image. Exit status 1 when a
     check refuses the image: one line naming the first problem, and nothing is written (not even the back-up)."""
     from ecattool.fileio import read_bytes
@@ -335,7 +362,7 @@ def write_cmd(image: str, target: str, slave: int, backup: str, force: bool) -> 
     data = read_bytes(image)
     check_output(backup, (image,))  # never over the image, an existing back-up only with --force
     with open_bus(target) as live:
-        problems = sii_write(live.slave(slave), data, image, backup, force, overwrite_backup=force_requested())
+        problems = sii_write(live.slave(slave), data, image, backup, any_identity, overwrite_backup=force_requested())
     if problems:
         from ecattool.errors import InputError
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
@@ -173,7 +174,7 @@ def run_cmd(source: str, script: str, product: str | None, revision: str | None,
     from ecattool.sim import Drive
     from ecattool.sim.script import load_script, run_script
 
-    if Path(source).is_file():
+    if os.path.isfile(source):  # (Path.is_file raises on a name too long)
         drive = Drive.from_esi(source, selector, policy=policy)
     else:
         drive = Drive.from_profile(source, product=product, revision=revision)

@@ -307,10 +307,18 @@ def download(file: str | None, dry_run: bool, mode: str, force: bool, no_reset: 
             c.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
             for start, err in report.write_errors.items():
                 c.print(f"block 0x{start:04X}: write failed: {err}", markup=False)
-            c.print("drive reset to load the new setup" if report.reset else
-                    "drive NOT reset: some blocks are still different; run the download again")
+            c.print(_reset_line(report, no_reset))
     if not report.ok:
         sys.exit(1)
+
+
+def _reset_line(report: Any, no_reset: bool) -> str:
+    """The last line of a download that wrote something: whether the drive was reset, and why not."""
+    if report.reset:
+        return "drive reset to load the new setup"
+    if report.ok and no_reset:
+        return "every block checks out; drive NOT reset (--no-reset): reset it to load the new setup"
+    return "drive NOT reset: some blocks are still different; run the download again"
 
 
 def _run_download(image: Any, target: Any, mode: int, reset: bool, force: bool, show_progress: bool) -> Any:

@@ -85,26 +85,35 @@ def expected_values(rd: Any) -> dict[tuple[int, int, bool], Any]:
     return last
 
 
+def identity_differences(rd: Any, ident: Any) -> list[tuple[str, int, int]]:
+    """``(field, project's, slave's)`` for each identity field the project checks (``identity:`` of the drive:
+    vendor, product, revision exact/at-least/ignore) where the slave's ``ident`` is not the project device's."""
+    dev_ident = rd.device.identity
+    check = rd.drive.identity
+    fields = [f for f, on in (("vendor_id", check.vendor), ("product_code", check.product),
+                              ("revision", check.revision != "ignore")) if on]
+    out = []
+    for f in fields:
+        want, got = getattr(dev_ident, f), getattr(ident, f)
+        if f == "revision" and (want == 0 or (check.revision == "at-least" and got >= want)):
+            continue
+        if want != got:
+            out.append((f, int(want), int(got)))
+    return out
+
+
 def audit_drive(rd: Any, slave: Any, report: AuditReport, sw_checksums: bool = False) -> None:
     name = rd.drive.name
     device = rd.device
-    dev_ident = device.identity
     try:
         ident = slave.identity()
     except TargetError as exc:
         report.drifts.append(Drift(name, rd.position, "unreadable", "identity", None, None, f"identity: {exc}"))
         ident = None
     if ident is not None:
-        check = rd.drive.identity  # what the project checks: vendor, product, revision exact/at-least/ignore
-        fields = [f for f, on in (("vendor_id", check.vendor), ("product_code", check.product),
-                                  ("revision", check.revision != "ignore")) if on]
-        for f in fields:
-            want, got = getattr(dev_ident, f), getattr(ident, f)
-            if f == "revision" and (want == 0 or (check.revision == "at-least" and got >= want)):
-                continue
-            if want != got:
-                report.drifts.append(Drift(name, rd.position, "identity", f, f"0x{want:08X}", f"0x{got:08X}",
-                                           f"{f} is 0x{got:08X} on the bus, the project's device has 0x{want:08X}"))
+        for f, want, got in identity_differences(rd, ident):
+            report.drifts.append(Drift(name, rd.position, "identity", f, f"0x{want:08X}", f"0x{got:08X}",
+                                       f"{f} is 0x{got:08X} on the bus, the project's device has 0x{want:08X}"))
     for (index, sub, ca), cmd in expected_values(rd).items():
         where = address(index, sub) + (" (complete access)" if ca else "")
         report.checked += 1

@@ -2,10 +2,22 @@
 snapshot and (Technosoft, where the project has a ``.sw``) its EEPROM setup read back into a ``.sw``.
 
 Everything is read first and written to a new folder beside the target, renamed into place at the end: a bus
-that fails half-way leaves no folder and no partial file."""
+that fails half-way leaves no folder and no partial file.
+
+A back-up never destroys and never lies:
+
+- the folder may not be, hold or lie inside one of the project's inputs (the project file, the ESI and ``.sw``
+  files it names), nor be the project's folder or hold it; an existing folder is replaced (``overwrite``, the
+  CLI's ``--force``) only when it is a back-up: it holds the manifest :data:`MANIFEST` a back-up writes;
+- what is saved is checked first: the slave's identity against the project's device (as ``audit`` compares
+  it), the SII image's fixed area (not blank, not all zero), its CRC and its category chain's end marker, and
+  every value's size against its data type; a slave that gives nothing to vouch for (no object read, e.g. in
+  INIT) fails the back-up. Any of these is an error and no folder is written.
+"""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
@@ -13,11 +25,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ecattool.errors import InputError, Location
+from ecattool.errors import InputError, Location, TargetError
 from ecattool.online.dictionary import typed
 from ecattool.online.live import LiveBus, Unsupported
 from ecattool.online.objects import dump
 
+#: the file that makes a folder an ecattool back-up (the only kind of folder ``--force`` replaces)
+MANIFEST = "ecattool-backup.json"
+MANIFEST_FORMAT = "ecattool-backup"
 
 @dataclass
 class BackupReport:
@@ -34,8 +49,7 @@ def _safe(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) or "slave"
 
 
-def collect(project: str | Path, bus: LiveBus) -> tuple[dict[str, bytes], list[str]]:
-    """The files of a backup (name -> content) and what was skipped, read from the bus."""
+def _project(project: str | Path) -> Any:
     from ecattool.project.export import refuse_errors
     from ecattool.project.lint import lint_project
 
@@ -44,16 +58,66 @@ def collect(project: str | Path, bus: LiveBus) -> tuple[dict[str, bytes], list[s
         first = result.findings[0]
         raise InputError(first.message, first.location)
     refuse_errors(result, "back up")
+    return result
+
+
+def _identity_1018(slave: Any) -> Any:
+    """The identity object 1018h:01-03 (vendor, product code, revision) as the slave's CoE reports it; the
+    identity the master read from the SII where the slave has no 1018h (an SDO abort)."""
+    from ecattool.errors import SdoAbort
+    from ecattool.esi.model import Identity
+
+    values = []
+    for sub in (1, 2, 3):
+        try:
+            data = slave.sdo_upload(0x1018, sub)
+        except SdoAbort:
+            return slave.identity()
+        if len(data) != 4:
+            raise TargetError(f"slave {slave.position}: 0x1018:{sub:02X}: answered {len(data)} byte(s), a UDINT has 4")
+        values.append(int.from_bytes(data, "little"))
+    return Identity(*values)
+
+
+def _check_identity(rd: Any, slave: Any) -> None:
+    """The slave at the drive's position is the project's device (the fields its ``identity:`` checks)."""
+    from ecattool.od.model import MAILBOX_STATES
+    from ecattool.online.audit import identity_differences
+
+    state = slave.state()
+    if state not in MAILBOX_STATES:
+        raise TargetError(f"slave {rd.position} ({rd.drive.name}) is in {state.value}: its mailbox does not answer "
+                          "there, no object can be read; nothing backed up")
+    wrong = identity_differences(rd, _identity_1018(slave))
+    if wrong:
+        f, want, got = wrong[0]
+        raise TargetError(f"slave {rd.position} is not drive {rd.drive.name!r} of the project: its {f} is "
+                          f"0x{got:08X}, the project's device has 0x{want:08X}; nothing backed up")
+
+
+def collect(project: str | Path, bus: LiveBus, result: Any = None) -> tuple[dict[str, bytes], list[str]]:
+    """The files of a backup (name -> content) and what was skipped, read from the bus and checked (module text):
+    a :class:`TargetError` naming the slave when something read cannot be vouched for. ``result``: the project
+    already linted (:func:`ecattool.project.lint.lint_project`), else it is linted here."""
+    from ecattool.online.sii_access import read_checked
+
+    if result is None:
+        result = _project(project)
     files: dict[str, bytes] = {}
     skipped: list[str] = []
     for rd in sorted(result.drives, key=lambda r: r.position):
         slave = bus.slave(rd.position)
         stem = f"{rd.position:02d}-{_safe(rd.drive.name)}"
         try:
-            files[f"{stem}.sii.bin"] = slave.sii_read()
+            files[f"{stem}.sii.bin"] = read_checked(slave)
         except Unsupported as exc:
             skipped.append(f"{rd.drive.name}: SII: {exc}")
+        _check_identity(rd, slave)
         snapshot = dump(slave, typed(slave, device=rd.device), bus.spec)
+        if not any("value" in row for key, row in snapshot["objects"].items() if not key.startswith("0x1018:")):
+            raise TargetError(f"slave {rd.position} ({rd.drive.name}) gave no object to back up (state "
+                              f"{snapshot['state']}, {len(snapshot['objects'])} object(s) read, none with a value "
+                              "beyond the identity 1018h); nothing backed up")
         files[f"{stem}.dict.json"] = (json.dumps(snapshot, indent=2, ensure_ascii=False) + "\n").encode()
         if rd.sw_image is not None:
             from ecattool.sw.image import write
@@ -67,15 +131,85 @@ def collect(project: str | Path, bus: LiveBus) -> tuple[dict[str, bytes], list[s
     return files, skipped
 
 
+def _resolved(path: str | Path) -> Path:
+    return Path(os.path.realpath(os.path.abspath(path)))
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    return path == folder or folder in path.parents
+
+
+def refuse_folder(folder: str | Path, project: str | Path, named: list[Path]) -> None:
+    """Raise :class:`InputError` when the back-up folder is, holds or lies inside one of the inputs (the project
+    file, the files it names), or is or holds the project's folder (links resolved)."""
+    target = _resolved(folder)
+    where = Location(str(folder))
+    base = _resolved(Path(project).parent)
+    if _inside(base, target):
+        raise InputError(f"the back-up folder {'is' if base == target else 'holds'} the project's folder; choose a "
+                         "new folder (e.g. beside the project file)", where)
+    for src in [Path(project), *named]:
+        real = _resolved(src)
+        if _inside(real, target) or _inside(target, real):
+            raise InputError(f"the back-up folder would replace {'' if real == target else 'or hold '}the "
+                             f"project's input {str(src)!r}; choose a folder outside it", where)
+
+
+def is_backup(folder: str | Path) -> bool:
+    """Whether ``folder`` is a back-up folder: a real directory (not a link) holding a back-up's manifest."""
+    p = Path(folder)
+    try:
+        if p.is_symlink() or not p.is_dir():
+            return False
+        from ecattool.fileio import read_bytes
+
+        data = json.loads(read_bytes(p / MANIFEST, 1 << 20))
+    except (OSError, ValueError, InputError):
+        return False
+    return isinstance(data, dict) and data.get("format") == MANIFEST_FORMAT
+
+
+def _manifest(project: str | Path, spec: str, files: dict[str, bytes]) -> bytes:
+    doc = {"format": MANIFEST_FORMAT, "version": 1, "project": str(project), "target": spec,
+           "files": {name: {"bytes": len(data), "sha256": hashlib.sha256(data).hexdigest()}
+                     for name, data in sorted(files.items())}}
+    return (json.dumps(doc, indent=2, ensure_ascii=False) + "\n").encode()
+
+
+def check_folder(folder: str | Path, project: str | Path, overwrite: bool = False, named: list[Path] | None = None
+                 ) -> None:
+    """Everything :func:`backup` refuses about its folder, before the bus is read: an input, the project's folder,
+    a name that is no new folder; an existing one that is not a back-up, or one without ``overwrite``. ``named``:
+    the files the project names (else the project is loaded to find them)."""
+    if str(folder) in ("", "-"):
+        raise InputError("give a folder for the back-up (-o DIR)", Location(repr(str(folder))))
+    target = Path(os.path.abspath(folder))
+    if not target.name or target.name in (".", ".."):
+        raise InputError("not a folder name a back-up can be created as", Location(str(folder)))
+    if named is None:
+        result = _project(project)
+        named = result.loaded.named_files() if result.loaded is not None else []
+    refuse_folder(folder, project, named)
+    if os.path.lexists(target):
+        if not overwrite:
+            raise InputError("file exists; use --force to replace the backup folder (or give a new one)",
+                             Location(str(folder)))
+        if not is_backup(target):
+            raise InputError(f"exists and is not a back-up folder (no {MANIFEST} in it): --force replaces only a "
+                             "back-up; give a new folder", Location(str(folder)))
+
+
 def backup(project: str | Path, bus: LiveBus, folder: str | Path, overwrite: bool = False) -> BackupReport:
     """Read everything (:func:`collect`), then write it into the new folder ``folder`` in one rename. An existing
     ``folder`` is refused unless ``overwrite``: then the complete new folder takes its place, and the old one is
     removed only after that rename (an interrupted run leaves the old folder or the new one, never half of one)."""
-    target = Path(folder)
-    if target.exists() and not (overwrite and (target.is_dir() or target.is_file()) and not target.is_symlink()):
-        raise InputError("file exists; use --force to replace the backup folder (or give a new one)",
-                         Location(str(target)))
-    files, skipped = collect(project, bus)
+    result = _project(project)
+    named = result.loaded.named_files()
+    check_folder(folder, project, overwrite, named)
+    target = Path(os.path.abspath(folder))
+    files, skipped = collect(project, bus, result)
+    check_folder(folder, project, overwrite, named)  # again: the bus took time, and the folder may have appeared
+    files[MANIFEST] = _manifest(project, bus.spec, files)
     tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
     old = target.with_name(f".{target.name}.{os.getpid()}.old")
     try:
@@ -94,4 +228,4 @@ def backup(project: str | Path, bus: LiveBus, folder: str | Path, overwrite: boo
         shutil.rmtree(old, ignore_errors=True)
     elif old.exists():
         old.unlink()
-    return BackupReport(str(target), sorted(files), skipped)
+    return BackupReport(str(folder), sorted(n for n in files if n != MANIFEST), skipped)

@@ -45,6 +45,9 @@ class KickcatLiveSlave(KickcatSlave):
     def sii_write(self, image: bytes) -> None:
         raise Unsupported("kickcat: the Python binding gives no SII EEPROM access (use pysoem:IF)")
 
+    def sii_write_word(self, word: int, data: bytes) -> None:
+        raise Unsupported("kickcat: the Python binding gives no SII EEPROM access (use pysoem:IF)")
+
     def sdo_info(self) -> ObjectDictionary:
         raise Unsupported("kickcat: the Python binding has no SDO Information OD list (use pysoem:IF, or type the "
                           "objects with --library/--device)")

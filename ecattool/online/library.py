@@ -3,6 +3,7 @@ project's ESI cache (:mod:`ecattool.project.cache`) so a second scan does not pa
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -58,7 +59,7 @@ class Library:
         if folder is None:
             return
         root = Path(folder)
-        if not root.is_dir():
+        if not os.path.isdir(root):  # (Path.is_dir raises on a name too long)
             raise InputError(f"device library {str(root)!r} is not a folder", Location(str(root)))
         from ecattool.project.cache import load_esi_cached
 

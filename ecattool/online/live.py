@@ -51,7 +51,12 @@ class LiveSlave(Protocol):
         ...
 
     def sii_write(self, image: bytes) -> None:
-        """Write ``image`` to the SII EEPROM word by word (the caller has checked it)."""
+        """Write ``image`` to the SII EEPROM word by word (the caller has checked it), in the order of
+        :func:`ecattool.online.sii_access.write_sequence` (the header and its CRC last)."""
+        ...
+
+    def sii_write_word(self, word: int, data: bytes) -> None:
+        """Write one 16-bit word (2 bytes, little-endian) at word address ``word`` of the SII EEPROM."""
         ...
 
     def sdo_info(self) -> ObjectDictionary:
@@ -171,8 +176,18 @@ class SimLiveSlave:
         return read_sii(lambda word: self.sii[2 * word:2 * word + 8].ljust(8, b"\xff"))
 
     def sii_write(self, image: bytes) -> None:
+        from ecattool.online.sii_access import write_sequence
+
         self._log.append(f"slave {self.position}: SII write of {len(image)} bytes")
-        self.sii = bytes(image) + self.sii[len(image):]
+        for word, data in write_sequence(image, self.sii):
+            self.sii_write_word(word, data)
+
+    def sii_write_word(self, word: int, data: bytes) -> None:
+        if len(data) != 2 or word < 0:
+            raise TargetError(f"slave {self.position}: SII word 0x{word:04X}: a write is one word (2 bytes)")
+        sii = bytearray(self.sii.ljust(2 * word + 2, b"\xff"))
+        sii[2 * word:2 * word + 2] = data
+        self.sii = bytes(sii)
 
     def sdo_info(self) -> ObjectDictionary:
         dictionary: ObjectDictionary = self.drive.device.dictionary

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from ecattool.abort import abort_text
-from ecattool.errors import InputError, Location, SdoAbort
-from ecattool.od.model import EcState
+from ecattool.errors import InputError, Location, SdoAbort, TargetError
+from ecattool.od.model import EcState, Entry
 from ecattool.online.dictionary import Typed, decode, encode
 
 SNAPSHOT_FORMAT = "ecattool-dictionary-snapshot"
@@ -39,8 +39,27 @@ class ReadValue:
         return out
 
 
+def size_problem(entry: Entry | None, data: bytes) -> str | None:
+    """Why ``data`` cannot be a value of ``entry``'s data type: a type of fixed size (UDINT: 4 octets, BOOL and
+    BIT2: 1) answered with another number of octets. None when it fits or the type has no fixed size."""
+    dt = entry.datatype if entry is not None else None
+    if entry is None or dt is None or dt.bits is None:
+        return None
+    want = (dt.bits + 7) // 8
+    # the size the description gives the entry counts too (an ESI's BitSize that is not its type's, as a few
+    # vendor files have: the drive answers by its own description)
+    if len(data) == want or (entry.bit_size and len(data) == (entry.bit_size + 7) // 8):
+        return None
+    return f"answered {len(data)} byte(s), a {entry.type_name} has {want}"
+
+
+class ValueSizeError(TargetError):
+    """A slave's reply whose size is not its object's data type's (a 64-byte or empty "UDINT")."""
+
+
 def read_value(slave: Any, typed: Typed, index: int, subindex: int, *, keep_aborts: bool = False) -> ReadValue:
-    """One object read over SDO and decoded by ``typed``; an abort is raised (or kept, ``keep_aborts``)."""
+    """One object read over SDO and decoded by ``typed``; an abort is raised (or kept, ``keep_aborts``). A reply
+    whose size is not the data type's is a :class:`ValueSizeError` naming the slave and the object."""
     e = typed.entry(index, subindex)
     name = e.name if e is not None else ""
     type_name = e.type_name if e is not None else ""
@@ -50,6 +69,10 @@ def read_value(slave: Any, typed: Typed, index: int, subindex: int, *, keep_abor
         if not keep_aborts:
             raise
         return ReadValue(index, subindex, name, type_name, None, None, exc.code)
+    wrong = size_problem(e, data)
+    if wrong is not None:
+        raise ValueSizeError(f"slave {slave.position}: {address(index, subindex)}{' ' + name if name else ''}: "
+                             f"{wrong}")
     return ReadValue(index, subindex, name, type_name, data, decode(e, data))
 
 

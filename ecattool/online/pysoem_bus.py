@@ -102,10 +102,13 @@ class PysoemLiveSlave:
         return read_sii(lambda w: self._eeprom(lambda: bytes(self._raw.eeprom_read(w, EEPROM_TIMEOUT_US)), w))
 
     def sii_write(self, image: bytes) -> None:
-        data = bytes(image) + (b"\xff" if len(image) % 2 else b"")
-        for w in range(len(data) // 2):
-            word = data[2 * w:2 * w + 2]
-            self._eeprom(lambda: self._raw.eeprom_write(w, word, EEPROM_TIMEOUT_US), w)
+        from ecattool.online.sii_access import write_sequence
+
+        for w, word in write_sequence(image, self.sii_read()):
+            self.sii_write_word(w, word)
+
+    def sii_write_word(self, word: int, data: bytes) -> None:
+        self._eeprom(lambda: self._raw.eeprom_write(word, data, EEPROM_TIMEOUT_US), word)
 
     def sdo_info(self) -> ObjectDictionary:
         try:

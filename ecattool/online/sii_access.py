@@ -1,7 +1,8 @@
 """SII read and write on a live slave, with the checks IgH's ``ethercat sii_write`` makes before writing: the
 image's size (a whole number of words, fits the EEPROM), the CRC of the configuration area, a category chain
-that parses to its end marker, and (unless forced) the identity against the slave's. The old image is read and
-written to a back-up file before the first word of the new one goes out."""
+that parses to its end marker, and (unless ``any_identity``) the identity against the slave's. The old image is
+read and written to a back-up file before the first word of the new one goes out, and the new one is written in
+an order that an interruption cannot turn into an image that checks out (:func:`write_sequence`)."""
 
 from __future__ import annotations
 
@@ -12,8 +13,9 @@ from ecattool.errors import InputError, Location
 from ecattool.findings import Finding, Severity
 
 
-def write_checks(image_bytes: bytes, current: bytes | None, source: str, force: bool = False) -> list[str]:
-    """What stops ``image_bytes`` from being written over the slave's ``current`` image (empty: write it)."""
+def write_checks(image_bytes: bytes, current: bytes | None, source: str, any_identity: bool = False) -> list[str]:
+    """What stops ``image_bytes`` from being written over the slave's ``current`` image (empty: write it); the
+    identity (vendor, product code, revision) must be the slave's unless ``any_identity``."""
     from ecattool.sii.checks import check
     from ecattool.sii.crc import preamble_crc
     from ecattool.sii.image import parse
@@ -40,30 +42,112 @@ def write_checks(image_bytes: bytes, current: bytes | None, source: str, force: 
         size = parse_header(current).eeprom_bytes  # the EEPROM the slave's own image declares
         if parse_header(current).size_word != 0xFFFF and len(image_bytes) > size:
             problems.append(f"{source}: {len(image_bytes)} bytes do not fit the slave's {size}-byte EEPROM")
-    if current is not None and not force:
+    if current is not None and not any_identity:
         from ecattool.sii.image import parse_header
 
         old, new = parse_header(current), image.header
         for field in ("vendor_id", "product_code", "revision"):
             a, b = getattr(old, field), getattr(new, field)
             if a != b:
-                problems.append(f"{source}: {field} 0x{b:08X} is not the slave's 0x{a:08X} (--force writes it "
-                                "anyway)")
+                problems.append(f"{source}: {field} 0x{b:08X} is not the slave's 0x{a:08X} (--any-identity "
+                                "writes it anyway)")
     return problems
 
 
-def sii_write(slave: Any, image_bytes: bytes, source: str, backup: str | Path, force: bool = False,
+def read_problems(data: bytes) -> list[str]:
+    """What makes an SII image read from a slave untrustworthy (empty: it checks out): shorter than the fixed area,
+    blank (every byte of the fixed area 0xFF, an erased EEPROM) or all zero (what a read whose working counter was
+    not checked gives), a checksum that is not the CRC-8 of bytes 0-13, a category chain without its end marker."""
+    from ecattool.sii.crc import preamble_crc
+    from ecattool.sii.image import parse
+
+    if len(data) < 128:
+        return [f"{len(data)} bytes, shorter than the 128-byte fixed area"]
+    head = data[:128]
+    if head == b"\xff" * 128:
+        return ["blank: every byte of the fixed area is 0xFF (an erased EEPROM)"]
+    if not any(head):
+        return ["all zero: every byte of the fixed area is 0x00 (the EEPROM was not read, or is zeroed)"]
+    problems = []
+    if preamble_crc(data) != data[14]:
+        problems.append(f"checksum 0x{data[14]:02X} is not the CRC-8 of bytes 0-13 (0x{preamble_crc(data):02X})")
+    try:
+        end_marker = parse(data).end_marker
+    except InputError as exc:
+        problems.append(f"the category chain does not parse: {exc.message}")
+    else:
+        if not end_marker:
+            problems.append("the category chain has no end marker 0xFFFF")
+    return problems
+
+
+def read_checked(slave: Any) -> bytes:
+    """The slave's SII image, checked by :func:`read_problems`: a :class:`TargetError` naming the slave and the
+    first problem when it does not check out."""
+    from ecattool.errors import TargetError
+
+    data: bytes = slave.sii_read()
+    problems = read_problems(data)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise TargetError(f"slave {slave.position}: the SII read does not check out: {problems[0]}{more}")
+    return data
+
+
+#: word address of the checksum word (CRC-8 of bytes 0-13 in its low byte)
+CRC_WORD = 7
+#: words of the fixed area (0x00-0x3F); the categories start after it
+HEADER_WORDS = 64
+
+
+def write_sequence(image: bytes, current: bytes) -> list[tuple[int, bytes]]:
+    """The word writes (word address, 2 bytes) that put ``image`` into an EEPROM that holds ``current``, in an
+    order an interruption cannot turn into an image that checks out:
+
+    1. the checksum word first, with a checksum byte that is the CRC of none of the contents words 0-6 pass
+       through on the way (so from here on the image fails its CRC, whatever else is written);
+    2. the categories (word 0x40 on), then the rest of the fixed area (words 8-0x3F), then words 0-6;
+    3. the checksum word with the right CRC last.
+
+    A write cut anywhere after step 1 leaves a CRC that does not match (``sii check`` and the slave's own load
+    refuse it); one cut before it leaves the old image whole. (A mixed EEPROM with a valid CRC was what a kill
+    during a write left before: new header and CRC first, old categories after.)"""
+    from ecattool.sii.crc import preamble_crc
+
+    data = bytes(image) + (b"\xff" if len(image) % 2 else b"")
+    words = [data[2 * w:2 * w + 2] for w in range(len(data) // 2)]
+    if len(words) <= CRC_WORD:
+        return list(enumerate(words))
+    old = bytearray(bytes(current[:14]).ljust(14, b"\xff"))
+    passed = {preamble_crc(bytes(old))}
+    for w in range(CRC_WORD):  # words 0-6 are written in this order in step 2
+        old[2 * w:2 * w + 2] = words[w]
+        passed.add(preamble_crc(bytes(old)))
+    invalid = next(x for x in range(256) if x not in passed)
+    crc_word = words[CRC_WORD]
+    seq = [(CRC_WORD, bytes([invalid, crc_word[1]]))]
+    seq += [(w, words[w]) for w in range(HEADER_WORDS, len(words))]
+    seq += [(w, words[w]) for w in range(CRC_WORD + 1, min(HEADER_WORDS, len(words)))]
+    seq += [(w, words[w]) for w in range(CRC_WORD)]
+    seq.append((CRC_WORD, crc_word))
+    return seq
+
+
+def sii_write(slave: Any, image_bytes: bytes, source: str, backup: str | Path, any_identity: bool = False,
               overwrite_backup: bool = False) -> list[str]:
-    """Check ``image_bytes`` against the slave, write the slave's current image to ``backup``, then write the
-    new one and read it back. Returns the problems that stopped the write (nothing was written then)."""
+    """Check ``image_bytes`` against the slave (its identity too, unless ``any_identity``), write the slave's
+    current image to ``backup``, then write the new one (:func:`write_sequence`: the header and its CRC last) and
+    read it back. Returns the problems that stopped the write (nothing was written then); a read-back that differs
+    is an :class:`InputError`."""
     from ecattool.fileio import write_atomic
 
     current = slave.sii_read()
-    problems = write_checks(image_bytes, current, source, force)
+    problems = write_checks(image_bytes, current, source, any_identity)
     if problems:
         return problems
     write_atomic(backup, current, (source,), overwrite=overwrite_backup)
-    slave.sii_write(image_bytes)
+    for word, data in write_sequence(image_bytes, current):
+        slave.sii_write_word(word, data)
     back = slave.sii_read()
     if back[:len(image_bytes)] != image_bytes[:len(back)] or len(back) < min(len(image_bytes), 128):
         raise InputError(f"slave {slave.position}: the SII read back differs from {source} (the old image is in "

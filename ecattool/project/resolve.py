@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from ecattool.errors import EcatToolError, EncodeError, InputError, Location
 from ecattool.esi.model import Device
+from ecattool.fileio import named_file_problem
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import EcState, Entry
 from ecattool.od.numbers import parse_address, parse_int
@@ -164,6 +165,14 @@ class Slave:
 ResolvedDrive = Slave
 
 
+def _shown(name: str) -> str:
+    """A file name as a finding quotes it: whole up to 160 characters, else its start and its end (where the file's
+    own name is) with the length between (a name of 4,000 is not repeated whole)."""
+    if len(name) <= 160:
+        return repr(name)
+    return f"{name[:40]!r}…{name[-80:]!r} ({len(name)} characters)"
+
+
 def resolve_device(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     ref = rd.drive.device
     try:
@@ -178,8 +187,12 @@ def resolve_device(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
 
             assert ref.esi is not None
             path = lp.resolve(ref.esi)
-            if not path.exists():
+            problem = named_file_problem(path)  # a FIFO, a device, a directory, a name too long: never opened
+            if problem == "not found":
                 rd.error("PRJ002", f"ESI file {ref.esi!r} not found (looked in {path})", lp.drive_location(i, "device", "esi"))
+                return
+            if problem is not None:
+                rd.error("PRJ005", f"ESI file {_shown(ref.esi)}: {problem}", lp.drive_location(i, "device", "esi"))
                 return
             # the device as it runs: default modules in its slots, synthesised mapping/assignment objects
             rd.device = load_device_cached(path, None if ref.select is None else str(ref.select), ref.policy)

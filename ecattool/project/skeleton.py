@@ -42,10 +42,17 @@ def resolve(profile: str | None, product: str | None, esi: str | None, select: s
 
     assert esi is not None
     path = base_dir / esi
-    if not path.is_file():
+    from ecattool.fileio import named_file_problem
+
+    problem = named_file_problem(path)  # a FIFO, a device, a directory, a name too long: never opened
+    if problem is not None:
         from ecattool.errors import InputError
 
-        raise InputError(f"ESI file {esi!r} not found (looked in {path}; --esi is relative to the project file)")
+        if problem == "not found":
+            raise InputError(f"ESI file {esi!r} not found (looked in {path}; --esi is relative to the project file)")
+        from ecattool.project.resolve import _shown
+
+        raise InputError(f"ESI file {_shown(esi)}: {problem}")
     return load_device_cached(path, select, policy)
 
 

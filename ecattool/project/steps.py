@@ -92,13 +92,21 @@ def check_sw(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     if rd.device.vendor_id != 0x1A3:
         rd.warning("PRJ031", f".sw images are Technosoft setups; {rd.device.type_name} is vendor 0x{rd.device.vendor_id:X}", loc)
     path = lp.resolve(cfg.file)
-    if not path.exists():
+    from ecattool.fileio import named_file_problem
+    from ecattool.project.resolve import _shown
+
+    problem = named_file_problem(path)  # a FIFO, a device, a directory, a name too long: never opened
+    if problem == "not found":
         rd.error("PRJ002", f".sw file {cfg.file!r} not found (looked in {path})", loc)
+        return
+    if problem is not None:
+        rd.error("PRJ030", f".sw file {_shown(cfg.file)}: {problem}", loc)
         return
     from ecattool import sw
 
     try:
-        rd.sw_image = sw.read(path)
+        # the project names the file: no finding quotes a line of it (it may name any file, a secret too)
+        rd.sw_image = sw.read(path, quote=False)
     except EcatToolError as exc:
         rd.error("PRJ030", exc.message, exc.location or loc)
         return

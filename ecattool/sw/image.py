@@ -164,8 +164,10 @@ def check_overlaps(blocks: Sequence[Block], source: str | None = None) -> None:
             )
 
 
-def parse(text: str | bytes, source: str | None = None) -> SwImage:
-    """Parse ``.sw`` text. Raises :class:`InputError` with file and line for anything malformed."""
+def parse(text: str | bytes, source: str | None = None, quote: bool = True) -> SwImage:
+    """Parse ``.sw`` text. Raises :class:`InputError` with file and line for anything malformed; with
+    ``quote=False`` the error quotes nothing of the text (not the line, not the byte), only where it is: for a file
+    a project names, which may be any file (lint must not print a secret's first line)."""
     content: str
     if isinstance(text, bytes):
         raw = text[3:] if text.startswith(b"\xef\xbb\xbf") else text
@@ -173,8 +175,9 @@ def parse(text: str | bytes, source: str | None = None) -> SwImage:
             content = raw.decode("ascii")
         except UnicodeDecodeError as exc:
             line = raw.count(b"\n", 0, exc.start) + 1
+            shown = f"byte 0x{raw[exc.start]:02X}" if quote else "a byte"
             raise InputError(
-                f"byte 0x{raw[exc.start]:02X} is not ASCII; a .sw line holds one hex word of at most 4 digits",
+                f"{shown} is not ASCII; a .sw line holds one hex word of at most 4 digits",
                 Location(source, line),
             ) from None
     else:
@@ -207,9 +210,9 @@ def parse(text: str | bytes, source: str | None = None) -> SwImage:
             continue
         last_blank = False
         if not _WORD.fullmatch(s):
-            shown = s if len(s) <= 20 else s[:20] + "..."
+            shown = repr(s if len(s) <= 20 else s[:20] + "...") if quote else "the line"
             raise InputError(
-                f"{shown!r} is not a hex word of at most 4 digits (expected e.g. 7ABD or 92)", Location(source, no)
+                f"{shown} is not a hex word of at most 4 digits (expected e.g. 7ABD or 92)", Location(source, no)
             )
         value = int(s, 16)
         if start is None:
@@ -227,11 +230,11 @@ def parse(text: str | bytes, source: str | None = None) -> SwImage:
     return SwImage(tuple(blocks), final_blank_line=last_blank, source=source)
 
 
-def read(path: str | Path) -> SwImage:
-    """Read a ``.sw`` file."""
+def read(path: str | Path, quote: bool = True) -> SwImage:
+    """Read a ``.sw`` file (``quote``: see :func:`parse`)."""
     from ecattool.fileio import read_bytes
 
-    return parse(read_bytes(path, MAX_FILE_BYTES), str(path))
+    return parse(read_bytes(path, MAX_FILE_BYTES), str(path), quote)
 
 
 def write(image: SwImage, final_blank_line: bool | None = None) -> bytes:

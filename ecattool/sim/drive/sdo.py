@@ -63,6 +63,24 @@ class SdoServer(PdoConfig):
                 self._log("sdo_timeout", index=index, subindex=subindex, reason="the drive sends no reply")
                 raise SdoTimeout(index, subindex)
 
+    def check_download(self, index: int, subindex: int, complete_access: bool = False) -> None:
+        """Raise the abort a download to ``index:subindex`` gets whatever its data: an object or entry that does not
+        exist, one read only via the mailbox (PDO only), read-only, or not writable in the current state. A slave
+        stack checks this at the initiate of a segmented download, before it takes any segment."""
+        try:
+            if complete_access:
+                self._ca_supported(index, subindex)
+                return
+            e = self._entry(index, subindex)
+            self._pdo_only(index, subindex)
+            if not e.access.write or (subindex and index in self._read_only_set):
+                raise sdo_abort(index, subindex, A.READ_ONLY)
+            if self.esm not in e.access.write:
+                raise sdo_abort(index, subindex, A.DATA_CANNOT_BE_STORED_STATE)
+        except SdoAbort as exc:
+            self._log("sdo_abort", op="download", index=index, subindex=subindex, data="", code=exc.code)
+            raise
+
     def _planned(self, planned: tuple[str, int], index: int, subindex: int) -> None:
         if planned[0] == "abort":
             self._log("sdo_abort", op="injected", index=index, subindex=subindex, code=planned[1])

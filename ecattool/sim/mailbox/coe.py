@@ -190,6 +190,12 @@ class SdoServer:
             if refused is not None:
                 return refused
         else:
+            # what no data can make writable is refused at the initiate, as a slave stack does: a read-only or
+            # missing object never gets to buffer its segments
+            refused = self._ask(index, subindex,
+                                lambda: self.drive.check_download(index, subindex, complete_access=ca))
+            if isinstance(refused, list):
+                return refused
             too_long = self._announced_too_long(index, subindex, ca, size)
             if too_long:
                 return [sdo_abort_data(index, subindex, too_long)]
