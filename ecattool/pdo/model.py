@@ -456,8 +456,9 @@ def _pdo_entries(device: Device, pdo: Pdo) -> list[PdoEntry]:
 
 def default_assignment(device: Device, direction: Direction) -> list[int]:
     """PDO indices assigned by default: the ESI PDOs with an ``Sm`` attribute or ``Mandatory`` (in file
-    order), else the dictionary's 1C12h/1C13h defaults."""
-    pdos = [p.index for p in device.pdos(direction) if p.sm is not None or p.mandatory]
+    order), else the dictionary's 1C12h/1C13h defaults. A virtual PDO (``Virtual="true"``: ESC registers that
+    TwinCAT maps through an FMMU, no CoE mapping object) is never assigned (docs/esi.md, "Virtual PDOs")."""
+    pdos = [p.index for p in device.pdos(direction) if (p.sm is not None or p.mandatory) and not device.esc_registers(p)]
     if pdos:
         return pdos
     obj = device.dictionary.get(direction.assign_index)
@@ -490,6 +491,30 @@ def default_mapping(device: Device) -> Mapping:
                 pdos.append(MappedPdo(index, entries, False, "", None))
         out.set_pdos(direction, pdos)
     return out
+
+
+def virtual_pdos(device: Device, mapping: Mapping) -> list[MappedPdo]:
+    """The PDOs of ``mapping`` that are windows onto ESC registers on ``device`` (:meth:`Device.esc_registers`,
+    and no real PDO of that index): DC latch times, sync activation that TwinCAT puts into the process image
+    through FMMUs. They are no sync manager's PDOs: never assigned, never counted against a sync manager."""
+    out = []
+    for d in Direction:
+        for p in mapping.pdos(d):
+            dev = device.pdo(p.index)
+            if dev is not None and device.esc_registers(dev):
+                out.append(p)
+    return out
+
+
+def without_virtual(device: Device, mapping: Mapping) -> tuple[Mapping, list[MappedPdo]]:
+    """``mapping`` without its virtual PDOs (:func:`virtual_pdos`), and those left out."""
+    gone = virtual_pdos(device, mapping)
+    if not gone:
+        return mapping, []
+    ids = {id(p) for p in gone}
+    out = Mapping(rx=[p for p in mapping.rx if id(p) not in ids], tx=[p for p in mapping.tx if id(p) not in ids],
+                  given=set(mapping.given), source=mapping.source)
+    return out, gone
 
 
 # --- from a startup list ---------------------------------------------------------------------------

@@ -21,7 +21,7 @@ from collections.abc import Iterable
 
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device, Direction
-from ecattool.pdo.model import MappedPdo, Mapping, default_mapping, entry_keys
+from ecattool.pdo.model import MappedPdo, Mapping, default_mapping, entry_keys, without_virtual
 from ecattool.profiles.rules import FamilyRules
 from ecattool.startup.model import StartupCommand, StartupList
 
@@ -82,6 +82,7 @@ def program(
     if order not in ORDERS:
         raise InputError(f"unknown programming order {order!r} (use {' or '.join(ORDERS)})")
     rules = resolve_rules(device, rules)
+    mapping = without_virtual(device, mapping)[0]  # ESC registers: no SDO assigns or maps them
     dirs = [d for d in Direction if d in set(directions if directions is not None else (mapping.given or Direction))]
     coe = device.mailbox.coe if device.mailbox is not None else None
     ca = bool(complete_access and coe is not None and coe.complete_access)

@@ -11,6 +11,7 @@ from typing import Any
 from ecattool.errors import EcatToolError, Location
 from ecattool.esi.model import Device, Direction
 from ecattool.findings import Finding, Severity
+from ecattool.pdo.model import without_virtual
 from ecattool.project.loader import LoadedProject
 from ecattool.project.resolve import ResolvedDrive
 from ecattool.startup.model import StartupCommand
@@ -40,8 +41,11 @@ def pdo_commands(lp: LoadedProject, i: int, rd: ResolvedDrive, params: list[Star
     except EcatToolError as exc:
         rd.error("PDO000", exc.message, exc.location or loc)
         return []
-    rd.mapping = mapping
     findings = pdo.check(rd.device, mapping, rules=rd.rules, startup=params)
+    # a virtual PDO is left out of what the slave is given (PDO029 says so): lint, startup export and
+    # commission see the same mapping
+    mapping = without_virtual(rd.device, mapping)[0]
+    rd.mapping = mapping
     rd.findings.extend(_relocate(f, loc) for f in findings)
     if cfg is None:
         return []  # the drive keeps its power-on mapping: nothing to program
