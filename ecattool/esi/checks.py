@@ -47,12 +47,16 @@ def standard_entry_bits(index: int, subindex: int, has_object: bool) -> int | No
     * 1800h-1BFFh sub 7 (TxPDO State) and sub 9 (TxPDO Toggle), BOOLEAN: ETG.1000.6 TxPDO parameter objects,
       which Beckhoff terminals map into their TxPDOs and leave out of the ESI's dictionary;
     * 1C32h/1C33h sub 20h (Sync Error), BOOLEAN: ETG.1020 sync manager parameter;
+    * 10F4h (External Synchronization Status, ETG.1000.6) sub 1-12h, 0 (any size): the EL6688/EL6692 map its
+      sync mode, update toggles and time stamps, and their ESIs' dictionaries leave the object out;
     * 0 (any size) for another sub-index of a communication-area object the dictionary has (``has_object``):
       the ESI lists a subset of a standard object's sub-indices (an EL6688's 10F4h:02)."""
     if 0x1800 <= index <= 0x1BFF and subindex in (7, 9):
         return 1
     if index in (0x1C32, 0x1C33) and subindex == 0x20:
         return 1
+    if index == 0x10F4 and 1 <= subindex <= 0x12:
+        return 0
     if has_object and index in COMMUNICATION_AREA:
         return 0
     return None

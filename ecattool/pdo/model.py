@@ -450,6 +450,30 @@ def _mapping_from_dictionary(device: Device, index: int) -> list[PdoEntry] | Non
     return out
 
 
+def _is_padding(value: int) -> bool:
+    return (value >> 16) < 0x20  # a gap (index 0) or a dummy of a standard data type
+
+
+def _padded_power_on(device: Device, index: int, listed: list[PdoEntry]) -> list[PdoEntry] | None:
+    """The dictionary's own default mapping of ``index`` where it differs from the ESI's PDO list ``listed`` only
+    by trailing padding (an EL6692's 1600h: a gap of 8 bits against an empty PDO): the same data, and the image
+    the slave powers on with, padding included. None otherwise (the PDO list stands; where the two really
+    differ, lint's PRJ027 says so)."""
+    obj = device.dictionary.get(index)
+    if obj is None or obj.location is None or not obj.location.line:
+        return None  # synthesised from the PDO list
+    own = _mapping_from_dictionary(device, index)
+    if own is None:
+        return None
+    a, b = [e.mapping_value for e in own], [e.mapping_value for e in listed]
+    if a == b:
+        return None
+    n = min(len(a), len(b))
+    if a[:n] != b[:n] or not all(_is_padding(v) for v in (a[n:] or b[n:])):
+        return None
+    return own
+
+
 def _pdo_entries(device: Device, pdo: Pdo) -> list[PdoEntry]:
     return [PdoEntry(e.index, e.subindex, e.bit_len, e.name, e.data_type, e.location) for e in pdo.entries]
 
@@ -485,7 +509,9 @@ def default_mapping(device: Device) -> Mapping:
         for index in default_assignment(device, direction):
             pdo = device.pdo(index)
             if pdo is not None:
-                pdos.append(MappedPdo(index, _pdo_entries(device, pdo), False, pdo.name, pdo.location))
+                entries = _pdo_entries(device, pdo)
+                own = _padded_power_on(device, index, entries)
+                pdos.append(MappedPdo(index, entries if own is None else own, False, pdo.name, pdo.location))
             else:
                 entries = _mapping_from_dictionary(device, index) or []
                 pdos.append(MappedPdo(index, entries, False, "", None))

@@ -61,6 +61,22 @@ def resolve_rules(device: Device, rules: FamilyRules | None) -> FamilyRules:
     return rules_for(device)
 
 
+def rewritten(device: Device, pdo: MappedPdo, rules: FamilyRules | None = None,
+              power_on: Mapping | None = None) -> bool:
+    """Whether :func:`program` writes the mapping object of ``pdo`` (given with entries): where the family lets
+    mapping objects be written and the PDO is not Fixed; else only where the entries differ from the PDO's own
+    (the drive then refuses them, as ``check`` says)."""
+    rules = resolve_rules(device, rules)
+    dev_pdo = device.pdo(pdo.index)
+    if rules.mapping_writable and not (dev_pdo is not None and dev_pdo.fixed):
+        return True
+    if power_on is None:
+        power_on = default_mapping(device)
+    own = dev_pdo.entries if dev_pdo is not None else next(
+        (p.entries for p in (*power_on.rx, *power_on.tx) if p.index == pdo.index), [])
+    return entry_keys(pdo.entries) != entry_keys(own)
+
+
 def program(
     device: Device,
     mapping: Mapping,
@@ -99,12 +115,7 @@ def program(
         return [p.index for p in mapping.pdos(d)] != [p.index for p in power_on.pdos(d)]
 
     def rewritable(pdo: MappedPdo) -> bool:
-        dev_pdo = device.pdo(pdo.index)
-        if rules.mapping_writable and not (dev_pdo is not None and dev_pdo.fixed):
-            return True
-        own = dev_pdo.entries if dev_pdo is not None else next(
-            (p.entries for p in (*power_on.rx, *power_on.tx) if p.index == pdo.index), [])
-        return entry_keys(pdo.entries) != entry_keys(own)
+        return rewritten(device, pdo, rules, power_on)
 
     # phase 1: disable the assignments
     if not count_first:
