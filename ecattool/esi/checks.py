@@ -103,8 +103,8 @@ def check_device(dev: Device) -> list[Finding]:
             continue  # ESC registers (1D09h:98h = register 0998h) through an FMMU: no object, no sync manager
         if check_od and not pdo.depend_on_slot:
             for e in pdo.entries:
-                if e.is_gap or e.depend_on_slot:
-                    continue
+                if e.is_gap or e.depend_on_slot or 1 <= e.index <= 7:
+                    continue  # a gap, or a dummy: data-type indices 1h-7h (BOOLEAN..UNSIGNED32) pad, name no object
                 entry = od.entry(e.index, e.subindex)
                 where = f"{name}: PDO 0x{pdo.index:04X} maps 0x{e.index:04X}:{e.subindex:02X}"
                 if entry is None:

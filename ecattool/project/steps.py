@@ -6,7 +6,8 @@ Each step adds located findings to the ResolvedDrive and returns the startup com
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, NamedTuple
+from dataclasses import dataclass
+from typing import Any
 
 from ecattool.errors import EcatToolError, Location
 from ecattool.esi.model import Device, Direction
@@ -243,6 +244,19 @@ def _move_fits(lp: LoadedProject, i: int, rd: ResolvedDrive, mode: str) -> bool:
     return True
 
 
+def check_mailbox(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """PRJ028: a startup SDO for a slave without a CoE mailbox (a fixed process image: an EL2008, an SMC EX260).
+    Nothing receives it, and commission never sends such a slave an SDO; reported once, at the first command."""
+    assert rd.device is not None
+    if rd.device.has_coe or rd.startup is None or not rd.startup.commands:
+        return
+    cmd = rd.startup.commands[0]
+    why = "the mailbox speaks " + ", ".join(rd.device.mailbox.protocols) if rd.device.mailbox else "it has no mailbox"
+    rd.error("PRJ028", f"{len(rd.startup.commands)} startup SDO(s) ({cmd.address} first) for {rd.device.type_name}, "
+                       f"which has no CoE mailbox ({why}): a fixed process image that nothing can write; leave them "
+                       "out", cmd.source or lp.drive_location(i, "device"))
+
+
 def check_kind(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     """PRJ025: ``enable: true`` on a slave that is not a CiA-402 axis (no 6040h/6041h, no profile 402 or 6060h):
     commission would run the CiA-402 enable on a terminal, a coupler or a gateway."""
@@ -310,7 +324,8 @@ def check_pdo_objects(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         return
 
 
-class MappingDifference(NamedTuple):
+@dataclass(frozen=True, slots=True)
+class MappingDifference:
     """A mapping object whose dictionary default differs from the ESI's PDO list (PRJ027)."""
 
     direction: Direction

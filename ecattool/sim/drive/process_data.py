@@ -173,6 +173,12 @@ class ProcessData(PdoConfig):
                     handler(sub, raw, int.from_bytes(raw, "little"))
                 except SdoAbort:
                     return False
+        e = self._entries.get((index, sub))
+        if e is not None and e.bit_size > 8 * len(raw):
+            # a compact PDO maps the low bits of a larger object (EJ2521's 16-bit 7000h:12 of 32): they
+            # replace the low bytes, the object keeps its high ones
+            old = self._store.get((index, sub), b"")
+            raw = raw + old[len(raw):(e.bit_size + 7) // 8].ljust((e.bit_size + 7) // 8 - len(raw), b"\x00")
         self._store[(index, sub)] = raw
         return index in self._after_write
 
