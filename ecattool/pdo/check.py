@@ -24,6 +24,7 @@ from ecattool.pdo.model import (
     default_mapping,
     entry_keys,
     pdo_direction,
+    power_on_entries,
     without_virtual,
 )
 from ecattool.pdo.program import resolve_rules
@@ -278,6 +279,9 @@ class _Checker:
         if p.index not in self.bad and not (dev_pdo is not None and dev_pdo.fixed):
             current = next((q for q in self.default.pdos(d) if q.index == p.index), None)
             reference = current.entries if current is not None else (dev_pdo.entries if dev_pdo is not None else None)
+            held = power_on_entries(self.device, p.index)
+            if held is not None:
+                reference = held  # the slave powers on with its dictionary's own mapping: that is what is rewritten
             if reference is None or entry_keys(reference) != entry_keys(p.entries):
                 why = self.mapping_not_writable(p.index)
                 if not why and current is not None and self.assign_not_writable(d):

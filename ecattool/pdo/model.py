@@ -450,6 +450,16 @@ def _mapping_from_dictionary(device: Device, index: int) -> list[PdoEntry] | Non
     return out
 
 
+def power_on_entries(device: Device, index: int) -> list[PdoEntry] | None:
+    """The entries the dictionary's own mapping object ``index`` holds at power-on where the ESI's dictionary
+    gives them (an object read from the file, with a count and a default for every entry it counts); None where
+    the dictionary does not say (or its object was synthesised from the PDO list)."""
+    obj = device.dictionary.get(index)
+    if obj is None or obj.location is None or not obj.location.line:
+        return None
+    return _mapping_from_dictionary(device, index)
+
+
 def _is_padding(value: int) -> bool:
     return (value >> 16) < 0x20  # a gap (index 0) or a dummy of a standard data type
 
@@ -459,10 +469,7 @@ def _padded_power_on(device: Device, index: int, listed: list[PdoEntry]) -> list
     by trailing padding (an EL6692's 1600h: a gap of 8 bits against an empty PDO): the same data, and the image
     the slave powers on with, padding included. None otherwise (the PDO list stands; where the two really
     differ, lint's PRJ027 says so)."""
-    obj = device.dictionary.get(index)
-    if obj is None or obj.location is None or not obj.location.line:
-        return None  # synthesised from the PDO list
-    own = _mapping_from_dictionary(device, index)
+    own = power_on_entries(device, index)
     if own is None:
         return None
     a, b = [e.mapping_value for e in own], [e.mapping_value for e in listed]
