@@ -247,3 +247,21 @@ def test_lint_reports_an_index_read_with_two_prefixes(tmp_path: Path) -> None:
     hits = [f for f in machine.findings if f.rule == "esi-number-0x"]
     assert hits and hits[0].location is not None and hits[0].location.line == 31
     assert "read as hex" in hits[0].message
+
+
+# --- 7. project new never writes a skeleton that fails its own lint ---------------------------------------
+
+
+def test_a_skeleton_leaves_out_the_move_where_the_encoder_resolution_is_0() -> None:
+    """An ESI whose 608Fh:01 (encoder increments) defaults to 0 beside a motor revolution of 1: a move would be
+    PRJ023 (the drive cannot convert positions); the skeleton asks for the value and leaves the move out."""
+    import copy
+
+    device = copy.deepcopy(load_device_cached(ESI / "copley_XE2_4.60.xml", None, "exact"))
+    device.dictionary.entry(0x608F, 1).default = (0).to_bytes(4, "little")
+    device.dictionary.entry(0x608F, 2).default = (1).to_bytes(4, "little")
+    text = new_project(device, esi="copley_XE2_4.60.xml")
+    assert "608F:01" in text and "is 0 in the ESI" in text
+    assert "    move:" not in text and "No commissioning move until then" in text
+    plain = new_project(load_device_cached(ESI / "copley_XE2_4.60.xml", None, "exact"), esi="copley_XE2_4.60.xml")
+    assert "    move: {distance: 1}" in plain
