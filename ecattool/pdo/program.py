@@ -12,7 +12,8 @@ With complete access, phase 2 and 3 write each object in one transfer at sub-ind
 ``n, 0x00 (pad), entry…`` (sub-index 0 padded to 16 bits). ``order="count-first"`` reproduces the Control
 Techniques quick start literally (count first, then entries, no disabling writes).
 
-Fixed PDOs are assigned but never rewritten; PDOs whose entries were not given keep their contents.
+Fixed PDOs are assigned but never rewritten; PDOs whose entries were not given keep their contents. A device
+without a CoE mailbox gets no SDO at all: its process image is fixed.
 """
 
 from __future__ import annotations
@@ -106,6 +107,8 @@ def program(
     out = StartupList(name=device.name or device.type_name, vendor_id=device.vendor_id,
                       product_code=device.product_code, revision=device.revision)
 
+    if not device.has_coe:
+        return out  # no mailbox: a fixed process image, nothing to write (check says where that differs: PDO022/023)
     power_on = default_mapping(device)
 
     def assignable(d: Direction) -> bool:
