@@ -265,3 +265,21 @@ def test_a_skeleton_leaves_out_the_move_where_the_encoder_resolution_is_0() -> N
     assert "    move:" not in text and "No commissioning move until then" in text
     plain = new_project(load_device_cached(ESI / "copley_XE2_4.60.xml", None, "exact"), esi="copley_XE2_4.60.xml")
     assert "    move: {distance: 1}" in plain
+
+
+def test_devices_sharing_product_and_revision_are_picked_by_type_name_or_index(tmp_path: Path) -> None:
+    """Two end caps with product 0 (EJ9400-0000 and EJ9404-0000 of beckhoff_EJ9xxx.xml given product 0, as bus-end
+    terminals are): a product selector no longer picks the first by chance; type name and list index do."""
+    from ecattool.errors import SelectionError
+
+    text = (ESI / "beckhoff_EJ9xxx.xml").read_text(encoding="utf-8")
+    esi = tmp_path / "caps.xml"
+    esi.write_text(text.replace('ProductCode="#x24B82851"', 'ProductCode="#x0"')
+                   .replace('ProductCode="#x24BC2851"', 'ProductCode="#x0"'), encoding="utf-8")
+    for select in ("0x0", "0x0:0x0"):
+        with pytest.raises(SelectionError, match="choose one by type name or list index"):
+            resolve(None, None, str(esi), select, tmp_path)
+    for select, name in (("EJ9404-0000", "EJ9404-0000"), ("1", "EJ9400-0000")):
+        assert resolve(None, None, str(esi), select, tmp_path).type_name == name
+        machine = load_machine(_project(tmp_path, esi, select))
+        assert not _errors(machine) and commission(machine).ok
