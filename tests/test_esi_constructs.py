@@ -90,6 +90,13 @@ def test_a_project_that_selects_a_virtual_pdo_gets_it_left_out_with_a_note(tmp_p
     machine = load_machine(path)
     assert not _errors(machine) and "PDO029" in _rules(machine.findings)
     assert machine.slaves[0].mapping is not None and 0x1A13 not in {p.index for p in machine.slaves[0].mapping.tx}
+    from ecattool.project.export import slave_configs
+    from ecattool.startup.formats import eni
+
+    (config,) = slave_configs(machine)
+    assert not [c for c in config.commands if c.value == 0x1A13 or c.index == 0x1A13]
+    exported = eni.export([config]).upper()  # the ENI's process data: the default PDOs, not the latch window
+    assert "#X1A00" in exported and "#X1A13" not in exported
     assert commission(machine).ok
 
 
