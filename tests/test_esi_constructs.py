@@ -290,3 +290,23 @@ def test_devices_sharing_product_and_revision_are_picked_by_type_name_or_index(t
         assert resolve(None, None, str(esi), select, tmp_path).type_name == name
         machine = load_machine(_project(tmp_path, esi, select))
         assert not _errors(machine) and commission(machine).ok
+
+
+def test_a_read_only_mapping_object_the_dictionary_fills_is_not_rewritable(tmp_path: Path) -> None:
+    """EL6695-0002 with 1A01h not Fixed but read-only (its DT1A01 as the file has it): the slave holds its
+    dictionary's mapping, so a pdo: that lists the PDO list's entries would be written and refused (abort
+    06010002); lint says so (PDO023, against the mapping the slave powers on with), and the skeleton writes no pdo:."""
+    device = load_device_cached(*EL6695_2, "exact")
+    line = next(p for p in device.tx_pdos if p.index == 0x1A01).location.line
+    lines = EL6695_2[0].read_text(encoding="utf-8").splitlines(keepends=True)
+    lines[line - 1] = lines[line - 1].replace(' Fixed="1"', "")
+    esi = tmp_path / "el6695.xml"
+    esi.write_text("".join(lines), encoding="utf-8")
+    path = _project(tmp_path, esi, EL6695_2[1])
+    assert "pdo:" not in path.read_text(encoding="utf-8")
+    assert "PRJ027" in _rules(_errors(load_machine(path)))
+    given = _project(tmp_path, esi, EL6695_2[1], '    pdo:\n      tx:\n        - {index: 0x1A01, entries: '
+                     '[gap/12, "0x1801:09/1", "0x1801:07/1", gap/1, "0x10F4:10/1"]}\n        - {index: 0x1A08}\n')
+    machine = load_machine(given)
+    assert "PDO023" in _rules(_errors(machine))
+    assert not commission(machine, allow_errors=True).ok  # the slave refuses the write lint warned of
