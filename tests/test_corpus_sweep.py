@@ -1,8 +1,8 @@
 """The corpus sweep (issue 22): every device of every ESI and EDS in ../shared/corpus goes through
 ``project new`` → ``lint`` → ``commission`` on the simulator, as a new user would run them.
 
-All devices of all files are swept (no sampling: the sweep takes about 20 s on one core, most of it reading the
-3.4 MB EL1xxx file). A file without devices (a module file such as weidmueller_UR20_IO.xml, an external
+All devices of all files are swept (no sampling: 520 devices since issue 34 added 14 Beckhoff families; the sweep
+takes about 22 s on one core with a warm device cache, 50 s cold, most of it reading the EL1xxx and EL66xx files). A file without devices (a module file such as weidmueller_UR20_IO.xml, an external
 dictionary such as beckhoff_AX5021-xxxx-0001_Dict.xml) is counted as such. The test fails on
 
 * a device whose skeleton lints clean and does not commission (lint clean ⇒ commissions), and

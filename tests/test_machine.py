@@ -88,7 +88,8 @@ def test_io_slaves_get_their_outputs_written_and_read_back(tmp_path):
     report = commission(machine, allow_errors=True)
     assert report.ok, report.drives[0].error
     detail = next(s.detail for s in report.drives[0].steps if s.name == "process data")
-    assert detail.startswith("4 output byte(s) written (4 object(s), 4 read back by SDO)"), detail
+    # the EX260 has no mailbox: its outputs are not read back, no SDO is sent to it (issue 34 item 5)
+    assert detail.startswith("4 output byte(s) written (4 object(s))"), detail
 
 
 def test_enable_on_an_io_slave_is_an_error_naming_enable(tmp_path):

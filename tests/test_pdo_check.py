@@ -34,6 +34,14 @@ def _no_dictionary(dev: Any) -> None:
     dev.dictionary = ObjectDictionary()
 
 
+def _latch_window(dev: Any) -> None:
+    """A virtual TxPDO without a sync manager, as the EL1252's 1A10h (beckhoff_EL1xxx.xml): DC latch registers."""
+    from ecattool.esi.model import Pdo, PdoEntry
+
+    dev.tx_pdos.append(Pdo(Direction.TX, 0x1A10, "Latch", [PdoEntry(0x1D09, 0xAE, 8, "Status0")], fixed=True,
+                           virtual=True, su=1))
+
+
 #: rule -> (rx, tx, rules, device edit, startup)
 CASES: dict[str, tuple[str | None, str | None, FamilyRules, Any, list[StartupCommand]]] = {
     "PDO001": ("0x1605=controlword", None, GENERIC, None, []),
@@ -64,6 +72,7 @@ CASES: dict[str, tuple[str | None, str | None, FamilyRules, Any, list[StartupCom
     "PDO024": ("0x1600=", None, GENERIC, None, []),
     "PDO025": ("0x1600=0x5000:00/16", None, GENERIC, _no_dictionary, []),
     "PDO027": (None, "0x1A00=statusword,0x2000:00/1", GENERIC, None, []),
+    "PDO029": (None, "0x1A00;0x1A10", GENERIC, _latch_window, []),
 }
 
 

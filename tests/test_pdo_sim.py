@@ -209,7 +209,9 @@ def simulate(t: Target, mapping: Mapping, complete_access: bool = False) -> Verd
 def _compare(t: Target, mapping: Mapping, stats: dict[str, int], complete_access: bool = False) -> None:
     findings = check(t.device, mapping, rules=t.rules)
     errors = {f.rule for f in findings if f.severity is Severity.ERROR}
-    if errors & (NOT_WITNESSED | SIM_GAPS):
+    # a slave without a CoE mailbox is sent no SDO (issue 34): a mapping it cannot take is not witnessed by it
+    unwritable = set() if t.device.has_coe else {"PDO014", "PDO022", "PDO023"}
+    if errors & (NOT_WITNESSED | SIM_GAPS | unwritable):
         stats["not witnessed"] += 1
         return
     verdict = simulate(t, mapping, complete_access)
@@ -237,7 +239,8 @@ def test_checker_and_simulator_agree(name: str) -> None:
         _compare(t, mapping, stats)
 
     run()
-    assert stats["accepted"] > 0 and stats["rejected"] > 0, stats
+    # a slave without a mailbox takes no mapping but its own (issue 34): nothing it could refuse is sent to it
+    assert stats["accepted"] > 0 and (stats["rejected"] > 0 or not t.device.has_coe), stats
 
 
 @pytest.mark.parametrize("name", TARGETS)

@@ -127,6 +127,8 @@ class ProcessIo:
         drive still holds from an earlier run does not act the moment it is enabled in CSV/CST/PV/TQ (the
         target position is set to the actual position before enabling, see ``_hold_position``). An object
         the drive will not read out keeps its startup value (or 0)."""
+        if not _speaks_coe(self.rd):
+            return  # no mailbox: nothing to ask; the outputs start from the startup values or 0
         for (index, sub), pos in self.out_pos.items():
             if index in _NOT_SEEDED or pos.bit_len % 8:
                 continue
@@ -208,11 +210,19 @@ def _goto(slave: SlaveTarget, state: EcState, report: DriveReport) -> None:
     report.trace.ec_state(state.value)
 
 
+def _speaks_coe(rd: ResolvedDrive) -> bool:
+    """Whether the slave has a CoE mailbox: a slave without one (an EL2008, a fixed process image) is never sent
+    an SDO; its identity is read from its EEPROM."""
+    return rd.device is not None and rd.device.has_coe
+
+
 def _check_identity(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
     assert rd.device is not None
     want = rd.device.identity
     policy = rd.drive.identity
     try:
+        if not _speaks_coe(rd):
+            raise TargetError("no mailbox: the identity is the EEPROM's")
         vendor = int.from_bytes(slave.sdo_upload(0x1018, 1), "little")
         product = int.from_bytes(slave.sdo_upload(0x1018, 2), "little")
         revision = int.from_bytes(slave.sdo_upload(0x1018, 3), "little")
@@ -453,7 +463,7 @@ def _prove_process_data(io: ProcessIo, rd: Slave, report: DriveReport) -> None:
         if entry is not None and entry.datatype is not None and entry.datatype.bits:
             values.append(f"{index:04X}:{sub:02X}={_get_bits(io.inputs, pos.bit_offset, pos.bit_len)}")
     checked = 0
-    for (index, sub), pos in io.out_pos.items():
+    for (index, sub), pos in io.out_pos.items() if _speaks_coe(rd) else ():
         entry = rd.device.dictionary.entry(index, sub)
         if entry is None or not entry.access.readable(EcState.OP) or pos.bit_len % 8:
             continue

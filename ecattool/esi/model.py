@@ -530,10 +530,27 @@ class Device(IdentityView, Record):
         return self.rx_pdos if direction is Direction.RX else self.tx_pdos
 
     def pdo(self, index: int) -> Pdo | None:
+        """The PDO ``index``; where a window onto ESC registers (:meth:`esc_registers`) shares the index with a
+        real PDO, the real one."""
+        found = None
         for p in (*self.rx_pdos, *self.tx_pdos):
             if p.index == index:
-                return p
-        return None
+                if not self.esc_registers(p):
+                    return p
+                found = found or p
+        return found
+
+    def esc_registers(self, pdo: Pdo) -> bool:
+        """Whether ``pdo`` is a window onto ESC registers rather than a PDO of a sync manager: ``Virtual="true"``
+        without a real sync manager of its direction (no ``Sm``, or a ``Sm Virtual="true"``). TwinCAT maps such a
+        PDO's entries (1D09h:98h = register 0998h, a DC latch or start time) through an FMMU; the slave has no
+        mapping object for it, so it is never assigned, programmed or counted against a sync manager. A virtual
+        PDO on a real sync manager (an EL6692's bridge PDOs, whose entries the configuration tool makes) is a
+        PDO of that sync manager."""
+        if not pdo.virtual:
+            return False
+        sm = self.sm(pdo.sm) if pdo.sm is not None else None
+        return sm is None or sm.virtual or sm.kind != pdo.direction.sm_kind
 
     def sm(self, number: int) -> SyncManager | None:
         for s in self.sync_managers:
@@ -542,9 +559,10 @@ class Device(IdentityView, Record):
         return None
 
     def process_sm(self, direction: Direction) -> SyncManager | None:
-        """The sync manager that carries process data in ``direction`` (SM2 outputs / SM3 inputs usually)."""
+        """The sync manager that carries process data in ``direction`` (SM2 outputs / SM3 inputs usually); a
+        virtual one (``Sm Virtual="true"``: ESC registers through an FMMU, no sync manager of the slave) never."""
         for s in self.sync_managers:
-            if s.kind == direction.sm_kind:
+            if s.kind == direction.sm_kind and not s.virtual:
                 return s
         return None
 

@@ -60,23 +60,38 @@ def _by_revision(pool: list[_D], revision: int | None, policy: str, what: str, a
     if not pool:
         raise SelectionError(f"no device matches {what}; candidates: {candidates_text(all_devices)}")
     if policy == "newest" or (policy == "newest-not-newer" and revision is None):
-        return max(pool, key=lambda d: d.revision)
+        return _one(pool, max(d.revision for d in pool), what, all_devices)
     if policy == "newest-not-newer":
         older = [d for d in pool if d.revision <= revision]
         if not older:
             raise SelectionError(
                 f"no revision of {what} is 0x{revision:08X} or older; candidates: {candidates_text(pool, all_devices)}")
-        return max(older, key=lambda d: d.revision)
+        return _one(older, max(d.revision for d in older), what, all_devices)
     if revision is None:
         if len(pool) == 1:
             return pool[0]
+        if len({d.revision for d in pool}) == 1:
+            _one(pool, pool[0].revision, what, all_devices)
         raise SelectionError(
             f"{what} matches {len(pool)} devices; give a revision (product:revision) or --policy newest (in a project file: policy: newest under device:); "
             f"candidates: {candidates_text(pool, all_devices)}")
     exact = [d for d in pool if d.revision == revision]
     if not exact:
         raise SelectionError(f"no device matches {what} with revision 0x{revision:08X} exactly; candidates: {candidates_text(pool, all_devices)}")
-    return exact[0]
+    return _one(exact, revision, what, all_devices)
+
+
+def _one(pool: list[_D], revision: int, what: str, all_devices: list[_D]) -> _D:
+    """The device of ``pool`` with ``revision``; where several devices of other type names share the product and
+    the revision (end caps and bus-end terminals with product 0), none is picked by chance: they are told apart
+    by type name or list index."""
+    same = [d for d in pool if d.revision == revision]
+    if len({d.type_name for d in same}) > 1:
+        k = next((i for i, d in enumerate(all_devices) if d is same[0]), 0)
+        raise SelectionError(
+            f"{what} matches {len(same)} devices of the same revision 0x{revision:08X}; choose one by type name or "
+            f"list index (--device {same[0].type_name} or --device {k}); candidates: {candidates_text(same, all_devices)}")
+    return same[0]
 
 
 def select(esi: EsiFile | list[Device], selector: str | int | None = None, policy: str = "exact") -> Device:

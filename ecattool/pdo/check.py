@@ -24,6 +24,8 @@ from ecattool.pdo.model import (
     default_mapping,
     entry_keys,
     pdo_direction,
+    power_on_entries,
+    without_virtual,
 )
 from ecattool.pdo.program import resolve_rules
 from ecattool.profiles.rules import FamilyRules
@@ -62,6 +64,7 @@ RULES: dict[str, tuple[Severity, str]] = {
     "PDO026": (E, "the entry's length is outside the family's entry size range"),
     "PDO027": (E, "the process image of a sync manager is not a whole number of bytes"),
     "PDO028": (W, "a master configuration declares other process data than its startup SDOs program"),
+    "PDO029": (W, "a virtual PDO (ESC registers through an FMMU) is left out: no sync manager carries it"),
 }
 
 #: CiA-301 data-type indices usable as dummy entries, with their bit sizes
@@ -174,7 +177,7 @@ class _Checker:
         # mandatory and exclude
         assigned = {p.index for p in pdos}
         for dev_pdo in self.device.pdos(d):
-            if dev_pdo.mandatory and dev_pdo.index not in assigned:
+            if dev_pdo.mandatory and dev_pdo.index not in assigned and not self.device.esc_registers(dev_pdo):
                 self.add("PDO015", f"PDO {_a(dev_pdo.index)} ({dev_pdo.name}) is Mandatory but not assigned",
                          pdos[0].location if pdos else self.mapping_location(), pdo=dev_pdo.index)
         reported: set[frozenset[int]] = set()
@@ -231,7 +234,7 @@ class _Checker:
         dev_pdo = self.device.pdo(index)
         if dev_pdo is not None and dev_pdo.sm is not None:
             sm = self.device.sm(dev_pdo.sm)
-            if sm is not None and sm.kind == d.sm_kind:
+            if sm is not None and sm.kind == d.sm_kind and not sm.virtual:
                 return sm.number
         first = self.device.process_sm(d)
         return first.number if first is not None else None
@@ -276,6 +279,9 @@ class _Checker:
         if p.index not in self.bad and not (dev_pdo is not None and dev_pdo.fixed):
             current = next((q for q in self.default.pdos(d) if q.index == p.index), None)
             reference = current.entries if current is not None else (dev_pdo.entries if dev_pdo is not None else None)
+            held = power_on_entries(self.device, p.index)
+            if held is not None:
+                reference = held  # the slave powers on with its dictionary's own mapping: that is what is rewritten
             if reference is None or entry_keys(reference) != entry_keys(p.entries):
                 why = self.mapping_not_writable(p.index)
                 if not why and current is not None and self.assign_not_writable(d):
@@ -483,7 +489,12 @@ def check(
 ) -> list[Finding]:
     """All findings of ``mapping`` on ``device`` (see :data:`RULES`). ``startup`` are the other startup
     commands of the drive (for PDO021)."""
-    return _Checker(device, mapping, resolve_rules(device, rules), startup).run()
+    mapping, virtual = without_virtual(device, mapping)
+    notes = [_finding("PDO029", f"PDO {_a(p.index)} ({p.name or 'virtual'}) is a virtual PDO of {device.type_name}: "
+                      "ESC registers TwinCAT maps through an FMMU, not a PDO of a sync manager; it is left out of the "
+                      "assignment and the process image (read the registers directly)", p.location, pdo=p.index)
+             for p in virtual]
+    return notes + _Checker(device, mapping, resolve_rules(device, rules), startup).run()
 
 
 def check_config(

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ecattool.esi.model import Device, Direction
-from ecattool.pdo.model import Mapping
+from ecattool.pdo.model import Mapping, without_virtual
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,7 +99,9 @@ def _type_name(device: Device, index: int, sub: int, fallback: str) -> str:
 
 
 def layout(device: Device, mapping: Mapping) -> Layout:
-    """Lay out the process image of ``mapping`` on ``device`` (RX → outputs/SM2, TX → inputs/SM3)."""
+    """Lay out the process image of ``mapping`` on ``device`` (RX → outputs/SM2, TX → inputs/SM3); virtual PDOs
+    (ESC registers, :func:`ecattool.pdo.model.without_virtual`) are no part of a sync manager's image."""
+    mapping = without_virtual(device, mapping)[0]
     images: dict[Direction, SmImage] = {}
     for direction in Direction:
         sm = device.process_sm(direction)

@@ -450,14 +450,46 @@ def _mapping_from_dictionary(device: Device, index: int) -> list[PdoEntry] | Non
     return out
 
 
+def power_on_entries(device: Device, index: int) -> list[PdoEntry] | None:
+    """The entries the dictionary's own mapping object ``index`` holds at power-on where the ESI's dictionary
+    gives them (an object read from the file, with a count and a default for every entry it counts); None where
+    the dictionary does not say (or its object was synthesised from the PDO list)."""
+    obj = device.dictionary.get(index)
+    if obj is None or obj.location is None or not obj.location.line:
+        return None
+    return _mapping_from_dictionary(device, index)
+
+
+def _is_padding(value: int) -> bool:
+    return (value >> 16) < 0x20  # a gap (index 0) or a dummy of a standard data type
+
+
+def _padded_power_on(device: Device, index: int, listed: list[PdoEntry]) -> list[PdoEntry] | None:
+    """The dictionary's own default mapping of ``index`` where it differs from the ESI's PDO list ``listed`` only
+    by trailing padding (an EL6692's 1600h: a gap of 8 bits against an empty PDO): the same data, and the image
+    the slave powers on with, padding included. None otherwise (the PDO list stands; where the two really
+    differ, lint's PRJ027 says so)."""
+    own = power_on_entries(device, index)
+    if own is None:
+        return None
+    a, b = [e.mapping_value for e in own], [e.mapping_value for e in listed]
+    if a == b:
+        return None
+    n = min(len(a), len(b))
+    if a[:n] != b[:n] or not all(_is_padding(v) for v in (a[n:] or b[n:])):
+        return None
+    return own
+
+
 def _pdo_entries(device: Device, pdo: Pdo) -> list[PdoEntry]:
     return [PdoEntry(e.index, e.subindex, e.bit_len, e.name, e.data_type, e.location) for e in pdo.entries]
 
 
 def default_assignment(device: Device, direction: Direction) -> list[int]:
     """PDO indices assigned by default: the ESI PDOs with an ``Sm`` attribute or ``Mandatory`` (in file
-    order), else the dictionary's 1C12h/1C13h defaults."""
-    pdos = [p.index for p in device.pdos(direction) if p.sm is not None or p.mandatory]
+    order), else the dictionary's 1C12h/1C13h defaults. A virtual PDO (``Virtual="true"``: ESC registers that
+    TwinCAT maps through an FMMU, no CoE mapping object) is never assigned (docs/esi.md, "Virtual PDOs")."""
+    pdos = [p.index for p in device.pdos(direction) if (p.sm is not None or p.mandatory) and not device.esc_registers(p)]
     if pdos:
         return pdos
     obj = device.dictionary.get(direction.assign_index)
@@ -484,12 +516,38 @@ def default_mapping(device: Device) -> Mapping:
         for index in default_assignment(device, direction):
             pdo = device.pdo(index)
             if pdo is not None:
-                pdos.append(MappedPdo(index, _pdo_entries(device, pdo), False, pdo.name, pdo.location))
+                entries = _pdo_entries(device, pdo)
+                own = _padded_power_on(device, index, entries)
+                pdos.append(MappedPdo(index, entries if own is None else own, False, pdo.name, pdo.location))
             else:
                 entries = _mapping_from_dictionary(device, index) or []
                 pdos.append(MappedPdo(index, entries, False, "", None))
         out.set_pdos(direction, pdos)
     return out
+
+
+def virtual_pdos(device: Device, mapping: Mapping) -> list[MappedPdo]:
+    """The PDOs of ``mapping`` that are windows onto ESC registers on ``device`` (:meth:`Device.esc_registers`,
+    and no real PDO of that index): DC latch times, sync activation that TwinCAT puts into the process image
+    through FMMUs. They are no sync manager's PDOs: never assigned, never counted against a sync manager."""
+    out = []
+    for d in Direction:
+        for p in mapping.pdos(d):
+            dev = device.pdo(p.index)
+            if dev is not None and device.esc_registers(dev):
+                out.append(p)
+    return out
+
+
+def without_virtual(device: Device, mapping: Mapping) -> tuple[Mapping, list[MappedPdo]]:
+    """``mapping`` without its virtual PDOs (:func:`virtual_pdos`), and those left out."""
+    gone = virtual_pdos(device, mapping)
+    if not gone:
+        return mapping, []
+    ids = {id(p) for p in gone}
+    out = Mapping(rx=[p for p in mapping.rx if id(p) not in ids], tx=[p for p in mapping.tx if id(p) not in ids],
+                  given=set(mapping.given), source=mapping.source)
+    return out, gone
 
 
 # --- from a startup list ---------------------------------------------------------------------------

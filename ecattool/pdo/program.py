@@ -12,7 +12,8 @@ With complete access, phase 2 and 3 write each object in one transfer at sub-ind
 ``n, 0x00 (pad), entry…`` (sub-index 0 padded to 16 bits). ``order="count-first"`` reproduces the Control
 Techniques quick start literally (count first, then entries, no disabling writes).
 
-Fixed PDOs are assigned but never rewritten; PDOs whose entries were not given keep their contents.
+Fixed PDOs are assigned but never rewritten; PDOs whose entries were not given keep their contents. A device
+without a CoE mailbox gets no SDO at all: its process image is fixed.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from collections.abc import Iterable
 
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device, Direction
-from ecattool.pdo.model import MappedPdo, Mapping, default_mapping, entry_keys
+from ecattool.pdo.model import MappedPdo, Mapping, default_mapping, entry_keys, without_virtual
 from ecattool.profiles.rules import FamilyRules
 from ecattool.startup.model import StartupCommand, StartupList
 
@@ -61,6 +62,22 @@ def resolve_rules(device: Device, rules: FamilyRules | None) -> FamilyRules:
     return rules_for(device)
 
 
+def rewritten(device: Device, pdo: MappedPdo, rules: FamilyRules | None = None,
+              power_on: Mapping | None = None) -> bool:
+    """Whether :func:`program` writes the mapping object of ``pdo`` (given with entries): where the family lets
+    mapping objects be written and the PDO is not Fixed; else only where the entries differ from the PDO's own
+    (the drive then refuses them, as ``check`` says)."""
+    rules = resolve_rules(device, rules)
+    dev_pdo = device.pdo(pdo.index)
+    if rules.mapping_writable and not (dev_pdo is not None and dev_pdo.fixed):
+        return True
+    if power_on is None:
+        power_on = default_mapping(device)
+    own = dev_pdo.entries if dev_pdo is not None else next(
+        (p.entries for p in (*power_on.rx, *power_on.tx) if p.index == pdo.index), [])
+    return entry_keys(pdo.entries) != entry_keys(own)
+
+
 def program(
     device: Device,
     mapping: Mapping,
@@ -82,6 +99,7 @@ def program(
     if order not in ORDERS:
         raise InputError(f"unknown programming order {order!r} (use {' or '.join(ORDERS)})")
     rules = resolve_rules(device, rules)
+    mapping = without_virtual(device, mapping)[0]  # ESC registers: no SDO assigns or maps them
     dirs = [d for d in Direction if d in set(directions if directions is not None else (mapping.given or Direction))]
     coe = device.mailbox.coe if device.mailbox is not None else None
     ca = bool(complete_access and coe is not None and coe.complete_access)
@@ -89,6 +107,8 @@ def program(
     out = StartupList(name=device.name or device.type_name, vendor_id=device.vendor_id,
                       product_code=device.product_code, revision=device.revision)
 
+    if not device.has_coe:
+        return out  # no mailbox: a fixed process image, nothing to write (check says where that differs: PDO022/023)
     power_on = default_mapping(device)
 
     def assignable(d: Direction) -> bool:
@@ -98,12 +118,7 @@ def program(
         return [p.index for p in mapping.pdos(d)] != [p.index for p in power_on.pdos(d)]
 
     def rewritable(pdo: MappedPdo) -> bool:
-        dev_pdo = device.pdo(pdo.index)
-        if rules.mapping_writable and not (dev_pdo is not None and dev_pdo.fixed):
-            return True
-        own = dev_pdo.entries if dev_pdo is not None else next(
-            (p.entries for p in (*power_on.rx, *power_on.tx) if p.index == pdo.index), [])
-        return entry_keys(pdo.entries) != entry_keys(own)
+        return rewritten(device, pdo, rules, power_on)
 
     # phase 1: disable the assignments
     if not count_first:

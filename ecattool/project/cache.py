@@ -195,8 +195,8 @@ def load_device_cached(path: str | Path, select: str | None, policy: str) -> Run
 
 
 def esi_findings_cached(path: str | Path, select: str | None, policy: str) -> list[Finding]:
-    """The structural findings (``esi.checks.check_device``) of the device ``select`` of the ESI at ``path``,
-    not of the file's other devices, with a memory and disk cache (content, selector, policy and path)."""
+    """The reader's findings about numbers inside the device ``select`` of the ESI at ``path`` (``esi-number-*`` of
+    ``esi.device_findings``: identifiers read with a tolerated spelling) and its structural findings (``esi.checks.check_device``), not those of the file's other devices, with a memory and disk cache (content, selector, policy and path)."""
     from ecattool import esi
     from ecattool.esi.checks import check_device
 
@@ -207,7 +207,12 @@ def esi_findings_cached(path: str | Path, select: str | None, policy: str) -> li
         return hit
     obj = _disk_get("check", key, list)
     if not isinstance(obj, list) or not all(isinstance(f, Finding) for f in obj):
-        obj = check_device(esi.select(_esi(path), select, policy=policy))
+        doc = _esi(path)
+        device = esi.select(doc, select, policy=policy)
+        # the reader's findings about numbers inside the device (an entry Index '#x0x6040' read as 6040h: what
+        # commission will use), then the structural ones
+        numbers = [f for f in esi.device_findings(doc, device) if f.rule.startswith("esi-number")]
+        obj = [*numbers, *check_device(device)]
         _disk_put("check", key, obj)
     _CHECKS[key] = obj
     return obj

@@ -182,6 +182,7 @@ def build_slave(lp: LoadedProject, i: int) -> Slave:
     startup.extend(steps.scaling_commands(lp, i, s))
     startup.extend(params)
     s.startup = startup
+    steps.check_mailbox(lp, i, s)
     steps.check_kind(lp, i, s)
     steps.check_pdo_objects(lp, i, s)
     steps.check_sw(lp, i, s)

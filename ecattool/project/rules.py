@@ -40,6 +40,7 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ025": "enable: true on a slave that is not a CiA-402 axis",
     "PRJ026": "a SoE drive's PDO is not a CoE mapping object: ecattool configures CoE slaves only",
     "PRJ027": "a mapping object of the device's dictionary differs from its ESI PDO list, and the project keeps the power-on mapping",
+    "PRJ028": "a startup SDO (parameter, PDO mapping, init command) for a slave without a CoE mailbox",
     "PRJ030": "the .sw image of a drive cannot be read or fails its integrity checks",
     "PRJ031": "a .sw image is configured for a drive that is not a Technosoft drive",
     "PRJ032": "a .sw image was made for another Technosoft product or firmware than the drive's",

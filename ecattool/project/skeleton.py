@@ -81,7 +81,7 @@ def new_project(device: Device, *, name: str | None = None, profile: str | None 
     motion = _motion(device, profiles.rules_for(device))
     # the skeleton's parameters are written in PS: an ESI command for the same object gives way to them
     replaced = {(int(a, 16), int(b, 16)) for a, b in re.findall(r'\{object: "([0-9A-F]{4}):([0-9A-F]{2})"', motion)}
-    body = (_dc(device) + (_esi_init(device, replaced) if esi is not None else "") + motion
+    body = (_dc(device) + _pdo(device) + (_esi_init(device, replaced) if esi is not None else "") + motion
             + _accept_flaws(device, findings or []))
     return ("# ecattool project file (format 1). Docs: docs/project.md\n"
             "ecattool: 1\n"
@@ -90,6 +90,49 @@ def new_project(device: Device, *, name: str | None = None, profile: str | None 
             f"  - name: {_scalar(name)}\n"
             "    device:\n"
             f"{ref}{body}")
+
+
+def _pdo(device: Device) -> str:
+    """``pdo:`` for a device whose dictionary's mapping objects hold another power-on mapping than its ESI's PDO
+    list (lint PRJ027): the PDO list of each such direction, the differing PDOs with their entries, so that
+    commission programs the mapping lint checks; with a comment saying why. Nothing where they agree."""
+    from ecattool.pdo import default_mapping, entry_text
+    from ecattool.project.steps import dictionary_mapping_differences
+
+    from ecattool.esi.model import Direction
+    from ecattool.pdo import MappedPdo, check
+    from ecattool.findings import Severity
+
+    mapping = default_mapping(device)
+    diffs = dictionary_mapping_differences(device, mapping)
+    if not diffs:
+        return ""
+    differing = {d.index for d in diffs}
+    # the PDO list, given: commission programs it; where it could not (Fixed PDOs, a list longer than the
+    # mapping object), lint keeps reporting PRJ027 and the skeleton leaves the mapping alone
+    given = type(mapping)(source=mapping.source, given={d.direction for d in diffs})
+    for direction in Direction:
+        given.set_pdos(direction, [MappedPdo(p.index, list(p.entries), p.index in differing, p.name, p.location)
+                                   for p in mapping.pdos(direction)])
+    if dictionary_mapping_differences(device, given) or any(f.severity is Severity.ERROR for f in check(device, given)):
+        return ""
+    lines = []
+    for d in diffs:
+        line = f", line {d.location.line}" if d.location is not None and d.location.line else ""
+        lines.append(f"    # the ESI's dictionary gives {d.index:04X}h another power-on mapping than its PDO list{line}:")
+        lines.append(f"    #   dictionary {' '.join(f'{v:08X}' for v in d.held) or 'nothing'}, "
+                     f"PDO list {' '.join(f'{v:08X}' for v in d.listed) or 'nothing'}")
+    lines.append("    # The slave would run the dictionary's; pdo: programs the PDO list that lint checks (PRJ027).")
+    lines.append("    pdo:")
+    for direction in sorted({d.direction for d in diffs}, key=lambda x: x.value):
+        lines.append(f"      {direction.value}:")
+        for p in mapping.pdos(direction):
+            if p.index in differing:
+                entries = ", ".join(_scalar(entry_text(e)) for e in p.entries)
+                lines.append(f"        - {{index: 0x{p.index:04X}, entries: [{entries}]}}")
+            else:
+                lines.append(f"        - {{index: 0x{p.index:04X}}}")
+    return "\n".join(lines) + "\n"
 
 
 def _esi_init(device: Device, replaced: set[tuple[int, int]]) -> str:
@@ -200,6 +243,10 @@ def _motion(device: Device, rules: FamilyRules) -> str:
     factor, asked = _factor_parts(device, rx, rules)
     params += factor
     lines = "".join(f"      - {p}\n" for p in params)
+    if asked:  # a move would fail lint (PRJ023): the skeleton leaves it out and says why
+        return ((f"    parameters:\n{lines}" if lines else "") + asked
+                + "    # No commissioning move until then (the drive could not convert the target): add\n"
+                  "    # move: {distance: 1} once the value is set.\n")
     return (f"    parameters:\n{lines}" if lines else "") + asked + "    move: {distance: 1}\n"
 
 

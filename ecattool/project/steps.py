@@ -6,12 +6,14 @@ Each step adds located findings to the ResolvedDrive and returns the startup com
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 from ecattool.errors import EcatToolError, Location
 from ecattool.esi.model import Device, Direction
 from ecattool.findings import Finding, Severity
-from ecattool.profiles.rules import NO_RULES
+from ecattool.profiles.rules import FamilyRules, NO_RULES
+from ecattool.pdo.model import Mapping, without_virtual
 from ecattool.project.loader import LoadedProject
 from ecattool.project.resolve import ResolvedDrive
 from ecattool.startup.model import StartupCommand
@@ -41,8 +43,11 @@ def pdo_commands(lp: LoadedProject, i: int, rd: ResolvedDrive, params: list[Star
     except EcatToolError as exc:
         rd.error("PDO000", exc.message, exc.location or loc)
         return []
-    rd.mapping = mapping
     findings = pdo.check(rd.device, mapping, rules=rd.rules, startup=params)
+    # a virtual PDO is left out of what the slave is given (PDO029 says so): lint, startup export and
+    # commission see the same mapping
+    mapping = without_virtual(rd.device, mapping)[0]
+    rd.mapping = mapping
     rd.findings.extend(_relocate(f, loc) for f in findings)
     if cfg is None:
         return []  # the drive keeps its power-on mapping: nothing to program
@@ -247,6 +252,19 @@ def _move_fits(lp: LoadedProject, i: int, rd: ResolvedDrive, mode: str) -> bool:
     return True
 
 
+def check_mailbox(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
+    """PRJ028: a startup SDO for a slave without a CoE mailbox (a fixed process image: an EL2008, an SMC EX260).
+    Nothing receives it, and commission never sends such a slave an SDO; reported once, at the first command."""
+    assert rd.device is not None
+    if rd.device.has_coe or rd.startup is None or not rd.startup.commands:
+        return
+    cmd = rd.startup.commands[0]
+    why = "the mailbox speaks " + ", ".join(rd.device.mailbox.protocols) if rd.device.mailbox else "it has no mailbox"
+    rd.error("PRJ028", f"{len(rd.startup.commands)} startup SDO(s) ({cmd.address} first) for {rd.device.type_name}, "
+                       f"which has no CoE mailbox ({why}): a fixed process image that nothing can write; leave them "
+                       "out", cmd.source or lp.drive_location(i, "device"))
+
+
 def check_kind(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     """PRJ025: ``enable: true`` on a slave that is not a CiA-402 axis (no 6040h/6041h, no profile 402 or 6060h):
     commission would run the CiA-402 enable on a terminal, a coupler or a gateway."""
@@ -303,9 +321,53 @@ def check_pdo_objects(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
                                f"mailbox speaks {', '.join(protocols)}, not CoE); ecattool configures "
                                "and commissions CoE slaves only", p.location if p.location and p.location.line else loc)
             return
-    if rd.mapping is None or (rd.drive.pdo is not None and (rd.drive.pdo.rx is not None or rd.drive.pdo.tx is not None)):
+    if rd.mapping is None:
         return
-    for direction, mp in [(Direction.RX, p) for p in rd.mapping.rx] + [(Direction.TX, p) for p in rd.mapping.tx]:
+    for diff in dictionary_mapping_differences(device, rd.mapping, rd.rules):
+        rd.error("PRJ027", f"the dictionary's mapping object 0x{diff.index:04X} maps "
+                           f"{', '.join(f'0x{v:08X}' for v in diff.held) or 'nothing'}, the ESI's PDO list "
+                           f"{', '.join(f'0x{v:08X}' for v in diff.listed) or 'nothing'}: {device.type_name} would run "
+                           "with the dictionary's mapping, which differs from the one checked; give the mapping in pdo: "
+                           "so that commission programs it", diff.location)
+        return
+
+
+@dataclass(frozen=True, slots=True)
+class MappingDifference:
+    """A mapping object whose dictionary default differs from the ESI's PDO list (PRJ027)."""
+
+    direction: Direction
+    index: int
+    held: list[int]  # the dictionary's default entries (mapping values)
+    listed: list[int]  # the PDO list's
+    location: Location | None
+
+
+def _without_trailing_padding(values: list[int]) -> list[int]:
+    """Mapping values without the gaps and dummies (index below 20h) at their end: they pad the PDO and carry
+    nothing, so a mapping object that differs from the PDO list only by them lays out the same data."""
+    out = list(values)
+    while out and (out[-1] >> 16) < 0x20:
+        out.pop()
+    return out
+
+
+def dictionary_mapping_differences(device: Device, mapping: Mapping,
+                                   rules: FamilyRules | None = None) -> list[MappingDifference]:
+    """The PDOs of ``mapping`` that the slave keeps as it has them (not given with entries, or Fixed: commission
+    does not program them, :func:`ecattool.pdo.program`) whose mapping object in the device's dictionary
+    holds another default mapping than the ESI's PDO list: another image (the EM7004's 1601h–1609h shifted by one
+    against its RxPdo list), or the same image where an entry of the dictionary's own mapping cannot be mapped
+    (a SOES board's 1A00h mapping 0x00060120, a dummy in a TxPDO). Equal where they differ only by trailing
+    padding (an EL6692's 1600h: a gap of 8 bits against an empty PDO). The slave powers on with the dictionary's
+    mapping; ``project new`` writes such a PDO list as ``pdo:`` so that commission programs it, lint reports it
+    (PRJ027) where the project keeps the power-on mapping."""
+    from ecattool.pdo.program import rewritten
+
+    out = []
+    for direction, mp in [(Direction.RX, p) for p in mapping.rx] + [(Direction.TX, p) for p in mapping.tx]:
+        if mp.explicit and rewritten(device, mp, rules):
+            continue  # commission programs the entries the project gives
         obj = device.dictionary.get(mp.index)
         if obj is None or obj.location is None or not obj.location.line:
             continue  # synthesised from the PDO list: it agrees by construction
@@ -313,22 +375,21 @@ def check_pdo_objects(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
         if count is None or count.default is None:
             continue
         n = int.from_bytes(count.default, "little")
-        held = []
+        held_or_none = []
         for sub in range(1, n + 1):
             e = obj.entry(sub)
-            held.append(int.from_bytes(e.default, "little") if e is not None and e.default is not None else None)
-        listed = [e.mapping_value for e in mp.entries]
-        if None in held or held == listed:
+            held_or_none.append(int.from_bytes(e.default, "little") if e is not None and e.default is not None else None)
+        if None in held_or_none:
             continue
-        same_layout = [v & 0xFF for v in held if v is not None] == [v & 0xFF for v in listed]
-        if same_layout and all(_maps_validly(device, v, direction) for v in held if v is not None):
+        held = [v for v in held_or_none if v is not None]
+        listed = [e.mapping_value for e in mp.entries]
+        if held == listed or _without_trailing_padding(held) == _without_trailing_padding(listed):
+            continue
+        same_layout = [v & 0xFF for v in held] == [v & 0xFF for v in listed]
+        if same_layout and all(_maps_validly(device, v, direction) for v in held):
             continue  # the same image of valid entries: a PDO list entry named otherwise is esi-pdo-object-missing's
-        rd.error("PRJ027", f"the dictionary's mapping object 0x{mp.index:04X} maps "
-                           f"{', '.join(f'0x{v:08X}' for v in held if v is not None) or 'nothing'}, the ESI's PDO list "
-                           f"{', '.join(f'0x{v:08X}' for v in listed) or 'nothing'}: {device.type_name} would run with "
-                           "the dictionary's mapping, which differs from the one checked; give the mapping in pdo: so "
-                           "that commission programs it", obj.location)
-        return
+        out.append(MappingDifference(direction, mp.index, held, listed, obj.location))
+    return out
 
 
 def zero_factor_parts(read: Callable[[int, int], int | None]) -> list[tuple[int, int]]:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ecattool.esi.model import Device, Identity
+from ecattool.esi.model import Device, Direction, Identity
 from ecattool.od.model import EcState, Entry
 from ecattool.profiles.rules import FamilyRules
 from ecattool.sim import eeprom as ee
@@ -35,6 +35,18 @@ def _rules_for(device: Device) -> FamilyRules:
     except ImportError:
         return FamilyRules("generic", vendor_id=device.vendor_id)
     return rules_for(device)
+
+
+def _standard_entry(sub: int, bits: int, d: Direction) -> Entry:
+    """A read-only entry of ``bits`` (BOOL for one bit, else BITn or the unsigned type of that size) mappable
+    in direction ``d``."""
+    from ecattool.od.model import RO
+    from ecattool.od.types import lookup
+
+    name = {1: "BOOL", 8: "USINT", 16: "UINT", 32: "UDINT", 64: "ULINT"}.get(bits, f"BIT{bits}")
+    dt = lookup(name)
+    return Entry(sub, f"standard object sub {sub}", dt, bits, name, pdo_mapping="R" if d is Direction.RX else "T",
+                 access=RO)
 
 
 class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirks, Memory):
@@ -109,9 +121,13 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
             for e in obj.entries.values():
                 self._entries[(obj.index, e.subindex)] = e
                 self._store[(obj.index, e.subindex)] = self._default_bytes(e)
-        for dset in self._pdo_known.values():
+        for direction, dset in self._pdo_known.items():
             for idx, sub, bits in dset:
                 self._store.setdefault((idx, sub), b"\x00" * ((bits + 7) // 8))
+                if 0x1000 <= idx <= 0x1FFF and (idx, sub) not in self._entries:
+                    # a communication object the ESI's dictionary leaves out but its PDO list maps (a TxPDO's
+                    # state and toggle 1800h:07/09, 1C32h:20h sync error): the slave has it, by SDO too
+                    self._entries[(idx, sub)] = _standard_entry(sub, bits, direction)
         self._identity_defaults()
         self._encoder_resolution()
         self._pdo_defaults()

@@ -75,15 +75,15 @@ class PdoConfig(DriveCore):
         for d in (RX, TX):
             pdos = self.device.pdos(d)
             for pdo in pdos:
-                if (pdo.index, 0) not in self._entries or self._own_mapping(pdo.index):
+                if self.device.esc_registers(pdo) or (pdo.index, 0) not in self._entries or self._own_mapping(pdo.index):
                     continue
                 for i, e in enumerate(pdo.entries, start=1):
                     if (pdo.index, i) in self._entries:
                         self._store[(pdo.index, i)] = e.mapping_value.to_bytes(4, "little")
                 self._put(pdo.index, 0, len(pdo.entries))
             assign = d.assign_index
-            if (assign, 0) in self._entries and any(p.sm is not None for p in pdos):
-                chosen = [p.index for p in pdos if p.sm is not None]
+            if (assign, 0) in self._entries and any(p.sm is not None and not self.device.esc_registers(p) for p in pdos):
+                chosen = [p.index for p in pdos if p.sm is not None and not self.device.esc_registers(p)]
                 subs = sorted(s for (i, s) in self._entries if i == assign and s > 0)
                 for s in subs:
                     self._store[(assign, s)] = b"\x00\x00"
@@ -93,8 +93,8 @@ class PdoConfig(DriveCore):
 
     def _assigned(self, d: Direction) -> list[int]:
         assign = d.assign_index
-        if (assign, 0) not in self._entries:
-            return [p.index for p in self.device.pdos(d) if p.sm is not None]
+        if (assign, 0) not in self._entries:  # a virtual PDO is ESC registers: the slave assigns no such PDO
+            return [p.index for p in self.device.pdos(d) if p.sm is not None and not self.device.esc_registers(p)]
         n = self._read_int(assign, 0) or 0
         chosen = (self._read_int(assign, s) or 0 for s in range(1, n + 1) if (assign, s) in self._entries)
         return [p for p in chosen if p]  # a 0 entry assigns nothing (Technosoft §2.5 leaves sub 2 at 0)
@@ -207,7 +207,7 @@ class PdoConfig(DriveCore):
         if (pdo, 0) in self._entries:
             n = self._read_int(pdo, 0) or 0
             return [PdoEntry.from_mapping_value(self._read_int(pdo, s) or 0) for s in range(1, n + 1)]
-        for p in self.device.pdos(d):
-            if p.index == pdo:
-                return list(p.entries)
+        found = [p for p in self.device.pdos(d) if p.index == pdo]
+        for p in sorted(found, key=self.device.esc_registers):  # a real PDO before ESC registers of its index
+            return list(p.entries)
         return None

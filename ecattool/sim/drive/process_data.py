@@ -28,6 +28,7 @@ class ProcessData(PdoConfig):
         code = AlStatus.INVALID_OUTPUT_CONFIG if d is RX else AlStatus.INVALID_INPUT_CONFIG
         layout = Layout()
         assigned = self._assigned(d)
+        per_sm: dict[int, int] = {}  # SM number -> bits of the PDOs it carries
         limit = self.rules.max_assigned_rx if d is RX else self.rules.max_assigned_tx
         if limit is not None and len(assigned) > limit:
             self._refuse(EcState.SAFEOP, code, f"{len(assigned)} PDOs assigned, at most {limit}")
@@ -56,14 +57,31 @@ class ProcessData(PdoConfig):
             if self.rules.max_pdo_entries is not None and len(entries) > self.rules.max_pdo_entries:
                 self._refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} has {len(entries)} entries")
             layout.bits += bits
+            sm_no = self._sm_of(d, pdo)
+            if sm_no is not None:
+                per_sm[sm_no] = per_sm.get(sm_no, 0) + bits
         if layout.bits % 8 and not self._mapping_is_fixed(assigned):
             # a slave whose mapping the master cannot change (fixed PDOs, no CoE: an EL1002's 2 bits) has its
             # sync manager one byte long, the ESC pads the rest; a configurable one refuses the odd length
             self._refuse(EcState.SAFEOP, code, f"{layout.bits} bits of process data is not a whole number of bytes")
-        sm = self.device.process_sm(d)
-        if sm is not None and sm.max_size is not None and layout.size > sm.max_size:
-            self._refuse(EcState.SAFEOP, code, f"{layout.size} bytes exceed SM{sm.number} maximum {sm.max_size}")
+        for sm_no, bits in per_sm.items():
+            sm = self.device.sm(sm_no)
+            size = (bits + 7) // 8
+            if sm is not None and sm.max_size is not None and size > sm.max_size:
+                self._refuse(EcState.SAFEOP, code, f"{size} bytes exceed SM{sm.number} maximum {sm.max_size}")
         return layout
+
+    def _sm_of(self, d: Direction, pdo: int) -> int | None:
+        """The sync manager that carries PDO ``pdo``: the one its ESI ``Sm`` names where that is a real sync manager
+        of the direction (an EQ2339's outputs are over SM0 and SM1, one byte each), else the direction's first."""
+        kind = "Outputs" if d is RX else "Inputs"
+        for p in self.device.pdos(d):
+            if p.index == pdo and not self.device.esc_registers(p) and p.sm is not None:
+                sm = self.device.sm(p.sm)
+                if sm is not None and sm.kind == kind and not sm.virtual:
+                    return sm.number
+        first = next((s for s in self.device.sync_managers if s.kind == kind and not s.virtual), None)
+        return first.number if first is not None else None
 
     def process_image_sizes(self) -> tuple[int, int]:
         """(output bytes, input bytes) of the current layout (valid from SAFE-OP on)."""
@@ -155,6 +173,12 @@ class ProcessData(PdoConfig):
                     handler(sub, raw, int.from_bytes(raw, "little"))
                 except SdoAbort:
                     return False
+        e = self._entries.get((index, sub))
+        if e is not None and e.bit_size > 8 * len(raw):
+            # a compact PDO maps the low bits of a larger object (EJ2521's 16-bit 7000h:12 of 32): they
+            # replace the low bytes, the object keeps its high ones
+            old = self._store.get((index, sub), b"")
+            raw = raw + old[len(raw):(e.bit_size + 7) // 8].ljust((e.bit_size + 7) // 8 - len(raw), b"\x00")
         self._store[(index, sub)] = raw
         return index in self._after_write
 

@@ -17,6 +17,9 @@ class SdoServer(PdoConfig):
 
     def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
         planned = self.faults.next_sdo()
+        if not self.device.has_coe:  # a fixed process image (an EL2008): no mailbox answers
+            self._log("sdo_timeout", index=index, subindex=subindex, reason="the slave has no CoE mailbox")
+            raise SdoTimeout(index, subindex)
         if self.esm not in MAILBOX_STATES:
             self._log("sdo_timeout", index=index, subindex=subindex, reason=f"no mailbox in {self.esm.value}")
             raise SdoTimeout(index, subindex)
@@ -36,6 +39,9 @@ class SdoServer(PdoConfig):
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None:
         planned = self.faults.next_sdo()
+        if not self.device.has_coe:  # a fixed process image (an EL2008): no mailbox answers
+            self._log("sdo_timeout", index=index, subindex=subindex, reason="the slave has no CoE mailbox")
+            raise SdoTimeout(index, subindex)
         if self.esm not in MAILBOX_STATES:
             self._log("sdo_timeout", index=index, subindex=subindex, reason=f"no mailbox in {self.esm.value}")
             raise SdoTimeout(index, subindex)
