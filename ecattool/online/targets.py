@@ -3,7 +3,7 @@ pysoem or KickCAT."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
@@ -23,10 +23,24 @@ def open_bus(spec: str, devices: Sequence[Device] = ()) -> LiveBus:
             raise SelectionError("target 'sim' without a project has no slaves: use sim:PROFILE,ESI… "
                                  "(e.g. sim:hdt,technosoft-ipos)")
         return sim_bus([drive_for_device(d) for d in devs], spec)
+    # a real master runs in a child process (ecattool.target.isolated): one that crashes or hangs on what a slave
+    # answers becomes a one-line error naming the slave and the object, never the end of ecattool
     if parsed.kind == "pysoem":
         from ecattool.online.pysoem_bus import open_pysoem
+        from ecattool.target.pysoem import _import_pysoem
 
-        return open_pysoem(parsed.interface)
+        _import_pysoem()
+        return isolated_bus(spec, lambda: open_pysoem(parsed.interface))
     from ecattool.online.kickcat_bus import open_kickcat
+    from ecattool.target.kickcat import import_kickcat
 
-    return open_kickcat(parsed.interface)
+    import_kickcat()
+    return isolated_bus(spec, lambda: open_kickcat(parsed.interface))
+
+
+def isolated_bus(spec: str, opener: Callable[[], LiveBus]) -> LiveBus:
+    """The live bus ``opener`` opens, served from a child process (:class:`~ecattool.target.isolated.MasterProcess`)."""
+    from ecattool.target.isolated import MasterProcess, RemoteSlave
+
+    master = MasterProcess(spec, opener, lambda bus: bus.slaves)
+    return LiveBus(spec, [RemoteSlave(master, p) for p in master.positions], closer=master.close)

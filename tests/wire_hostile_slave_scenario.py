@@ -1,0 +1,72 @@
+"""Run inside a private network namespace (tests/test_wire_hostile_slave.py starts it through ecattool.sim.bus.netns):
+for each misbehaviour, ``ecattool sim serve PROJECT --misbehave NAME`` on one end of the veth pair, and on the
+other end the read commands of ecattool through SOEM (pysoem): ``bus scan``, ``sdo read``, ``sdo dump``,
+``sii read``, ``backup`` and ``audit``, each a process of its own, each bounded in time.
+
+    python wire_hostile_slave_scenario.py PROJECT OUTDIR NAME...
+
+Prints one JSON document on stdout: per misbehaviour and command the exit status, the time taken, stderr and
+the end of stdout. Every wait is bounded."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from wire_pysoem_scenario import MASTER_IF, master_priority, start_server, stop_server
+
+#: the longest one command may take (the master's own time limits are capped at MASTER_TIMEOUT_S)
+COMMAND_TIMEOUT_S = 40
+MASTER_TIMEOUT_S = "4"
+
+
+def commands(project: str, out: Path) -> dict[str, list[str]]:
+    target = ["--target", f"pysoem:{MASTER_IF}"]
+    return {
+        "bus scan": ["bus", "scan", *target],
+        "sdo read": ["sdo", "read", "0x1018:01", *target],
+        "sdo dump": ["sdo", "dump", *target, "-o", str(out / "dump.json")],
+        "sii read": ["sii", "read", *target, "-o", str(out / "slave.sii.bin")],
+        "backup": ["backup", project, *target, "-o", str(out / "backup")],
+        "audit": ["audit", project, *target],
+    }
+
+
+def run(argv: list[str]) -> dict[str, Any]:
+    env = {**os.environ, "ECATTOOL_MASTER_TIMEOUT_S": MASTER_TIMEOUT_S}
+    t0 = time.monotonic()
+    try:
+        done = subprocess.run([sys.executable, "-m", "ecattool", *argv], capture_output=True, text=True,
+                              timeout=COMMAND_TIMEOUT_S, env=env)
+        rc, out, err = done.returncode, done.stdout, done.stderr
+    except subprocess.TimeoutExpired as exc:
+        rc, out, err = None, str(exc.stdout or ""), f"timed out after {COMMAND_TIMEOUT_S} s"
+    return {"returncode": rc, "seconds": round(time.monotonic() - t0, 2), "stdout": out[-1500:], "stderr": err}
+
+
+def one(project: str, name: str, outdir: Path) -> dict[str, Any]:
+    out = outdir / name
+    out.mkdir(parents=True)
+    extra = [] if name == "none" else ["--misbehave", name]
+    server, _ready = start_server([project, *extra])
+    results: dict[str, Any] = {}
+    try:
+        for label, argv in commands(project, out).items():
+            results[label] = run(argv)
+            sii = out / "slave.sii.bin"
+            if label == "sii read" and sii.exists():
+                results[label]["sii_hex"] = sii.read_bytes().hex()
+    finally:
+        results["server"] = stop_server(server)
+    return results
+
+
+if __name__ == "__main__":
+    master_priority()
+    project, outdir, *names = sys.argv[1:]
+    print(json.dumps({name: one(project, name, Path(outdir)) for name in names}))
