@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ecattool.errors import InputError, SdoAbort, TargetError
+from ecattool.target.isolated import MasterGone
 from ecattool.findings import Finding, Severity
 from ecattool.online.dictionary import decode
 from ecattool.online.live import LiveBus
@@ -91,6 +92,8 @@ def audit_drive(rd: Any, slave: Any, report: AuditReport, sw_checksums: bool = F
     dev_ident = device.identity
     try:
         ident = slave.identity()
+    except MasterGone:
+        raise  # nothing more can be read: one line, not a drift report of everything
     except TargetError as exc:
         report.drifts.append(Drift(name, rd.position, "unreadable", "identity", None, None, f"identity: {exc}"))
         ident = None
@@ -115,6 +118,8 @@ def audit_drive(rd: Any, slave: Any, report: AuditReport, sw_checksums: bool = F
             report.drifts.append(Drift(name, rd.position, "abort", where, cmd.data.hex(), f"0x{exc.code:08X}",
                                        f"{where}: reading it back was refused: {exc}", cmd.source))
             continue
+        except MasterGone:
+            raise
         except TargetError as exc:
             report.drifts.append(Drift(name, rd.position, "unreadable", where, cmd.data.hex(), None,
                                        f"{where}: {exc}", cmd.source))

@@ -44,11 +44,15 @@ TIMEOUT_ENV = "ECATTOOL_MASTER_TIMEOUT_S"
 _PR_SET_PDEATHSIG = 1
 
 
-class MasterCrashed(TargetError):
+class MasterGone(TargetError):
+    """The master is gone (it crashed or hung earlier): nothing more can be read through it."""
+
+
+class MasterCrashed(MasterGone):
     """The master's child process ended while it served a request (a crash inside the master library)."""
 
 
-class MasterHung(TargetError):
+class MasterHung(MasterGone):
     """The master did not answer a request within its time limit; its child process was stopped."""
 
 
@@ -164,7 +168,7 @@ class MasterProcess:
     def __init__(self, name: str, factory: Callable[[], Any], slaves_of: Callable[[Any], Sequence[Any]],
                  open_timeout_s: float = OPEN_TIMEOUT_S) -> None:
         self.name = name
-        self._dead: TargetError | None = None
+        self._dead: MasterGone | None = None
         ctx = multiprocessing.get_context("fork")
         self._conn, child_end = ctx.Pipe()
         self._proc = ctx.Process(target=_serve, args=(child_end, factory, slaves_of), daemon=True,
@@ -196,7 +200,7 @@ class MasterProcess:
         """``method(*args, **kwargs)`` of the slave at ``position`` (None: the master itself), in the child."""
         what = describe(method, position, args)
         if self._dead is not None:
-            raise TargetError(f"{what}: {self._dead.message}")
+            raise MasterGone(f"{what}: {self._dead.message}")
         try:
             self._conn.send((position, method, args, kwargs))
         except (OSError, ValueError):
@@ -222,7 +226,7 @@ class MasterProcess:
         self._stop()
         self._conn.close()
         if self._dead is None:
-            self._dead = TargetError(f"the master on {self.name} is closed")
+            self._dead = MasterGone(f"the master on {self.name} is closed")
 
 
 class RemoteSlave:

@@ -30,10 +30,12 @@ MISBEHAVIOURS = {
     "wrong-wkc": "every datagram comes back with a working counter one higher than the slaves counted",
     "sii-blank": "the SII EEPROM is blank (every word 0xFFFF)",
     "sii-no-end": "the SII category chain has no end marker: zero words follow the last category to 4 KiB",
-    "vanish": "the slave stops answering after its first mailbox request",
+    "vanish": "the slave stops answering for VANISH_S after each first mailbox request of a bus init",
 }
 #: the octets an endless upload announces (fits SOEM's 256-octet buffer, so SOEM goes segmented)
 ENDLESS_ANNOUNCED = 200
+#: how long a vanished slave stays away (then it answers again, as a slave whose link came back)
+VANISH_S = 2.5
 #: the EEPROM a chain without end marker fills
 SII_NO_END_BYTES = 4096
 
@@ -100,19 +102,32 @@ def _end_marker(data: bytes) -> int:
 
 
 def _vanish(slaves: list["VirtualSlave"]) -> "FrameFault":
-    gone = [False]
+    import time
+
+    #: when the slave went away (0: it is there); it goes at a mailbox request after a reset to INIT
+    gone = [0.0]
+    armed = [True]
     for slave in slaves:
         mailbox = slave.mailbox
-        handle = mailbox.handle
+        handle, reset = mailbox.handle, mailbox.reset
 
         def first(frame_bytes: bytes, handle: Callable[[bytes], None] = handle) -> None:
             handle(frame_bytes)
-            gone[0] = True
+            if armed[0]:
+                armed[0], gone[0] = False, time.monotonic()
+
+        def rearm(reset: Callable[[], None] = reset) -> None:
+            reset()
+            armed[0] = True
 
         mailbox.handle = first  # type: ignore[method-assign]
+        mailbox.reset = rearm  # type: ignore[method-assign]
 
     def fault(raw: bytes) -> tuple[bytes | None, bool]:
-        return (None, True) if gone[0] else (raw, True)
+        if gone[0] and time.monotonic() - gone[0] < VANISH_S:
+            return None, True
+        gone[0] = 0.0  # back (until the next mailbox request after a reset to INIT)
+        return raw, True
 
     return fault
 

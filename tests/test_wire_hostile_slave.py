@@ -1,0 +1,115 @@
+"""A hostile slave never takes ecattool down (issue 37, item 1 and its "Done when"): ecattool's own served slave
+(``sim serve --misbehave NAME``, on a veth pair in a private network namespace) misbehaves one way at a time --
+4 GiB and endless SDO uploads, truncated and empty mailbox replies, wrong working counters, a blank SII, an SII
+without an end marker, a slave that vanishes -- and ``bus scan``, ``sdo read``, ``sdo dump``, ``sii read``,
+``backup`` and ``audit`` through SOEM (pysoem) each end with an exit status and at most one line on stderr, within
+a bounded time (the scenario gives each command 40 s and caps the master's own time limits at 4 s), and exit 0 only
+where what they report is true (checked against the served slave's identity and SII).
+
+Before the master ran in a child process of its own (ecattool/target/isolated.py), the 4 GiB and endless uploads
+ended ``bus scan``, ``sdo read``, ``sdo dump``, ``backup`` and ``audit`` with SIGSEGV (exit -11 here).
+
+The misbehaviours themselves: ecattool/sim/bus/misbehave.py."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from ecattool.sim.bus import netns
+from tests.conftest import ROOT
+
+pytestmark = pytest.mark.xdist_group("wire")
+
+SCENARIO = Path(__file__).with_name("wire_hostile_slave_scenario.py")
+PROJECT = "samples/hdt/project.yaml"
+MISBEHAVIOURS = ["none", "upload-4gib", "upload-endless", "reply-truncated", "reply-empty", "wrong-wkc",
+                 "sii-blank", "sii-no-end", "vanish"]
+#: where exit 0 is not yet a true result, and whose work it is: a back-up and ``sii read`` that check the SII
+#: (CRC, blank, end marker) before they save it are issue 37 item 2 (branch "safe")
+OPEN_ELSEWHERE = {("sii-blank", "sii read"), ("sii-blank", "backup"), ("sii-no-end", "sii read"),
+                  ("sii-no-end", "backup")}
+
+
+def _served_sii() -> bytes:
+    from ecattool.project.bus import devices_in_bus_order
+    from ecattool.sii.builder import build
+
+    ((_, device),) = devices_in_bus_order(str(ROOT / PROJECT), False)
+    return build(device).to_bytes()
+
+
+def _vendor() -> int:
+    from ecattool.project.bus import devices_in_bus_order
+
+    ((_, device),) = devices_in_bus_order(str(ROOT / PROJECT), False)
+    return int(device.identity.vendor_id)
+
+
+def _untrue(name: str, command: str, run: dict[str, Any], outdir: Path) -> str | None:
+    """Why an exit 0 of ``command`` under ``name`` reports something untrue (None: what it says is so)."""
+    vendor, sii = _vendor(), _served_sii()
+    out = outdir / name
+    if command == "sdo read":
+        return None if f"= {vendor} " in run["stdout"] else f"printed {run['stdout'][-200:]!r}"
+    if command == "sii read":
+        got = bytes.fromhex(run.get("sii_hex", ""))
+        return None if got == sii else f"saved {len(got)} bytes that are not the slave's {len(sii)}-byte SII"
+    if command == "sdo dump":
+        objects = json.loads((out / "dump.json").read_text())["objects"]
+        return None if objects.get("0x1018:01", {}).get("value") == vendor else "1018h:01 is not the vendor id"
+    if command == "backup":
+        folder = out / "backup"
+        dicts, images = list(folder.glob("*.dict.json")), list(folder.glob("*.sii.bin"))
+        if len(dicts) != 1 or len(images) != 1 or images[0].read_bytes() != sii:
+            return "the backed-up SII is not the slave's"
+        objects = json.loads(dicts[0].read_text())["objects"]
+        return None if objects.get("0x1018:01", {}).get("value") == vendor else "1018h:01 is not the vendor id"
+    if command == "bus scan":
+        return None if "HDT" in run["stdout"] else "the slave is not named"
+    return "the project's values differ from the uncommissioned drive's: audit cannot be clean"
+
+
+def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
+    try:
+        import pysoem  # type: ignore[import-not-found, import-untyped, unused-ignore]  # noqa: F401
+    except ImportError:
+        reason: str | None = "pysoem is not installed (pip install 'ecattool[wire]')"
+    else:
+        reason = netns.unavailable()
+    if reason:
+        print(f"wire test skipped: {reason}", file=sys.stderr)
+        pytest.skip(reason)
+    argv = netns.command([sys.executable, str(SCENARIO), PROJECT, str(tmp_path), *MISBEHAVIOURS])
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=900, cwd=ROOT)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
+    wrong, open_elsewhere = [], []
+    for name in MISBEHAVIOURS:
+        runs = result[name]
+        assert runs.pop("server") == {"returncode": 0, "stderr": ""}, name  # the server itself never fails
+        for command, run in runs.items():
+            rc, err = run["returncode"], run["stderr"]
+            where = f"{name} / {command}"
+            if rc not in (0, 1):  # None: still running after 40 s; -11: SIGSEGV; 2: a usage error
+                wrong.append(f"{where}: exit {rc} {err[-300:]!r}")
+            elif "Traceback" in err or len(err.strip().splitlines()) > 1:
+                wrong.append(f"{where}: more than one line on stderr: {err[-500:]!r}")
+            elif rc == 1 and err and not err.startswith("ecattool: error: "):
+                wrong.append(f"{where}: {err!r}")
+            elif rc == 0 and (why := _untrue(name, command, run, tmp_path)) is not None:
+                (open_elsewhere if (name, command) in OPEN_ELSEWHERE else wrong).append(f"{where}: exit 0, {why}")
+    assert not wrong, "\n".join(wrong)
+    if open_elsewhere:
+        print("open elsewhere (issue 37 item 2):", *open_elsewhere, sep="\n  ", file=sys.stderr)
+    # the crashes the master process keeps away: named, one line, with the slave and the object
+    for name in ("upload-4gib", "upload-endless"):
+        assert "the master crashed reading 1018h:01 of slave 0" in result[name]["sdo read"]["stderr"], name
+    # the baseline: every command works against the well-behaved slave
+    base = result["none"]
+    assert all(base[c]["returncode"] == 0 for c in ("bus scan", "sdo read", "sdo dump", "sii read", "backup"))
