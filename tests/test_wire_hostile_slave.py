@@ -37,11 +37,14 @@ OPEN_ELSEWHERE = {("sii-blank", "sii read"), ("sii-blank", "backup"), ("sii-no-e
 
 
 def _served_sii() -> bytes:
+    """The served slave's SII up to its end marker (what a reader of the category chain reads)."""
     from ecattool.project.bus import devices_in_bus_order
     from ecattool.sii.builder import build
+    from ecattool.sim.bus.misbehave import _end_marker
 
     ((_, device),) = devices_in_bus_order(str(ROOT / PROJECT), False)
-    return build(device).to_bytes()
+    image = build(device).to_bytes()
+    return image[:_end_marker(image) + 2]
 
 
 def _vendor() -> int:
@@ -90,6 +93,7 @@ def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr[-3000:]
     result: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
     wrong, open_elsewhere = [], []
+    running = result["none"].pop("running bus")
     for name in MISBEHAVIOURS:
         runs = result[name]
         assert runs.pop("server") == {"returncode": 0, "stderr": ""}, name  # the server itself never fails
@@ -113,3 +117,17 @@ def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
     # the baseline: every command works against the well-behaved slave
     base = result["none"]
     assert all(base[c]["returncode"] == 0 for c in ("bus scan", "sdo read", "sdo dump", "sii read", "backup"))
+    # issue 35 item 4: a bus in SAFE-OP is not reset without --reset-bus; with it, what could not be put back is said
+    assert running["safeop"] is True and running["found_safeop"] == ["slave 0 (SAFEOP)"]
+    refused = running["refused"]
+    assert refused["returncode"] == 1 and refused["stderr"] == (
+        "ecattool: error: slave 0 (SAFEOP) on 'ecat0' is running: opening the bus resets every slave to INIT and "
+        "would stop the machine; pass --reset-bus to do it anyway\n")
+    assert running["after_refusal"] == ["slave 0 (SAFEOP)"]  # untouched
+    reset = running["reset"]
+    assert reset["returncode"] == 0 and f"= {_vendor()} " in reset["stdout"]
+    assert reset["stderr"] == ("ecattool: note: slave 0 (SAFEOP) was left in PRE-OP: ecattool has no configuration "
+                               "to take it back to SAFEOP\n")
+    # a slave found in INIT is read (INIT and PRE-OP are not refused) and put back in INIT
+    assert running["init"] is True and running["in_init"]["returncode"] == 0, running["in_init"]
+    assert running["after_init"] == ["slave 0 (INIT)"]

@@ -49,6 +49,42 @@ def run(argv: list[str]) -> dict[str, Any]:
     return {"returncode": rc, "seconds": round(time.monotonic() - t0, 2), "stdout": out[-1500:], "stderr": err}
 
 
+def _take(state_name: str) -> bool:
+    """A bare SOEM master takes the slave to INIT or SAFE-OP and goes away (as a machine's master that stopped)."""
+    import pysoem
+
+    master = pysoem.Master()
+    master.open(MASTER_IF)
+    try:
+        if master.config_init() <= 0:
+            return False
+        if state_name == "SAFEOP":
+            master.config_map()
+        code = getattr(pysoem, f"{state_name}_STATE")
+        master.state = code
+        master.write_state()
+        return bool(master.state_check(code, 2_000_000) == code)
+    finally:
+        master.close()
+
+
+def running_bus() -> dict[str, Any]:
+    """Issue 35 item 4 on the wire: a bus found in SAFE-OP is refused without --reset-bus; with it the read runs
+    and says what it could not put back; a slave found in INIT is put back in INIT."""
+    from ecattool.online.bus_state import read_states
+
+    read = ["sdo", "read", "0x1018:01", "--target", f"pysoem:{MASTER_IF}"]
+    out: dict[str, Any] = {"safeop": _take("SAFEOP")}
+    out["found_safeop"] = [str(f) for f in read_states(MASTER_IF) or []]
+    out["refused"] = run(read)
+    out["after_refusal"] = [str(f) for f in read_states(MASTER_IF) or []]
+    out["reset"] = run([*read, "--reset-bus"])
+    out["init"] = _take("INIT")
+    out["in_init"] = run(read)
+    out["after_init"] = [str(f) for f in read_states(MASTER_IF) or []]
+    return out
+
+
 def one(project: str, name: str, outdir: Path) -> dict[str, Any]:
     out = outdir / name
     out.mkdir(parents=True)
@@ -61,6 +97,8 @@ def one(project: str, name: str, outdir: Path) -> dict[str, Any]:
             sii = out / "slave.sii.bin"
             if label == "sii read" and sii.exists():
                 results[label]["sii_hex"] = sii.read_bytes().hex()
+        if name == "none":
+            results["running bus"] = running_bus()
     finally:
         results["server"] = stop_server(server)
     return results

@@ -18,6 +18,7 @@ from ecattool.cli.common import (
     table,
     write_output,
 )
+from ecattool.cli.online import open_live, reset_bus_option
 from ecattool.cli.paths import InputFile
 
 
@@ -301,11 +302,10 @@ Examples:
               help="pysoem:IF, or the simulator sim:PROFILE,ESI… (KickCAT's binding has no SII access).")
 @click.option("--slave", type=int, default=0, show_default=True, help="Position of the slave on the bus.")
 @output_option(required=True, help="The image file (binary; written atomically, never over an input).")
+@reset_bus_option
 def read_cmd(target: str, slave: int, output: str) -> None:
     """Read a slave's SII EEPROM (the fixed area and the category chain to its end marker) into a file."""
-    from ecattool.online.targets import open_bus
-
-    with open_bus(target) as live:
+    with open_live(target) as live:
         data = live.slave(slave).sii_read()
     write_output(output, data)
 
@@ -325,16 +325,16 @@ area, the category chain up to its end marker, the size, and the identity agains
               help="Where the slave's current image is written before anything is written to it.")
 @click.option("--force", is_flag=True, callback=store_force,
               help="Write even when the image's identity is not the slave's; replace an existing --backup file.")
+@reset_bus_option
 def write_cmd(image: str, target: str, slave: int, backup: str, force: bool) -> None:
     """Write IMAGE to a slave's SII EEPROM, after the checks and a back-up of the old image. Exit status 1 when a
     check refuses the image: one line naming the first problem, and nothing is written (not even the back-up)."""
     from ecattool.fileio import read_bytes
-    from ecattool.online.targets import open_bus
     from ecattool.online.sii_access import sii_write
 
     data = read_bytes(image)
     check_output(backup, (image,))  # never over the image, an existing back-up only with --force
-    with open_bus(target) as live:
+    with open_live(target) as live:
         problems = sii_write(live.slave(slave), data, image, backup, force, overwrite_backup=force_requested())
     if problems:
         from ecattool.errors import InputError
