@@ -22,6 +22,7 @@ The cost is one ``fork`` when the bus is opened and one pipe round trip (some te
 from __future__ import annotations
 
 import ctypes
+import faulthandler
 import multiprocessing
 import os
 import signal
@@ -121,6 +122,7 @@ def _serve(conn: Connection, factory: Callable[[], Any], slaves_of: Callable[[An
     except (OSError, AttributeError):
         pass
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's: it closes the master in order
+    faulthandler.disable()  # a crash of the master is the parent's one line, not a Python stack dump
     try:
         root = factory()
         slaves = list(slaves_of(root))
