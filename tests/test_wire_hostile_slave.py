@@ -94,6 +94,7 @@ def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
     result: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
     wrong, open_elsewhere = [], []
     running = result["none"].pop("running bus")
+    unknown = result.pop("unknown drive")
     for name in MISBEHAVIOURS:
         runs = result[name]
         assert runs.pop("server") == {"returncode": 0, "stderr": ""}, name  # the server itself never fails
@@ -131,3 +132,20 @@ def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
     # a slave found in INIT is read (INIT and PRE-OP are not refused) and put back in INIT
     assert running["init"] is True and running["in_init"]["returncode"] == 0, running["in_init"]
     assert running["after_init"] == ["slave 0 (INIT)"]
+    # issue 35 item 3: a drive ecattool has no profile for, without SDO Information (its ESI: CoE SdoInfo="0")
+    ident = unknown["ready"]["slaves"][0]
+    info = unknown["info"]
+    assert info["returncode"] == 1 and info["stderr"].startswith("ecattool: error: slave 0 offers no SDO Information")
+    read = unknown["read"]  # by index, no dictionary: the raw bytes
+    assert read["returncode"] == 0, read["stderr"]
+    assert json.loads(read["stdout"])["hex"] == ident["vendor_id"].to_bytes(4, "little").hex()
+    by_name = unknown["by_name"]  # by name, through the ESI given as --device
+    assert by_name["returncode"] == 0, by_name["stderr"]
+    assert json.loads(by_name["stdout"])["address"] == "0x6041:00"
+    assert unknown["name_without_dictionary"]["returncode"] == 1
+    assert "has no dictionary to find it by name in" in unknown["name_without_dictionary"]["stderr"]
+    # the refused SDO Information request does not fail the requests after it (it did: mailbox error 4, 64 times)
+    assert unknown["sdo_info"].startswith("slave 0 offers no SDO Information")
+    assert unknown["after"] == [ident["vendor_id"].to_bytes(4, "little").hex(),
+                                ident["product_code"].to_bytes(4, "little").hex(),
+                                ident["vendor_id"].to_bytes(4, "little").hex()]

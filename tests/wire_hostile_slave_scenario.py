@@ -85,6 +85,35 @@ def running_bus() -> dict[str, Any]:
     return out
 
 
+#: a drive ecattool has no profile for, whose ESI says it has no SDO Information (CoE SdoInfo="0")
+UNKNOWN = "samples/generic_esi/inovance_SV660_EOE_1Axis_V9.12.xml"
+
+
+def unknown_drive() -> dict[str, Any]:
+    """Issue 35 item 3 on the wire: a drive without a profile and without SDO Information."""
+    from ecattool.online.targets import open_bus
+
+    server, ready = start_server([UNKNOWN])
+    target = ["--target", f"pysoem:{MASTER_IF}"]
+    out: dict[str, Any] = {"ready": ready}
+    try:
+        out["info"] = run(["sdo", "info", *target])
+        out["read"] = run(["sdo", "read", "0x1018:01", *target, "--json"])
+        out["by_name"] = run(["sdo", "read", "statusword", *target, "--device", UNKNOWN, "--json"])
+        out["name_without_dictionary"] = run(["sdo", "read", "statusword", *target])
+        with open_bus(f"pysoem:{MASTER_IF}") as bus:  # SDO Information refused, then every later SDO still works
+            slave = bus.slaves[0]
+            try:
+                slave.sdo_info()
+                out["sdo_info"] = "answered"
+            except Exception as exc:  # noqa: BLE001 - recorded for the test
+                out["sdo_info"] = str(exc)
+            out["after"] = [slave.sdo_upload(0x1018, s).hex() for s in (1, 2, 1)]
+    finally:
+        out["server"] = stop_server(server)
+    return out
+
+
 def one(project: str, name: str, outdir: Path) -> dict[str, Any]:
     out = outdir / name
     out.mkdir(parents=True)
@@ -107,4 +136,6 @@ def one(project: str, name: str, outdir: Path) -> dict[str, Any]:
 if __name__ == "__main__":
     master_priority()
     project, outdir, *names = sys.argv[1:]
-    print(json.dumps({name: one(project, name, Path(outdir)) for name in names}))
+    result = {name: one(project, name, Path(outdir)) for name in names}
+    result["unknown drive"] = unknown_drive()
+    print(json.dumps(result))

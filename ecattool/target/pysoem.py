@@ -169,7 +169,17 @@ class PysoemSlave:
                     raise
                 return read(LARGE_SDO_BYTES)
 
-        return self._sdo(read_any_size, index, subindex)
+        def read_again_once() -> bytes:
+            # an upload changes nothing on the slave: one that got no answer, or a stale mailbox error (the
+            # answer to an earlier request, e.g. a refused SDO Information request), is asked again once, with
+            # the next mailbox counter (SOEM counts on for each request), after SOEM's error list is emptied
+            try:
+                return read_any_size()
+            except (self._mod.WkcError, self._mod.MailboxError):
+                self._master.drain_errors()
+                return read_any_size()
+
+        return self._sdo(read_again_once, index, subindex)
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None:
@@ -323,6 +333,17 @@ class PysoemTarget:
         self._slaves = [PysoemSlave(self, i, s) for i, s in enumerate(self.master.slaves)]
         self.mapped = False
         self.dc_configured = False
+
+    def drain_errors(self) -> None:
+        """Empty SOEM's error list: an error left there (e.g. by a refused SDO Information request, one per
+        mailbox answer) is raised by pysoem from the next call on that master, whatever that call's own result."""
+        collect = getattr(self.master, "_collect_mailbox_errors", None)
+        if collect is None:
+            return
+        try:
+            collect()
+        except Exception:  # noqa: BLE001 - the errors are the stale ones being dropped
+            pass
 
     def map(self) -> None:
         """Lay out the IO map from the PDO mappings the slaves report (pysoem ``config_map``)."""
