@@ -58,7 +58,7 @@ def _untrue(name: str, command: str, run: dict[str, Any], outdir: Path) -> str |
     """Why an exit 0 of ``command`` under ``name`` reports something untrue (None: what it says is so)."""
     vendor, sii = _vendor(), _served_sii()
     out = outdir / name
-    if command == "sdo read":
+    if command.startswith("sdo read"):
         return None if f"= {vendor} " in run["stdout"] else f"printed {run['stdout'][-200:]!r}"
     if command == "sii read":
         got = bytes.fromhex(run.get("sii_hex", ""))

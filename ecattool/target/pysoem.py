@@ -74,6 +74,9 @@ DEFAULT_WATCHDOG_S = 0.1
 KEEPER_IDLE_S = 5.0
 #: how often process data exchanges read the AL status to notice a drive that left OP by itself, in seconds
 STATE_POLL_S = 0.1
+#: how long SOEM waits for one SDO answer, in microseconds (its own default is 0.7 s); an upload that got none is
+#: asked once more (PysoemSlave.sdo_upload)
+SDO_TIMEOUT_US = 2_000_000
 #: pysoem reads into a 256-byte buffer unless told otherwise; a larger object is read again with this size
 LARGE_SDO_BYTES = 65536
 _STATE_NAMES = {EcState.INIT: "INIT_STATE", EcState.PREOP: "PREOP_STATE", EcState.BOOT: "BOOT_STATE",
@@ -313,6 +316,11 @@ class PysoemTarget:
         self.master = self.pysoem.Master()
         # SDO and process data calls wait in SOEM without the GIL: the keeper thread runs meanwhile
         self.master.always_release_gil = True
+        # SOEM waits 0.7 s for a mailbox answer (EC_TIMEOUTRXM); on a loaded machine a slave's answer (or the
+        # frame carrying it) can take longer. A longer wait costs nothing when the answer comes
+        for name in ("sdo_read_timeout", "sdo_write_timeout"):
+            if hasattr(self.master, name):
+                setattr(self.master, name, SDO_TIMEOUT_US)
         try:
             self.master.open(ifname)
         except Exception as exc:  # noqa: BLE001 - ConnectionError, or an OS error on some platforms
