@@ -132,6 +132,12 @@ def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
     # a slave found in INIT is read (INIT and PRE-OP are not refused) and put back in INIT
     assert running["init"] is True and running["in_init"]["returncode"] == 0, running["in_init"]
     assert running["after_init"] == ["slave 0 (INIT)"]
+    # audit: a drive found in INIT is drift; HDT's 6081h/6083h (in its RxPDOs) are process data, not drift
+    report = json.loads(running["audit_in_init"]["stdout"])
+    assert running["audit_in_init"]["returncode"] == 1
+    assert [d["message"] for d in report["drifts"] if d["kind"] == "state"] == [
+        "found in INIT before the bus was opened"]
+    assert [p["address"] for p in report["process_data"]] == ["0x6081:00", "0x6083:00"]
     # issue 35 item 3: a drive ecattool has no profile for, without SDO Information (its ESI: CoE SdoInfo="0")
     ident = unknown["ready"]["slaves"][0]
     info = unknown["info"]

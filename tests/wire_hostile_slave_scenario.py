@@ -111,7 +111,7 @@ def _take(state_name: str) -> bool:
         master.close()
 
 
-def running_bus() -> dict[str, Any]:
+def running_bus(project: str) -> dict[str, Any]:
     """Issue 35 item 4 on the wire: a bus found in SAFE-OP is refused without --reset-bus; with it the read runs
     and says what it could not put back; a slave found in INIT is put back in INIT."""
     from ecattool.online.bus_state import read_states
@@ -125,6 +125,7 @@ def running_bus() -> dict[str, Any]:
     out["init"] = _take("INIT")
     out["in_init"] = run(read)
     out["after_init"] = [str(f) for f in read_states(MASTER_IF) or []]
+    out["audit_in_init"] = run(["audit", project, "--target", f"pysoem:{MASTER_IF}", "--json"])
     return out
 
 
@@ -174,7 +175,7 @@ def one(project: str, name: str, outdir: Path) -> dict[str, Any]:
         if name in KICKCAT_UNDER:  # KickCAT as the master, where it has been seen to crash or hang
             results["sdo read (kickcat)"] = run(["sdo", "read", "0x1018:01", "--target", f"kickcat:{MASTER_IF}"])
         if name == "none":
-            results["running bus"] = running_bus()
+            results["running bus"] = running_bus(project)
     finally:
         results["server"] = stop_server(server)
     return results

@@ -34,10 +34,17 @@ RUNNING = (EcState.SAFEOP, EcState.OP)
 
 @dataclass(frozen=True)
 class Found:
-    """A slave's AL state as found before the bus was reset (``state`` None: an AL status that names none)."""
+    """A slave's AL state as found before the bus was reset (``state`` None: an AL status that names none), and
+    its AL status code (0x0134)."""
 
     position: int
     al_status: int
+    al_status_code: int = 0
+
+    @property
+    def error(self) -> bool:
+        """The AL status's error indication (bit 4): the slave refused a state change or left a state by itself."""
+        return bool(self.al_status & 0x10)
 
     @property
     def state(self) -> EcState | None:
@@ -87,13 +94,15 @@ def read_states(ifname: str) -> list[Found] | None:
         count = min(parse_frame(got).datagrams[0].wkc, MAX_SLAVES)  # type: ignore[union-attr]
         if count <= 0:
             return []
-        reads = [Datagram.make(Cmd.APRD, -p, AL_STATUS, 2, index=0x52) for p in range(count)]
+        # 0x0130-0x0135: the AL status and the AL status code (0x0134)
+        reads = [Datagram.make(Cmd.APRD, -p, AL_STATUS, 6, index=0x52) for p in range(count)]
         got = _exchange(sock, make_frame(reads, _SRC), 0x52)
         if got is None:
             return None
         frame = parse_frame(got)
         assert frame is not None
-        return [Found(p, int.from_bytes(d.data[:2], "little")) for p, d in enumerate(frame.datagrams) if d.wkc]
+        return [Found(p, int.from_bytes(d.data[:2], "little"), int.from_bytes(d.data[4:6], "little"))
+                for p, d in enumerate(frame.datagrams) if d.wkc]
     except (OSError, FrameError):
         return None
     finally:

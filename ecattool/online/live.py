@@ -73,6 +73,8 @@ class LiveBus:
     devices: list[Device] = field(default_factory=list)
     #: what closing the bus could not do (a slave found in OP and left in PRE-OP), one line each
     notes: list[str] = field(default_factory=list)
+    #: each slave's AL state as found before the master reset the bus (``bus_state.Found``; empty: not known)
+    found: list[Any] = field(default_factory=list)
     #: whether the ``with`` block that used the bus ended with an exception (its error is what a user reads then)
     failed: bool = False
 

@@ -52,6 +52,7 @@ def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:
     from ecattool.online.bus_state import restore
 
     close = bus.closer
+    bus.found = list(found)
 
     def closer() -> None:
         try:
