@@ -89,7 +89,7 @@ def run(argv: list[str]) -> dict[str, Any]:
         stdout, stderr = out.read().decode(errors="replace"), err.read().decode(errors="replace")
     if rc is None:
         stderr += f"\nstill running after {COMMAND_TIMEOUT_S} s"
-    return {"returncode": rc, "seconds": round(time.monotonic() - t0, 2), "stdout": stdout[-1500:], "stderr": stderr}
+    return {"returncode": rc, "seconds": round(time.monotonic() - t0, 2), "stdout": stdout[-50000:], "stderr": stderr}
 
 
 def _take(state_name: str) -> bool:

@@ -84,8 +84,7 @@ def read(address: str, target: str, slave: int, library: str | None, device: str
     addr = _address(address)
     with open_live(target) as live:
         s = live.slave(slave)
-        # typed once; by SDO Information only where it is needed for the name (a raw read needs no dictionary)
-        t = _typed(s, library, device, sdo_info=addr is None)
+        t = _typed(s, library, device)  # the SDO Information service is asked at most once
         index, sub = _object(address, addr, t, slave)
         v = read_value(s, t, index, sub)
     if as_json:
@@ -140,8 +139,9 @@ def info(target: str, slave: int, library: str | None, device: str | None, as_js
     if not len(t.dictionary):
         from ecattool.errors import TargetError
 
-        raise TargetError(f"slave {slave} offers no SDO Information (and no --device, --library or built-in family "
-                          "describes it): its objects can still be read as raw bytes, 'ecattool sdo read INDEX:SUB'")
+        why = t.sdo_info_error or f"slave {slave} offers no SDO Information"
+        raise TargetError(f"{why}; and no --device, --library or built-in family describes it: its objects can still "
+                          "be read as raw bytes, 'ecattool sdo read INDEX:SUB'")
     rows = [{"address": f"0x{o.index:04X}:{e.subindex:02X}", "object": o.name, "name": e.name,
              "type": e.type_name, "bits": e.bit_size,
              "read": sorted(s.value for s in e.access.read), "write": sorted(s.value for s in e.access.write),

@@ -98,15 +98,22 @@ def rx_objects(rd: Any) -> set[tuple[int, int]]:
     return {(e.index, e.subindex) for pdo in mapping.rx for e in pdo.entries if e.index}
 
 
+#: the AL status code a drive shows in SAFE-OP once its master stopped sending process data (the sync manager
+#: watchdog): what every drive of a machine shows after its master went away, not a drift of the drive
+WATCHDOG_CODE = 0x001B
+
+
 def state_drift(rd: Any, found: Any) -> Drift | None:
     """A drive found (before the master reset the bus) in INIT or BOOT, or with the AL error indication: the project
-    expects every drive at least in PRE-OP with its mailbox running and no error (commissioning takes it on)."""
+    expects every drive at least in PRE-OP with its mailbox running and no error (commissioning takes it on). A
+    drive in SAFE-OP with the watchdog's code 0x001B is one whose master stopped: not drift."""
     from ecattool.abort import al_status_text
     from ecattool.online.bus_state import RUNNING
 
     state = found.state
-    if not found.error and (state is EcState.PREOP or state in RUNNING):
-        return None
+    if state is EcState.PREOP or state in RUNNING:
+        if not found.error or (state is EcState.SAFEOP and found.al_status_code == WATCHDOG_CODE):
+            return None
     code = found.al_status_code
     why = f", AL status code 0x{code:04X} ({al_status_text(code)})" if found.error or code else ""
     return Drift(rd.drive.name, rd.position, "state", "AL status", "PRE-OP, SAFE-OP or OP without error",
