@@ -10,13 +10,16 @@ from ecattool.errors import TargetError
 from ecattool.od.model import EcState
 from ecattool.online import bus_state
 from ecattool.online.bus_state import Found, guard, restore
+from ecattool.online.live import Unsupported
 
 
 class Slave:
-    def __init__(self, position: int, refuse: bool = False) -> None:
-        self.position, self.refuse, self.asked = position, refuse, []
+    def __init__(self, position: int, refuse: bool = False, whole_bus_only: bool = False) -> None:
+        self.position, self.refuse, self.whole_bus_only, self.asked = position, refuse, whole_bus_only, []
 
     def request_state(self, state: EcState) -> None:
+        if self.whole_bus_only:
+            raise Unsupported("kickcat: the Python binding requests a state for the whole bus, not for one slave")
         if self.refuse:
             raise TargetError("no answer")
         self.asked.append(state)
@@ -40,8 +43,10 @@ def test_a_bus_in_init_or_preop_or_unknown_opens(monkeypatch: pytest.MonkeyPatch
 
 
 def test_each_slave_is_put_back_where_it_can_be_and_the_rest_is_named() -> None:
-    slaves = [Slave(0), Slave(1), Slave(2), Slave(3, refuse=True)]
-    notes = restore(slaves, [Found(0, 0x01), Found(1, 0x02), Found(2, 0x08), Found(3, 0x01)])
+    slaves = [Slave(0), Slave(1), Slave(2), Slave(3, refuse=True), Slave(4, whole_bus_only=True)]
+    notes = restore(slaves, [Found(0, 0x01), Found(1, 0x02), Found(2, 0x08), Found(3, 0x01), Found(4, 0x01)])
     assert slaves[0].asked == [EcState.INIT] and slaves[1].asked == [] and slaves[2].asked == []
     assert notes == ["slave 2 (OP) was left in PRE-OP: ecattool has no configuration to take it back to OP",
-                     "slave 3 (INIT) could not be put back in INIT: no answer"]
+                     "slave 3 (INIT) could not be put back in INIT: no answer",
+                     "slave 4 (INIT) was left in PRE-OP: kickcat: the Python binding requests a state for the whole "
+                     "bus, not for one slave"]

@@ -115,6 +115,12 @@ def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
     # the crashes the master process keeps away: named, one line, with the slave and the object
     for name in ("upload-4gib", "upload-endless"):
         assert "the master crashed reading 1018h:01 of slave 0" in result[name]["sdo read"]["stderr"], name
+    # KickCAT: reads the well-behaved slave; crashes on endless segments and hangs on an SII chain without end --
+    # each one line, the hang stopped at its time limit
+    assert result["none"]["sdo read (kickcat)"]["returncode"] == 0
+    assert result["upload-endless"]["sdo read (kickcat)"]["stderr"].startswith("ecattool: error: the master crashed ")
+    assert result["sii-no-end"]["sdo read (kickcat)"]["stderr"].startswith(
+        "ecattool: error: the master did not answer within 15 s opening the bus on kickcat:ecat0")
     # the baseline: every command works against the well-behaved slave
     base = result["none"]
     assert all(base[c]["returncode"] == 0 for c in ("bus scan", "sdo read", "sdo dump", "sii read", "backup"))

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 from ecattool.errors import TargetError
 from ecattool.od.model import EcState
+from ecattool.online.live import Unsupported
 
 #: the AL status register (ETG.1000.4, 0x0130): bits 0-3 the state, bit 4 the error indication
 AL_STATUS = 0x0130
@@ -135,6 +136,8 @@ def restore(slaves: Sequence[object], found: Sequence[Found]) -> list[str]:
             continue
         try:
             slave.request_state(EcState.INIT)  # type: ignore[attr-defined]
+        except Unsupported as exc:
+            notes.append(f"{f} was left in PRE-OP: {exc}")
         except (TargetError, AttributeError) as exc:
             notes.append(f"{f} could not be put back in INIT: {exc}")
     return notes
