@@ -94,10 +94,12 @@ class SdoAbort(TargetError):
 class SdoTimeout(TargetError):
     """An SDO request got no reply in time."""
 
-    def __init__(self, index: int, subindex: int) -> None:
+    def __init__(self, index: int, subindex: int, position: int | None = None) -> None:
         self.index = index
         self.subindex = subindex
-        super().__init__(f"SDO timeout on 0x{index:04X}:{subindex:02X}: no reply")
+        self.position = position
+        of = "" if position is None else f" of slave {position}"
+        super().__init__(f"SDO timeout on 0x{index:04X}:{subindex:02X}{of}: no reply")
 
 
 class StateChangeError(TargetError):

@@ -89,7 +89,9 @@ def test_sdo_information_types_a_drive_nothing_else_describes(result: dict[str, 
     assert not wrong
     read = ok(r["read"])
     assert read["dictionary"] == "sdo-info" and esi["0x6041:00"] == (lookup(read["type"]).code, 8 * len(read["hex"]) // 2)
-    assert r["info_kickcat"]["returncode"] == 0 and r["info_kickcat"]["stdout"]["dictionary"] == "none"
+    # KickCAT binds no OD list: sdo info says so in one line, exit 1 (issue 35 item 3; it printed "0 entries", exit 0)
+    info_kickcat = r["info_kickcat"]
+    assert info_kickcat["returncode"] == 1 and "no SDO Information OD list" in info_kickcat["stderr"]
 
 
 def test_sii_read_and_the_refused_writes(result: dict[str, Any]) -> None:

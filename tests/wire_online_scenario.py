@@ -68,7 +68,9 @@ def four(work: Path) -> dict[str, Any]:
                                  str(work / "machine.yaml"))
         r["from_bus_lint"] = ecattool("lint", str(work / "machine.yaml"), "--format", "json")
         r["from_bus_commission"] = ecattool("commission", str(work / "machine.yaml"), "--target", PYSOEM, "--json")
-        r["dump_fails"] = ecattool("sdo", "dump", "--target", PYSOEM, "--slave", "9", "-o", str(work / "none.json"))
+        # the commissioned bus is running: opening it again takes --reset-bus (issue 35 item 4)
+        r["dump_fails"] = ecattool("sdo", "dump", "--target", PYSOEM, "--slave", "9", "-o", str(work / "none.json"),
+                                   "--reset-bus")
     finally:
         r["server"] = stop_server(server)
     return r
@@ -95,13 +97,13 @@ def technosoft(work: Path) -> dict[str, Any]:
     r: dict[str, Any] = {}
     try:
         r["commission"] = ecattool("commission", TECHNOSOFT, "--target", PYSOEM, "--json")
-        r["audit_clean"] = ecattool("audit", TECHNOSOFT, "--target", PYSOEM, "--json")
+        r["audit_clean"] = ecattool("audit", TECHNOSOFT, "--target", PYSOEM, "--json", "--reset-bus")
         r["changes"] = [ecattool("sdo", "write", a, v, "--target", PYSOEM) for a, v in CHANGES]
         r["audit_drift"] = ecattool("audit", TECHNOSOFT, "--target", PYSOEM, "--json")
-        r["audit_kickcat"] = ecattool("audit", TECHNOSOFT, "--target", KICKCAT, "--json")
+        r["audit_kickcat"] = ecattool("audit", TECHNOSOFT, "--target", KICKCAT, "--json", "--reset-bus")
         r["upload"] = ecattool("sw", "upload", "--project", TECHNOSOFT, "--target", PYSOEM, "-o",
                                str(work / "back.sw"), "--json")
-        r["backup"] = ecattool("backup", TECHNOSOFT, "--target", PYSOEM, "-o", str(work / "backup"))
+        r["backup"] = ecattool("backup", TECHNOSOFT, "--target", PYSOEM, "-o", str(work / "backup"), "--reset-bus")
     finally:
         r["server"] = stop_server(server)
     return r

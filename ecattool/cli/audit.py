@@ -45,6 +45,10 @@ def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool
         lines = [f"{project} on {target}: {report.checked} values checked, "
                  + ("no drift" if report.ok else f"{len(report.drifts)} drifted")]
         lines += [f"  {d.drive} (slave {d.position}) {d.address}: {d.message}" for d in report.drifts]
+        if report.process_data:
+            lines.append("process data (objects in the RxPDOs: the master writes them every cycle, not compared):")
+            lines += [f"  {p['drive']} (slave {p['position']}) {p['address']}: the project sets {p['project']!r}, "
+                      f"read {p['read']!r}" for p in report.process_data]
         text = "\n".join(lines) + "\n"
     write_output(output, text, (project,))
     if html is not None:

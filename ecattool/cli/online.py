@@ -16,8 +16,49 @@ TARGET_HELP = ("Where the bus is: pysoem:IF or kickcat:IF (a real master on a ne
                "sim:PROFILE,ESI… (e.g. sim:hdt,technosoft-ipos).")
 
 
+#: where --reset-bus is kept for the command (click's context meta)
+RESET_BUS = "ecattool.reset_bus"
+
+
+def _reset_bus(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    if value:
+        ctx.meta[RESET_BUS] = True
+
+
+#: ``--reset-bus``, the same on every command that opens a live bus (kept in the context: open_live reads it)
+reset_bus_option = click.option(
+    "--reset-bus", is_flag=True, expose_value=False, callback=_reset_bus,
+    help="Open the bus even when a slave is in SAFE-OP or OP (a real master's bus init takes every slave to INIT: "
+         "the machine stops). Without it such a bus is refused.")
+
+
 def target_option(required: bool = True) -> Callable[..., Any]:
-    return click.option("--target", "target", required=required, metavar="TARGET", help=TARGET_HELP)
+    """``--target`` and ``--reset-bus``."""
+    target = click.option("--target", "target", required=required, metavar="TARGET", help=TARGET_HELP)
+
+    def both(f: Callable[..., Any]) -> Callable[..., Any]:
+        return target(reset_bus_option(f))
+
+    return both
+
+
+def _opened(bus: Any) -> Any:
+    """``bus``, whose notes (what closing it could not put back) go to stderr when the command ends."""
+    ctx = click.get_current_context(silent=True)
+
+    def say() -> None:
+        if not bus.failed:  # after an error, its one line is what the user reads
+            for note in bus.notes:
+                click.echo(f"ecattool: note: {note}", err=True)
+
+    if ctx is not None:
+        ctx.call_on_close(say)
+    return bus
+
+
+def reset_bus_given() -> bool:
+    ctx = click.get_current_context(silent=True)
+    return bool(ctx is not None and ctx.meta.get(RESET_BUS))
 
 
 def slave_option(f: Callable[..., Any]) -> Callable[..., Any]:
@@ -56,7 +97,7 @@ def load_device(text: str | None) -> RunningDevice | None:
 def open_live(target: str) -> LiveBus:
     from ecattool.online.targets import open_bus
 
-    return open_bus(target)
+    return _opened(open_bus(target, reset_bus=reset_bus_given()))
 
 
 def project_bus(project: str, target: str) -> LiveBus:
@@ -74,4 +115,4 @@ def project_bus(project: str, target: str) -> LiveBus:
     refuse_errors(result, f"use {project} on a bus")
     # what a bare 'sim' simulates (open_bus reads the spec; a real master or sim:SOURCES ignore them)
     devices = [rd.device for rd in sorted(result.drives, key=lambda r: r.position) if rd.device is not None]
-    return open_bus(target, devices)
+    return _opened(open_bus(target, devices, reset_bus=reset_bus_given()))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from ecattool.cli.common import dump_json, output_option, policy_option, write_output
+from ecattool.cli.online import reset_bus_option
 from ecattool.cli.paths import InputFile
 from ecattool.cli.vocab import shared_option
 
@@ -65,6 +66,7 @@ Examples:
 @click.option("--library", type=click.Path(file_okay=False), metavar="DIR",
               help="With --from-bus: a folder of ESI/EDS files to match the slaves against.")
 @output_option()
+@reset_bus_option
 def new(profile: str | None, product: str | None, esi_path: str | None, select: str | None, policy: str,
         name: str | None, from_bus: str | None, library: str | None, output: str | None) -> None:
     """Write a minimal project file for one drive that lints clean (a vendor ESI's own flaws aside, which it
@@ -75,9 +77,9 @@ def new(profile: str | None, product: str | None, esi_path: str | None, select: 
             raise click.UsageError("give --from-bus, or --profile/--esi, not both")
         from ecattool.online.from_bus import project_from_bus
         from ecattool.online.library import Library
-        from ecattool.online.targets import open_bus
+        from ecattool.cli.online import open_live
 
-        with open_bus(from_bus) as live:
+        with open_live(from_bus) as live:
             text = project_from_bus(live, Library(library) if library else None, output)
         write_output(output, text)
         return

@@ -19,20 +19,38 @@ from ecattool.cli.online import (
 )
 
 
-def _address(text: str) -> tuple[int, int]:
+def _address(text: str) -> tuple[int, int] | None:
+    """``text`` as an object address (6060:00, 0x6060:0, 6060h), or None when it is not one (a name, then)."""
     from ecattool.errors import InputError
     from ecattool.od.numbers import parse_address
 
     try:
         return parse_address(text)
-    except InputError as exc:
-        raise click.BadParameter(exc.message) from None
+    except InputError:
+        return None
 
 
-def _typed(slave: Any, library: str | None, device: str | None) -> Any:
+def _object(text: str, address: tuple[int, int] | None, t: Any, slave: int) -> tuple[int, int]:
+    """The object ``text`` names: its address, or a name found in the slave's dictionary ``t``."""
+    if address is not None:
+        return address
+    from ecattool.errors import InputError, did_you_mean
+
+    found = t.dictionary.find(text)
+    if found is not None:
+        return found  # type: ignore[no-any-return]
+    if not len(t.dictionary):
+        raise InputError(f"{text!r} is not an object address (write 6060:00 or 0x6060:0), and slave {slave} has no "
+                         "dictionary to find it by name in (give --device or --library)")
+    names = [o.name for o in t.dictionary]
+    raise InputError(f"{text!r} is neither an object address (6060:00, 0x6060:0) nor the name of an object in slave "
+                     f"{slave}'s dictionary ({t.source}){did_you_mean(text, names)}")
+
+
+def _typed(slave: Any, library: str | None, device: str | None, sdo_info: bool = True) -> Any:
     from ecattool.online.dictionary import typed
 
-    return typed(slave, load_library(library), load_device(device))
+    return typed(slave, load_library(library), load_device(device), sdo_info=sdo_info)
 
 
 @click.group(epilog="""\b
@@ -50,7 +68,8 @@ def sdo() -> None:
 Examples:
   ecattool sdo read 0x6060:00 --target pysoem:eth0
   ecattool sdo read 0x1018:01 --target kickcat:eth0 --json
-  ecattool sdo read 0x6064:00 --target sim:technosoft-ipos""")
+  ecattool sdo read 0x6064:00 --target sim:technosoft-ipos
+  ecattool sdo read controlword --target pysoem:eth0 --device drive.xml""")
 @click.argument("address")
 @target_option()
 @slave_option
@@ -58,13 +77,15 @@ Examples:
 @device_option
 @json_option
 def read(address: str, target: str, slave: int, library: str | None, device: str | None, as_json: bool) -> None:
-    """Read one object (INDEX:SUB) and show its value decoded by its data type."""
+    """Read one object (INDEX:SUB, or its name in the slave's dictionary: controlword) and show its value decoded
+    by its data type; without a dictionary, as raw bytes."""
     from ecattool.online.objects import read_value
 
-    index, sub = _address(address)
+    addr = _address(address)
     with open_live(target) as live:
         s = live.slave(slave)
-        t = _typed(s, library, device)
+        t = _typed(s, library, device)  # the SDO Information service is asked at most once
+        index, sub = _object(address, addr, t, slave)
         v = read_value(s, t, index, sub)
     if as_json:
         print_json({**v.to_json(), "dictionary": t.source})
@@ -90,10 +111,11 @@ def write(address: str, value: str, target: str, slave: int, library: str | None
     """Write one object: VALUE is encoded by the object's data type (range checked), or given as hex:BYTES."""
     from ecattool.online.objects import write_value
 
-    index, sub = _address(address)
+    addr = _address(address)
     with open_live(target) as live:
         s = live.slave(slave)
         t = _typed(s, library, device)
+        index, sub = _object(address, addr, t, slave)
         data = write_value(s, t, index, sub, value)
     if as_json:
         print_json({"address": f"0x{index:04X}:{sub:02X}", "hex": data.hex(), "dictionary": t.source})
@@ -114,6 +136,12 @@ def info(target: str, slave: int, library: str | None, device: str | None, as_js
     """The slave's dictionary (objects, entries, types, access) and where it comes from."""
     with open_live(target) as live:
         t = _typed(live.slave(slave), library, device)
+    if not len(t.dictionary):
+        from ecattool.errors import TargetError
+
+        why = t.sdo_info_error or f"slave {slave} offers no SDO Information"
+        raise TargetError(f"{why}; and no --device, --library or built-in family describes it: its objects can still "
+                          "be read as raw bytes, 'ecattool sdo read INDEX:SUB'")
     rows = [{"address": f"0x{o.index:04X}:{e.subindex:02X}", "object": o.name, "name": e.name,
              "type": e.type_name, "bits": e.bit_size,
              "read": sorted(s.value for s in e.access.read), "write": sorted(s.value for s in e.access.write),

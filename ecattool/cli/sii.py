@@ -18,6 +18,7 @@ from ecattool.cli.common import (
     table,
     write_output,
 )
+from ecattool.cli.online import open_live, reset_bus_option
 from ecattool.cli.paths import InputFile
 
 
@@ -305,6 +306,7 @@ Examples:
 @click.option("--unchecked", is_flag=True,
               help="Save the image even when it does not check out (a damaged EEPROM to repair); the problem is "
                    "still printed on stderr.")
+@reset_bus_option
 def read_cmd(target: str, slave: int, output: str, unchecked: bool) -> None:
     """Read a slave's SII EEPROM (the fixed area and the category chain to its end marker) into a file.
 
@@ -312,10 +314,9 @@ def read_cmd(target: str, slave: int, output: str, unchecked: bool) -> None:
     failed gives), its checksum the CRC-8 of bytes 0-13, its category chain ending in the end marker. One that does
     not check out is exit 1 and no file (unless --unchecked)."""
     from ecattool.online.sii_access import read_problems
-    from ecattool.online.targets import open_bus
 
     check_output(output)  # an existing file without --force: refused before the bus is opened
-    with open_bus(target) as live:
+    with open_live(target) as live:
         s = live.slave(slave)
         data = s.sii_read()
     problems = read_problems(data)
@@ -352,16 +353,16 @@ checks out. The image is read back and compared at the end.""")
                    "device's image; e.g. a firmware change).")
 @click.option("--force", is_flag=True, callback=store_force,
               help="Replace an existing --backup file (it only ever means overwriting files).")
+@reset_bus_option
 def write_cmd(image: str, target: str, slave: int, backup: str, any_identity: bool, force: bool) -> None:
     """Write IMAGE to a slave's SII EEPROM, after the checks and a back-up of the old image. Exit status 1 when a
     check refuses the image: one line naming the first problem, and nothing is written (not even the back-up)."""
     from ecattool.fileio import read_bytes
-    from ecattool.online.targets import open_bus
     from ecattool.online.sii_access import sii_write
 
     data = read_bytes(image)
     check_output(backup, (image,))  # never over the image, an existing back-up only with --force
-    with open_bus(target) as live:
+    with open_live(target) as live:
         problems = sii_write(live.slave(slave), data, image, backup, any_identity, overwrite_backup=force_requested())
     if problems:
         from ecattool.errors import InputError

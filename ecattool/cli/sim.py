@@ -234,10 +234,12 @@ Run it inside a private network namespace with a veth pair (never on the host's 
               help="Processes serving the line, each a segment of consecutive slaves (default: one per 16 drives, "
                    "at most one per core).")
 @click.option("--allow-errors", is_flag=True, help="Serve a project even when lint reports errors for it.")
+@click.option("--misbehave", metavar="NAME", hidden=True,
+              help="Test hook: every slave misbehaves as NAME (ecattool.sim.bus.misbehave; one process serves).")
 @json_option
 def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, revision: str | None,
               selector: str | None, frames: int | None, list_only: bool, workers: int | None, allow_errors: bool,
-              as_json: bool) -> None:
+              misbehave: str | None, as_json: bool) -> None:
     """Serve simulated drives as EtherCAT slaves on a network interface, for a real master (SOEM/pysoem).
 
     SOURCES, in bus order: a project file (every drive of the project, in its bus order), a built-in profile
@@ -282,4 +284,9 @@ def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, 
             click.echo(f"serving {len(slaves)} slave{'s' if len(slaves) != 1 else ''} on {iface} ({names})")
         sys.stdout.flush()
 
-    serve(slaves, iface, ready, frames, workers=workers)
+    fault = None
+    if misbehave is not None:  # the hostile-slave test's switch (tests/test_wire_hostile_slave.py)
+        from ecattool.sim.bus.misbehave import apply
+
+        fault, workers = apply(misbehave, slaves), 1
+    serve(slaves, iface, ready, frames, fault=fault, workers=workers)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 
 from ecattool.errors import TargetError
@@ -22,9 +23,41 @@ def state_of(statusword: int) -> str:
     return state.text if state is not None else f"unknown (0x{statusword:04X})"
 
 
-def enable(read_sw: Callable[[], int], write_cw: Callable[[int], None], cycle: Callable[[], None], max_cycles: int = 200) -> list[str]:
-    """Drive the state machine to OPERATION ENABLED; returns the states passed through."""
+#: how long a fault reset is held (bit 7 set) at most while the statusword still says FAULT, in seconds
+FAULT_RESET_S = 2.0
+#: the most cycles one fault reset is held, whatever the clock says (a bound on the loop itself)
+FAULT_RESET_CYCLES = 5000
+#: fault resets tried before the drive counts as staying in FAULT
+FAULT_RESETS = 2
+
+
+def fault_reset(read_sw: Callable[[], int], write_cw: Callable[[int], None], cycle: Callable[[], None],
+                clock: Callable[[], float] = time.monotonic, hold_s: float = FAULT_RESET_S) -> int:
+    """A fault reset as CiA-402 defines it: bit 7 of the controlword low for one cycle, then set (the rising edge
+    starts transition 15) and held until the statusword leaves FAULT or ``hold_s`` passes; the caller clears
+    bit 7 with its next command (Technosoft iPOS manual, seeds/000_a0ab57c0bda88c2c.txt line 2027: "After leaving
+    the state Fault bit 7, Fault Reset of the Controlword has to be cleared by the host"; line 2085: "the fault
+    reset: The transition is only started by a bit transition from 0 to 1"). Returns the last statusword read."""
+    write_cw(DISABLE_VOLTAGE)  # bit 7 low first: a controlword left at 0x0080 would give no edge
+    cycle()
+    write_cw(FAULT_RESET)
+    deadline = clock() + hold_s
+    sw = read_sw()
+    for _ in range(FAULT_RESET_CYCLES):
+        cycle()
+        sw = read_sw()
+        if state_of(sw) != "fault" or clock() >= deadline:
+            break
+    return sw
+
+
+def enable(read_sw: Callable[[], int], write_cw: Callable[[int], None], cycle: Callable[[], None],
+           max_cycles: int = 200, clock: Callable[[], float] = time.monotonic,
+           reset_hold_s: float = FAULT_RESET_S) -> list[str]:
+    """Drive the state machine to OPERATION ENABLED; returns the states passed through. A drive in FAULT gets a
+    :func:`fault_reset` (at most FAULT_RESETS); one in FAULT REACTION ACTIVE is waited for (it ends in FAULT)."""
     seen: list[str] = []
+    resets = 0
     for _ in range(max_cycles):
         cycle()
         sw = read_sw()
@@ -34,12 +67,15 @@ def enable(read_sw: Callable[[], int], write_cw: Callable[[int], None], cycle: C
         if st == "operation enabled":
             return seen
         if st == "fault":
-            if seen.count("fault") > 1 and "fault reset sent" in seen:
-                raise TargetError(f"drive stays in FAULT after a fault reset (statusword 0x{sw:04X})")
-            write_cw(FAULT_RESET)
+            if resets >= FAULT_RESETS:
+                raise TargetError(f"drive stays in FAULT after {resets} fault resets, each held up to "
+                                  f"{reset_hold_s:g} s (statusword 0x{sw:04X})")
+            resets += 1
             seen.append("fault reset sent")
-            cycle()
-            write_cw(DISABLE_VOLTAGE)
+            sw = fault_reset(read_sw, write_cw, cycle, clock, reset_hold_s)
+            if state_of(sw) != "fault":
+                seen.append(state_of(sw))
+                write_cw(SHUTDOWN)  # bit 7 cleared, on to READY TO SWITCH ON
         elif st in ("switch on disabled", "not ready to switch on"):
             write_cw(SHUTDOWN)
         elif st == "ready to switch on":

@@ -15,6 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from ecattool.errors import InputError, SdoAbort, TargetError
+from ecattool.od.model import EcState
+from ecattool.target.isolated import MasterGone
 from ecattool.findings import Finding, Severity
 from ecattool.online.dictionary import decode
 from ecattool.online.live import LiveBus
@@ -24,7 +26,7 @@ from ecattool.online.objects import address
 @dataclass
 class Drift:
     """One difference between the project and a drive: ``kind`` is ``value``, ``identity``, ``abort``,
-    ``unreadable`` or ``sw``."""
+    ``unreadable``, ``sw`` or ``state``."""
 
     drive: str
     position: int
@@ -51,6 +53,9 @@ class AuditReport:
     target: str
     drifts: list[Drift] = field(default_factory=list)
     checked: int = 0
+    #: values the project sets on objects mapped into the drive's RxPDOs: the master writes them every cycle, so
+    #: what SDO reads there is process data, not a setting (listed, not drift)
+    process_data: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -58,7 +63,7 @@ class AuditReport:
 
     def to_json(self) -> dict[str, Any]:
         return {"project": self.project, "target": self.target, "ok": self.ok, "checked": self.checked,
-                "drifts": [d.to_json() for d in self.drifts]}
+                "drifts": [d.to_json() for d in self.drifts], "process_data": self.process_data}
 
     def findings(self) -> list[Finding]:
         return [d.finding() for d in self.drifts]
@@ -102,11 +107,47 @@ def identity_differences(rd: Any, ident: Any) -> list[tuple[str, int, int]]:
     return out
 
 
-def audit_drive(rd: Any, slave: Any, report: AuditReport, sw_checksums: bool = False) -> None:
+def rx_objects(rd: Any) -> set[tuple[int, int]]:
+    """The objects mapped into the drive's RxPDOs (the project's mapping, else the device's default)."""
+    mapping = getattr(rd, "mapping", None)
+    if mapping is None:
+        return set()
+    return {(e.index, e.subindex) for pdo in mapping.rx for e in pdo.entries if e.index}
+
+
+#: the AL status code a drive shows in SAFE-OP once its master stopped sending process data (the sync manager
+#: watchdog): what every drive of a machine shows after its master went away, not a drift of the drive
+WATCHDOG_CODE = 0x001B
+
+
+def state_drift(rd: Any, found: Any) -> Drift | None:
+    """A drive found (before the master reset the bus) in INIT or BOOT, or with the AL error indication: the project
+    expects every drive at least in PRE-OP with its mailbox running and no error (commissioning takes it on). A
+    drive in SAFE-OP with the watchdog's code 0x001B is one whose master stopped: not drift."""
+    from ecattool.abort import al_status_text
+    from ecattool.online.bus_state import RUNNING
+
+    state = found.state
+    if state is EcState.PREOP or state in RUNNING:
+        if not found.error or (state is EcState.SAFEOP and found.al_status_code == WATCHDOG_CODE):
+            return None
+    code = found.al_status_code
+    why = f", AL status code 0x{code:04X} ({al_status_text(code)})" if found.error or code else ""
+    return Drift(rd.drive.name, rd.position, "state", "AL status", "PRE-OP, SAFE-OP or OP without error",
+                 str(found), f"found in {state.value if state else 'no state'}{' with an error' if found.error else ''}"
+                             f"{why} before the bus was opened", None)
+
+
+def audit_drive(rd: Any, slave: Any, report: AuditReport, sw_checksums: bool = False, found: Any = None) -> None:
     name = rd.drive.name
     device = rd.device
+    if found is not None and (drift := state_drift(rd, found)) is not None:
+        report.drifts.append(drift)
+    in_pdos = rx_objects(rd)
     try:
         ident = slave.identity()
+    except MasterGone:
+        raise  # nothing more can be read: one line, not a drift report of everything
     except TargetError as exc:
         report.drifts.append(Drift(name, rd.position, "unreadable", "identity", None, None, f"identity: {exc}"))
         ident = None
@@ -124,11 +165,16 @@ def audit_drive(rd: Any, slave: Any, report: AuditReport, sw_checksums: bool = F
             report.drifts.append(Drift(name, rd.position, "abort", where, cmd.data.hex(), f"0x{exc.code:08X}",
                                        f"{where}: reading it back was refused: {exc}", cmd.source))
             continue
+        except MasterGone:
+            raise
         except TargetError as exc:
             report.drifts.append(Drift(name, rd.position, "unreadable", where, cmd.data.hex(), None,
                                        f"{where}: {exc}", cmd.source))
             continue
-        if not _same(cmd.data, actual):
+        if not _same(cmd.data, actual) and (index, sub) in in_pdos:
+            report.process_data.append({"drive": name, "position": rd.position, "address": where,
+                                        "project": decode(entry, cmd.data), "read": decode(entry, actual)})
+        elif not _same(cmd.data, actual):
             want, got = decode(entry, cmd.data), decode(entry, actual)
             label = f" ({entry.name})" if entry is not None and entry.name else ""
             report.drifts.append(Drift(name, rd.position, "value", where, want, got,
@@ -156,6 +202,7 @@ def audit(project: str | Path, bus: LiveBus, sw_checksums: bool = False) -> Audi
         raise InputError(first.message, first.location)
     refuse_errors(result, "audit")
     report = AuditReport(str(project), bus.spec)
+    found = {f.position: f for f in bus.found}
     for rd in sorted(result.drives, key=lambda r: r.position):
-        audit_drive(rd, bus.slave(rd.position), report, sw_checksums)
+        audit_drive(rd, bus.slave(rd.position), report, sw_checksums, found.get(rd.position))
     return report

@@ -23,6 +23,8 @@ class Typed:
     source: str
     match: Match | None = None
     device: Device | None = None
+    #: why the slave's SDO Information gave no dictionary, where it was asked and refused
+    sdo_info_error: str | None = None
 
     def entry(self, index: int, subindex: int) -> Entry | None:
         return self.dictionary.entry(index, subindex)
@@ -48,8 +50,8 @@ def typed(slave: Any, library: Library | None = None, device: Device | None = No
     if sdo_info:
         try:
             return Typed(slave.sdo_info(), "sdo-info")
-        except EcatToolError:
-            pass  # the slave offers no SDO Information (or the master gives none): untyped
+        except EcatToolError as exc:  # the slave offers no SDO Information (or the master gives none): untyped
+            return Typed(ObjectDictionary(), "none", sdo_info_error=exc.message)
     return Typed(ObjectDictionary(), "none")
 
 

@@ -21,7 +21,7 @@ from contextlib import contextmanager
 from types import ModuleType
 
 from ecattool.errors import TargetError
-from ecattool.od.model import ObjectDictionary
+from ecattool.od.model import EcState, ObjectDictionary
 from ecattool.online.live import LiveBus, Unsupported
 from ecattool.target.kickcat import KickcatSlave, import_kickcat
 
@@ -47,6 +47,10 @@ class KickcatLiveSlave(KickcatSlave):
 
     def sii_write_word(self, word: int, data: bytes) -> None:
         raise Unsupported("kickcat: the Python binding gives no SII EEPROM access (use pysoem:IF)")
+
+    def request_state(self, state: EcState) -> None:
+        raise Unsupported("kickcat: the Python binding requests a state for the whole bus, not for one slave (use "
+                          "pysoem:IF)")
 
     def sdo_info(self) -> ObjectDictionary:
         raise Unsupported("kickcat: the Python binding has no SDO Information OD list (use pysoem:IF, or type the "

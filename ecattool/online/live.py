@@ -76,6 +76,12 @@ class LiveBus:
     write_log: list[str] | None = None
     #: the devices a simulator bus was made of (its own dictionaries), by position
     devices: list[Device] = field(default_factory=list)
+    #: what closing the bus could not do (a slave found in OP and left in PRE-OP), one line each
+    notes: list[str] = field(default_factory=list)
+    #: each slave's AL state as found before the master reset the bus (``bus_state.Found``; empty: not known)
+    found: list[Any] = field(default_factory=list)
+    #: whether the ``with`` block that used the bus ended with an exception (its error is what a user reads then)
+    failed: bool = False
 
     def slave(self, position: int) -> Any:
         if not 0 <= position < len(self.slaves):
@@ -91,6 +97,7 @@ class LiveBus:
         return self
 
     def __exit__(self, *exc: object) -> None:
+        self.failed = exc[0] is not None
         self.close()
 
 

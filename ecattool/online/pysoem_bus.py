@@ -113,8 +113,10 @@ class PysoemLiveSlave:
     def sdo_info(self) -> ObjectDictionary:
         try:
             objects = self._raw.od
-        except self._mod.SdoInfoError as exc:
-            raise TargetError(f"slave {self.position}: SDO Information service: {exc}") from None
+        except (self._mod.SdoInfoError, self._mod.MailboxError, self._mod.WkcError) as exc:
+            # tried once: what the refusal left in SOEM's error list must not fail the requests that follow
+            self._t._master.drain_errors()
+            raise TargetError(f"slave {self.position} offers no SDO Information ({exc})") from None
         return dictionary_from_soem(objects)
 
 

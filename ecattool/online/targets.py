@@ -3,7 +3,8 @@ pysoem or KickCAT."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
@@ -11,9 +12,14 @@ from ecattool.online.live import LiveBus, sim_bus
 from ecattool.target.opener import parse_target, sim_devices
 
 
-def open_bus(spec: str, devices: Sequence[Device] = ()) -> LiveBus:
+def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False) -> LiveBus:
     """The live bus of a target spec: ``sim`` (the simulator with ``devices``, e.g. a project's), ``sim:SOURCE,…``
-    (profiles or ESI files), ``pysoem:IF`` or ``kickcat:IF`` (a real master on a network interface)."""
+    (profiles or ESI files), ``pysoem:IF`` or ``kickcat:IF`` (a real master on a network interface).
+
+    A real master resets every slave when it opens the bus: first each slave's state is read
+    (:mod:`ecattool.online.bus_state`), a bus with slaves in SAFE-OP or OP is refused unless ``reset_bus``, and
+    when the bus is closed each slave is put back where it was found where that can be done (what could not is
+    in the bus's ``notes``)."""
     parsed = parse_target(spec)
     if parsed.kind == "sim":
         from ecattool.sim.slave import drive_for_device
@@ -23,10 +29,44 @@ def open_bus(spec: str, devices: Sequence[Device] = ()) -> LiveBus:
             raise SelectionError("target 'sim' without a project has no slaves: use sim:PROFILE,ESI… "
                                  "(e.g. sim:hdt,technosoft-ipos)")
         return sim_bus([drive_for_device(d) for d in devs], spec)
+    from ecattool.online.bus_state import guard
+
+    found = guard(parsed.interface, reset_bus)
+    # a real master runs in a child process (ecattool.target.isolated): one that crashes or hangs on what a slave
+    # answers becomes a one-line error naming the slave and the object, never the end of ecattool
     if parsed.kind == "pysoem":
         from ecattool.online.pysoem_bus import open_pysoem
+        from ecattool.target.pysoem import _import_pysoem
 
-        return open_pysoem(parsed.interface)
+        _import_pysoem()
+        return _restoring(isolated_bus(spec, lambda: open_pysoem(parsed.interface)), found)
     from ecattool.online.kickcat_bus import open_kickcat
+    from ecattool.target.kickcat import import_kickcat
 
-    return open_kickcat(parsed.interface)
+    import_kickcat()
+    return _restoring(isolated_bus(spec, lambda: open_kickcat(parsed.interface)), found)
+
+
+def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:
+    """``bus``, closed with each slave put back in the state it was found in (bus_state.restore) first."""
+    from ecattool.online.bus_state import restore
+
+    close = bus.closer
+    bus.found = list(found)
+
+    def closer() -> None:
+        try:
+            bus.notes.extend(restore(bus.slaves, found))
+        finally:
+            close()
+
+    bus.closer = closer
+    return bus
+
+
+def isolated_bus(spec: str, opener: Callable[[], LiveBus]) -> LiveBus:
+    """The live bus ``opener`` opens, served from a child process (:class:`~ecattool.target.isolated.MasterProcess`)."""
+    from ecattool.target.isolated import MasterProcess, RemoteSlave
+
+    master = MasterProcess(spec, opener, lambda bus: bus.slaves)
+    return LiveBus(spec, [RemoteSlave(master, p) for p in master.positions], closer=master.close)

@@ -50,7 +50,7 @@ class KickcatSlave:
         if m:
             return SdoAbort(index, subindex, int(m.group(1), 16))
         if "timeout" in text.lower():
-            return SdoTimeout(index, subindex)
+            return SdoTimeout(index, subindex, self.position)
         return TargetError(f"slave {self.position}, 0x{index:04X}:{subindex:02X}: {text}")
 
     def identity(self) -> Identity:
@@ -79,7 +79,7 @@ class KickcatSlave:
         status = int(msg.status())
         if status == int(MessageStatus.RUNNING) or status == int(getattr(MessageStatus, "TIMEDOUT", -1)):
             if expect_reply:
-                raise SdoTimeout(index, subindex)
+                raise SdoTimeout(index, subindex, self.position)
         elif status > 0xFFFF:  # KickCAT keeps the slave's abort code as the message status
             raise SdoAbort(index, subindex, status)
         elif status != int(MessageStatus.SUCCESS):

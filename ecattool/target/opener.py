@@ -81,9 +81,9 @@ def open_target(spec: str, devices: Iterable[Device] = ()) -> Target:
 
         return SimTarget.from_devices(sim_devices(parsed, devices))
     if parsed.kind == "pysoem":
-        from ecattool.target.pysoem import PysoemTarget
+        from ecattool.target.isolated import pysoem_target
 
-        return PysoemTarget(parsed.interface)
+        return pysoem_target(parsed.interface)  # SOEM in a child process: a crash in it cannot end ecattool
     raise SelectionError(f"target {spec!r}: KickCAT reads a live bus (ecattool bus scan, audit, backup; sii read) "
                          f"and does not act on slaves here: use {SLAVE_TARGET_FORMS}")
 

@@ -74,6 +74,9 @@ DEFAULT_WATCHDOG_S = 0.1
 KEEPER_IDLE_S = 5.0
 #: how often process data exchanges read the AL status to notice a drive that left OP by itself, in seconds
 STATE_POLL_S = 0.1
+#: how long SOEM waits for one SDO answer, in microseconds (its own default is 0.7 s); an upload that got none is
+#: asked once more (PysoemSlave.sdo_upload)
+SDO_TIMEOUT_US = 2_000_000
 #: pysoem reads into a 256-byte buffer unless told otherwise; a larger object is read again with this size
 LARGE_SDO_BYTES = 65536
 _STATE_NAMES = {EcState.INIT: "INIT_STATE", EcState.PREOP: "PREOP_STATE", EcState.BOOT: "BOOT_STATE",
@@ -148,7 +151,7 @@ class PysoemSlave:
         except mod.SdoError as exc:
             raise SdoAbort(index, subindex, int(exc.abort_code)) from None
         except mod.WkcError:  # the mailbox answer did not come (the working counter stayed 0)
-            raise SdoTimeout(index, subindex) from None
+            raise SdoTimeout(index, subindex, self.position) from None
         except mod.MailboxError as exc:
             where = self._where(index, subindex)
             raise TargetError(f"{where}: mailbox error {exc.error_code}: {exc.desc}") from None
@@ -169,7 +172,17 @@ class PysoemSlave:
                     raise
                 return read(LARGE_SDO_BYTES)
 
-        return self._sdo(read_any_size, index, subindex)
+        def read_again_once() -> bytes:
+            # an upload changes nothing on the slave: one that got no answer, or a stale mailbox error (the
+            # answer to an earlier request, e.g. a refused SDO Information request), is asked again once, with
+            # the next mailbox counter (SOEM counts on for each request), after SOEM's error list is emptied
+            try:
+                return read_any_size()
+            except (self._mod.WkcError, self._mod.MailboxError):
+                self._master.drain_errors()
+                return read_any_size()
+
+        return self._sdo(read_again_once, index, subindex)
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None:
@@ -303,6 +316,11 @@ class PysoemTarget:
         self.master = self.pysoem.Master()
         # SDO and process data calls wait in SOEM without the GIL: the keeper thread runs meanwhile
         self.master.always_release_gil = True
+        # SOEM waits 0.7 s for a mailbox answer (EC_TIMEOUTRXM); on a loaded machine a slave's answer (or the
+        # frame carrying it) can take longer. A longer wait costs nothing when the answer comes
+        for name in ("sdo_read_timeout", "sdo_write_timeout"):
+            if hasattr(self.master, name):
+                setattr(self.master, name, SDO_TIMEOUT_US)
         try:
             self.master.open(ifname)
         except Exception as exc:  # noqa: BLE001 - ConnectionError, or an OS error on some platforms
@@ -323,6 +341,17 @@ class PysoemTarget:
         self._slaves = [PysoemSlave(self, i, s) for i, s in enumerate(self.master.slaves)]
         self.mapped = False
         self.dc_configured = False
+
+    def drain_errors(self) -> None:
+        """Empty SOEM's error list: an error left there (e.g. by a refused SDO Information request, one per
+        mailbox answer) is raised by pysoem from the next call on that master, whatever that call's own result."""
+        collect = getattr(self.master, "_collect_mailbox_errors", None)
+        if collect is None:
+            return
+        try:
+            collect()
+        except Exception:  # noqa: BLE001 - the errors are the stale ones being dropped
+            pass
 
     def map(self) -> None:
         """Lay out the IO map from the PDO mappings the slaves report (pysoem ``config_map``)."""

@@ -1,0 +1,120 @@
+"""``ecattool sdo read`` of one object against a bare pysoem script doing the same (issue 35 item 5, issue 37
+item 1): each a fresh process, side by side in one run, against one drive served by ``ecattool sim serve`` over
+a veth pair in a private network namespace that the script makes itself (never the host's interfaces).
+
+* bare: ``python -c "import pysoem; m = pysoem.Master(); m.open(IF); m.config_init(); m.slaves[0].sdo_read(0x1018,
+  1); m.close()"``;
+* ecattool: ``python -m ecattool sdo read 0x1018:01 --target pysoem:IF`` (the master in its child process,
+  ecattool.target.isolated; the value decoded by the drive's built-in family).
+
+The two alternate (bare, ecattool, bare, …) so that a busy machine slows both alike; the figures are the median
+and the lower quartile wall time of a whole process, and their ratio.
+
+    .venv/bin/python benchmarks/bench_sdo_read.py [--rounds 15] [--json]
+
+Needs the ``wire`` extra (pysoem) and root (or unprivileged user namespaces). Every loop is bounded in count.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+MASTER_IF, SLAVE_IF = "ecat0", "ecat1"
+BARE = ("import pysoem\nm = pysoem.Master()\nm.open({iface!r})\nassert m.config_init() > 0\n"
+        "print(int.from_bytes(m.slaves[0].sdo_read(0x1018, 1), 'little'))\nm.close()\n")
+
+
+#: as an installed package runs: with its compiled modules cached (this machine's environment sets
+#: PYTHONDONTWRITEBYTECODE, which makes every start compile ecattool's sources again; pysoem is compiled code)
+ENV = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+
+
+def _timed(argv: list[str]) -> tuple[float, str]:
+    t0 = time.perf_counter()
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=60, cwd=ROOT, env=ENV)
+    took = time.perf_counter() - t0
+    if done.returncode != 0:
+        raise SystemExit(f"{argv[:4]} failed: {done.stderr[-1000:]}")
+    return took, done.stdout.strip()
+
+
+def inside(rounds: int) -> dict[str, Any]:
+    import select
+
+    server = subprocess.Popen([sys.executable, "-m", "ecattool", "sim", "serve", "hdt", "--iface", SLAVE_IF],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT, env=ENV)
+    try:
+        assert server.stdout is not None
+        ready, _, _ = select.select([server.stdout], [], [], 60)
+        if not ready or not server.stdout.readline():
+            raise SystemExit("the server did not get ready")
+        bare_argv = [sys.executable, "-c", BARE.format(iface=MASTER_IF)]
+        tool_argv = [sys.executable, "-m", "ecattool", "sdo", "read", "0x1018:01", "--target", f"pysoem:{MASTER_IF}"]
+        _timed(bare_argv)  # the link's first frames, the page cache: not measured
+        _timed(tool_argv)
+        bare, tool = [], []
+        outputs = set()
+        for _ in range(rounds):
+            t, out = _timed(bare_argv)
+            bare.append(t)
+            outputs.add(("bare", out))
+            t, out = _timed(tool_argv)
+            tool.append(t)
+            outputs.add(("ecattool", out.split(" = ")[1].split(" ")[0] if " = " in out else out))
+    finally:
+        server.terminate()
+        server.wait(20)
+
+    def fig(xs: list[float]) -> dict[str, float]:
+        q = statistics.quantiles(xs, n=4)
+        return {"median_s": round(statistics.median(xs), 4), "q1_s": round(q[0], 4), "min_s": round(min(xs), 4)}
+
+    b, e = fig(bare), fig(tool)
+    return {"rounds": rounds, "bare_pysoem": b, "ecattool_sdo_read": e,
+            "ratio_median": round(e["median_s"] / b["median_s"], 2), "ratio_q1": round(e["q1_s"] / b["q1_s"], 2),
+            "values": sorted(outputs), "loadavg": os.getloadavg()}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rounds", type=int, default=15)
+    ap.add_argument("--json", action="store_true")
+    ap.add_argument("--inside", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    rounds = max(3, min(args.rounds, 200))
+    if args.inside:
+        print(json.dumps(inside(rounds)))
+        return
+    sys.path.insert(0, str(ROOT))
+    from ecattool.sim.bus import netns
+
+    reason = netns.unavailable()
+    if reason:
+        raise SystemExit(f"cannot make a private network namespace: {reason}")
+    argv = netns.command([sys.executable, __file__, "--inside", "--rounds", str(rounds)])
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=60 + 20 * rounds, cwd=ROOT)
+    if done.returncode != 0:
+        raise SystemExit(done.stderr[-2000:])
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return
+    b, e = result["bare_pysoem"], result["ecattool_sdo_read"]
+    print(f"{rounds} rounds, load average {' '.join(f'{x:.1f}' for x in result['loadavg'])}")
+    print(f"bare pysoem script     median {b['median_s'] * 1000:7.1f} ms   lower quartile {b['q1_s'] * 1000:7.1f} ms")
+    print(f"ecattool sdo read      median {e['median_s'] * 1000:7.1f} ms   lower quartile {e['q1_s'] * 1000:7.1f} ms")
+    print(f"ratio                  median {result['ratio_median']:.2f}x      lower quartile {result['ratio_q1']:.2f}x")
+    print(f"values read: {result['values']}")
+
+
+if __name__ == "__main__":
+    main()

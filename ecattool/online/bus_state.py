@@ -1,0 +1,143 @@
+"""Never stop a running machine by surprise (issue 35 item 4): before a master resets the bus (SOEM's
+``config_init`` and KickCAT's bus init take every slave to INIT), each slave's AL state is read with one raw
+frame, built by the frame code the simulator's bus uses (``ecattool.sim.bus.frame``): a BRD of the AL status
+register (0x0130) counts the slaves, one APRD per slave reads its state. Where a slave is in SAFE-OP or OP the
+command is refused in one line naming them, unless the user passed ``--reset-bus``; when the command ends, each
+slave is put back in the state it was found in where ecattool can (INIT and PRE-OP), and what it could not is
+said (:func:`restore`).
+
+The read needs what the master needs (a raw socket: root or CAP_NET_RAW); where it cannot be made, or nothing
+answers, nothing is known and the master goes on as before (it says itself why it cannot open the interface).
+"""
+
+from __future__ import annotations
+
+import socket
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from ecattool.errors import TargetError
+from ecattool.od.model import EcState
+from ecattool.online.live import Unsupported
+
+#: the AL status register (ETG.1000.4, 0x0130): bits 0-3 the state, bit 4 the error indication
+AL_STATUS = 0x0130
+#: how long one raw read waits for its frame to come back, and how often it is sent
+REPLY_S = 0.05
+ATTEMPTS = 3
+#: slaves read in one frame at most (12 octets of datagram head and data each: a frame holds ~120)
+MAX_SLAVES = 100
+_SRC = b"\x02\x00\x00\x00\xec\x01"
+_STATES = {0x01: EcState.INIT, 0x02: EcState.PREOP, 0x03: EcState.BOOT, 0x04: EcState.SAFEOP, 0x08: EcState.OP}
+RUNNING = (EcState.SAFEOP, EcState.OP)
+
+
+@dataclass(frozen=True)
+class Found:
+    """A slave's AL state as found before the bus was reset (``state`` None: an AL status that names none), and
+    its AL status code (0x0134)."""
+
+    position: int
+    al_status: int
+    al_status_code: int = 0
+
+    @property
+    def error(self) -> bool:
+        """The AL status's error indication (bit 4): the slave refused a state change or left a state by itself."""
+        return bool(self.al_status & 0x10)
+
+    @property
+    def state(self) -> EcState | None:
+        return _STATES.get(self.al_status & 0x0F)
+
+    def __str__(self) -> str:
+        name = self.state.value if self.state is not None else f"AL status 0x{self.al_status:02X}"
+        return f"slave {self.position} ({name}{', error' if self.al_status & 0x10 else ''})"
+
+
+def _exchange(sock: socket.socket, frame: bytes, index: int) -> bytes | None:
+    """``frame`` sent; the frame that comes back processed (bit 1 of the source MAC set by the first slave)."""
+    from ecattool.sim.bus.frame import parse_frame
+
+    for _ in range(ATTEMPTS):
+        sock.send(frame)
+        deadline = time.monotonic() + REPLY_S
+        while (left := deadline - time.monotonic()) > 0:
+            sock.settimeout(left)
+            try:
+                got, addr = sock.recvfrom(2048)
+            except (socket.timeout, BlockingIOError):
+                break
+            if len(addr) > 2 and addr[2] == socket.PACKET_OUTGOING:
+                continue
+            parsed = parse_frame(got)
+            if parsed is not None and got[6:12] == bytes([_SRC[0] | 0x02]) + _SRC[1:] and parsed.datagrams \
+                    and parsed.datagrams[0].index == index:
+                return got
+    return None
+
+
+def read_states(ifname: str) -> list[Found] | None:
+    """Each slave's AL status on ``ifname``, in bus order; None where it cannot be read (no raw socket, no
+    answer)."""
+    from ecattool.sim.bus.frame import ETHERTYPE_ECAT, Cmd, Datagram, FrameError, make_frame, parse_frame
+
+    try:
+        sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(ETHERTYPE_ECAT))
+    except (OSError, AttributeError):
+        return None
+    try:
+        sock.bind((ifname, 0))
+        got = _exchange(sock, make_frame([Datagram.make(Cmd.BRD, 0, AL_STATUS, 2, index=0x51)], _SRC), 0x51)
+        if got is None:
+            return None
+        count = min(parse_frame(got).datagrams[0].wkc, MAX_SLAVES)  # type: ignore[union-attr]
+        if count <= 0:
+            return []
+        # 0x0130-0x0135: the AL status and the AL status code (0x0134)
+        reads = [Datagram.make(Cmd.APRD, -p, AL_STATUS, 6, index=0x52) for p in range(count)]
+        got = _exchange(sock, make_frame(reads, _SRC), 0x52)
+        if got is None:
+            return None
+        frame = parse_frame(got)
+        assert frame is not None
+        return [Found(p, int.from_bytes(d.data[:2], "little"), int.from_bytes(d.data[4:6], "little"))
+                for p, d in enumerate(frame.datagrams) if d.wkc]
+    except (OSError, FrameError):
+        return None
+    finally:
+        sock.close()
+
+
+def guard(ifname: str, reset_bus: bool) -> list[Found]:
+    """The slaves' states before the bus is reset; a TargetError naming the slaves in SAFE-OP or OP unless
+    ``reset_bus``."""
+    found = read_states(ifname) or []
+    running = [f for f in found if f.state in RUNNING]
+    if running and not reset_bus:
+        raise TargetError(f"{', '.join(str(f) for f in running)} on {ifname!r} "
+                          f"{'is' if len(running) == 1 else 'are'} running: opening the bus resets every slave to "
+                          "INIT and would stop the machine; pass --reset-bus to do it anyway")
+    return found
+
+
+def restore(slaves: Sequence[object], found: Sequence[Found]) -> list[str]:
+    """Put each slave back in the state it was found in where ecattool can (INIT; PRE-OP is where the bus commands
+    leave it); returns what it could not, one line per slave."""
+    notes = []
+    by_position = {int(getattr(s, "position", i)): s for i, s in enumerate(slaves)}
+    for f in found:
+        slave = by_position.get(f.position)
+        if slave is None or f.state in (None, EcState.PREOP):
+            continue
+        if f.state in RUNNING or f.state is EcState.BOOT:
+            notes.append(f"{f} was left in PRE-OP: ecattool has no configuration to take it back to {f.state.value}")
+            continue
+        try:
+            slave.request_state(EcState.INIT)  # type: ignore[attr-defined]
+        except Unsupported as exc:
+            notes.append(f"{f} was left in PRE-OP: {exc}")
+        except (TargetError, AttributeError) as exc:
+            notes.append(f"{f} could not be put back in INIT: {exc}")
+    return notes

@@ -1,0 +1,306 @@
+"""A real master in a child process of its own, so that a master that crashes or hangs cannot take ecattool down.
+
+SOEM (through pysoem) and KickCAT are compiled code that trusts what a slave answers: SOEM reads the size an SDO
+upload announces as a signed 32-bit number (2^31 octets or more passes its "does it fit the buffer" check and is
+copied with ``memcpy``), and copies the segments of a segmented upload without ever checking the end of the buffer;
+KickCAT's bus init follows an SII category chain without an end marker for minutes (docs/at-the-machine.md,
+"When the master crashes"). In ecattool's own process either ends the command with SIGSEGV (exit 139, no word)
+or a wait without end.
+
+So the master runs in a forked child (:class:`MasterProcess`): the child opens the bus and owns the master's
+objects; ecattool sends it one request at a time over a pipe (a slave's position, a method, its arguments) and
+waits a bounded time for the answer. ecattool's own errors raised in the child (SdoAbort, SdoTimeout, …) come
+back as themselves. A child that dies becomes one :class:`MasterCrashed` naming the slave and what was asked
+("the master crashed reading 1018h:01 of slave 0"); one that does not answer in time is stopped and named the
+same way (:class:`MasterHung`). After either, the master is gone: every later request raises the same error at
+once. Every request and the bus init have a time limit (``timeout_s`` of the call; ``ECATTOOL_MASTER_TIMEOUT_S``
+caps them all, e.g. for a test that wants a hang found quickly).
+
+The cost is one ``fork`` when the bus is opened and one pipe round trip (some ten microseconds) per request.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import faulthandler
+import multiprocessing
+import os
+import signal
+from collections.abc import Callable, Sequence
+from multiprocessing.connection import Connection
+from typing import Any
+
+from ecattool.errors import EcatToolError, TargetError
+from ecattool.target.base import SlaveTarget
+
+#: how long the bus init may take (a master reads every slave's SII; SOEM asks an empty bus again for 2 s)
+OPEN_TIMEOUT_S = 30.0
+#: how long one SDO, state or SII request may take (SOEM: 0.7 s per mailbox answer, a few for a segmented upload)
+CALL_TIMEOUT_S = 20.0
+#: how long a closing master may take before it is stopped
+CLOSE_TIMEOUT_S = 5.0
+#: the environment variable that caps every time limit (seconds)
+TIMEOUT_ENV = "ECATTOOL_MASTER_TIMEOUT_S"
+#: prctl(2) option: the signal the child gets when its parent dies
+_PR_SET_PDEATHSIG = 1
+
+
+class MasterGone(TargetError):
+    """The master is gone (it crashed or hung earlier): nothing more can be read through it."""
+
+
+class MasterCrashed(MasterGone):
+    """The master's child process ended while it served a request (a crash inside the master library)."""
+
+
+class MasterHung(MasterGone):
+    """The master did not answer a request within its time limit; its child process was stopped."""
+
+
+def cap(timeout_s: float) -> float:
+    """``timeout_s``, or the cap ``ECATTOOL_MASTER_TIMEOUT_S`` sets where it is lower."""
+    text = os.environ.get(TIMEOUT_ENV, "")
+    try:
+        limit = float(text) if text else 0.0
+    except ValueError:
+        raise TargetError(f"{TIMEOUT_ENV}={text!r} is not a number of seconds") from None
+    return min(timeout_s, limit) if limit > 0 else timeout_s
+
+
+def object_text(index: int, subindex: int) -> str:
+    """An object as a manual writes it: ``1018h:01``."""
+    return f"{index:04X}h:{subindex:02X}"
+
+
+def describe(method: str, slave: int | None, args: Sequence[Any]) -> str:
+    """What a request does, for an error: ``reading 1018h:01 of slave 0``."""
+    of = "" if slave is None else f" of slave {slave}"
+    if method == "sdo_upload" and len(args) >= 2:
+        return f"reading {object_text(args[0], args[1])}{of}"
+    if method == "sdo_download" and len(args) >= 2:
+        return f"writing {object_text(args[0], args[1])}{of}"
+    if method == "sii_read":
+        return f"reading the SII{of}"
+    if method == "sii_write":
+        return f"writing the SII{of}"
+    if method == "sdo_info":
+        return f"reading the SDO Information{of}"
+    if method in ("state", "al_status_code"):
+        return f"reading the state{of}"
+    if method == "request_state" and args:
+        return f"requesting {getattr(args[0], 'value', args[0])}{of}"
+    if method == "identity":
+        return f"reading the identity{of}"
+    if method == "exchange":
+        return f"exchanging process data{of}"
+    return f"{method.replace('_', ' ')}{of}"
+
+
+def _signal_name(code: int | None) -> str:
+    if code is None:
+        return "no exit status"
+    if code < 0:
+        try:
+            return f"signal {signal.Signals(-code).name}"
+        except ValueError:
+            return f"signal {-code}"
+    return f"exit status {code}"
+
+
+# ------------------------------------------------------------------------------------------------ the child
+def _error_reply(exc: BaseException) -> tuple[Any, ...]:
+    if isinstance(exc, EcatToolError):
+        return ("error", type(exc), exc.args, dict(exc.__dict__))
+    return ("failed", f"{type(exc).__name__}: {exc}")
+
+
+def _serve(conn: Connection, factory: Callable[[], Any], slaves_of: Callable[[Any], Sequence[Any]]) -> None:
+    """The child: open the master (``factory``), tell the parent the slaves' positions, then answer requests
+    until the parent says ``None`` (close) or goes away."""
+    try:  # the master never outlives ecattool (a killed parent leaves no master on the interface)
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    except (OSError, AttributeError):
+        pass
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's: it closes the master in order
+    faulthandler.disable()  # a crash of the master is the parent's one line, not a Python stack dump
+    try:
+        root = factory()
+        slaves = list(slaves_of(root))
+    except BaseException as exc:  # noqa: BLE001 - every failure goes back to the parent as one reply
+        conn.send(_error_reply(exc))
+        return
+    conn.send(("ok", [int(getattr(s, "position", i)) for i, s in enumerate(slaves)]))
+    while True:
+        try:
+            request = conn.recv()
+        except (EOFError, OSError):
+            request = None
+        if request is None:
+            try:
+                root.close()
+            finally:
+                conn.close()
+            return
+        position, method, args, kwargs = request
+        try:
+            target = root if position is None else slaves[position]
+            reply: tuple[Any, ...] = ("ok", getattr(target, method)(*args, **kwargs))
+        except BaseException as exc:  # noqa: BLE001
+            reply = _error_reply(exc)
+        conn.send(reply)
+
+
+def _rebuild(reply: tuple[Any, ...], what: str) -> Exception:
+    """The exception a child's error reply stands for."""
+    if reply[0] == "error":
+        cls, args, state = reply[1], reply[2], reply[3]
+        exc: Exception = cls.__new__(cls)
+        exc.args = args
+        exc.__dict__.update(state)
+        return exc
+    return TargetError(f"the master failed {what}: {reply[1]}")
+
+
+# ------------------------------------------------------------------------------------------------ the parent
+class MasterProcess:
+    """A master opened by ``factory`` in a forked child; ``slaves_of(root)`` lists its slaves there.
+
+    ``name`` (``pysoem:eth0``) is used in errors. :attr:`positions` are the slaves' bus positions, in order."""
+
+    def __init__(self, name: str, factory: Callable[[], Any], slaves_of: Callable[[Any], Sequence[Any]],
+                 open_timeout_s: float = OPEN_TIMEOUT_S) -> None:
+        self.name = name
+        self._dead: MasterGone | None = None
+        ctx = multiprocessing.get_context("fork")
+        self._conn, child_end = ctx.Pipe()
+        self._proc = ctx.Process(target=_serve, args=(child_end, factory, slaves_of), daemon=True,
+                                 name=f"ecattool-master-{name}")
+        self._proc.start()
+        child_end.close()
+        self.positions: list[int] = self._answer(f"opening the bus on {name}", cap(open_timeout_s))
+
+    def _answer(self, what: str, timeout_s: float) -> Any:
+        """The child's reply to the request just sent (or to its start)."""
+        conn = self._conn
+        try:
+            ready = conn.poll(timeout_s)
+            reply = conn.recv() if ready else None
+        except (EOFError, OSError):
+            self._proc.join(1.0)
+            self._dead = MasterCrashed(f"the master crashed {what} ({self.name}: {_signal_name(self._proc.exitcode)})")
+            raise self._dead from None
+        if reply is None:
+            self._stop()
+            self._dead = MasterHung(f"the master did not answer within {timeout_s:g} s {what} ({self.name}; stopped)")
+            raise self._dead
+        if reply[0] == "ok":
+            return reply[1]
+        raise _rebuild(reply, what)
+
+    def call(self, position: int | None, method: str, *args: Any, timeout_s: float = CALL_TIMEOUT_S,
+             **kwargs: Any) -> Any:
+        """``method(*args, **kwargs)`` of the slave at ``position`` (None: the master itself), in the child."""
+        what = describe(method, position, args)
+        if self._dead is not None:
+            raise MasterGone(f"{what}: {self._dead.message}")
+        try:
+            self._conn.send((position, method, args, kwargs))
+        except (OSError, ValueError):
+            self._proc.join(1.0)
+            self._dead = MasterCrashed(f"the master crashed before {what} ({self.name}: "
+                                       f"{_signal_name(self._proc.exitcode)})")
+            raise self._dead from None
+        return self._answer(what, cap(timeout_s))
+
+    def _stop(self) -> None:
+        if self._proc.is_alive():
+            self._proc.kill()
+        self._proc.join(CLOSE_TIMEOUT_S)
+
+    def close(self) -> None:
+        """Close the master (in the child) and end the child; bounded by CLOSE_TIMEOUT_S."""
+        if self._dead is None and self._proc.is_alive():
+            try:
+                self._conn.send(None)
+            except (OSError, ValueError):
+                pass
+            self._proc.join(cap(CLOSE_TIMEOUT_S))
+        self._stop()
+        self._conn.close()
+        if self._dead is None:
+            self._dead = MasterGone(f"the master on {self.name} is closed")
+
+
+class RemoteSlave:
+    """A slave of a :class:`MasterProcess`: every method of the slave runs in the child (LiveSlave and
+    SlaveTarget alike)."""
+
+    def __init__(self, master: MasterProcess, position: int) -> None:
+        self._master = master
+        self.position = position
+
+    def _call(self, method: str, *args: Any, **kwargs: Any) -> Any:
+        return self._master.call(self.position, method, *args, **kwargs)
+
+    def identity(self) -> Any:
+        return self._call("identity")
+
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
+        data: bytes = self._call("sdo_upload", index, subindex, complete_access)
+        return data
+
+    def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
+                     expect_reply: bool = True) -> None:
+        self._call("sdo_download", index, subindex, bytes(data), complete_access, expect_reply)
+
+    def state(self) -> Any:
+        return self._call("state")
+
+    def request_state(self, state: Any) -> None:
+        # pysoem gives a drive on its way to OP 2 s of paced cycles plus a state check per cycle (~22 s at 1 ms)
+        self._call("request_state", state, timeout_s=3 * CALL_TIMEOUT_S)
+
+    def al_status_code(self) -> int | None:
+        code: int | None = self._call("al_status_code")
+        return code
+
+    def sii_read(self) -> bytes:
+        image: bytes = self._call("sii_read")
+        return image
+
+    def sii_write(self, image: bytes) -> None:
+        # word by word through the EEPROM: a 4 KiB image takes some seconds on a real bus
+        self._call("sii_write", bytes(image), timeout_s=max(CALL_TIMEOUT_S, len(image) / 2 * 0.05))
+
+    def sdo_info(self) -> Any:
+        # the SDO Information service reads every object's and entry's description: minutes on a large dictionary
+        return self._call("sdo_info", timeout_s=10 * CALL_TIMEOUT_S)
+
+    def exchange(self, outputs: bytes) -> bytes:
+        data: bytes = self._call("exchange", bytes(outputs))
+        return data
+
+    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0, sync0_shift_ns: int = 0) -> None:
+        self._call("configure_dc", assign_activate, sync0_cycle_ns, sync0_shift_ns)
+
+
+class IsolatedTarget:
+    """A :class:`~ecattool.target.base.Target` whose master runs in a :class:`MasterProcess`."""
+
+    def __init__(self, master: MasterProcess) -> None:
+        self.master = master
+        self._slaves = [RemoteSlave(master, p) for p in master.positions]
+
+    def slaves(self) -> list[SlaveTarget]:
+        return list(self._slaves)
+
+    def close(self) -> None:
+        self.master.close()
+
+
+def pysoem_target(ifname: str) -> IsolatedTarget:
+    """SOEM through pysoem on ``ifname`` (:class:`ecattool.target.pysoem.PysoemTarget`), in a child process."""
+    from ecattool.target.pysoem import PysoemTarget, _import_pysoem
+
+    _import_pysoem()  # a missing extra is said here, and the child starts with the module loaded
+    return IsolatedTarget(MasterProcess(f"pysoem:{ifname}", lambda: PysoemTarget(ifname), lambda t: t.slaves()))
