@@ -42,7 +42,7 @@ def target_option(required: bool = True) -> Callable[..., Any]:
     return both
 
 
-def _opened(bus: Any) -> Any:
+def _opened(bus: LiveBus) -> LiveBus:
     """``bus``, whose notes (what closing it could not put back) go to stderr when the command ends."""
     ctx = click.get_current_context(silent=True)
 
