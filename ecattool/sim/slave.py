@@ -20,10 +20,11 @@ device model (the three manual families have no public ESI).
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
 from pathlib import Path
 
-from ecattool.errors import StateChangeError, TargetError
+from ecattool.errors import EcatToolError, StateChangeError, TargetError
 from ecattool.esi.model import Device
 from ecattool.od.model import EcState
 from ecattool.sim.drive import Drive
@@ -85,6 +86,11 @@ class VirtualSlave(EscApplication):
         #: own clock: the outputs of the drive's last cycle (None: none yet)
         self._ran_on: bytes | None = None
         self.esc = Esc(sii, app=self, clock=clock)
+        #: what each sync manager is for, as the SII says (a device's SMs come from its SII, any number of them)
+        self.roles = sm_roles(sii)
+        #: the ESC follows the AL control itself (SII word 0 bit 8, device emulation): no application checks a
+        #: state change; the drive model behind it only supplies the process data
+        self.emulation = bool(self.esc.mem[R.ESC_CONFIG] & R.DEVICE_EMULATION)
         mbx = self._mailbox_defaults()
         self.mailbox = MailboxServer(drive, mbx[0], mbx[1])
         self.refusals: list[Refusal] = []
@@ -113,27 +119,39 @@ class VirtualSlave(EscApplication):
         words = self.esc.eeprom.words(0x18, 4)  # standard receive / send mailbox offset and size
         return (words[1] or 128, words[3] or 128)
 
+    def state(self) -> EcState:
+        """The state the AL status shows: the drive's, or with device emulation the one the master requested."""
+        if self.emulation:
+            return _BY_CODE.get(self.esc.al_state, EcState.INIT)
+        return self.drive.state()
+
     # ------------------------------------------------------------------------------------------
     # ESM
     # ------------------------------------------------------------------------------------------
     def _sync_state(self, error: bool = False, code: int = 0) -> None:
-        state = self.drive.state()
-        self.esc.set_al_status(state.code, error=error, code=code)
+        state = self.state()
+        if not self.emulation:
+            self.esc.set_al_status(state.code, error=error, code=code)
         mailbox_on = state in (EcState.PREOP, EcState.SAFEOP, EcState.OP, EcState.BOOT)
-        pd_on = state in (EcState.SAFEOP, EcState.OP)
+        pd_on = state in (EcState.SAFEOP, EcState.OP) and self.drive.state() in (EcState.SAFEOP, EcState.OP)
         self._no_outputs = pd_on and self.drive.process_image_sizes()[0] == 0
         if not pd_on:
             self._outputs = None  # below SAFE-OP the process image may change: a SYNC0 cycle waits for new outputs
             self._ran_on = None  # and the drive's own cycles start again with the first event in SAFE-OP
             self._cycle_at = None
+        if self.emulation:
+            return  # no application behind the PDI: nothing deactivates a sync manager
+        mailboxes = self.roles.mailboxes
         for n in range(self.esc.sm_count):
-            sm = self.esc.sm(n)
-            if n in (MBX_OUT, MBX_IN) or (sm.mailbox and n < 2):
+            if n in mailboxes:
                 self.esc.pdi_deactivate(n, not mailbox_on)
             else:
                 self.esc.pdi_deactivate(n, not pd_on)
 
     def al_control(self, esc: Esc, control: int) -> None:
+        if self.emulation:
+            self._emulate(esc, control)
+            return
         status = esc.u16(R.AL_STATUS)
         ack = bool(control & R.AL_ERROR)
         if status & R.AL_ERROR and not ack:
@@ -161,10 +179,33 @@ class VirtualSlave(EscApplication):
         except StateChangeError as exc:
             self._refuse(requested.value, exc.al_status, str(exc))
             return
-        if requested in (EcState.PREOP, EcState.BOOT) and current is EcState.INIT:
-            self.mailbox.resize(esc.sm(MBX_OUT).length, esc.sm(MBX_IN).length)
+        if requested in (EcState.PREOP, EcState.BOOT) and current is EcState.INIT and self.roles.has_mailbox:
+            assert self.roles.mbx_out is not None and self.roles.mbx_in is not None
+            self.mailbox.resize(esc.sm(self.roles.mbx_out).length, esc.sm(self.roles.mbx_in).length)
         elif requested is EcState.INIT:  # from PRE-OP, SAFE-OP, OP or BOOT
             self.mailbox.reset()  # the mailbox stops: transfers a master left unfinished are dropped
+        self._sync_state()
+        if requested in (EcState.SAFEOP, EcState.OP):
+            self._exchange(None)
+
+    def _emulate(self, esc: Esc, control: int) -> None:
+        """Device emulation: the ESC copies the requested state into the AL status, checking nothing (ESC
+        configuration 0x0141 bit 0); the drive model follows as far as it can, for the process data."""
+        esc.set_al_status(control & 0x0F, error=False, code=0)
+        requested = _BY_CODE.get(control & 0x0F)
+        if requested is not None and requested is not self.drive.state():
+            order = [EcState.INIT, EcState.PREOP, EcState.SAFEOP, EcState.OP]
+            try:
+                if requested in order and self.drive.state() in order:
+                    current = order.index(self.drive.state())
+                    target = order.index(requested)
+                    steps = order[current + 1:target + 1] if target > current else [requested]
+                    for step in steps:
+                        self.drive.request_state(step)
+                else:
+                    self.drive.request_state(requested)
+            except StateChangeError:
+                pass  # the ESC shows the requested state whatever the model behind it makes of it
         self._sync_state()
         if requested in (EcState.SAFEOP, EcState.OP):
             self._exchange(None)
@@ -174,10 +215,15 @@ class VirtualSlave(EscApplication):
         self._sync_state(error=True, code=code)
 
     def _check_config(self, current: EcState, requested: EcState) -> None:
+        roles = self.roles
         if current is EcState.INIT and requested in (EcState.PREOP, EcState.BOOT):
             code = AL_INVALID_MAILBOX_BOOT if requested is EcState.BOOT else AL_INVALID_MAILBOX
-            out, inp = self.esc.sm(MBX_OUT), self.esc.sm(MBX_IN)
-            for n, sm, direction in ((MBX_OUT, out, SM_DIR_WRITE), (MBX_IN, inp, SM_DIR_READ)):
+            if roles.mbx_out is None or roles.mbx_in is None:
+                if requested is EcState.BOOT:
+                    raise ConfigRefused(code, "the device has no mailbox to boot through")
+                return  # no mailbox: nothing to check at INIT -> PRE-OP
+            out, inp = self.esc.sm(roles.mbx_out), self.esc.sm(roles.mbx_in)
+            for n, sm, direction in ((roles.mbx_out, out, SM_DIR_WRITE), (roles.mbx_in, inp, SM_DIR_READ)):
                 if not sm.enabled or sm.control & 0x3 != SM_MODE_MAILBOX or (sm.control >> 2) & 3 != direction:
                     raise ConfigRefused(code, f"SM{n} is not an enabled mailbox of the right direction")
                 if sm.length < 8 or sm.start < R.PROCESS_RAM or sm.end > len(self.esc.mem):
@@ -186,36 +232,51 @@ class VirtualSlave(EscApplication):
                 raise ConfigRefused(code, "the mailbox sync managers overlap")
 
     def _check_process_data(self) -> None:
-        """PRE-OP -> SAFE-OP: SM2/SM3 and their FMMUs against the process image the drive's PDO assignment
-        gives (the drive has accepted the assignment itself)."""
+        """PRE-OP -> SAFE-OP: the process data SMs (SM2/SM3 of a drive with a mailbox; those the SII names
+        otherwise) and their FMMUs against the process image the drive's PDO assignment gives (the drive has
+        accepted the assignment itself)."""
         out_size, in_size = self.drive.process_image_sizes()
         fmmus = self.esc.fmmus()
-        for n, size, direction, code, what in ((PD_OUT, out_size, SM_DIR_WRITE, AL_INVALID_OUTPUTS, "output"),
-                                               (PD_IN, in_size, SM_DIR_READ, AL_INVALID_INPUTS, "input")):
-            sm = self.esc.sm(n)
+        for sms, size, direction, code, what in (
+                (self.roles.outputs, out_size, SM_DIR_WRITE, AL_INVALID_OUTPUTS, "output"),
+                (self.roles.inputs, in_size, SM_DIR_READ, AL_INVALID_INPUTS, "input")):
             if size == 0:
-                if sm.enabled and sm.length:
-                    raise ConfigRefused(code, f"SM{n} is enabled with {sm.length} bytes, the drive has no {what}s")
+                for n in sms:
+                    sm = self.esc.sm(n)
+                    if sm.enabled and sm.length:
+                        raise ConfigRefused(code, f"SM{n} is enabled with {sm.length} bytes, the drive has no "
+                                                  f"{what}s")
                 continue
-            if not sm.enabled:
-                raise ConfigRefused(code, f"SM{n} is not enabled ({size} {what} bytes assigned)")
-            if sm.control & 0x3 != SM_MODE_BUFFERED or (sm.control >> 2) & 3 != direction:
-                raise ConfigRefused(code, f"SM{n} control 0x{sm.control:02X} is not a buffered {what} SM")
-            if sm.length != size:
-                raise ConfigRefused(code, f"SM{n} length {sm.length} differs from the {size} {what} bytes "
-                                          "of the PDO assignment")
-            if sm.start < R.PROCESS_RAM or sm.end > len(self.esc.mem):
-                raise ConfigRefused(code, f"SM{n} at 0x{sm.start:04X} is outside the process RAM")
-            mapped = [f for f in fmmus if (f.write if direction == SM_DIR_WRITE else f.read)
-                      and f.physical < sm.end and f.physical + f.length > sm.start]
-            if not mapped:
-                raise ConfigRefused(code, f"no {'write' if direction == SM_DIR_WRITE else 'read'} FMMU maps SM{n}")
+            used = [n for n in sms if self.esc.sm(n).enabled and self.esc.sm(n).length]
+            if not used:
+                first = f"SM{sms[0]}" if sms else f"an {what} SM"
+                raise ConfigRefused(code, f"{first} is not enabled ({size} {what} bytes assigned)")
+            total = 0
+            for n in used:
+                sm = self.esc.sm(n)
+                if sm.control & 0x3 != SM_MODE_BUFFERED or (sm.control >> 2) & 3 != direction:
+                    raise ConfigRefused(code, f"SM{n} control 0x{sm.control:02X} is not a buffered {what} SM")
+                if not sm.active:
+                    raise ConfigRefused(code, f"SM{n} at 0x{sm.start:04X} is outside the process RAM")
+                mapped = [f for f in fmmus if (f.write if direction == SM_DIR_WRITE else f.read)
+                          and f.physical < sm.end and f.physical + f.length > sm.start]
+                if not mapped:
+                    raise ConfigRefused(code, f"no {'write' if direction == SM_DIR_WRITE else 'read'} FMMU "
+                                              f"maps SM{n}")
+                total += sm.length
+            if total != size:
+                where = f"SM{used[0]} length" if len(used) == 1 else \
+                    "SM" + "+".join(str(n) for n in used) + " lengths"
+                raise ConfigRefused(code, f"{where} {total} differs from the {size} {what} bytes of the PDO "
+                                          "assignment")
 
     # ------------------------------------------------------------------------------------------
     # mailbox
     # ------------------------------------------------------------------------------------------
     def mailbox_written(self, esc: Esc, sm: int, data: bytes) -> None:
         esc.pdi_mailbox_take(sm)
+        if sm != self.roles.mbx_out:
+            return  # a mailbox SM the device does not have: nothing behind it reads the request
         delay = self.drive.faults.mailbox_delay_ms(self.drive.state())
         if delay:
             self._reply_due = esc.frame_ns + delay * 1_000_000
@@ -233,7 +294,8 @@ class VirtualSlave(EscApplication):
 
     def _push_mailbox(self) -> None:
         esc = self.esc
-        if esc.sm_full(MBX_IN) or esc.sm_deactivated(MBX_IN) or not esc.sm(MBX_IN).active:
+        mbx_in = self.roles.mbx_in
+        if mbx_in is None or esc.sm_full(mbx_in) or esc.sm_deactivated(mbx_in) or not esc.sm(mbx_in).active:
             return
         if self._reply_due is not None:
             if esc.frame_ns < self._reply_due:
@@ -241,18 +303,21 @@ class VirtualSlave(EscApplication):
             self._reply_due = None
         reply = self.mailbox.pending()
         if reply is not None:
-            esc.pdi_mailbox_put(MBX_IN, reply)
+            esc.pdi_mailbox_put(mbx_in, reply)
 
     # ------------------------------------------------------------------------------------------
     # process data
     # ------------------------------------------------------------------------------------------
     def buffer_written(self, esc: Esc, sm: int, data: bytes) -> None:
-        if sm == PD_OUT:
+        outputs = self.roles.outputs
+        if sm in outputs:
+            if len(outputs) > 1:  # the image is the output SMs' buffers in SM order
+                data = b"".join(bytes(esc.mem[s.start:s.end]) for s in (esc.sm(n) for n in outputs) if s.active)
             self._outputs = data
             self._pd_event = True
 
     def buffer_read(self, esc: Esc, sm: int) -> None:
-        if sm == PD_IN and self._no_outputs:
+        if self._no_outputs and sm in self.roles.inputs:
             self._outputs = b""
             self._pd_event = True
 
@@ -323,16 +388,23 @@ class VirtualSlave(EscApplication):
         state = drive.state()
         if state is not _OP and state is not _SAFEOP:
             return
+        size = drive.process_image_sizes()[0]
         if outputs is None or state is not _OP:
-            outputs = bytes(drive.process_image_sizes()[0])
+            outputs = bytes(size)
+        elif len(outputs) != size:  # SMs the master sized otherwise (device emulation checks nothing)
+            outputs = outputs[:size] + bytes(max(0, size - len(outputs)))
         try:
             inputs = drive.exchange(outputs)
         except TargetError:
             self._sync_state()  # e.g. power lost during an EEPROM write: the drive is back in INIT
             return
-        sm = self.esc.sm(PD_IN)
-        if inputs and sm.active:  # the input image of the drive's layout: empty for a drive without inputs
-            self.esc.pdi_write(sm.start, inputs[:sm.length])
+        for n in self.roles.inputs:  # the input image of the drive's layout, over the input SMs in SM order
+            if not inputs:
+                break  # empty for a drive without inputs
+            sm = self.esc.sm(n)
+            if sm.active:
+                self.esc.pdi_write(sm.start, inputs[:sm.length])
+                inputs = inputs[sm.length:]
 
     # ------------------------------------------------------------------------------------------
     # distributed clocks, frames
@@ -348,14 +420,71 @@ class VirtualSlave(EscApplication):
             self.drive.configure_dc(0, 0, 0)
 
     def pd_watchdog_expired(self, esc: Esc) -> None:
+        if self.emulation:
+            return  # no application: the ESC stays in its state (a digital I/O ESC would release its outputs)
         if self.drive.state() is EcState.OP:
             self.drive.lose_communication()
             self._sync_state(error=True, code=AL_SM_WATCHDOG)
 
     def frame_done(self, esc: Esc) -> None:
-        if _CODES[self.drive.state()] != esc.al_state:
+        if not self.emulation and _CODES[self.drive.state()] != esc.al_state:
             self._sync_state()  # the drive changed state by itself (power loss, communication lost)
         self._push_mailbox()
+
+
+@dataclass(frozen=True, slots=True)
+class SmRoles:
+    """What each sync manager of a slave is for, from the SII's SyncM category (ETG.2010: type 1 mailbox out,
+    2 mailbox in, 3 outputs, 4 inputs; virtual SMs, enable bit 2, are no SMs of the ESC). The process data of
+    a slave with a mailbox is the first output and the first input SM (1C12h/1C13h assign to SM2/SM3); a slave
+    without one has its fixed image over every output and every input SM, in SM order."""
+
+    mbx_out: int | None
+    mbx_in: int | None
+    outputs: tuple[int, ...]
+    inputs: tuple[int, ...]
+
+    @property
+    def has_mailbox(self) -> bool:
+        return self.mbx_out is not None and self.mbx_in is not None
+
+    @property
+    def mailboxes(self) -> tuple[int, ...]:
+        return tuple(n for n in (self.mbx_out, self.mbx_in) if n is not None)
+
+
+#: a slave whose SII has no SyncM category: the usual SM0/SM1 mailbox, SM2/SM3 process data
+DEFAULT_ROLES = SmRoles(MBX_OUT, MBX_IN, (PD_OUT,), (PD_IN,))
+
+
+def sii_sync_managers(sii: bytes) -> list[tuple[int, int, int, int, int]] | None:
+    """(start, length, control, enable, type) of each SM of the SII's SyncM category, None without one."""
+    from ecattool.sii.image import parse
+    from ecattool.sii.model import SyncMCategory
+
+    try:
+        image = parse(sii)
+    except (EcatToolError, ValueError, struct.error):  # an image the SII tools refuse: the usual roles
+        return None
+    for cat in image.categories:
+        if isinstance(cat, SyncMCategory):
+            return [(sm.start, sm.length, sm.control, sm.enable, sm.type) for sm in cat.sync_managers]
+    return None
+
+
+def sm_roles(sii: bytes) -> SmRoles:
+    """The :class:`SmRoles` of the SII image ``sii``."""
+    sms = sii_sync_managers(sii)
+    if sms is None:
+        return DEFAULT_ROLES
+    real = [(n, t) for n, (_, _, _, enable, t) in enumerate(sms) if not enable & 0x04]
+    mbx_out = next((n for n, t in real if t == 1), None)
+    mbx_in = next((n for n, t in real if t == 2), None)
+    outputs = tuple(n for n, t in real if t == 3)
+    inputs = tuple(n for n, t in real if t == 4)
+    if mbx_out is not None and mbx_in is not None:
+        outputs, inputs = outputs[:1], inputs[:1]
+    return SmRoles(mbx_out, mbx_in, outputs, inputs)
 
 
 def drive_for_device(device: Device) -> Drive:
