@@ -85,9 +85,10 @@ class VirtualSlave(EscApplication):
         self._cycle_at: int | None = None
         #: own clock: the outputs of the drive's last cycle (None: none yet)
         self._ran_on: bytes | None = None
-        self.esc = Esc(sii, app=self, clock=clock)
+        sms = sii_sync_managers(sii)
+        self.esc = Esc(sii, app=self, clock=clock, ram_bytes=ram_for(sms))
         #: what each sync manager is for, as the SII says (a device's SMs come from its SII, any number of them)
-        self.roles = sm_roles(sii)
+        self.roles = sm_roles(sms)
         #: the ESC follows the AL control itself (SII word 0 bit 8, device emulation): no application checks a
         #: state change; the drive model behind it only supplies the process data
         self.emulation = bool(self.esc.mem[R.ESC_CONFIG] & R.DEVICE_EMULATION)
@@ -118,6 +119,30 @@ class VirtualSlave(EscApplication):
     def _mailbox_defaults(self) -> tuple[int, int]:
         words = self.esc.eeprom.words(0x18, 4)  # standard receive / send mailbox offset and size
         return (words[1] or 128, words[3] or 128)
+
+    def unservable(self) -> str | None:
+        """Why this slave cannot be served as its SII describes it (one sentence), or None. What the ESC model
+        cannot be: more sync managers or FMMUs than it has, an SM outside its process memory (other than the
+        output SM of a digital-I/O ESC over 0x0F00), a mailbox protocol without mailbox sync managers."""
+        esc = self.esc
+        sms = sii_sync_managers(bytes(esc.eeprom.data))
+        if sms is not None:
+            real = [(n, sm) for n, sm in enumerate(sms) if not sm[3] & 0x04]
+            if real and real[-1][0] >= esc.sm_count:
+                return f"its SII lists {len(sms)} sync managers, the simulated ESC has {esc.sm_count}"
+            for n, (start, length, control, _, kind) in real:
+                size = max(length, 1)
+                if start + size > len(esc.mem) or (start < R.PROCESS_RAM
+                                                   and not esc.digital_output_sm(start, size, control)):
+                    where = "the digital outputs of an ESC whose PDI is not digital I/O" \
+                        if start < R.PROCESS_RAM and esc.mem[R.PDI_CONTROL] != R.PDI_DIGITAL_IO and \
+                        R.DIGITAL_OUTPUT <= start < R.DIGITAL_OUTPUT + R.DIGITAL_OUTPUT_SIZE else \
+                        "no process memory of the simulated ESC"
+                    return f"SM{n} ({SM_KINDS.get(kind, f'type {kind}')}) at 0x{start:04X}, {length} bytes, is in {where}"
+        protocols = esc.eeprom.words(0x1C, 1)[0]
+        if protocols and not self.roles.has_mailbox:
+            return f"its SII names mailbox protocols (0x{protocols:04X}) but no mailbox sync managers"
+        return None
 
     def state(self) -> EcState:
         """The state the AL status shows: the drive's, or with device emulation the one the master requested."""
@@ -453,6 +478,12 @@ class SmRoles:
         return tuple(n for n in (self.mbx_out, self.mbx_in) if n is not None)
 
 
+#: the process RAM of an ET1100, and the most an ESC's 16-bit address space leaves above the registers
+DEFAULT_RAM, MAX_RAM = 8192, 0x10000 - R.PROCESS_RAM
+
+#: the SII's SM types (ETG.2010 SyncM category), for messages
+SM_KINDS = {0: "unused", 1: "mailbox out", 2: "mailbox in", 3: "outputs", 4: "inputs"}
+
 #: a slave whose SII has no SyncM category: the usual SM0/SM1 mailbox, SM2/SM3 process data
 DEFAULT_ROLES = SmRoles(MBX_OUT, MBX_IN, (PD_OUT,), (PD_IN,))
 
@@ -472,9 +503,33 @@ def sii_sync_managers(sii: bytes) -> list[tuple[int, int, int, int, int]] | None
     return None
 
 
-def sm_roles(sii: bytes) -> SmRoles:
-    """The :class:`SmRoles` of the SII image ``sii``."""
-    sms = sii_sync_managers(sii)
+def ram_for(sms: list[tuple[int, int, int, int, int]] | None) -> int:
+    """The process RAM (bytes) of the ESC a slave with the SII sync managers ``sms`` has: 8 KiB (an ET1100),
+    or as much as its SMs reach, in whole KiB (an FPGA ESC such as an EL6695's has up to 60 KiB)."""
+    end = max((start + length for start, length, _, enable, _ in sms or () if not enable & 0x04), default=0)
+    need = -(-(end - R.PROCESS_RAM) // 1024) * 1024
+    return max(DEFAULT_RAM, min(need, MAX_RAM))
+
+
+def served_sii(device: Device) -> bytes:
+    """The SII image ``ecattool sii build`` makes of ``device``; where the image does not fit the EEPROM size the
+    ESI declares (a vendor's ByteSize too small for its own PDO categories), the served EEPROM is as large as
+    the image needs (the next power of two)."""
+    from ecattool.errors import InputError
+    from ecattool.sii.builder import assemble, build
+
+    try:
+        return build(device).to_bytes()
+    except InputError:
+        used = len(assemble(device).to_bytes())
+        size = 2048
+        while size < used:
+            size *= 2
+        return build(device, size=size).to_bytes()
+
+
+def sm_roles(sms: list[tuple[int, int, int, int, int]] | None) -> SmRoles:
+    """The :class:`SmRoles` of the SII sync managers ``sms`` (:func:`sii_sync_managers`)."""
     if sms is None:
         return DEFAULT_ROLES
     real = [(n, t) for n, (_, _, _, enable, t) in enumerate(sms) if not enable & 0x04]

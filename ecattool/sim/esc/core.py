@@ -294,7 +294,7 @@ class Esc:
                 start, length, enabled = self.u16(a), self.u16(a + 2), bool(self.mem[a + 6] & 1)
                 control = self.mem[a + 4]
                 active = enabled and length > 0 and (start >= R.PROCESS_RAM and start + length <= size
-                                                     or self._digital_output_sm(start, length, control))
+                                                     or self.digital_output_sm(start, length, control))
                 out.append(_Sm(start, length, control, enabled, active))
             self._sms = out
             self._read_mailboxes = tuple(n for n, sm in enumerate(out)
@@ -309,7 +309,7 @@ class Esc:
         """PDI control 0x0140 = 04h: the ESC's PDI is digital I/O (an EL1xxx/EL2xxx terminal, no processor)."""
         return self.mem[R.PDI_CONTROL] == R.PDI_DIGITAL_IO
 
-    def _digital_output_sm(self, start: int, length: int, control: int) -> bool:
+    def digital_output_sm(self, start: int, length: int, control: int) -> bool:
         """An SM over the digital output registers 0x0F00-0x0F03, which an ESC with digital I/O serves as its
         output buffer (ET1100 data sheet: "digital output data" 0x0F00:0x0F03, written by a buffered SM of ECAT
         write direction): the only register area an SM may cover, and only on such an ESC."""
