@@ -88,7 +88,7 @@ class VirtualSlave(EscApplication):
         sms = sii_sync_managers(sii)
         self.esc = Esc(sii, app=self, clock=clock, ram_bytes=ram_for(sms))
         #: what each sync manager is for, as the SII says (a device's SMs come from its SII, any number of them)
-        self.roles = sm_roles(sms)
+        self.roles = sm_roles(sms, mailbox=self.esc.eeprom.words(0x19, 1)[0] not in (0, 0xFFFF))
         #: the ESC follows the AL control itself (SII word 0 bit 8, device emulation): no application checks a
         #: state change; the drive model behind it only supplies the process data
         self.emulation = bool(self.esc.mem[R.ESC_CONFIG] & R.DEVICE_EMULATION)
@@ -528,10 +528,12 @@ def served_sii(device: Device) -> bytes:
         return build(device, size=size).to_bytes()
 
 
-def sm_roles(sms: list[tuple[int, int, int, int, int]] | None) -> SmRoles:
-    """The :class:`SmRoles` of the SII sync managers ``sms`` (:func:`sii_sync_managers`)."""
+def sm_roles(sms: list[tuple[int, int, int, int, int]] | None, *, mailbox: bool = True) -> SmRoles:
+    """The :class:`SmRoles` of the SII sync managers ``sms`` (:func:`sii_sync_managers`). Without a SyncM
+    category: the usual four where the SII has a standard mailbox (``mailbox``: word 0x19, its size), none
+    where it has not (a coupler)."""
     if sms is None:
-        return DEFAULT_ROLES
+        return DEFAULT_ROLES if mailbox else SmRoles(None, None, (), ())
     real = [(n, t) for n, (_, _, _, enable, t) in enumerate(sms) if not enable & 0x04]
     mbx_out = next((n for n, t in real if t == 1), None)
     mbx_in = next((n for n, t in real if t == 2), None)

@@ -1,0 +1,130 @@
+"""Slaves without a mailbox on the served bus (issue 34, items 5 and 8), frame by frame through the in-process loop:
+a device's sync managers come from its SII, whatever their number and use; an ESC without an application (device
+emulation, SII word 0 bit 8) follows the AL control itself; an ESC whose PDI is digital I/O (PDI control 04h)
+serves its output SM over the digital output registers 0x0F00-0x0F03, and no other ESC lets an SM cover a
+register; ``sim serve`` refuses in one line a slave it cannot serve.
+
+Real files: the Beckhoff ESIs of ../shared/corpus/esi (SOURCES.md: DiamondLightSource/ethercat)."""
+
+from __future__ import annotations
+
+import struct
+
+import pytest
+
+from ecattool import esi
+from ecattool.errors import InputError
+from ecattool.od.model import EcState
+from ecattool.sim import Drive
+from ecattool.sim.bus import Cmd, Datagram
+from ecattool.sim.bus.serve import device_source, virtual_slaves
+from ecattool.sim.esc import registers as R
+from ecattool.sim.slave import VirtualSlave, drive_for_device, served_sii
+from tests.conftest import CORPUS, need_corpus
+from tests.conftest import run as run_main
+from tests.test_wire_slave import MiniMaster, _fmmu, _sm
+
+need_corpus()
+ESI = CORPUS / "esi"
+
+
+def _slave(file: str, select: str) -> VirtualSlave:
+    device = esi.load_device(ESI / file, select, "newest")
+    return VirtualSlave(drive_for_device(device), served_sii(device))
+
+
+def _states(m: MiniMaster, *codes: int) -> list[tuple[int, int]]:
+    return [m.al(code) for code in codes]
+
+
+def test_the_roles_of_the_sync_managers_come_from_the_sii() -> None:
+    """EJ2809: two output SMs over 0x0F00 and 0x0F01 (ESI: ``<Sm StartAddress="#x0f00" ControlByte="#x44"``),
+    EL1008: one input SM at 0x1000 as SM0, EK1100: none; a drive keeps SM0/SM1 mailbox, SM2/SM3 process data."""
+    ej2809 = _slave("beckhoff_EJ2xxx.xml", "EJ2809")
+    assert (ej2809.roles.mbx_out, ej2809.roles.mbx_in, ej2809.roles.outputs, ej2809.roles.inputs) == \
+        (None, None, (0, 1), ())
+    el1008 = _slave("beckhoff_EL1xxx.xml", "EL1008")
+    assert (el1008.roles.has_mailbox, el1008.roles.outputs, el1008.roles.inputs) == (False, (), (0,))
+    ek1100 = _slave("beckhoff_EK11xx.xml", "EK1100")
+    assert (ek1100.roles.has_mailbox, ek1100.roles.outputs, ek1100.roles.inputs) == (False, (), ())
+    hdt = VirtualSlave.from_drive(Drive.from_profile("hdt"))
+    assert (hdt.roles.mbx_out, hdt.roles.mbx_in, hdt.roles.outputs, hdt.roles.inputs) == (0, 1, (2,), (3,))
+    # device emulation from SII word 0 (the ESI's ConfigData 04 01: PDI digital I/O, ESC configuration bit 0)
+    assert ej2809.emulation and el1008.emulation and ek1100.emulation and not hdt.emulation
+    assert ej2809.esc.digital_io and not hdt.esc.digital_io
+
+
+def test_a_coupler_follows_the_al_control_through_every_state() -> None:
+    """EK1100 (ConfigData 0001: device emulation): no mailbox to check, no application to refuse; the AL status
+    is what the master asked for, with status code 0, as an ESC without a processor shows it."""
+    m = MiniMaster(_slave("beckhoff_EK11xx.xml", "EK1100"))
+    assert _states(m, 2, 4, 8, 4, 2, 1) == [(2, 0), (4, 0), (8, 0), (4, 0), (2, 0), (1, 0)]
+    assert m.slave.refusals == []
+
+
+def test_digital_outputs_are_served_over_0x0f00_with_the_working_counter() -> None:
+    """EJ2008: SOEM's configuration of its SII (SM0 at 0x0F00, 1 byte, control 0x44; FMMU0 writes it): INIT to OP
+    without a mailbox, the LWR reaches the digital output register and the drive's 7000h..7070h objects."""
+    m = MiniMaster(_slave("beckhoff_EJ2xxx.xml", "EJ2008"))
+    assert m.al(2) == (0x02, 0)  # was AL 0x0016 (invalid mailbox configuration): the slave has none
+    assert m.wr(R.SM, _sm(0x0F00, 1, 0x44)) == 1 and m.wr(R.FMMU, _fmmu(0x0, 1, 0x0F00, 2)) == 1
+    assert m.slave.esc.sm(0).active
+    assert _states(m, 4, 8) == [(0x04, 0), (0x08, 0)]
+    lwr = m.loop.one(Datagram.logical(Cmd.LWR, 0, bytes([0b1000_0101])))
+    assert lwr.wkc == 1
+    assert m.rd(R.DIGITAL_OUTPUT, 1) == (bytes([0b1000_0101]), 1)
+    drive = m.slave.drive
+    assert [drive.value(0x7000 + 0x10 * k, 1) for k in range(8)] == [1, 0, 1, 0, 0, 0, 0, 1]
+
+
+def test_two_output_sms_make_one_image() -> None:
+    """EJ2809: 16 outputs over SM0 (0x0F00) and SM1 (0x0F01), one FMMU over both: one image for the drive."""
+    m = MiniMaster(_slave("beckhoff_EJ2xxx.xml", "EJ2809"))
+    m.wr(R.SM, _sm(0x0F00, 1, 0x44) + _sm(0x0F01, 1, 0x44))
+    m.wr(R.FMMU, _fmmu(0x0, 2, 0x0F00, 2))
+    assert _states(m, 2, 4, 8) == [(2, 0), (4, 0), (8, 0)]
+    assert m.loop.one(Datagram.logical(Cmd.LWR, 0, bytes([0x01, 0x80]))).wkc == 1
+    drive = m.slave.drive
+    assert drive.value(0x7000, 1) == 1 and drive.value(0x70F0, 1) == 1 and drive.value(0x7080, 1) == 0
+
+
+def test_digital_inputs_are_read_from_their_sm() -> None:
+    """EL1008: SM0 at 0x1000, 1 byte, control 0x00 (inputs); the LRD is answered with the working counter 1."""
+    m = MiniMaster(_slave("beckhoff_EL1xxx.xml", "EL1008"))
+    m.wr(R.SM, _sm(0x1000, 1, 0x00))
+    m.wr(R.FMMU, _fmmu(0x0, 1, 0x1000, 1))
+    assert _states(m, 2, 4, 8) == [(2, 0), (4, 0), (8, 0)]
+    lrd = m.loop.one(Datagram.logical(Cmd.LRD, 0, 1))
+    assert lrd.wkc == 1 and m.slave.drive.state() is EcState.OP
+
+
+def test_an_sm_over_the_digital_outputs_of_an_esc_without_digital_io_is_not_activated() -> None:
+    """The register area stays closed to every SM of an ESC whose PDI is not digital I/O (HDT: SPI), also at
+    0x0F00: the bytes are the register's, the SM does not serve them (tests/test_wire_esc_bounds.py for more)."""
+    m = MiniMaster(VirtualSlave.from_drive(Drive.from_profile("hdt")))
+    assert m.wr(R.SM + 2 * R.SM_SIZE, _sm(0x0F00, 1, 0x44)) == 1
+    assert m.slave.esc.sm(2).enabled and not m.slave.esc.sm(2).active
+    # and on a digital-I/O ESC only the four output registers: an SM over 0x0F00..0x0F07 is not activated
+    ej = MiniMaster(_slave("beckhoff_EJ2xxx.xml", "EJ2008"))
+    ej.wr(R.SM, _sm(0x0F00, 8, 0x44) + _sm(0x0E00, 1, 0x44) + _sm(0x0F00, 1, 0x00))
+    assert [ej.slave.esc.sm(n).active for n in range(3)] == [False, False, False]
+
+
+def test_a_slave_with_a_mailbox_still_needs_its_mailbox_sms() -> None:
+    """EJ3004 (analog inputs, CoE): INIT -> PRE-OP without mailbox SMs stays refused with 0x0016."""
+    m = MiniMaster(_slave("beckhoff_EJ3xxx.xml", "EJ3004"))
+    assert not m.slave.emulation and m.slave.roles.has_mailbox
+    assert m.al(2) == (0x11, 0x0016)
+
+
+def test_sim_serve_refuses_a_slave_it_cannot_serve_in_one_line(capsys: pytest.CaptureFixture[str]) -> None:
+    """Elmo's ESI (corpus) gives its SII a SyncM category (Eeprom/Category 41) whose SM0 is at 0x0000, 32792
+    bytes: SOEM programs SM0 from it and no master could use the slave. ``sim serve`` says so before it
+    starts, naming the slave, and exits 1 (it used to print "serving 1 slave")."""
+    elmo = str(ESI / "elmo_Elmo_ECAT_00010420_V11.xml")
+    with pytest.raises(InputError, match="cannot serve slave 0 .*SM0 .* at 0x0000"):
+        virtual_slaves([device_source(elmo, selector="0")])
+    code, out, err = run_main(capsys, "sim", "serve", "hdt", elmo, "--device", "0", "--iface", "nonexistent0")
+    lines = err.strip().splitlines()
+    assert code == 1 and len(lines) == 1 and out == "", (out, err)
+    assert "cannot serve slave 1 (Elmo Drive" in lines[0] and "product 0x" in lines[0]
