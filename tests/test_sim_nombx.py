@@ -128,3 +128,27 @@ def test_sim_serve_refuses_a_slave_it_cannot_serve_in_one_line(capsys: pytest.Ca
     lines = err.strip().splitlines()
     assert code == 1 and len(lines) == 1 and out == "", (out, err)
     assert "cannot serve slave 1 (Elmo Drive" in lines[0] and "product 0x" in lines[0]
+
+
+def test_a_drive_whose_60c2_is_no_processor_cycle_takes_each_frames_outputs_on_its_own_clock() -> None:
+    """Found by the wire sweep (tests/test_wire_whole_bus.py): Ingenia's ESI gives 60C2h = 1 x 10^0 s; served on
+    its own clock the drive took a controlword once a second and commission's enable gave up after 200 cycles.
+    A 60C2h over 100 ms paces nothing: each process data event is one cycle."""
+    from tests.test_wire_slave import FakeTime
+
+    device = esi.load_device(ESI / "ingenia_eve-xcr-e_esi.xml", "0x29C:0x2C31001:0x50014")
+    slave = VirtualSlave(drive_for_device(device), served_sii(device))
+    assert slave.drive.cycle_ns() == 1_000_000_000
+    time = FakeTime()
+    m = MiniMaster(slave, clock=time)
+    slave.own_clock = True
+    m.mailbox_config()
+    m.wr(R.SM + 16, _sm(0x1800, 11, 0x64) + _sm(0x1C00, 11, 0x20))
+    m.wr(R.FMMU, _fmmu(0, 11, 0x1800, 2) + _fmmu(11, 11, 0x1C00, 1))
+    assert _states(m, 2, 4, 8) == [(2, 0), (4, 0), (8, 0)]
+    for cw in (6, 7, 15):
+        time.ms(1)
+        assert m.loop.one(Datagram.logical(Cmd.LRW, 0, struct.pack("<HiiB", cw, 0, 0, 1) + bytes(11))).wkc == 3
+        time.ms(1)
+        m.loop.one(Datagram.logical(Cmd.LRD, 0x100, 1))  # a frame after it: the drive has run its cycle
+        assert slave.drive.value(0x6040) == cw

@@ -62,6 +62,11 @@ class ConfigRefused(Exception):
 #: frame can cost the server
 MAX_CATCH_UP = 100
 
+#: the longest 60C2h a served drive paces its own cycles by: a longer interpolation period (Ingenia's ESI gives 1 s
+#: as its default) is no processor's cycle, and a drive paced by it would apply a controlword once a second; such a
+#: drive runs one cycle per process data event, as in process
+MAX_OWN_CYCLE_NS = 100_000_000
+
 
 @dataclass(frozen=True, slots=True)
 class Refusal:
@@ -390,10 +395,10 @@ class VirtualSlave(EscApplication):
         """Own clock without SYNC0: how many of the drive's cycles (60C2h) ended since its last one; the first
         event runs one cycle at once."""
         at = self._cycle_at
-        if at is None:
-            self._cycle_at = now
-            return 1
         period = self.drive.cycle_ns()
+        if at is None or period > MAX_OWN_CYCLE_NS:
+            self._cycle_at = now
+            return 1  # the first event; or a 60C2h no processor cycles at: each event is the drive's cycle
         cycles = (now - at) // period
         # a silence longer than MAX_CATCH_UP cycles is not made up: the cycles restart from now
         self._cycle_at = now if cycles > MAX_CATCH_UP else at + cycles * period
