@@ -94,6 +94,11 @@ class VirtualSlave(EscApplication):
         self.esc = Esc(sii, app=self, clock=clock, ram_bytes=ram_for(sms))
         #: what each sync manager is for, as the SII says (a device's SMs come from its SII, any number of them)
         self.roles = sm_roles(sms, mailbox=self.esc.eeprom.words(0x19, 1)[0] not in (0, 0xFFFF))
+        #: per SM: the SII gives it one buffer (mailbox mode) though it carries process data
+        self._one_buffer = [False] * self.esc.sm_count
+        for n, (_, _, control, _, kind) in enumerate(sms or ()):
+            if n < self.esc.sm_count and kind in (3, 4) and control & 0x3 == SM_MODE_MAILBOX:
+                self._one_buffer[n] = True
         #: the ESC follows the AL control itself (SII word 0 bit 8, device emulation): no application checks a
         #: state change; the drive model behind it only supplies the process data
         self.emulation = bool(self.esc.mem[R.ESC_CONFIG] & R.DEVICE_EMULATION)
@@ -284,7 +289,10 @@ class VirtualSlave(EscApplication):
             total = 0
             for n in used:
                 sm = self.esc.sm(n)
-                if sm.control & 0x3 != SM_MODE_BUFFERED or (sm.control >> 2) & 3 != direction:
+                # buffered (3 buffers), or one buffer (mailbox mode) where the SII gives that: older terminals
+                # such as the EM7004 have their process data SMs in mailbox mode (ControlByte 0x26/0x22)
+                modes = (SM_MODE_BUFFERED, SM_MODE_MAILBOX) if self._one_buffer[n] else (SM_MODE_BUFFERED,)
+                if sm.control & 0x3 not in modes or (sm.control >> 2) & 3 != direction:
                     raise ConfigRefused(code, f"SM{n} control 0x{sm.control:02X} is not a buffered {what} SM")
                 if not sm.active:
                     raise ConfigRefused(code, f"SM{n} at 0x{sm.start:04X} is outside the process RAM")
@@ -305,6 +313,9 @@ class VirtualSlave(EscApplication):
     # ------------------------------------------------------------------------------------------
     def mailbox_written(self, esc: Esc, sm: int, data: bytes) -> None:
         esc.pdi_mailbox_take(sm)
+        if sm in self.roles.outputs:  # process data through one buffer: the outputs, taken at once
+            self.buffer_written(esc, sm, data)
+            return
         if sm != self.roles.mbx_out:
             return  # a mailbox SM the device does not have: nothing behind it reads the request
         delay = self.drive.faults.mailbox_delay_ms(self.drive.state())
@@ -314,6 +325,9 @@ class VirtualSlave(EscApplication):
         self._push_mailbox()
 
     def mailbox_read(self, esc: Esc, sm: int) -> None:
+        if sm in self.roles.inputs:  # process data through one buffer: read out, as a buffered SM's last byte
+            self.buffer_read(esc, sm)
+            return
         self._push_mailbox()
 
     def mailbox_repeat(self, esc: Esc, sm: int) -> None:
@@ -433,7 +447,10 @@ class VirtualSlave(EscApplication):
                 break  # empty for a drive without inputs
             sm = self.esc.sm(n)
             if sm.active:
-                self.esc.pdi_write(sm.start, inputs[:sm.length])
+                if sm.mailbox:  # one buffer: the master reads it once it is full
+                    self.esc.pdi_mailbox_put(n, inputs[:sm.length], force=True)
+                else:
+                    self.esc.pdi_write(sm.start, inputs[:sm.length])
                 inputs = inputs[sm.length:]
 
     # ------------------------------------------------------------------------------------------
