@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ecattool.errors import InputError, Location, TargetError
+from ecattool.errors import InputError, Location
 from ecattool.online.dictionary import typed
 from ecattool.online.live import LiveBus, Unsupported, describe_slave, sii_facts
 from ecattool.online.objects import dump
@@ -25,21 +25,19 @@ class BackupReport:
     files: list[str] = field(default_factory=list)
     #: what a target could not give (e.g. SII through KickCAT), or a slave has not (a dictionary without a mailbox)
     skipped: list[str] = field(default_factory=list)
-    #: what a slave did not answer (named: position, name, identity); the backup holds the rest
-    failed: list[str] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
-        return {"folder": self.folder, "files": self.files, "skipped": self.skipped, "failed": self.failed}
+        return {"folder": self.folder, "files": self.files, "skipped": self.skipped}
 
 
 def _safe(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) or "slave"
 
 
-def collect(project: str | Path, bus: LiveBus, failed: list[str] | None = None) -> tuple[dict[str, bytes], list[str]]:
+def collect(project: str | Path, bus: LiveBus) -> tuple[dict[str, bytes], list[str]]:
     """The files of a backup (name -> content) and what was skipped, read from the bus. A slave without a CoE
-    mailbox (its SII says so) is never sent an SDO: its SII is its backup. A slave that does not answer is named
-    in ``failed`` (where given; else the error ends the backup) and the backup goes on with the others."""
+    mailbox (its SII says so) is never sent an SDO: its SII is its backup. A slave that does not answer ends the
+    backup (a backup is complete or not written at all)."""
     from ecattool.project.export import refuse_errors
     from ecattool.project.lint import lint_project
 
@@ -57,20 +55,10 @@ def collect(project: str | Path, bus: LiveBus, failed: list[str] | None = None) 
             files[f"{stem}.sii.bin"] = slave.sii_read()
         except Unsupported as exc:
             skipped.append(f"{rd.drive.name}: SII: {exc}")
-        except TargetError as exc:
-            if failed is None:
-                raise
-            failed.append(f"{rd.drive.name}: {describe_slave(slave)}: SII: {exc}")
         if sii_facts(slave).coe is False:
             skipped.append(f"{rd.drive.name}: dictionary: {describe_slave(slave)} has no CoE mailbox (its SII)")
             continue
-        try:
-            snapshot = dump(slave, typed(slave, device=rd.device), bus.spec)
-        except TargetError as exc:
-            if failed is None:
-                raise TargetError(f"{describe_slave(slave)}: {exc}") from None
-            failed.append(f"{rd.drive.name}: {describe_slave(slave)}: dictionary: {exc}")
-            continue
+        snapshot = dump(slave, typed(slave, device=rd.device), bus.spec)
         files[f"{stem}.dict.json"] = (json.dumps(snapshot, indent=2, ensure_ascii=False) + "\n").encode()
         if rd.sw_image is not None:
             from ecattool.sw.image import write
@@ -92,8 +80,7 @@ def backup(project: str | Path, bus: LiveBus, folder: str | Path, overwrite: boo
     if target.exists() and not (overwrite and (target.is_dir() or target.is_file()) and not target.is_symlink()):
         raise InputError("file exists; use --force to replace the backup folder (or give a new one)",
                          Location(str(target)))
-    failed: list[str] = []
-    files, skipped = collect(project, bus, failed)
+    files, skipped = collect(project, bus)
     tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
     old = target.with_name(f".{target.name}.{os.getpid()}.old")
     try:
@@ -112,4 +99,4 @@ def backup(project: str | Path, bus: LiveBus, folder: str | Path, overwrite: boo
         shutil.rmtree(old, ignore_errors=True)
     elif old.exists():
         old.unlink()
-    return BackupReport(str(target), sorted(files), skipped, failed)
+    return BackupReport(str(target), sorted(files), skipped)
