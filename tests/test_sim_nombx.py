@@ -152,3 +152,57 @@ def test_a_drive_whose_60c2_is_no_processor_cycle_takes_each_frames_outputs_on_i
         time.ms(1)
         m.loop.one(Datagram.logical(Cmd.LRD, 0x100, 1))  # a frame after it: the drive has run its cycle
         assert slave.drive.value(0x6040) == cw
+
+
+def _live_mixed() -> tuple[object, list[list[tuple[int, int]]]]:
+    """A live simulator bus of an EK1100, an EL1008 (no mailbox) and an HDT drive; per slave, the SDOs sent to it."""
+    from ecattool.online import sim_bus
+
+    devices = [esi.load_device(ESI / "beckhoff_EK11xx.xml", "EK1100", "newest"),
+               esi.load_device(ESI / "beckhoff_EL1xxx.xml", "EL1008", "newest")]
+    drives = [drive_for_device(d) for d in devices] + [Drive.from_profile("hdt")]
+    bus = sim_bus(drives)
+    sent: list[list[tuple[int, int]]] = [[] for _ in drives]
+    for slave, log in zip(bus.slaves, sent):
+        upload = slave.sdo_upload
+
+        def spy(index: int, sub: int, complete_access: bool = False, _up=upload, _log=log) -> bytes:
+            _log.append((index, sub))
+            return bytes(_up(index, sub, complete_access))
+
+        slave.sdo_upload = spy
+    return bus, sent
+
+
+def test_scan_and_from_bus_never_send_an_sdo_to_a_slave_without_a_mailbox(tmp_path) -> None:
+    """Issue 35 item 1: the coupler and the digital terminal are read from their SII only (``bus scan`` used to
+    try 1018h on each, ``project new --from-bus`` stopped at ``SDO timeout on 0x1C12:00``)."""
+    from ecattool.online import Library, scan
+    from ecattool.online.from_bus import project_from_bus
+
+    bus, sent = _live_mixed()
+    scanned = scan(bus, Library(ESI))
+    assert [s.coe_identity is None for s in scanned] == [True, True, False]
+    assert sent[0] == [] and sent[1] == [] and (0x1018, 1) in sent[2]
+    text = project_from_bus(bus, Library(ESI), tmp_path / "m.yaml")
+    assert sent[0] == [] and sent[1] == []
+    assert '- name: "io1"' in text and '- name: "io2"' in text and '- name: "axis3"' in text
+    assert text.count("no CoE mailbox") == 2 and "0x1C12" not in text.split('"axis3"')[0]
+
+
+def test_from_bus_names_a_slave_that_does_not_answer_and_writes_the_others(tmp_path) -> None:
+    from ecattool.errors import SdoTimeout
+    from ecattool.online import Library
+    from ecattool.online.from_bus import project_from_bus
+
+    bus, _ = _live_mixed()
+
+    def silent(*a: object, **k: object) -> bytes:
+        raise SdoTimeout(0x1C12, 0)
+
+    bus.slaves[2].sdo_upload = silent
+    problems: list[str] = []
+    text = project_from_bus(bus, Library(ESI), tmp_path / "m.yaml", problems=problems)
+    assert text.count("  - name: ") == 2 and len(problems) == 1
+    assert problems[0].startswith("not written: slave 2 (") and "vendor 0x00000289" in problems[0], problems
+    assert "# not written: slave 2" in text
