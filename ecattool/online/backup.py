@@ -51,11 +51,12 @@ def collect(project: str | Path, bus: LiveBus) -> tuple[dict[str, bytes], list[s
     for rd in sorted(result.drives, key=lambda r: r.position):
         slave = bus.slave(rd.position)
         stem = f"{rd.position:02d}-{_safe(rd.drive.name)}"
+        sii: bytes | None = None
         try:
-            files[f"{stem}.sii.bin"] = slave.sii_read()
+            sii = files[f"{stem}.sii.bin"] = slave.sii_read()
         except Unsupported as exc:
             skipped.append(f"{rd.drive.name}: SII: {exc}")
-        if sii_facts(slave).coe is False:
+        if sii_facts(slave, sii).coe is False:  # the image just read: no second read of the EEPROM
             skipped.append(f"{rd.drive.name}: dictionary: {describe_slave(slave)} has no CoE mailbox (its SII)")
             continue
         snapshot = dump(slave, typed(slave, device=rd.device), bus.spec)

@@ -141,8 +141,9 @@ class SiiFacts:
 _FACTS: "weakref.WeakKeyDictionary[Any, SiiFacts]" = weakref.WeakKeyDictionary()
 
 
-def sii_facts(slave: Any) -> SiiFacts:
-    """The :class:`SiiFacts` of ``slave``, read from its SII once (kept for as long as the slave object lives)."""
+def sii_facts(slave: Any, sii: bytes | None = None) -> SiiFacts:
+    """The :class:`SiiFacts` of ``slave``, read from its SII once (kept for as long as the slave object lives);
+    ``sii``: its SII image where the caller has read it already."""
     try:
         return _FACTS[slave]
     except (KeyError, TypeError):
@@ -150,7 +151,7 @@ def sii_facts(slave: Any) -> SiiFacts:
     from ecattool.sii.image import parse
 
     try:
-        image = parse(slave.sii_read(), source=f"slave {slave.position} SII")
+        image = parse(slave.sii_read() if sii is None else sii, source=f"slave {slave.position} SII")
     except TargetError:  # Unsupported (no SII through this master), or the read failed: not known
         facts = SiiFacts(None)
     except InputError:  # an SII that does not parse: the header words are still the slave's

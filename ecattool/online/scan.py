@@ -11,7 +11,7 @@ from ecattool.abort import al_status_text
 from ecattool.errors import EcatToolError, SdoAbort
 from ecattool.esi.model import Identity
 from ecattool.online.library import Library, Match, family_match
-from ecattool.online.live import LiveBus, Unsupported
+from ecattool.online.live import LiveBus, Unsupported, sii_facts
 
 
 def _ident_json(i: Identity | None) -> dict[str, int] | None:
@@ -74,7 +74,9 @@ def scan_slave(slave: Any, library: Library | None = None) -> ScannedSlave:
     name = ""
     coe_mailbox: bool | None = None  # unknown until the SII says
     try:
-        image = parse(slave.sii_read(), source=f"slave {slave.position} SII")
+        sii = slave.sii_read()
+        sii_facts(slave, sii)  # kept for the commands that scan first (the slave's name in a message)
+        image = parse(sii, source=f"slave {slave.position} SII")
         h = image.header
         sii_ident = Identity(h.vendor_id, h.product_code, h.revision, h.serial)
         protocols = h.protocols if h.std_rx_size not in (0, 0xFFFF) else []

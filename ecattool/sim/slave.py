@@ -148,7 +148,8 @@ class VirtualSlave(EscApplication):
                         if start < R.PROCESS_RAM and esc.mem[R.PDI_CONTROL] != R.PDI_DIGITAL_IO and \
                         R.DIGITAL_OUTPUT <= start < R.DIGITAL_OUTPUT + R.DIGITAL_OUTPUT_SIZE else \
                         "no process memory of the simulated ESC"
-                    return f"SM{n} ({SM_KINDS.get(kind, f'type {kind}')}) at 0x{start:04X}, {length} bytes, is in {where}"
+                    what = SM_KINDS.get(kind, f"type {kind}")
+                    return f"SM{n} ({what}) at 0x{start:04X}, {length} bytes, is in {where}"
         protocols = esc.eeprom.words(0x1C, 1)[0]
         if protocols and not self.roles.has_mailbox:
             return f"its SII names mailbox protocols (0x{protocols:04X}) but no mailbox sync managers"
