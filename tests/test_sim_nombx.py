@@ -206,3 +206,19 @@ def test_from_bus_names_a_slave_that_does_not_answer_and_writes_the_others(tmp_p
     assert text.count("  - name: ") == 2 and len(problems) == 1
     assert problems[0].startswith("not written: slave 2 (") and "vendor 0x00000289" in problems[0], problems
     assert "# not written: slave 2" in text
+
+
+def test_the_full_working_counter_counts_a_slave_with_bit_inputs() -> None:
+    """SOEM 1.4 (pysoem 1.1.13) gives expected_wkc 0 for a lone EL1002 (2 bit inputs) although its ESC adds 1
+    for the read; on the wire sample of the corpus sweep commission saw "working counter 41, expected 39"."""
+    from types import SimpleNamespace
+
+    from ecattool.target.pysoem import full_working_counter
+
+    def slave(o: int, i: int) -> SimpleNamespace:
+        return SimpleNamespace(output=bytes(o), input=bytes(i))
+
+    bus = SimpleNamespace(slaves=[slave(0, 0), slave(0, 1), slave(1, 0), slave(28, 20)], expected_wkc=5)
+    assert full_working_counter(bus) == 1 + 2 + 3
+    big = SimpleNamespace(slaves=[slave(1000, 1000)], expected_wkc=7)  # two frames: SOEM's count stands
+    assert full_working_counter(big) == 7
