@@ -112,7 +112,10 @@ def project_from_bus(bus: LiveBus, library: Library | None, output: str | Path |
         try:
             ident, match = identify(slave, library)
         except EcatToolError as exc:
-            failed.append(f"{describe_slave(slave)}: {exc}")
+            hint = "" if sii_facts(slave).protocols is not None else (
+                f" ({bus.spec} gives no SII: a slave without a mailbox has no identity to read here; use pysoem:IF)")
+            text = str(exc).removeprefix(f"slave {slave.position}, ").removeprefix(f"slave {slave.position}: ")
+            failed.append(f"{describe_slave(slave)}: {text}{hint}")
             continue
         if match is None:
             unknown.append(f"slave {slave.position} (vendor 0x{ident.vendor_id:08X}, product "
