@@ -222,3 +222,13 @@ def test_the_full_working_counter_counts_a_slave_with_bit_inputs() -> None:
     assert full_working_counter(bus) == 1 + 2 + 3
     big = SimpleNamespace(slaves=[slave(1000, 1000)], expected_wkc=7)  # two frames: SOEM's count stands
     assert full_working_counter(big) == 7
+
+
+def test_a_1c00h_without_defaults_reads_the_sync_manager_types() -> None:
+    """Copley XE2 and EM7004 list 1C00h without DefaultData: every SM read type 0, and KickCAT's create_mapping
+    (which finds the process data SMs through 1C00h) mapped nothing, so SAFE-OP was refused with 0x001D."""
+    for file, select in (("copley_XE2_4.60.xml", "0xAB:0x10B0:0x10004"),
+                         ("beckhoff_EM7xxx.xml", "0x2:0x1B5C3452:0x270B0000")):
+        drive = drive_for_device(esi.load_device(ESI / file, select))
+        drive.request_state(EcState.PREOP)
+        assert [drive.sdo_upload(0x1C00, sub)[0] for sub in range(5)] == [4, 1, 2, 3, 4], file
