@@ -35,3 +35,4 @@ def backup(project: str, target: str, folder: str, force: bool) -> None:
         c.print(f"  {f}")
     for s in report.skipped:
         c.print(f"  skipped: {s}")
+

@@ -79,9 +79,12 @@ def new(profile: str | None, product: str | None, esi_path: str | None, select: 
         from ecattool.online.library import Library
         from ecattool.cli.online import open_live
 
+        problems: list[str] = []
         with open_live(from_bus) as live:
-            text = project_from_bus(live, Library(library) if library else None, output)
+            text = project_from_bus(live, Library(library) if library else None, output, problems=problems)
         write_output(output, text)
+        for p in problems:  # a slave that did not answer: named, the project holds the others
+            click.echo(f"ecattool: warning: {p}", err=True)
         return
     if (profile is None) == (esi_path is None):
         raise click.UsageError("give --profile or --esi (or --from-bus)")

@@ -243,8 +243,10 @@ def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, 
     """Serve simulated drives as EtherCAT slaves on a network interface, for a real master (SOEM/pysoem).
 
     SOURCES, in bus order: a project file (every drive of the project, in its bus order), a built-in profile
-    name, or an ESI file. Each drive sits behind an ESC model whose SII is what 'ecattool sii build' makes. Prints
-    one line when the slaves are ready; stops cleanly on SIGINT/SIGTERM. See docs/virtual-bus.md.
+    name, or an ESI file. Each drive sits behind an ESC model whose SII is what 'ecattool sii build' makes, with
+    the sync managers that SII gives (a coupler or a digital terminal without a mailbox too). A slave the ESC
+    model cannot serve is refused before serving starts, in one line naming it (exit 1). Prints one line when
+    the slaves are ready; stops cleanly on SIGINT/SIGTERM. See docs/virtual-bus.md.
     """
     import sys
 

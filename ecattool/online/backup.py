@@ -27,7 +27,7 @@ from typing import Any
 
 from ecattool.errors import InputError, Location, TargetError
 from ecattool.online.dictionary import typed
-from ecattool.online.live import LiveBus, Unsupported
+from ecattool.online.live import LiveBus, Unsupported, describe_slave, sii_facts
 from ecattool.online.objects import dump
 
 #: the file that makes a folder an ecattool back-up (the only kind of folder ``--force`` replaces)
@@ -38,7 +38,7 @@ MANIFEST_FORMAT = "ecattool-backup"
 class BackupReport:
     folder: str
     files: list[str] = field(default_factory=list)
-    #: what a target could not give (e.g. SII through KickCAT)
+    #: what a target could not give (e.g. SII through KickCAT), or a slave has not (a dictionary without a mailbox)
     skipped: list[str] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
@@ -79,16 +79,18 @@ def _identity_1018(slave: Any) -> Any:
     return Identity(*values)
 
 
-def _check_identity(rd: Any, slave: Any) -> None:
-    """The slave at the drive's position is the project's device (the fields its ``identity:`` checks)."""
+def _check_identity(rd: Any, slave: Any, sdo: bool = True) -> None:
+    """The slave at the drive's position is the project's device (the fields its ``identity:`` checks): by 1018h,
+    or without ``sdo`` (a slave without a CoE mailbox) by the identity its SII holds."""
     from ecattool.od.model import MAILBOX_STATES
     from ecattool.online.audit import identity_differences
 
-    state = slave.state()
-    if state not in MAILBOX_STATES:
-        raise TargetError(f"slave {rd.position} ({rd.drive.name}) is in {state.value}: its mailbox does not answer "
-                          "there, no object can be read; nothing backed up")
-    wrong = identity_differences(rd, _identity_1018(slave))
+    if sdo:
+        state = slave.state()
+        if state not in MAILBOX_STATES:
+            raise TargetError(f"slave {rd.position} ({rd.drive.name}) is in {state.value}: its mailbox does not "
+                              "answer there, no object can be read; nothing backed up")
+    wrong = identity_differences(rd, _identity_1018(slave) if sdo else slave.identity())
     if wrong:
         f, want, got = wrong[0]
         raise TargetError(f"slave {rd.position} is not drive {rd.drive.name!r} of the project: its {f} is "
@@ -97,7 +99,8 @@ def _check_identity(rd: Any, slave: Any) -> None:
 
 def collect(project: str | Path, bus: LiveBus, result: Any = None) -> tuple[dict[str, bytes], list[str]]:
     """The files of a backup (name -> content) and what was skipped, read from the bus and checked (module text):
-    a :class:`TargetError` naming the slave when something read cannot be vouched for. ``result``: the project
+    a :class:`TargetError` naming the slave when something read cannot be vouched for. A slave without a CoE mailbox
+    (its SII says so) is never sent an SDO: its SII is its backup. ``result``: the project
     already linted (:func:`ecattool.project.lint.lint_project`), else it is linted here."""
     from ecattool.online.sii_access import read_checked
 
@@ -108,10 +111,15 @@ def collect(project: str | Path, bus: LiveBus, result: Any = None) -> tuple[dict
     for rd in sorted(result.drives, key=lambda r: r.position):
         slave = bus.slave(rd.position)
         stem = f"{rd.position:02d}-{_safe(rd.drive.name)}"
+        sii: bytes | None = None
         try:
-            files[f"{stem}.sii.bin"] = read_checked(slave)
+            sii = files[f"{stem}.sii.bin"] = read_checked(slave)
         except Unsupported as exc:
             skipped.append(f"{rd.drive.name}: SII: {exc}")
+        if sii_facts(slave, sii).coe is False:  # the image just read: no second read of the EEPROM
+            _check_identity(rd, slave, sdo=False)
+            skipped.append(f"{rd.drive.name}: dictionary: {describe_slave(slave)} has no CoE mailbox (its SII)")
+            continue
         _check_identity(rd, slave)
         snapshot = dump(slave, typed(slave, device=rd.device), bus.spec)
         if not any("value" in row for key, row in snapshot["objects"].items() if not key.startswith("0x1018:")):

@@ -11,11 +11,11 @@ import os
 from pathlib import Path
 from typing import Any
 
-from ecattool.errors import EcatToolError, InputError, SdoAbort
+from ecattool.errors import EcatToolError, InputError, SdoAbort, TargetError
 from ecattool.od.model import EcState
 from ecattool.online.dictionary import identify
 from ecattool.online.library import Library, Match, family_device
-from ecattool.online.live import LiveBus
+from ecattool.online.live import LiveBus, describe_slave, sii_facts
 
 #: the objects a project usually sets, written as parameters with the value the drive holds now
 USUAL_OBJECTS = ((0x6060, 0), (0x6065, 0), (0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6085, 0))
@@ -50,13 +50,18 @@ def _device_ref(match: Match, base: Path) -> str:
 
 
 def drive_yaml(slave: Any, name: str, match: Match, device: Any, base: Path) -> str:
+    """The project lines of one slave. A slave without a CoE mailbox (its SII says so: a coupler, a digital
+    terminal) is never sent an SDO: its process image is the fixed one of its device description."""
     from ecattool.project.skeleton import dc_only_mode
 
     lines = [f"  - name: {_q(name)}", f"    position: {slave.position}", "    device:" ]
     text = "\n".join(lines) + "\n" + _device_ref(match, base)
+    coe = sii_facts(slave).coe is not False
+    if not coe:
+        text += "    # no CoE mailbox (its SII): its fixed process image, as its device description gives it\n"
     pdo = []
     rx_mapped: set[tuple[int, int]] = set()
-    for key, assign in (("rx", 0x1C12), ("tx", 0x1C13)):
+    for key, assign in (("rx", 0x1C12), ("tx", 0x1C13)) if coe else ():
         try:
             pdos = read_pdos(slave, assign)
         except SdoAbort:
@@ -74,7 +79,7 @@ def drive_yaml(slave: Any, name: str, match: Match, device: Any, base: Path) -> 
     if mode is not None:
         text += f"    dc: {{opmode: {_q(mode)}, cycle_ns: 1000000}}  # the device runs only with DC; set your cycle\n"
     params = []
-    for index, sub in USUAL_OBJECTS:
+    for index, sub in USUAL_OBJECTS if coe else ():
         e = device.dictionary.entry(index, sub)
         if e is None or not e.access.writable(EcState.PREOP) or e.datatype is None or (index, sub) in rx_mapped:
             continue  # an object the outputs carry is set every cycle, not by a parameter
@@ -92,22 +97,44 @@ def drive_yaml(slave: Any, name: str, match: Match, device: Any, base: Path) -> 
 
 
 def project_from_bus(bus: LiveBus, library: Library | None, output: str | Path | None,
-                     name: str = "from-bus") -> str:
-    """The text of a project file for every slave of ``bus`` (paths relative to ``output``'s folder)."""
+                     name: str = "from-bus", problems: list[str] | None = None) -> str:
+    """The text of a project file for every slave of ``bus`` (paths relative to ``output``'s folder). A slave
+    that does not answer is named (position, name, identity) in ``problems`` and in a comment of the project,
+    which goes on with the others; a bus where no slave answers is an error."""
+    from ecattool.project.resolve import is_axis
+
     base = Path(output).parent if output not in (None, "-") else Path(".")
     drives = []
     unknown = []
+    failed: list[str] = []
     for slave in bus.slaves:
-        ident, match = identify(slave, library)
+        sii_facts(slave)  # the SII first: whether the slave has a mailbox, and its name for any message
+        try:
+            ident, match = identify(slave, library)
+        except EcatToolError as exc:
+            hint = "" if sii_facts(slave).protocols is not None else (
+                f" ({bus.spec} gives no SII: a slave without a mailbox has no identity to read here; use pysoem:IF)")
+            text = str(exc).removeprefix(f"slave {slave.position}, ").removeprefix(f"slave {slave.position}: ")
+            failed.append(f"{describe_slave(slave)}: {text}{hint}")
+            continue
         if match is None:
             unknown.append(f"slave {slave.position} (vendor 0x{ident.vendor_id:08X}, product "
                            f"0x{ident.product_code:08X})")
             continue
         device = library.device(match) if match.kind == "esi" and library is not None else family_device(match)
-        drives.append(drive_yaml(slave, f"axis{slave.position + 1}", match, device, base))
+        stem = "axis" if is_axis(device) else "io"
+        try:
+            drives.append(drive_yaml(slave, f"{stem}{slave.position + 1}", match, device, base))
+        except EcatToolError as exc:
+            failed.append(f"{describe_slave(slave)}: {exc}")
     if unknown:
         raise InputError(f"no library file or built-in family describes {', '.join(unknown)}; give --library with "
                          "its ESI")
+    if failed and not drives:
+        raise TargetError("no slave answered: " + "; ".join(failed))
+    if problems is not None:
+        problems.extend(f"not written: {f}" for f in failed)
     target = bus.spec if not bus.spec.startswith("sim") else "sim"
+    notes = "".join(f"# not written: {f}\n" for f in failed)
     return ("# ecattool project file (format 1), written by 'ecattool project new --from-bus'. Docs: docs/project.md\n"
-            f"ecattool: 1\nname: {_q(name)}\ntarget: {_q(target)}\ndrives:\n" + "".join(drives))
+            + notes + f"ecattool: 1\nname: {_q(name)}\ntarget: {_q(target)}\ndrives:\n" + "".join(drives))

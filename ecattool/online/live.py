@@ -7,6 +7,7 @@ Every target implements the same :class:`LiveSlave`; what a master's binding can
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
@@ -127,6 +128,78 @@ def read_sii(read_words: Any, max_bytes: int = SII_MAX_BYTES) -> bytes:
         offset += 4 + 2 * size_words
         fill(min(offset, max_bytes))
     return bytes(data[:min(max(offset, SII_HEADER_BYTES), max_bytes)])
+
+
+# --------------------------------------------------------------------------------------------- as found
+#: the mailbox protocol bit of CoE in SII word 0x1C (ETG.2010)
+MBX_COE = 0x0004
+
+
+@dataclass(frozen=True)
+class SiiFacts:
+    """What a slave's SII says about how to talk to it: its mailbox protocols (SII word 0x1C; 0 where its
+    standard receive mailbox, word 0x19, has no size: the slave has no mailbox) and its name (the general
+    category's); ``protocols`` None where the target gives no SII (KickCAT's binding)."""
+
+    protocols: int | None
+    name: str = ""
+
+    @property
+    def coe(self) -> bool | None:
+        """Whether SDOs can reach the slave: True, False (no CoE mailbox: never send it one), None (unknown)."""
+        return None if self.protocols is None else bool(self.protocols & MBX_COE)
+
+
+_FACTS: "weakref.WeakKeyDictionary[Any, SiiFacts]" = weakref.WeakKeyDictionary()
+
+
+def sii_facts(slave: Any, sii: bytes | None = None) -> SiiFacts:
+    """The :class:`SiiFacts` of ``slave``, read from its SII once (kept for as long as the slave object lives);
+    ``sii``: its SII image where the caller has read it already."""
+    try:
+        return _FACTS[slave]
+    except (KeyError, TypeError):
+        pass
+    from ecattool.sii.image import parse
+
+    try:
+        image = parse(slave.sii_read() if sii is None else sii, source=f"slave {slave.position} SII")
+    except TargetError:  # Unsupported (no SII through this master), or the read failed: not known
+        facts = SiiFacts(None)
+    except InputError:  # an SII that does not parse: the header words are still the slave's
+        facts = SiiFacts(None)
+    else:
+        h = image.header
+        g = image.general
+        name = image.strings[g.name_idx - 1] if g is not None and 0 < g.name_idx <= len(image.strings) else ""
+        has_mailbox = h.std_rx_size not in (0, 0xFFFF) and h.mailbox_protocols != 0xFFFF
+        facts = SiiFacts(h.mailbox_protocols if has_mailbox else 0, name)
+    try:
+        _FACTS[slave] = facts
+    except TypeError:
+        pass  # an object that takes no weak reference: read again next time
+    return facts
+
+
+def describe_slave(slave: Any) -> str:
+    """"slave N (NAME, vendor 0x…, product 0x…, revision 0x…)": a slave named as a user finds it on the bus
+    (what is not known is left out)."""
+    parts = []
+    try:
+        known = _FACTS.get(slave)
+    except TypeError:
+        known = None
+    name = known.name if known is not None else ""  # never a new SII read for a slave that may not answer
+    if name:
+        parts.append(name)
+    try:
+        ident = slave.identity()
+    except Exception:  # noqa: BLE001 - naming a slave that does not answer must not fail in turn
+        ident = None
+    if ident is not None:
+        parts.append(f"vendor 0x{ident.vendor_id:08X}, product 0x{ident.product_code:08X}, "
+                     f"revision 0x{ident.revision:08X}")
+    return f"slave {slave.position}" + (f" ({', '.join(parts)})" if parts else "")
 
 
 # --------------------------------------------------------------------------------------------- simulator

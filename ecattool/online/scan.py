@@ -11,7 +11,7 @@ from ecattool.abort import al_status_text
 from ecattool.errors import EcatToolError, SdoAbort
 from ecattool.esi.model import Identity
 from ecattool.online.library import Library, Match, family_match
-from ecattool.online.live import LiveBus, Unsupported
+from ecattool.online.live import LiveBus, Unsupported, sii_facts
 
 
 def _ident_json(i: Identity | None) -> dict[str, int] | None:
@@ -72,11 +72,15 @@ def scan_slave(slave: Any, library: Library | None = None) -> ScannedSlave:
     protocols: list[str] | None = None
     dc: bool | None = None
     name = ""
+    coe_mailbox: bool | None = None  # unknown until the SII says
     try:
-        image = parse(slave.sii_read(), source=f"slave {slave.position} SII")
+        sii = slave.sii_read()
+        sii_facts(slave, sii)  # kept for the commands that scan first (the slave's name in a message)
+        image = parse(sii, source=f"slave {slave.position} SII")
         h = image.header
         sii_ident = Identity(h.vendor_id, h.product_code, h.revision, h.serial)
-        protocols = h.protocols
+        protocols = h.protocols if h.std_rx_size not in (0, 0xFFFF) else []
+        coe_mailbox = "CoE" in protocols
         dc = bool(image.dc_opmodes) or None
         g = image.general
         if g is not None and 0 < g.name_idx <= len(image.strings):
@@ -86,10 +90,11 @@ def scan_slave(slave: Any, library: Library | None = None) -> ScannedSlave:
     except EcatToolError as exc:
         unknown.append(f"SII: {exc}")
     coe: Identity | None = None
-    try:
-        coe = _coe_identity(slave)
-    except EcatToolError as exc:
-        unknown.append(f"1018h: {exc}")
+    if coe_mailbox is not False:  # a slave without a CoE mailbox is never sent an SDO
+        try:
+            coe = _coe_identity(slave)
+        except EcatToolError as exc:
+            unknown.append(f"1018h: {exc}")
     if sii_ident is None and coe is None:
         try:
             coe = slave.identity()

@@ -162,13 +162,19 @@ def complete_generic(device: Device) -> Device:
             e = existing.entry(sub)
             if e is not None and e.datatype is not None and e.bit_size == 32:
                 e.default = obj.entries[sub].default
-    if 0x1C00 not in od and out.sync_managers:
+    if out.sync_managers:
         sms = sorted(out.sync_managers, key=lambda s: s.number)
         obj = OdObject(0x1C00, "Sync manager type", ObjectCode.ARRAY, location=Location(where))
         obj.entries[0] = _u(0, "Number of sync managers", USINT, len(sms), RO, where)
         for sm in sms:
             obj.entries[sm.number + 1] = _u(sm.number + 1, f"SM{sm.number} type", USINT, SM_TYPE.get(sm.kind, 0), RO, where)
-        od.add(obj)
+        existing = od.get(0x1C00)
+        if existing is None:
+            od.add(obj)
+        else:
+            # an ESI 1C00h without DefaultData (Copley XE2, EM7004) would read 0 for every SM, and a master that
+            # finds the process data SMs through it (KickCAT's create_mapping) would map nothing
+            _fill_defaults(existing, obj)
     config = bool(coe and coe.pdo_config)
     assign = bool(coe and coe.pdo_assign)
     for direction in (Direction.RX, Direction.TX):

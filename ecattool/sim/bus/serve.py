@@ -16,7 +16,7 @@ from ecattool.errors import InputError
 from ecattool.esi.model import Device
 from ecattool.sim.bus.engine import Bus
 from ecattool.sim.esc import Clock
-from ecattool.sim.slave import VirtualSlave, drive_for_device
+from ecattool.sim.slave import VirtualSlave, drive_for_device, served_sii
 
 if TYPE_CHECKING:
     from ecattool.sim.bus.loop import FrameFault
@@ -54,14 +54,16 @@ def device_source(source: str, *, product: str | None = None, revision: str | No
 def virtual_slaves(named: list[tuple[str, Device]]) -> list[Served]:
     """One virtual slave per device, in bus order: the drive ``commission --target sim`` would simulate for
     it, behind an ESC whose SII is what ``ecattool sii build`` makes of the device."""
-    from ecattool.sii.builder import build
-
     if not named:
         raise InputError("nothing to serve: name a project file, a profile or an ESI file")
     out = []
     for i, (name, device) in enumerate(named):
-        slave = VirtualSlave(drive_for_device(device), build(device).to_bytes(),
+        slave = VirtualSlave(drive_for_device(device), served_sii(device),
                              clock=Clock(offset_ns=i * CLOCK_SPREAD_NS))
+        why = slave.unservable()
+        if why is not None:
+            raise InputError(f"cannot serve slave {i} ({name}, {device.type_name or '?'} vendor 0x"
+                             f"{device.vendor_id or 0:08X} product 0x{device.product_code:08X}): {why}")
         out.append(Served(name, slave))
     return out
 

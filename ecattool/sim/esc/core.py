@@ -238,7 +238,10 @@ class Esc:
         m[R.PORT_DESCRIPTOR] = 0x0F  # ports 0 and 1 MII, 2 and 3 not implemented
         # features: FMMU bit operation, DC, 64-bit DC, enhanced link detection; LRW and xRW supported
         self._put16(R.FEATURES, 0x000C | 0x0040 | 0x0100)
-        self._put16(R.PDI_CONTROL, 0x0005 if app else 0x0105)  # SPI; device emulation without an application
+        # PDI control 0x0140 and ESC configuration 0x0141 are loaded from SII word 0 (_load_eeprom_config); an
+        # image that leaves the word 0 gets an SPI PDI, and device emulation where there is no application
+        self._default_pdi = 0x0005 if app else 0x0105
+        self._put16(R.PDI_CONTROL, self._default_pdi)
         self._put16(R.WD_DIVIDER, 0x09C2)  # 100 us
         self._put16(R.WD_TIME_PDI, 1000)
         self._put16(R.WD_TIME_PD, 1000)
@@ -289,8 +292,10 @@ class Esc:
             for n in range(self.sm_count):
                 a = R.SM + R.SM_SIZE * n
                 start, length, enabled = self.u16(a), self.u16(a + 2), bool(self.mem[a + 6] & 1)
-                active = enabled and length > 0 and start >= R.PROCESS_RAM and start + length <= size
-                out.append(_Sm(start, length, self.mem[a + 4], enabled, active))
+                control = self.mem[a + 4]
+                active = enabled and length > 0 and (start >= R.PROCESS_RAM and start + length <= size
+                                                     or self.digital_output_sm(start, length, control))
+                out.append(_Sm(start, length, control, enabled, active))
             self._sms = out
             self._read_mailboxes = tuple(n for n, sm in enumerate(out)
                                          if sm.active and sm.mailbox and not sm.ecat_writes)
@@ -298,6 +303,18 @@ class Esc:
 
     def sm(self, n: int) -> _Sm:
         return self.sms()[n]
+
+    @property
+    def digital_io(self) -> bool:
+        """PDI control 0x0140 = 04h: the ESC's PDI is digital I/O (an EL1xxx/EL2xxx terminal, no processor)."""
+        return self.mem[R.PDI_CONTROL] == R.PDI_DIGITAL_IO
+
+    def digital_output_sm(self, start: int, length: int, control: int) -> bool:
+        """An SM over the digital output registers 0x0F00-0x0F03, which an ESC with digital I/O serves as its
+        output buffer (ET1100 data sheet: "digital output data" 0x0F00:0x0F03, written by a buffered SM of ECAT
+        write direction): the only register area an SM may cover, and only on such an ESC."""
+        return (self.digital_io and control & 0x3 == SM_MODE_BUFFERED and (control >> 2) & 0x3 == SM_DIR_WRITE
+                and R.DIGITAL_OUTPUT <= start and start + length <= R.DIGITAL_OUTPUT + R.DIGITAL_OUTPUT_SIZE)
 
     def fmmus(self) -> list[_Fmmu]:
         if self._fmmus is None:
@@ -763,6 +780,10 @@ class Esc:
     def _load_eeprom_config(self) -> None:
         """Words 0..7 (the ESC configuration area): PDI control and the station alias."""
         words = self.eeprom.words(0, 8)
+        self._put16(R.PDI_CONTROL, words[0] or self._default_pdi)
+        self._sms = None  # whether an SM over the digital outputs is active depends on the PDI
+        self._plans.clear()
+        self._segment_cache.clear()
         self._put16(R.STATION_ALIAS, words[4])
         self._sync_eeprom_status()
 

@@ -25,6 +25,10 @@ AL_CONTROL = 0x0120
 AL_STATUS = 0x0130
 AL_STATUS_CODE = 0x0134
 PDI_CONTROL = 0x0140
+#: PDI control value of an ESC whose PDI is digital I/O (no processor behind it)
+PDI_DIGITAL_IO = 0x04
+#: ESC configuration 0x0141 bit 0: device emulation (the AL status follows the AL control)
+DEVICE_EMULATION = 0x01
 ESC_CONFIG = 0x0141
 PDI_CONFIG = 0x0150
 ECAT_EVENT_MASK = 0x0200
@@ -92,6 +96,9 @@ EE_BUSY = 0x8000
 AL_ERROR = 0x10
 
 #: (first, last) inclusive byte ranges below 0x1000 the master may write; all others are read-only for it
+#: the digital output registers of an ESC with digital I/O
+DIGITAL_OUTPUT, DIGITAL_OUTPUT_SIZE = 0x0F00, 4
+
 ECAT_WRITABLE: tuple[tuple[int, int], ...] = (
     (STATION_ADDRESS, STATION_ADDRESS + 1),
     (WRITE_ENABLE, 0x0021), (ESC_WRITE_ENABLE, 0x0031), (ESC_RESET, ESC_RESET),
