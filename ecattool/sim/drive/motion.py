@@ -228,6 +228,7 @@ class Motion(DriveCore):
         up = acc(0x6083)
         down = acc(0x6084) if (0x6084, 0) in self._entries else up
         jerk_time = _ZERO
+        jerk: Fraction | None = None
         if mode == PP and (read(0x6086, 0) or 0) == 3:
             if self.family == "technosoft-ipos":
                 jerk_time = Fraction(read(0x2023, 0) or 0, 1000)
@@ -235,12 +236,12 @@ class Motion(DriveCore):
                 if (read(0x201A, 0) or 0) & 0x4:
                     jerk_time = Fraction(read(0x2021, 0) or 0, 1000)
                 else:
-                    jerk = acc(0x2011)
-                    jerk_time = up / jerk if jerk else _ZERO
+                    # a jerk limit, not a jerk time: up / jerk would grow the move with the acceleration
+                    jerk = acc(0x2011) or None
         # HDT §4.07.8 profile type -1, "linear ramp with torque limit": the trapezoid of 0, whose generator stops
         # while an obstacle blocks the axis (the model has no torque: :meth:`set_obstacle` is the obstacle)
         torque_limited = mode == PP and self.family == "hdt" and read(0x6086, 0) == -1
-        return Profile(velocity, up, down, jerk_time, torque_limited)
+        return Profile(velocity, up, down, jerk_time, torque_limited, jerk)
 
     def _refresh_inputs(self, mode: int | None = None) -> None:
         """Actual values from the state: 6041h, 6063h/6064h, 606Ch, 603Fh (``mode``: 6061h, where the caller
