@@ -52,6 +52,8 @@ class Behaviour:
     #: communication error (EMCY codes of Table 3.1.3); HDT §4.03.10's table: 3220h, 8611h; Control Techniques
     #: 7.3.5 "ignored if the drive is tripped" (every simulated fault is a trip): none
     fault_reaction_codes: frozenset[int] | None = None
+    #: the largest following-error window in increments whatever 6065h says (HDT §4.06.5: 32,768 pulses)
+    following_error_cap: int | None = None
 
     @property
     def supply_bit_always(self) -> bool:
@@ -65,7 +67,7 @@ BEHAVIOURS: dict[str, Behaviour] = {
         homing_stop_on_bit4_clear=False, homing_unavailable_emcy=0xFF03, homing_busy_warning=True,
         supply_undervoltage_fault=0x3220, fault_reaction_codes=frozenset({0x3210, 0x3220, 0x4280, 0x4310, 0x8100}),
     ),
-    "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
+    "hdt": Behaviour(following_error_cap=32768, homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
                      home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611})),
     "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
                                    homing_current_outside_enabled=True, fault_reaction_codes=frozenset()),

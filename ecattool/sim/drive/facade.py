@@ -9,7 +9,7 @@ with the AL status code the drive sets. It satisfies :class:`ecattool.target.bas
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from ecattool.esi.model import Device, Identity
 from ecattool.od.model import EcState, Entry
@@ -24,7 +24,9 @@ from ecattool.sim.drive.injection import Injection
 from ecattool.sim.drive.memory import Memory
 from ecattool.sim.drive.modules import expand_default_modules
 from ecattool.sim.drive.motion import Motion
+from ecattool.sim.drive.plant import Plant, PlantParams, counts_per_rev, plant_for
 from ecattool.sim.drive.process_data import ProcessData
+from ecattool.sim.drive.supervision import Supervision
 from ecattool.sim.drive.sdo import SdoServer
 from ecattool.sim.faults import Faults
 from ecattool.sim.units import units_for
@@ -50,7 +52,10 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
     """A simulated EtherCAT CoE slave (a servo drive when its dictionary has the CiA-402 objects)."""
 
     def __init__(self, device: Device, rules: FamilyRules | None = None, *, position: int = 0,
-                 strict_pdo_length: bool = True, record_events: bool = True) -> None:
+                 strict_pdo_length: bool = True, record_events: bool = True,
+                 plant: PlantParams | Literal["ideal"] | None = None) -> None:
+        """``plant``: the motor and load between demand and actual values (None: the family's default plant,
+        :func:`~ecattool.sim.drive.plant.plant_for`; ``"ideal"``: none, the actual values are the demand)."""
         self.device = device
         self.rules = rules if rules is not None else _rules_for(device)
         self.family = self.rules.family if self.rules.family in BEHAVIOURS else "generic"
@@ -59,6 +64,8 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self.strict_pdo_length = strict_pdo_length
         self.record_events = record_events
         self.faults = Faults()
+        self._plant_params: PlantParams | None = None if plant == "ideal" else (
+            plant if isinstance(plant, PlantParams) else plant_for(self.family))
         self.events = []
         self.emergencies = []
         self.memory = ee.Memory()
@@ -135,7 +142,32 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self.units = units_for(self.family, self._read_int, revision=d.revision,
                              has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
         self.units.version = lambda: self._store.version
+        self._new_plant()
         self._refresh_inputs()
+
+    def _new_plant(self) -> None:
+        """The plant at rest (power-on, reset, new parameters) and the supervision's memory cleared."""
+        params = self._plant_params
+        self.supervision = Supervision()
+        self._demand_before = (self.cia.pos_n, self.cia.pos_d)
+        if params is None or not self.has_cia402:
+            self.plant = None
+            return
+        dt = self.cycle_time()
+        self.plant = Plant(params, counts_per_rev(self), dt.numerator / dt.denominator)
+
+    def set_plant(self, plant: PlantParams | Literal["ideal"] | None = None) -> None:
+        """Put the drive on another plant (None: the family's default; ``"ideal"``: the exact tracker). The axis
+        keeps its position; the plant starts at rest on the demand."""
+        self._plant_params = None if plant == "ideal" else (
+            plant if isinstance(plant, PlantParams) else plant_for(self.family))
+        self._new_plant()
+        self._refresh_inputs()
+
+    @property
+    def plant_params(self) -> PlantParams | None:
+        """The plant's parameters (None: the ideal tracker)."""
+        return self._plant_params
 
     def _default_bytes(self, e: Entry) -> bytes:
         size = e.byte_size

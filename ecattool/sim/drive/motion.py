@@ -12,6 +12,8 @@ from ecattool.profiles.rules import interpolation_period_ns
 from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile, State
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
+from ecattool.sim.drive.plant import cycle as plant_cycle
+from ecattool.sim.drive.supervision import report_actual, supervise
 from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
@@ -129,6 +131,7 @@ class Motion(DriveCore):
         mode: int | None = None
         for _ in range(cycles):
             mode = self.mode()
+            self._demand_before = (cia.pos_n, cia.pos_d)
             # an enabled axis without halt follows the target of its mode; CSP and CSV in integers (the same
             # rationals as the Fraction conversions, numerator and denominator apart), the others through
             # Cia402.step, which converts only the targets the mode moves by
@@ -168,7 +171,11 @@ class Motion(DriveCore):
         """What follows every cycle's motion: the following error's supervision, and the transitions the drive
         made by itself (the end of a quick stop or of a fault reaction)."""
         cia = self.cia
-        if cia.following_error:
+        plant = self.plant
+        if plant is not None:
+            plant_cycle(self, plant, self.mode(), *self._demand_before)
+            supervise(self, dt)
+        elif cia.following_error:
             self._supervise_following_error(dt)
         if cia.automatic:
             done, cia.automatic = cia.automatic, []
@@ -254,6 +261,9 @@ class Motion(DriveCore):
         sw = cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
         if self.family == "technosoft-ipos" and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
+        if self.plant is not None:
+            report_actual(self, sw, mode)
+            return
         vn, vd = self.units.ratios()[2:4]
         # 6063h, 6064h, 606Ch: floor(position), floor(position / factor) (+ the home offset), floor(velocity /
         # factor), in integers

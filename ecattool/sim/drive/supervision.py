@@ -1,0 +1,132 @@
+"""Supervision of the actual values the plant gives (:mod:`.plant`): the following error and its window, the
+position window of target reached, and the actual values as the drive reports them.
+
+* following error (6065h window in position user units, 6066h time in ms): in the position modes (PP, IP,
+  homing, CSP) an error beyond the window for longer than the time sets statusword bit 13 and faults the drive
+  with 8611h — the family's fault reaction and an EMCY (HDT §4.06.5; CiA-402 for the others). 6065h =
+  FFFFFFFFh switches the supervision off; HDT caps the window at 32,768 pulses (§4.06.5, ``Behaviour``);
+* target reached in PP (statusword bit 10): the profile has ended and the actual position has stayed within
+  the position window 6067h of the target for the window time 6068h (ms; 0 where the drive lacks them);
+* 6063h, 6064h, 6062h, 606Ch, 6077h, 6078h and 60F4h from the plant's measurement.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from math import floor
+from typing import TYPE_CHECKING
+
+from ecattool.sim.cia402 import CSP, HALT, HOMING, PP, State
+
+if TYPE_CHECKING:
+    from ecattool.sim.drive.core import DriveCore
+
+#: the modes whose following error is supervised (CiA-402: pp, ip, hm, csp)
+POSITION_MODES = frozenset({PP, 7, HOMING, CSP})
+#: the actual values :func:`report_actual` refreshes, in its order
+_ACTUAL = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0), (0x60F4, 0), (0x6077, 0),
+           (0x6078, 0))
+
+
+class Supervision:
+    """What the supervision remembers from cycle to cycle (seconds outside the following-error window, inside the
+    position window), and the largest figures of the running move for commissioning."""
+
+    __slots__ = ("outside_s", "inside_s")
+
+    def __init__(self) -> None:
+        self.outside_s = 0.0
+        self.inside_s = 0.0
+
+    def state(self) -> tuple[float, float]:
+        return self.outside_s, self.inside_s
+
+
+def following_error(drive: "DriveCore") -> float:
+    """Position demand minus actual position, increments (the plant's lag and an obstacle's block)."""
+    plant = drive.plant
+    lag = -plant.error if plant is not None else 0.0
+    fe = drive.cia.following_error
+    return lag + (fe.numerator / fe.denominator if fe else 0.0)
+
+
+def _window_increments(drive: "DriveCore", window: int) -> float:
+    pn, pd = drive.units.ratios()[:2]
+    inc = window * pn / pd
+    cap = drive.behaviour.following_error_cap
+    return min(inc, cap) if cap is not None else inc
+
+
+def supervise(drive: "DriveCore", dt: Fraction) -> None:
+    """One cycle of supervision (after the plant's step)."""
+    cia = drive.cia
+    sup = drive.supervision
+    seconds = dt.numerator / dt.denominator
+    mode = drive.mode()
+    if mode == PP and cia.target_reached and drive.plant is not None and \
+            _position_window(drive, _actual_user(drive, drive.plant.reported()[0])):
+        sup.inside_s += seconds
+    else:
+        sup.inside_s = 0.0
+    if cia.state is not State.OPERATION_ENABLED or mode not in POSITION_MODES:
+        sup.outside_s = 0.0
+        return
+    window, timeout = drive._read_int(0x6065, 0), drive._read_int(0x6066, 0)
+    if window is None or window == 0xFFFFFFFF:
+        sup.outside_s = 0.0
+        return
+    error = following_error(drive)
+    if abs(error) <= _window_increments(drive, window):
+        sup.outside_s = 0.0
+        return
+    sup.outside_s += seconds
+    if sup.outside_s * 1000 > (timeout or 0):
+        sup.outside_s = 0.0
+        cia.following_error_bit = True
+        pn, pd = drive.units.ratios()[:2]
+        drive._log("following_error", window=window, timeout_ms=timeout, error=int(error * pd / pn),
+                   mode=mode)
+        drive.inject_fault(0x8611)
+
+
+def _position_window(drive: "DriveCore", actual_user: int) -> bool:
+    """PP: the actual position is within 6067h of the target 607Ah."""
+    target = drive._read_int(0x607A, 0)
+    return target is not None and abs(actual_user - target) <= (drive._read_int(0x6067, 0) or 0)
+
+
+def _actual_user(drive: "DriveCore", error: float) -> int:
+    """6064h for a plant error of ``error`` increments."""
+    pn, pd = drive.units.ratios()[:2]
+    qn, qd = drive.cia.pos_n, drive.cia.pos_d
+    return ((qn + round(error) * qd) * pd) // (qd * pn) + drive._home_offset()
+
+
+def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
+    """The actual values from the plant (see the module doc); ``sw``: the statusword as the state machine makes
+    it."""
+    cia = drive.cia
+    plant = drive.plant
+    assert plant is not None
+    units = drive.units
+    pn, pd, vn, vd, sn, sd = units.ratios()
+    error, velocity = plant.reported()
+    k = round(error)
+    offset = drive._home_offset()
+    qn, qd = cia.pos_n, cia.pos_d
+    demand_user = (qn * pd) // (qd * pn) + offset
+    actual_user = ((qn + k * qd) * pd) // (qd * pn) + offset
+    fe = cia.following_error
+    blocked = units.position_to_user_int(fe) if fe else 0
+    lag_user = -error * pd / pn
+    user_velocity = velocity * sd * vd / (sn * vn)
+    user_velocity = floor(user_velocity + 1e-9 * max(1.0, abs(user_velocity)))
+    if cia.state is State.OPERATION_ENABLED and mode == PP and not cia.controlword & HALT and sw & 0x0400 and not (
+            _position_window(drive, actual_user)
+            and drive.supervision.inside_s * 1000 >= (drive._read_int(0x6068, 0) or 0)):
+        sw &= ~0x0400
+    if mode == CSP and cia.following_error_bit:
+        sw |= 0x2000
+    torque = plant.torque_per_mille()
+    drive._put_all(_ACTUAL, (sw, qn // qd + k, actual_user, demand_user + blocked, user_velocity, cia.fault_code,
+                             blocked + int(round(lag_user)), torque, torque))
