@@ -64,8 +64,7 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self.strict_pdo_length = strict_pdo_length
         self.record_events = record_events
         self.faults = Faults()
-        self._plant_params: PlantParams | None = None if plant == "ideal" else (
-            plant if isinstance(plant, PlantParams) else plant_for(self.family))
+        self._plant_params = self._params_of(plant)
         self.events = []
         self.emergencies = []
         self.memory = ee.Memory()
@@ -159,10 +158,14 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
     def set_plant(self, plant: PlantParams | Literal["ideal"] | None = None) -> None:
         """Put the drive on another plant (None: the family's default; ``"ideal"``: the exact tracker). The axis
         keeps its position; the plant starts at rest on the demand."""
-        self._plant_params = None if plant == "ideal" else (
-            plant if isinstance(plant, PlantParams) else plant_for(self.family))
+        self._plant_params = self._params_of(plant)
         self._new_plant()
         self._refresh_inputs()
+
+    def _params_of(self, plant: PlantParams | Literal["ideal"] | None) -> PlantParams | None:
+        if plant == "ideal":
+            return None
+        return plant if isinstance(plant, PlantParams) else plant_for(self.family)
 
     @property
     def plant_params(self) -> PlantParams | None:

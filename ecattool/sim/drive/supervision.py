@@ -50,6 +50,14 @@ def following_error(drive: "DriveCore") -> float:
     return lag + (fe.numerator / fe.denominator if fe else 0.0)
 
 
+def _ms(drive: "DriveCore", time: int) -> float:
+    """6066h/6068h in ms (the family's unit: ms, or control-loop samples)."""
+    if drive.behaviour.window_times_in_samples:
+        dt = drive.units.cycle_s
+        return time * 1000 * dt.numerator / dt.denominator
+    return float(time)
+
+
 def _window_increments(drive: "DriveCore", window: int) -> float:
     pn, pd = drive.units.ratios()[:2]
     inc = window * pn / pd
@@ -72,15 +80,16 @@ def supervise(drive: "DriveCore", dt: Fraction) -> None:
         sup.outside_s = 0.0
         return
     window, timeout = drive._read_int(0x6065, 0), drive._read_int(0x6066, 0)
-    if window is None or window == 0xFFFFFFFF:
+    if window is None or window == 0xFFFFFFFF or (
+            drive.behaviour.following_error_zero_unset and not window and not timeout):
         sup.outside_s = 0.0
         return
     error = following_error(drive)
-    if abs(error) <= _window_increments(drive, window):
+    if abs(round(error)) <= _window_increments(drive, window):  # the encoder measures whole increments
         sup.outside_s = 0.0
         return
     sup.outside_s += seconds
-    if sup.outside_s * 1000 > (timeout or 0):
+    if sup.outside_s * 1000 > _ms(drive, timeout or 0):
         sup.outside_s = 0.0
         cia.following_error_bit = True
         pn, pd = drive.units.ratios()[:2]
@@ -123,7 +132,7 @@ def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
     user_velocity = floor(user_velocity + 1e-9 * max(1.0, abs(user_velocity)))
     if cia.state is State.OPERATION_ENABLED and mode == PP and not cia.controlword & HALT and sw & 0x0400 and not (
             _position_window(drive, actual_user)
-            and drive.supervision.inside_s * 1000 >= (drive._read_int(0x6068, 0) or 0)):
+            and drive.supervision.inside_s * 1000 >= _ms(drive, drive._read_int(0x6068, 0) or 0)):
         sw &= ~0x0400
     if mode == CSP and cia.following_error_bit:
         sw |= 0x2000
