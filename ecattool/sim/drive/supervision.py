@@ -3,8 +3,9 @@ position window of target reached, and the actual values as the drive reports th
 
 * following error (6065h window in position user units, 6066h time in ms): in the position modes (PP, IP,
   homing, CSP) an error beyond the window for longer than the time sets statusword bit 13 and faults the drive
-  with 8611h — the family's fault reaction and an EMCY (HDT §4.06.5; CiA-402 for the others). 6065h =
-  FFFFFFFFh switches the supervision off; HDT caps the window at 32,768 pulses (§4.06.5, ``Behaviour``);
+  with 8611h — the family's fault reaction and an EMCY (HDT §4.06.5; CiA-402 for the others). A drive without
+  both objects does not supervise (Control Techniques has no 6066h); 6065h = FFFFFFFFh switches the supervision
+  off; HDT caps the window at 32,768 pulses (§4.06.5, ``Behaviour``);
 * target reached in PP (statusword bit 10): the profile has ended and the actual position has stayed within
   the position window 6067h of the target for the window time 6068h (ms; 0 where the drive lacks them);
 * 6063h, 6064h, 6062h, 606Ch, 6077h, 6078h and 60F4h from the plant's measurement.
@@ -80,7 +81,7 @@ def supervise(drive: "DriveCore", dt: Fraction) -> None:
         sup.outside_s = 0.0
         return
     window, timeout = drive._read_int(0x6065, 0), drive._read_int(0x6066, 0)
-    if window is None or window == 0xFFFFFFFF or (
+    if window is None or timeout is None or window == 0xFFFFFFFF or (
             drive.behaviour.following_error_zero_unset and not window and not timeout):
         sup.outside_s = 0.0
         return
@@ -89,7 +90,7 @@ def supervise(drive: "DriveCore", dt: Fraction) -> None:
         sup.outside_s = 0.0
         return
     sup.outside_s += seconds
-    if sup.outside_s * 1000 > _ms(drive, timeout or 0):
+    if sup.outside_s * 1000 > _ms(drive, timeout):
         sup.outside_s = 0.0
         cia.following_error_bit = True
         pn, pd = drive.units.ratios()[:2]
