@@ -69,3 +69,12 @@ def test_the_samples_commission_with_figures(sample: str):
                                 "peak_torque_per_mille"}
     assert "following error up to" in next(s.detail for s in drive.steps if s.name == "move")
     json.dumps(out)
+
+
+def test_the_html_report_plots_the_following_error_with_its_window_and_the_torque(tmp_path: Path):
+    from ecattool.report import commission_html
+
+    html = commission_html([commission(_project(tmp_path, 1000))])
+    assert "Following error and torque" in html
+    assert "6065h following error window ±1000" in html
+    assert "6077h torque actual" in html
