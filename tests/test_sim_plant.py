@@ -164,3 +164,22 @@ def test_hdt_caps_the_following_error_window_at_32768_pulses():
         if d.cia402_state is not State.OPERATION_ENABLED:
             break
     assert any(e.code == 0x8611 for e in d.emergencies)
+
+
+def test_a_script_sets_the_plant_and_the_inputs():
+    """Issue 33 item 6: ``sim run`` scripts set plant parameters, a load torque and limit switches."""
+    from ecattool.errors import InputError, Location
+    from ecattool.sim.script import parse_steps, run_script
+
+    d = at("hdt", OP, plant=None)
+    steps = [{"plant": {"position_bandwidth": 50, "velocity_feedforward": 0}}, {"inputs": {"load_torque": 0.5}},
+             {"inputs": {"limit_positive": True}}, {"cycles": 1}]
+    parsed, locs = parse_steps(steps, [Location("s.yaml", i + 1) for i in range(len(steps))])
+    transcript = run_script(d, parsed, locs)
+    assert transcript.ok
+    assert d.plant is not None and d.plant.params.position_bandwidth == 50 and d.plant.load_torque == 0.5
+    assert d.limit_switches == (False, True)
+    with pytest.raises(InputError, match="unknown parameter 'bandwith'"):
+        run_script(d, [{"plant": {"bandwith": 5}}], [Location("s.yaml", 1)])
+    run_script(d, [{"plant": "ideal"}], [Location("s.yaml", 1)])
+    assert d.plant is None
