@@ -454,7 +454,7 @@ def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fracti
 
 def _settle(io: ProcessIo, target: int | None = None, cycles: int = 2000) -> None:
     """Cycle until the axis stands: 6064h on ``target`` (where given) and the actual position (6063h where the
-    drive has it, else 6064h) the same for three cycles; at most ``cycles`` (a drive's position loop settles
+    drive has it, else 6064h) the same for ten cycles; at most ``cycles`` (a drive's position loop settles
     after its demand has ended; bit 10 comes within the position window 6067h, which may be wider than a
     count). A fault (statusword bit 3) ends the wait."""
     key = 0x6063 if io.has(0x6063) else 0x6064
@@ -463,7 +463,7 @@ def _settle(io: ProcessIo, target: int | None = None, cycles: int = 2000) -> Non
         now = io.read(key, 0)
         same = same + 1 if now == last else 0
         last = now
-        if io.read(0x6041, 0) & 0x0008 or (same >= 3 and (target is None or io.read(0x6064, 0) == target)):
+        if io.read(0x6041, 0) & 0x0008 or (same >= 10 and (target is None or io.read(0x6064, 0) == target)):
             return
         io.cycle()
 
