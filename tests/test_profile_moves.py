@@ -36,8 +36,9 @@ def test_a_sample_move_shows_the_three_phases_of_its_profile(tmp_path: Path):
 
     sample = ROOT / "samples" / "technosoft_ipos"
     shutil.copy(sample / "setup.sw", tmp_path / "setup.sw")
+    # the profile's exact phases: the ideal plant (the default plant's velocity lags the demand; issue 33)
     text = (sample / "project.yaml").read_text().replace("move: {distance: 1000, mode: pp}",
-                                                          "move: {distance: 10000, mode: pp}")
+                                                          "move: {distance: 10000, mode: pp}\n    plant: ideal")
     assert "distance: 10000" in text
     (tmp_path / "project.yaml").write_text(text)
     report = commission(tmp_path / "project.yaml")

@@ -391,7 +391,7 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     _set_mode(io, MOVE_MODE_CODES[mode])
     report.trace.begin_move(io, f"{mode.upper()} move of {dist} user units")
     try:
-        _run_move(io, rd, mode, p0, dist)
+        _run_move(io, rd, mode, p0, dist, report.trace)
     finally:
         report.trace.end_move(io)
     figures = report.trace.figures
@@ -426,7 +426,7 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     report.steps.append(Step("move", True, detail + took))
 
 
-def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fraction) -> None:
+def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fraction, trace: DriveTrace) -> None:
     """The motion: one profile-position set-point (pp), or 100 cyclic set-points then 50 cycles (csp)."""
     target = int(p0 + dist)
     if mode == "pp":
@@ -442,6 +442,7 @@ def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fracti
         if not _cycle_until(io, lambda sw: bool(sw & 0x0400) and not sw & 0x1000, 200_000):
             raise _Failed(Step("move", False, f"profile position move to {target} did not reach its target "
                                               "(statusword bit 10)" + _zero_objects(io, rd, mode)))
+        trace.reached()
         _settle(io)
     else:
         steps = 100
@@ -449,6 +450,7 @@ def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fracti
             io.write(0x607A, 0, int(p0 + dist * k / steps))
             io.cycle()
         _cycle_until(io, lambda sw: False, 50)
+        trace.reached()
         _settle(io, target)
 
 

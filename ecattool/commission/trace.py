@@ -205,6 +205,9 @@ class DriveTrace:
     #: the following-error window 6065h read when the move began (None: none, or FFFFFFFFh = off)
     error_window: int | None = None
     figures: MoveFigures | None = None
+    #: the cycle the move reached its target (PP: statusword bit 10; CSP: the last set-point), before the axis
+    #: settled: the end of :attr:`move_cycles` where set
+    reached_cycle: int | None = None
     #: the move's duration by the master's clock (on a real bus the drive moves in real time, and a master that
     #: is late for a cycle counts fewer cycles than the drive ran)
     move_wall_s: float | None = None
@@ -294,6 +297,7 @@ class DriveTrace:
             # §7.2.10: "Default value -", set by Drive Setup)
             self.error_window = None if window == 0xFFFFFFFF or (window == 0 and time_out == 0) else window
         self._move_start = self.cycles
+        self.reached_cycle = None
         self._move_start_wall = time.monotonic()
         self._sampling = True
         self._sample(io)
@@ -312,11 +316,15 @@ class DriveTrace:
             return None
         return float(interpolation_period_ns(base, exponent)) / 1e9 if base > 0 and -9 <= exponent <= 2 else None
 
+    def reached(self) -> None:
+        """The move has reached its target now (the axis may still settle)."""
+        self.reached_cycle = self.cycles
+
     def end_move(self, io: ProcessImage) -> None:
         if self._sampling and (not self.samples or self.samples[-1].cycle != self.cycles):
             self._sample(io)
         self._sampling = False
-        self.move_cycles = (self._move_start, self.cycles)
+        self.move_cycles = (self._move_start, self.reached_cycle if self.reached_cycle is not None else self.cycles)
         self.figures = move_figures(self.samples, self.cycle_s, self.error_window)
         self.move_wall_s = time.monotonic() - self._move_start_wall
 
