@@ -141,12 +141,12 @@ class Motion(DriveCore):
                     # internal velocity units per increment/s: the inverse of increments/s per unit (sn > 0)
                     cia.follow_position(((self._read_int(0x607A, 0) or 0) - self._home_offset()) * pn, pd, dt,
                                         sd, sn)
-                    self._after_step(dt)
+                    self._after_step(dt, mode)
                     continue
                 if mode == CSV:
                     _, _, vn, vd, sn, sd = u.ratios()
                     cia.follow_velocity((self._read_int(0x60FF, 0) or 0) * vn, vd, dt, sn, sd)
-                    self._after_step(dt)
+                    self._after_step(dt, mode)
                     continue
                 moving = True
             else:
@@ -164,17 +164,17 @@ class Motion(DriveCore):
             )
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
-            self._after_step(dt)
+            self._after_step(dt, mode)
         self._refresh_inputs(mode)  # the step changes no mode (6061h)
 
-    def _after_step(self, dt: Fraction) -> None:
+    def _after_step(self, dt: Fraction, mode: int) -> None:
         """What follows every cycle's motion: the following error's supervision, and the transitions the drive
         made by itself (the end of a quick stop or of a fault reaction)."""
         cia = self.cia
         plant = self.plant
         if plant is not None:
-            plant_cycle(self, plant, self.mode(), *self._demand_before)
-            supervise(self, dt)
+            plant_cycle(self, plant, mode, *self._demand_before)
+            supervise(self, mode)
         elif cia.following_error:
             self._supervise_following_error(dt)
         if cia.automatic:

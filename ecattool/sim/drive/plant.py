@@ -23,6 +23,8 @@ import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Literal
 
+from ecattool.sim.cia402 import State
+
 if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
     from ecattool.sim.drive.motion import Motion
@@ -287,6 +289,7 @@ class Plant:
 
 
 # --- the plant in the drive's cycle ---------------------------------------------------------------------------
+_ENABLED, _QUICK_STOP, _FAULT_REACTION = State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION
 #: modes whose loop is the velocity loop (vl 2, PV 3, CSV 9); the others close the position loop
 VELOCITY_MODES = frozenset({2, 3, 9})
 
@@ -304,8 +307,6 @@ def cycle(drive: "Motion", plant: Plant, mode: int, pn0: int, pd0: int) -> None:
     """Step ``plant`` one cycle after the drive's demand moved from ``pn0 / pd0`` to where its CiA-402 model is now
     (increments): the position loop or the velocity loop while the power stage is on (OPERATION ENABLED, a quick
     stop or fault reaction ramping), else the motor coasts and the demand follows the actual position."""
-    from ecattool.sim.cia402 import State
-
     cia = drive.cia
     version = drive._store.version
     if plant.version != version:  # 608Fh or the cycle 60C2h may have changed
@@ -315,8 +316,8 @@ def cycle(drive: "Motion", plant: Plant, mode: int, pn0: int, pd0: int) -> None:
     pn, pd = cia.pos_n, cia.pos_d
     moved = (pn * pd0 - pn0 * pd) / (pd * pd0) if (pn, pd) != (pn0, pd0) else 0.0
     state = cia.state
-    if state is State.OPERATION_ENABLED or state is State.QUICK_STOP or state is State.FAULT_REACTION:
-        if mode in VELOCITY_MODES and state is State.OPERATION_ENABLED:
+    if state is _ENABLED or state is _QUICK_STOP or state is _FAULT_REACTION:
+        if mode in VELOCITY_MODES and state is _ENABLED:
             sn, sd = drive.units.ratios()[4:6]
             plant.follow_velocity(cia.vel_n * sn / (cia.vel_d * sd), moved)
         else:

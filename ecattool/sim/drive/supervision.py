@@ -13,11 +13,12 @@ position window of target reached, and the actual values as the drive reports th
 
 from __future__ import annotations
 
-from fractions import Fraction
 from math import floor
 from typing import TYPE_CHECKING
 
 from ecattool.sim.cia402 import CSP, HALT, HOMING, PP, State
+
+_ENABLED = State.OPERATION_ENABLED
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
@@ -66,19 +67,25 @@ def _window_increments(drive: "DriveCore", window: int) -> float:
     return min(inc, cap) if cap is not None else inc
 
 
-def supervise(drive: "DriveCore", dt: Fraction) -> None:
-    """One cycle of supervision (after the plant's step)."""
+def supervise(drive: "DriveCore", mode: int) -> None:
+    """One cycle of supervision (after the plant's step) in ``mode`` (6061h)."""
     cia = drive.cia
     sup = drive.supervision
-    seconds = dt.numerator / dt.denominator
-    mode = drive.mode()
-    if mode == PP and cia.target_reached and drive.plant is not None and \
-            _position_window(drive, _actual_user(drive, drive.plant.reported()[0])):
-        sup.inside_s += seconds
-    else:
+    plant = drive.plant
+    assert plant is not None
+    seconds = plant.dt
+    if mode == PP:
+        if cia.target_reached and _position_window(drive, _actual_user(drive, plant.reported()[0])):
+            sup.inside_s += seconds
+        else:
+            sup.inside_s = 0.0
+    elif sup.inside_s:
         sup.inside_s = 0.0
-    if cia.state is not State.OPERATION_ENABLED or mode not in POSITION_MODES:
+    if cia.state is not _ENABLED or mode not in POSITION_MODES:
         sup.outside_s = 0.0
+        return
+    if -0.5 < plant.error < 0.5 and not cia.following_error:
+        sup.outside_s = 0.0  # measured in whole increments: no error, within any window
         return
     window, timeout = drive._read_int(0x6065, 0), drive._read_int(0x6066, 0)
     if window is None or timeout is None or window == 0xFFFFFFFF or (
