@@ -183,3 +183,55 @@ def test_a_script_sets_the_plant_and_the_inputs():
         run_script(d, [{"plant": {"bandwith": 5}}], [Location("s.yaml", 1)])
     run_script(d, [{"plant": "ideal"}], [Location("s.yaml", 1)])
     assert d.plant is None
+
+
+def _ts_pp(writes: tuple[tuple[int, int, int], ...] = ()) -> Drive:
+    d = at("technosoft-ipos", OP)
+    w(d, 0x6060, 0, 1, 1)
+    w(d, 0x6081, 0, 10 * 65536, 4)  # 10 counts per sample
+    w(d, 0x6083, 0, 65536, 4)  # 1 count per sample²
+    w(d, 0x6085, 0, 2 * 65536, 4)  # quick-stop deceleration: 2 counts per sample²
+    for index, sub, value in writes:
+        w(d, index, sub, value, 4)
+    for cw in (0x06, 0x07, 0x0F):
+        w(d, 0x6040, 0, cw, 2)
+    return d
+
+
+def _go(d: Drive, target: int) -> None:
+    w(d, 0x607A, 0, target, 4)
+    w(d, 0x6040, 0, 0x1F, 2)
+    w(d, 0x6040, 0, 0x0F, 2)
+
+
+def test_a_limit_switch_stops_the_move_with_6085h_and_holds():
+    """Issue 33, N11: Technosoft §4.3.1 (seeds/000_a0ab57c0bda88c2c.txt line 2235): a limit switch during a motion
+    stops the axis with 6085h, the drive stays OPERATION ENABLED and takes only a motion away from the switch."""
+    d = _ts_pp()
+    _go(d, 100_000)
+    d.step(20)  # at 10 counts/sample
+    assert d.internal_velocity == 10 * 65536
+    d.set_limit_switches(positive=True)
+    d.step(2)
+    assert d.internal_velocity == 6 * 65536  # 2 counts/sample² down
+    d.step(10)
+    assert d.internal_velocity == 0 and d.cia402_state is State.OPERATION_ENABLED
+    stopped = d.internal_position
+    d.step(50)
+    assert d.internal_position == stopped  # held: the set-point beyond the switch is dropped
+    _go(d, 100_000)  # still towards the switch: refused
+    d.step(10)
+    assert d.internal_position == stopped
+    _go(d, 0)  # away from it: taken
+    d.step(10)
+    assert d.internal_position < stopped
+
+
+def test_software_limits_607dh_stop_the_move():
+    """Issue 33, N12: Technosoft §4.3.2 (line 2276): the software limits "work just like the hardware limit
+    switches": a move to 10,000 with 607Dh:02 = 5000 stops just beyond 5000 (the 6085h ramp)."""
+    d = _ts_pp(((0x607D, 2, 5000),))
+    _go(d, 10_000)
+    d.step(2000)
+    assert 5000 <= d.internal_position < 5000 + 40
+    assert d.cia402_state is State.OPERATION_ENABLED

@@ -13,10 +13,12 @@ from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile,
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
 from ecattool.sim.drive.plant import cycle as plant_cycle
-from ecattool.sim.drive.supervision import report_actual, supervise
+from ecattool.sim.drive.supervision import limit_stop, report_actual, supervise
 from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
+#: 607Dh's sub-indices 1 and 2 at the whole INTEGER32 range (no software limit)
+_OPEN_LOW, _OPEN_HIGH = (-(2**31)).to_bytes(4, "little", signed=True), (2**31 - 1).to_bytes(4, "little", signed=True)
 _ENABLED = State.OPERATION_ENABLED
 #: every object :meth:`Motion._make_profile` reads
 _PROFILE_OBJECTS = ((0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6086, 0), (0x2023, 0), (0x201A, 0), (0x2021, 0),
@@ -136,6 +138,9 @@ class Motion(DriveCore):
             # rationals as the Fraction conversions, numerator and denominator apart), the others through
             # Cia402.step, which converts only the targets the mode moves by
             if cia.state is _ENABLED and not cia.controlword & HALT:
+                if (self.limit_active or self._soft_limits) and limit_stop(self, mode, dt):
+                    self._after_step(dt, mode)
+                    continue
                 if mode == CSP:
                     pn, pd, _, _, sn, sd = u.ratios()
                     # internal velocity units per increment/s: the inverse of increments/s per unit (sn > 0)
@@ -166,6 +171,12 @@ class Motion(DriveCore):
                 hh.after_step(self, homing_before)
             self._after_step(dt, mode)
         self._refresh_inputs(mode)  # the step changes no mode (6061h)
+
+    @property
+    def _soft_limits(self) -> bool:
+        """607Dh narrower than the whole INTEGER32 range (the stored bytes compared: every cycle asks)."""
+        get = self._store.get
+        return get((0x607D, 1), _OPEN_LOW) != _OPEN_LOW or get((0x607D, 2), _OPEN_HIGH) != _OPEN_HIGH
 
     def _after_step(self, dt: Fraction, mode: int) -> None:
         """What follows every cycle's motion: the following error's supervision, and the transitions the drive

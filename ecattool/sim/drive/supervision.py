@@ -13,6 +13,7 @@ position window of target reached, and the actual values as the drive reports th
 
 from __future__ import annotations
 
+from fractions import Fraction
 from math import floor
 from typing import TYPE_CHECKING
 
@@ -22,6 +23,7 @@ _ENABLED = State.OPERATION_ENABLED
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
+    from ecattool.sim.drive.motion import Motion
 
 #: the modes whose following error is supervised (CiA-402: pp, ip, hm, csp)
 POSITION_MODES = frozenset({PP, 7, HOMING, CSP})
@@ -147,3 +149,70 @@ def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
     torque = plant.torque_per_mille()
     drive._put_all(_ACTUAL, (sw, qn // qd + k, actual_user, demand_user + blocked, user_velocity, cia.fault_code,
                              blocked + int(round(lag_user)), torque, torque))
+
+
+# --- limit switches and software position limits ---------------------------------------------------------------
+_FULL_RANGE = (-(2**31), 2**31 - 1)
+
+
+def _blocked(drive: "DriveCore") -> tuple[bool, bool]:
+    """(negative, positive) directions a limit blocks: the hardware limit-switch inputs, and the software position
+    limits 607Dh (min, max, position user units) reached by the position demand — Technosoft §4.3.2 ("work just
+    like the hardware limit switches"); HDT only with 201Ah bit 0 (§4.06.7). A 607Dh of the whole INTEGER32 range,
+    or min >= max, sets none."""
+    neg, pos = drive.limit_switches
+    low, high = drive._read_int(0x607D, 1), drive._read_int(0x607D, 2)
+    if low is None or high is None or (low, high) == _FULL_RANGE or low >= high:
+        return neg, pos
+    if drive.behaviour.home_offset_continuous and not (drive._read_int(0x201A, 0) or 0) & 1:  # HDT
+        return neg, pos
+    pn, pd = drive.units.ratios()[:2]
+    demand = (drive.cia.pos_n * pd) // (drive.cia.pos_d * pn) + drive._home_offset()
+    return neg or demand <= low, pos or demand >= high
+
+
+def limit_stop(drive: "Motion", mode: int, dt: Fraction) -> bool:
+    """A limit switch (or software limit) in the direction the axis moves or is told to move: the axis ramps down
+    with the quick-stop deceleration 6085h and holds, still OPERATION ENABLED; only a motion away from the limit
+    is taken (Technosoft §4.3.1, seeds/000_a0ab57c0bda88c2c.txt line 2235: "Triggering a limit switch during a
+    motion causes the drive to automatically stop using the deceleration value defined in Object 6085h ... wait
+    until a new motion command is received in the opposite direction"). True: this cycle's motion was the stop.
+    Homing searches for the switches and is left alone."""
+    if mode == HOMING:
+        return False
+    neg, pos = drive.limit_switches
+    if not (neg or pos) and (0x607D, 2) not in drive._entries:
+        return False
+    blocked_neg, blocked_pos = _blocked(drive)
+    if not (blocked_neg or blocked_pos):
+        return False
+    cia = drive.cia
+    direction = (cia.vel_n > 0) - (cia.vel_n < 0)
+    if not direction:
+        if mode == PP and cia.target is not None:
+            direction = (cia.target > cia.position) - (cia.target < cia.position)
+        elif mode == CSP:
+            pn, pd = drive.units.ratios()[:2]
+            target = Fraction(((drive._read_int(0x607A, 0) or 0) - drive._home_offset()) * pn, pd)
+            direction = (target > cia.position) - (target < cia.position)
+        else:
+            v = drive._read_int(0x60FF, 0) or 0
+            direction = (v > 0) - (v < 0)
+    if not ((direction > 0 and blocked_pos) or (direction < 0 and blocked_neg)):
+        return False
+    units = drive.units
+    if cia.vel_n:
+        decel = abs(units.increments_per_second2(units.acceleration_to_internal(drive._read_int(0x6085, 0) or 0)))
+        if decel:
+            cia._slow_down(dt, decel, units.increments_per_second, units.velocity_from_increments_per_second)
+        else:
+            cia.velocity = Fraction(0)
+    if not cia.vel_n:
+        if cia.target is not None or cia.move is not None:
+            drive._log("limit", event="stopped", direction=direction)
+        cia.target = None
+        cia.move = None
+        cia.target_reached = True
+    else:
+        cia.move = None
+    return True
