@@ -10,7 +10,8 @@ import pytest
 from ecattool.sim import Drive
 from ecattool.sim.cia402 import State
 from ecattool.sim.drive.plant import Plant, PlantParams, reflected_inertia
-from sim_helpers import OP, at, r, w
+from sim_helpers import OP, PRE, SAFE, at, r, w
+from tests.conftest import ROOT
 
 CPR = 65536.0
 #: a stiff, unsaturated plant: the linear loop alone
@@ -235,3 +236,28 @@ def test_software_limits_607dh_stop_the_move():
     d.step(2000)
     assert 5000 <= d.internal_position < 5000 + 40
     assert d.cia402_state is State.OPERATION_ENABLED
+
+
+def test_6072h_limits_the_plants_torque():
+    """Issue 33 item 3: 6072h max torque (per mille of rated) is the plant's torque limit: a CSP jump the loop
+    would make at several times the rated torque is made at 10 % of it, the axis lags behind (Inovance SV660N)."""
+    from ecattool.sim.drive import Drive as SimDrive
+
+    esi = ROOT / "samples" / "generic_esi" / "inovance_SV660_EOE_1Axis_V9.12.xml"
+    peaks = {}
+    for limit in (0, 100):
+        d = SimDrive.from_esi(esi, "InoSV660N")
+        for s in (PRE, SAFE, OP):
+            d.request_state(s)
+        assert (0x6072, 0) in d._entries
+        w(d, 0x6065, 0, 0xFFFFFFFF, 4)
+        w(d, 0x6072, 0, limit, 2)
+        _csp(d)
+        w(d, 0x607A, 0, 100_000, 4)
+        peak = 0
+        for _ in range(20):
+            d.step(1)
+            peak = max(peak, abs(r(d, 0x6077, signed=True)))
+        peaks[limit] = (peak, r(d, 0x6064, signed=True))
+    assert peaks[100][0] == 100 and peaks[0][0] > 1000
+    assert peaks[100][1] < peaks[0][1]

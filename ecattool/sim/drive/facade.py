@@ -32,6 +32,10 @@ from ecattool.sim.faults import Faults
 from ecattool.sim.units import units_for
 
 
+#: the torque limits of CiA-402 (per mille of the rated torque 6076h)
+_TORQUE_LIMITS = (0x6072, 0x60E0, 0x60E1)
+
+
 def _rules_for(device: Device) -> FamilyRules:
     try:
         from ecattool.profiles import rules_for
@@ -154,6 +158,22 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
             return
         dt = self.cycle_time()
         self.plant = Plant(params, counts_per_rev(self), dt.numerator / dt.denominator)
+        for index in _TORQUE_LIMITS:
+            self._after_write[index] = self._on_torque_limit
+        self._on_torque_limit(0, None)
+
+    def _on_torque_limit(self, sub: int, value: int | None) -> None:
+        """6072h max torque and 60E0h/60E1h positive/negative torque limits (per mille of the rated torque; 0 or
+        absent: none) limit the plant's torque, at most its peak torque (one symmetric limit: the smallest)."""
+        plant = self.plant
+        if plant is None:
+            return
+        limit = plant.params.peak_torque
+        for index in _TORQUE_LIMITS:
+            raw = self._read_int(index, 0) if (index, 0) in self._entries else None
+            if raw:
+                limit = min(limit, abs(raw) / 1000 * plant.params.rated_torque)
+        plant.torque_limit = limit
 
     def set_plant(self, plant: PlantParams | Literal["ideal"] | None = None) -> None:
         """Put the drive on another plant (None: the family's default; ``"ideal"``: the exact tracker). The axis
