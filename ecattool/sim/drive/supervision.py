@@ -36,11 +36,13 @@ class Supervision:
     """What the supervision remembers from cycle to cycle (seconds outside the following-error window, inside the
     position window), and the largest figures of the running move for commissioning."""
 
-    __slots__ = ("outside_s", "inside_s")
+    __slots__ = ("outside_s", "inside_s", "limits")
 
     def __init__(self) -> None:
         self.outside_s = 0.0
         self.inside_s = 0.0
+        #: (the stored 6065h, 6066h and the store's version they were read at, :func:`_limits` of them)
+        self.limits: tuple[tuple[bytes | None, bytes | None, int], float | None, float] | None = None
 
     def state(self) -> tuple[float, float]:
         return self.outside_s, self.inside_s
@@ -69,6 +71,15 @@ def _window_increments(drive: "DriveCore", window: int) -> float:
     return min(inc, cap) if cap is not None else inc
 
 
+def _limits(drive: "DriveCore") -> tuple[float | None, float]:
+    """(the following-error window in increments, None: no supervision; the time in ms) from 6065h/6066h."""
+    window, timeout = drive._read_int(0x6065, 0), drive._read_int(0x6066, 0)
+    if window is None or timeout is None or window == 0xFFFFFFFF or (
+            drive.behaviour.following_error_zero_unset and not window and not timeout):
+        return None, 0.0
+    return _window_increments(drive, window), _ms(drive, timeout)
+
+
 def supervise(drive: "DriveCore", mode: int) -> None:
     """One cycle of supervision (after the plant's step) in ``mode`` (6061h)."""
     cia = drive.cia
@@ -89,22 +100,26 @@ def supervise(drive: "DriveCore", mode: int) -> None:
     if -0.5 < plant.error < 0.5 and not cia.following_error:
         sup.outside_s = 0.0  # measured in whole increments: no error, within any window
         return
-    window, timeout = drive._read_int(0x6065, 0), drive._read_int(0x6066, 0)
-    if window is None or timeout is None or window == 0xFFFFFFFF or (
-            drive.behaviour.following_error_zero_unset and not window and not timeout):
+    get = drive._store.get
+    key = (get((0x6065, 0)), get((0x6066, 0)), drive._store.version)
+    limits = sup.limits
+    if limits is None or limits[0] != key:
+        limits = sup.limits = (key, *_limits(drive))
+    window_inc = limits[1]
+    if window_inc is None:
         sup.outside_s = 0.0
         return
     error = following_error(drive)
-    if abs(round(error)) <= _window_increments(drive, window):  # the encoder measures whole increments
+    if abs(round(error)) <= window_inc:  # the encoder measures whole increments
         sup.outside_s = 0.0
         return
     sup.outside_s += seconds
-    if sup.outside_s * 1000 > _ms(drive, timeout):
+    if sup.outside_s * 1000 > limits[2]:
         sup.outside_s = 0.0
         cia.following_error_bit = True
         pn, pd = drive.units.ratios()[:2]
-        drive._log("following_error", window=window, timeout_ms=timeout, error=int(error * pd / pn),
-                   mode=mode)
+        drive._log("following_error", window=drive._read_int(0x6065, 0), timeout_ms=drive._read_int(0x6066, 0),
+                   error=int(error * pd / pn), mode=mode)
         drive.inject_fault(0x8611)
 
 
@@ -129,26 +144,28 @@ def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
     assert plant is not None
     units = drive.units
     pn, pd, vn, vd, sn, sd = units.ratios()
-    error, velocity = plant.reported()
+    error, velocity = plant.sampled if plant.params.delay == "sample" else (plant.error, plant.velocity)
     k = round(error)
     offset = drive._home_offset()
     qn, qd = cia.pos_n, cia.pos_d
     demand_user = (qn * pd) // (qd * pn) + offset
-    actual_user = ((qn + k * qd) * pd) // (qd * pn) + offset
+    actual_user = ((qn + k * qd) * pd) // (qd * pn) + offset if k else demand_user
     fe = cia.following_error
     blocked = units.position_to_user_int(fe) if fe else 0
-    lag_user = -error * pd / pn
     user_velocity = velocity * sd * vd / (sn * vn)
-    user_velocity = floor(user_velocity + 1e-9 * max(1.0, abs(user_velocity)))
+    # a velocity that is the demand's up to the float's last bits reads as the demand's (no floor below it)
+    user_velocity = floor(user_velocity + 1e-9 * (user_velocity if user_velocity > 1.0 else
+                                                  -user_velocity if user_velocity < -1.0 else 1.0))
     if cia.state is State.OPERATION_ENABLED and mode == PP and not cia.controlword & HALT and sw & 0x0400 and not (
             _position_window(drive, actual_user)
             and drive.supervision.inside_s * 1000 >= _ms(drive, drive._read_int(0x6068, 0) or 0)):
         sw &= ~0x0400
     if mode == CSP and cia.following_error_bit:
         sw |= 0x2000
-    torque = plant.torque_per_mille()
+    rated = plant.params.rated_torque
+    torque = round(plant.torque / rated * 1000) if rated > 0 else 0
     drive._put_all(_ACTUAL, (sw, qn // qd + k, actual_user, demand_user + blocked, user_velocity, cia.fault_code,
-                             blocked + int(round(lag_user)), torque, torque))
+                             blocked + (round(-error * pd / pn) if error else 0), torque, torque))
 
 
 # --- limit switches and software position limits ---------------------------------------------------------------
