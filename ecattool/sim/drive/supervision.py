@@ -18,6 +18,7 @@ from math import floor
 from typing import TYPE_CHECKING
 
 from ecattool.sim.cia402 import CSP, HALT, HOMING, PP, State
+from ecattool.sim.units import floor_ratio
 
 _ENABLED = State.OPERATION_ENABLED
 
@@ -118,6 +119,7 @@ def supervise(drive: "DriveCore", mode: int) -> None:
         sup.outside_s = 0.0
         cia.following_error_bit = True
         pn, pd = drive.units.ratios()[:2]
+        pn = pn or 1
         drive._log("following_error", window=drive._read_int(0x6065, 0), timeout_ms=drive._read_int(0x6066, 0),
                    error=int(error * pd / pn), mode=mode)
         drive.inject_fault(0x8611)
@@ -133,7 +135,7 @@ def _actual_user(drive: "DriveCore", error: float) -> int:
     """6064h for a plant error of ``error`` increments."""
     pn, pd = drive.units.ratios()[:2]
     qn, qd = drive.cia.pos_n, drive.cia.pos_d
-    return ((qn + round(error) * qd) * pd) // (qd * pn) + drive._home_offset()
+    return floor_ratio(qn + round(error) * qd, qd, pn, pd) + drive._home_offset()
 
 
 def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
@@ -148,11 +150,11 @@ def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
     k = round(error)
     offset = drive._home_offset()
     qn, qd = cia.pos_n, cia.pos_d
-    demand_user = (qn * pd) // (qd * pn) + offset
-    actual_user = ((qn + k * qd) * pd) // (qd * pn) + offset if k else demand_user
+    demand_user = floor_ratio(qn, qd, pn, pd) + offset
+    actual_user = floor_ratio(qn + k * qd, qd, pn, pd) + offset if k else demand_user
     fe = cia.following_error
     blocked = units.position_to_user_int(fe) if fe else 0
-    user_velocity = velocity * sd * vd / (sn * vn)
+    user_velocity = velocity * sd * vd / (sn * vn) if sn and vn else 0.0
     # a velocity that is the demand's up to the float's last bits reads as the demand's (no floor below it)
     user_velocity = floor(user_velocity + 1e-9 * (user_velocity if user_velocity > 1.0 else
                                                   -user_velocity if user_velocity < -1.0 else 1.0))
@@ -165,7 +167,7 @@ def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
     rated = plant.params.rated_torque
     torque = round(plant.torque / rated * 1000) if rated > 0 else 0
     drive._put_all(_ACTUAL, (sw, qn // qd + k, actual_user, demand_user + blocked, user_velocity, cia.fault_code,
-                             blocked + (round(-error * pd / pn) if error else 0), torque, torque))
+                             blocked + (round(-error * pd / pn) if error and pn else 0), torque, torque))
 
 
 # --- limit switches and software position limits ---------------------------------------------------------------
@@ -184,7 +186,7 @@ def _blocked(drive: "DriveCore") -> tuple[bool, bool]:
     if drive.behaviour.home_offset_continuous and not (drive._read_int(0x201A, 0) or 0) & 1:  # HDT
         return neg, pos
     pn, pd = drive.units.ratios()[:2]
-    demand = (drive.cia.pos_n * pd) // (drive.cia.pos_d * pn) + drive._home_offset()
+    demand = floor_ratio(drive.cia.pos_n, drive.cia.pos_d, pn, pd) + drive._home_offset()
     return neg or demand <= low, pos or demand >= high
 
 
