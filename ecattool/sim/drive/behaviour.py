@@ -79,7 +79,8 @@ BEHAVIOURS: dict[str, Behaviour] = {
                      home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611})),
     "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
                                    homing_current_outside_enabled=True, fault_reaction_codes=frozenset()),
-    "generic": Behaviour(homing_current_outside_enabled=True),
+    # an ESI's 6065h = 6066h = 0 is a window nobody set (as Technosoft's "Default value -"): no supervision
+    "generic": Behaviour(homing_current_outside_enabled=True, following_error_zero_unset=True),
 }
 
 #: Control Techniques trip number -> 603Fh error code (SM-EtherCAT Table 9.17)
