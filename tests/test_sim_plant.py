@@ -261,3 +261,22 @@ def test_6072h_limits_the_plants_torque():
         peaks[limit] = (peak, r(d, 0x6064, signed=True))
     assert peaks[100][0] == 100 and peaks[0][0] > 1000
     assert peaks[100][1] < peaks[0][1]
+
+
+@pytest.mark.parametrize("family,delayed", [("controltechniques", True), ("technosoft-ipos", True), ("hdt", False)])
+def test_one_sample_of_delay_where_the_manual_says_so(family: str, delayed: bool):
+    """Issue 33 item 2 / N3: Control Techniques CSP inserts one interpolation period (CT 2550); Technosoft samples
+    the actual position before the new reference (§3.2.2, TS 1855); HDT's loop answers in the same cycle."""
+    d = _csp(at(family, OP, plant=None))
+    if (0x6065, 0) in d._entries:
+        w(d, 0x6065, 0, 0xFFFFFFFF, 4)
+    w(d, 0x607A, 0, 1, 4)  # 1 user unit: 1 count (HDT, Technosoft), 65536 counts (Control Techniques)
+
+    def actual() -> float:  # increments, as the drive measures them this cycle
+        assert d.plant is not None
+        return d.cia.pos_n / d.cia.pos_d + d.plant.reported()[0]
+
+    d.step(1)
+    assert (actual() == 0) is delayed, actual()
+    d.step(1)
+    assert actual() > 0

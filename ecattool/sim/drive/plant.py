@@ -187,7 +187,7 @@ class Plant:
             loop_moved, y0 = self.pending, self.error + self.pending
             self.pending = moved
         elif p.delay == "sample":
-            self.sampled = (self.error, self.velocity)
+            self.sampled = (self.error - moved, self.velocity)  # the previous actual, against the new demand
         s = loop_moved / self.dt
         c = 2 * p.damping * (1 - p.velocity_feedforward) / p.position_bandwidth * s
         v0 = self.velocity
@@ -201,7 +201,7 @@ class Plant:
         """One cycle in a velocity mode: the velocity loop towards ``reference`` increments/s; the demand position
         (the reference integrated) moved by ``moved``."""
         if self.params.delay == "sample":
-            self.sampled = (self.error, self.velocity)
+            self.sampled = (self.error - moved, self.velocity)  # the previous actual, against the new demand
         v0 = self.velocity
         v1 = reference + (v0 - reference) * self._decay
         travelled = reference * self.dt + (v0 - reference) * self._tau_gain
@@ -211,7 +211,7 @@ class Plant:
         """One cycle with the motor making ``torque`` N·m (a torque mode, or 0 with the power stage off: the axis
         coasts against its friction and load); the demand moved by ``moved``."""
         if self.params.delay == "sample":
-            self.sampled = (self.error, self.velocity)
+            self.sampled = (self.error - moved, self.velocity)  # the previous actual, against the new demand
         limit = self.torque_limit
         torque = max(-limit, min(limit, torque))
         self._accelerate(self.velocity, torque, moved)
