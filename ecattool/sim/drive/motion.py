@@ -178,12 +178,14 @@ class Motion(DriveCore):
         get = self._store.get
         return get((0x607D, 1), _OPEN_LOW) != _OPEN_LOW or get((0x607D, 2), _OPEN_HIGH) != _OPEN_HIGH
 
-    def _after_step(self, dt: Fraction, mode: int) -> None:
+    def _after_step(self, dt: Fraction, mode: int | None = None) -> None:
         """What follows every cycle's motion: the following error's supervision, and the transitions the drive
         made by itself (the end of a quick stop or of a fault reaction)."""
         cia = self.cia
         plant = self.plant
         if plant is not None:
+            if mode is None:
+                mode = self.mode()
             plant_cycle(self, plant, mode, *self._demand_before)
             supervise(self, mode)
         elif cia.following_error:
