@@ -176,3 +176,12 @@ def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
         code = exc.code if isinstance(exc.code, int) else 0
     out, err = capsys.readouterr()
     return code, out, err
+
+
+@pytest.fixture
+def ideal_plant(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Drives built in the test have no plant (actual = demand), unless the test gives one: for the tests of the
+    manuals' exact timings and traces (issue 33)."""
+    from ecattool.sim.drive import facade
+
+    monkeypatch.setattr(facade, "plant_for", lambda family: None)

@@ -31,7 +31,9 @@ def code_of(fn: Any, *args: Any) -> int:
 
 
 def at(name: str, state: EcState = PRE, **kw: Any) -> Drive:
-    """A drive of profile ``name`` brought from INIT up to ``state``."""
+    """A drive of profile ``name`` brought from INIT up to ``state``. On the ideal plant (actual = demand) unless
+    ``plant`` is given: these tests check the manuals' exact timings and traces (issue 33)."""
+    kw.setdefault("plant", "ideal")
     d = Drive.from_profile(name, **kw)
     for s in (PRE, SAFE, OP):
         d.request_state(s)

@@ -15,7 +15,9 @@ def test_json_report_shape(capsys):
         assert set(proj) == {"project", "target", "ok", "drives"}
         assert proj["project"].endswith(f"{name}/project.yaml") and proj["target"] == "sim" and proj["ok"]
         for d in proj["drives"]:
-            assert set(d) == {"name", "position", "kind", "ok", "error", "final_state", "steps"}
+            # "move": the figures of the move on the plant (issue 33), for every sample's axis
+            assert set(d) == {"name", "position", "kind", "ok", "error", "final_state", "steps", "move"}
+            assert {"following_error_max", "settling_time_s", "overshoot", "peak_speed"} <= set(d["move"])
             assert d["ok"] is True and d["error"] is None and d["final_state"] == "OP"
             for s in d["steps"]:
                 assert {"name", "ok", "detail"} <= set(s) <= {"name", "ok", "detail", "abort_code", "al_status"}

@@ -36,8 +36,9 @@ def test_a_sample_move_shows_the_three_phases_of_its_profile(tmp_path: Path):
 
     sample = ROOT / "samples" / "technosoft_ipos"
     shutil.copy(sample / "setup.sw", tmp_path / "setup.sw")
+    # the profile's exact phases: the ideal plant (the default plant's velocity lags the demand; issue 33)
     text = (sample / "project.yaml").read_text().replace("move: {distance: 1000, mode: pp}",
-                                                          "move: {distance: 10000, mode: pp}")
+                                                          "move: {distance: 10000, mode: pp}\n    plant: ideal")
     assert "distance: 10000" in text
     (tmp_path / "project.yaml").write_text(text)
     report = commission(tmp_path / "project.yaml")
@@ -221,3 +222,54 @@ def test_commission_refuses_a_move_faster_than_its_profile():
     trace.move_cycles = (0, 90)
     assert check_move_time(io, rd, trace, "pp", Fraction(1000))[0]  # type: ignore[arg-type]
     assert check_move_time(io, rd, trace, "csp", Fraction(1000)) == (True, "")  # type: ignore[arg-type]
+
+
+def _hdt_pp_cycles(acceleration: int) -> int:
+    """Cycles of the issue-33 HDT PP move: 200,000 counts at 6081h = 2000 rpm, 6083h = 6084h = ``acceleration``
+    rpm/s, with the defaults 6086h = 3 (jerk-limited ramp) and 2011h = 100000 rpm/s³ (HDT §4.07.9)."""
+    d = _pp("hdt", v=(0x6081, 2000, 4), a=(0x6083, acceleration, 4), b=(0x6084, acceleration, 4))
+    w(d, 0x607A, 0, 200_000, 4)
+    w(d, 0x6040, 0, 0x1F, 2)
+    n = 0
+    while not r(d, 0x6041) & 0x0400 and n < 20_000:
+        d.step(1)
+        n += 1
+    assert r(d, 0x6064, signed=True) == 200_000
+    return n
+
+
+def test_hdt_pp_move_does_not_grow_with_the_acceleration():
+    """Issue 33's defect: with 6083h/6084h = 200,000 rpm/s the move took 1,050 cycles and with 20,000,000 rpm/s
+    100,045 (the jerk time was 6083h / 2011h). HDT §4.07.9 (seeds/003_8679b1dde0e37523.txt line 4203): "A higher
+    jerk value implies bigger acceleration variations, which reduce the time needed for the positioning" — 2011h
+    limits the jerk, so an acceleration beyond what the jerk reaches changes nothing. Closed form of the
+    jerk-limited move that never reaches 6083h: D/v + 2 sqrt(v/J) = 0.0916 s + 0.283 s = 187 cycles of 2 ms."""
+    slow, fast, faster = (_hdt_pp_cycles(a) for a in (2000, 200_000, 20_000_000))
+    assert fast <= slow and faster <= fast
+    assert faster == fast  # 2011h, not 6083h, limits the ramp from 200,000 rpm/s on
+    assert abs(fast - 187) <= 4, fast
+
+
+def _move_cycles(distance: int, vmax: int, acc: int, dec: int, jerk: int | None, jerk_ms: int) -> int:
+    dt = Fraction(1, 1000)
+    move = ProfileMove(Fraction(0), Fraction(0), Fraction(distance), Fraction(vmax), Fraction(acc), Fraction(dec),
+                       Fraction(jerk_ms, 1000), dt, Fraction(jerk) if jerk else None)
+    n = 0
+    while n < 4000:
+        n += 1
+        if move.step(dt)[2]:
+            break
+    return n
+
+
+@settings(max_examples=60, deadline=None)
+@given(distance=st.integers(1, 20_000), vmax=st.integers(2_000, 200_000), acc=st.integers(10_000, 10**8),
+       dec=st.integers(10_000, 10**8), jerk=st.one_of(st.none(), st.integers(10**5, 10**10)),
+       jerk_ms=st.integers(0, 30), which=st.sampled_from(["vmax", "acc", "dec"]), factor=st.integers(2, 1000))
+def test_a_move_never_takes_longer_when_a_limit_grows(distance, vmax, acc, dec, jerk, jerk_ms, which, factor):
+    """Issue 33 item 5: a move's time never grows when acceleration, deceleration or velocity grows (trapezoid,
+    jerk time, jerk limit)."""
+    args = {"vmax": vmax, "acc": acc, "dec": dec}
+    base = _move_cycles(distance, args["vmax"], args["acc"], args["dec"], jerk, jerk_ms)
+    args[which] *= factor
+    assert _move_cycles(distance, args["vmax"], args["acc"], args["dec"], jerk, jerk_ms) <= base

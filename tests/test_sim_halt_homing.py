@@ -21,6 +21,9 @@ from ecattool.sim import Drive
 from ecattool.sim.cia402 import State, decode_statusword
 from tests.conftest import corpus_path
 
+#: the manuals' exact timings and traces: the ideal plant (actual = demand; issue 33)
+pytestmark = pytest.mark.usefixtures("ideal_plant")
+
 PRE, SAFE, OP = EcState.PREOP, EcState.SAFEOP, EcState.OP
 INOVANCE = "inovance_SV660_EOE_1Axis_V9.12.xml"
 HOMING_BITS = 0x2000 | 0x1000 | 0x0400  # statusword bits 13, 12, 10 in homing mode

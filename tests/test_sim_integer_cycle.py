@@ -16,6 +16,7 @@ import struct
 from fractions import Fraction
 from pathlib import Path
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -29,6 +30,9 @@ from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.ramp import Trapezoid
 from ecattool.sim.units import (FACTOR_OBJECTS, HdtUnits, Reader, TechnosoftUnits, Units, floor_ratio, reduced,
                                 to_int)
+
+#: the integer cycle against the reference Fraction cycle, exact traces: the ideal plant (issue 33)
+pytestmark = pytest.mark.usefixtures("ideal_plant")
 
 ROOT = Path(__file__).resolve().parent.parent
 FAMILIES = ("hdt", "technosoft-ipos", "controltechniques")

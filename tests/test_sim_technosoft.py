@@ -13,6 +13,9 @@ from ecattool.od.model import EcState
 from ecattool.sim import Cia402State, Drive, FoeError, decode_statusword
 from tests.conftest import corpus_path
 
+#: the manuals' exact timings and traces: the ideal plant (actual = demand; issue 33)
+pytestmark = pytest.mark.usefixtures("ideal_plant")
+
 PRE, SAFE, OP = EcState.PREOP, EcState.SAFEOP, EcState.OP
 
 

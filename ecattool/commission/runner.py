@@ -58,8 +58,11 @@ class DriveReport:
     trace: DriveTrace = field(default_factory=DriveTrace)
 
     def to_json(self) -> dict[str, Any]:
-        return {"name": self.name, "position": self.position, "kind": self.kind, "ok": self.ok, "error": self.error,
-                "final_state": self.final_state, "steps": [s.to_json() for s in self.steps]}
+        out = {"name": self.name, "position": self.position, "kind": self.kind, "ok": self.ok, "error": self.error,
+               "final_state": self.final_state, "steps": [s.to_json() for s in self.steps]}
+        if self.trace.figures is not None:
+            out["move"] = self.trace.figures.to_json()
+        return out
 
 
 @dataclass(slots=True)
@@ -398,9 +401,17 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     _set_mode(io, MOVE_MODE_CODES[mode])
     report.trace.begin_move(io, f"{mode.upper()} move of {dist} user units")
     try:
-        _run_move(io, rd, mode, p0, dist)
+        _run_move(io, rd, mode, p0, dist, report.trace)
     finally:
         report.trace.end_move(io)
+    figures = report.trace.figures
+    if io.read(0x6041, 0) & 0x0008:
+        raise _Failed(Step("move", False, "the drive faulted during the move (statusword bit 3)"
+                                          + (f": {figures.text()}" if figures is not None else "")))
+    if figures is not None and figures.outside_window:
+        raise _Failed(Step("move", False, f"the following error reached {figures.following_error} user units, "
+                                          f"beyond the window 6065h = {figures.window}: {figures.text()} (widen "
+                                          "6065h, lower 6083h/6081h, or stiffen the drive's position loop)"))
     p1 = io.read(0x6064, 0)
     if p1 - p0 != dist:
         raise _Failed(Step("move", False, f"position moved {p1 - p0} user units, commanded {dist}"
@@ -420,10 +431,12 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     took_ok, took = check_move_time(io, rd, report.trace, mode, dist)  # the profile's time (issue 24)
     if not took_ok:
         raise _Failed(Step("move", False, took))
+    if figures is not None:
+        took += f"; {figures.text()}"
     report.steps.append(Step("move", True, detail + took))
 
 
-def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fraction) -> None:
+def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fraction, trace: DriveTrace) -> None:
     """The motion: one profile-position set-point (pp), or 100 cyclic set-points then 50 cycles (csp)."""
     target = int(p0 + dist)
     if mode == "pp":
@@ -439,12 +452,32 @@ def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fracti
         if not _cycle_until(io, lambda sw: bool(sw & 0x0400) and not sw & 0x1000, 200_000):
             raise _Failed(Step("move", False, f"profile position move to {target} did not reach its target "
                                               "(statusword bit 10)" + _zero_objects(io, rd, mode)))
+        trace.reached()
+        _settle(io)
     else:
         steps = 100
         for k in range(1, steps + 1):
             io.write(0x607A, 0, int(p0 + dist * k / steps))
             io.cycle()
         _cycle_until(io, lambda sw: False, 50)
+        trace.reached()
+        _settle(io, target)
+
+
+def _settle(io: ProcessIo, target: int | None = None, cycles: int = 2000) -> None:
+    """Cycle until the axis stands: 6064h on ``target`` (where given) and the actual position (6063h where the
+    drive has it, else 6064h) the same for ten cycles; at most ``cycles`` (a drive's position loop settles
+    after its demand has ended; bit 10 comes within the position window 6067h, which may be wider than a
+    count). A fault (statusword bit 3) ends the wait."""
+    key = 0x6063 if io.has(0x6063) else 0x6064
+    last, same = None, 0
+    for _ in range(cycles):
+        now = io.read(key, 0)
+        same = same + 1 if now == last else 0
+        last = now
+        if io.read(0x6041, 0) & 0x0008 or (same >= 10 and (target is None or io.read(0x6064, 0) == target)):
+            return
+        io.cycle()
 
 
 def _prove_process_data(io: ProcessIo, rd: Slave, report: DriveReport) -> None:
@@ -657,6 +690,18 @@ def open_target(spec: str, drives: list[Slave]) -> tuple[Target, str]:
     return open_spec(spec, devices), spec
 
 
+def _set_plants(slaves: list[SlaveTarget], drives: list[Slave]) -> None:
+    """Put each simulated drive on the plant its project sets (``plant:``); a real slave has its own."""
+    from ecattool.project.plant import plant_params
+
+    for rd in drives:
+        if rd.drive.plant is None or rd.position >= len(slaves):
+            continue
+        set_plant = getattr(slaves[rd.position], "set_plant", None)
+        if set_plant is not None:
+            set_plant(plant_params(rd))
+
+
 def commission(path: str | Path | Machine, target: str | Target | None = None,
                on_drive: Callable[[DriveReport], None] | None = None, *,
                allow_errors: bool = False) -> CommissionReport:
@@ -680,6 +725,8 @@ def commission(path: str | Path | Machine, target: str | Target | None = None,
     report = CommissionReport(machine.path, name, findings=list(machine.findings))
     try:
         slaves = tgt.slaves()
+        if owned:
+            _set_plants(slaves, machine.slaves)
         ordered = machine.in_bus_order()
         runs: list[_DriveRun | DriveReport] = []
         for rd in ordered:  # every drive's PRE-OP work first, then SAFE-OP/OP drive by drive

@@ -60,7 +60,71 @@ CHANNELS = (
     Channel("actual", 0x6064, 0, "6064h position actual", "user", "position", "drive"),
     Channel("velocity", 0x606C, 0, "606Ch velocity actual", "user", "velocity", "drive"),
     Channel("internal", 0x6063, 0, "6063h position actual (internal)", "internal", "position", "drive"),
+    Channel("error", 0x60F4, 0, "60F4h following error actual", "user", "position", "drive"),
+    Channel("torque", 0x6077, 0, "6077h torque actual", "per mille of rated torque", "torque", "drive"),
 )
+
+
+@dataclass(frozen=True, slots=True)
+class MoveFigures:
+    """What the move's trace shows about how the axis followed (issue 33): the largest following error (60F4h,
+    else 6062h - 6064h; user units), the settling time (from the demand's end until the actual position stays
+    on the final demand; s), the overshoot beyond the final demand in the direction of the move (user units),
+    the peak speed (606Ch, user velocity units) and the peak torque (6077h, per mille of rated); ``window``:
+    the drive's following-error window 6065h (None: none, or supervision off)."""
+
+    following_error: int
+    settling_s: float
+    overshoot: int
+    peak_speed: int | None
+    peak_torque: int | None
+    window: int | None
+
+    @property
+    def outside_window(self) -> bool:
+        return self.window is not None and self.following_error > self.window
+
+    def to_json(self) -> dict[str, Any]:
+        return {"following_error_max": self.following_error, "following_error_window": self.window,
+                "settling_time_s": round(self.settling_s, 6), "overshoot": self.overshoot,
+                "peak_speed": self.peak_speed, "peak_torque_per_mille": self.peak_torque}
+
+    def text(self) -> str:
+        parts = [f"following error up to {self.following_error}"
+                 + (f" (6065h window {self.window})" if self.window is not None else ""),
+                 f"settled {self.settling_s * 1000:g} ms after the demand", f"overshoot {self.overshoot}"]
+        if self.peak_speed is not None:
+            parts.append(f"peak speed {self.peak_speed}")
+        if self.peak_torque is not None:
+            parts.append(f"peak torque {self.peak_torque / 10:g} % of rated")
+        return "; ".join(parts)
+
+
+def move_figures(samples: list[Sample], cycle_s: float, window: int | None) -> MoveFigures | None:
+    """:class:`MoveFigures` of a move's samples (None: no position samples)."""
+    pts = [s for s in samples if "actual" in s.values]
+    if not pts:
+        return None
+    demand_key = "demand" if all("demand" in s.values for s in pts) else "actual"
+    errors = [abs(s.values["error"]) if "error" in s.values else abs(s.values[demand_key] - s.values["actual"])
+              for s in pts]
+    final = pts[-1].values[demand_key]
+    start = pts[0].values["actual"]
+    direction = 1 if final >= start else -1
+    demand_end = pts[0].cycle
+    for a, b in zip(pts, pts[1:]):
+        if b.values[demand_key] != a.values[demand_key]:
+            demand_end = b.cycle
+    settled = pts[-1].cycle
+    for s in reversed(pts):
+        if s.values["actual"] != final:
+            break
+        settled = s.cycle
+    overshoot = max(0, max((s.values["actual"] - final) * direction for s in pts))
+    speeds = [abs(s.values["velocity"]) for s in pts if "velocity" in s.values]
+    torques = [abs(s.values["torque"]) for s in pts if "torque" in s.values]
+    return MoveFigures(max(errors), max(0, settled - demand_end) * cycle_s, overshoot,
+                       max(speeds) if speeds else None, max(torques) if torques else None, window)
 
 
 @dataclass(slots=True)
@@ -138,6 +202,12 @@ class DriveTrace:
     channels: list[Channel] = field(default_factory=list)
     move: str = ""  # "PP move of 1000 user units" once the move started
     move_cycles: tuple[int, int] | None = None
+    #: the following-error window 6065h read when the move began (None: none, or FFFFFFFFh = off)
+    error_window: int | None = None
+    figures: MoveFigures | None = None
+    #: the cycle the move reached its target (PP: statusword bit 10; CSP: the last set-point), before the axis
+    #: settled: the end of :attr:`move_cycles` where set
+    reached_cycle: int | None = None
     #: the move's duration by the master's clock (on a real bus the drive moves in real time, and a master that
     #: is late for a cycle counts fewer cycles than the drive ran)
     move_wall_s: float | None = None
@@ -217,7 +287,17 @@ class DriveTrace:
         self.move = what
         self.channels = [c for c in CHANNELS if io.has(c.index, c.subindex)]
         self.cycle_s = self._drive_period(io) or self.cycle_s
+        self.error_window = None
+        if io.has(0x6065, 0) and io.has(0x6066, 0):  # the supervision needs both (window and time)
+            try:
+                window, time_out = io.read(0x6065, 0), io.read(0x6066, 0)
+            except EcatToolError:
+                window, time_out = 0xFFFFFFFF, 0
+            # FFFFFFFFh: supervision off (CiA-402); 0 with a time of 0: a setup that set neither (Technosoft
+            # §7.2.10: "Default value -", set by Drive Setup)
+            self.error_window = None if window == 0xFFFFFFFF or (window == 0 and time_out == 0) else window
         self._move_start = self.cycles
+        self.reached_cycle = None
         self._move_start_wall = time.monotonic()
         self._sampling = True
         self._sample(io)
@@ -236,11 +316,16 @@ class DriveTrace:
             return None
         return float(interpolation_period_ns(base, exponent)) / 1e9 if base > 0 and -9 <= exponent <= 2 else None
 
+    def reached(self) -> None:
+        """The move has reached its target now (the axis may still settle)."""
+        self.reached_cycle = self.cycles
+
     def end_move(self, io: ProcessImage) -> None:
         if self._sampling and (not self.samples or self.samples[-1].cycle != self.cycles):
             self._sample(io)
         self._sampling = False
-        self.move_cycles = (self._move_start, self.cycles)
+        self.move_cycles = (self._move_start, self.reached_cycle if self.reached_cycle is not None else self.cycles)
+        self.figures = move_figures(self.samples, self.cycle_s, self.error_window)
         self.move_wall_s = time.monotonic() - self._move_start_wall
 
     def _sample(self, io: ProcessImage) -> None:

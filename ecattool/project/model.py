@@ -190,6 +190,36 @@ class MoveTest(_Strict):
     )
 
 
+class PlantConfig(_Strict):
+    """The motor and load of a simulated drive (issue 33; docs/simulator.md "The plant"): what commission's
+    simulator moves. Every field is optional: the family's default plant fills the rest."""
+
+    motor_inertia: float | None = Field(default=None, gt=0, allow_inf_nan=False,
+                                        description="Rotor inertia, kg·m² (motor datasheet J)")
+    load_inertia: float | None = Field(default=None, ge=0, allow_inf_nan=False,
+                                       description="Rotary load inertia at the load side, kg·m² (reflected "
+                                       "through the scaling's gear)")
+    load_mass: float | None = Field(default=None, ge=0, allow_inf_nan=False,
+                                    description="Moved mass, kg (reflected through the scaling's screw, belt or "
+                                    "rack and gear)")
+    viscous_friction: float | None = Field(default=None, ge=0, allow_inf_nan=False,
+                                           description="Viscous friction at the motor, N·m per rad/s")
+    coulomb_friction: float | None = Field(default=None, ge=0, allow_inf_nan=False,
+                                           description="Coulomb friction at the motor, N·m")
+    rated_torque: float | None = Field(default=None, gt=0, allow_inf_nan=False,
+                                       description="Rated (continuous) torque, N·m (6076h)")
+    peak_torque: float | None = Field(default=None, gt=0, allow_inf_nan=False, description="Peak torque, N·m")
+    max_speed: float | None = Field(default=None, gt=0, allow_inf_nan=False, description="Maximum speed, rpm")
+    position_bandwidth: float | None = Field(default=None, gt=0, allow_inf_nan=False,
+                                             description="Position loop natural frequency wn, rad/s")
+    damping: float | None = Field(default=None, gt=0, allow_inf_nan=False,
+                                  description="Position loop damping ratio zeta")
+    velocity_feedforward: float | None = Field(default=None, ge=0, le=1, allow_inf_nan=False,
+                                               description="Velocity feed-forward 0..1 (1: no steady lag)")
+    velocity_tau: float | None = Field(default=None, gt=0, allow_inf_nan=False,
+                                       description="Velocity loop time constant, s")
+
+
 class Drive(_Strict):
     name: str = Field(description="Axis/drive name, unique in the project")
     position: int | None = Field(
@@ -215,6 +245,8 @@ class Drive(_Strict):
         "(default: yes for a CiA-402 axis, no for an I/O slave; false commissions an axis without enabling it)"
     )
     disable_rules: list[RuleOff] = Field(default_factory=list)
+    plant: Literal["ideal"] | PlantConfig | None = Field(
+        default=None, description="The simulated motor and load (default: the family's); 'ideal': actual = demand")
 
     @property
     def sw_config(self) -> SwConfig | None:

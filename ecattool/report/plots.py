@@ -206,4 +206,34 @@ def move_svgs(trace: DriveTrace, uid: str) -> list[tuple[str, str]]:
             lines = ax.get_lines() + ax2.get_lines()
             ax.legend(lines, [str(ln.get_label()) for ln in lines], fontsize=7.5, frameon=False, loc="upper left")
             figures.append(("Internal units (counts)", _svg(fig, f"{uid}-int")))
+        # following error (60F4h, else demand - actual) with the window 6065h, and the torque 6077h
+        if "actual" in channels and ("error" in channels or "demand" in channels):
+            fig = _figure(9.0, 3.0)
+            ax = fig.add_subplot()
+            if "error" in channels:
+                x, _, y = series("error")
+                label = f"{channels['error'].label} [{pu}]"
+            else:
+                pts = [(s.cycle, s.values["demand"] - s.values["actual"]) for s in trace.samples
+                       if "demand" in s.values and "actual" in s.values]
+                x, y = [(c - t0) * ms for c, _ in pts], [v for _, v in pts]
+                label = f"6062h - 6064h following error [{pu}]"
+            lines = ax.plot(x, y, color="#d62728", label=label)
+            if trace.error_window is not None:
+                for sign in (1, -1):
+                    ax.axhline(sign * trace.error_window, color="#888888", ls="--", lw=1)
+                lines += ax.plot([], [], color="#888888", ls="--", lw=1,
+                                 label=f"6065h following error window ±{trace.error_window}")
+            ax.set_ylabel(f"following error [{pu}]")
+            if "torque" in channels:
+                tax = ax.twinx()
+                x, _, y = series("torque")
+                lines += tax.plot(x, [v / 10 for v in y], color="#9467bd", ls=":", lw=2,
+                                  label="6077h torque actual [% of rated]")
+                tax.set_ylabel("torque [% of rated]")
+                tax.grid(False)
+            ax.set_xlabel(xlabel)
+            ax.set_title("Following error and torque", loc="left", fontsize=10, fontweight="bold")
+            ax.legend(lines, [str(ln.get_label()) for ln in lines], fontsize=7.5, frameon=False, loc="upper left")
+            figures.append(("Following error and torque", _svg(fig, f"{uid}-fe")))
     return figures

@@ -43,12 +43,15 @@ _Convert = Callable[[Fraction], Fraction]
 class Profile:
     """The profile a mode moves by, as the drive reads it from its dictionary: profile velocity (6081h) in
     increments/s, acceleration (6083h) and deceleration (6084h, or the family's choice) in increments/s², and
-    the jerk time in s of a jerk-limited ramp (0: trapezoidal)."""
+    the jerk time in s of a jerk-limited ramp (0: trapezoidal), or the jerk in increments/s³ that limits it
+    (None: the jerk time rules)."""
 
-    __slots__ = ("velocity", "acceleration", "deceleration", "jerk_time", "torque_limited")
+    __slots__ = ("velocity", "acceleration", "deceleration", "jerk_time", "torque_limited", "jerk")
 
     def __init__(self, velocity: Fraction, acceleration: Fraction, deceleration: Fraction,
-                 jerk_time: Fraction = Fraction(0), torque_limited: bool = False) -> None:
+                 jerk_time: Fraction = Fraction(0), torque_limited: bool = False,
+                 jerk: Fraction | None = None) -> None:
+        self.jerk = jerk
         self.velocity = abs(velocity)
         self.acceleration = abs(acceleration)
         self.deceleration = abs(deceleration)
@@ -468,7 +471,7 @@ class Cia402:
         if self.move is None or self.move.target != self.target:
             self.move = ProfileMove(self.position, inc_per_s(self.velocity), self.target, profile.velocity,
                                     profile.acceleration, profile.deceleration or profile.acceleration,
-                                    profile.jerk_time, dt)
+                                    profile.jerk_time, dt, profile.jerk)
         position, velocity, done = self.move.step(dt)
         if self.blocked_at(position):
             self._blocked_step(position, done, profile.torque_limited)

@@ -96,14 +96,67 @@ class Trapezoid:
         return position, Fraction(vn * ad * ud + an * un * vd, vd * ad * ud)
 
 
+#: the most smoothing windows :func:`jerk_window` tries (a jerk so small that the best window is longer is served
+#: by the best of these; at a 1 ms cycle, 20 s of jerk time)
+MAX_JERK_WINDOWS = 20_000
+
+
+def _cycles(ramp: Trapezoid, window: int, dt: Fraction) -> int:
+    """The cycles :class:`ProfileMove` takes for ``ramp`` smoothed over ``window`` cycles (see its ``done``)."""
+    n = -((-ramp.duration) // dt)  # ceil
+    return int(n) + (window if window > 1 else 0)
+
+
+def _within(acc: Fraction, dec: Fraction, limit: Fraction) -> tuple[Fraction, Fraction]:
+    """Acceleration and deceleration, each at most as given, with a mean of at most ``limit``: the smaller one
+    first up to ``limit``, the other up to what the mean leaves (the split that makes the shortest move)."""
+    if acc <= dec:
+        a = min(acc, limit)
+        return a, min(dec, 2 * limit - a)
+    d = min(dec, limit)
+    return min(acc, 2 * limit - d), d
+
+
+def jerk_window(start: Fraction, v0: Fraction, target: Fraction, vmax: Fraction, acc: Fraction, dec: Fraction,
+                jerk: Fraction, dt: Fraction) -> tuple[int, Fraction, Fraction]:
+    """The smoothing window (cycles) and the accelerations (increments/s²) of the fastest jerk-limited move whose
+    jerk stays within ``jerk`` (increments/s³; HDT 2011h): a window of ``w`` cycles turns an acceleration ``a``
+    into a ramp of jerk ``a / (w dt)``; the window allows a mean of 6083h and 6084h of at most ``jerk w dt`` (the
+    one window serves both ramps, and with the mean the move takes as long as the jerk-limited ramp of the
+    manual, which adds a / 2J + d / 2J to the trapezoid). A large 6083h
+    with a small jerk is not reached (the acceleration ramp turns back before it: HDT §4.07.9, "a higher jerk
+    value ... reduce[s] the time needed for the positioning"): the window is the one of the fewest cycles, so a
+    larger acceleration, deceleration or velocity never makes the move longer (each window's cycle count does not
+    grow with them, and the choice is the least over the same windows)."""
+    acc, dec, jerk = abs(acc), abs(dec), abs(jerk)
+    if jerk <= 0 or dt <= 0 or acc <= 0:
+        return 1, acc, dec
+    best: tuple[int, int, Fraction, Fraction] | None = None
+    top = max(acc, dec or acc)
+    for w in range(1, MAX_JERK_WINDOWS + 1):
+        limit = jerk * w * dt
+        a, d = _within(acc, dec or acc, limit)
+        n = _cycles(Trapezoid(start, v0, target, vmax, a, d), w, dt)
+        if best is None or n < best[0]:
+            best = (n, w, a, d)
+        if limit >= top or w >= best[0]:  # a longer window only adds cycles from here on
+            break
+    assert best is not None
+    return best[1], best[2], best[3]
+
+
 class ProfileMove:
     """One profile move as the drive's reference generator runs it, cycle by cycle: the trapezoid, smoothed
-    over ``jerk_time`` seconds where the profile is jerk-limited (0: a plain trapezoid)."""
+    over ``jerk_time`` seconds where the profile is jerk-limited (0: a plain trapezoid), or, with ``jerk``
+    (increments/s³), over the window :func:`jerk_window` chooses for that jerk."""
 
     __slots__ = ("ramp", "elapsed", "window", "steps", "total", "raw", "position")
 
     def __init__(self, start: Fraction, v0: Fraction, target: Fraction, vmax: Fraction, acc: Fraction,
-                 dec: Fraction, jerk_time: Fraction, dt: Fraction) -> None:
+                 dec: Fraction, jerk_time: Fraction, dt: Fraction, jerk: Fraction | None = None) -> None:
+        if jerk:
+            window, acc, dec = jerk_window(start, v0, target, vmax, acc, dec, jerk, dt)
+            jerk_time = window * dt if window > 1 else _ZERO
         self.ramp = Trapezoid(start, v0, target, vmax, acc, dec)
         self.elapsed = _ZERO
         self.window = max(1, round(jerk_time / dt)) if jerk_time > 0 and dt > 0 else 1

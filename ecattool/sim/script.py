@@ -18,6 +18,9 @@ Steps (one mapping each)::
     - cycles: 100                           # advance the motion model
     - foe: FOESW_AXIS01.bin                 # data: hex, or file: path relative to the script
       file: setup.bin
+    - inputs: {limit_positive: true}        # limit_negative, limit_positive (switch inputs), load_torque (N·m
+                                            # on the motor shaft), obstacle (user position, or null)
+    - plant: {position_bandwidth: 50}       # the plant's parameters (docs/simulator.md), or: plant: ideal
 
 :func:`run_script` runs the steps and returns the transcript; it stops at the first unexpected result.
 """
@@ -33,7 +36,9 @@ from ecattool.od.model import EcState
 from ecattool.od.numbers import format_address, parse_address, parse_int
 from ecattool.sim.drive import Drive, FoeError
 
-_KINDS = ("state", "read", "write", "exchange", "cycles", "foe")
+_KINDS = ("state", "read", "write", "exchange", "cycles", "foe", "inputs", "plant")
+#: what an ``inputs:`` step sets
+_INPUTS = ("limit_negative", "limit_positive", "load_torque", "obstacle")
 #: The keys each kind of step takes besides its own: anything else is refused, never silently ignored.
 _KEYS: dict[str, frozenset[str]] = {
     "state": frozenset({"expect_al_status"}),
@@ -42,6 +47,8 @@ _KEYS: dict[str, frozenset[str]] = {
     "exchange": frozenset(),
     "cycles": frozenset(),
     "foe": frozenset({"data", "file", "password", "expect_abort"}),
+    "inputs": frozenset(),
+    "plant": frozenset(),
 }
 
 
@@ -178,6 +185,10 @@ def _run_step(drive: Drive, step: dict[str, Any], n: int, loc: Location, base_di
         except EcatToolError as exc:
             return Line(n, ln, "exchange", outputs.hex(), "refused", str(exc), expected=False)
         return Line(n, ln, "exchange", outputs.hex(), "ok", data=inputs.hex())
+    if "inputs" in step:
+        return _inputs(drive, step["inputs"], n, loc)
+    if "plant" in step:
+        return _plant(drive, step["plant"], n, loc)
     if "foe" in step:
         name = str(step["foe"])
         if "file" in step:
@@ -217,6 +228,57 @@ def _run_step(drive: Drive, step: dict[str, Any], n: int, loc: Location, base_di
         return Line(n, ln, op, addr, "abort", exc.message.split(": ", 1)[-1], exc.code, want_abort == exc.code)
     except SdoTimeout:
         return Line(n, ln, op, addr, "timeout", "no reply", expected=bool(step.get("expect_timeout", False)))
+
+
+def _number(v: Any, loc: Location, what: str) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise InputError(f"{what} must be a number, not {v!r}", loc)
+    return float(v)
+
+
+def _inputs(drive: Drive, data: Any, n: int, loc: Location) -> Line:
+    """Switch inputs, a load torque or an obstacle (issue 33: what a script can do to the axis)."""
+    if not isinstance(data, dict) or not data:
+        raise InputError(f"step {n} (inputs): a mapping of {', '.join(_INPUTS)}", loc)
+    for key in data:
+        if key not in _INPUTS:
+            raise InputError(f"step {n} (inputs): unknown input {key!r}{_suggest(str(key), frozenset(_INPUTS))} "
+                             f"(one of {', '.join(_INPUTS)})", loc)
+    if "limit_negative" in data or "limit_positive" in data:
+        neg, pos = drive.limit_switches
+        for key in ("limit_negative", "limit_positive"):
+            if key in data and not isinstance(data[key], bool):
+                raise InputError(f"step {n} (inputs): {key} is true or false, not {data[key]!r}", loc)
+        drive.set_limit_switches(negative=bool(data.get("limit_negative", neg)),
+                                 positive=bool(data.get("limit_positive", pos)))
+    if "load_torque" in data:
+        drive.set_load_torque(_number(data["load_torque"], loc, "load_torque"))
+    if "obstacle" in data:
+        drive.set_obstacle(None if data["obstacle"] is None else _int(data["obstacle"], loc, "obstacle"))
+    return Line(n, loc.line, "inputs", ", ".join(f"{k}={v}" for k, v in data.items()), "ok")
+
+
+def _plant(drive: Drive, data: Any, n: int, loc: Location) -> Line:
+    """New plant parameters (or ``ideal``) for the drive."""
+    from dataclasses import fields
+
+    from ecattool.sim.drive.plant import PlantParams
+
+    if data == "ideal":
+        drive.set_plant("ideal")
+        return Line(n, loc.line, "plant", "ideal", "ok")
+    names = {f.name for f in fields(PlantParams)} - {"delay"}
+    if not isinstance(data, dict) or not data:
+        raise InputError(f"step {n} (plant): 'ideal' or a mapping of {', '.join(sorted(names))}", loc)
+    for key, value in data.items():
+        if key not in names:
+            raise InputError(f"step {n} (plant): unknown parameter {key!r}{_suggest(str(key), frozenset(names))}",
+                             loc)
+        if _number(value, loc, str(key)) < 0:
+            raise InputError(f"step {n} (plant): {key} must not be negative", loc)
+    base = drive.plant_params or PlantParams()
+    drive.set_plant(base.with_(**{k: float(v) for k, v in data.items()}))
+    return Line(n, loc.line, "plant", ", ".join(f"{k}={v}" for k, v in data.items()), "ok")
 
 
 def _expected_value(v: Any, loc: Location) -> Any:

@@ -52,6 +52,14 @@ class Behaviour:
     #: communication error (EMCY codes of Table 3.1.3); HDT §4.03.10's table: 3220h, 8611h; Control Techniques
     #: 7.3.5 "ignored if the drive is tripped" (every simulated fault is a trip): none
     fault_reaction_codes: frozenset[int] | None = None
+    #: the largest following-error window in increments whatever 6065h says (HDT §4.06.5: 32,768 pulses)
+    following_error_cap: int | None = None
+    #: 6066h and 6068h count control-loop samples, not ms (Technosoft §7.2.11: "The value is given in control
+    #: loop time which is by default 1ms")
+    window_times_in_samples: bool = False
+    #: 6065h = 0 with 6066h = 0 is a setup that has not set the supervision (Technosoft §7.2.10: "Default value
+    #: -", "automatically set in Drive Setup by modifying the Position control error"): no supervision
+    following_error_zero_unset: bool = False
 
     @property
     def supply_bit_always(self) -> bool:
@@ -64,12 +72,15 @@ BEHAVIOURS: dict[str, Behaviour] = {
         unsupported_mode_emcy=0xFF04, mode_display_on_enable=True, pdo_length_emcy=0x8220,
         homing_stop_on_bit4_clear=False, homing_unavailable_emcy=0xFF03, homing_busy_warning=True,
         supply_undervoltage_fault=0x3220, fault_reaction_codes=frozenset({0x3210, 0x3220, 0x4280, 0x4310, 0x8100}),
+        window_times_in_samples=True, following_error_zero_unset=True,
     ),
-    "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
+    "hdt": Behaviour(following_error_cap=32768, homing_error_emcy=0xFF02,
+                     homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
                      home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611})),
     "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
                                    homing_current_outside_enabled=True, fault_reaction_codes=frozenset()),
-    "generic": Behaviour(homing_current_outside_enabled=True),
+    # an ESI's 6065h = 6066h = 0 is a window nobody set (as Technosoft's "Default value -"): no supervision
+    "generic": Behaviour(homing_current_outside_enabled=True, following_error_zero_unset=True),
 }
 
 #: Control Techniques trip number -> 603Fh error code (SM-EtherCAT Table 9.17)

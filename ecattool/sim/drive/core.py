@@ -13,7 +13,7 @@ import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import SdoAbort, StateChangeError
 from ecattool.esi.model import Device, Direction
@@ -24,6 +24,10 @@ from ecattool.sim import eeprom as ee
 from ecattool.sim.cia402 import Cia402, State
 from ecattool.sim.drive.behaviour import Behaviour
 from ecattool.sim.faults import Faults
+
+if TYPE_CHECKING:
+    from ecattool.sim.drive.plant import Plant
+    from ecattool.sim.drive.supervision import Supervision
 from ecattool.sim.units import FACTOR_OBJECTS, Units
 
 RX, TX = Direction.RX, Direction.TX
@@ -240,6 +244,10 @@ class DriveCore:
     homing_warning: bool
     has_cia402: bool
     units: Units
+    #: the motor and load between demand and actual values (None: the ideal tracker, actual = demand)
+    plant: "Plant | None"
+    supervision: "Supervision"
+    _demand_before: tuple[int, int]
 
     # ------------------------------------------------------------------------------------------
     # helpers on the store

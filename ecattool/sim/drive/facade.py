@@ -9,7 +9,7 @@ with the AL status code the drive sets. It satisfies :class:`ecattool.target.bas
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from ecattool.esi.model import Device, Direction, Identity
 from ecattool.od.model import EcState, Entry
@@ -23,10 +23,16 @@ from ecattool.sim.drive.family import FamilyQuirks
 from ecattool.sim.drive.injection import Injection
 from ecattool.sim.drive.memory import Memory
 from ecattool.sim.drive.motion import Motion
+from ecattool.sim.drive.plant import Plant, PlantParams, counts_per_rev, plant_for
 from ecattool.sim.drive.process_data import ProcessData
+from ecattool.sim.drive.supervision import Supervision
 from ecattool.sim.drive.sdo import SdoServer
 from ecattool.sim.faults import Faults
 from ecattool.sim.units import units_for
+
+
+#: the torque limits of CiA-402 (per mille of the rated torque 6076h)
+_TORQUE_LIMITS = (0x6072, 0x60E0, 0x60E1)
 
 
 def _rules_for(device: Device) -> FamilyRules:
@@ -53,7 +59,10 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
     """A simulated EtherCAT CoE slave (a servo drive when its dictionary has the CiA-402 objects)."""
 
     def __init__(self, device: Device, rules: FamilyRules | None = None, *, position: int = 0,
-                 strict_pdo_length: bool = True, record_events: bool = True) -> None:
+                 strict_pdo_length: bool = True, record_events: bool = True,
+                 plant: PlantParams | Literal["ideal"] | None = None) -> None:
+        """``plant``: the motor and load between demand and actual values (None: the family's default plant,
+        :func:`~ecattool.sim.drive.plant.plant_for`; ``"ideal"``: none, the actual values are the demand)."""
         self.device = device
         self.rules = rules if rules is not None else _rules_for(device)
         self.family = self.rules.family if self.rules.family in BEHAVIOURS else "generic"
@@ -62,6 +71,7 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self.strict_pdo_length = strict_pdo_length
         self.record_events = record_events
         self.faults = Faults()
+        self._plant_params = self._params_of(plant)
         self.events = []
         self.emergencies = []
         self.memory = ee.Memory()
@@ -143,7 +153,52 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self.units = units_for(self.family, self._read_int, revision=d.revision,
                              has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
         self.units.version = lambda: self._store.version
+        self._new_plant()
         self._refresh_inputs()
+
+    def _new_plant(self) -> None:
+        """The plant at rest (power-on, reset, new parameters) and the supervision's memory cleared."""
+        params = self._plant_params
+        self.supervision = Supervision()
+        self._demand_before = (self.cia.pos_n, self.cia.pos_d)
+        if params is None or not self.has_cia402:
+            self.plant = None
+            return
+        dt = self.cycle_time()
+        self.plant = Plant(params, counts_per_rev(self), dt.numerator / dt.denominator)
+        for index in _TORQUE_LIMITS:
+            self._after_write[index] = self._on_torque_limit
+        self._on_torque_limit(0, None)
+
+    def _on_torque_limit(self, sub: int, value: int | None) -> None:
+        """6072h max torque and 60E0h/60E1h positive/negative torque limits (per mille of the rated torque; 0 or
+        absent: none) limit the plant's torque, at most its peak torque (one symmetric limit: the smallest)."""
+        plant = self.plant
+        if plant is None:
+            return
+        limit = plant.params.peak_torque
+        for index in _TORQUE_LIMITS:
+            raw = self._read_int(index, 0) if (index, 0) in self._entries else None
+            if raw:
+                limit = min(limit, abs(raw) / 1000 * plant.params.rated_torque)
+        plant.torque_limit = limit
+
+    def set_plant(self, plant: PlantParams | Literal["ideal"] | None = None) -> None:
+        """Put the drive on another plant (None: the family's default; ``"ideal"``: the exact tracker). The axis
+        keeps its position; the plant starts at rest on the demand."""
+        self._plant_params = self._params_of(plant)
+        self._new_plant()
+        self._refresh_inputs()
+
+    def _params_of(self, plant: PlantParams | Literal["ideal"] | None) -> PlantParams | None:
+        if plant == "ideal":
+            return None
+        return plant if isinstance(plant, PlantParams) else plant_for(self.family)
+
+    @property
+    def plant_params(self) -> PlantParams | None:
+        """The plant's parameters (None: the ideal tracker)."""
+        return self._plant_params
 
     def _default_bytes(self, e: Entry) -> bytes:
         size = e.byte_size

@@ -110,6 +110,13 @@ class Injection(DriveCore):
         hh.on_limit_switches(self)
         self._refresh_inputs()
 
+    def set_load_torque(self, torque: float) -> None:
+        """An external torque on the motor shaft, N·m (a load, gravity on a vertical axis); the plant's axis
+        works against it (the ideal plant ignores it)."""
+        if self.plant is not None:
+            self.plant.load_torque = float(torque)
+        self._log("inputs", load_torque=float(torque))
+
     def set_obstacle(self, position: int | None) -> None:
         """An obstacle at ``position`` (user units, as 6064h reads; None: taken away) that the axis cannot pass,
         on the side of it the axis is on now. A profile position move runs into it: with HDT's profile type -1

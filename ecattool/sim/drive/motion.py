@@ -12,9 +12,13 @@ from ecattool.profiles.rules import interpolation_period_ns
 from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile, State
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
+from ecattool.sim.drive.plant import cycle as plant_cycle
+from ecattool.sim.drive.supervision import limit_stop, report_actual, supervise
 from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
+#: 607Dh's sub-indices 1 and 2 at the whole INTEGER32 range (no software limit)
+_OPEN_LOW, _OPEN_HIGH = (-(2**31)).to_bytes(4, "little", signed=True), (2**31 - 1).to_bytes(4, "little", signed=True)
 _ENABLED = State.OPERATION_ENABLED
 #: every object :meth:`Motion._make_profile` reads
 _PROFILE_OBJECTS = ((0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6086, 0), (0x2023, 0), (0x201A, 0), (0x2021, 0),
@@ -129,21 +133,25 @@ class Motion(DriveCore):
         mode: int | None = None
         for _ in range(cycles):
             mode = self.mode()
+            self._demand_before = (cia.pos_n, cia.pos_d)
             # an enabled axis without halt follows the target of its mode; CSP and CSV in integers (the same
             # rationals as the Fraction conversions, numerator and denominator apart), the others through
             # Cia402.step, which converts only the targets the mode moves by
             if cia.state is _ENABLED and not cia.controlword & HALT:
+                if (self.limit_active or self._soft_limits) and limit_stop(self, mode, dt):
+                    self._after_step(dt, mode)
+                    continue
                 if mode == CSP:
                     pn, pd, _, _, sn, sd = u.ratios()
                     # internal velocity units per increment/s: the inverse of increments/s per unit (sn > 0)
                     cia.follow_position(((self._read_int(0x607A, 0) or 0) - self._home_offset()) * pn, pd, dt,
                                         sd, sn)
-                    self._after_step(dt)
+                    self._after_step(dt, mode)
                     continue
                 if mode == CSV:
                     _, _, vn, vd, sn, sd = u.ratios()
                     cia.follow_velocity((self._read_int(0x60FF, 0) or 0) * vn, vd, dt, sn, sd)
-                    self._after_step(dt)
+                    self._after_step(dt, mode)
                     continue
                 moving = True
             else:
@@ -161,14 +169,26 @@ class Motion(DriveCore):
             )
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
-            self._after_step(dt)
+            self._after_step(dt, mode)
         self._refresh_inputs(mode)  # the step changes no mode (6061h)
 
-    def _after_step(self, dt: Fraction) -> None:
+    @property
+    def _soft_limits(self) -> bool:
+        """607Dh narrower than the whole INTEGER32 range (the stored bytes compared: every cycle asks)."""
+        get = self._store.get
+        return get((0x607D, 1), _OPEN_LOW) != _OPEN_LOW or get((0x607D, 2), _OPEN_HIGH) != _OPEN_HIGH
+
+    def _after_step(self, dt: Fraction, mode: int | None = None) -> None:
         """What follows every cycle's motion: the following error's supervision, and the transitions the drive
         made by itself (the end of a quick stop or of a fault reaction)."""
         cia = self.cia
-        if cia.following_error:
+        plant = self.plant
+        if plant is not None:
+            if mode is None:
+                mode = self.mode()
+            plant_cycle(self, plant, mode, *self._demand_before)
+            supervise(self, mode)
+        elif cia.following_error:
             self._supervise_following_error(dt)
         if cia.automatic:
             done, cia.automatic = cia.automatic, []
@@ -228,6 +248,7 @@ class Motion(DriveCore):
         up = acc(0x6083)
         down = acc(0x6084) if (0x6084, 0) in self._entries else up
         jerk_time = _ZERO
+        jerk: Fraction | None = None
         if mode == PP and (read(0x6086, 0) or 0) == 3:
             if self.family == "technosoft-ipos":
                 jerk_time = Fraction(read(0x2023, 0) or 0, 1000)
@@ -235,12 +256,12 @@ class Motion(DriveCore):
                 if (read(0x201A, 0) or 0) & 0x4:
                     jerk_time = Fraction(read(0x2021, 0) or 0, 1000)
                 else:
-                    jerk = acc(0x2011)
-                    jerk_time = up / jerk if jerk else _ZERO
+                    # a jerk limit, not a jerk time: up / jerk would grow the move with the acceleration
+                    jerk = acc(0x2011) or None
         # HDT §4.07.8 profile type -1, "linear ramp with torque limit": the trapezoid of 0, whose generator stops
         # while an obstacle blocks the axis (the model has no torque: :meth:`set_obstacle` is the obstacle)
         torque_limited = mode == PP and self.family == "hdt" and read(0x6086, 0) == -1
-        return Profile(velocity, up, down, jerk_time, torque_limited)
+        return Profile(velocity, up, down, jerk_time, torque_limited, jerk)
 
     def _refresh_inputs(self, mode: int | None = None) -> None:
         """Actual values from the state: 6041h, 6063h/6064h, 606Ch, 603Fh (``mode``: 6061h, where the caller
@@ -253,6 +274,9 @@ class Motion(DriveCore):
         sw = cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
         if self.family == "technosoft-ipos" and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
+        if self.plant is not None:
+            report_actual(self, sw, mode)
+            return
         vn, vd = self.units.ratios()[2:4]
         # 6063h, 6064h, 606Ch: floor(position), floor(position / factor) (+ the home offset), floor(velocity /
         # factor), in integers

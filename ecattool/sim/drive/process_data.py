@@ -161,7 +161,8 @@ class ProcessData(PdoConfig):
                 self.units, self._entries, len(self._entries), rx, tx, tuple(rx.entries), tuple(tx.entries),
                 rx.bits, tx.bits,
                 self.limit_active, self.limit_switches, self.homing_warning, self.behaviour, self.family,
-                self.has_cia402, self.homing_search_s, self.record_events, self._seq, len(self.emergencies))
+                self.has_cia402, self.homing_search_s, self.record_events, self._seq, len(self.emergencies),
+                None if self.plant is None else self.plant.state(), self.supervision.state())
 
     def _pdo_write(self, index: int, sub: int, raw: bytes) -> bool:
         """Store one mapped output that changed; True when the object has a reaction to run once the image is
