@@ -52,6 +52,16 @@ class Behaviour:
     #: communication error (EMCY codes of Table 3.1.3); HDT §4.03.10's table: 3220h, 8611h; Control Techniques
     #: 7.3.5 "ignored if the drive is tripped" (every simulated fault is a trip): none
     fault_reaction_codes: frozenset[int] | None = None
+    #: vl velocity mode reads controlword bits 4-6 (enable ramp, ramp unlock, enable reference: HDT §4.11.1,
+    #: CiA-402); Control Techniques' controlword has no vl bits (Table 7.1), its ramp always runs
+    vl_ramp_bits: bool = True
+    #: interpolated position runs only while controlword bit 4 "enable ip mode" is 1 (HDT §4.09.1, CiA-402)
+    ip_enable_bit: bool = True
+    #: interpolation periods between a 60C1h record and the demand reaching it (Control Techniques 7.4.3: 1)
+    ip_delay_periods: int = 0
+    #: a 60FFh written before profile velocity is entered does not start a motion until it is written again
+    #: (Technosoft §10.1 Remark 2)
+    pv_needs_new_target: bool = False
 
     @property
     def supply_bit_always(self) -> bool:
@@ -64,11 +74,13 @@ BEHAVIOURS: dict[str, Behaviour] = {
         unsupported_mode_emcy=0xFF04, mode_display_on_enable=True, pdo_length_emcy=0x8220,
         homing_stop_on_bit4_clear=False, homing_unavailable_emcy=0xFF03, homing_busy_warning=True,
         supply_undervoltage_fault=0x3220, fault_reaction_codes=frozenset({0x3210, 0x3220, 0x4280, 0x4310, 0x8100}),
+        pv_needs_new_target=True,
     ),
     "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
                      home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611})),
     "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
-                                   homing_current_outside_enabled=True, fault_reaction_codes=frozenset()),
+                                   homing_current_outside_enabled=True, fault_reaction_codes=frozenset(),
+                                   vl_ramp_bits=False, ip_enable_bit=False, ip_delay_periods=1),
     "generic": Behaviour(homing_current_outside_enabled=True),
 }
 

@@ -23,6 +23,7 @@ from ecattool.profiles.rules import FamilyRules
 from ecattool.sim import eeprom as ee
 from ecattool.sim.cia402 import Cia402, State
 from ecattool.sim.drive.behaviour import Behaviour
+from ecattool.sim.drive.mode_parts import ModeParts
 from ecattool.sim.faults import Faults
 from ecattool.sim.units import FACTOR_OBJECTS, Units
 
@@ -240,6 +241,8 @@ class DriveCore:
     homing_warning: bool
     has_cia402: bool
     units: Units
+    #: the demand side of vl, PV windows, torque and interpolated position (:mod:`.mode_parts`)
+    modes: ModeParts
 
     # ------------------------------------------------------------------------------------------
     # helpers on the store

@@ -12,6 +12,7 @@ from ecattool.profiles.rules import interpolation_period_ns
 from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile, State
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
+from ecattool.sim.drive.mode_parts import MOVED, PARTS
 from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
@@ -92,10 +93,15 @@ class Motion(DriveCore):
             self.emcy(0x6320, index.to_bytes(2, "little") + bytes([sub]))
 
     def _on_mode(self, sub: int, value: int | None) -> None:
+        if value == PV:
+            self.modes.pv.armed = False  # Technosoft §10.1 Remark 2: 60FFh must be written again
         if not self.behaviour.mode_display_on_enable or self.cia.state is State.OPERATION_ENABLED:
             self._put(0x6061, 0, value or 0)
         hh.on_mode(self)
         self._refresh_inputs()
+
+    def _on_target_velocity(self, sub: int, value: int | None) -> None:
+        self.modes.pv.armed = True
 
     def _check_mode(self, sub: int, data: bytes, value: int | None) -> bool:
         mode = value or 0
@@ -145,6 +151,11 @@ class Motion(DriveCore):
                     cia.follow_velocity((self._read_int(0x60FF, 0) or 0) * vn, vd, dt, sn, sd)
                     self._after_step(dt)
                     continue
+                if mode in MOVED:  # vl, profile torque, interpolated position, CST: their own parts
+                    self.modes.step(self, mode, dt)
+                    self.modes.after(self, mode, dt)
+                    self._after_step(dt)
+                    continue
                 moving = True
             else:
                 moving = False
@@ -153,7 +164,7 @@ class Motion(DriveCore):
                 mode, dt,
                 target_position=_ZERO,
                 target_velocity=u.velocity_to_internal(self._read_int(0x60FF, 0) or 0)
-                if moving and mode == PV else _ZERO,
+                if moving and mode == PV and self.modes.pv.target_live(self) else _ZERO,
                 profile_velocity=_ZERO, acceleration=_ZERO,
                 inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
                 inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
@@ -161,6 +172,8 @@ class Motion(DriveCore):
             )
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
+            if mode in PARTS:
+                self.modes.after(self, mode, dt)
             self._after_step(dt)
         self._refresh_inputs(mode)  # the step changes no mode (6061h)
 
@@ -251,6 +264,8 @@ class Motion(DriveCore):
             mode = self.mode()
         cia = self.cia
         sw = cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
+        if mode in PARTS:
+            sw |= self.modes.status_bits(self, mode)
         if self.family == "technosoft-ipos" and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
         vn, vd = self.units.ratios()[2:4]
@@ -289,5 +304,6 @@ class Motion(DriveCore):
     def _install_motion_handlers(self) -> None:
         self._after_write[0x6040] = self._on_controlword
         self._after_write[0x6060] = self._on_mode
+        self._after_write[0x60FF] = self._on_target_velocity
         self._handlers_down[0x6060] = self._check_mode
         self._handlers_down[0x6098] = self._check_homing_method
