@@ -192,6 +192,8 @@ class FractionDrive(Drive):
                          profile=self._make_profile(mode) if moving and mode in (PP, PV) else None)
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
+            if mode == PP and cia.target is None and self.modes.pp.after_step(self):
+                self._report_blocked_motion()
             if mode in PARTS:
                 self.modes.after(self, mode, dt)
             self._after_step(dt)  # following error, automatic transitions: no arithmetic of the cycle's own
@@ -208,6 +210,11 @@ class FractionDrive(Drive):
             sw |= self.modes.status_bits(self, mode)
         if self.family == "technosoft-ipos" and mode == 6 and cia.homing.name == "IN_PROGRESS":
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)
+        if self.family == "technosoft-ipos" and cia.state in (State.OPERATION_ENABLED, State.QUICK_STOP,
+                                                             State.FAULT_REACTION):
+            sw |= 0x8000
+        if self.family == "technosoft-ipos":
+            self._put(0x2000, 0, self.motion_errors())
         user_position = to_int(u.position_to_user(cia.position)) + self._home_offset()
         error = to_int(u.position_to_user(cia.following_error)) if cia.following_error else 0
         self._put_all(((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0), (0x60F4, 0)),

@@ -62,6 +62,28 @@ class Behaviour:
     #: a 60FFh written before profile velocity is entered does not start a motion until it is written again
     #: (Technosoft §10.1 Remark 2)
     pv_needs_new_target: bool = False
+    #: profile position with bit 5 = 0 takes a set-point given during a move only once that move has ended, and
+    #: keeps set-point acknowledge until then (Technosoft §7.1.1, HDT §4.07.3; :mod:`.pp_setpoints`)
+    pp_single_setpoint: bool = False
+    #: ... acquiring 607Ah at the end of the move if bit 4 is still 1, and clearing bit 12 there (HDT §4.07.3);
+    #: else the set-point of the rising edge, bit 12 cleared once bit 4 is 0 as well (Technosoft §7.1.1)
+    pp_acquire_at_end: bool = False
+    #: controlword bit 11 makes a relative set-point additive (Technosoft §7.1)
+    pp_additive_bit11: bool = False
+    #: 6086h = 3 (S-curve) with bit 5 = 1 is a command error (Technosoft §7.1.2 Remark)
+    scurve_single_setpoint_only: bool = False
+    #: statusword bit 15 "Axis on": the power stage is enabled (Technosoft Table 4.2.3)
+    axis_on_bit15: bool = False
+    #: statusword bit 8 "homing executing" and bit 7 "warning" in homing (Technosoft §4.2.2)
+    homing_busy_bits: bool = False
+    #: the Motion Error Register the drive keeps (Technosoft 2000h, Table 4.4.2), None: none
+    motion_error_register: int | None = None
+    #: EMCY code -> the bit of the Motion Error Register it sets (Technosoft Table 4.4.2 with the codes of
+    #: Table 3.1.3); a Fault Reset clears them (2325: "the error is reset using a Fault Reset command")
+    motion_error_bits: tuple[tuple[int, int], ...] = ()
+    #: a Fault Reset out of FAULT clears 1001h and sends the "error reset" EMCY 0000h (Technosoft 1781 "00xx
+    #: Error Reset or No Error", Control Techniques Table 9.17 "0x0000 Error reset / No error")
+    error_reset_emcy: bool = True
 
     @property
     def supply_bit_always(self) -> bool:
@@ -74,10 +96,15 @@ BEHAVIOURS: dict[str, Behaviour] = {
         unsupported_mode_emcy=0xFF04, mode_display_on_enable=True, pdo_length_emcy=0x8220,
         homing_stop_on_bit4_clear=False, homing_unavailable_emcy=0xFF03, homing_busy_warning=True,
         supply_undervoltage_fault=0x3220, fault_reaction_codes=frozenset({0x3210, 0x3220, 0x4280, 0x4310, 0x8100}),
-        pv_needs_new_target=True,
+        pv_needs_new_target=True, pp_single_setpoint=True, pp_additive_bit11=True, scurve_single_setpoint_only=True,
+        axis_on_bit15=True, homing_busy_bits=True, motion_error_register=0x2000,
+        motion_error_bits=((0x8100, 0), (0x2340, 1), (0x6100, 2), (0x8611, 3), (0x7500, 4), (0x7300, 5),
+                           (0x2310, 8), (0x8331, 9), (0x4280, 10), (0x4310, 11), (0x3210, 12), (0x3220, 13),
+                           (0x9000, 14), (0x5441, 15)),
     ),
     "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
-                     home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611})),
+                     home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611}),
+                     pp_single_setpoint=True, pp_acquire_at_end=True),
     "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
                                    homing_current_outside_enabled=True, fault_reaction_codes=frozenset(),
                                    vl_ramp_bits=False, ip_enable_bit=False, ip_delay_periods=1),

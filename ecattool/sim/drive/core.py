@@ -376,6 +376,15 @@ class DriveCore:
     def inject_fault(self, code: int, data: bytes = b"") -> None:  # injection
         raise NotImplementedError
 
+    def motion_error(self, bit: int) -> None:  # injection
+        raise NotImplementedError
+
+    def motion_errors(self) -> int:  # injection
+        raise NotImplementedError
+
+    def fault_reset(self) -> None:  # injection
+        raise NotImplementedError
+
     def _esm_effects(self, previous: EcState, state: EcState) -> None:  # family
         raise NotImplementedError
 

@@ -15,8 +15,34 @@ from ecattool.sim.drive.core import DriveCore
 class Injection(DriveCore):
     """Faults, communication loss and inputs, with the reactions the family's rules give them."""
 
+    #: Motion Error Register bits latched by errors until a Fault Reset (the limit-switch bits are live)
+    _motion_errors = 0
+
+    def motion_error(self, bit: int) -> None:
+        """An error sets bit ``bit`` of the family's Motion Error Register (Technosoft 2000h)."""
+        if self.behaviour.motion_error_register is not None:
+            self._motion_errors |= 1 << bit
+
+    def motion_errors(self) -> int:
+        """The Motion Error Register: the latched bits, and the limit switches (Technosoft Table 4.4.2: bit 7
+        negative, bit 6 positive limit switch active, "Reset when ... inactive")."""
+        negative, positive = self.limit_switches
+        return self._motion_errors | (0x80 if negative else 0) | (0x40 if positive else 0)
+
+    def fault_reset(self) -> None:
+        """A Fault Reset has taken the drive out of FAULT: the error register 1001h is cleared, the "error reset"
+        EMCY 0000h sent, the Motion Error Register's latched bits cleared but "invalid setup data" (bit 2)."""
+        if not self.behaviour.error_reset_emcy:
+            return
+        self._put(0x1001, 0, 0)
+        self._motion_errors &= 1 << 2
+        self.emcy(0x0000)
+
     def inject_fault(self, code: int, data: bytes = b"") -> None:
         """A drive fault: FAULT REACTION ACTIVE -> FAULT, 603Fh = code, EMCY with the code."""
+        for error, bit in self.behaviour.motion_error_bits:
+            if error == code:
+                self.motion_error(bit)
         self._cia_moves(self.cia.fault(code, hh.fault_reaction_ramp(self, code)), f"fault 0x{code:04X}")
         self.emcy(code, data)
         self._refresh_inputs()

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 from ecattool.sim.cia402 import HALT, State
 from ecattool.sim.drive.interpolated import IP, Interpolated
+from ecattool.sim.drive.pp_setpoints import PpSetpoints
 from ecattool.sim.drive.torque_mode import CST, PROFILE_TORQUE, TorqueMode
 from ecattool.sim.drive.velocity_mode import VL, PvStatus, VlVelocity
 
@@ -27,17 +28,19 @@ PARTS = MOVED | {PV}
 class ModeParts:
     """The parts of one axis (made again with the drive application)."""
 
-    __slots__ = ("vl", "pv", "torque", "ip")
+    __slots__ = ("vl", "pv", "torque", "ip", "pp")
 
     def __init__(self) -> None:
         self.vl = VlVelocity()
         self.pv = PvStatus()
         self.torque = TorqueMode()
         self.ip = Interpolated()
+        self.pp = PpSetpoints()
 
     def snapshot(self) -> tuple[object, ...]:
         """The parts' state, for the quiet-cycle comparison of the process data."""
-        return (*self.vl.snapshot(), *self.pv.snapshot(), *self.torque.snapshot(), *self.ip.snapshot())
+        return (*self.vl.snapshot(), *self.pv.snapshot(), *self.torque.snapshot(), *self.ip.snapshot(),
+                *self.pp.snapshot())
 
     def step(self, drive: DriveCore, mode: int, dt: Fraction) -> None:
         """One cycle of ``mode`` (one of :data:`MOVED`) in OPERATION ENABLED without halt."""

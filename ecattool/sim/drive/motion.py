@@ -17,6 +17,8 @@ from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
 _ENABLED = State.OPERATION_ENABLED
+#: the states with the power stage on
+_POWERED = frozenset({State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION})
 #: every object :meth:`Motion._make_profile` reads
 _PROFILE_OBJECTS = ((0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6086, 0), (0x2023, 0), (0x201A, 0), (0x2021, 0),
                     (0x2011, 0))
@@ -66,14 +68,11 @@ class Motion(DriveCore):
             self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
         moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP, quick_stop_option=option)
         self._cia_moves(moves, f"controlword 0x{cw:04X}")
+        if moves and moves[0][0] is State.FAULT:
+            self.fault_reset()
         if self.cia.state is State.OPERATION_ENABLED and self.mode() == PP:
-            if cw & 0x10 and not prev & 0x10:
-                relative = bool(cw & 0x40)
-                target = (self._read_int(0x607A, 0) or 0) - (0 if relative else self._home_offset())
-                self.cia.new_setpoint(self.units.position_to_internal(target), relative=relative)
+            if self.modes.pp.on_controlword(self, cw, prev):  # the set-point handshake (:mod:`.pp_setpoints`)
                 self._report_blocked_motion()
-            elif not cw & 0x10:
-                self.cia.setpoint_ack = False
         hh.on_controlword(self, cw, prev)
         self._refresh_inputs()
 
@@ -172,6 +171,8 @@ class Motion(DriveCore):
             )
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
+            if mode == PP and cia.target is None and self.modes.pp.after_step(self):
+                self._report_blocked_motion()  # the set-point that waited for the move is taken
             if mode in PARTS:
                 self.modes.after(self, mode, dt)
             self._after_step(dt)
@@ -266,8 +267,13 @@ class Motion(DriveCore):
         sw = cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
         if mode in PARTS:
             sw |= self.modes.status_bits(self, mode)
-        if self.family == "technosoft-ipos" and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
+        behaviour = self.behaviour
+        if behaviour.homing_busy_bits and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
+        if behaviour.axis_on_bit15 and cia.state in _POWERED:
+            sw |= 0x8000  # Technosoft Table 4.2.3: "Axis on. Power stage is enabled"
+        if behaviour.motion_error_register is not None:
+            self._put(behaviour.motion_error_register, 0, self.motion_errors())
         vn, vd = self.units.ratios()[2:4]
         # 6063h, 6064h, 606Ch: floor(position), floor(position / factor) (+ the home offset), floor(velocity /
         # factor), in integers

@@ -108,7 +108,7 @@ class VlVelocity:
             self.rpm = drive.units.increments_per_second(cia.velocity) * 60 / cpr  # after a halt or a quick stop
         cw = cia.controlword
         per_unit = self.rpm_per_unit(drive)
-        goal = self.limited(drive, drive._read_int(0x6042, 0) or 0) * per_unit
+        goal: Fraction | None = self.limited(drive, drive._read_int(0x6042, 0) or 0) * per_unit
         dimension = _ratio(drive, 0x604C)  # 604Bh "does not influence ... the ramp function" (CT 7.5.9)
         if drive.behaviour.vl_ramp_bits:
             if not cw & 0x10:  # bit 4 = 0: "The motor is stopped with the power on"
