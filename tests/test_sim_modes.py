@@ -326,3 +326,136 @@ def test_n10_technosoft_pv_target_written_before_entering_does_not_start():
     h.step(10)
     assert h.cia.velocity != 0
     assert h.esm is EcState.OP
+
+
+# N1 N2 N21 N22 (profile position set-points) ---------------------------------------------------------------
+def _pp(family: str, velocity: int, acceleration: int) -> Drive:
+    d = at(family, PRE)
+    w(d, 0x6060, 0, 1, 1)
+    d.request_state(SAFE)
+    d.request_state(OP)
+    w(d, 0x6081, 0, velocity, 4)
+    w(d, 0x6083, 0, acceleration, 4)
+    if (0x6084, 0) in d._entries:
+        w(d, 0x6084, 0, acceleration, 4)
+    enable(d)
+    return d
+
+
+def _until_reached(d: Drive, limit: int = 100_000) -> int:
+    for n in range(1, limit):
+        d.step(1)
+        if r(d, 0x6041) & 0x0400:
+            return n
+    raise AssertionError("target never reached")
+
+
+def test_n1_n2_technosoft_single_setpoint_waits_for_the_running_move():
+    manual_says(TS_TEXT, 5836, "Finish the actual positioning and then start the next positioning")
+    manual_says(TS_TEXT, 5806, "the drive will signalize that it can accept a new set-point by resetting *set-point "
+                               "acknowledge* bit in *Statusword* after the reference generator has reached the "
+                               "designated demand position")
+    d = _pp("technosoft-ipos", 10 << 16, 1 << 16)  # 10 increments/ms, 1 increment/ms²
+    w(d, 0x607A, 0, 20000, 4)
+    w(d, 0x6040, 0, 0x1F, 2)
+    d.step(100)
+    w(d, 0x6040, 0, 0x0F, 2)  # bit 4 falls during the move: acknowledge stays (N2)
+    assert r(d, 0x6041) & 0x1000
+    w(d, 0x607A, 0, 0, 4)
+    w(d, 0x6040, 0, 0x1F, 2)  # a second set-point while the first runs (N1)
+    w(d, 0x6040, 0, 0x0F, 2)
+    before = d.value(0x6064)
+    d.step(10)
+    assert d.value(0x6064) > before  # still on the way to 20000
+    peak = before
+    for _ in range(5000):
+        d.step(1)
+        peak = max(peak, d.value(0x6064))
+        if d.value(0x6064) < peak:
+            break
+    assert peak == 20000  # the first move ended at its target, then the second started
+    assert r(d, 0x6041) & 0x1000  # acknowledged: the second set-point runs
+    _until_reached(d)
+    assert d.value(0x6064) == 0 and not r(d, 0x6041) & 0x1000
+
+
+def test_n2_hdt_single_setpoint_acknowledge_until_the_end_of_the_positioning():
+    manual_says(HDT_TEXT, 4026, "When a positioning is terminated the bit 12 of the statusword is set")
+    d = _pp("hdt", 1000, 10000)
+    w(d, 0x607A, 0, 20000, 4)
+    w(d, 0x6040, 0, 0x1F, 2)
+    d.step(10)
+    w(d, 0x6040, 0, 0x0F, 2)
+    assert r(d, 0x6041) & 0x1000  # bit 4 fell, the positioning runs: still acknowledged
+    _until_reached(d)
+    assert not r(d, 0x6041) & 0x1000
+    # change set immediately: acknowledge follows bit 4 (HDT 4056)
+    manual_says(HDT_TEXT, 4056, "When bit 4 of the controlword returns to 0 bit 12 of the statusword returns to 0 too")
+    w(d, 0x607A, 0, 0, 4)
+    w(d, 0x6040, 0, 0x3F, 2)
+    d.step(5)
+    w(d, 0x6040, 0, 0x2F, 2)
+    assert not r(d, 0x6041) & 0x1000
+
+
+def test_n21_technosoft_additive_relative_move():
+    manual_says(TS_TEXT, 5797, "In the additive relative mode, the position to reach is computed by adding the "
+                               "position increment to the previous position to reach")
+    d = _pp("technosoft-ipos", 10 << 16, 1 << 16)
+    w(d, 0x607A, 0, 5000, 4)
+    w(d, 0x6040, 0, 0x3F, 2)  # absolute 5000, change set immediately
+    d.step(50)
+    w(d, 0x6040, 0, 0x2F, 2)
+    w(d, 0x607A, 0, 1000, 4)
+    w(d, 0x6040, 0, 0x087F, 2)  # relative (bit 6), additive (bit 11), immediately (bit 5)
+    _until_reached(d)
+    assert d.value(0x6064) == 6000  # 5000 + 1000, not the position at the command + 1000
+
+
+def test_n22_technosoft_s_curve_with_change_set_immediately_is_a_command_error():
+    manual_says(TS_TEXT, 5818, "then *change set immediately* bit must be 0, else a command error is issued")
+    manual_says(TS_TEXT, 1804, "9000\tCommand error")
+    d = _pp("technosoft-ipos", 10 << 16, 1 << 16)
+    w(d, 0x6086, 0, 3, 2)
+    w(d, 0x607A, 0, 5000, 4)
+    w(d, 0x6040, 0, 0x3F, 2)
+    assert [m.code for m in d.emergencies][-1] == 0x9000
+    assert r(d, 0x2000) & (1 << 14)  # Motion Error Register: command error
+    d.step(100)
+    assert d.value(0x6064) == 0  # not taken
+
+
+# N19 N26 N27 ---------------------------------------------------------------------------------------------
+def test_n19_technosoft_statusword_bit15_axis_on():
+    manual_says(TS_TEXT, 2124, "1	Axis on. Power stage is enabled. Motor control is performed")
+    d = at("technosoft-ipos", OP)
+    for cw in (0x06, 0x07):
+        w(d, 0x6040, 0, cw, 2)
+        assert not r(d, 0x6041) & 0x8000
+    w(d, 0x6040, 0, 0x0F, 2)
+    assert r(d, 0x6041) & 0x8000
+    w(d, 0x6040, 0, 0x07, 2)
+    assert not r(d, 0x6041) & 0x8000
+
+
+def test_n26_n27_motion_error_register_and_fault_reset():
+    manual_says(TS_TEXT, 2359, "3	Control error (position/speed error too big). <u>Set</u> when protection is "
+                               "triggered. <u>Reset</u> by a Reset Fault command")
+    manual_says(TS_TEXT, 1781, "00xx	Error Reset or No Error")
+    manual_says(CT_TEXT, 3128, "| 0x0000     | Error reset / No error ")
+    d = at("technosoft-ipos", OP)
+    enable(d)
+    d.inject_fault(0x8611)
+    assert r(d, 0x2000) & (1 << 3) and r(d, 0x1001) != 0
+    d.set_limit_switches(negative=True)
+    assert r(d, 0x2000) & (1 << 7)
+    d.set_limit_switches()
+    w(d, 0x6040, 0, 0x80, 2)
+    assert d.cia.state is State.SWITCH_ON_DISABLED
+    assert (r(d, 0x2000), r(d, 0x1001)) == (0, 0)
+    assert d.emergencies[-1].code == 0x0000
+    c = at("controltechniques", OP)
+    enable(c)
+    c.inject_trip(1)
+    w(c, 0x6040, 0, 0x80, 2)
+    assert (r(c, 0x1001), c.emergencies[-1].code) == (0, 0x0000)
