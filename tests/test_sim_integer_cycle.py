@@ -253,6 +253,7 @@ def _pair(family: str, writes: list[tuple[int, int, int]]) -> tuple[Drive, Drive
     for index, sub, value in writes:
         assert _write(drives[0], index, sub, value) == _write(drives[1], index, sub, value)
     for d in drives:
+        d.configure_dc(0x0300, 1_000_000)  # SYNC0 1 ms: CT's positioning modes need DC in OP (CT 1857)
         d.request_state(EcState.SAFEOP)
         d.request_state(EcState.OP)
     return drives

@@ -459,3 +459,81 @@ def test_n26_n27_motion_error_register_and_fault_reset():
     c.inject_trip(1)
     w(c, 0x6040, 0, 0x80, 2)
     assert (r(c, 0x1001), c.emergencies[-1].code) == (0, 0x0000)
+
+
+# N23 N24 (Technosoft CSP) ----------------------------------------------------------------------------------
+def _ts_csp() -> Drive:
+    d = at("technosoft-ipos", PRE)
+    w(d, 0x6060, 0, 8, 1)
+    d.request_state(SAFE)
+    d.request_state(OP)
+    enable(d)
+    return d
+
+
+def test_n23_technosoft_csp_relative_adds_607a_each_cycle():
+    manual_says(TS_TEXT, 8736, "In Relative position mode, the drive will add to its current position the value "
+                               "received in object 607A_h.")
+    d = _ts_csp()
+    w(d, 0x6040, 0, 0x4F, 2)  # bit 6: relative
+    w(d, 0x607A, 0, 10, 4)
+    d.step(5)
+    assert d.value(0x6064) == 50
+    w(d, 0x6040, 0, 0x0F, 2)  # absolute again
+    d.step(1)
+    assert d.value(0x6064) == 10
+
+
+def test_n24_technosoft_csp_speed_limit_2086():
+    manual_says(TS_TEXT, 8817, "If 2086_h = 1, the limit is active. During CSP mode, the maximum velocity will be the "
+                               "one defined in object 6081_h.")
+    manual_says(TS_TEXT, 8819, "If 6081_h = 0 and 2086_h = 1, during CSP mode, the motor will not move")
+    d = _ts_csp()
+    w(d, 0x2086, 0, 1, 2)
+    w(d, 0x6081, 0, 0, 4)
+    w(d, 0x607A, 0, 1000, 4)
+    d.step(3)
+    assert d.value(0x6064) == 0
+    w(d, 0x6081, 0, 100 << 16, 4)  # 100 increments per sample (1 ms)
+    d.step(3)
+    assert d.value(0x6064) == 300
+    d.step(10)
+    assert d.value(0x6064) == 1000
+
+
+# N28 N29 N30 (Control Techniques) --------------------------------------------------------------------------
+def test_n28_ct_trips_map_to_the_codes_of_table_9_17():
+    manual_says(CT_TEXT, 3133, "| 0x3130     | Phase failure                           | 32 – PH<br>107 – PH.P   |")
+    manual_says(CT_TEXT, 3136, "| 0x4200     | Temperature device ")
+    manual_says(CT_TEXT, 3157, "| 0x7112 | Brake Chopper (Over current brake chopper) | 4 – Ol.br")
+    expected = {32: 0x3130, 107: 0x3130, 2: 0x3200, 21: 0x4200, 105: 0x4200, 36: 0x5530, 4: 0x7112, 176: 0x7300,
+                190: 0x7300, 177: 0x7600, 8: 0x3000, 109: 0x2200, 20: 0x2300, 215: 0x5000, 150: 0x6200, 11: 0x1000}
+    for trip, code in expected.items():
+        d = at("controltechniques", OP)
+        d.inject_trip(trip)
+        assert d.value(0x603F) == code, trip
+
+
+def test_n29_ct_positioning_mode_selected_in_op_without_dc_leaves_op():
+    manual_says(CT_TEXT, 1857, "When using one of the DSP-402 positioning modes, Distributed Clocks must be enabled. "
+                               "Failure to do so may result in the SM-EtherCAT module going into the SAFE-OPERATIONAL "
+                               "state (Pr **MM.04** = 4).")
+    d = at("controltechniques", OP)  # free run, vl
+    w(d, 0x6060, 0, 8, 1)
+    assert d.esm is EcState.SAFEOP
+    assert d.value(0x200F, 4) == 4
+    assert any(e.kind == "state" and e.data.get("al_status") == 0x0030 for e in d.events)
+    # with DC it stays in OP; vl without DC as well
+    c = ct_with_dc(2)
+    w(c, 0x6060, 0, 8, 1)
+    assert c.esm is EcState.OP
+
+
+def test_n30_ct_6080_is_pr_1_06():
+    manual_says(CT_TEXT, 1808, "changing the value of this object will also change Pr 1.06")
+    d = at("controltechniques", PRE)
+    assert d.value(0x2001, 6) == d.value(0x6080) == 3000
+    w(d, 0x6080, 0, 1500, 4)
+    assert d.value(0x2001, 6) == 1500
+    w(d, 0x2001, 6, 2500, 4)
+    assert d.value(0x6080) == 2500

@@ -84,6 +84,16 @@ class Behaviour:
     #: a Fault Reset out of FAULT clears 1001h and sends the "error reset" EMCY 0000h (Technosoft 1781 "00xx
     #: Error Reset or No Error", Control Techniques Table 9.17 "0x0000 Error reset / No error")
     error_reset_emcy: bool = True
+    #: objects the drive keeps equal, both ways ((index, sub), (index, sub)): Control Techniques 7.3.17 "changing
+    #: the value of this object [6080h] will also change Pr 1.06"
+    linked_objects: tuple[tuple[tuple[int, int], tuple[int, int]], ...] = ()
+    #: a positioning mode (``FamilyRules.dc_required_modes``) selected in OP without DC sends the module to
+    #: SAFE-OP (Control Techniques 7.4 NOTE: "may result in the SM-EtherCAT module going into the
+    #: SAFE-OPERATIONAL state (Pr MM.04 = 4)")
+    dc_mode_in_op_drops_to_safeop: bool = False
+    #: CSP reads controlword bit 6 (relative: 607Ah is added to the position, Technosoft §13.1.1) and 2086h = 1
+    #: (the speed limited to 6081h, Technosoft §13.2)
+    csp_options: bool = False
 
     @property
     def supply_bit_always(self) -> bool:
@@ -101,16 +111,37 @@ BEHAVIOURS: dict[str, Behaviour] = {
         motion_error_bits=((0x8100, 0), (0x2340, 1), (0x6100, 2), (0x8611, 3), (0x7500, 4), (0x7300, 5),
                            (0x2310, 8), (0x8331, 9), (0x4280, 10), (0x4310, 11), (0x3210, 12), (0x3220, 13),
                            (0x9000, 14), (0x5441, 15)),
+        csp_options=True,
     ),
     "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
                      home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611}),
                      pp_single_setpoint=True, pp_acquire_at_end=True),
     "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
                                    homing_current_outside_enabled=True, fault_reaction_codes=frozenset(),
-                                   vl_ramp_bits=False, ip_enable_bit=False, ip_delay_periods=1),
+                                   vl_ramp_bits=False, ip_enable_bit=False, ip_delay_periods=1,
+                                   linked_objects=(((0x6080, 0), (0x2001, 6)),), dc_mode_in_op_drops_to_safeop=True),
     "generic": Behaviour(homing_current_outside_enabled=True),
 }
 
+def _trip_table() -> dict[int, int]:
+    """Control Techniques trip number -> 603Fh error code, SM-EtherCAT Table 9.17 (CT 3124-3165). Where the
+    OCR'd table names a trip twice the product decides, and the simulated drive is a Unidrive SP: 32 is "PH"
+    (0x3130; "32 - t038" under 0x6200 is trip 38), 189 is "Enc1 (SP Only)" (0x7300; "O.cL (SK Only)" under
+    0x2200): docs/decisions.md. Trips the table does not list are "Generic error" 0x1000."""
+    rows: dict[int, tuple[int, ...]] = {
+        0x0000: (0,), 0x2200: (109,), 0x2300: (3, 20, 104), 0x3000: (8,), 0x3130: (32, 107),
+        0x3200: (1, 2, 5, 9, 108), 0x3210: (106,), 0x4200: (21, 22, 23, 27, 102, 105),
+        0x5000: (*range(200, 216), 217, 218, 219, *range(220, 233)), 0x5530: (31, 36, 37),
+        0x6200: (10, 38, *range(40, 100), 101, *range(112, 161), *range(168, 175), 216), 0x6320: (199,),
+        0x7112: (4, 19, 103), 0x7200: (33,), 0x7300: (14, 15, 16, *range(161, 168), 176, 189, *range(190, 199)),
+        0x7510: (30,), 0x7600: (175, *range(177, 189)), 0x9000: (6,),
+    }
+    table: dict[int, int] = {}
+    for code, trips in rows.items():
+        for trip in trips:
+            table.setdefault(trip, code)
+    return table
+
+
 #: Control Techniques trip number -> 603Fh error code (SM-EtherCAT Table 9.17)
-CT_TRIP_CODES = {0: 0x0000, 1: 0x3200, 3: 0x2300, 6: 0x9000, 30: 0x7510, 31: 0x5530, 33: 0x7200, 38: 0x6200,
-                 106: 0x3210, 199: 0x6320, 202: 0x5000}
+CT_TRIP_CODES = _trip_table()

@@ -385,6 +385,12 @@ class DriveCore:
     def fault_reset(self) -> None:  # injection
         raise NotImplementedError
 
+    def _fall_to_safeop(self, code: int, why: str) -> None:  # esm
+        raise NotImplementedError
+
+    def dc_active(self) -> bool:  # esm
+        raise NotImplementedError
+
     def _esm_effects(self, previous: EcState, state: EcState) -> None:  # family
         raise NotImplementedError
 

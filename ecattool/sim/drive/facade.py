@@ -141,6 +141,8 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
             # 6061h shows the mode 6060h selects from power-on (HDT §4.02.2, CT Table 7.16: 6060h = 2 by
             # default, and that mode is the one the drive runs)
             self._put(0x6061, 0, self._read_int(0x6060, 0) or 0)
+        for (index, sub), other in self.behaviour.linked_objects:
+            self._put(*other, self._read_int(index, sub) or 0)  # Pr 1.06 = 6080h's default (CT 7.3.17)
         self._refresh_inputs()
 
     def _default_bytes(self, e: Entry) -> bytes:

@@ -106,6 +106,17 @@ class FamilyQuirks(DriveCore):
             raise sdo_abort(0x60C2, sub, A.INVALID_VALUE)
         return True
 
+    def _linked(self, index: int) -> Callable[[int, int | None], None]:
+        """A write to ``index`` changes the objects ``Behaviour.linked_objects`` ties to it (Control Techniques
+        7.3.17: 6080h and Pr 1.06)."""
+        def after(sub: int, value: int | None) -> None:
+            for a, b in self.behaviour.linked_objects:
+                if a == (index, sub):
+                    self._put(*b, value or 0)
+                elif b == (index, sub):
+                    self._put(*a, value or 0)
+        return after
+
     def _install_family_handlers(self) -> None:
         self._handlers_down[0x1010] = self._check_store_signature
         if self.behaviour.home_offset_continuous:
@@ -114,6 +125,9 @@ class FamilyQuirks(DriveCore):
             self._handlers_down[0x6046] = self._check_min_max
         if self.rules.ip_periods_ns or self.rules.ip_period_step_ns:
             self._handlers_down[0x60C2] = self._check_interpolation_period
+        for pair in self.behaviour.linked_objects:
+            for index in {pair[0][0], pair[1][0]}:
+                self._after_write[index] = self._linked(index)
         if self.family == "controltechniques":
             self._handlers_down[0x604B] = self._nonzero(0x604B)
             self._handlers_down[0x604C] = self._nonzero(0x604C)

@@ -10,8 +10,10 @@ from ecattool import abort as A
 from ecattool.od.model import EcState
 from ecattool.profiles.rules import interpolation_period_ns
 from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile, State
+from ecattool.sim.drive import csp_options as csp
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
+from ecattool.sim.drive.esm import AL_DC_INVALID_SYNC
 from ecattool.sim.drive.mode_parts import MOVED, PARTS
 from ecattool.sim.units import floor_ratio
 
@@ -94,6 +96,9 @@ class Motion(DriveCore):
     def _on_mode(self, sub: int, value: int | None) -> None:
         if value == PV:
             self.modes.pv.armed = False  # Technosoft §10.1 Remark 2: 60FFh must be written again
+        if self.behaviour.dc_mode_in_op_drops_to_safeop and self.esm is EcState.OP and not self.dc_active() \
+                and value in self.rules.dc_required_modes:
+            self._fall_to_safeop(AL_DC_INVALID_SYNC, f"mode {value} needs distributed clocks")
         if not self.behaviour.mode_display_on_enable or self.cia.state is State.OPERATION_ENABLED:
             self._put(0x6061, 0, value or 0)
         hh.on_mode(self)
@@ -140,6 +145,11 @@ class Motion(DriveCore):
             if cia.state is _ENABLED and not cia.controlword & HALT:
                 if mode == CSP:
                     pn, pd, _, _, sn, sd = u.ratios()
+                    if csp.applies(self):  # Technosoft bit 6 relative, 2086h speed limit
+                        goal = csp.target(self, dt)
+                        cia.follow_position(goal.numerator, goal.denominator, dt, sd, sn)
+                        self._after_step(dt)
+                        continue
                     # internal velocity units per increment/s: the inverse of increments/s per unit (sn > 0)
                     cia.follow_position(((self._read_int(0x607A, 0) or 0) - self._home_offset()) * pn, pd, dt,
                                         sd, sn)
