@@ -23,7 +23,6 @@ from ecattool.profiles.rules import FamilyRules
 from ecattool.sim import eeprom as ee
 from ecattool.sim.cia402 import Cia402, State
 from ecattool.sim.drive.behaviour import Behaviour
-from ecattool.sim.drive.mode_parts import ModeParts
 from ecattool.sim.faults import Faults
 from ecattool.sim.units import FACTOR_OBJECTS, Units
 
@@ -241,8 +240,6 @@ class DriveCore:
     homing_warning: bool
     has_cia402: bool
     units: Units
-    #: the demand side of vl, PV windows, torque and interpolated position (:mod:`.mode_parts`)
-    modes: ModeParts
 
     # ------------------------------------------------------------------------------------------
     # helpers on the store
@@ -383,6 +380,9 @@ class DriveCore:
         raise NotImplementedError
 
     def fault_reset(self) -> None:  # injection
+        raise NotImplementedError
+
+    def _modes_snapshot(self) -> tuple[object, ...]:  # motion
         raise NotImplementedError
 
     def _fall_to_safeop(self, code: int, why: str) -> None:  # esm

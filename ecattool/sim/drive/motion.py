@@ -14,7 +14,7 @@ from ecattool.sim.drive import csp_options as csp
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
 from ecattool.sim.drive.esm import AL_DC_INVALID_SYNC
-from ecattool.sim.drive.mode_parts import MOVED, PARTS
+from ecattool.sim.drive.mode_parts import MOVED, PARTS, ModeParts
 from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
@@ -30,6 +30,12 @@ _ACTUAL_VALUES = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0
 
 class Motion(DriveCore):
     """The CiA-402 device control and the motion it produces."""
+
+    #: the demand side of vl, PP set-points, PV windows, torque and interpolated position (:mod:`.mode_parts`)
+    modes: ModeParts
+
+    def _modes_snapshot(self) -> tuple[object, ...]:
+        return self.modes.snapshot()
 
     def cycle_time(self) -> Fraction:
         """The process-data cycle in seconds: 60C2h (sub1 × 10^sub2) where present, else 1 ms (computed once per
