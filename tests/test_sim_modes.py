@@ -537,3 +537,16 @@ def test_n30_ct_6080_is_pr_1_06():
     assert d.value(0x2001, 6) == 1500
     w(d, 0x2001, 6, 2500, 4)
     assert d.value(0x6080) == 2500
+
+
+def test_no_family_name_compares_left_in_the_simulator():
+    """Issue 33 item 1: the family is chosen once, as data (``Behaviour``, ``FamilyRules``); the simulator's code
+    compares no family names."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1] / "ecattool" / "sim"
+    found = [f"{p.relative_to(root)}:{n}" for p in root.rglob("*.py")
+             for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+             if re.search(r"family\s*(==|!=|in\s*\()", line)]
+    assert not found, found

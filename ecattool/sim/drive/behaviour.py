@@ -94,6 +94,39 @@ class Behaviour:
     #: CSP reads controlword bit 6 (relative: 607Ah is added to the position, Technosoft §13.1.1) and 2086h = 1
     #: (the speed limited to 6081h, Technosoft §13.2)
     csp_options: bool = False
+    #: 608Fh reports the drive's encoder resolution, not the table default (Control Techniques A24)
+    encoder_resolution_reported: bool = False
+    #: the module shows the ESM state in its slot menu (MM.04) and writes its drive parameters on SAFE-OP -> OP
+    #: (Control Techniques 5.5, 7.3.1)
+    module_menu: bool = False
+    #: 6046h max <= min is refused with 0609 0030h (HDT §4.11.6)
+    vl_min_max_checked: bool = False
+    #: 604Bh/604Ch refuse 0, and 6046h sub 1/2 overwrite 6047h (Control Techniques 7.5.4, 7.5.9, 7.5.10)
+    vl_factors_nonzero: bool = False
+    #: the state lost communication ends in whatever 6007h says (Control Techniques 7.3.1: SWITCH ON DISABLED)
+    communication_lost_state: str | None = None
+    #: EMCY codes for the (negative, positive) limit switch becoming active, 0000h when it clears (Technosoft)
+    limit_switch_emcy: tuple[int, int] | None = None
+    #: the EEPROM objects, drive reset and FoE setup of Technosoft (:mod:`.memory`)
+    eeprom_objects: bool = False
+    #: the jerk of 6086h = 3: "2023h" (Technosoft jerk time, ms), "2011h/2021h" (HDT profile jerk or rounding
+    #: time per 201Ah bit 2), "" none
+    scurve_jerk: str = ""
+    #: 6086h = -1 is HDT's "linear ramp with torque limit" (§4.07.8)
+    torque_limited_profile: bool = False
+    #: the halt and quick-stop ramps: "604Eh" (HDT: 604Eh over 6050h/6051h), "6083h" (Technosoft: slow-down
+    #: 6083h, quick-stop 6085h), "" CiA-402 (6084h / 6085h)
+    halt_ramps: str = ""
+    #: a halt in profile position uses the profile deceleration 6084h (HDT §4.07)
+    pp_halt_uses_6084: bool = False
+    #: 210Bh bit 12 keeps the position when homing ends (Technosoft §6.3.3)
+    home_keeps_position_bit: bool = False
+    #: homing methods 15, 16, 31, 32 are refused when written (HDT §4.08.3, CT Table 7.59)
+    homing_reserved_refused: bool = False
+    #: homing method 0 homes on the position zeroed at power-on (HDT §4.08.3)
+    homing_zero_is_power_on: bool = False
+    #: how the manual converts user units (:func:`ecattool.sim.units.units_for`): "technosoft", "hdt", "cia402"
+    units: str = "cia402"
 
     @property
     def supply_bit_always(self) -> bool:
@@ -111,15 +144,21 @@ BEHAVIOURS: dict[str, Behaviour] = {
         motion_error_bits=((0x8100, 0), (0x2340, 1), (0x6100, 2), (0x8611, 3), (0x7500, 4), (0x7300, 5),
                            (0x2310, 8), (0x8331, 9), (0x4280, 10), (0x4310, 11), (0x3210, 12), (0x3220, 13),
                            (0x9000, 14), (0x5441, 15)),
-        csp_options=True,
+        csp_options=True, limit_switch_emcy=(0x5442, 0x5443), eeprom_objects=True, scurve_jerk="2023h",
+        halt_ramps="6083h", home_keeps_position_bit=True, units="technosoft",
     ),
     "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
                      home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611}),
-                     pp_single_setpoint=True, pp_acquire_at_end=True),
+                     pp_single_setpoint=True, pp_acquire_at_end=True, vl_min_max_checked=True,
+                     scurve_jerk="2011h/2021h", torque_limited_profile=True, halt_ramps="604Eh",
+                     pp_halt_uses_6084=True, homing_reserved_refused=True, homing_zero_is_power_on=True,
+                     units="hdt"),
     "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
                                    homing_current_outside_enabled=True, fault_reaction_codes=frozenset(),
                                    vl_ramp_bits=False, ip_enable_bit=False, ip_delay_periods=1,
-                                   linked_objects=(((0x6080, 0), (0x2001, 6)),), dc_mode_in_op_drops_to_safeop=True),
+                                   linked_objects=(((0x6080, 0), (0x2001, 6)),), dc_mode_in_op_drops_to_safeop=True,
+                                   encoder_resolution_reported=True, module_menu=True, vl_factors_nonzero=True,
+                                   communication_lost_state="SWITCH_ON_DISABLED", homing_reserved_refused=True),
     "generic": Behaviour(homing_current_outside_enabled=True),
 }
 

@@ -75,9 +75,11 @@ class StateMachine(DriveCore):
 
     def _check_dc(self) -> None:
         active, cycle = getattr(self, "dc", (0, 0))
-        if self.family == "controltechniques" and active:
-            # 8.1.1: SYNC0 = n x 250 us, n = 1..60
-            if cycle <= 0 or cycle % 250_000 or not 1 <= cycle // 250_000 <= 60:
-                self._refuse(EcState.OP, AL_DC_INVALID_CYCLE, f"SYNC0 cycle {cycle} ns is not n x 250 us (n = 1..60)")
+        step, most = self.rules.dc_sync0_step_ns, self.rules.dc_sync0_max_steps
+        if step and active:
+            # Control Techniques 8.1.1: SYNC0 = n x 250 us, n = 1..60 (the family rules' data)
+            if cycle <= 0 or cycle % step or not 1 <= cycle // step <= (most or cycle // step):
+                self._refuse(EcState.OP, AL_DC_INVALID_CYCLE,
+                             f"SYNC0 cycle {cycle} ns is not n x {step // 1000} us (n = 1..{most})")
         if not active and self.has_cia402 and self.mode() in self.rules.dc_required_modes:
             self._refuse(EcState.OP, AL_DC_INVALID_SYNC, f"mode {self.mode()} needs distributed clocks")

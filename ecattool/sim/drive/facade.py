@@ -134,7 +134,7 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self.limit_switches = (False, False)  # (negative, positive) inputs, set_limit_switches()
         self.homing_warning = False  # Technosoft statusword bit 7 (homing start ignored)
         self.has_cia402 = (0x6040, 0) in self._entries and (0x6041, 0) in self._entries
-        self.units = units_for(self.family, self._read_int, revision=d.revision,
+        self.units = units_for(self.behaviour.units, self._read_int, revision=d.revision,
                              has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
         self.units.version = lambda: self._store.version
         if not self.behaviour.mode_display_on_enable and (0x6061, 0) in self._entries:

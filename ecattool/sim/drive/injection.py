@@ -63,8 +63,8 @@ class Injection(DriveCore):
         option = 1 if option is None else option
         end = self.option_end_state(0x6007, option,
                                     {0: "NO_ACTION", 1: "FAULT", 2: "SWITCH_ON_DISABLED"}.get(option, "QUICK_STOP"))
-        if self.family == "controltechniques":
-            end = "SWITCH_ON_DISABLED"
+        if self.behaviour.communication_lost_state is not None:
+            end = self.behaviour.communication_lost_state
         self._log("cia402", reason=f"communication lost, 6007h = {option}", reaction=end)
         if end == "FAULT":
             self.inject_fault(0x8100)
@@ -125,8 +125,9 @@ class Injection(DriveCore):
         self.limit_active = negative or positive
         self.limit_switches = (negative, positive)
         self._log("inputs", digital_inputs=new)
-        if self.family == "technosoft-ipos":
-            for was, now, code in ((was_neg, negative, 0x5442), (was_pos, positive, 0x5443)):
+        codes = self.behaviour.limit_switch_emcy
+        if codes is not None:
+            for was, now, code in ((was_neg, negative, codes[0]), (was_pos, positive, codes[1])):
                 if now and not was:
                     self.emcy(code)
                 elif was and not now:

@@ -259,9 +259,9 @@ class Motion(DriveCore):
         down = acc(0x6084) if (0x6084, 0) in self._entries else up
         jerk_time = _ZERO
         if mode == PP and (read(0x6086, 0) or 0) == 3:
-            if self.family == "technosoft-ipos":
+            if self.behaviour.scurve_jerk == "2023h":
                 jerk_time = Fraction(read(0x2023, 0) or 0, 1000)
-            elif self.family == "hdt":
+            elif self.behaviour.scurve_jerk == "2011h/2021h":
                 if (read(0x201A, 0) or 0) & 0x4:
                     jerk_time = Fraction(read(0x2021, 0) or 0, 1000)
                 else:
@@ -269,7 +269,7 @@ class Motion(DriveCore):
                     jerk_time = up / jerk if jerk else _ZERO
         # HDT §4.07.8 profile type -1, "linear ramp with torque limit": the trapezoid of 0, whose generator stops
         # while an obstacle blocks the axis (the model has no torque: :meth:`set_obstacle` is the obstacle)
-        torque_limited = mode == PP and self.family == "hdt" and read(0x6086, 0) == -1
+        torque_limited = mode == PP and self.behaviour.torque_limited_profile and read(0x6086, 0) == -1
         return Profile(velocity, up, down, jerk_time, torque_limited)
 
     def _refresh_inputs(self, mode: int | None = None) -> None:
