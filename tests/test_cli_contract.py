@@ -105,6 +105,21 @@ def test_group_help_has_examples(capsys: pytest.CaptureFixture[str], group: tupl
     assert re.search(rf"^\s+ecattool {re.escape(_name(group))} ", out, re.MULTILINE), f"no example in:\n{out}"
 
 
+def _command_table() -> set[tuple[str, ...]]:
+    """The commands docs/cli.md's table lists: `group` | `a`, `b` | page, or `cmd` | (one command) | page."""
+    text = (ROOT / "docs" / "cli.md").read_text(encoding="utf-8")
+    listed: set[tuple[str, ...]] = set()
+    for group, commands in re.findall(r"^\| `([a-z-]+)` \| ([^|]+) \|", text, re.MULTILINE):
+        names = re.findall(r"`([a-z-]+)`", commands)
+        listed |= {(group, n) for n in names} if names else {(group,)}
+    return listed
+
+
+def test_docs_cli_lists_every_command() -> None:
+    """docs/cli.md's table is the list of commands a reader trusts: every command is there, and nothing else."""
+    assert _command_table() == set(LEAVES)
+
+
 @pytest.mark.parametrize("cmd", sorted(LEAVES), ids=_name)
 def test_json_where_data_is_printed(cmd: tuple[str, ...]) -> None:
     has_json = any("--json" in p.opts for p in LEAVES[cmd].params if isinstance(p, click.Option))

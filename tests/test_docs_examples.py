@@ -23,6 +23,7 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
+import click
 import pytest
 
 from ecattool.errors import SdoAbort
@@ -367,6 +368,25 @@ def _processes_in(directory: Path) -> list[str]:
     return out
 
 
+def _serve_help_recipe() -> str:
+    """The recipe `ecattool sim serve --help` prints under "Run it inside a private network namespace", as a user
+    would copy it from the terminal (the help's indent removed)."""
+    from ecattool.cli import cli
+
+    serve = cli.get_command(click.Context(cli), "sim").get_command(click.Context(cli), "serve")  # type: ignore[union-attr]
+    epilog = serve.epilog or ""
+    lines = epilog[epilog.index("unshare -n"):].splitlines()
+    recipe = [line[2:] if line.startswith("  ") else line for line in lines]
+    return "\n".join(line for line in recipe if not line.startswith("(")).strip()
+
+
+def test_the_serve_help_recipe_is_the_documented_one() -> None:
+    """`sim serve --help` shows the recipe docs/virtual-bus.md runs (the old one left the server running)."""
+    recipe = _serve_help_recipe()
+    assert recipe.startswith("unshare -n sh -c") and "trap" in recipe and "ecattool sim serve" in recipe
+    assert "(ecattool sim serve" not in recipe
+
+
 @pytest.mark.xdist_group("wire")
 def test_virtual_bus_recipes_run(tmp_path: Path) -> None:
     """The recipes of docs/virtual-bus.md, pasted as written (each starts its own private network namespace with
@@ -386,7 +406,7 @@ def test_virtual_bus_recipes_run(tmp_path: Path) -> None:
         (work / name).symlink_to(ROOT / name)
     needs = {"wire_kickcat_scenario": "kickcat", "pysoem:": "pysoem"}
     ran = 0
-    for block in shell_blocks("docs/virtual-bus.md"):
+    for block in [*shell_blocks("docs/virtual-bus.md"), _serve_help_recipe()]:
         missing = [m for key, m in needs.items() if key in block and importlib.util.find_spec(m) is None]
         if missing:
             continue  # the wire tests say why (the master is not installed here)

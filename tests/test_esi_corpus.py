@@ -22,7 +22,7 @@ def _ids(p: Path) -> str:
 
 
 def test_corpus_is_present():
-    assert len(list((corpus_path("esi")).glob("*.xml"))) == 19
+    assert len(list((corpus_path("esi")).glob("*.xml"))) == 33
     assert len(list((corpus_path("sii")).glob("*.xml"))) == 14
 
 

@@ -21,15 +21,31 @@ from ecattool.od.model import ObjectDictionary
 from ecattool.xmlsafe import parse_xml
 from tests.conftest import CORPUS, corpus_files, corpus_path
 
-# sha256 of _dictionary_facts(file), by the reader before issue 2's fast paths
+# sha256 of _dictionary_facts(file), by the reader before issue 2's fast paths; the 14 Beckhoff families the corpus
+# gained with issue 34 (EJ1-9xxx, EK13xx, EK15xx, EL15xx, EL47xx, EL66xx, EM3xxx, EP4xxx, EQ2xxx, ER5xxx) by the reader
+# of that day, a guard against regressions
 DIGESTS = {
     "beckhoff_AX2xxx.xml": "7dca06da9e6b59b5ae36ae60f258177e3f069f506d89964c9ac835e768ed22a0",
     "beckhoff_AX5021-xxxx-0001_Dict.xml": "333e2a342bf02c27f0a53bc132ab54a684357e78089da4d3ed28b7cc0d2044bf",
     "beckhoff_AX5xxx.xml": "2b5fc6fd1371ab25a2f05bb9ef59cc269f6f394f95dc933d87e24c40e8f50848",
     "beckhoff_CUxxxx.xml": "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855",
+    "beckhoff_EJ1xxx.xml": "0f4d7faf2e69782ca1ca76c715098c1727836c43f596f96a11e3c763feb47839",
+    "beckhoff_EJ2xxx.xml": "5ab0045fbd4e78997e0b8774f080f47f4b9d919d4807b601a5d0d3331a85eb77",
+    "beckhoff_EJ3xxx.xml": "466ecd4d8abdf9d68ba1f7c69563e2d5b8c698a620f5675b4718a40414bd2c2b",
+    "beckhoff_EJ5xxx.xml": "e5c738aed03e03d80cc09a97157e150d943e87f4f2db2b8b0f5d33ef1a884426",
+    "beckhoff_EJ9xxx.xml": "0ad409d1332d82a5b3448735a302d96f4a86be6f093de0c796e77be5ab25929a",
     "beckhoff_EK11xx.xml": "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855",
+    "beckhoff_EK13xx.xml": "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855",
+    "beckhoff_EK15xx.xml": "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855",
+    "beckhoff_EL15xx.xml": "cbd22805886a2941d426a0c3c5399fe76d7d23b1b077fb3df3034bf26373bc68",
     "beckhoff_EL1xxx.xml": "788abafd9b9e43691d371bb51b77c81f4dcff291f5b00b5e031daecd670312a6",
+    "beckhoff_EL47xx.xml": "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855",
+    "beckhoff_EL66xx.xml": "e4bb9c06a66b52f62efbb0d392c0e89fd6facb886e0f9a43399eb22a31ce1a0c",
+    "beckhoff_EM3xxx.xml": "7fd190e283fb3cc602920efbd82dbf753f40c923646ccd441d5a85487833e819",
     "beckhoff_EM7xxx.xml": "1bd873b10ba7e714b23faf2483e7f8412012e77f09380fe9697d0095531a67fb",
+    "beckhoff_EP4xxx.xml": "75b77312de470109094a8a78831a527c009dcda64762735765bdee8d892b1c23",
+    "beckhoff_EQ2xxx.xml": "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855",
+    "beckhoff_ER5xxx.xml": "17340244c2c99eca9603c63b3b5c629d7c409f80c0926f55bd26cbed40474e71",
     "copley_XE2_4.60.xml": "12bf20bfbd6b04a3ee8ef2edc7cb5beb72ff3da480a07de8651f186928f62695",
     "elmo_Elmo_ECAT_00010420_V11.xml": "3668e0b075bf676387266bc31628ae1ee2dae0500c5b8825160884eaa5f7069d",
     "etg_ETG2001_ModulesSlots_CiA402.xml": "221e917b8c4c71ed184e5caef6b1b47e8b032b449b2918e8b9c8ff0f9555f3b1",

@@ -213,10 +213,14 @@ Examples:
   ecattool sim serve hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt hdt --iface ecat1 --workers 2
 \b
 Run it inside a private network namespace with a veth pair (never on the host's network):
-  unshare -n sh -c 'ip link add ecat0 type veth peer name ecat1 &&
-    ip link set ecat0 up && ip link set ecat1 up &&
-    (ecattool sim serve machine.yaml --iface ecat1 &) && sleep 2 &&
-    ecattool commission machine.yaml --target pysoem:ecat0'""")
+  unshare -n sh -c '
+    ip link add ecat0 type veth peer name ecat1
+    ip link set ecat0 up; ip link set ecat1 up
+    ecattool sim serve samples/hdt/project.yaml --iface ecat1 > serve.log & serve=$!
+    trap "kill $serve; wait $serve" EXIT
+    until grep -q serving serve.log; do kill -0 $serve || exit 1; sleep 0.1; done
+    ecattool commission samples/hdt/project.yaml --target pysoem:ecat0'
+  (the trap stops the server however the commissioning ends; see docs/virtual-bus.md)""")
 @click.argument("sources", nargs=-1, required=True)
 @click.option("--iface", help="Network interface to serve on (raw Ethernet, EtherType 0x88A4).")
 @click.option("--product", help="Model of a built-in family named as a SOURCE.")
