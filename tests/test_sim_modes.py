@@ -550,3 +550,40 @@ def test_no_family_name_compares_left_in_the_simulator():
              for n, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
              if re.search(r"family\s*(==|!=|in\s*\()", line)]
     assert not found, found
+
+
+# N25 -----------------------------------------------------------------------------------------------------
+def test_n25_technosoft_polarity_reverses_targets_and_actual_values():
+    manual_says(TS_TEXT, 4222, "This object is used to multiply by 1 or -1 position and velocity objects. The object "
+                               "applies only to position profile, velocity profile, CSP and CSV in modes of operation.")
+    d = _ts_csp()
+    w(d, 0x607E, 0, 0xC0, 1)
+    w(d, 0x607A, 0, 1000, 4)
+    d.step(1)
+    assert d.internal_position == -1000  # the motor turns the other way
+    assert d.value(0x6064) == 1000  # and the position object is multiplied by -1 too
+    w(d, 0x607E, 0, 0, 1)
+    d.step(1)
+    assert d.internal_position == 1000 and d.value(0x6064) == 1000
+
+
+def test_n25_hdt_polarity_reverses_the_targets():
+    manual_says(HDT_TEXT, 3418, "if the bit is equal to 1, the value’s sign is reversed.")
+    d = at("hdt", PRE)
+    w(d, 0x6060, 0, 9, 1)  # CSV
+    d.request_state(SAFE)
+    d.request_state(OP)
+    w(d, 0x607E, 0, 0x40, 1)  # velocity polarity
+    enable(d)
+    w(d, 0x60FF, 0, 1000, 4)
+    d.step(10)
+    assert d.internal_velocity < 0 and r(d, 0x606C, 0, True) < 0  # HDT: the target only
+    h = at("hdt", PRE)
+    w(h, 0x6060, 0, 8, 1)  # CSP
+    h.request_state(SAFE)
+    h.request_state(OP)
+    w(h, 0x607E, 0, 0x80, 1)
+    enable(h)
+    w(h, 0x607A, 0, 5000, 4)
+    h.step(1)
+    assert h.value(0x6064) == -5000

@@ -127,6 +127,9 @@ class Behaviour:
     homing_zero_is_power_on: bool = False
     #: how the manual converts user units (:func:`ecattool.sim.units.units_for`): "technosoft", "hdt", "cia402"
     units: str = "cia402"
+    #: what 607Eh reverses (:mod:`.polarity`): "targets+actuals" (Technosoft §5.1.1, in PP/PV/CSP/CSV),
+    #: "targets" (HDT §4.05.11), "" not read
+    polarity: str = ""
 
     @property
     def supply_bit_always(self) -> bool:
@@ -146,13 +149,14 @@ BEHAVIOURS: dict[str, Behaviour] = {
                            (0x9000, 14), (0x5441, 15)),
         csp_options=True, limit_switch_emcy=(0x5442, 0x5443), eeprom_objects=True, scurve_jerk="2023h",
         halt_ramps="6083h", home_keeps_position_bit=True, units="technosoft",
+        polarity="targets+actuals",
     ),
     "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
                      home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611}),
                      pp_single_setpoint=True, pp_acquire_at_end=True, vl_min_max_checked=True,
                      scurve_jerk="2011h/2021h", torque_limited_profile=True, halt_ramps="604Eh",
                      pp_halt_uses_6084=True, homing_reserved_refused=True, homing_zero_is_power_on=True,
-                     units="hdt"),
+                     units="hdt", polarity="targets"),
     "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
                                    homing_current_outside_enabled=True, fault_reaction_codes=frozenset(),
                                    vl_ramp_bits=False, ip_enable_bit=False, ip_delay_periods=1,

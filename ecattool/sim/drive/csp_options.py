@@ -12,6 +12,8 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
+from ecattool.sim.drive import polarity
+
 if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
 
@@ -27,7 +29,7 @@ def applies(drive: DriveCore) -> bool:
 def target(drive: DriveCore, dt: Fraction) -> Fraction:
     """The position (internal units) CSP goes to this cycle."""
     cia, units, read = drive.cia, drive.units, drive._read_int
-    value = read(0x607A, 0) or 0
+    value = (read(0x607A, 0) or 0) * polarity.target_signs(drive, 8)[0]
     if cia.controlword & RELATIVE:
         goal = cia.position + units.position_to_internal(value)
     else:

@@ -12,6 +12,7 @@ from ecattool.profiles.rules import interpolation_period_ns
 from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile, State
 from ecattool.sim.drive import csp_options as csp
 from ecattool.sim.drive import halt_homing as hh
+from ecattool.sim.drive import polarity
 from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
 from ecattool.sim.drive.esm import AL_DC_INVALID_SYNC
 from ecattool.sim.drive.mode_parts import MOVED, PARTS, ModeParts
@@ -157,13 +158,15 @@ class Motion(DriveCore):
                         self._after_step(dt)
                         continue
                     # internal velocity units per increment/s: the inverse of increments/s per unit (sn > 0)
-                    cia.follow_position(((self._read_int(0x607A, 0) or 0) - self._home_offset()) * pn, pd, dt,
+                    sign = polarity.target_signs(self, mode)[0]
+                    cia.follow_position((sign * (self._read_int(0x607A, 0) or 0) - self._home_offset()) * pn, pd, dt,
                                         sd, sn)
                     self._after_step(dt)
                     continue
                 if mode == CSV:
                     _, _, vn, vd, sn, sd = u.ratios()
-                    cia.follow_velocity((self._read_int(0x60FF, 0) or 0) * vn, vd, dt, sn, sd)
+                    sign = polarity.target_signs(self, mode)[1]
+                    cia.follow_velocity(sign * (self._read_int(0x60FF, 0) or 0) * vn, vd, dt, sn, sd)
                     self._after_step(dt)
                     continue
                 if mode in MOVED:  # vl, profile torque, interpolated position, CST: their own parts
@@ -178,7 +181,8 @@ class Motion(DriveCore):
             cia.step(
                 mode, dt,
                 target_position=_ZERO,
-                target_velocity=u.velocity_to_internal(self._read_int(0x60FF, 0) or 0)
+                target_velocity=u.velocity_to_internal(polarity.target_signs(self, mode)[1]
+                                                       * (self._read_int(0x60FF, 0) or 0))
                 if moving and mode == PV and self.modes.pv.target_live(self) else _ZERO,
                 profile_velocity=_ZERO, acceleration=_ZERO,
                 inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
@@ -295,8 +299,12 @@ class Motion(DriveCore):
         # factor), in integers
         user_position = self._user_position()
         error = self.units.position_to_user_int(cia.following_error) if cia.following_error else 0
-        self._put_all(_ACTUAL_VALUES, (sw, cia.pos_n // cia.pos_d, user_position, user_position + error,
-                                       floor_ratio(cia.vel_n, cia.vel_d, vn, vd), cia.fault_code, error))
+        velocity = floor_ratio(cia.vel_n, cia.vel_d, vn, vd)
+        if behaviour.polarity:
+            ps, vs = polarity.actual_signs(self, mode)
+            user_position, error, velocity = ps * user_position, ps * error, vs * velocity
+        self._put_all(_ACTUAL_VALUES, (sw, cia.pos_n // cia.pos_d, user_position, user_position + error, velocity,
+                                       cia.fault_code, error))
 
     def _home_offset(self) -> int:
         """607Ch where the family adds it to the measured position at all times (HDT), else 0."""

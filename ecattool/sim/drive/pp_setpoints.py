@@ -26,6 +26,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from ecattool.sim.cia402 import State
+from ecattool.sim.drive import polarity
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
@@ -71,6 +72,7 @@ class PpSetpoints:
     def take(self, drive: DriveCore, cw: int, target: int) -> None:
         cia = drive.cia
         relative = bool(cw & RELATIVE)
+        target *= polarity.target_signs(drive, 1)[0]  # 607Eh bit 7
         position = drive.units.position_to_internal(target - (0 if relative else drive._home_offset()))
         if relative and cw & ADDITIVE and drive.behaviour.pp_additive_bit11:
             base = self.last_target if self.last_target is not None else cia.position

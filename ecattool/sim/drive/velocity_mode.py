@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 from ecattool.esi.model import Direction
 from ecattool.od.model import EcState
 from ecattool.sim.cia402 import HALT, State
+from ecattool.sim.drive import polarity
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
@@ -171,7 +172,8 @@ class PvStatus:
         cia = drive.cia
         actual = drive.units.velocity_to_user(cia.velocity)
         if (0x606D, 0) in entries and cia.state is State.OPERATION_ENABLED and not cia.controlword & HALT:
-            target = Fraction(read(0x60FF, 0) or 0) if self.target_live(drive) else _ZERO
+            sign = polarity.target_signs(drive, 3)[1]  # 607Eh: compared as the drive turns
+            target = Fraction(sign * (read(0x60FF, 0) or 0)) if self.target_live(drive) else _ZERO
             if abs(target - actual) <= (read(0x606D, 0) or 0):
                 self.in_window_s = _ZERO if self.in_window_s is None else self.in_window_s + dt
             else:
