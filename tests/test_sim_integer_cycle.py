@@ -189,7 +189,9 @@ class FractionDrive(Drive):
                          profile_velocity=Fraction(0), acceleration=Fraction(0),
                          inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
                          inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
-                         profile=self._make_profile(mode) if moving and mode in (PP, PV) else None)
+                         profile=(self._make_profile(mode) if mode == PV
+                                  else self.modes.pp.profile(self, self._make_profile(mode)))
+                         if moving and mode in (PP, PV) else None)
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
             if mode == PP and cia.target is None and self.modes.pp.after_step(self):

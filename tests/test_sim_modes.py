@@ -587,3 +587,34 @@ def test_n25_hdt_polarity_reverses_the_targets():
     w(h, 0x607A, 0, 5000, 4)
     h.step(1)
     assert h.value(0x6064) == -5000
+
+
+# N14 N15 (HDT profile position on the fly) -------------------------------------------------------------------
+def test_n14_hdt_new_profile_velocity_applies_during_the_move():
+    manual_says(HDT_TEXT, 4164, "speed instead (profile velocity - index 6081h) is immediately adjusted to the set value.")
+    d = _pp("hdt", 1000, 10000)
+    w(d, 0x607A, 0, 10_000_000, 4)
+    w(d, 0x6040, 0, 0x3F, 2)
+    d.step(100)
+    cruise = r(d, 0x606C, 0, True)
+    w(d, 0x6081, 0, 2000, 4)
+    d.step(100)
+    assert r(d, 0x606C, 0, True) == 2 * cruise
+
+
+def test_n15_hdt_ramps_changed_during_a_move_wait_for_standstill():
+    manual_says(HDT_TEXT, 4163, "are adjusted when the motor is standstill and a new positioning is starting.")
+    d = _pp("hdt", 1000, 10000)  # 1000 rpm in 0.1 s = 50 cycles
+    w(d, 0x6086, 0, 0, 2)  # linear ramp (trapezoid)
+    w(d, 0x607A, 0, 10_000_000, 4)
+    w(d, 0x6040, 0, 0x3F, 2)
+    d.step(10)
+    w(d, 0x6083, 0, 100, 4)  # a ramp 100 times flatter
+    w(d, 0x6084, 0, 100, 4)
+    w(d, 0x6040, 0, 0x2F, 2)
+    w(d, 0x607A, 0, 20_000_000, 4)
+    w(d, 0x6040, 0, 0x3F, 2)  # a new set-point taken while moving: the ramps of the running positioning
+    d.step(45)
+    cruise = r(d, 0x606C, 0, True)
+    d.step(10)
+    assert r(d, 0x606C, 0, True) == cruise  # at full speed after 55 cycles, as the old ramp runs

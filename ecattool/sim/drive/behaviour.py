@@ -130,6 +130,8 @@ class Behaviour:
     #: what 607Eh reverses (:mod:`.polarity`): "targets+actuals" (Technosoft §5.1.1, in PP/PV/CSP/CSV),
     #: "targets" (HDT §4.05.11), "" not read
     polarity: str = ""
+    #: profile position keeps the ramps of a positioning until the motor stands, takes 6081h at once (HDT §4.07.3)
+    pp_ramps_at_standstill: bool = False
 
     @property
     def supply_bit_always(self) -> bool:
@@ -156,7 +158,7 @@ BEHAVIOURS: dict[str, Behaviour] = {
                      pp_single_setpoint=True, pp_acquire_at_end=True, vl_min_max_checked=True,
                      scurve_jerk="2011h/2021h", torque_limited_profile=True, halt_ramps="604Eh",
                      pp_halt_uses_6084=True, homing_reserved_refused=True, homing_zero_is_power_on=True,
-                     units="hdt", polarity="targets"),
+                     units="hdt", polarity="targets", pp_ramps_at_standstill=True),
     "controltechniques": Behaviour(enable_needs_op=True, mode_locked_when_enabled=True, mapping_assigned=None,
                                    homing_current_outside_enabled=True, fault_reaction_codes=frozenset(),
                                    vl_ramp_bits=False, ip_enable_bit=False, ip_delay_periods=1,

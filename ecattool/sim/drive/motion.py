@@ -187,7 +187,8 @@ class Motion(DriveCore):
                 profile_velocity=_ZERO, acceleration=_ZERO,
                 inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
                 inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
-                profile=self._profile(mode) if moving and mode in (PP, PV) else None,
+                profile=(self._profile(mode) if mode == PV else self.modes.pp.profile(self, self._profile(mode)))
+                if moving and mode in (PP, PV) else None,
             )
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)

@@ -25,7 +25,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from ecattool.sim.cia402 import State
+from ecattool.sim.cia402 import Profile, State
 from ecattool.sim.drive import polarity
 
 if TYPE_CHECKING:
@@ -38,16 +38,39 @@ COMMAND_ERROR = 0x9000
 class PpSetpoints:
     """The set-point handshake of one axis: a set-point waiting for the running move, the last target taken."""
 
-    __slots__ = ("pending", "last_target")
+    __slots__ = ("pending", "last_target", "ramps", "planned_velocity")
 
     def __init__(self) -> None:
         #: (controlword, 607Ah) of a set-point given while a single set-point move runs
         self.pending: tuple[int, int] | None = None
         #: the last position to reach (internal units), for an additive relative move
         self.last_target: Fraction | None = None
+        #: (acceleration, deceleration, jerk time) of the positioning that started from standstill
+        self.ramps: tuple[Fraction, Fraction, Fraction] | None = None
+        #: the profile velocity the running move was planned with
+        self.planned_velocity: Fraction | None = None
 
     def snapshot(self) -> tuple[object, ...]:
-        return (self.pending, self.last_target)
+        return (self.pending, self.last_target, self.ramps, self.planned_velocity)
+
+    def profile(self, drive: DriveCore, fresh: Profile) -> Profile:
+        """The profile a PP cycle moves by. HDT §4.07.3 (``Behaviour.pp_ramps_at_standstill``): "The acceleration
+        ramps ..., deceleration ramps ... and the 'rounding values' ... are adjusted when the motor is standstill
+        and a new positioning is starting. The speed instead (profile velocity - index 6081h) is immediately
+        adjusted to the set value": the ramps of the positioning that started from standstill, the velocity of
+        now (a new one re-plans the running move)."""
+        if not drive.behaviour.pp_ramps_at_standstill:
+            return fresh
+        cia = drive.cia
+        if self.ramps is None or (cia.move is None and cia.vel_n == 0):
+            self.ramps = (fresh.acceleration, fresh.deceleration, fresh.jerk_time)
+        if cia.move is not None and self.planned_velocity != fresh.velocity:
+            cia.move = None  # planned again from where the axis is, at the speed it has
+        self.planned_velocity = fresh.velocity
+        acc, dec, jerk = self.ramps
+        if (acc, dec, jerk) == (fresh.acceleration, fresh.deceleration, fresh.jerk_time):
+            return fresh
+        return Profile(fresh.velocity, acc, dec, jerk, fresh.torque_limited)
 
     def on_controlword(self, drive: DriveCore, cw: int, prev: int) -> bool:
         """A controlword in profile position, OPERATION ENABLED; True when a set-point was taken."""
