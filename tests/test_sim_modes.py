@@ -618,3 +618,24 @@ def test_n15_hdt_ramps_changed_during_a_move_wait_for_standstill():
     cruise = r(d, 0x606C, 0, True)
     d.step(10)
     assert r(d, 0x606C, 0, True) == cruise  # at full speed after 55 cycles, as the old ramp runs
+
+
+def test_n17_hdt_201a_bit1_torque_limit_makes_the_profile_adapt():
+    manual_says(HDT_TEXT, 3816, "1 Torque limit enabled: when the Drive torque reaches the limit (because there is an "
+                                "obstacle on")
+    rev = 65536
+    d = at("hdt", OP)
+    w(d, 0x6060, 0, 1, 1)
+    for index, value, size in ((0x6086, 0, 2), (0x6081, 600, 4), (0x6083, 6000, 4), (0x6084, 6000, 4),
+                               (0x201A, 0x2, 1)):
+        w(d, index, 0, value, size)
+    enable(d)
+    d.set_obstacle(3 * rev)
+    w(d, 0x607A, 0, 10 * rev, 4)
+    w(d, 0x6040, 0, 0x1F, 2)
+    d.step(1000)
+    assert r(d, 0x6064, signed=True) == 3 * rev and r(d, 0x60F4, signed=True) == 0  # adapted, no error
+    assert d.cia402_state is State.OPERATION_ENABLED
+    d.set_obstacle(None)
+    d.step(1000)
+    assert r(d, 0x6064, signed=True) == 10 * rev  # resumed to the target

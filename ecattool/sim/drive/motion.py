@@ -274,7 +274,11 @@ class Motion(DriveCore):
                     jerk_time = up / jerk if jerk else _ZERO
         # HDT §4.07.8 profile type -1, "linear ramp with torque limit": the trapezoid of 0, whose generator stops
         # while an obstacle blocks the axis (the model has no torque: :meth:`set_obstacle` is the obstacle)
-        torque_limited = mode == PP and self.behaviour.torque_limited_profile and read(0x6086, 0) == -1
+        # or any profile type with 201Ah bit 1 "Torque limit enabled" (HDT §4.06.10: "the position profile is
+        # adapted to the measured position; when the Drive torque is no longer at its limit, then the execution of
+        # the position profile is resumed")
+        torque_limited = mode == PP and self.behaviour.torque_limited_profile and (
+            read(0x6086, 0) == -1 or bool((read(0x201A, 0) or 0) & 0x2))
         return Profile(velocity, up, down, jerk_time, torque_limited)
 
     def _refresh_inputs(self, mode: int | None = None) -> None:
