@@ -639,3 +639,23 @@ def test_n17_hdt_201a_bit1_torque_limit_makes_the_profile_adapt():
     d.set_obstacle(None)
     d.step(1000)
     assert r(d, 0x6064, signed=True) == 10 * rev  # resumed to the target
+
+
+def test_ct_quick_stop_in_vl_ramps_along_604a():
+    manual_says(CT_TEXT, 2107, "This object is used to configure the delta speed and delta time of the slope of the "
+                               "deceleration ramp for quick stop.")
+    d = at("controltechniques", OP)
+    w(d, 0x6048, 2, 0, 2)  # at speed at once
+    w(d, 0x604A, 1, 1000, 4)  # 1000 rpm per 1 s
+    w(d, 0x604A, 2, 1, 2)
+    w(d, 0x605A, 0, 2, 2)
+    enable(d)
+    w(d, 0x6042, 0, 1000, 2)
+    d.step(1)
+    assert r(d, 0x6044, 0, True) == 1000
+    w(d, 0x6040, 0, 0x0B, 2)  # quick stop
+    cycles_per_s = int(1 / d.cycle_time())
+    d.step(cycles_per_s // 2)
+    assert d.cia402_state is State.QUICK_STOP and r(d, 0x6044, 0, True) == 500
+    d.step(cycles_per_s // 2)
+    assert d.cia402_state is State.SWITCH_ON_DISABLED

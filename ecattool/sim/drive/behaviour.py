@@ -132,6 +132,10 @@ class Behaviour:
     polarity: str = ""
     #: profile position keeps the ramps of a positioning until the motor stands, takes 6081h at once (HDT §4.07.3)
     pp_ramps_at_standstill: bool = False
+    #: a quick stop in vl or profile torque ramps along 6049h (option 1/5) and 604Ah (2/6) (Control Techniques 7.6:
+    #: "When using profile torque mode object 0x604A vl_velocity_quick_stop will be used in the event of a quick
+    #: stop"; docs/decisions.md)
+    vl_quick_stop_ramps: bool = False
 
     @property
     def supply_bit_always(self) -> bool:
@@ -164,7 +168,8 @@ BEHAVIOURS: dict[str, Behaviour] = {
                                    vl_ramp_bits=False, ip_enable_bit=False, ip_delay_periods=1,
                                    linked_objects=(((0x6080, 0), (0x2001, 6)),), dc_mode_in_op_drops_to_safeop=True,
                                    encoder_resolution_reported=True, module_menu=True, vl_factors_nonzero=True,
-                                   communication_lost_state="SWITCH_ON_DISABLED", homing_reserved_refused=True),
+                                   communication_lost_state="SWITCH_ON_DISABLED", homing_reserved_refused=True,
+                                   vl_quick_stop_ramps=True),
     "generic": Behaviour(homing_current_outside_enabled=True),
 }
 

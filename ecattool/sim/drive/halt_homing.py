@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING
 from ecattool.errors import SdoAbort
 from ecattool import abort as A
 from ecattool.sim.cia402 import HALT, HOMING, PP, PV, Homing, State
+from ecattool.sim.drive.velocity_mode import counts_per_rev
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.behaviour import Behaviour
@@ -283,7 +284,23 @@ def quick_stop_ramp(drive: DriveCore, option: int) -> Fraction | None:
     (docs/decisions.md, "Simulator: quick stop and fault reaction")."""
     if option == 0:
         return None
+    if drive.behaviour.vl_quick_stop_ramps and drive.mode() in (2, 4):
+        # Control Techniques 7.5.7/7.5.8, 7.6: vl and profile torque stop along the vl ramps, 6049h (slow down)
+        # and 604Ah ("the slope of the deceleration ramp for quick stop")
+        return vl_ramp(drive, 0x6049 if option in (1, 5) else 0x604A)
     return halt_deceleration(drive, 1 if option in (1, 5) else 2)
+
+
+def vl_ramp(drive: DriveCore, index: int) -> Fraction | None:
+    """A vl ramp record (delta speed in 6042h units, delta time in s) in increments/s²; None: delta time 0 or no
+    known increments per revolution (the axis stops within the cycle)."""
+    speed, time = drive._read_int(index, 1), drive._read_int(index, 2)
+    cpr = counts_per_rev(drive)
+    if not time or cpr is None:
+        return None
+    num, den = drive._read_int(0x604C, 1), drive._read_int(0x604C, 2)
+    dimension = Fraction(num, den) if num and den else Fraction(1)
+    return Fraction(speed or 0, time) * dimension * cpr / 60
 
 
 def fault_reaction_ramp(drive: DriveCore, code: int) -> Fraction | None:
