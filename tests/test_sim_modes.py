@@ -659,3 +659,19 @@ def test_ct_quick_stop_in_vl_ramps_along_604a():
     assert d.cia402_state is State.QUICK_STOP and r(d, 0x6044, 0, True) == 500
     d.step(cycles_per_s // 2)
     assert d.cia402_state is State.SWITCH_ON_DISABLED
+
+
+def test_n24_technosoft_csv_acceleration_limit_2086():
+    manual_says(TS_TEXT, 8817, "During CSV mode, the maximum acceleration will be the one defined in object 6083_h.")
+    d = at("technosoft-ipos", PRE)
+    w(d, 0x6060, 0, 9, 1)
+    d.request_state(SAFE)
+    d.request_state(OP)
+    enable(d)
+    w(d, 0x2086, 0, 1, 2)
+    w(d, 0x6083, 0, 1 << 16, 4)  # 1 increment/sample²
+    w(d, 0x60FF, 0, 10 << 16, 4)
+    d.step(5)
+    assert r(d, 0x606C, 0, True) == 5 << 16
+    d.step(10)
+    assert r(d, 0x606C, 0, True) == 10 << 16

@@ -164,6 +164,10 @@ class Motion(DriveCore):
                     self._after_step(dt)
                     continue
                 if mode == CSV:
+                    if csp.csv_limited(self):  # Technosoft 2086h = 1: acceleration at most 6083h
+                        csp.csv_step(self, dt)
+                        self._after_step(dt)
+                        continue
                     _, _, vn, vd, sn, sd = u.ratios()
                     sign = polarity.target_signs(self, mode)[1]
                     cia.follow_velocity(sign * (self._read_int(0x60FF, 0) or 0) * vn, vd, dt, sn, sd)
