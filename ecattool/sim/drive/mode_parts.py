@@ -42,6 +42,14 @@ class ModeParts:
         return (*self.vl.snapshot(), *self.pv.snapshot(), *self.torque.snapshot(), *self.ip.snapshot(),
                 *self.pp.snapshot())
 
+    def mode_changed(self) -> None:
+        """6060h was written: the interpolator starts afresh, the PV window timers too, the torque demand is the
+        new mode's."""
+        self.ip.stop()
+        self.pv.in_window_s = None
+        self.pv.changing_s = Fraction(0)
+        self.torque.demand = Fraction(0)
+
     def step(self, drive: DriveCore, mode: int, dt: Fraction) -> None:
         """One cycle of ``mode`` (one of :data:`MOVED`) in OPERATION ENABLED without halt."""
         if mode == VL:

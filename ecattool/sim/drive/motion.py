@@ -103,6 +103,7 @@ class Motion(DriveCore):
     def _on_mode(self, sub: int, value: int | None) -> None:
         if value == PV:
             self.modes.pv.armed = False  # Technosoft §10.1 Remark 2: 60FFh must be written again
+        self.modes.mode_changed()
         if self.behaviour.dc_mode_in_op_drops_to_safeop and self.esm is EcState.OP and not self.dc_active() \
                 and value in self.rules.dc_required_modes:
             self._fall_to_safeop(AL_DC_INVALID_SYNC, f"mode {value} needs distributed clocks")
