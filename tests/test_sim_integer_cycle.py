@@ -194,7 +194,7 @@ class FractionDrive(Drive):
                          if moving and mode in (PP, PV) else None)
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
-            if mode == PP and cia.target is None and self.modes.pp.after_step(self):
+            if mode == PP and cia.target is None and self.modes.pp.after_step(self, dt):
                 self._report_blocked_motion()
             if mode in PARTS:
                 self.modes.after(self, mode, dt)

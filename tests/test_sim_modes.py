@@ -675,3 +675,24 @@ def test_n24_technosoft_csv_acceleration_limit_2086():
     assert r(d, 0x606C, 0, True) == 5 << 16
     d.step(10)
     assert r(d, 0x606C, 0, True) == 10 << 16
+
+
+def test_n20_technosoft_pp_bit10_waits_for_the_position_window_time():
+    manual_says(TS_TEXT, 6125, "If the *position actual value* is within the *position window* for a time period "
+                               "defined inside the *position window time* object, this *target position* is regarded "
+                               "as reached.")
+    d = _pp("technosoft-ipos", 10 << 16, 1 << 16)
+    w(d, 0x6067, 0, 5, 4)
+    w(d, 0x6068, 0, 20, 2)  # 20 samples of 1 ms
+    w(d, 0x607A, 0, 1000, 4)
+    w(d, 0x6040, 0, 0x1F, 2)
+    n = 0
+    while d.internal_position != 1000:
+        d.step(1)
+        n += 1
+        assert n < 1000
+    assert not r(d, 0x6041) & 0x0400  # at the target, not yet 20 ms in the window
+    d.step(19)
+    assert not r(d, 0x6041) & 0x0400
+    d.step(1)
+    assert r(d, 0x6041) & 0x0400

@@ -136,6 +136,8 @@ class Behaviour:
     #: "When using profile torque mode object 0x604A vl_velocity_quick_stop will be used in the event of a quick
     #: stop"; docs/decisions.md)
     vl_quick_stop_ramps: bool = False
+    #: PP bit 10 waits for the position window 6067h held for 6068h (Technosoft §7.2.12)
+    pp_position_window: bool = False
 
     @property
     def supply_bit_always(self) -> bool:
@@ -155,7 +157,7 @@ BEHAVIOURS: dict[str, Behaviour] = {
                            (0x9000, 14), (0x5441, 15)),
         csp_options=True, limit_switch_emcy=(0x5442, 0x5443), eeprom_objects=True, scurve_jerk="2023h",
         halt_ramps="6083h", home_keeps_position_bit=True, units="technosoft",
-        polarity="targets+actuals",
+        polarity="targets+actuals", pp_position_window=True,
     ),
     "hdt": Behaviour(homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
                      home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611}),

@@ -197,7 +197,7 @@ class Motion(DriveCore):
             )
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
-            if mode == PP and cia.target is None and self.modes.pp.after_step(self):
+            if mode == PP and cia.target is None and self.modes.pp.after_step(self, dt):
                 self._report_blocked_motion()  # the set-point that waited for the move is taken
             if mode in PARTS:
                 self.modes.after(self, mode, dt)

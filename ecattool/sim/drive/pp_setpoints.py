@@ -38,7 +38,7 @@ COMMAND_ERROR = 0x9000
 class PpSetpoints:
     """The set-point handshake of one axis: a set-point waiting for the running move, the last target taken."""
 
-    __slots__ = ("pending", "last_target", "ramps", "planned_velocity")
+    __slots__ = ("pending", "last_target", "ramps", "planned_velocity", "settle_s")
 
     def __init__(self) -> None:
         #: (controlword, 607Ah) of a set-point given while a single set-point move runs
@@ -49,9 +49,11 @@ class PpSetpoints:
         self.ramps: tuple[Fraction, Fraction, Fraction] | None = None
         #: the profile velocity the running move was planned with
         self.planned_velocity: Fraction | None = None
+        #: how long the axis has been in the position window 6067h since the generator ended, s
+        self.settle_s: Fraction | None = None
 
     def snapshot(self) -> tuple[object, ...]:
-        return (self.pending, self.last_target, self.ramps, self.planned_velocity)
+        return (self.pending, self.last_target, self.ramps, self.planned_velocity, self.settle_s)
 
     def profile(self, drive: DriveCore, fresh: Profile) -> Profile:
         """The profile a PP cycle moves by. HDT §4.07.3 (``Behaviour.pp_ramps_at_standstill``): "The acceleration
@@ -92,6 +94,24 @@ class PpSetpoints:
             cia.setpoint_ack = False
         return False
 
+    def _settle(self, drive: DriveCore, dt: Fraction) -> None:
+        """Technosoft §7.2.12 (TS 6125): "If the position actual value is within the position window for a time
+        period defined inside the position window time object, this target position is regarded as reached";
+        6067h = 2^32 - 1 switches the window off ("reached when the position reference is reached"). 6068h counts
+        slow-loop samples (1 ms by default: docs/decisions.md)."""
+        read, cia = drive._read_int, drive.cia
+        window = read(0x6067, 0)
+        if window is None or window == 0xFFFFFFFF:
+            return
+        assert self.last_target is not None
+        inside = abs(drive.units.position_to_user(cia.position - self.last_target)) <= window
+        if not inside:
+            self.settle_s = None
+        else:
+            self.settle_s = Fraction(0) if self.settle_s is None else self.settle_s + dt
+        cia.target_reached = inside and self.settle_s is not None and \
+            self.settle_s * 1000 >= (read(0x6068, 0) or 0)
+
     def take(self, drive: DriveCore, cw: int, target: int) -> None:
         cia = drive.cia
         relative = bool(cw & RELATIVE)
@@ -103,13 +123,16 @@ class PpSetpoints:
         else:
             cia.new_setpoint(position, relative=relative)
         self.last_target = cia.target
+        self.settle_s = None
 
-    def after_step(self, drive: DriveCore) -> bool:
+    def after_step(self, drive: DriveCore, dt: Fraction) -> bool:
         """After a profile position cycle: the end of a single set-point move starts the waiting set-point and
-        ends the handshake. True when a set-point was taken."""
+        ends the handshake; the position window holds bit 10. True when a set-point was taken."""
         cia = drive.cia
         if cia.target is not None or cia.state is not State.OPERATION_ENABLED:
             return False
+        if drive.behaviour.pp_position_window and self.last_target is not None:
+            self._settle(drive, dt)
         cw = cia.controlword
         if self.pending is not None:
             pending, self.pending = self.pending, None
