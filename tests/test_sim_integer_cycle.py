@@ -24,6 +24,7 @@ from ecattool.errors import SdoAbort
 from ecattool.esi.model import Direction
 from ecattool.od.model import EcState
 from ecattool.project.export import slave_configs
+from ecattool.sim.drive.mode_parts import MOVED, PARTS
 from ecattool.sim import Drive
 from ecattool.sim.cia402 import CSP, CSV, HALT, PP, PV, Cia402, State
 from ecattool.sim.drive import halt_homing as hh
@@ -183,16 +184,24 @@ class FractionDrive(Drive):
             elif moving and mode == CSV:
                 cia.velocity = u.velocity_to_internal(self._read_int(0x60FF, 0) or 0)
                 cia.position = cia.position + u.increments_per_second(cia.velocity) * dt
+            elif moving and mode in MOVED:  # the parts of vl, torque and IP (no integer path of their own)
+                self.modes.step(self, mode, dt)
             else:
                 cia.step(mode, dt, target_position=Fraction(0),
                          target_velocity=u.velocity_to_internal(self._read_int(0x60FF, 0) or 0)
-                         if moving and mode == PV else Fraction(0),
+                         if moving and mode == PV and self.modes.pv.target_live(self) else Fraction(0),
                          profile_velocity=Fraction(0), acceleration=Fraction(0),
                          inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
                          inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
-                         profile=self._make_profile(mode) if moving and mode in (PP, PV) else None)
+                         profile=(self._make_profile(mode) if mode == PV
+                                  else self.modes.pp.profile(self, self._make_profile(mode)))
+                         if moving and mode in (PP, PV) else None)
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
+            if mode == PP and cia.target is None and self.modes.pp.after_step(self, dt):
+                self._report_blocked_motion()
+            if mode in PARTS:
+                self.modes.after(self, mode, dt)
             self._after_step(dt)  # following error, automatic transitions: no arithmetic of the cycle's own
         self._refresh_inputs(mode)
 
@@ -203,8 +212,15 @@ class FractionDrive(Drive):
             mode = self.mode()
         cia, u = self.cia, self.units
         sw = cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
+        if mode in PARTS:
+            sw |= self.modes.status_bits(self, mode)
         if self.family == "technosoft-ipos" and mode == 6 and cia.homing.name == "IN_PROGRESS":
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)
+        if self.family == "technosoft-ipos" and cia.state in (State.OPERATION_ENABLED, State.QUICK_STOP,
+                                                             State.FAULT_REACTION):
+            sw |= 0x8000
+        if self.family == "technosoft-ipos":
+            self._put(0x2000, 0, self.motion_errors())
         user_position = to_int(u.position_to_user(cia.position)) + self._home_offset()
         error = to_int(u.position_to_user(cia.following_error)) if cia.following_error else 0
         self._put_all(((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0), (0x60F4, 0)),
@@ -243,6 +259,7 @@ def _pair(family: str, writes: list[tuple[int, int, int]]) -> tuple[Drive, Drive
     for index, sub, value in writes:
         assert _write(drives[0], index, sub, value) == _write(drives[1], index, sub, value)
     for d in drives:
+        d.configure_dc(0x0300, 1_000_000)  # SYNC0 1 ms: CT's positioning modes need DC in OP (CT 1857)
         d.request_state(EcState.SAFEOP)
         d.request_state(EcState.OP)
     return drives

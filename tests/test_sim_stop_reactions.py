@@ -9,7 +9,7 @@ import pytest
 
 from ecattool.sim import Drive
 from ecattool.sim.cia402 import State
-from sim_helpers import OP, at, code_of, r, w
+from sim_helpers import OP, SAFE, at, code_of, r, w
 from test_families_manuals import CT_TEXT, HDT_TEXT, TS_TEXT, manual_says
 
 #: per family: the writes that set up a moving axis with a slow-down ramp half as steep as the quick-stop ramp
@@ -26,7 +26,9 @@ SETUP = {
 
 
 def _moving(family: str, option: int) -> Drive:
-    d = at(family, OP)
+    d = at(family, SAFE)
+    d.configure_dc(0x0300, 1_000_000)  # CT 1857: the positioning modes need distributed clocks in OP
+    d.request_state(OP)
     writes, target = SETUP[family]
     w(d, 0x6060, 0, 3 if target is not None else 8, 1)
     for index, value, size in writes:

@@ -270,10 +270,13 @@ def technosoft_cia402_2(revision: int, has_210f: bool) -> bool:
     return has_210f
 
 
-def units_for(family: str, read: Reader, *, revision: int = 0, has_210f: bool = False,
+def units_for(model: str, read: Reader, *, revision: int = 0, has_210f: bool = False,
               cycle_s: Fraction = Fraction(1, 1000)) -> Units:
-    if family == "technosoft-ipos":
+    """The unit conversions of a drive whose manual defines them as ``model`` (``Behaviour.units``):
+    "technosoft" (§5, CiA-402-2 from F515K or the obsolete factors), "hdt" (65536 counts/rev, 6093h/6094h/6097h),
+    anything else CiA-402 (608Fh, 6091h/6092h, 6096h, 6097h)."""
+    if model == "technosoft":
         return TechnosoftUnits(read, cycle_s, cia402_2=technosoft_cia402_2(revision, has_210f))
-    if family == "hdt":
+    if model == "hdt":
         return HdtUnits(read, cycle_s)
     return Units(read, cycle_s)

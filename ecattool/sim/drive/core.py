@@ -381,6 +381,24 @@ class DriveCore:
     def inject_fault(self, code: int, data: bytes = b"") -> None:  # injection
         raise NotImplementedError
 
+    def motion_error(self, bit: int) -> None:  # injection
+        raise NotImplementedError
+
+    def motion_errors(self) -> int:  # injection
+        raise NotImplementedError
+
+    def fault_reset(self) -> None:  # injection
+        raise NotImplementedError
+
+    def _modes_snapshot(self) -> tuple[object, ...]:  # motion
+        raise NotImplementedError
+
+    def _fall_to_safeop(self, code: int, why: str) -> None:  # esm
+        raise NotImplementedError
+
+    def dc_active(self) -> bool:  # esm
+        raise NotImplementedError
+
     def _esm_effects(self, previous: EcState, state: EcState) -> None:  # family
         raise NotImplementedError
 

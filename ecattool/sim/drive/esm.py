@@ -46,6 +46,20 @@ class StateMachine(DriveCore):
         self._esm_effects(current, state)
         self._refresh_inputs()
 
+    def _fall_to_safeop(self, code: int, why: str) -> None:
+        """The slave leaves OP by itself for SAFE-OP with AL status ``code`` (a running axis: as when OP is
+        left)."""
+        if self.esm is not EcState.OP:
+            return
+        self._log("state", previous="OP", state="SAFEOP", al_status=code, reason=why)
+        self.esm = EcState.SAFEOP
+        if self.has_cia402:
+            self._cia_moves(self.cia.communication_lost(), "ESM left OP")
+        self._esm_effects(EcState.OP, EcState.SAFEOP)
+
+    def dc_active(self) -> bool:
+        return bool(getattr(self, "dc", (0, 0))[0])
+
     def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0, sync0_shift_ns: int = 0) -> None:
         """What the master writes to the ESC before SAFE-OP: DC activation (0x0981, e.g. 0x0300 = SYNC0)
         and the SYNC0 cycle and shift times in ns. ``assign_activate = 0`` = free run."""

@@ -22,6 +22,7 @@ from ecattool.sim.drive.esm import StateMachine
 from ecattool.sim.drive.family import FamilyQuirks
 from ecattool.sim.drive.injection import Injection
 from ecattool.sim.drive.memory import Memory
+from ecattool.sim.drive.mode_parts import ModeParts
 from ecattool.sim.drive.motion import Motion
 from ecattool.sim.drive.plant import Plant, PlantParams, counts_per_rev, plant_for
 from ecattool.sim.drive.process_data import ProcessData
@@ -146,13 +147,20 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self.layout = {RX: Layout(), TX: Layout()}
         self.cia = Cia402(enable_needs_op=self.behaviour.enable_needs_op,
                           supply_bit_always=self.behaviour.supply_bit_always)
+        self.modes = ModeParts()
         self.limit_active = False
         self.limit_switches = (False, False)  # (negative, positive) inputs, set_limit_switches()
         self.homing_warning = False  # Technosoft statusword bit 7 (homing start ignored)
         self.has_cia402 = (0x6040, 0) in self._entries and (0x6041, 0) in self._entries
-        self.units = units_for(self.family, self._read_int, revision=d.revision,
+        self.units = units_for(self.behaviour.units, self._read_int, revision=d.revision,
                              has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
         self.units.version = lambda: self._store.version
+        if not self.behaviour.mode_display_on_enable and (0x6061, 0) in self._entries:
+            # 6061h shows the mode 6060h selects from power-on (HDT §4.02.2, CT Table 7.16: 6060h = 2 by
+            # default, and that mode is the one the drive runs)
+            self._put(0x6061, 0, self._read_int(0x6060, 0) or 0)
+        for (index, sub), other in self.behaviour.linked_objects:
+            self._put(*other, self._read_int(index, sub) or 0)  # Pr 1.06 = 6080h's default (CT 7.3.17)
         self._new_plant()
         self._refresh_inputs()
 

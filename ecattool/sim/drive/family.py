@@ -20,7 +20,7 @@ class FamilyQuirks(DriveCore):
         """Control Techniques 608Fh is read-only and "read from the drive's encoder configuration" (A24):
         the drive reports its position resolution, 65536 increments per revolution (the drive's 1/2^16-turn
         position format), not the table default 1/1. :meth:`set_encoder_resolution` changes it."""
-        if self.family == "controltechniques" and (0x608F, 1) in self._entries:
+        if self.behaviour.encoder_resolution_reported and (0x608F, 1) in self._entries:
             self._put(0x608F, 1, self.rules.counts_per_rev or 65536)
             self._put(0x608F, 2, 1)
 
@@ -47,7 +47,7 @@ class FamilyQuirks(DriveCore):
     def _esm_effects(self, previous: EcState, state: EcState) -> None:
         """What a family's module does itself on an ESM change (Control Techniques: MM.04 follows the state in
         the slot menu 0x200F and its mirror 0x203C; the SAFE-OP -> OP parameter writes)."""
-        if self.family != "controltechniques":
+        if not self.behaviour.module_menu:
             return
         code = self._CT_MM04.get(state)
         if code is not None:
@@ -106,15 +106,29 @@ class FamilyQuirks(DriveCore):
             raise sdo_abort(0x60C2, sub, A.INVALID_VALUE)
         return True
 
+    def _linked(self, index: int) -> Callable[[int, int | None], None]:
+        """A write to ``index`` changes the objects ``Behaviour.linked_objects`` ties to it (Control Techniques
+        7.3.17: 6080h and Pr 1.06)."""
+        def after(sub: int, value: int | None) -> None:
+            for a, b in self.behaviour.linked_objects:
+                if a == (index, sub):
+                    self._put(*b, value or 0)
+                elif b == (index, sub):
+                    self._put(*a, value or 0)
+        return after
+
     def _install_family_handlers(self) -> None:
         self._handlers_down[0x1010] = self._check_store_signature
         if self.behaviour.home_offset_continuous:
             self._after_write[0x607C] = lambda sub, value: self._refresh_inputs()  # 6064h = sensor + 607Ch
-        if self.family == "hdt":
+        if self.behaviour.vl_min_max_checked:
             self._handlers_down[0x6046] = self._check_min_max
         if self.rules.ip_periods_ns or self.rules.ip_period_step_ns:
             self._handlers_down[0x60C2] = self._check_interpolation_period
-        if self.family == "controltechniques":
+        for pair in self.behaviour.linked_objects:
+            for index in {pair[0][0], pair[1][0]}:
+                self._after_write[index] = self._linked(index)
+        if self.behaviour.vl_factors_nonzero:
             self._handlers_down[0x604B] = self._nonzero(0x604B)
             self._handlers_down[0x604C] = self._nonzero(0x604C)
             self._after_write[0x6046] = self._copy_min_max_amount

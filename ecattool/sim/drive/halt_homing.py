@@ -30,8 +30,10 @@ from typing import TYPE_CHECKING
 from ecattool.errors import SdoAbort
 from ecattool import abort as A
 from ecattool.sim.cia402 import HALT, HOMING, PP, PV, Homing, State
+from ecattool.sim.drive.velocity_mode import counts_per_rev
 
 if TYPE_CHECKING:
+    from ecattool.sim.drive.behaviour import Behaviour
     from ecattool.sim.drive.core import DriveCore
 
 HOMING_START = 0x0010  # controlword bit 4 in homing mode
@@ -48,21 +50,23 @@ SEARCH = {
 }
 
 
-def reserved_method(family: str, method: int) -> bool:
+def reserved_method(behaviour: Behaviour, method: int) -> bool:
     """A 6098h value the drive refuses when it is written (HDT §4.08.3 "0..35 except 15, 16, 31, 32",
-    Control Techniques Table 7.59 "15, 16, 31, 32 reserved"). Values outside 0..35 are refused by the
-    entry's range (0609 0031h / 0609 0032h); Technosoft stores any INTEGER8 and answers at the start."""
-    return family in ("hdt", "controltechniques") and method in _RESERVED
+    Control Techniques Table 7.59 "15, 16, 31, 32 reserved": ``Behaviour.homing_reserved_refused``). Values
+    outside 0..35 are refused by the entry's range (0609 0031h / 0609 0032h); Technosoft stores any INTEGER8 and
+    answers at the start."""
+    return behaviour.homing_reserved_refused and method in _RESERVED
 
 
-def homing_kind(family: str, method: int) -> str:
+def homing_kind(family: str, behaviour: Behaviour, method: int) -> str:
     """What a homing start does with ``method``: "current" (home here), "power_on" (HDT 0: the power-on
     zero is home), "none" (0: no homing is executed), "search" (needs a switch or index pulse) or
-    "unavailable" (Technosoft EMCY FF03h; generic: a reserved method)."""
+    "unavailable" (Technosoft EMCY FF03h; generic: a reserved method). The method tables are data per family
+    (:data:`CURRENT_POSITION`, :data:`SEARCH`)."""
     if method in CURRENT_POSITION.get(family, CURRENT_POSITION["generic"]):
         return "current"
     if method == 0:
-        return "power_on" if family == "hdt" else "none"
+        return "power_on" if behaviour.homing_zero_is_power_on else "none"
     methods = SEARCH.get(family)
     if methods is None:  # generic CiA-402: 1..34 standard, negative = manufacturer specific
         return "unavailable" if method in _RESERVED or method == 36 or method > 37 else "search"
@@ -98,13 +102,14 @@ def halt_deceleration(drive: DriveCore, option: int | None = None) -> Fraction |
     ``option`` 1 slow-down ramp, 2 quick-stop ramp (default: 605Dh)."""
     option = halt_option(drive) if option is None else option
     read = drive._read_int
-    if drive.family == "hdt":
+    ramps = drive.behaviour.halt_ramps
+    if ramps == "604Eh":
         # §4.03.7-4.03.9: deceleration = 604Eh (6042h units, x 604Ch -> rpm) / 6050h or 6051h (ms)
         time_ms = read(0x6051 if option == 2 else 0x6050, 0)
         num, den = read(0x604C, 1) or 1, read(0x604C, 2) or 1
         rpm = Fraction(read(0x604E, 0) or 0) * Fraction(num, den)
         return rpm * 65536 / 60 / Fraction(time_ms, 1000) if time_ms else None
-    if drive.family == "technosoft-ipos":
+    if ramps == "6083h":
         index = 0x6085 if option == 2 else 0x6083  # §4.4.10: slow-down ramp 6083h, quick-stop ramp 6085h
     elif option in (3, 4):
         return None  # current / voltage limit: the model has no torque, the axis stops within the cycle
@@ -146,7 +151,7 @@ def start_homing(drive: DriveCore) -> None:
     cia = drive.cia
     method = drive._read_int(0x6098, 0) if (0x6098, 0) in drive._entries else 0
     method = method or 0
-    kind = homing_kind(drive.family, method)
+    kind = homing_kind(drive.family, drive.behaviour, method)
     enabled = cia.state is State.OPERATION_ENABLED
     outside = kind == "current" and drive.behaviour.homing_current_outside_enabled and \
         cia.state in (State.READY, State.SWITCHED_ON)
@@ -224,7 +229,7 @@ def home_position(drive: DriveCore) -> Fraction | None:
     6064h to 607Ch, except Technosoft with 210Bh bit 12 = 1 (position kept, §6.3.3)."""
     if drive.behaviour.home_offset_continuous:
         return Fraction(0)
-    if drive.family == "technosoft-ipos" and (drive._read_int(0x210B, 0) or 0) & 0x1000:
+    if drive.behaviour.home_keeps_position_bit and (drive._read_int(0x210B, 0) or 0) & 0x1000:
         return None
     offset = drive._read_int(0x607C, 0) if (0x607C, 0) in drive._entries else 0
     return drive.units.position_to_internal(offset or 0)
@@ -241,7 +246,7 @@ def after_step(drive: DriveCore, before: Homing) -> None:
 
 
 def check_method(drive: DriveCore, sub: int, value: int) -> None:
-    if reserved_method(drive.family, value):
+    if reserved_method(drive.behaviour, value):
         raise SdoAbort(0x6098, sub, A.INVALID_VALUE)
 
 
@@ -255,7 +260,7 @@ def halt_decel_for_step(drive: DriveCore, mode: int) -> Fraction | None:
         return halt_deceleration(drive)
     if mode == HOMING:
         return drive.cia.homing_acceleration
-    if drive.family == "hdt":
+    if drive.behaviour.pp_halt_uses_6084:
         u = drive.units
         return abs(u.increments_per_second2(u.acceleration_to_internal(drive._read_int(0x6084, 0) or 0))) or None
     return halt_deceleration(drive)
@@ -279,7 +284,23 @@ def quick_stop_ramp(drive: DriveCore, option: int) -> Fraction | None:
     (docs/decisions.md, "Simulator: quick stop and fault reaction")."""
     if option == 0:
         return None
+    if drive.behaviour.vl_quick_stop_ramps and drive.mode() in (2, 4):
+        # Control Techniques 7.5.7/7.5.8, 7.6: vl and profile torque stop along the vl ramps, 6049h (slow down)
+        # and 604Ah ("the slope of the deceleration ramp for quick stop")
+        return vl_ramp(drive, 0x6049 if option in (1, 5) else 0x604A)
     return halt_deceleration(drive, 1 if option in (1, 5) else 2)
+
+
+def vl_ramp(drive: DriveCore, index: int) -> Fraction | None:
+    """A vl ramp record (delta speed in 6042h units, delta time in s) in increments/s²; None: delta time 0 or no
+    known increments per revolution (the axis stops within the cycle)."""
+    speed, time = drive._read_int(index, 1), drive._read_int(index, 2)
+    cpr = counts_per_rev(drive)
+    if not time or cpr is None:
+        return None
+    num, den = drive._read_int(0x604C, 1), drive._read_int(0x604C, 2)
+    dimension = Fraction(num, den) if num and den else Fraction(1)
+    return Fraction(speed or 0, time) * dimension * cpr / 60
 
 
 def fault_reaction_ramp(drive: DriveCore, code: int) -> Fraction | None:

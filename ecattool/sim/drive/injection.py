@@ -16,8 +16,34 @@ from ecattool.sim.drive.core import DriveCore
 class Injection(DriveCore):
     """Faults, communication loss and inputs, with the reactions the family's rules give them."""
 
+    #: Motion Error Register bits latched by errors until a Fault Reset (the limit-switch bits are live)
+    _motion_errors = 0
+
+    def motion_error(self, bit: int) -> None:
+        """An error sets bit ``bit`` of the family's Motion Error Register (Technosoft 2000h)."""
+        if self.behaviour.motion_error_register is not None:
+            self._motion_errors |= 1 << bit
+
+    def motion_errors(self) -> int:
+        """The Motion Error Register: the latched bits, and the limit switches (Technosoft Table 4.4.2: bit 7
+        negative, bit 6 positive limit switch active, "Reset when ... inactive")."""
+        negative, positive = self.limit_switches
+        return self._motion_errors | (0x80 if negative else 0) | (0x40 if positive else 0)
+
+    def fault_reset(self) -> None:
+        """A Fault Reset has taken the drive out of FAULT: the error register 1001h is cleared, the "error reset"
+        EMCY 0000h sent, the Motion Error Register's latched bits cleared but "invalid setup data" (bit 2)."""
+        if not self.behaviour.error_reset_emcy:
+            return
+        self._put(0x1001, 0, 0)
+        self._motion_errors &= 1 << 2
+        self.emcy(0x0000)
+
     def inject_fault(self, code: int, data: bytes = b"") -> None:
         """A drive fault: FAULT REACTION ACTIVE -> FAULT, 603Fh = code, EMCY with the code."""
+        for error, bit in self.behaviour.motion_error_bits:
+            if error == code:
+                self.motion_error(bit)
         self._cia_moves(self.cia.fault(code, hh.fault_reaction_ramp(self, code)), f"fault 0x{code:04X}")
         self.emcy(code, data)
         self._refresh_inputs()
@@ -39,8 +65,8 @@ class Injection(DriveCore):
         option = 1 if option is None else option
         end = self.option_end_state(0x6007, option,
                                     {0: "NO_ACTION", 1: "FAULT", 2: "SWITCH_ON_DISABLED"}.get(option, "QUICK_STOP"))
-        if self.family == "controltechniques":
-            end = "SWITCH_ON_DISABLED"
+        if self.behaviour.communication_lost_state is not None:
+            end = self.behaviour.communication_lost_state
         self._log("cia402", reason=f"communication lost, 6007h = {option}", reaction=end)
         if end == "FAULT":
             self.inject_fault(0x8100)
@@ -101,8 +127,9 @@ class Injection(DriveCore):
         self.limit_active = negative or positive
         self.limit_switches = (negative, positive)
         self._log("inputs", digital_inputs=new)
-        if self.family == "technosoft-ipos":
-            for was, now, code in ((was_neg, negative, 0x5442), (was_pos, positive, 0x5443)):
+        codes = self.behaviour.limit_switch_emcy
+        if codes is not None:
+            for was, now, code in ((was_neg, negative, codes[0]), (was_pos, positive, codes[1])):
                 if now and not was:
                     self.emcy(code)
                 elif was and not now:

@@ -26,7 +26,7 @@ class Memory(DriveCore):
     """EEPROM objects, reset, power, FoE."""
 
     def _install_memory_handlers(self) -> None:
-        if self.family != "technosoft-ipos":
+        if not self.behaviour.eeprom_objects:
             return
         m = self.memory
 

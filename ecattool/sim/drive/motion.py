@@ -10,16 +10,21 @@ from ecattool import abort as A
 from ecattool.od.model import EcState
 from ecattool.profiles.rules import interpolation_period_ns
 from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile, State
+from ecattool.sim.drive import csp_options as csp
 from ecattool.sim.drive import halt_homing as hh
+from ecattool.sim.drive import polarity
 from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
 from ecattool.sim.drive.plant import cycle as plant_cycle
 from ecattool.sim.drive.supervision import limit_stop, report_actual, supervise
+from ecattool.sim.drive.mode_parts import MOVED, PARTS, ModeParts
 from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
 #: 607Dh's sub-indices 1 and 2 at the whole INTEGER32 range (no software limit)
 _OPEN_LOW, _OPEN_HIGH = (-(2**31)).to_bytes(4, "little", signed=True), (2**31 - 1).to_bytes(4, "little", signed=True)
 _ENABLED = State.OPERATION_ENABLED
+#: the states with the power stage on
+_POWERED = frozenset({State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION})
 #: every object :meth:`Motion._make_profile` reads
 _PROFILE_OBJECTS = ((0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6086, 0), (0x2023, 0), (0x201A, 0), (0x2021, 0),
                     (0x2011, 0))
@@ -29,6 +34,12 @@ _ACTUAL_VALUES = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0
 
 class Motion(DriveCore):
     """The CiA-402 device control and the motion it produces."""
+
+    #: the demand side of vl, PP set-points, PV windows, torque and interpolated position (:mod:`.mode_parts`)
+    modes: ModeParts
+
+    def _modes_snapshot(self) -> tuple[object, ...]:
+        return self.modes.snapshot()
 
     def cycle_time(self) -> Fraction:
         """The process-data cycle in seconds: 60C2h (sub1 × 10^sub2) where present, else 1 ms (computed once per
@@ -69,14 +80,11 @@ class Motion(DriveCore):
             self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
         moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP, quick_stop_option=option)
         self._cia_moves(moves, f"controlword 0x{cw:04X}")
+        if moves and moves[0][0] is State.FAULT:
+            self.fault_reset()
         if self.cia.state is State.OPERATION_ENABLED and self.mode() == PP:
-            if cw & 0x10 and not prev & 0x10:
-                relative = bool(cw & 0x40)
-                target = (self._read_int(0x607A, 0) or 0) - (0 if relative else self._home_offset())
-                self.cia.new_setpoint(self.units.position_to_internal(target), relative=relative)
+            if self.modes.pp.on_controlword(self, cw, prev):  # the set-point handshake (:mod:`.pp_setpoints`)
                 self._report_blocked_motion()
-            elif not cw & 0x10:
-                self.cia.setpoint_ack = False
         hh.on_controlword(self, cw, prev)
         self._refresh_inputs()
 
@@ -96,10 +104,19 @@ class Motion(DriveCore):
             self.emcy(0x6320, index.to_bytes(2, "little") + bytes([sub]))
 
     def _on_mode(self, sub: int, value: int | None) -> None:
+        if value == PV:
+            self.modes.pv.armed = False  # Technosoft §10.1 Remark 2: 60FFh must be written again
+        self.modes.mode_changed()
+        if self.behaviour.dc_mode_in_op_drops_to_safeop and self.esm is EcState.OP and not self.dc_active() \
+                and value in self.rules.dc_required_modes:
+            self._fall_to_safeop(A.AlStatus.DC_INVALID_SYNC, f"mode {value} needs distributed clocks")
         if not self.behaviour.mode_display_on_enable or self.cia.state is State.OPERATION_ENABLED:
             self._put(0x6061, 0, value or 0)
         hh.on_mode(self)
         self._refresh_inputs()
+
+    def _on_target_velocity(self, sub: int, value: int | None) -> None:
+        self.modes.pv.armed = True
 
     def _check_mode(self, sub: int, data: bytes, value: int | None) -> bool:
         mode = value or 0
@@ -143,14 +160,30 @@ class Motion(DriveCore):
                     continue
                 if mode == CSP:
                     pn, pd, _, _, sn, sd = u.ratios()
+                    if csp.applies(self):  # Technosoft bit 6 relative, 2086h speed limit
+                        goal = csp.target(self, dt)
+                        cia.follow_position(goal.numerator, goal.denominator, dt, sd, sn)
+                        self._after_step(dt, mode)
+                        continue
                     # internal velocity units per increment/s: the inverse of increments/s per unit (sn > 0)
-                    cia.follow_position(((self._read_int(0x607A, 0) or 0) - self._home_offset()) * pn, pd, dt,
+                    sign = polarity.target_signs(self, mode)[0]
+                    cia.follow_position((sign * (self._read_int(0x607A, 0) or 0) - self._home_offset()) * pn, pd, dt,
                                         sd, sn)
                     self._after_step(dt, mode)
                     continue
                 if mode == CSV:
+                    if csp.csv_limited(self):  # Technosoft 2086h = 1: acceleration at most 6083h
+                        csp.csv_step(self, dt)
+                        self._after_step(dt, mode)
+                        continue
                     _, _, vn, vd, sn, sd = u.ratios()
-                    cia.follow_velocity((self._read_int(0x60FF, 0) or 0) * vn, vd, dt, sn, sd)
+                    sign = polarity.target_signs(self, mode)[1]
+                    cia.follow_velocity(sign * (self._read_int(0x60FF, 0) or 0) * vn, vd, dt, sn, sd)
+                    self._after_step(dt, mode)
+                    continue
+                if mode in MOVED:  # vl, profile torque, interpolated position, CST: their own parts
+                    self.modes.step(self, mode, dt)
+                    self.modes.after(self, mode, dt)
                     self._after_step(dt, mode)
                     continue
                 moving = True
@@ -160,15 +193,21 @@ class Motion(DriveCore):
             cia.step(
                 mode, dt,
                 target_position=_ZERO,
-                target_velocity=u.velocity_to_internal(self._read_int(0x60FF, 0) or 0)
-                if moving and mode == PV else _ZERO,
+                target_velocity=u.velocity_to_internal(polarity.target_signs(self, mode)[1]
+                                                       * (self._read_int(0x60FF, 0) or 0))
+                if moving and mode == PV and self.modes.pv.target_live(self) else _ZERO,
                 profile_velocity=_ZERO, acceleration=_ZERO,
                 inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
                 inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(self, mode),
-                profile=self._profile(mode) if moving and mode in (PP, PV) else None,
+                profile=(self._profile(mode) if mode == PV else self.modes.pp.profile(self, self._profile(mode)))
+                if moving and mode in (PP, PV) else None,
             )
             if homing_before is not cia.homing:
                 hh.after_step(self, homing_before)
+            if mode == PP and cia.target is None and self.modes.pp.after_step(self, dt):
+                self._report_blocked_motion()  # the set-point that waited for the move is taken
+            if mode in PARTS:
+                self.modes.after(self, mode, dt)
             self._after_step(dt, mode)
         self._refresh_inputs(mode)  # the step changes no mode (6061h)
 
@@ -250,9 +289,9 @@ class Motion(DriveCore):
         jerk_time = _ZERO
         jerk: Fraction | None = None
         if mode == PP and (read(0x6086, 0) or 0) == 3:
-            if self.family == "technosoft-ipos":
+            if self.behaviour.scurve_jerk == "2023h":
                 jerk_time = Fraction(read(0x2023, 0) or 0, 1000)
-            elif self.family == "hdt":
+            elif self.behaviour.scurve_jerk == "2011h/2021h":
                 if (read(0x201A, 0) or 0) & 0x4:
                     jerk_time = Fraction(read(0x2021, 0) or 0, 1000)
                 else:
@@ -260,7 +299,11 @@ class Motion(DriveCore):
                     jerk = acc(0x2011) or None
         # HDT §4.07.8 profile type -1, "linear ramp with torque limit": the trapezoid of 0, whose generator stops
         # while an obstacle blocks the axis (the model has no torque: :meth:`set_obstacle` is the obstacle)
-        torque_limited = mode == PP and self.family == "hdt" and read(0x6086, 0) == -1
+        # or any profile type with 201Ah bit 1 "Torque limit enabled" (HDT §4.06.10: "the position profile is
+        # adapted to the measured position; when the Drive torque is no longer at its limit, then the execution of
+        # the position profile is resumed")
+        torque_limited = mode == PP and self.behaviour.torque_limited_profile and (
+            read(0x6086, 0) == -1 or bool((read(0x201A, 0) or 0) & 0x2))
         return Profile(velocity, up, down, jerk_time, torque_limited, jerk)
 
     def _refresh_inputs(self, mode: int | None = None) -> None:
@@ -272,8 +315,15 @@ class Motion(DriveCore):
             mode = self.mode()
         cia = self.cia
         sw = cia.statusword(mode=mode) | (0x0800 if self.limit_active else 0)
-        if self.family == "technosoft-ipos" and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
+        if mode in PARTS:
+            sw |= self.modes.status_bits(self, mode)
+        behaviour = self.behaviour
+        if behaviour.homing_busy_bits and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
             sw |= 0x0100 | (0x0080 if self.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning
+        if behaviour.axis_on_bit15 and cia.state in _POWERED:
+            sw |= 0x8000  # Technosoft Table 4.2.3: "Axis on. Power stage is enabled"
+        if behaviour.motion_error_register is not None:
+            self._put(behaviour.motion_error_register, 0, self.motion_errors())
         if self.plant is not None:
             report_actual(self, sw, mode)
             return
@@ -282,8 +332,12 @@ class Motion(DriveCore):
         # factor), in integers
         user_position = self._user_position()
         error = self.units.position_to_user_int(cia.following_error) if cia.following_error else 0
-        self._put_all(_ACTUAL_VALUES, (sw, cia.pos_n // cia.pos_d, user_position, user_position + error,
-                                       floor_ratio(cia.vel_n, cia.vel_d, vn, vd), cia.fault_code, error))
+        velocity = floor_ratio(cia.vel_n, cia.vel_d, vn, vd)
+        if behaviour.polarity:
+            ps, vs = polarity.actual_signs(self, mode)
+            user_position, error, velocity = ps * user_position, ps * error, vs * velocity
+        self._put_all(_ACTUAL_VALUES, (sw, cia.pos_n // cia.pos_d, user_position, user_position + error, velocity,
+                                       cia.fault_code, error))
 
     def _home_offset(self) -> int:
         """607Ch where the family adds it to the measured position at all times (HDT), else 0."""
@@ -313,5 +367,6 @@ class Motion(DriveCore):
     def _install_motion_handlers(self) -> None:
         self._after_write[0x6040] = self._on_controlword
         self._after_write[0x6060] = self._on_mode
+        self._after_write[0x60FF] = self._on_target_velocity
         self._handlers_down[0x6060] = self._check_mode
         self._handlers_down[0x6098] = self._check_homing_method

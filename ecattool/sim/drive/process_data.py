@@ -158,6 +158,7 @@ class ProcessData(PdoConfig):
         rx, tx = self.layout[RX], self.layout[TX]
         store = self._store
         return (store, store.changes, cia, None if cia.move is None else object(), *vars(cia).values(),
+                *self._modes_snapshot(),
                 self.units, self._entries, len(self._entries), rx, tx, tuple(rx.entries), tuple(tx.entries),
                 rx.bits, tx.bits,
                 self.limit_active, self.limit_switches, self.homing_warning, self.behaviour, self.family,
