@@ -28,9 +28,10 @@ def enable(d: Drive, last: int = 0x0F) -> None:
     assert d.cia.state is State.OPERATION_ENABLED
 
 
-def ct_with_dc(mode: int) -> Drive:
-    """A Control Techniques drive in OP with SYNC0 at 250 us (its positioning modes need DC, CT 1857)."""
-    d = Drive.from_profile("controltechniques")
+def ct_with_dc(mode: int, plant: object = "ideal") -> Drive:
+    """A Control Techniques drive in OP with SYNC0 at 250 us (its positioning modes need DC, CT 1857); on the
+    ideal plant unless ``plant`` is given (the manuals' traces are the demand's)."""
+    d = Drive.from_profile("controltechniques", plant=plant)  # type: ignore[arg-type]
     d.request_state(PRE)
     w(d, 0x6060, 0, mode, 1)
     d.configure_dc(0x0300, 250_000)
@@ -185,6 +186,30 @@ def test_n6_ct_interpolated_position_follows_60c1_one_period_late():
     d.step(1)
     assert d.value(0x6064) == 300
     assert r(d, 0x6041) & 0x0400
+
+
+def test_n6_ct_interpolated_position_is_delayed_once_on_the_plant():
+    """The one period of CT 1921 is the interpolator's: the plant's own reference delay (CT CSP, 2550) does not
+    add a second one in mode 7, so the axis on the family's plant tracks the same demand as on a plant without
+    that delay."""
+    from dataclasses import replace
+
+    from ecattool.sim.drive.plant import plant_for
+
+    params = plant_for("controltechniques")
+    assert params is not None and params.delay == "reference"
+    traces = []
+    for p in (params, replace(params, delay="none")):
+        d = ct_with_dc(7, plant=p)
+        enable(d)
+        trace = []
+        for cycle in range(800):  # 0.2 s at 250 us: one revolution (1 unit, 65536 increments) per 80 periods
+            w(d, 0x60C1, 1, min(cycle // 80, 5), 4)
+            d.step(1)
+            assert d.plant is not None
+            trace.append(round(d.cia.pos_n / d.cia.pos_d + d.plant.reported()[0]))  # increments, as measured
+        traces.append(trace)
+    assert traces[0] == traces[1] and 0 < traces[0][100] < traces[0][-1] <= 5 * 65536
 
 
 def test_n6_hdt_interpolated_position_needs_bit4_and_reports_bit12():
@@ -595,11 +620,11 @@ def test_n14_hdt_new_profile_velocity_applies_during_the_move():
     d = _pp("hdt", 1000, 10000)
     w(d, 0x607A, 0, 10_000_000, 4)
     w(d, 0x6040, 0, 0x3F, 2)
-    d.step(100)
+    d.step(300)  # at cruise (the S-curve's jerk limit 2011h included)
     cruise = r(d, 0x606C, 0, True)
     w(d, 0x6081, 0, 2000, 4)
-    d.step(100)
-    assert r(d, 0x606C, 0, True) == 2 * cruise
+    d.step(300)
+    assert cruise > 0 and r(d, 0x606C, 0, True) == 2 * cruise
 
 
 def test_n15_hdt_ramps_changed_during_a_move_wait_for_standstill():

@@ -267,7 +267,10 @@ def test_6072h_limits_the_plants_torque():
 def test_one_sample_of_delay_where_the_manual_says_so(family: str, delayed: bool):
     """Issue 33 item 2 / N3: Control Techniques CSP inserts one interpolation period (CT 2550); Technosoft samples
     the actual position before the new reference (§3.2.2, TS 1855); HDT's loop answers in the same cycle."""
-    d = _csp(at(family, OP, plant=None))
+    d = at(family, SAFE, plant=None)
+    d.configure_dc(0x0300, 1_000_000)  # CT 1857: the positioning modes need distributed clocks in OP
+    d.request_state(OP)
+    d = _csp(d)
     if (0x6065, 0) in d._entries:
         w(d, 0x6065, 0, 0xFFFFFFFF, 4)
     w(d, 0x607A, 0, 1, 4)  # 1 user unit: 1 count (HDT, Technosoft), 65536 counts (Control Techniques)

@@ -179,13 +179,19 @@ class Plant:
             self._derive()
 
     # --- the cycle -----------------------------------------------------------------------------------------
-    def follow_position(self, moved: float) -> None:
-        """One cycle in a position mode: the demand moved by ``moved`` increments over the cycle."""
+    def follow_position(self, moved: float, reference_delay: bool = True) -> None:
+        """One cycle in a position mode: the demand moved by ``moved`` increments over the cycle. Without
+        ``reference_delay`` the loop sees the demand at once even where the family delays it (the mode's own
+        generator already delayed it: Control Techniques interpolated position); a reference still held back from
+        an earlier cycle is then passed on."""
         p = self.params
         loop_moved, y0 = moved, self.error  # what the loop's reference moved by, the loop's error
-        if p.delay == "reference":
+        if p.delay == "reference" and reference_delay:
             loop_moved, y0 = self.pending, self.error + self.pending
             self.pending = moved
+        elif p.delay == "reference" and self.pending:
+            loop_moved, y0 = moved + self.pending, self.error + self.pending
+            self.pending = 0.0
         elif p.delay == "sample":
             self.sampled = (self.error - moved, self.velocity)  # the previous actual, against the new demand
         s = loop_moved / self.dt
@@ -292,6 +298,8 @@ class Plant:
 _ENABLED, _QUICK_STOP, _FAULT_REACTION = State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION
 #: modes whose loop is the velocity loop (vl 2, PV 3, CSV 9); the others close the position loop
 VELOCITY_MODES = frozenset({2, 3, 9})
+#: interpolated position (CiA-402 mode 7)
+_IP = 7
 
 
 def counts_per_rev(drive: "DriveCore") -> float:
@@ -321,7 +329,9 @@ def cycle(drive: "Motion", plant: Plant, mode: int, pn0: int, pd0: int) -> None:
             sn, sd = drive.units.ratios()[4:6]
             plant.follow_velocity(cia.vel_n * sn / (cia.vel_d * sd), moved)
         else:
-            plant.follow_position(moved)
+            # the one period Control Techniques inserts is the interpolator's in mode 7 (Behaviour.ip_delay_periods):
+            # the loop takes that demand at once, not one period later again
+            plant.follow_position(moved, not (mode == _IP and drive.behaviour.ip_delay_periods))
         return
     plant.apply_torque(0.0, moved)
     error = plant.error
