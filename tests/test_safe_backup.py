@@ -223,52 +223,65 @@ def _other_image(good: bytes) -> bytes:
     return bytes(new)
 
 
-def test_a_sii_write_cut_anywhere_never_leaves_an_image_that_checks_out(tmp_path: Path) -> None:
+def test_a_sii_write_cut_anywhere_never_leaves_an_image_that_checks_out() -> None:
     """Issue 37.3: 2 of 20 kills during `sii write` left a mixed EEPROM (new header with a valid CRC, old
-    categories) that `sii check` passes. Cut after every single word write: the EEPROM is the old image whole, the
-    new one whole, or fails its CRC."""
+    categories) that `sii check` passes. Cut after every single word write of the sequence: the EEPROM is the old
+    image whole, the new one whole, or fails its CRC."""
+    from ecattool.online.sii_access import read_problems, write_sequence
+
+    with open_bus("sim:technosoft-ipos") as bus:
+        old = bus.slaves[0].sii
+    categories_only = bytearray(old)
+    categories_only[0x84] ^= 0x01  # words 0-7 as they are: the old checksum stays valid for the new header, so
+    # writing the header last alone would leave old-header-plus-half-new-categories checking out
+    for new in (_other_image(old), bytes(categories_only)):
+        seq = write_sequence(new, old)
+        assert sorted({w for w, _ in seq}) == list(range(len(new) // 2)) and len(seq) == len(new) // 2 + 1
+        for n in range(len(seq) + 1):
+            eeprom = bytearray(old)
+            for word, data in seq[:n]:
+                eeprom[2 * word:2 * word + 2] = data
+            problems = read_problems(bytes(eeprom))
+            if n == 0:
+                assert bytes(eeprom) == old
+            elif n == len(seq):
+                assert bytes(eeprom[:len(new)]) == new and problems == []
+            else:
+                assert any("CRC-8" in p for p in problems), (n, seq[n - 1][0], problems)
+
+
+def test_sii_write_sends_that_sequence_word_by_word_and_a_cut_write_fails_the_crc(tmp_path: Path) -> None:
+    """The same through a master (the fake pysoem module, word by word): the writes are the sequence, and a write
+    cut half-way (the master's EEPROM write fails) leaves an EEPROM whose CRC fails."""
     from ecattool.online.pysoem_bus import open_pysoem
-    from ecattool.online.sii_access import read_problems, sii_write
+    from ecattool.online.sii_access import read_problems, sii_write, write_sequence
     from ecattool.sim import Drive
     from tests import fake_pysoem
 
-    class Cut(Exception):
-        pass
-
-    total = None
-    n = 0
-    while total is None or n <= total:
-        drive = Drive.from_profile("technosoft-ipos")
-        mod = fake_pysoem.make_module([drive])
-        bus = open_pysoem("eth0", mod)
+    for cut in (None, 3, 200):
+        bus = open_pysoem("eth0", fake_pysoem.make_module([Drive.from_profile("technosoft-ipos")]))
         try:
             raw = bus.slaves[0]._raw
             old = bytes(raw.sii)
             new = _other_image(old)
             real_write = raw.eeprom_write
-            writes = []
 
-            def cut_after_n(word_address: int, data: bytes, timeout: int = 20000, n: int = n) -> None:
-                if len(writes) == n:
-                    raise Cut()
-                writes.append(word_address)
+            def write(word_address: int, data: bytes, timeout: int = 20000) -> None:
+                if cut is not None and len(raw.sii_writes) == cut:
+                    raise KeyboardInterrupt  # the process is stopped here
                 real_write(word_address, data, timeout)
 
-            raw.eeprom_write = cut_after_n
-            backup_file = tmp_path / f"old-{n}.bin"
-            try:
-                assert sii_write(bus.slaves[0], new, "new.bin", backup_file) == []
-                total = len(writes)
-                assert bytes(raw.sii[:len(new)]) == new  # not cut: the new image, whole
-            except Cut:
-                eeprom = bytes(raw.sii)
-                problems = read_problems(eeprom)
-                assert eeprom == old or any("CRC-8" in p for p in problems), (n, writes[-3:], problems)
-                assert n == 0 or eeprom != old  # something was written, and it shows
+            raw.eeprom_write = write
+            if cut is None:
+                assert sii_write(bus.slaves[0], new, "new.bin", tmp_path / "old.bin") == []
+                assert raw.sii_writes == write_sequence(new, old) and bytes(raw.sii[:len(new)]) == new
+            else:
+                with pytest.raises(KeyboardInterrupt):
+                    sii_write(bus.slaves[0], new, "new.bin", tmp_path / f"old-{cut}.bin")
+                assert len(raw.sii_writes) == cut
+                assert any("CRC-8" in p for p in read_problems(bytes(raw.sii)))
         finally:
             bus.close()
-        n += 1 if total is None or n < 8 or n > total - 10 else max(1, (total - 18) // 12)
-    assert total is not None and total > 64  # every word of the image, the checksum word twice
 
 
 def test_sii_write_force_only_overwrites_files_and_any_identity_is_its_own_flag(
