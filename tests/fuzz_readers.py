@@ -53,7 +53,8 @@ ESI_SEEDS = ("samples/esi/etg2001_cia402.xml", "corpus:esi/smc_EX260-SECx_V11.xm
 ENTRIES: tuple[Entry, ...] = (
     Entry("esi devices", ("esi", "devices", "{f}"), ESI_SEEDS, ".xml"),
     Entry("sii build (ESI)", ("sii", "build", "{f}", "--device", "0", "-o", "{o}", "--force"), ESI_SEEDS, ".xml"),
-    Entry("sim run (ESI)", ("sim", "run", "{f}", "{script}", "--device", "0"), ESI_SEEDS[:3], ".xml"),
+    # the SMC EX260 has no mailbox (its script's SDO read would time out, as on the real slave): the drives only
+    Entry("sim run (ESI)", ("sim", "run", "{f}", "{script}", "--device", "0"), (ESI_SEEDS[0], ESI_SEEDS[2]), ".xml"),
     Entry("esi show (EDS)", ("esi", "show", "{f}", "--pdos"), ("corpus:eds/technosoft_iPOS.D.v1.04.eds",), ".eds"),
     Entry("sii info", ("sii", "info", "{f}"),
           ("corpus:sii/ni9144.bin", "corpus:sii/soes_linux_lan9252demo.bin", "samples/sii/custom_slave.bin"), ".bin"),

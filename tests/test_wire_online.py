@@ -26,8 +26,19 @@ SCENARIO = Path(__file__).with_name("wire_online_scenario.py")
 ETG2001 = ROOT / "samples" / "esi" / "etg2001_cia402.xml"
 
 
+#: the scenario's result, once per test process: pytest tears a module fixture down whenever it sees no next test
+#: (an xdist worker that has not been sent the rest of the group yet), and the scenario takes two minutes
+_RESULT: dict[str, Any] = {}
+
+
 @pytest.fixture(scope="module")
 def result(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    if not _RESULT:
+        _RESULT.update(_run_scenario(tmp_path_factory))
+    return _RESULT
+
+
+def _run_scenario(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     try:
         import kickcat  # type: ignore[import-not-found, import-untyped, unused-ignore]  # noqa: F401
         import pysoem  # type: ignore[import-not-found, import-untyped, unused-ignore]  # noqa: F401
