@@ -196,7 +196,7 @@ def test_plots_are_drawn_with_their_titles_and_labels(page: DevTools) -> None:
         assert "606Ch velocity actual" in velocity["text"] or "demand velocity" in velocity["text"]
     z_axis = plots[0]
     assert [p["title"] for p in z_axis] == ["timeline", "Position (user units, um)", "Velocity (user units, mm/s)",
-                                            "Internal units (counts)"]
+                                            "Internal units (counts)", "Following error and torque"]
     assert "position [um]" in z_axis[1]["text"] and "velocity [counts/s]" in z_axis[3]["text"]
 
 

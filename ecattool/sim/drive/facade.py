@@ -24,7 +24,8 @@ from ecattool.sim.drive.injection import Injection
 from ecattool.sim.drive.memory import Memory
 from ecattool.sim.drive.mode_parts import ModeParts
 from ecattool.sim.drive.motion import Motion
-from ecattool.sim.drive.plant import Plant, PlantParams, counts_per_rev, plant_for
+from ecattool.sim.drive.plant import Plant, PlantParams, plant_for
+from ecattool.sim.drive.plant_step import counts_per_rev
 from ecattool.sim.drive.process_data import ProcessData
 from ecattool.sim.drive.supervision import Supervision
 from ecattool.sim.drive.sdo import SdoServer

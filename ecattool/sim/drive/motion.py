@@ -14,7 +14,7 @@ from ecattool.sim.drive import csp_options as csp
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive import polarity
 from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
-from ecattool.sim.drive.plant import cycle as plant_cycle
+from ecattool.sim.drive.plant_step import cycle as plant_cycle
 from ecattool.sim.drive.supervision import limit_stop, report_actual, supervise
 from ecattool.sim.drive.mode_parts import MOVED, PARTS, ModeParts
 from ecattool.sim.units import floor_ratio

@@ -21,13 +21,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
-from ecattool.sim.cia402 import State
-
-if TYPE_CHECKING:
-    from ecattool.sim.drive.core import DriveCore
-    from ecattool.sim.drive.motion import Motion
 
 #: ``"reference"``: the loop sees the demand one cycle late (Control Techniques CSP/IP insert one interpolation
 #: period); ``"sample"``: the actual values are sampled before the new reference is applied (Technosoft §3.2.2)
@@ -292,53 +287,3 @@ class Plant:
         """6077h: the torque in thousandths of the rated torque."""
         rated = self.params.rated_torque
         return int(round(self.torque / rated * 1000)) if rated > 0 else 0
-
-
-# --- the plant in the drive's cycle ---------------------------------------------------------------------------
-_ENABLED, _QUICK_STOP, _FAULT_REACTION = State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION
-#: modes whose loop is the velocity loop (vl 2, PV 3, CSV 9); the others close the position loop
-VELOCITY_MODES = frozenset({2, 3, 9})
-#: interpolated position (CiA-402 mode 7)
-_IP = 7
-
-
-def counts_per_rev(drive: "DriveCore") -> float:
-    """Increments per motor revolution: 608Fh (encoder increments / motor revolutions) where the drive has it,
-    else HDT's 65536 (§4.06, every HDT drive)."""
-    num, den = drive._read_int(0x608F, 1), drive._read_int(0x608F, 2)
-    if num and den:
-        return num / den
-    return 65536.0
-
-
-def cycle(drive: "Motion", plant: Plant, mode: int, pn0: int, pd0: int) -> None:
-    """Step ``plant`` one cycle after the drive's demand moved from ``pn0 / pd0`` to where its CiA-402 model is now
-    (increments): the position loop or the velocity loop while the power stage is on (OPERATION ENABLED, a quick
-    stop or fault reaction ramping), else the motor coasts and the demand follows the actual position."""
-    cia = drive.cia
-    version = drive._store.version
-    if plant.version != version:  # 608Fh or the cycle 60C2h may have changed
-        plant.version = version
-        dt = drive.cycle_time()
-        plant.set_geometry(counts_per_rev(drive), dt.numerator / dt.denominator)
-    pn, pd = cia.pos_n, cia.pos_d
-    moved = (pn * pd0 - pn0 * pd) / (pd * pd0) if (pn, pd) != (pn0, pd0) else 0.0
-    state = cia.state
-    if state is _ENABLED or state is _QUICK_STOP or state is _FAULT_REACTION:
-        if mode in VELOCITY_MODES and state is _ENABLED:
-            sn, sd = drive.units.ratios()[4:6]
-            plant.follow_velocity(cia.vel_n * sn / (cia.vel_d * sd), moved)
-        else:
-            # the one period Control Techniques inserts is the interpolator's in mode 7 (Behaviour.ip_delay_periods):
-            # the loop takes that demand at once, not one period later again
-            plant.follow_position(moved, not (mode == _IP and drive.behaviour.ip_delay_periods))
-        return
-    plant.apply_torque(0.0, moved)
-    error = plant.error
-    if error:  # the demand follows the axis (in 1/65536 increments; the rest stays an error below that)
-        from fractions import Fraction
-
-        step = Fraction(round(error * 65536), 65536)
-        if step:
-            cia.position = cia.position + step
-            plant.take_error(float(step))

@@ -1,0 +1,60 @@
+"""The plant in the drive's cycle: what the drive's demand does to its :class:`~ecattool.sim.drive.plant.Plant`
+each cycle (the position or the velocity loop while the power stage is on, else the motor coasts). Apart from the
+plant's physics so that the plant knows nothing of the drive."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import TYPE_CHECKING
+
+from ecattool.sim.cia402 import State
+from ecattool.sim.drive.plant import Plant
+from ecattool.sim.drive.velocity_mode import counts_per_rev as _counts_per_rev
+
+if TYPE_CHECKING:
+    from ecattool.sim.drive.core import DriveCore
+    from ecattool.sim.drive.motion import Motion
+
+_ENABLED, _QUICK_STOP, _FAULT_REACTION = State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION
+#: modes whose loop is the velocity loop (vl 2, PV 3, CSV 9); the others close the position loop
+VELOCITY_MODES = frozenset({2, 3, 9})
+#: interpolated position (CiA-402 mode 7)
+_IP = 7
+
+
+def counts_per_rev(drive: "DriveCore") -> float:
+    """Increments per motor revolution for the plant: 608Fh where the drive has it, else the family's fixed
+    resolution (:func:`ecattool.sim.drive.velocity_mode.counts_per_rev`), else 65536 (HDT's, §4.06)."""
+    cpr = _counts_per_rev(drive)
+    return float(cpr) if cpr else 65536.0
+
+
+def cycle(drive: "Motion", plant: Plant, mode: int, pn0: int, pd0: int) -> None:
+    """Step ``plant`` one cycle after the drive's demand moved from ``pn0 / pd0`` to where its CiA-402 model is now
+    (increments): the position loop or the velocity loop while the power stage is on (OPERATION ENABLED, a quick
+    stop or fault reaction ramping), else the motor coasts and the demand follows the actual position."""
+    cia = drive.cia
+    version = drive._store.version
+    if plant.version != version:  # 608Fh or the cycle 60C2h may have changed
+        plant.version = version
+        dt = drive.cycle_time()
+        plant.set_geometry(counts_per_rev(drive), dt.numerator / dt.denominator)
+    pn, pd = cia.pos_n, cia.pos_d
+    moved = (pn * pd0 - pn0 * pd) / (pd * pd0) if (pn, pd) != (pn0, pd0) else 0.0
+    state = cia.state
+    if state is _ENABLED or state is _QUICK_STOP or state is _FAULT_REACTION:
+        if mode in VELOCITY_MODES and state is _ENABLED:
+            sn, sd = drive.units.ratios()[4:6]
+            plant.follow_velocity(cia.vel_n * sn / (cia.vel_d * sd), moved)
+        else:
+            # the one period Control Techniques inserts is the interpolator's in mode 7 (Behaviour.ip_delay_periods):
+            # the loop takes that demand at once, not one period later again
+            plant.follow_position(moved, not (mode == _IP and drive.behaviour.ip_delay_periods))
+        return
+    plant.apply_torque(0.0, moved)
+    error = plant.error
+    if error:  # the demand follows the axis (in 1/65536 increments; the rest stays an error below that)
+        step = Fraction(round(error * 65536), 65536)
+        if step:
+            cia.position = cia.position + step
+            plant.take_error(float(step))
