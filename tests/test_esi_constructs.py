@@ -76,6 +76,26 @@ def test_a_virtual_sm_is_no_process_data_sm() -> None:
     assert default_mapping(device).tx == []
 
 
+def test_the_sii_built_from_the_device_lists_no_register_window_pdo() -> None:
+    """A master without CoE lays out its SMs from the SII's PDO categories (SOEM sums every PDO with an SM number):
+    the EL4712's virtual TxPDO 1A82h on its virtual SM2 made SOEM lay out 4 input bytes over register 0998h that
+    the mapping leaves out (the whole-bus wire sweep: "the input image is 4 byte(s), the mapping lays out 0").
+    The virtual SM stays in the SyncM category (SM numbers unchanged), flagged virtual (enable bit 2)."""
+    from ecattool.sii.builder import build
+    from ecattool.sii.model import CategoryType, PdoCategory, SyncMCategory
+
+    for ref, kept in ((EL4712, set()), (EL1252, {0x1A00, 0x1A01, 0x1A02})):
+        device = load_device_cached(*ref, "exact")
+        image = build(device)
+        tx = {p.index for c in image.categories if isinstance(c, PdoCategory) and c.type == CategoryType.TXPDO
+              for p in c.pdos}
+        assert tx == {p.index for p in device.tx_pdos if not device.esc_registers(p)}, ref
+        assert kept <= tx and not tx & {p.index for p in device.tx_pdos if p.virtual}, ref
+        sms = next(c for c in image.categories if isinstance(c, SyncMCategory)).sync_managers
+        assert [n for n, sm in enumerate(sms) if sm.enable & 0x04] == [s.number for s in device.sync_managers
+                                                                      if s.virtual], ref
+
+
 def test_a_project_that_selects_a_virtual_pdo_gets_it_left_out_with_a_note(tmp_path: Path) -> None:
     device = load_device_cached(*EL1252, "exact")
     tx = ";".join(f"0x{p.index:04X}" for p in default_mapping(device).tx) + ";0x1A13"

@@ -8,7 +8,8 @@
     python wire_whole_bus_scenario.py commands PROJECT LIBRARY DIR
                                                           on one served bus, through pysoem: bus scan, project new
                                                           --from-bus (DIR/from-bus.yaml), lint, commission, audit of
-                                                          that project, backup (DIR/backup)
+                                                          that project (--reset-bus: it is running), backup
+                                                          (DIR/backup)
     python wire_whole_bus_scenario.py commission PROJECT  ecattool commission PROJECT --target pysoem
 
 Prints one JSON document on stdout. Every wait and loop is bounded."""
@@ -153,7 +154,9 @@ def commands(project: str, library: str, folder: str) -> dict[str, Any]:
         runs.append(_ecattool("project", "new", "--from-bus", target, "--library", library, "-o", made))
         runs.append(_ecattool("lint", made, "--format", "json"))
         runs.append(_ecattool("commission", made, "--target", target, "--json"))
-        runs.append(_ecattool("audit", made, "--target", target, "--json"))
+        # the commissioned bus is running: opening it again takes --reset-bus (issue 35 item 4, as in
+        # wire_online_scenario.py); audit reads each slave's state before the reset and judges it
+        runs.append(_ecattool("audit", made, "--target", target, "--json", "--reset-bus"))
         runs.append(_ecattool("backup", project, "--target", target, "-o", str(Path(folder) / "backup")))
     finally:
         stopped = stop_server(server)

@@ -190,8 +190,11 @@ def assemble(device: Device, *, pdo_categories: bool = True) -> SiiImage:
                           1 if o.cycle_time_sync0_factor is None else o.cycle_time_sync0_factor,
                           strings.add(o.name), 0)
               for o in device.dc_opmodes]
-    tx = [_pdo(p, strings) for p in device.tx_pdos] if pdo_categories else []
-    rx = [_pdo(p, strings) for p in device.rx_pdos] if pdo_categories else []
+    # a virtual PDO that is a window onto ESC registers (Device.esc_registers, docs/esi.md "Virtual PDOs") is no
+    # PDO of a sync manager: a master without CoE lays out its SMs from these categories (SOEM's config_map sums
+    # every PDO with an SM number), so listing it would lay out an image the slave's mapping does not have
+    tx = [_pdo(p, strings) for p in device.tx_pdos if not device.esc_registers(p)] if pdo_categories else []
+    rx = [_pdo(p, strings) for p in device.rx_pdos if not device.esc_registers(p)] if pdo_categories else []
 
     # Eeprom/Category entries come first (as the vendor categories of the AKD/EL2262 dumps do); one of a
     # standard type (Elmo's boot devices give their own GENERAL and SYNCM) replaces the generated one.
