@@ -27,7 +27,7 @@ from ecattool.sim.faults import Faults
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.plant import Plant
-    from ecattool.sim.drive.supervision import Supervision
+    from ecattool.sim.drive.supervision_state import Supervision
 from ecattool.sim.units import FACTOR_OBJECTS, Units
 
 RX, TX = Direction.RX, Direction.TX

@@ -27,7 +27,7 @@ from ecattool.sim.drive.motion import Motion
 from ecattool.sim.drive.plant import Plant, PlantParams, plant_for
 from ecattool.sim.drive.plant_step import counts_per_rev
 from ecattool.sim.drive.process_data import ProcessData
-from ecattool.sim.drive.supervision import Supervision
+from ecattool.sim.drive.supervision_state import Supervision
 from ecattool.sim.drive.sdo import SdoServer
 from ecattool.sim.faults import Faults
 from ecattool.sim.units import units_for

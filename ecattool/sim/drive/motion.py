@@ -225,7 +225,7 @@ class Motion(DriveCore):
         if plant is not None:
             if mode is None:
                 mode = self.mode()
-            plant_cycle(self, plant, mode, *self._demand_before)
+            plant_cycle(self, plant, mode, dt, *self._demand_before)
             supervise(self, mode)
         elif cia.following_error:
             self._supervise_following_error(dt)

@@ -13,7 +13,6 @@ from ecattool.sim.drive.velocity_mode import counts_per_rev as _counts_per_rev
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
-    from ecattool.sim.drive.motion import Motion
 
 _ENABLED, _QUICK_STOP, _FAULT_REACTION = State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION
 #: modes whose loop is the velocity loop (vl 2, PV 3, CSV 9); the others close the position loop
@@ -29,15 +28,14 @@ def counts_per_rev(drive: "DriveCore") -> float:
     return float(cpr) if cpr else 65536.0
 
 
-def cycle(drive: "Motion", plant: Plant, mode: int, pn0: int, pd0: int) -> None:
-    """Step ``plant`` one cycle after the drive's demand moved from ``pn0 / pd0`` to where its CiA-402 model is now
-    (increments): the position loop or the velocity loop while the power stage is on (OPERATION ENABLED, a quick
-    stop or fault reaction ramping), else the motor coasts and the demand follows the actual position."""
+def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, pd0: int) -> None:
+    """Step ``plant`` one cycle ``dt`` after the drive's demand moved from ``pn0 / pd0`` to where its CiA-402 model
+    is now (increments): the position loop or the velocity loop while the power stage is on (OPERATION ENABLED, a
+    quick stop or fault reaction ramping), else the motor coasts and the demand follows the actual position."""
     cia = drive.cia
     version = drive._store.version
     if plant.version != version:  # 608Fh or the cycle 60C2h may have changed
         plant.version = version
-        dt = drive.cycle_time()
         plant.set_geometry(counts_per_rev(drive), dt.numerator / dt.denominator)
     pn, pd = cia.pos_n, cia.pos_d
     moved = (pn * pd0 - pn0 * pd) / (pd * pd0) if (pn, pd) != (pn0, pd0) else 0.0

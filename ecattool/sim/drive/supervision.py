@@ -18,35 +18,19 @@ from math import floor
 from typing import TYPE_CHECKING
 
 from ecattool.sim.cia402 import CSP, HALT, HOMING, PP, State
+from ecattool.sim.drive.supervision_state import Supervision
 from ecattool.sim.units import floor_ratio
 
 _ENABLED = State.OPERATION_ENABLED
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
-    from ecattool.sim.drive.motion import Motion
 
 #: the modes whose following error is supervised (CiA-402: pp, ip, hm, csp)
 POSITION_MODES = frozenset({PP, 7, HOMING, CSP})
 #: the actual values :func:`report_actual` refreshes, in its order
 _ACTUAL = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x603F, 0), (0x60F4, 0), (0x6077, 0),
            (0x6078, 0))
-
-
-class Supervision:
-    """What the supervision remembers from cycle to cycle (seconds outside the following-error window, inside the
-    position window), and the largest figures of the running move for commissioning."""
-
-    __slots__ = ("outside_s", "inside_s", "limits")
-
-    def __init__(self) -> None:
-        self.outside_s = 0.0
-        self.inside_s = 0.0
-        #: (the stored 6065h, 6066h and the store's version they were read at, :func:`_limits` of them)
-        self.limits: tuple[tuple[bytes | None, bytes | None, int], float | None, float] | None = None
-
-    def state(self) -> tuple[float, float]:
-        return self.outside_s, self.inside_s
 
 
 def following_error(drive: "DriveCore") -> float:
@@ -190,7 +174,7 @@ def _blocked(drive: "DriveCore") -> tuple[bool, bool]:
     return neg or demand <= low, pos or demand >= high
 
 
-def limit_stop(drive: "Motion", mode: int, dt: Fraction) -> bool:
+def limit_stop(drive: "DriveCore", mode: int, dt: Fraction) -> bool:
     """A limit switch (or software limit) in the direction the axis moves or is told to move: the axis ramps down
     with the quick-stop deceleration 6085h and holds, still OPERATION ENABLED; only a motion away from the limit
     is taken (Technosoft §4.3.1, seeds/000_a0ab57c0bda88c2c.txt line 2235: "Triggering a limit switch during a
