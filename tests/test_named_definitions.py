@@ -11,22 +11,21 @@ import pytest
 from ecattool.abort import AL_STATUS_TEXTS, AlStatus, al_status_text
 from ecattool.od import cia402
 from ecattool.od.cia402 import MASK_OF, STATUS_BITS, State, state_of
-from tests.conftest import ROOT
+from tests.conftest import seeds_path
 
-SEEDS = ROOT.parent / "shared" / "seeds"
 #: Technosoft iPOS CoE Programming (P091.064), "Table 4.2.4 – State coding in Statusword"
-TECHNOSOFT = SEEDS / "000_a0ab57c0bda88c2c.txt"
+TECHNOSOFT = "000_a0ab57c0bda88c2c.txt"
 #: Control Techniques SM-EtherCAT User Guide, "Table 7.5 State coding"
-CONTROL_TECHNIQUES = SEEDS / "004_b59360cba58a7982.txt"
+CONTROL_TECHNIQUES = "004_b59360cba58a7982.txt"
 
 _ROW = re.compile(r"^\|?\s*(xxxx xxxx [x01]{4} [x01]{4})\s*_?b\s*\|?\s*([A-Za-z ]+?)\s*\|?\s*$")
 
 
-def _coding(path: object, first: int, last: int) -> dict[str, tuple[int, int]]:
+def _coding(name: str, first: int, last: int) -> dict[str, tuple[int, int]]:
     """State name (lower case) → (mask, value) of the rows ``first``..``last`` (1-based lines) of a manual's
-    state coding table: a 0/1 digit is a bit that must have that value, an x one that does not matter."""
-    assert isinstance(path, type(SEEDS))
-    assert path.is_file(), f"manual text missing: {path} (../shared/seeds)"
+    state coding table: a 0/1 digit is a bit that must have that value, an x one that does not matter. Skips, as
+    every test of the manuals' texts, where ../shared/seeds is not beside the checkout."""
+    path = seeds_path(name)
     lines = path.read_text(encoding="utf-8").splitlines()[first - 1:last]
     out = {}
     for line in lines:
@@ -43,7 +42,7 @@ def _coding(path: object, first: int, last: int) -> dict[str, tuple[int, int]]:
     (TECHNOSOFT, 2150, 2157),  # 000_a0ab57c0bda88c2c.txt:2150-2157, Table 4.2.4
     (CONTROL_TECHNIQUES, 1386, 1393),  # 004_b59360cba58a7982.txt:1386-1393, Table 7.5
 ])
-def test_the_state_coding_is_the_manuals(path: object, first: int, last: int) -> None:
+def test_the_state_coding_is_the_manuals(path: str, first: int, last: int) -> None:
     table = _coding(path, first, last)
     assert set(table) == {s.text for s in State}
     for state in State:
