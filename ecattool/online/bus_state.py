@@ -81,14 +81,14 @@ def _exchange(sock: socket.socket, frame: bytes, index: int) -> bytes | None:
 def read_states(ifname: str) -> list[Found] | None:
     """Each slave's AL status on ``ifname``, in bus order; None where it cannot be read (no raw socket, no
     answer)."""
-    from ecattool.sim.bus.frame import ETHERTYPE_ECAT, Cmd, Datagram, FrameError, make_frame, parse_frame
+    from ecattool.sim.bus.frame import Cmd, Datagram, FrameError, make_frame, parse_frame
+    from ecattool.sim.bus.raw import open_raw
 
     try:
-        sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(ETHERTYPE_ECAT))
-    except (OSError, AttributeError):
-        return None
+        sock = open_raw(ifname)
+    except TargetError:
+        return None  # no raw socket here, or no such interface: the master's own open says why
     try:
-        sock.bind((ifname, 0))
         got = _exchange(sock, make_frame([Datagram.make(Cmd.BRD, 0, AL_STATUS, 2, index=0x51)], _SRC), 0x51)
         if got is None:
             return None
