@@ -9,15 +9,12 @@ The rules one by one, in process: tests/test_wire_esc_bounds.py."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from ecattool.sim.bus import netns
-from tests.conftest import ROOT
+from tests.wire_helpers import run_scenario, skip_without
 
 #: every bus of these tests runs in one xdist worker (scripts/dev.py: --dist loadgroup), never two at once
 pytestmark = pytest.mark.xdist_group("wire")
@@ -28,20 +25,8 @@ PROJECT = "samples/technosoft_ipos/project.yaml"
 
 
 def _run(seed: int) -> dict[str, Any]:
-    try:
-        import pysoem  # type: ignore[import-not-found, import-untyped, unused-ignore]  # noqa: F401
-    except ImportError:
-        reason: str | None = "pysoem is not installed (pip install 'ecattool[wire]')"
-    else:
-        reason = netns.unavailable()
-    if reason:
-        print(f"wire test skipped: {reason}", file=sys.stderr)
-        pytest.skip(reason)
-    argv = netns.command([sys.executable, "-X", "faulthandler", str(SCENARIO), PROJECT, str(seed)])
-    done = subprocess.run(argv, capture_output=True, text=True, timeout=300, cwd=ROOT)
-    assert done.returncode == 0, done.stderr[-3000:]
-    result: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
-    return result
+    skip_without("pysoem")
+    return run_scenario(SCENARIO, PROJECT, str(seed), timeout=300)
 
 
 @pytest.mark.parametrize("seed", [1, 2])

@@ -22,6 +22,7 @@ from ecattool.sim.bus import netns
 from ecattool.project.bus import devices_in_bus_order
 from ecattool.sim.bus.serve import Served, device_source, virtual_slaves
 from tests.conftest import ROOT
+from tests.wire_helpers import last_json, skip_without
 
 #: every bus of these tests runs in one xdist worker (scripts/dev.py: --dist loadgroup), never two at once
 pytestmark = pytest.mark.xdist_group("wire")
@@ -31,19 +32,8 @@ HERE = Path(__file__).parent
 PROJECTS = ["samples/hdt/project.yaml", "samples/technosoft_ipos/project.yaml", "samples/generic_esi/project.yaml"]
 
 
-def _skip_reason(module: str) -> str | None:
-    try:
-        __import__(module)
-    except ImportError:
-        return f"{module} is not installed (pip install 'ecattool[wire]')"
-    return netns.unavailable()
-
-
 def _scenario(script: str, *args: str, timeout: int, module: str) -> dict[str, Any]:
-    reason = _skip_reason(module)
-    if reason:
-        print(f"wire test skipped: {reason}", file=sys.stderr)
-        pytest.skip(reason)
+    skip_without(module)
     # faulthandler: a crash inside a master's compiled code still names the Python line that called it
     argv = netns.command([sys.executable, "-X", "faulthandler", str(HERE / script), *args])
     done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, cwd=ROOT)
@@ -56,8 +46,7 @@ def _scenario(script: str, *args: str, timeout: int, module: str) -> dict[str, A
     assert done.returncode == 0, done.stderr[-3000:]
     # the scenario's result is its last JSON line: KickCAT's C++ side writes its own lines to stdout, and
     # its buffer may be flushed after Python's at exit ("Opening redundant interface: None")
-    result: dict[str, Any] = json.loads([ln for ln in done.stdout.splitlines() if ln.startswith("{")][-1])
-    return result
+    return last_json(done.stdout)
 
 
 def load_sources(sources: list[str]) -> list[Served]:

@@ -5,20 +5,18 @@ namespace that the test makes itself. One subprocess with a timeout; every comma
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from ecattool.sii.builder import build
-from ecattool.sim.bus import netns
 from ecattool import profiles
 from ecattool.esi import load_device
 from ecattool.od.types import lookup
 from ecattool.sim.slave import drive_for_device
 from tests.conftest import ROOT
+from tests.wire_helpers import run_scenario, skip_without
 
 pytestmark = pytest.mark.xdist_group("wire")
 
@@ -39,19 +37,9 @@ def result(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
 
 
 def _run_scenario(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
-    try:
-        import kickcat  # type: ignore[import-not-found, import-untyped, unused-ignore]  # noqa: F401
-        import pysoem  # type: ignore[import-not-found, import-untyped, unused-ignore]  # noqa: F401
-    except ImportError:
-        pytest.skip("pysoem or kickcat is not installed (pip install 'ecattool[wire]')")
-    reason = netns.unavailable()
-    if reason:
-        pytest.skip(reason)
+    skip_without("pysoem", "kickcat")
     work = tmp_path_factory.mktemp("online")
-    done = subprocess.run(netns.command([sys.executable, str(SCENARIO), str(work)]), capture_output=True, text=True,
-                          timeout=1500, cwd=ROOT)
-    assert done.returncode == 0, done.stderr[-3000:]
-    out: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
+    out = run_scenario(SCENARIO, str(work), timeout=1500)
     out["work"] = str(work)
     return out
 

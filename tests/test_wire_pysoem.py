@@ -19,6 +19,7 @@ from ecattool.od.model import EcState
 from ecattool.sim.bus import netns
 from ecattool.sim.bus.serve import device_source, virtual_slaves
 from tests.conftest import ROOT
+from tests.wire_helpers import run_scenario, skip_without
 
 #: every bus of these tests runs in one xdist worker (scripts/dev.py: --dist loadgroup), never two at once
 pytestmark = pytest.mark.xdist_group("wire")
@@ -28,28 +29,13 @@ GENERIC_ESI = ROOT / "samples" / "generic_esi" / "inovance_SV660_EOE_1Axis_V9.12
 SAMPLES = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "samples").glob("*/project.yaml"))
 
 
-def _skip_reason() -> str | None:
-    try:
-        import pysoem  # type: ignore[import-not-found, import-untyped, unused-ignore]  # noqa: F401
-    except ImportError:
-        return "pysoem is not installed (pip install 'ecattool[wire]')"
-    return netns.unavailable()
-
-
 @pytest.fixture(scope="module")
 def wire() -> None:
-    reason = _skip_reason()
-    if reason:
-        print(f"wire tests skipped: {reason}", file=sys.stderr)
-        pytest.skip(reason)
+    skip_without("pysoem")
 
 
 def _scenario(*args: str, timeout: int) -> dict[str, Any]:
-    done = subprocess.run(netns.command([sys.executable, str(SCENARIO), *args]), capture_output=True, text=True,
-                          timeout=timeout, cwd=ROOT)
-    assert done.returncode == 0, done.stderr[-3000:]
-    result: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
-    return result
+    return run_scenario(SCENARIO, *args, timeout=timeout)
 
 
 def test_soem_brings_up_the_bus_and_commissions_every_sample(wire: None) -> None:

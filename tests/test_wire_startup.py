@@ -5,16 +5,15 @@ value it writes is then read back over SDO. One namespace subprocess with a time
 
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-from ecattool.sim.bus import netns
 from tests.conftest import ROOT
-from tests.test_wire_pysoem import SAMPLES, _skip_reason
+from tests.test_wire_pysoem import SAMPLES
+from tests.wire_helpers import run_scenario, skip_without
 
 #: every bus of these tests runs in one xdist worker (scripts/dev.py: --dist loadgroup), never two at once
 pytestmark = pytest.mark.xdist_group("wire")
@@ -23,10 +22,7 @@ SCENARIO = Path(__file__).with_name("wire_startup_scenario.py")
 
 
 def test_exported_pysoem_module_reaches_op_on_the_wire(tmp_path: Path) -> None:
-    reason = _skip_reason()
-    if reason:
-        print(f"wire tests skipped: {reason}", file=sys.stderr)
-        pytest.skip(reason)
+    skip_without("pysoem")
     args = []
     for project in SAMPLES:
         module = tmp_path / f"startup_{Path(project).parent.name}.py"
@@ -35,10 +31,7 @@ def test_exported_pysoem_module_reaches_op_on_the_wire(tmp_path: Path) -> None:
                               timeout=120, cwd=ROOT)
         assert done.returncode == 0, done.stderr
         args.append(f"{project}={module}")
-    done = subprocess.run(netns.command([sys.executable, str(SCENARIO), *args]), capture_output=True, text=True,
-                          timeout=300, cwd=ROOT)
-    assert done.returncode == 0, done.stderr[-3000:]
-    runs = json.loads(done.stdout.strip().splitlines()[-1])["runs"]
+    runs = run_scenario(SCENARIO, *args, timeout=300)["runs"]
     assert [r["project"] for r in runs] == SAMPLES
     for r in runs:
         assert r["found"] == 1 and r["safeop"] is True, r

@@ -14,8 +14,6 @@ namespace."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -26,9 +24,9 @@ from ecattool.findings import Severity
 from ecattool.project.cache import load_esi_cached
 from ecattool.project.machine import load_machine
 from ecattool.project.skeleton import esi_flaws, new_project, resolve
-from ecattool.sim.bus import netns
 from ecattool.sim.bus.serve import virtual_slaves
 from tests.conftest import CORPUS, ROOT, need_corpus
+from tests.wire_helpers import run_scenario, skip_without
 
 need_corpus()
 pytestmark = pytest.mark.xdist_group("wire")
@@ -53,23 +51,8 @@ IDENTITY = [[2, 0x044C2C52], [2, 0x03F03052], [2, 0x07D82852], [2, 0x0BBC2852], 
 NO_MAILBOX = {0, 1, 2}
 
 
-def _skip(module: str) -> None:
-    try:
-        __import__(module)
-    except ImportError:
-        pytest.skip(f"{module} is not installed (pip install 'ecattool[wire]')")
-    reason = netns.unavailable()
-    if reason:
-        print(f"wire tests skipped: {reason}", file=sys.stderr)
-        pytest.skip(reason)
-
-
 def _scenario(*args: str, timeout: int) -> dict[str, Any]:
-    done = subprocess.run(netns.command([sys.executable, str(SCENARIO), *args]), capture_output=True, text=True,
-                          timeout=timeout, cwd=ROOT)
-    assert done.returncode == 0, done.stderr[-3000:]
-    result: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
-    return result
+    return run_scenario(SCENARIO, *args, timeout=timeout)
 
 
 @pytest.fixture(scope="module")
@@ -97,7 +80,7 @@ def _check_op(out: dict[str, Any], sizes_key: str = "sizes") -> None:
 
 def test_soem_brings_the_mixed_bus_to_op_with_the_full_working_counter(mixed: Path) -> None:
     """Was: the three mailbox-less slaves refused INIT -> PRE-OP with AL 0x0016 under ``sim serve``."""
-    _skip("pysoem")
+    skip_without("pysoem")
     out = _scenario("soem", str(mixed), timeout=300)
     _check_op(out)
     assert [i[:2] for i in out["identity"]] == IDENTITY
@@ -107,7 +90,7 @@ def test_soem_brings_the_mixed_bus_to_op_with_the_full_working_counter(mixed: Pa
 
 
 def test_kickcat_brings_the_mixed_bus_to_op_with_the_full_working_counter(mixed: Path) -> None:
-    _skip("kickcat")
+    skip_without("kickcat")
     out = _scenario("kickcat", str(mixed), timeout=300)
     _check_op(out)
     assert out["op"] == [True] * len(MIXED)
@@ -120,7 +103,7 @@ def test_read_commands_on_the_mixed_bus_and_from_bus_commissions_it(mixed: Path,
     --from-bus`` writes every slave (it stopped at the first mailbox-less one: ``SDO timeout on 0x1C12:00``), the
     project lints clean, commissions the same bus and audits clean; ``backup`` takes the SII of every slave and
     the dictionary of those with CoE."""
-    _skip("pysoem")
+    skip_without("pysoem")
     out = _scenario("commands", str(mixed), str(ESI), str(tmp_path), timeout=600)
     scan, made, lint, commission, audit, backup = out["runs"]
     assert scan["returncode"] == 0, scan["stderr"]
@@ -189,7 +172,7 @@ def test_a_sample_of_the_corpus_sweep_commissions_on_the_wire(tmp_path: Path) ->
     """Lint clean => commissions, on the wire: one device of each corpus file on one bus through SOEM. Found on
     the way: Ingenia's 60C2h of 1 s paced the served drive (its enable failed), the EM7004's one-buffer process
     data SMs were refused (AL 0x001D), and SOEM's expected working counter leaves out slaves with bit inputs."""
-    _skip("pysoem")
+    skip_without("pysoem")
     text, names, refused = sweep_sample(tmp_path)
     # the one device family sim serve refuses: Elmo's ESI gives its SII a SyncM category (Eeprom/Category 41)
     # whose SM0 is at 0x0000, 32792 bytes (a master programs SM0 from it): refused in one line, as it should be

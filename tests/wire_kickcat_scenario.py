@@ -36,6 +36,25 @@ WATCHDOG_S = 1.0
 STATE_TIMEOUT_S = 10.0
 
 
+def init_bus() -> Any:
+    """A KickCAT bus on MASTER_IF, initialised (each try with a longer link timeout: the first frames of a fresh
+    namespace can come late), its link then at LINK_TIMEOUT_S."""
+    import kickcat
+
+    link = kickcat.create_link(MASTER_IF, "")
+    bus = kickcat.Bus(link)
+    for attempt, timeout in enumerate(INIT_TIMEOUTS_S):
+        link.set_timeout(timeout)
+        try:
+            bus.init(WATCHDOG_S)
+            break
+        except RuntimeError:
+            if attempt == len(INIT_TIMEOUTS_S) - 1:
+                raise
+    link.set_timeout(LINK_TIMEOUT_S)
+    return bus
+
+
 def run(projects: list[str]) -> dict[str, Any]:
     import kickcat
     from kickcat import State
@@ -47,17 +66,7 @@ def run(projects: list[str]) -> dict[str, Any]:
     out: dict[str, Any] = {"ready": ready, "error": None}
     step = "init"
     try:
-        link = kickcat.create_link(MASTER_IF, "")
-        bus = kickcat.Bus(link)
-        for attempt, timeout in enumerate(INIT_TIMEOUTS_S):
-            link.set_timeout(timeout)
-            try:
-                bus.init(WATCHDOG_S)
-                break
-            except RuntimeError:
-                if attempt == len(INIT_TIMEOUTS_S) - 1:
-                    raise
-        link.set_timeout(LINK_TIMEOUT_S)
+        bus = init_bus()
         slaves = bus.slaves()
         out["found"] = len(slaves)
         step = "identity"

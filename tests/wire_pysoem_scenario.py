@@ -96,6 +96,23 @@ def open_preop(out: dict[str, Any]) -> Any:
     return master
 
 
+def reach_op(master: Any) -> tuple[int, int]:
+    """Request OP and run the process data until the slaves are in OP, bounded: at most 2000 cycles of 1 ms.
+    Returns the last working counter and the cycles it took."""
+    import pysoem
+
+    master.state = pysoem.OP_STATE
+    master.write_state()
+    wkc, cycles = 0, 0
+    for cycles in range(1, 2001):
+        master.send_processdata()
+        wkc = master.receive_processdata(2000)
+        if master.state_check(pysoem.OP_STATE, 1000) == pysoem.OP_STATE:
+            break
+        time.sleep(0.001)
+    return wkc, cycles
+
+
 def bringup(sources: list[str]) -> dict[str, Any]:
     import pysoem
 
@@ -118,15 +135,7 @@ def bringup(sources: list[str]) -> dict[str, Any]:
         master.config_map()
         out["sizes"] = [[len(s.output), len(s.input)] for s in master.slaves]
         out["safeop"] = master.state_check(pysoem.SAFEOP_STATE, 2_000_000)
-        master.state = pysoem.OP_STATE
-        master.write_state()
-        wkc, cycles = 0, 0
-        for cycles in range(1, 2001):  # bounded: at most 2000 cycles of 1 ms
-            master.send_processdata()
-            wkc = master.receive_processdata(2000)
-            if master.state_check(pysoem.OP_STATE, 1000) == pysoem.OP_STATE:
-                break
-            time.sleep(0.001)
+        wkc, cycles = reach_op(master)
         out["op"] = master.read_state() == pysoem.OP_STATE
         out["states"] = [s.state for s in master.slaves]
         out["wkc"], out["expected_wkc"], out["cycles"] = wkc, master.expected_wkc, cycles

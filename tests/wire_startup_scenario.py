@@ -14,10 +14,9 @@ import json
 import os
 import re
 import sys
-import time
 from typing import Any
 
-from wire_pysoem_scenario import MASTER_IF, master_priority, start_server, stop_server
+from wire_pysoem_scenario import MASTER_IF, master_priority, reach_op, start_server, stop_server
 
 WRITE = re.compile(r"slave\.sdo_write\(0x([0-9A-F]{4}), 0x([0-9A-F]{2}), bytes\.fromhex\('([0-9a-f]*)'\)")
 
@@ -53,14 +52,7 @@ def run_module(project: str, module_path: str) -> dict[str, Any]:
             except pysoem.SdoError as exc:
                 readback[key] = f"abort:{exc.abort_code:08X}"
         out["written"], out["readback"] = written, readback
-        master.state = pysoem.OP_STATE
-        master.write_state()
-        for _ in range(2000):  # bounded: at most 2000 cycles of 1 ms
-            master.send_processdata()
-            master.receive_processdata(2000)
-            if master.state_check(pysoem.OP_STATE, 1000) == pysoem.OP_STATE:
-                break
-            time.sleep(0.001)
+        reach_op(master)
         out["op"] = master.read_state() == pysoem.OP_STATE
         out["al_status_code"] = [s.al_status for s in master.slaves]
         master.state = pysoem.INIT_STATE

@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from wire_pysoem_scenario import MASTER_IF, master_priority, start_server, stop_server  # tests/ is the folder
+from wire_pysoem_scenario import MASTER_IF, master_priority, reach_op, start_server, stop_server  # tests/ is the folder
 
 #: cycles of process data each master runs in OP, each checked
 CYCLES = 50
@@ -54,14 +54,7 @@ def soem(project: str) -> dict[str, Any]:
         out["sizes"] = sizes = [[len(s.output), len(s.input)] for s in master.slaves]
         out["safeop"] = master.state_check(pysoem.SAFEOP_STATE, 2_000_000) == pysoem.SAFEOP_STATE
         step = "OP"
-        master.state = pysoem.OP_STATE
-        master.write_state()
-        for _ in range(2000):  # bounded: at most 2000 cycles of 1 ms
-            master.send_processdata()
-            master.receive_processdata(2000)
-            if master.state_check(pysoem.OP_STATE, 1000) == pysoem.OP_STATE:
-                break
-            time.sleep(0.001)
+        reach_op(master)
         master.read_state()
         out["states"] = [s.state for s in master.slaves]
         step = "process data"
@@ -84,25 +77,14 @@ def soem(project: str) -> dict[str, Any]:
 
 
 def kickcat(project: str) -> dict[str, Any]:
-    import kickcat as kc
     from kickcat import State
-    from wire_kickcat_scenario import INIT_TIMEOUTS_S, LINK_TIMEOUT_S, STATE_TIMEOUT_S, WATCHDOG_S
+    from wire_kickcat_scenario import STATE_TIMEOUT_S, init_bus
 
     server, ready = start_server([project])
     out: dict[str, Any] = {"ready": ready, "error": None}
     step = "init"
     try:
-        link = kc.create_link(MASTER_IF, "")
-        bus = kc.Bus(link)
-        for attempt, timeout in enumerate(INIT_TIMEOUTS_S):
-            link.set_timeout(timeout)
-            try:
-                bus.init(WATCHDOG_S)
-                break
-            except RuntimeError:
-                if attempt == len(INIT_TIMEOUTS_S) - 1:
-                    raise
-        link.set_timeout(LINK_TIMEOUT_S)
+        bus = init_bus()
         slaves = bus.slaves()
         out["found"] = len(slaves)
         step = "mapping"
