@@ -156,3 +156,20 @@ def test_the_suite_collects_from_any_directory(tmp_path):
     out = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:xdist",
                           str(ROOT / "tests" / "test_startup_device.py")], cwd=tmp_path, capture_output=True, text=True)
     assert out.returncode == 0 and "error" not in out.stdout.lower(), out.stdout[-2000:]
+
+
+def test_an_xdist_group_runs_in_one_worker(tmp_path):
+    """The wire tests share the xdist group "wire" so that two served buses never compete for the two cores
+    (scripts/dev.py runs -n 2 --dist loadgroup). pytest-xdist 3.8 marks a group by rewriting Node._nodeid, which
+    pytest 9 no longer reads: the group was silently ignored (pyproject pins pytest < 9). Six grouped tests that
+    each wait a little must all run in one worker."""
+    (tmp_path / "test_grouped.py").write_text(
+        "import os, time\nimport pytest\npytestmark = pytest.mark.xdist_group('wire')\n\n"
+        "@pytest.mark.parametrize('i', range(6))\ndef test_wait(i):\n    time.sleep(0.2)\n"
+        "    print('worker=' + os.environ['PYTEST_XDIST_WORKER'])\n", encoding="utf-8")
+    out = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-n", "2", "--dist", "loadgroup",
+                          "-rA", "-q", "--rootdir", str(tmp_path), str(tmp_path / "test_grouped.py")],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stdout[-2000:]
+    workers = {line.split("=", 1)[1] for line in out.stdout.splitlines() if line.startswith("worker=")}
+    assert len(workers) == 1, (workers, out.stdout[-2000:])
