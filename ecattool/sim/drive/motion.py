@@ -23,6 +23,9 @@ _ZERO = Fraction(0)
 #: 607Dh's sub-indices 1 and 2 at the whole INTEGER32 range (no software limit)
 _OPEN_LOW, _OPEN_HIGH = (-(2**31)).to_bytes(4, "little", signed=True), (2**31 - 1).to_bytes(4, "little", signed=True)
 _ENABLED = State.OPERATION_ENABLED
+#: the option code a slow-down before leaving OPERATION ENABLED followed, by the state it ended in (event reasons)
+_DISABLE_WHY = {State.READY: "605Bh = 1 (shutdown)", State.SWITCHED_ON: "605Ch = 1 (disable operation)",
+                State.SWITCH_ON_DISABLED: "605Ch = 1 (disable voltage)"}
 #: the states with the power stage on
 _POWERED = frozenset({State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION})
 #: every object :meth:`Motion._make_profile` reads
@@ -78,7 +81,8 @@ class Motion(DriveCore):
         option = hh.quick_stop_option(self)
         if self.cia.state is not State.QUICK_STOP:  # a running quick stop keeps its ramp
             self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
-        moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP, quick_stop_option=option)
+        moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP, quick_stop_option=option,
+                                             disable_ramp=self._disable_ramp)
         self._cia_moves(moves, f"controlword 0x{cw:04X}")
         if moves and moves[0][0] is State.FAULT:
             self.fault_reset()
@@ -87,6 +91,10 @@ class Motion(DriveCore):
                 self._report_blocked_motion()
         hh.on_controlword(self, cw, prev)
         self._refresh_inputs()
+
+    def _disable_ramp(self, to: State) -> Fraction | None:
+        """:func:`.halt_homing.disable_ramp`: the slow-down before Shutdown / Disable Operation (605Bh/605Ch)."""
+        return hh.disable_ramp(self, to)
 
     def _report_blocked_motion(self) -> None:
         """A set-point the drive takes but cannot move to: a profile velocity or acceleration of 0, or a position
@@ -154,7 +162,7 @@ class Motion(DriveCore):
             # an enabled axis without halt follows the target of its mode; CSP and CSV in integers (the same
             # rationals as the Fraction conversions, numerator and denominator apart), the others through
             # Cia402.step, which converts only the targets the mode moves by
-            if cia.state is _ENABLED and not cia.controlword & HALT:
+            if cia.state is _ENABLED and not cia.controlword & HALT and cia.disable_to is None:
                 if (self.limit_active or self._soft_limits) and limit_stop(self, mode, dt):
                     self._after_step(dt, mode)
                     continue
@@ -231,8 +239,10 @@ class Motion(DriveCore):
             self._supervise_following_error(dt)
         if cia.automatic:
             done, cia.automatic = cia.automatic, []
-            self._cia_moves(done, "fault reaction completed" if done[0][0] is State.FAULT_REACTION
-                            else f"quick stop completed, 605Ah = {cia.quick_stop_option}")
+            first = done[0][0]
+            self._cia_moves(done, "fault reaction completed" if first is State.FAULT_REACTION
+                            else f"quick stop completed, 605Ah = {cia.quick_stop_option}" if first is State.QUICK_STOP
+                            else f"slow down completed, {_DISABLE_WHY.get(done[0][1], '')}")
 
     def _supervise_following_error(self, dt: Fraction) -> None:
         """A following error beyond the window 6065h (user position units) for longer than 6066h ms sets

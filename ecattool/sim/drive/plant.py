@@ -120,7 +120,7 @@ class Plant:
     (N·m)."""
 
     __slots__ = ("params", "counts_per_rev", "dt", "error", "velocity", "torque", "load_torque", "torque_limit",
-                 "speed_limit", "pending", "sampled", "version", "_phi", "_j", "_b", "_tc", "_vmax", "_decay", "_tau_gain",
+                 "speed_limit", "pending", "sampled", "version", "limits_key", "_phi", "_j", "_b", "_tc", "_vmax", "_decay", "_tau_gain",
                  "_limited")
 
     def __init__(self, params: PlantParams, counts_per_rev: float, dt: float) -> None:
@@ -144,6 +144,8 @@ class Plant:
         self._limited = False
         #: the drive store's version the geometry was taken at
         self.version = 0
+        #: what the drive's speed limit (:attr:`speed_limit`) was made from (the drive's objects, the geometry)
+        self.limits_key: object = None
         self._derive()
 
     def _derive(self) -> None:
@@ -165,6 +167,12 @@ class Plant:
         self.params = params
         self.torque_limit = params.peak_torque
         self._derive()
+        self.limits_key = None
+
+    @property
+    def max_speed(self) -> float:
+        """The motor's own maximum speed, increments/s (:attr:`speed_limit` is at most this)."""
+        return self._vmax
 
     def set_geometry(self, counts_per_rev: float, dt: float) -> None:
         """Increments per motor revolution and the cycle in seconds (derived values made again on a change)."""
@@ -172,6 +180,7 @@ class Plant:
             self.dt = dt
             self.counts_per_rev = counts_per_rev
             self._derive()
+            self.limits_key = None
 
     # --- the cycle -----------------------------------------------------------------------------------------
     def follow_position(self, moved: float, reference_delay: bool = True) -> None:

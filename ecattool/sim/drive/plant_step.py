@@ -28,6 +28,38 @@ def counts_per_rev(drive: "DriveCore") -> float:
     return float(cpr) if cpr else 65536.0
 
 
+#: 6080h max motor speed, 607Fh max profile velocity
+_MAX_MOTOR_SPEED, _MAX_PROFILE_VELOCITY = (0x6080, 0), (0x607F, 0)
+
+
+def speed_limit(drive: "DriveCore", plant: Plant, mode: int) -> float:
+    """The speed the plant's motor cannot pass, increments/s: the motor's own (:attr:`Plant.max_speed`), and what
+    the drive is told in 6080h max motor speed and 607Fh max profile velocity, where it has them and they are not 0
+    (Technosoft §15.2.3: "The speed limitation is activated when setting a value different from zero"). The unit
+    is the entry's (the family's profile data: Control Techniques 7.3.17 rpm, Technosoft user velocity units);
+    an entry without one: 6080h rpm (CiA-402, "taken from the motor data sheet"), 607Fh the profile velocity's
+    user units. 6080h counts only in the modes the family's manual names (``Behaviour.max_motor_speed_modes``)."""
+    limit = plant.max_speed
+    modes = drive.behaviour.max_motor_speed_modes
+    entries = drive._entries
+    units = drive.units
+    for key in (_MAX_MOTOR_SPEED, _MAX_PROFILE_VELOCITY):
+        entry = entries.get(key)
+        if entry is None or (key is _MAX_MOTOR_SPEED and modes is not None and mode not in modes):
+            continue
+        raw = drive._read_int(*key)
+        if not raw:
+            continue
+        unit = entry.unit.strip().lower() or ("rpm" if key is _MAX_MOTOR_SPEED else "")
+        if unit == "rpm":
+            value = abs(raw) * plant.counts_per_rev / 60
+        else:
+            fast = units.increments_per_second(units.velocity_to_internal(raw))
+            value = abs(fast.numerator / fast.denominator)
+        limit = min(limit, value)
+    return limit
+
+
 def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, pd0: int) -> None:
     """Step ``plant`` one cycle ``dt`` after the drive's demand moved from ``pn0 / pd0`` to where its CiA-402 model
     is now (increments): the position loop or the velocity loop while the power stage is on (OPERATION ENABLED, a
@@ -37,6 +69,11 @@ def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, p
     if plant.version != version:  # 608Fh or the cycle 60C2h may have changed
         plant.version = version
         plant.set_geometry(counts_per_rev(drive), dt.numerator / dt.denominator)
+    get = drive._store.get
+    key = (version, mode, get(_MAX_MOTOR_SPEED), get(_MAX_PROFILE_VELOCITY))
+    if plant.limits_key != key:  # 6080h / 607Fh written, the factors or the mode changed
+        plant.limits_key = key
+        plant.speed_limit = speed_limit(drive, plant, mode)
     pn, pd = cia.pos_n, cia.pos_d
     moved = (pn * pd0 - pn0 * pd) / (pd * pd0) if (pn, pd) != (pn0, pd0) else 0.0
     state = cia.state
