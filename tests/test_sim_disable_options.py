@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from ecattool.sim import Drive
 from ecattool.sim.cia402 import State
-from sim_helpers import OP, at, code_of, r, w
+from sim_helpers import OP, SAFE, at, code_of, r, w
 from test_families_manuals import CT_TEXT, TS_TEXT, manual_says
 from test_sim_stop_reactions import _moving
 
@@ -135,3 +135,60 @@ def test_the_slow_down_runs_through_the_plant():
     assert before > 0
     n, _ = _leave(d, DISABLE_OPERATION)
     assert n >= 49 and d.cia402_state is State.SWITCHED_ON
+
+
+# --- 605Dh halt in the cyclic modes ------------------------------------------------------------------------------
+def test_technosoft_halt_in_csv_ramps_with_605dh_and_ignores_the_target():
+    """A halt in CSV ramps down with the slow-down ramp 605Dh = 1 names (6083h), the target ignored (bit 12 = 0)
+    and bit 10 = 0 while the drive decelerates, 1 at standstill; it stopped within the cycle before."""
+    manual_says(TS_TEXT, 2565, "This object determines what action is taken if when the halt command is executed. "
+                               "The slowdown ramp is a deceleration value set by [Object 6083_h: Profile "
+                               "acceleration](#).")
+    manual_says(TS_TEXT, 8907, "Target velocity ignored. When 6040h.8 Halt is set to 1.")
+    d = at("technosoft-ipos", OP)
+    w(d, 0x6060, 0, 9, 1)
+    w(d, 0x6083, 0, 65536 // 10, 4)
+    for cw in (0x06, 0x07, 0x0F):
+        w(d, 0x6040, 0, cw, 2)
+    w(d, 0x60FF, 0, 5 * 65536, 4)
+    d.step(3)
+    assert d.internal_velocity == 5 * 65536 and r(d, 0x605D) == 1
+    w(d, 0x6040, 0, 0x10F, 2)
+    n = 0
+    while d.internal_velocity and n < 200:
+        sw = r(d, 0x6041)
+        assert not sw & 0x1000 and not sw & 0x0400 and sw & 0x6F == 0x27
+        d.step(1)
+        n += 1
+    assert n == 51, n
+    assert r(d, 0x6041) & 0x0400 and d.cia402_state is State.OPERATION_ENABLED
+    w(d, 0x6040, 0, 0x0F, 2)  # halt cleared: the target velocity again
+    d.step(1)
+    assert d.internal_velocity == 5 * 65536
+
+
+def test_controltechniques_halt_in_csp_ramps_with_6084h():
+    """605Dh (no default: 0, as 1) in CSP (Control Techniques: "the deceleration value of the used mode of operations",
+    6084h): the axis slows down over several cycles, holding still afterwards while the target runs on."""
+    manual_says(CT_TEXT, 1494, "The slow down ramp is the deceleration value of the used mode of operations.")
+    d = at("controltechniques", SAFE)
+    d.configure_dc(0x0300, 1_000_000)
+    d.request_state(OP)
+    w(d, 0x6060, 0, 8, 1)
+    w(d, 0x6084, 0, 100 * 65536, 4)  # 10 units a 250 us cycle stop in about 25 cycles
+    for cw in (0x06, 0x07, 0x0F):
+        w(d, 0x6040, 0, cw, 2)
+    for position in range(1, 21):
+        w(d, 0x607A, 0, position * 10, 4)
+        d.step(1)
+    assert d.internal_velocity
+    w(d, 0x6040, 0, 0x10F, 2)
+    n = 0
+    while d.internal_velocity and n < 1000:
+        w(d, 0x607A, 0, 300 + n * 10, 4)  # the master's set-points run on: ignored while halted
+        d.step(1)
+        n += 1
+    assert 2 < n < 1000
+    held = r(d, 0x6064, signed=True)
+    d.step(5)
+    assert r(d, 0x6064, signed=True) == held and d.cia402_state is State.OPERATION_ENABLED

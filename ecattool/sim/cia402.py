@@ -596,9 +596,9 @@ class Cia402:
     def _halt_step(self, mode: int, dt: Fraction, deceleration: Fraction | None, inc_per_s: _Convert,
                    vel_from_inc_per_s: _Convert) -> None:
         """Halt: the pending set-point (PP target, homing search) is kept for when bit 8 clears; the axis ramps
-        down with ``deceleration`` (PP, PV, homing; CSP/CSV and a 0 ramp stop within the cycle)."""
+        down with ``deceleration`` (a 0 or missing ramp stops within the cycle); CSP/CSV ignore their targets."""
         self.move = None  # a PP move resumes with a new plan from standstill
-        if mode in (CSP, CSV) or not deceleration or deceleration <= 0:
+        if not deceleration or deceleration <= 0:
             self.velocity = Fraction(0)
             return
         self._slow_down(dt, deceleration, inc_per_s, vel_from_inc_per_s)

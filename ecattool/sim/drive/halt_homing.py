@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 from ecattool.errors import SdoAbort
 from ecattool import abort as A
-from ecattool.sim.cia402 import HALT, HOMING, PP, PV, Homing, State
+from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, State
 from ecattool.sim.drive.velocity_mode import counts_per_rev
 
 if TYPE_CHECKING:
@@ -37,6 +37,8 @@ if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
 
 HOMING_START = 0x0010  # controlword bit 4 in homing mode
+#: the modes a halt ramps down with a deceleration (the others stop within the cycle)
+_HALT_RAMP_MODES = frozenset({PV, PP, HOMING, CSP, CSV})
 
 #: methods whose home is the current position, per family (HDT 0 = zeroed at power-on is separate)
 CURRENT_POSITION = {"hdt": frozenset({35}), "technosoft-ipos": frozenset({35}),
@@ -253,10 +255,12 @@ def check_method(drive: DriveCore, sub: int, value: int) -> None:
 def halt_decel_for_step(drive: DriveCore, mode: int) -> Fraction | None:
     """The ramp a halt uses in the mode (increments/s²): profile velocity the option code's (see
     :func:`halt_deceleration`); profile position the slow-down ramp of the mode (HDT §4.07: 6084h; Technosoft
-    §4.4.10: 6083h, or 6085h for option 2); a homing search the homing acceleration 609Ah. CSP/CSV: None."""
-    if not drive.cia.controlword & HALT or mode not in (PV, PP, HOMING):
+    §4.4.10: 6083h, or 6085h for option 2); a homing search the homing acceleration 609Ah; CSP and CSV the option
+    code's ramp as in profile velocity (the target is ignored, statusword bit 12 = 0, while the axis slows down:
+    Technosoft §14.1.2 "Target velocity ignored. When 6040h.8 Halt is set to 1"); other modes: None."""
+    if not drive.cia.controlword & HALT or mode not in _HALT_RAMP_MODES:
         return None
-    if mode == PV:
+    if mode == PV or mode == CSP or mode == CSV:
         return halt_deceleration(drive)
     if mode == HOMING:
         return drive.cia.homing_acceleration
