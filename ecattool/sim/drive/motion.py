@@ -17,6 +17,7 @@ from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
 from ecattool.sim.drive.plant_step import cycle as plant_cycle
 from ecattool.sim.drive.supervision import limit_stop, report_actual, supervise
 from ecattool.sim.drive.mode_parts import MOVED, PARTS, ModeParts
+from ecattool.sim.drive.torque_mode import TORQUE_MODES
 from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
@@ -192,7 +193,9 @@ class Motion(DriveCore):
                 if mode in MOVED:  # vl, profile torque, interpolated position, CST: their own parts
                     self.modes.step(self, mode, dt)
                     self.modes.after(self, mode, dt)
-                    self._after_step(dt, mode)
+                    plant = self.plant
+                    self._after_step(dt, mode, self.modes.torque.newton_metres(plant.params.rated_torque)
+                                     if plant is not None and mode in TORQUE_MODES else None)
                     continue
                 moving = True
             else:
@@ -225,15 +228,16 @@ class Motion(DriveCore):
         get = self._store.get
         return get((0x607D, 1), _OPEN_LOW) != _OPEN_LOW or get((0x607D, 2), _OPEN_HIGH) != _OPEN_HIGH
 
-    def _after_step(self, dt: Fraction, mode: int | None = None) -> None:
-        """What follows every cycle's motion: the following error's supervision, and the transitions the drive
-        made by itself (the end of a quick stop or of a fault reaction)."""
+    def _after_step(self, dt: Fraction, mode: int | None = None, torque: float | None = None) -> None:
+        """What follows every cycle's motion: the plant's step (``torque``: the torque mode's demand in N·m, which
+        the plant's motor makes instead of following a position or velocity), the following error's supervision,
+        and the transitions the drive made by itself (the end of a quick stop or of a fault reaction)."""
         cia = self.cia
         plant = self.plant
         if plant is not None:
             if mode is None:
                 mode = self.mode()
-            plant_cycle(self, plant, mode, dt, *self._demand_before)
+            plant_cycle(self, plant, mode, dt, *self._demand_before, torque)
             supervise(self, mode)
         elif cia.following_error:
             self._supervise_following_error(dt)

@@ -60,10 +60,12 @@ def speed_limit(drive: "DriveCore", plant: Plant, mode: int) -> float:
     return limit
 
 
-def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, pd0: int) -> None:
+def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, pd0: int,
+          torque: float | None = None) -> None:
     """Step ``plant`` one cycle ``dt`` after the drive's demand moved from ``pn0 / pd0`` to where its CiA-402 model
     is now (increments): the position loop or the velocity loop while the power stage is on (OPERATION ENABLED, a
-    quick stop or fault reaction ramping), else the motor coasts and the demand follows the actual position."""
+    quick stop or fault reaction ramping); a torque mode's ``torque`` (N·m) made by the motor; else the motor
+    coasts. Where no loop holds the axis on the demand, the demand follows the actual position."""
     cia = drive.cia
     version = drive._store.version
     if plant.version != version:  # 608Fh or the cycle 60C2h may have changed
@@ -77,6 +79,13 @@ def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, p
     pn, pd = cia.pos_n, cia.pos_d
     moved = (pn * pd0 - pn0 * pd) / (pd * pd0) if (pn, pd) != (pn0, pd0) else 0.0
     state = cia.state
+    if torque is not None and state is _ENABLED:
+        plant.apply_torque(torque, moved)
+        _demand_follows(drive, plant)
+        # the model's velocity is the axis's: a halt or quick stop ramps down from there
+        cia.velocity = drive.units.velocity_from_increments_per_second(Fraction(round(plant.velocity * 65536),
+                                                                                65536))
+        return
     if state is _ENABLED or state is _QUICK_STOP or state is _FAULT_REACTION:
         if mode in VELOCITY_MODES and state is _ENABLED:
             sn, sd = drive.units.ratios()[4:6]
@@ -87,9 +96,16 @@ def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, p
             plant.follow_position(moved, not (mode == _IP and drive.behaviour.ip_delay_periods))
         return
     plant.apply_torque(0.0, moved)
+    _demand_follows(drive, plant)
+
+
+def _demand_follows(drive: "DriveCore", plant: Plant) -> None:
+    """No loop holds the axis on the demand: the demand follows the axis (in 1/65536 increments; the rest stays an
+    error below that)."""
     error = plant.error
-    if error:  # the demand follows the axis (in 1/65536 increments; the rest stays an error below that)
+    if error:
         step = Fraction(round(error * 65536), 65536)
         if step:
+            cia = drive.cia
             cia.position = cia.position + step
             plant.take_error(float(step))
