@@ -128,6 +128,9 @@ class Cia402:
         #: an obstacle the axis cannot pass (internal position), and the side of it the axis is on
         self.obstacle: Fraction | None = None
         self.obstacle_side = 0
+        #: the obstacle blocks the plant's load, not the demand (the drive is on a plant): the profile runs on and
+        #: the plant's axis lags behind it; only a torque-limited profile (HDT -1) stops at it
+        self.obstacle_on_plant = False
         #: the profile's position demand where it differs from the actual position (the axis is blocked)
         self.demand: Fraction | None = None
         #: statusword bit 13 in profile position: the following error is outside its window too long
@@ -505,7 +508,7 @@ class Cia402:
                                     profile.acceleration, profile.deceleration or profile.acceleration,
                                     profile.jerk_time, dt, profile.jerk)
         position, velocity, done = self.move.step(dt)
-        if self.blocked_at(position):
+        if self.blocked_at(position) and (profile.torque_limited or not self.obstacle_on_plant):
             self._blocked_step(position, done, profile.torque_limited)
             return
         self.demand = None

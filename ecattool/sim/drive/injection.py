@@ -154,11 +154,19 @@ class Injection(DriveCore):
 
     def set_obstacle(self, position: int | None) -> None:
         """An obstacle at ``position`` (user units, as 6064h reads; None: taken away) that the axis cannot pass,
-        on the side of it the axis is on now. A profile position move runs into it: with HDT's profile type -1
-        (torque-limited ramp, §4.07.8) the profile stops and resumes once the obstacle is gone; otherwise the
-        profile runs on, the following error 60F4h grows, and past 6065h for 6066h ms the drive faults (8611h)."""
+        on the side of it the axis is on now. On a plant it blocks the load in every mode: the demand (profile, the
+        master's CSP set-points, the interpolator) runs on, the following error 60F4h grows through the plant, and
+        past 6065h for 6066h ms the drive faults (8611h); with HDT's profile type -1 (torque-limited ramp, §4.07.8)
+        the profile stops at it and resumes once the obstacle is gone. On the ideal plant a profile position move
+        runs into it the same way (the demand is held, the error is the demand's)."""
         internal = None if position is None else self.units.position_to_internal(position - self._home_offset())
-        self.cia.set_obstacle(internal)
+        cia = self.cia
+        plant = self.plant
+        cia.obstacle_on_plant = plant is not None
+        cia.set_obstacle(internal)
+        if plant is not None and internal is not None:
+            # the side of the obstacle the load is on: the actual position's, not the demand's
+            cia.obstacle_side = 1 if internal > cia.position + Fraction(round(plant.error * 65536), 65536) else -1
         self._log("inputs", obstacle=position)
         self._refresh_inputs()
 

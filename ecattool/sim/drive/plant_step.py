@@ -12,6 +12,7 @@ from ecattool.sim.drive.plant import Plant
 from ecattool.sim.drive.velocity_mode import counts_per_rev as _counts_per_rev
 
 if TYPE_CHECKING:
+    from ecattool.sim.cia402 import Cia402
     from ecattool.sim.drive.core import DriveCore
 
 _ENABLED, _QUICK_STOP, _FAULT_REACTION = State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION
@@ -81,6 +82,8 @@ def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, p
     state = cia.state
     if torque is not None and state is _ENABLED:
         plant.apply_torque(torque, moved)
+        if cia.obstacle is not None:
+            _block(cia, plant)
         _demand_follows(drive, plant)
         # the model's velocity is the axis's: a halt or quick stop ramps down from there
         cia.velocity = drive.units.velocity_from_increments_per_second(Fraction(round(plant.velocity * 65536),
@@ -94,9 +97,28 @@ def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, p
             # the one period Control Techniques inserts is the interpolator's in mode 7 (Behaviour.ip_delay_periods):
             # the loop takes that demand at once, not one period later again
             plant.follow_position(moved, not (mode == _IP and drive.behaviour.ip_delay_periods))
+        if cia.obstacle is not None:
+            _block(cia, plant)
         return
     plant.apply_torque(0.0, moved)
+    if cia.obstacle is not None:
+        _block(cia, plant)
     _demand_follows(drive, plant)
+
+
+def _block(cia: "Cia402", plant: Plant) -> None:
+    """The obstacle (``cia.obstacle``, on the side ``cia.obstacle_side`` of the load) holds the load: an axis the
+    step took beyond it stands at it (the demand runs on; the following error is the plant's)."""
+    obstacle = cia.obstacle
+    assert obstacle is not None
+    side = cia.obstacle_side
+    demand = cia.pos_n / cia.pos_d
+    at = obstacle.numerator / obstacle.denominator
+    if (demand + plant.error - at) * side < 0:  # side: where the obstacle lies, seen from the load
+        return
+    plant.error = at - demand
+    if plant.velocity * side > 0:
+        plant.velocity = 0.0
 
 
 def _demand_follows(drive: "DriveCore", plant: Plant) -> None:
