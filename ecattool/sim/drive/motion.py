@@ -24,6 +24,7 @@ _ZERO = Fraction(0)
 #: 607Dh's sub-indices 1 and 2 at the whole INTEGER32 range (no software limit)
 _OPEN_LOW, _OPEN_HIGH = (-(2**31)).to_bytes(4, "little", signed=True), (2**31 - 1).to_bytes(4, "little", signed=True)
 _ENABLED = State.OPERATION_ENABLED
+_HOME_OFFSET, _LIMIT_LOW, _LIMIT_HIGH = (0x607C, 0), (0x607D, 1), (0x607D, 2)
 #: the option code a slow-down before leaving OPERATION ENABLED followed, by the state it ended in (event reasons)
 _DISABLE_WHY = {State.READY: "605Bh = 1 (shutdown)", State.SWITCHED_ON: "605Ch = 1 (disable operation)",
                 State.SWITCH_ON_DISABLED: "605Ch = 1 (disable voltage)"}
@@ -224,9 +225,19 @@ class Motion(DriveCore):
 
     @property
     def _soft_limits(self) -> bool:
-        """607Dh narrower than the whole INTEGER32 range (the stored bytes compared: every cycle asks)."""
+        """607Dh narrower than the whole INTEGER32 range (the stored bytes compared, again only when they are
+        other bytes: every cycle asks)."""
         get = self._store.get
-        return get((0x607D, 1), _OPEN_LOW) != _OPEN_LOW or get((0x607D, 2), _OPEN_HIGH) != _OPEN_HIGH
+        low, high = get(_LIMIT_LOW, _OPEN_LOW), get(_LIMIT_HIGH, _OPEN_HIGH)
+        cached = self._soft_cache
+        if cached[0] is low and cached[1] is high:
+            return cached[2]
+        narrow = low != _OPEN_LOW or high != _OPEN_HIGH
+        self._soft_cache = (low, high, narrow)
+        return narrow
+
+    #: the stored bytes of 607Dh:1/2 and whether they limit (:attr:`_soft_limits`)
+    _soft_cache: tuple[bytes | None, bytes | None, bool] = (None, None, False)
 
     def _after_step(self, dt: Fraction, mode: int | None = None, torque: float | None = None) -> None:
         """What follows every cycle's motion: the plant's step (``torque``: the torque mode's demand in N·m, which
@@ -354,10 +365,20 @@ class Motion(DriveCore):
                                        cia.fault_code, error))
 
     def _home_offset(self) -> int:
-        """607Ch where the family adds it to the measured position at all times (HDT), else 0."""
+        """607Ch where the family adds it to the measured position at all times (HDT), else 0 (decoded again only
+        when the stored bytes are other bytes: every cycle asks, twice)."""
         if not self.behaviour.home_offset_continuous:
             return 0
-        return self._read_int(0x607C, 0) or 0
+        raw = self._store.get(_HOME_OFFSET)
+        cached = self._home_cache
+        if cached[0] is raw and raw is not None:
+            return cached[1]
+        value = self._read_int(0x607C, 0) or 0
+        self._home_cache = (raw, value)
+        return value
+
+    #: the stored bytes of 607Ch and their value (:meth:`_home_offset`)
+    _home_cache: tuple[bytes | None, int] = (None, 0)
 
     def _user_position(self) -> int:
         """6064h: the position in user units (HDT: sensor position + home offset 607Ch, §4.06.6)."""

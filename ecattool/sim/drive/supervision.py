@@ -82,7 +82,7 @@ def supervise(drive: "DriveCore", mode: int) -> None:
     if cia.state is not _ENABLED or mode not in POSITION_MODES:
         sup.outside_s = 0.0
         return
-    if -0.5 < plant.error < 0.5 and not cia.following_error:
+    if -0.5 < plant.error < 0.5 and not cia.following_error.numerator:
         sup.outside_s = 0.0  # measured in whole increments: no error, within any window
         return
     get = drive._store.get
@@ -130,19 +130,19 @@ def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
     assert plant is not None
     units = drive.units
     pn, pd, vn, vd, sn, sd = units.ratios()
-    error, velocity = plant.sampled if plant.params.delay == "sample" else (plant.error, plant.velocity)
+    error, velocity = plant.sampled if plant.samples_first else (plant.error, plant.velocity)
     k = round(error)
     offset = drive._home_offset()
     qn, qd = cia.pos_n, cia.pos_d
     demand_user = floor_ratio(qn, qd, pn, pd) + offset
     actual_user = floor_ratio(qn + k * qd, qd, pn, pd) + offset if k else demand_user
     fe = cia.following_error
-    blocked = units.position_to_user_int(fe) if fe else 0
+    blocked = units.position_to_user_int(fe) if fe.numerator else 0
     user_velocity = velocity * sd * vd / (sn * vn) if sn and vn else 0.0
     # a velocity that is the demand's up to the float's last bits reads as the demand's (no floor below it)
     user_velocity = floor(user_velocity + 1e-9 * (user_velocity if user_velocity > 1.0 else
                                                   -user_velocity if user_velocity < -1.0 else 1.0))
-    if cia.state is State.OPERATION_ENABLED and mode == PP and not cia.controlword & HALT and sw & 0x0400 and not (
+    if mode == PP and cia.state is _ENABLED and not cia.controlword & HALT and sw & 0x0400 and not (
             _position_window(drive, actual_user)
             and drive.supervision.inside_s * 1000 >= _ms(drive, drive._read_int(0x6068, 0) or 0)):
         sw &= ~0x0400
