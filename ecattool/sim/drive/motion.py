@@ -24,7 +24,7 @@ _ZERO = Fraction(0)
 #: 607Dh's sub-indices 1 and 2 at the whole INTEGER32 range (no software limit)
 _OPEN_LOW, _OPEN_HIGH = (-(2**31)).to_bytes(4, "little", signed=True), (2**31 - 1).to_bytes(4, "little", signed=True)
 _ENABLED = State.OPERATION_ENABLED
-_HOME_OFFSET, _LIMIT_LOW, _LIMIT_HIGH = (0x607C, 0), (0x607D, 1), (0x607D, 2)
+_LIMIT_LOW, _LIMIT_HIGH = (0x607D, 1), (0x607D, 2)
 #: the option code a slow-down before leaving OPERATION ENABLED followed, by the state it ended in (event reasons)
 _DISABLE_WHY = {State.READY: "605Bh = 1 (shutdown)", State.SWITCHED_ON: "605Ch = 1 (disable operation)",
                 State.SWITCH_ON_DISABLED: "605Ch = 1 (disable voltage)"}
@@ -170,7 +170,7 @@ class Motion(DriveCore):
                     continue
                 if mode == CSP:
                     pn, pd, _, _, sn, sd = u.ratios()
-                    if csp.applies(self):  # Technosoft bit 6 relative, 2086h speed limit
+                    if self.behaviour.csp_options and csp.applies(self):  # Technosoft bit 6 relative, 2086h
                         goal = csp.target(self, dt)
                         cia.follow_position(goal.numerator, goal.denominator, dt, sd, sn)
                         self._after_step(dt, mode)
@@ -225,19 +225,20 @@ class Motion(DriveCore):
 
     @property
     def _soft_limits(self) -> bool:
-        """607Dh narrower than the whole INTEGER32 range (the stored bytes compared, again only when they are
-        other bytes: every cycle asks)."""
-        get = self._store.get
-        low, high = get(_LIMIT_LOW, _OPEN_LOW), get(_LIMIT_HIGH, _OPEN_HIGH)
+        """607Dh narrower than the whole INTEGER32 range (compared again only when the store's version changed:
+        every cycle asks)."""
+        store = self._store
+        version = store.version  # a write to 607Dh changes it (core.SETTING_OBJECTS)
         cached = self._soft_cache
-        if cached[0] is low and cached[1] is high:
-            return cached[2]
-        narrow = low != _OPEN_LOW or high != _OPEN_HIGH
-        self._soft_cache = (low, high, narrow)
+        if cached[0] == version:
+            return cached[1]
+        get = store.get
+        narrow = get(_LIMIT_LOW, _OPEN_LOW) != _OPEN_LOW or get(_LIMIT_HIGH, _OPEN_HIGH) != _OPEN_HIGH
+        self._soft_cache = (version, narrow)
         return narrow
 
-    #: the stored bytes of 607Dh:1/2 and whether they limit (:attr:`_soft_limits`)
-    _soft_cache: tuple[bytes | None, bytes | None, bool] = (None, None, False)
+    #: the store's version and whether 607Dh limits at it (:attr:`_soft_limits`)
+    _soft_cache: tuple[int, bool] = (0, False)
 
     def _after_step(self, dt: Fraction, mode: int | None = None, torque: float | None = None) -> None:
         """What follows every cycle's motion: the plant's step (``torque``: the torque mode's demand in N·m, which
@@ -366,19 +367,19 @@ class Motion(DriveCore):
 
     def _home_offset(self) -> int:
         """607Ch where the family adds it to the measured position at all times (HDT), else 0 (decoded again only
-        when the stored bytes are other bytes: every cycle asks, twice)."""
+        when the store's version changed: every cycle asks, twice)."""
         if not self.behaviour.home_offset_continuous:
             return 0
-        raw = self._store.get(_HOME_OFFSET)
+        version = self._store.version  # a write to 607Ch changes it (core.SETTING_OBJECTS)
         cached = self._home_cache
-        if cached[0] is raw and raw is not None:
+        if cached[0] == version:
             return cached[1]
         value = self._read_int(0x607C, 0) or 0
-        self._home_cache = (raw, value)
+        self._home_cache = (version, value)
         return value
 
-    #: the stored bytes of 607Ch and their value (:meth:`_home_offset`)
-    _home_cache: tuple[bytes | None, int] = (None, 0)
+    #: the store's version and 607Ch at it (:meth:`_home_offset`)
+    _home_cache: tuple[int, int] = (0, 0)
 
     def _user_position(self) -> int:
         """6064h: the position in user units (HDT: sensor position + home offset 607Ch, §4.06.6)."""

@@ -120,7 +120,7 @@ class Plant:
     (N·m)."""
 
     __slots__ = ("params", "counts_per_rev", "dt", "error", "velocity", "torque", "load_torque", "torque_limit",
-                 "speed_limit", "pending", "sampled", "version", "limits_key", "samples_first", "_ramp_lag", "_fixed", "_phi", "_j", "_b", "_tc", "_vmax", "_decay", "_tau_gain",
+                 "speed_limit", "pending", "sampled", "version", "limits_key", "limits_mode", "samples_first", "_ramp_lag", "_fixed", "_phi", "_j", "_b", "_tc", "_vmax", "_decay", "_tau_gain",
                  "_limited")
 
     def __init__(self, params: PlantParams, counts_per_rev: float, dt: float) -> None:
@@ -144,8 +144,9 @@ class Plant:
         self._limited = False
         #: the drive store's version the geometry was taken at
         self.version = 0
-        #: what the drive's speed limit (:attr:`speed_limit`) was made from (the drive's objects, the geometry)
-        self.limits_key: object = None
+        #: the drive store's version and the mode the speed limit (:attr:`speed_limit`) was made at (0: not yet)
+        self.limits_key = 0
+        self.limits_mode = 0
         self._derive()
 
     def _derive(self) -> None:
@@ -174,7 +175,7 @@ class Plant:
         self.params = params
         self.torque_limit = params.peak_torque
         self._derive()
-        self.limits_key = None
+        self.limits_key = 0
 
     @property
     def max_speed(self) -> float:
@@ -187,7 +188,7 @@ class Plant:
             self.dt = dt
             self.counts_per_rev = counts_per_rev
             self._derive()
-            self.limits_key = None
+            self.limits_key = 0
 
     # --- the cycle -----------------------------------------------------------------------------------------
     def follow_position(self, moved: float, reference_delay: bool = True) -> None:

@@ -72,10 +72,9 @@ def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, p
     if plant.version != version:  # 608Fh or the cycle 60C2h may have changed
         plant.version = version
         plant.set_geometry(counts_per_rev(drive), dt.numerator / dt.denominator)
-    get = drive._store.get
-    key = (version, mode, get(_MAX_MOTOR_SPEED), get(_MAX_PROFILE_VELOCITY))
-    if plant.limits_key != key:  # 6080h / 607Fh written, the factors or the mode changed
-        plant.limits_key = key
+    if plant.limits_key != version or plant.limits_mode != mode:  # 6080h/607Fh or the factors written (a write
+        plant.limits_key = version  # to them changes the version: core.SETTING_OBJECTS), or another mode
+        plant.limits_mode = mode
         plant.speed_limit = speed_limit(drive, plant, mode)
     pn, pd = cia.pos_n, cia.pos_d
     moved = (pn * pd0 - pn0 * pd) / (pd * pd0) if (pn, pd) != (pn0, pd0) else 0.0
