@@ -196,17 +196,18 @@ class Plant:
         ``reference_delay`` the loop sees the demand at once even where the family delays it (the mode's own
         generator already delayed it: Control Techniques interpolated position); a reference still held back from
         an earlier cycle is then passed on."""
-        start = (moved, self.error, self.velocity, self.pending, self.load_torque, self.torque_limit,
-                 self.speed_limit, reference_delay)
-        if start == self._fixed:
+        fixed = self._fixed
+        e0, v0, p0 = self.error, self.velocity, self.pending
+        if fixed is not None and fixed[0] == moved and fixed == (moved, e0, v0, p0, self.load_torque,
+                                                               self.torque_limit, self.speed_limit, reference_delay):
             # the cycle before started here with the same demand step and ended here (a steady ramp or a standstill
             # settled to the float's last bit): this one does the same; only the delayed sample moves on
             if self.samples_first:
-                self.sampled = (self.error - moved, self.velocity)
+                self.sampled = (e0 - moved, v0)
             return
         self._step_position(moved, reference_delay)
-        self._fixed = start if start[1] == self.error and start[2] == self.velocity and start[3] == self.pending \
-            else None
+        self._fixed = (moved, e0, v0, p0, self.load_torque, self.torque_limit, self.speed_limit, reference_delay) \
+            if e0 == self.error and v0 == self.velocity and p0 == self.pending else None
 
     def _step_position(self, moved: float, reference_delay: bool) -> None:
         p = self.params

@@ -77,7 +77,10 @@ def cycle(drive: "DriveCore", plant: Plant, mode: int, dt: Fraction, pn0: int, p
         plant.limits_mode = mode
         plant.speed_limit = speed_limit(drive, plant, mode)
     pn, pd = cia.pos_n, cia.pos_d
-    moved = (pn * pd0 - pn0 * pd) / (pd * pd0) if (pn, pd) != (pn0, pd0) else 0.0
+    if pd == pd0:
+        moved = (pn - pn0) / pd if pn != pn0 else 0.0
+    else:
+        moved = (pn * pd0 - pn0 * pd) / (pd * pd0)
     state = cia.state
     if torque is not None and state is _ENABLED:
         plant.apply_torque(torque, moved)

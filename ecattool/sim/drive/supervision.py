@@ -134,8 +134,12 @@ def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
     k = round(error)
     offset = drive._home_offset()
     qn, qd = cia.pos_n, cia.pos_d
-    demand_user = floor_ratio(qn, qd, pn, pd) + offset
-    actual_user = floor_ratio(qn + k * qd, qd, pn, pd) + offset if k else demand_user
+    # floor_ratio, inline (every cycle): floor((q / qd) / (pn / pd)), 0 where the factor is 0
+    if pn:
+        demand_user = (qn * pd) // (qd * pn) + offset
+        actual_user = ((qn + k * qd) * pd) // (qd * pn) + offset if k else demand_user
+    else:
+        demand_user = actual_user = offset
     fe = cia.following_error
     blocked = units.position_to_user_int(fe) if fe.numerator else 0
     user_velocity = velocity * sd * vd / (sn * vn) if sn and vn else 0.0
