@@ -18,6 +18,7 @@ from math import floor
 from typing import TYPE_CHECKING
 
 from ecattool.sim.cia402 import CSP, HALT, HOMING, PP, State
+from ecattool.sim.drive import polarity
 from ecattool.sim.drive.supervision_state import Supervision
 from ecattool.sim.units import floor_ratio
 
@@ -154,8 +155,14 @@ def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
         sw |= 0x2000
     rated = plant.params.rated_torque
     torque = round(plant.torque / rated * 1000) if rated > 0 else 0
-    drive._put_all(_ACTUAL, (sw, qn // qd + k, actual_user, demand_user + blocked, user_velocity, cia.fault_code,
-                             blocked + (round(-error * pd / pn) if error and pn else 0), torque, torque))
+    demand_user += blocked
+    lag = blocked + (round(-error * pd / pn) if error and pn else 0)
+    if drive.behaviour.polarity == "targets+actuals":
+        # Technosoft §5.1.1: 607Eh multiplies the actual values too (as on the ideal plant, motion.py)
+        ps, vs = polarity.actual_signs(drive, mode)
+        actual_user, demand_user, lag, user_velocity = ps * actual_user, ps * demand_user, ps * lag, vs * user_velocity
+    drive._put_all(_ACTUAL, (sw, qn // qd + k, actual_user, demand_user, user_velocity, cia.fault_code, lag, torque,
+                             torque))
 
 
 # --- limit switches and software position limits ---------------------------------------------------------------
