@@ -9,6 +9,7 @@ import click
 
 from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
                                  table, write_output)
+from ecattool.cli.online import reset_bus_given, reset_bus_option
 from ecattool.cli.paths import InputFile
 from ecattool.cli.startup import lossy_option, write_startup
 from ecattool.cli.vocab import WRITE_FORMATS, device_option, shared_option
@@ -338,6 +339,7 @@ Examples:
 @click.option("--from", "source", type=InputFile(),
               help="Read values from a startup file (any format), a `scale compute --json` file or a YAML mapping.")
 @click.option("--target", help="Read the values from a drive: 'sim' (the family's simulated drive) or 'pysoem:IFACE'.")
+@reset_bus_option
 @click.option("--slave", type=int, default=0, show_default=True, help="Bus position of the drive (with --target).")
 @click.option("--project", type=InputFile(), help="Read the values a project's drive holds after its startup list "
               "(its writes, else the device's defaults) and take its family.")
@@ -412,7 +414,8 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
 
 def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> Any:
     from ecattool.errors import InputError, SelectionError
-    from ecattool.target.opener import SLAVE_TARGET_FORMS, open_target, parse_target, slave_at
+    from ecattool.online.targets import open_guarded
+    from ecattool.target.opener import SLAVE_TARGET_FORMS, parse_target, slave_at
 
     devices = []
     try:
@@ -424,7 +427,7 @@ def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> A
                 raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
             devices = [profiles.load(family, revision=firmware) if firmware else profiles.load(family)]
             slave = 0
-        found = slave_at(open_target(spec, devices), slave)
+        found = slave_at(open_guarded(spec, devices, reset_bus_given()), slave)
     except SelectionError as exc:
         if exc.message.startswith("unknown target"):
             raise click.BadParameter(f"use {SLAVE_TARGET_FORMS}", param_hint="--target") from None
