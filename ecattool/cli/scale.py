@@ -57,68 +57,23 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
           steps: str | None, feedback_on: str | None, gear: str | None, transmission: str | None, pos_unit: str | None,
           vel_unit: str | None, acc_unit: str | None, jerk_unit: str | None, slow_loop: str | None,
           reverse: bool | None, approximation: str | None) -> Any:
+    """(the spec the flags say, over SPEC where given; the family, firmware and approximation to use)."""
     from ecattool.errors import InputError
-    from ecattool.scaling.spec import load_spec, spec_from_dict
+    from ecattool.scaling.model import length_unit, transmission_from
+    from ecattool.scaling.spec import AxisOptions, load_spec, spec_with
 
-    data: dict[str, Any] = {}
-    base = None
-    if spec:
-        base = load_spec(spec)
-    fb: dict[str, Any] = {}
-    if counts:
-        fb["counts_per_rev"] = counts
-    if lines:
-        fb["lines"] = lines
-    if steps:
-        if "x" not in steps.lower():
-            raise click.BadParameter("write STEPSxMICROSTEPS, e.g. 200x256", param_hint="--steps")
-        s, m = steps.lower().split("x", 1)
-        fb.update(steps=s, microsteps=m)
-    if feedback_on:
-        fb["on"] = feedback_on
+    base = load_spec(spec) if spec else None
+    if steps and "x" not in steps.lower():
+        raise click.BadParameter("write STEPSxMICROSTEPS, e.g. 200x256", param_hint="--steps")
     if transmission:  # a mechanics string the user typed: its error names the option
-        from ecattool.scaling.model import length_unit, transmission_from
-
         try:
             transmission_from(transmission, meant=length_unit(pos_unit or (base.axis.position if base else None)))
         except InputError as exc:
             raise click.BadParameter(exc.message, param_hint="'--transmission'") from None
-    if base is None:
-        if not fb or not any(k in fb for k in ("counts_per_rev", "lines", "steps")):
-            raise InputError("give a SPEC file or the feedback (--counts-per-rev, --lines or --steps)")
-        data["feedback"] = fb
-        data["gear"] = gear
-        data["transmission"] = transmission
-        data["units"] = {k: v for k, v in (("position", pos_unit), ("velocity", vel_unit), ("acceleration", acc_unit),
-                                           ("jerk", jerk_unit)) if v}
-        if slow_loop:
-            data["slow_loop"] = slow_loop
-        data["reverse"] = bool(reverse)
-        parsed = spec_from_dict(data)
-    else:
-        from dataclasses import replace
-
-        from ecattool.scaling.model import feedback_from, gear_from, slow_loop_from, transmission_from
-
-        ax = base.axis
-        changes: dict[str, Any] = {}
-        if fb:
-            changes["feedback"] = feedback_from(fb) if any(k in fb for k in ("counts_per_rev", "lines", "steps")) else \
-                replace(ax.feedback, on=fb["on"])
-        if gear:
-            changes["gear"] = gear_from(gear)
-        if transmission:
-            changes["transmission"] = transmission_from(transmission)
-        for key, val in (("position", pos_unit), ("velocity", vel_unit), ("acceleration", acc_unit), ("jerk", jerk_unit)):
-            if val:
-                changes[key] = val
-        if slow_loop:
-            changes["slow_loop"] = slow_loop_from(slow_loop)
-        if reverse is not None:
-            changes["reverse"] = reverse
-        parsed = replace(base, axis=replace(ax, **changes))
-        for order in range(4):
-            parsed.axis.unit(order)
+    stepper = steps.lower().split("x", 1) if steps else None
+    parsed = spec_with(base, AxisOptions(counts, lines, (stepper[0], stepper[1]) if stepper else None, feedback_on,
+                                         gear, transmission, pos_unit, vel_unit, acc_unit, jerk_unit, slow_loop,
+                                         reverse))
     fam = family or parsed.family or "technosoft-ipos"
     return parsed, fam, firmware or parsed.firmware, approximation or parsed.approximation
 
