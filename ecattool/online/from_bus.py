@@ -21,8 +21,11 @@ from ecattool.od.model import EcState
 from ecattool.online.library import Library, Match, family_device, family_match
 from ecattool.online.live import LiveBus, describe_slave, sii_facts
 
-#: the objects a project usually sets, written as parameters with the value the drive holds now
-USUAL_OBJECTS = ((0x6060, 0), (0x6065, 0), (0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6085, 0))
+#: the objects a project usually sets, written as parameters with the value the drive holds now; the
+#: interpolation period 60C2h (its unit, sub 2, before its value: a drive checks the period they make) that a
+#: cyclic synchronous mode takes its set-points by (lint's PRJ044 against the SYNC0 cycle)
+USUAL_OBJECTS = ((0x6060, 0), (0x6065, 0), (0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6085, 0), (0x60C2, 2),
+                 (0x60C2, 1))
 #: the cyclic synchronous modes (CiA 402: csp, csv, cst): set-points taken on SYNC0
 CYCLIC_SYNC_MODES = (8, 9, 10)
 
