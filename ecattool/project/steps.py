@@ -564,9 +564,12 @@ def check_esi(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     assert rd.device is not None
     # a mapping object whose DefaultData contradicts its PDO element matters where the slave runs it as it holds
     # it: a PDO the mapping uses and commission does not program (docs/decisions.md, "An ESI that contradicts
-    # itself")
+    # itself"); where PRJ027 reports the project's mapping against it (its first such PDO, at the same line, with
+    # what to do: give the mapping in pdo:), once is enough
     kept = ({p.index for p in (*rd.mapping.rx, *rd.mapping.tx) if not (p.explicit and rewritten(rd.device, p, rd.rules))}
             if rd.mapping is not None else set())
+    if rd.mapping is not None:
+        kept -= {d.index for d in dictionary_mapping_differences(rd.device, rd.mapping, rd.rules)}
     for f in findings:
         pdo_index = f.data.get("pdo")
         if f.rule == "esi-pdo-default-differs" and pdo_index not in kept:
