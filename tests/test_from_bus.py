@@ -147,5 +147,9 @@ def test_without_the_registers_the_project_says_so_and_takes_the_esi_dc_mode(tmp
     target, bus = _commissioned(CT)
     for s in bus.slaves:
         s.dc_activation = None  # type: ignore[assignment]  (as a remote master's slave: nothing to ask)
-    text = project_from_bus(bus, None, tmp_path / "m.yaml")  # type: ignore[arg-type]
+    out = tmp_path / "m.yaml"
+    text = project_from_bus(bus, None, out)  # type: ignore[arg-type]
     assert "# DC not read: sim gave no ESC register read" in text, text
+    assert 'the ESI\'s DC OpMode DC is assumed, set your cycle\n    dc: {opmode: "DC", cycle_ns: 1000000}\n' in text
+    out.write_text(text, encoding="utf-8")
+    assert "PRJ041" not in {f.rule for f in lint_project(out).findings}
