@@ -153,3 +153,12 @@ def test_without_the_registers_the_project_says_so_and_takes_the_esi_dc_mode(tmp
     assert 'the ESI\'s DC OpMode DC is assumed, set your cycle\n    dc: {opmode: "DC", cycle_ns: 1000000}\n' in text
     out.write_text(text, encoding="utf-8")
     assert "PRJ041" not in {f.rule for f in lint_project(out).findings}
+
+
+def test_bus_scan_names_the_model_the_sii_names() -> None:
+    """``bus scan`` matches as ``project new --from-bus`` writes: the Digitax ST is not shown as a Unidrive SP."""
+    from ecattool.online import scan
+
+    _, bus = _commissioned(CT)
+    (found,) = scan(bus, None)  # type: ignore[arg-type]
+    assert found.match is not None and found.match.product == "digitax-st", found.match
