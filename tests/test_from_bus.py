@@ -162,3 +162,53 @@ def test_bus_scan_names_the_model_the_sii_names() -> None:
     _, bus = _commissioned(CT)
     (found,) = scan(bus, None)  # type: ignore[arg-type]
     assert found.match is not None and found.match.product == "digitax-st", found.match
+
+
+def test_late_answers_to_frames_sent_again_are_taken_off_before_the_master_opens(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A frame answered late is sent again; its late answer must not reach the master's socket opened next (KickCAT
+    reads it as an answer to its own frame): the raw read takes it off before it closes its socket."""
+    import socket
+
+    from ecattool.online import bus_state
+    from ecattool.sim.bus.engine import Bus
+    from ecattool.sim.slave import VirtualSlave, drive_for_device
+    from ecattool.sii.builder import build
+
+    (rd,) = lint_project(CT).drives
+    engine = Bus([VirtualSlave(drive_for_device(rd.device), build(rd.device).to_bytes()).esc])
+
+    class LateWire:
+        """The last frame's answer comes only after it was sent again (then twice)."""
+
+        def __init__(self) -> None:
+            self.queue: list[bytes] = []
+            self.sent = 0
+            self.closed = False
+
+        def send(self, frame: bytes) -> None:
+            self.sent += 1
+            answer = engine.process(frame)
+            assert answer is not None
+            if self.sent == 3:  # the last read (the DC registers)
+                self.held = answer
+                return
+            if self.sent == 4:
+                self.queue.append(self.held)  # the late answer to the first
+            self.queue.append(answer)
+
+        def settimeout(self, _: float) -> None:
+            pass
+
+        def recvfrom(self, _: int) -> tuple[bytes, tuple[str, int, int]]:
+            if not self.queue:
+                raise socket.timeout
+            return self.queue.pop(0), ("veth", 0x88A4, socket.PACKET_HOST)
+
+        def close(self) -> None:
+            self.closed = True
+
+    wire = LateWire()
+    monkeypatch.setattr("ecattool.sim.bus.raw.open_raw", lambda ifname: wire)
+    found = bus_state.read_states("veth")
+    assert found is not None and found[0].assign_activate == 0 and wire.sent == 4
+    assert wire.queue == [] and wire.closed  # nothing left for the master's socket

@@ -67,11 +67,14 @@ class Found:
         return f"slave {self.position} ({name}{', error' if self.al_status & 0x10 else ''})"
 
 
-def _exchange(sock: socket.socket, frame: bytes, index: int) -> bytes | None:
-    """``frame`` sent; the frame that comes back processed (bit 1 of the source MAC set by the first slave)."""
+def _exchange(sock: socket.socket, frame: bytes, index: int, resent: list[bool] | None = None) -> bytes | None:
+    """``frame`` sent; the frame that comes back processed (bit 1 of the source MAC set by the first slave).
+    ``resent``: set to [True] where the frame was sent again (a late answer to the first may still come)."""
     from ecattool.sim.bus.frame import parse_frame
 
-    for _ in range(ATTEMPTS):
+    for attempt in range(ATTEMPTS):
+        if attempt and resent is not None:
+            resent[:] = [True]
         sock.send(frame)
         deadline = time.monotonic() + REPLY_S
         while (left := deadline - time.monotonic()) > 0:
@@ -102,12 +105,26 @@ def read_states(ifname: str) -> list[Found] | None:
         sock = open_raw(ifname)
     except TargetError:
         return None  # no raw socket here, or no such interface: the master's own open says why
+    resent: list[bool] = []
     try:
-        return read_found(lambda frame, index: _exchange(sock, frame, index))
+        return read_found(lambda frame, index: _exchange(sock, frame, index, resent))
     except OSError:
         return None
     finally:
+        if resent:
+            _drain(sock)
         sock.close()
+
+
+def _drain(sock: socket.socket) -> None:
+    """Take the late answers to frames sent again off the wire before the master opens its own socket (which
+    would read them as answers to its frames), until none comes for :data:`REPLY_S` (at most ``ATTEMPTS``)."""
+    for _ in range(ATTEMPTS):
+        sock.settimeout(REPLY_S)
+        try:
+            sock.recvfrom(2048)
+        except (OSError, socket.timeout):
+            return
 
 
 def read_found(exchange: Exchange) -> list[Found] | None:
