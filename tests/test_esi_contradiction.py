@@ -139,3 +139,21 @@ def test_the_corpus_sweep_finds_only_the_files_known_to_contradict_themselves() 
                 assert without_trailing_padding(held) == without_trailing_padding(listed)
     assert reported == known
     assert own > 800 and padded >= 1  # both agree in every other mapping object, the EL6692's padding included
+
+
+def test_trailing_padding_is_no_finding_but_the_sii_holds_it_as_the_slave_does() -> None:
+    """The EL6692's 1600h: a gap of 8 bits in the dictionary against an empty RxPdo element. No finding (the same
+    data), and the SII's RXPDO category holds the gap, as the power-on mapping (``pdo.default_mapping``, ``map
+    layout``) and the served slave do: a master without CoE lays out the same byte."""
+    from ecattool.esi.power_on import contradictions
+    from ecattool.pdo import default_mapping
+    from ecattool.sii.builder import build
+    from ecattool.sii.model import CategoryType
+
+    device = next(d for d in load(CORPUS / "beckhoff_EL66xx.xml").devices if d.type_name == "EL6692")
+    assert device.pdo(0x1600) is not None and device.pdo(0x1600).entries == []  # type: ignore[union-attr]
+    assert contradictions(device) == []
+    (mapped,) = [p for p in default_mapping(device).rx if p.index == 0x1600]
+    (sii_pdo,) = [p for p in build(device).pdos(CategoryType.RXPDO) if p.index == 0x1600]
+    assert [e.mapping_value for e in mapped.entries] == [(e.index << 16) | (e.subindex << 8) | e.bit_len
+                                                         for e in sii_pdo.entries] == [0x00000008]

@@ -90,11 +90,11 @@ def contradictions(device: Device) -> list[Contradiction]:
 
 
 def power_on_entries(device: Device, pdo: Pdo) -> list[PdoEntry]:
-    """The entries ``pdo`` has at power-on: the dictionary's own mapping object where it contradicts the PDO
-    element (named and typed by the dictionary), else the element's."""
+    """The entries ``pdo`` has at power-on: the dictionary's own mapping object where it differs from the PDO
+    element (named and typed by the dictionary; trailing padding included, as ``pdo.default_mapping`` and the
+    simulator take it: the image the slave has), else the element's."""
     held = own_mapping_values(device, pdo.index) if pdo.index in MAPPING_RANGES[pdo.direction] else None
-    if held is None or without_trailing_padding(held) == without_trailing_padding(
-            [e.mapping_value for e in pdo.entries]):
+    if held is None or held == [e.mapping_value for e in pdo.entries]:
         return list(pdo.entries)
     out = []
     for value in held:
