@@ -29,7 +29,7 @@ def _commissioned(project: str | Path) -> tuple[SimTarget, object]:
     return target, sim_bus(target.slaves())
 
 
-def _again(project: Path, target: SimTarget) -> SimTarget:
+def _again(target: SimTarget) -> SimTarget:
     """The same drives, powered up again (a fresh simulator of their devices)."""
     return SimTarget.from_devices([s.drive.device for s in sim_bus(target.slaves()).slaves])
 
@@ -50,7 +50,7 @@ def test_a_digitax_st_in_csp_on_dc_is_written_as_such_lints_clean_and_commission
     assert not result.findings, [str(f) for f in result.findings]  # no PRJ041, and no PRJ044: 60C2h as found
     (rd,) = result.drives
     assert rd.device.extra["product"] == "digitax-st" and rd.dc is not None and rd.dc.assign_activate == 0x0300
-    report = commission(out, _again(out, target))
+    report = commission(out, _again(target))
     assert report.ok, report.to_json()
 
 
@@ -64,7 +64,7 @@ def test_the_revision_found_is_kept_where_it_is_not_the_family_default(tmp_path:
     out = tmp_path / "machine.yaml"
     out.write_text(project_from_bus(bus, None, out), encoding="utf-8")  # type: ignore[arg-type]
     assert 'revision: "01.00.00"' in out.read_text(encoding="utf-8")
-    assert commission(out, _again(out, target)).ok
+    assert commission(out, _again(target)).ok
 
 
 def _library_link(tmp_path: Path) -> Path:
