@@ -97,7 +97,8 @@ def test_the_sii_map_layout_and_the_served_slave_agree_on_the_dictionary(
     # the served slave: its 1600h as a master reads it over CoE
     drive = drive_for_device(device)
     drive.request_state(EcState.PREOP)
-    served = [int.from_bytes(drive.sdo_upload(0x1600, s), "little") for s in range(1, drive.sdo_upload(0x1600, 0)[0] + 1)]
+    count = drive.sdo_upload(0x1600, 0)[0]
+    served = [int.from_bytes(drive.sdo_upload(0x1600, s), "little") for s in range(1, count + 1)]
     assert served == held
     # the SII's RXPDO category
     (sii_pdo,) = [p for p in build(device).pdos(CategoryType.RXPDO) if p.index == 0x1600]

@@ -164,7 +164,8 @@ def test_bus_scan_names_the_model_the_sii_names() -> None:
     assert found.match is not None and found.match.product == "digitax-st", found.match
 
 
-def test_late_answers_to_frames_sent_again_are_taken_off_before_the_master_opens(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_late_answers_to_frames_sent_again_are_taken_off_before_the_master_opens(
+        monkeypatch: pytest.MonkeyPatch) -> None:
     """A frame answered late is sent again; its late answer must not reach the master's socket opened next (KickCAT
     reads it as an answer to its own frame): the raw read takes it off before it closes its socket."""
     import socket

@@ -566,8 +566,8 @@ def check_esi(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
     # it: a PDO the mapping uses and commission does not program (docs/decisions.md, "An ESI that contradicts
     # itself"); where PRJ027 reports the project's mapping against it (its first such PDO, at the same line, with
     # what to do: give the mapping in pdo:), once is enough
-    kept = ({p.index for p in (*rd.mapping.rx, *rd.mapping.tx) if not (p.explicit and rewritten(rd.device, p, rd.rules))}
-            if rd.mapping is not None else set())
+    kept = ({p.index for p in (*rd.mapping.rx, *rd.mapping.tx)
+             if not (p.explicit and rewritten(rd.device, p, rd.rules))} if rd.mapping is not None else set())
     if rd.mapping is not None:
         kept -= {d.index for d in dictionary_mapping_differences(rd.device, rd.mapping, rd.rules)}
     for f in findings:
