@@ -105,7 +105,9 @@ def test_the_sii_map_layout_and_the_served_slave_agree_on_the_dictionary(
     assert [(e.index << 16) | (e.subindex << 8) | e.bit_len for e in sii_pdo.entries] == held
     # map layout: 11 bytes (the element's 13 would be 104 bits)
     _, out, _ = run(capsys, "map", "layout", "--esi", str(tmp_path / "contra.xml"), "--json")
-    outputs = json.loads(out)["outputs"]
+    doc = json.loads(out)
+    outputs = doc["outputs"]
+    assert doc["power_on_from_dictionary"] == ["0x1600"]
     assert outputs["bits"] == sum(v & 0xFF for v in held) == 88
     _, text, _ = run(capsys, "map", "layout", "--esi", str(tmp_path / "contra.xml"))
     assert "Outputs SM2 (11 bytes, 88 bits)" in text and "note: PDO 0x1600 is drawn as the slave powers on" in text

@@ -203,7 +203,10 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
         if svg == "-":
             return
     if as_json or output not in (None, "-"):
-        write_output(output, dump_json(lay.to_json()) + "\n", inputs)
+        doc = lay.to_json()
+        if dictionary_pdos:  # drawn by the dictionary's mapping object (esi-pdo-default-differs)
+            doc["power_on_from_dictionary"] = [f"0x{i:04X}" for i in dictionary_pdos]
+        write_output(output, dump_json(doc) + "\n", inputs)
         return
     con = console()
     for img in (lay.outputs, lay.inputs):
