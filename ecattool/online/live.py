@@ -246,6 +246,11 @@ class SimLiveSlave:
     def request_state(self, state: EcState) -> None:
         self.drive.request_state(state)
 
+    def dc_activation(self) -> tuple[int, int, int]:
+        """The drive's DC as a master configured it (the ESC's 0x0980-0x0981 word, SYNC0 and SYNC1 cycle in ns)."""
+        act, cycle = getattr(self.drive, "dc", (0, 0))
+        return int(act), int(cycle), 0
+
     def al_status_code(self) -> int | None:
         for e in reversed(self.drive.events):
             if e.kind in ("state", "state_refused"):

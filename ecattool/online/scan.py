@@ -103,7 +103,8 @@ def scan_slave(slave: Any, library: Library | None = None) -> ScannedSlave:
     ident = sii_ident or coe
     match = None
     if ident is not None:
-        match = (library.match(ident) if library is not None else None) or family_match(ident)
+        # among models sharing the identity, the one the SII's name names (as project new --from-bus writes it)
+        match = (library.match(ident, name) if library is not None else None) or family_match(ident, name)
         if match is None:
             unknown.append("device: no library file or built-in family has this vendor and product code")
     if dc is None and match is not None:
