@@ -102,6 +102,21 @@ class SdoTimeout(TargetError):
         super().__init__(f"SDO timeout on 0x{index:04X}:{subindex:02X}{of}: no reply")
 
 
+class SdoTooLarge(TargetError):
+    """A slave answered an SDO upload with more octets than the object can have (its type's size, or the
+    documented bound where the type is not known): the reply is refused, never copied on."""
+
+    def __init__(self, index: int, subindex: int, position: int | None, size: int, got: int | None = None) -> None:
+        self.index = index
+        self.subindex = subindex
+        self.position = position
+        self.size = size
+        self.got = got
+        of = "" if position is None else f"slave {position}: "
+        said = "the slave announced more than" if got is None else f"the reply has {got} octets, more than"
+        super().__init__(f"{of}0x{index:04X}:{subindex:02X}: {said} the {size} the object can have (refused)")
+
+
 class StateChangeError(TargetError):
     """An EtherCAT state change was refused; ``al_status`` holds the AL status code."""
 

@@ -73,8 +73,8 @@ class PysoemLiveSlave:
         ident: Identity = self._t.identity()
         return ident
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
-        data: bytes = self._t.sdo_upload(index, subindex, complete_access)
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        data: bytes = self._t.sdo_upload(index, subindex, complete_access, size=size)
         return data
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,

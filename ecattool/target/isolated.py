@@ -245,8 +245,8 @@ class RemoteSlave:
     def identity(self) -> Any:
         return self._call("identity")
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
-        data: bytes = self._call("sdo_upload", index, subindex, complete_access)
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        data: bytes = self._call("sdo_upload", index, subindex, complete_access, size=size)
         return data
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,

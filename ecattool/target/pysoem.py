@@ -46,10 +46,10 @@ from types import ModuleType
 from typing import Any, TypeVar
 
 from ecattool.abort import al_status_text
-from ecattool.errors import SdoAbort, SdoTimeout, StateChangeError, TargetError
+from ecattool.errors import SdoAbort, SdoTimeout, SdoTooLarge, StateChangeError, TargetError
 from ecattool.esi.model import Identity
 from ecattool.od.model import EcState
-from ecattool.target.base import SlaveTarget
+from ecattool.target.base import UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX, SlaveTarget, check_upload
 
 #: how long a state change may take, in microseconds (SOEM's own EC_TIMEOUTSTATE is 2 s)
 STATE_TIMEOUT_US = 2_000_000
@@ -77,13 +77,17 @@ STATE_POLL_S = 0.1
 #: how long SOEM waits for one SDO answer, in microseconds (its own default is 0.7 s); an upload that got none is
 #: asked once more (PysoemSlave.sdo_upload)
 SDO_TIMEOUT_US = 2_000_000
-#: pysoem reads into a 256-byte buffer unless told otherwise; a larger object is read again with this size
-LARGE_SDO_BYTES = 65536
+#: how many times an upload that got no answer is asked again (each a new request with the next mailbox counter)
+UPLOAD_REPEATS = 2
 _STATE_NAMES = {EcState.INIT: "INIT_STATE", EcState.PREOP: "PREOP_STATE", EcState.BOOT: "BOOT_STATE",
                 EcState.SAFEOP: "SAFEOP_STATE", EcState.OP: "OP_STATE"}
 #: PacketError.error_code of SOEM: "data container too small for type"
 _PACKET_TOO_SMALL = 3
 _T = TypeVar("_T")
+
+
+class _Larger(Exception):
+    """The slave announced more than SOEM's default buffer holds, where the object's size is not known."""
 
 
 def _import_pysoem() -> ModuleType:
@@ -160,29 +164,47 @@ class PysoemSlave:
         except mod.Emergency as exc:  # only when no callback is registered; kept as a TargetError anyway
             raise TargetError(f"{self._where(index, subindex)}: emergency {exc}") from None
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
-        def read(size: int = 0) -> bytes:
-            return bytes(self._slave.sdo_read(index, subindex, size, ca=complete_access))
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        """The object's value, read into a buffer of exactly ``size`` octets (its type's): SOEM refuses an
+        announced size larger than its buffer ("data container too small", PacketError 3), which is an
+        :class:`SdoTooLarge` here. Without ``size``: SOEM's default buffer (UNKNOWN_SIZE_FIRST), then once
+        UNKNOWN_SIZE_MAX. SOEM copies the segments of a segmented upload without checking its buffer's end (docs/
+        at-the-machine.md, "When the master crashes"): that is why the master runs in a child process."""
+        mod = self._mod
 
-        def read_any_size() -> bytes:
+        def read(n: int) -> bytes:
             try:
-                return read()
-            except self._mod.PacketError as exc:
+                return bytes(self._slave.sdo_read(index, subindex, n, ca=complete_access))
+            except mod.PacketError as exc:
                 if exc.error_code != _PACKET_TOO_SMALL:
                     raise
-                return read(LARGE_SDO_BYTES)
+                if size is None and n < UNKNOWN_SIZE_MAX:
+                    raise _Larger() from None
+                raise SdoTooLarge(index, subindex, self.position, n) from None
 
-        def read_again_once() -> bytes:
-            # an upload changes nothing on the slave: one that got no answer, or a stale mailbox error (the
-            # answer to an earlier request, e.g. a refused SDO Information request), is asked again once, with
-            # the next mailbox counter (SOEM counts on for each request), after SOEM's error list is emptied
+        def read_bounded() -> bytes:
+            if size is not None:
+                return check_upload(read(max(1, size)), size, index, subindex, self.position)
             try:
-                return read_any_size()
-            except (self._mod.WkcError, self._mod.MailboxError):
-                self._master.drain_errors()
-                return read_any_size()
+                return read(UNKNOWN_SIZE_FIRST)
+            except _Larger:
+                return check_upload(read(UNKNOWN_SIZE_MAX), None, index, subindex, self.position)
 
-        return self._sdo(read_again_once, index, subindex)
+        def read_again() -> bytes:
+            # an upload changes nothing on the slave: one that got no answer, or a stale mailbox error (the answer
+            # to an earlier request, e.g. a refused SDO Information request), is asked again, up to UPLOAD_REPEATS
+            # times, after SOEM's error list is emptied. SOEM gives each request the next mailbox counter (1..7,
+            # ETG.1000.6 5.6), and itself toggles SM1's repeat request when the reply to a request was lost on its way
+            for attempt in range(UPLOAD_REPEATS + 1):
+                try:
+                    return read_bounded()
+                except (mod.WkcError, mod.MailboxError):
+                    if attempt == UPLOAD_REPEATS:
+                        raise
+                    self._master.drain_errors()
+            raise AssertionError("unreachable")  # pragma: no cover
+
+        return self._sdo(read_again, index, subindex)
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None:
