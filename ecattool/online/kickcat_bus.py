@@ -84,7 +84,9 @@ def open_kickcat(ifname: str, module: ModuleType | None = None) -> LiveBus:
         with _quiet_stdout():
             link = kc.create_link(ifname, "")
     except Exception as exc:  # noqa: BLE001 - RuntimeError/OSError from the binding
-        raise TargetError(f"cannot open EtherCAT interface {ifname!r} with KickCAT: {exc}") from None
+        from ecattool.target.pysoem import open_advice
+
+        raise TargetError(f"cannot open EtherCAT interface {ifname!r} with KickCAT: {exc}{open_advice(ifname)}") from None
     bus = kc.Bus(link)
     for attempt, timeout in enumerate(INIT_TIMEOUTS_S):
         link.set_timeout(timeout)

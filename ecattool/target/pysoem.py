@@ -100,6 +100,20 @@ def _import_pysoem() -> ModuleType:
     return module
 
 
+def open_advice(ifname: str, euid: int | None = None, interfaces: str = "/sys/class/net") -> str:
+    """Why a master cannot open ``ifname`` where it can be told (appended to the error): an interface this machine
+    does not have, or a user without the right to open a raw socket on it (root or CAP_NET_RAW)."""
+    import os
+
+    if os.path.isdir(interfaces) and not os.path.exists(os.path.join(interfaces, ifname)):
+        return f" (this machine has no network interface {ifname!r}: 'ip link' lists them)"
+    uid = os.geteuid() if euid is None else euid
+    if uid != 0:
+        return (" (a master sends raw Ethernet frames: run as root, or give the Python interpreter CAP_NET_RAW, "
+                "e.g. sudo setcap cap_net_raw+ep \"$(readlink -f \"$(command -v python3)\")\")")
+    return ""
+
+
 def dc_sync_args(assign_activate: int, sync0_cycle_ns: int, sync0_shift_ns: int = 0) -> tuple[Any, ...]:
     """The arguments of pysoem's ``slave.dc_sync`` for an ESI AssignActivate word.
 
@@ -346,7 +360,7 @@ class PysoemTarget:
         try:
             self.master.open(ifname)
         except Exception as exc:  # noqa: BLE001 - ConnectionError, or an OS error on some platforms
-            raise TargetError(f"cannot open EtherCAT interface {ifname!r}: {exc}") from None
+            raise TargetError(f"cannot open EtherCAT interface {ifname!r}: {exc}{open_advice(ifname)}") from None
         count = self.master.config_init()
         # a link that was just brought up (a NIC negotiating, a fresh veth pair) drops the first frames: ask again
         # for up to LINK_WAIT_S before saying the bus is empty
