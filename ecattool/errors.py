@@ -94,12 +94,14 @@ class SdoAbort(TargetError):
 class SdoTimeout(TargetError):
     """An SDO request got no reply in time."""
 
-    def __init__(self, index: int, subindex: int, position: int | None = None) -> None:
+    def __init__(self, index: int, subindex: int, position: int | None = None, name: str = "",
+                 detail: str = "no reply") -> None:
         self.index = index
         self.subindex = subindex
         self.position = position
-        of = "" if position is None else f" of slave {position}"
-        super().__init__(f"SDO timeout on 0x{index:04X}:{subindex:02X}{of}: no reply")
+        self.name = name
+        of = "" if position is None else f" of slave {position}" + (f" ({name})" if name else "")
+        super().__init__(f"SDO timeout on 0x{index:04X}:{subindex:02X}{of}: {detail}")
 
 
 class SdoTooLarge(TargetError):

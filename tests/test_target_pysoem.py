@@ -278,9 +278,12 @@ def test_a_non_root_user_is_told_about_root_and_cap_net_raw():
             __import__(spec.split(":")[0])
         except ImportError:
             continue
-        done = subprocess.run([sys.executable, "-m", "ecattool", "sdo", "read", "0x1018:01", "--target", spec],
-                              capture_output=True, text=True, timeout=60, cwd=root, user=65534, group=65534,
-                              extra_groups=[], env={**os.environ, "PYTHONPATH": str(root)})
+        try:
+            done = subprocess.run([sys.executable, "-m", "ecattool", "sdo", "read", "0x1018:01", "--target", spec],
+                                  capture_output=True, text=True, timeout=60, cwd=root, user=65534, group=65534,
+                                  extra_groups=[], env={**os.environ, "PYTHONPATH": str(root)})
+        except PermissionError:  # this interpreter lives where user 'nobody' may not go (e.g. under /root)
+            pytest.skip(f"user 'nobody' cannot run {sys.executable}")
         assert done.returncode == 1 and done.stdout == "", done
         lines = done.stderr.strip().splitlines()
         assert len(lines) == 1 and "cannot open EtherCAT interface 'lo'" in lines[0], done.stderr

@@ -32,10 +32,10 @@ from typing import Any
 
 from ecattool.errors import EcatToolError, TargetError
 from ecattool.target.base import SlaveTarget
+from ecattool.target.timeouts import BusLimits
 
-#: how long the bus init may take (a master reads every slave's SII; SOEM asks an empty bus again for 2 s)
-OPEN_TIMEOUT_S = 30.0
-#: how long one SDO, state or SII request may take (SOEM: 0.7 s per mailbox answer, a few for a segmented upload)
+#: how long one state or SII request may take (the bus init and SDO requests are bounded by the slaves' own
+#: timeouts instead: ecattool.target.timeouts.BusLimits)
 CALL_TIMEOUT_S = 20.0
 #: how long a closing master may take before it is stopped
 CLOSE_TIMEOUT_S = 5.0
@@ -165,11 +165,14 @@ def _rebuild(reply: tuple[Any, ...], what: str) -> Exception:
 class MasterProcess:
     """A master opened by ``factory`` in a forked child; ``slaves_of(root)`` lists its slaves there.
 
-    ``name`` (``pysoem:eth0``) is used in errors. :attr:`positions` are the slaves' bus positions, in order."""
+    ``name`` (``pysoem:eth0``) is used in errors. :attr:`positions` are the slaves' bus positions, in order.
+    ``limits``: how long the bus init and each SDO request may take (the slaves' timeouts; ``open_timeout_s``
+    overrides the bus init's)."""
 
     def __init__(self, name: str, factory: Callable[[], Any], slaves_of: Callable[[Any], Sequence[Any]],
-                 open_timeout_s: float = OPEN_TIMEOUT_S) -> None:
+                 open_timeout_s: float | None = None, limits: BusLimits | None = None) -> None:
         self.name = name
+        self.limits = limits or BusLimits()
         self._dead: MasterGone | None = None
         ctx = multiprocessing.get_context("fork")
         self._conn, child_end = ctx.Pipe()
@@ -177,7 +180,8 @@ class MasterProcess:
                                  name=f"ecattool-master-{name}")
         self._proc.start()
         child_end.close()
-        self.positions: list[int] = self._answer(f"opening the bus on {name}", cap(open_timeout_s))
+        open_s = self.limits.open_s if open_timeout_s is None else open_timeout_s
+        self.positions: list[int] = self._answer(f"opening the bus on {name}", cap(open_s))
 
     def _answer(self, what: str, timeout_s: float) -> Any:
         """The child's reply to the request just sent (or to its start)."""
@@ -191,7 +195,8 @@ class MasterProcess:
             raise self._dead from None
         if reply is None:
             self._stop()
-            self._dead = MasterHung(f"the master did not answer within {timeout_s:g} s {what} ({self.name}; stopped)")
+            self._dead = MasterHung(f"the master did not answer within {timeout_s:g} s {what} ({self.name}; stopped; "
+                                    f"{self.limits.describe()})")
             raise self._dead
         if reply[0] == "ok":
             return reply[1]
@@ -243,15 +248,18 @@ class RemoteSlave:
         return self._master.call(self.position, method, *args, **kwargs)
 
     def identity(self) -> Any:
-        return self._call("identity")
+        # pysoem's identity is the SII's (no request); KickCAT's is 1018h:01-03, three SDOs
+        return self._call("identity", timeout_s=3 * self._master.limits.sdo_call_s)
 
     def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
-        data: bytes = self._call("sdo_upload", index, subindex, complete_access, size=size)
+        data: bytes = self._call("sdo_upload", index, subindex, complete_access, size=size,
+                                 timeout_s=self._master.limits.sdo_call_s)
         return data
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None:
-        self._call("sdo_download", index, subindex, bytes(data), complete_access, expect_reply)
+        self._call("sdo_download", index, subindex, bytes(data), complete_access, expect_reply,
+                   timeout_s=self._master.limits.sdo_call_s)
 
     def state(self) -> Any:
         return self._call("state")
@@ -298,9 +306,11 @@ class IsolatedTarget:
         self.master.close()
 
 
-def pysoem_target(ifname: str) -> IsolatedTarget:
-    """SOEM through pysoem on ``ifname`` (:class:`ecattool.target.pysoem.PysoemTarget`), in a child process."""
+def pysoem_target(ifname: str, limits: BusLimits | None = None) -> IsolatedTarget:
+    """SOEM through pysoem on ``ifname`` (:class:`ecattool.target.pysoem.PysoemTarget`), in a child process;
+    ``limits``: the slaves' timeouts (ecattool.target.timeouts)."""
     from ecattool.target.pysoem import PysoemTarget, _import_pysoem
 
     _import_pysoem()  # a missing extra is said here, and the child starts with the module loaded
-    return IsolatedTarget(MasterProcess(f"pysoem:{ifname}", lambda: PysoemTarget(ifname), lambda t: t.slaves()))
+    return IsolatedTarget(MasterProcess(f"pysoem:{ifname}", lambda: PysoemTarget(ifname, limits=limits),
+                                        lambda t: t.slaves(), limits=limits))

@@ -18,6 +18,7 @@ from ecattool.errors import SdoAbort, SdoTimeout, SdoTooLarge, TargetError
 from ecattool.esi.model import Identity
 from ecattool.od.model import EcState
 from ecattool.target.base import UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX, check_upload
+from ecattool.target.timeouts import BusLimits
 
 SDO_TIMEOUT_S = 3.0
 #: mailbox polls one SDO download may take (each is one exchange of frames)
@@ -43,7 +44,10 @@ def import_kickcat() -> ModuleType:
 class KickcatSlave:
     """One slave of a KickCAT ``Bus``: identity (1018h), SDO upload/download, state."""
 
-    def __init__(self, bus: Any, slave: Any, position: int, module: ModuleType) -> None:
+    def __init__(self, bus: Any, slave: Any, position: int, module: ModuleType, limits: BusLimits | None = None) -> None:
+        #: how long one SDO waits for its answer: the slave's mailbox window (its ESI's request + response
+        #: timeouts), never less than SDO_TIMEOUT_S
+        self.sdo_timeout_s = max(SDO_TIMEOUT_S, (limits or BusLimits()).mailbox_s)
         self._bus = bus
         self._slave = slave
         self._mod = module
@@ -69,7 +73,7 @@ class KickcatSlave:
         access = self._mod.Access.COMPLETE if complete_access else self._mod.Access.PARTIAL
 
         def read(n: int) -> bytes:
-            return bytes(self._bus.read_sdo(self._slave, index, subindex, access, n, SDO_TIMEOUT_S))
+            return bytes(self._bus.read_sdo(self._slave, index, subindex, access, n, self.sdo_timeout_s))
 
         first = UNKNOWN_SIZE_FIRST if size is None else max(1, size)
         try:
@@ -94,7 +98,7 @@ class KickcatSlave:
         from kickcat.mailbox.request import MessageStatus  # type: ignore[import-not-found, import-untyped, unused-ignore]
 
         try:
-            msg = self._slave.mailbox.write_sdo(index, subindex, complete_access, bytes(data), SDO_TIMEOUT_S)
+            msg = self._slave.mailbox.write_sdo(index, subindex, complete_access, bytes(data), self.sdo_timeout_s)
             for _ in range(POLLS):
                 if msg.status() != MessageStatus.RUNNING:
                     break

@@ -50,6 +50,7 @@ from ecattool.errors import SdoAbort, SdoTimeout, SdoTooLarge, StateChangeError,
 from ecattool.esi.model import Identity
 from ecattool.od.model import EcState
 from ecattool.target.base import UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX, SlaveTarget, check_upload
+from ecattool.target.timeouts import REPEATS, BusLimits, window_text
 
 #: how long a state change may take, in microseconds (SOEM's own EC_TIMEOUTSTATE is 2 s)
 STATE_TIMEOUT_US = 2_000_000
@@ -77,8 +78,6 @@ STATE_POLL_S = 0.1
 #: how long SOEM waits for one SDO answer, in microseconds (its own default is 0.7 s); an upload that got none is
 #: asked once more (PysoemSlave.sdo_upload)
 SDO_TIMEOUT_US = 2_000_000
-#: how many times an upload that got no answer is asked again (each a new request with the next mailbox counter)
-UPLOAD_REPEATS = 2
 _STATE_NAMES = {EcState.INIT: "INIT_STATE", EcState.PREOP: "PREOP_STATE", EcState.BOOT: "BOOT_STATE",
                 EcState.SAFEOP: "SAFEOP_STATE", EcState.OP: "OP_STATE"}
 #: PacketError.error_code of SOEM: "data container too small for type"
@@ -143,6 +142,8 @@ class PysoemSlave:
         slave.add_emergency_callback(self.emergencies.append)
         #: the state last requested (a slave asked for OP is watched for leaving it by itself)
         self.requested: EcState | None = None
+        #: uploads asked again because a try got no answer
+        self.repeats = 0
         self._state_read_at = master.clock()
 
     @property
@@ -156,6 +157,15 @@ class PysoemSlave:
 
     def identity(self) -> Identity:
         return Identity(int(self._slave.man), int(self._slave.id), int(self._slave.rev))
+
+    def _name(self) -> str:
+        """The slave's name as SOEM read it from the SII ('' where it has none)."""
+        try:
+            name = self._slave.name
+        except Exception:  # noqa: BLE001 - a name is a courtesy in an error
+            return ""
+        text = name.decode("latin-1", "replace") if isinstance(name, (bytes, bytearray)) else str(name or "")
+        return text.strip("\0 ")
 
     def _where(self, index: int, subindex: int) -> str:
         return f"slave {self.position}, 0x{index:04X}:{subindex:02X}"
@@ -206,19 +216,33 @@ class PysoemSlave:
 
         def read_again() -> bytes:
             # an upload changes nothing on the slave: one that got no answer, or a stale mailbox error (the answer
-            # to an earlier request, e.g. a refused SDO Information request), is asked again, up to UPLOAD_REPEATS
-            # times, after SOEM's error list is emptied. SOEM gives each request the next mailbox counter (1..7,
-            # ETG.1000.6 5.6), and itself toggles SM1's repeat request when the reply to a request was lost on its way
-            for attempt in range(UPLOAD_REPEATS + 1):
+            # to an earlier request, e.g. a refused SDO Information request), is asked again, REPEATS times at the
+            # most, after SOEM's error list is emptied and not before the slave's mailbox window (its request and
+            # response timeouts) has passed since the last try: a request whose frames did not come back fails at
+            # once, and a slave that is away for a moment gets its whole window each time. SOEM gives each request
+            # the next mailbox counter (1..7, ETG.1000.6 5.6: the slave takes a request with the counter of the
+            # previous one as a repeated write), and itself toggles SM1's repeat request when a reply was lost on
+            # its way (ecx_mbxreceive): docs/at-the-machine.md, "Mailbox repeats"
+            window = self._master.limits.mailbox_s
+            for attempt in range(REPEATS + 1):
+                started = self._master.clock()
                 try:
                     return read_bounded()
                 except (mod.WkcError, mod.MailboxError):
-                    if attempt == UPLOAD_REPEATS:
+                    if attempt == REPEATS:
                         raise
                     self._master.drain_errors()
+                    self.repeats += 1
+                    rest = started + window - self._master.clock()
+                    if rest > 0:
+                        self._master.sleep(rest)
             raise AssertionError("unreachable")  # pragma: no cover
 
-        return self._sdo(read_again, index, subindex)
+        try:
+            return self._sdo(read_again, index, subindex)
+        except SdoTimeout:
+            raise SdoTimeout(index, subindex, self.position, self._name(),
+                             f"no reply in {REPEATS + 1} tries of {window_text(self._master.limits)}") from None
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None:
@@ -332,8 +356,11 @@ class PysoemTarget:
 
     def __init__(self, ifname: str, pysoem_module: ModuleType | None = None,
                  clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep,
-                 keep_cycling: bool = True, keeper_idle_s: float = KEEPER_IDLE_S) -> None:
+                 keep_cycling: bool = True, keeper_idle_s: float = KEEPER_IDLE_S,
+                 limits: BusLimits | None = None) -> None:
         self.pysoem = pysoem_module or _import_pysoem()
+        #: how long to wait for the slaves (their ESI timeouts where known: ecattool.target.timeouts)
+        self.limits = limits or BusLimits()
         #: the bus cycle in seconds: the SYNC0 cycle once DC is configured, else 1 ms
         self.cycle_s = DEFAULT_CYCLE_NS / 1e9
         self.clock = clock
@@ -352,11 +379,12 @@ class PysoemTarget:
         self.master = self.pysoem.Master()
         # SDO and process data calls wait in SOEM without the GIL: the keeper thread runs meanwhile
         self.master.always_release_gil = True
-        # SOEM waits 0.7 s for a mailbox answer (EC_TIMEOUTRXM); on a loaded machine a slave's answer (or the
-        # frame carrying it) can take longer. A longer wait costs nothing when the answer comes
+        # SOEM waits 0.7 s for a mailbox answer (EC_TIMEOUTRXM); the slave's own request + response timeouts (its
+        # ESI's, else 0.1 + 2 s) are what it may take, and on a loaded machine the frames carrying the answer too.
+        # A longer wait costs nothing when the answer comes
         for name in ("sdo_read_timeout", "sdo_write_timeout"):
             if hasattr(self.master, name):
-                setattr(self.master, name, SDO_TIMEOUT_US)
+                setattr(self.master, name, max(SDO_TIMEOUT_US, round(self.limits.mailbox_s * 1e6)))
         try:
             self.master.open(ifname)
         except Exception as exc:  # noqa: BLE001 - ConnectionError, or an OS error on some platforms
@@ -372,11 +400,15 @@ class PysoemTarget:
             self.master.close()
             raise TargetError(f"no EtherCAT slaves found on {ifname!r} (asked for {LINK_WAIT_S:g} s)")
         # config_init has requested PRE-OP (without waiting for it); from here on ecattool requests every state
-        self.master.state_check(int(self.pysoem.PREOP_STATE), STATE_TIMEOUT_US)
+        self.master.state_check(int(self.pysoem.PREOP_STATE), round(self.limits.preop_s * 1e6))
         self.master.manual_state_change = 1
         self._slaves = [PysoemSlave(self, i, s) for i, s in enumerate(self.master.slaves)]
         self.mapped = False
         self.dc_configured = False
+
+    def sleep(self, seconds: float) -> None:
+        """Wait (the injectable sleep: a test's virtual clock)."""
+        self._sleep(seconds)
 
     def drain_errors(self) -> None:
         """Empty SOEM's error list: an error left there (e.g. by a refused SDO Information request, one per
