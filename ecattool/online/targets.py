@@ -35,11 +35,11 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
     from ecattool.online.bus_state import guard
 
     found = guard(parsed.interface, reset_bus)
-    from ecattool.target.timeouts import bus_limits
+    from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, bus_limits
 
     # how long to wait: the slaves' own ESI timeouts where the command has devices (a project, --device), the bus
     # init budgeted for as many slaves as the state read found (ecattool.target.timeouts)
-    limits = bus_limits(devices, len(found) or None)
+    limits = bus_limits(devices, len(found) or None, KICKCAT_SII_S if parsed.kind == "kickcat" else SII_S)
     # a real master runs in a child process (ecattool.target.isolated): one that crashes or hangs on what a slave
     # answers becomes a one-line error naming the slave and the object, never the end of ecattool
     if parsed.kind == "pysoem":

@@ -18,8 +18,8 @@ From them, for a bus (the longest of its slaves' where several are known):
   :data:`SEGMENT_MARGIN_S` for the segments of a segmented transfer; a master that has not answered by then is
   stopped (MasterHung);
 * the bus init: :data:`LINK_WAIT_S` (a link just up drops frames) + the longest PRE-OP timeout + :data:`SII_S`
-  per slave (the master reads each slave's SII) + :data:`OPEN_MARGIN_S`; where the number of slaves is not known,
-  :data:`DEFAULT_OPEN_SLAVES`.
+  per slave (the master reads each slave's SII; KickCAT: :data:`KICKCAT_SII_S`) + :data:`OPEN_MARGIN_S`; where the
+  number of slaves is not known, :data:`DEFAULT_OPEN_SLAVES`.
 """
 
 from __future__ import annotations
@@ -47,6 +47,9 @@ SEGMENT_MARGIN_S = 3.0
 LINK_WAIT_S = 2.0
 #: reading one slave's SII during the bus init (SOEM reads the header and the categories it needs, word by word)
 SII_S = 0.5
+#: the same for KickCAT, whose bus init reads the whole EEPROM and waits its link timeout on every read (a redundant
+#: port's copy that never comes): seconds per slave
+KICKCAT_SII_S = 10.0
 #: what the bus init takes besides (the socket, SOEM's own broadcast reads)
 OPEN_MARGIN_S = 3.0
 #: the slaves a bus init is budgeted for where the number is not known (no state read before the bus opened)
@@ -73,7 +76,8 @@ def _ms(text: str | None) -> int | None:
     if text is None:
         return None
     try:
-        value = int(str(text).split(";")[0].strip(), 0)
+        word = str(text).split(";")[0].strip()
+        value = int("0x" + word[2:], 16) if word[:2].lower() == "#x" else int(word, 10)  # ESI numbers: 100, #x64
     except ValueError:
         return None
     return min(value, MAX_MS) if value > 0 else None
@@ -97,6 +101,8 @@ class BusLimits:
     slaves: tuple[SlaveTimeouts, ...] = ()
     #: the number of slaves on the bus where known before it is opened
     count: int | None = None
+    #: what the master's bus init takes to read one slave's SII (SII_S for SOEM, KICKCAT_SII_S for KickCAT)
+    sii_s: float = SII_S
 
     def longest(self, field: str) -> float:
         """The longest of the slaves' ``field`` (a :class:`SlaveTimeouts` field name), in seconds."""
@@ -121,7 +127,7 @@ class BusLimits:
     def open_s(self) -> float:
         """The bus init: the link, every slave's SII, the way to PRE-OP."""
         n = self.count if self.count is not None else max(len(self.slaves), DEFAULT_OPEN_SLAVES)
-        return LINK_WAIT_S + self.preop_s + SII_S * max(n, 1) + OPEN_MARGIN_S
+        return LINK_WAIT_S + self.preop_s + self.sii_s * max(n, 1) + OPEN_MARGIN_S
 
     def describe(self) -> str:
         """The limits as a user reads them in an error."""
@@ -137,6 +143,7 @@ def window_text(limits: BusLimits) -> str:
             f"{limits.longest('response_ms'):g} s)")
 
 
-def bus_limits(devices: Iterable[Any] = (), count: int | None = None) -> BusLimits:
-    """The limits of a bus of ``devices`` (a project's, a ``--device``; none: the defaults) with ``count`` slaves."""
-    return BusLimits(tuple(of_device(d) for d in devices), count)
+def bus_limits(devices: Iterable[Any] = (), count: int | None = None, sii_s: float = SII_S) -> BusLimits:
+    """The limits of a bus of ``devices`` (a project's, a ``--device``; none: the defaults) with ``count`` slaves,
+    whose master reads one slave's SII in ``sii_s``."""
+    return BusLimits(tuple(of_device(d) for d in devices), count, sii_s)
