@@ -83,10 +83,14 @@ def read(address: str, target: str, slave: int, library: str | None, device: str
     by its data type; without a dictionary, as raw bytes."""
     from ecattool.online.objects import read_value
 
+    from ecattool.online.dictionary import standard_typed
+
     addr = _address(address)
+    # a CiA-301 object by its address (1018h:01 …) is typed by the standard: no identity, family or SDO Information
+    quick = standard_typed(*addr) if addr is not None and device is None and library is None else None
     with open_live(target, dev := load_device(device)) as live:
         s = live.slave(slave)
-        t = _typed(s, library, dev)  # the SDO Information service is asked at most once
+        t = quick or _typed(s, library, dev)  # the SDO Information service is asked at most once
         index, sub = _object(address, addr, t, slave)
         v = read_value(s, t, index, sub)
     if as_json:

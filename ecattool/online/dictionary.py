@@ -17,7 +17,8 @@ from ecattool.online.library import Library, Match, family_device, family_match
 @dataclass
 class Typed:
     """A slave's dictionary and where it came from: ``device`` (given: ``--device``, or the project's), ``esi`` or
-    ``eds`` (the library), ``family``, ``sdo-info`` (the slave's own), or ``none``."""
+    ``eds`` (the library), ``family``, ``sdo-info`` (the slave's own), ``standard`` (one CiA-301 object,
+    :func:`standard_typed`), or ``none``."""
 
     dictionary: ObjectDictionary
     source: str
@@ -28,6 +29,24 @@ class Typed:
 
     def entry(self, index: int, subindex: int) -> Entry | None:
         return self.dictionary.entry(index, subindex)
+
+
+def standard_typed(index: int, subindex: int) -> Typed | None:
+    """A one-entry dictionary for a CiA-301 communication object whose type is the same on every slave (1000h,
+    1008h, 1018h:01 …; ``od.standard.CIA301_OBJECTS``), ``source`` "standard"; None for any other object. Reading
+    one of them needs no identity, family, library or SDO Information (``sdo read 0x1018:01``)."""
+    from ecattool.od.model import RO, ObjectCode, OdObject
+    from ecattool.od.standard import CIA301_OBJECTS
+    from ecattool.od.types import lookup
+
+    known = CIA301_OBJECTS.get((index, subindex))
+    dt = lookup(known[1]) if known is not None else None
+    if known is None or dt is None:
+        return None
+    entry = Entry(subindex, known[0], dt, dt.bits or 0, access=RO)
+    od = ObjectDictionary()
+    od.add(OdObject(index, known[0], ObjectCode.VAR if subindex == 0 else ObjectCode.RECORD, {subindex: entry}))
+    return Typed(od, "standard")
 
 
 def identify(slave: Any, library: Library | None = None) -> tuple[Identity, Match | None]:
