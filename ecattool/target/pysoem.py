@@ -199,6 +199,10 @@ class PysoemSlave:
         def read(n: int) -> bytes:
             try:
                 return bytes(self._slave.sdo_read(index, subindex, n, ca=complete_access))
+            except SystemError:
+                # SOEM read an announced size of 2^31 octets or more as negative and passed it on as the reply's
+                # length; pysoem cannot make bytes of it (with a larger buffer SOEM copies that much: a crash)
+                raise SdoTooLarge(index, subindex, self.position, n) from None
             except mod.PacketError as exc:
                 if exc.error_code != _PACKET_TOO_SMALL:
                     raise
