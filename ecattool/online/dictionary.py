@@ -6,12 +6,14 @@ are shown as they are."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import EcatToolError, InputError
 from ecattool.esi.model import Device, Identity
 from ecattool.od.model import Entry, ObjectDictionary
-from ecattool.online.library import Library, Match, family_device, family_match
+
+if TYPE_CHECKING:
+    from ecattool.online.library import Library, Match
 
 
 @dataclass
@@ -51,6 +53,8 @@ def standard_typed(index: int, subindex: int) -> Typed | None:
 
 def identify(slave: Any, library: Library | None = None) -> tuple[Identity, Match | None]:
     """The slave's identity and the library device or built-in family it matches (library first)."""
+    from ecattool.online.library import family_match
+
     ident: Identity = slave.identity()
     match = library.match(ident) if library is not None else None
     return ident, match or family_match(ident)
@@ -59,6 +63,8 @@ def identify(slave: Any, library: Library | None = None) -> tuple[Identity, Matc
 def typed(slave: Any, library: Library | None = None, device: Device | None = None,
           sdo_info: bool = True) -> Typed:
     """The dictionary of ``slave`` (see the module text for the order of the sources)."""
+    from ecattool.online.library import Match, family_device
+
     if device is not None:
         return Typed(device.dictionary, "device", Match("device", device.source, device.type_name, True), device)
     ident, match = identify(slave, library)
