@@ -108,7 +108,8 @@ class SdoTooLarge(TargetError):
     """A slave answered an SDO upload with more octets than the object can have (its type's size, or the
     documented bound where the type is not known): the reply is refused, never copied on."""
 
-    def __init__(self, index: int, subindex: int, position: int | None, size: int, got: int | None = None) -> None:
+    def __init__(self, index: int, subindex: int, position: int | None, size: int, got: int | None = None,
+                 known: bool = True) -> None:
         self.index = index
         self.subindex = subindex
         self.position = position
@@ -116,7 +117,9 @@ class SdoTooLarge(TargetError):
         self.got = got
         of = "" if position is None else f"slave {position}: "
         said = "the slave announced more than" if got is None else f"the reply has {got} octets, more than"
-        super().__init__(f"{of}0x{index:04X}:{subindex:02X}: {said} the {size} the object can have (refused)")
+        bound = (f"the {size} the object can have" if known else
+                 f"the {size} octets read of an object whose type is not known")
+        super().__init__(f"{of}0x{index:04X}:{subindex:02X}: {said} {bound} (refused)")
 
 
 class StateChangeError(TargetError):

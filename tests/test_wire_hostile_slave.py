@@ -98,9 +98,15 @@ def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
         # refused (issue 37 item 1; before, the master crashed here too)
         assert result[name]["sdo read"]["stderr"] == ("ecattool: error: slave 0: 0x1018:01: the slave announced more "
                                                       "than the 4 the object can have (refused)\n"), name
-        # the crashes the master process keeps away where the type is not known (SOEM's default buffer): named, one
-        # line, with the slave and the object
-        assert "the master crashed reading 2FFFh:00 of slave 0" in result[name]["sdo read (unknown type)"]["stderr"]
+    # where the type is not known: SOEM given a 256-octet buffer (not its static one, as pysoem passes size 0) reads
+    # the 4 GiB announcement as negative and pysoem refuses to make bytes of it: refused, no crash
+    assert result["upload-4gib"]["sdo read (unknown type)"]["stderr"] == (
+        "ecattool: error: slave 0: 0x2FFF:00: the slave announced more than the 256 octets read of an object whose "
+        "type is not known (refused)\n")
+    # the endless segments of an announced 200 octets fit the 256-octet buffer and SOEM copies on past its end: the
+    # crash the master's child process keeps away, named in one line with the slave and the object
+    assert "the master crashed reading 2FFFh:00 of slave 0" in result["upload-endless"]["sdo read (unknown type)"][
+        "stderr"]
     # KickCAT: reads the well-behaved slave; crashes on endless segments and hangs on an SII chain without end --
     # each one line, the hang stopped at its time limit
     assert result["none"]["sdo read (kickcat)"]["returncode"] == 0

@@ -24,7 +24,7 @@ def check_upload(data: bytes, size: int | None, index: int, subindex: int, posit
     """``data`` when it fits the bound ``size`` (None: :data:`UNKNOWN_SIZE_MAX`), else :class:`SdoTooLarge`."""
     bound = UNKNOWN_SIZE_MAX if size is None else size
     if len(data) > bound:
-        raise SdoTooLarge(index, subindex, position, bound, len(data))
+        raise SdoTooLarge(index, subindex, position, bound, len(data), known=size is not None)
     return data
 
 

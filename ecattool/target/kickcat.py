@@ -89,7 +89,7 @@ class KickcatSlave:
             raise
         except Exception as exc:  # noqa: BLE001
             if _too_small(exc):
-                raise SdoTooLarge(index, subindex, self.position, UNKNOWN_SIZE_MAX) from None
+                raise SdoTooLarge(index, subindex, self.position, UNKNOWN_SIZE_MAX, known=False) from None
             raise self._error(exc, index, subindex) from None
         return check_upload(data, size, index, subindex, self.position)
 

@@ -202,13 +202,13 @@ class PysoemSlave:
             except SystemError:
                 # SOEM read an announced size of 2^31 octets or more as negative and passed it on as the reply's
                 # length; pysoem cannot make bytes of it (with a larger buffer SOEM copies that much: a crash)
-                raise SdoTooLarge(index, subindex, self.position, n) from None
+                raise SdoTooLarge(index, subindex, self.position, n, known=size is not None) from None
             except mod.PacketError as exc:
                 if exc.error_code != _PACKET_TOO_SMALL:
                     raise
                 if size is None and n < UNKNOWN_SIZE_MAX:
                     raise _Larger() from None
-                raise SdoTooLarge(index, subindex, self.position, n) from None
+                raise SdoTooLarge(index, subindex, self.position, n, known=size is not None) from None
 
         def read_bounded() -> bytes:
             if size is not None:
