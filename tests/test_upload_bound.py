@@ -79,7 +79,8 @@ def test_an_unknown_type_is_bounded_soem_default_then_one_larger_try() -> None:
     assert sizes == [UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX]
     sizes.clear()
     _answer(drive, 0x2101, 0, b"x" * (UNKNOWN_SIZE_MAX + 1))
-    with pytest.raises(SdoTooLarge, match=r"^slave 0: 0x2101:00: .* than the 65536 octets read of an object whose type is not known"):
+    with pytest.raises(SdoTooLarge, match=r"^slave 0: 0x2101:00: .* than the 65536 octets read of an object whose "
+                                          r"type is not known"):
         s.sdo_upload(0x2101, 0)
     assert sizes == [UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX]  # never a third, larger buffer
 

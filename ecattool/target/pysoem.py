@@ -179,7 +179,8 @@ class PysoemSlave:
         except mod.SdoError as exc:
             raise SdoAbort(index, subindex, int(exc.abort_code)) from None
         except mod.WkcError:  # the mailbox answer did not come (the working counter stayed 0)
-            raise SdoTimeout(index, subindex, self.position) from None
+            raise SdoTimeout(index, subindex, self.position, self._name(),
+                             f"no reply in {window_text(self._master.limits)}") from None
         except mod.MailboxError as exc:
             where = self._where(index, subindex)
             raise TargetError(f"{where}: mailbox error {exc.error_code}: {exc.desc}") from None
