@@ -107,10 +107,12 @@ def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
     # crash the master's child process keeps away, named in one line with the slave and the object
     assert "the master crashed reading 2FFFh:00 of slave 0" in result["upload-endless"]["sdo read (unknown type)"][
         "stderr"]
-    # KickCAT: reads the well-behaved slave; crashes on endless segments and hangs on an SII chain without end --
+    # KickCAT: reads the well-behaved slave; refuses the endless segments' announcement of 200 octets now that its
+    # buffer is 1018h:01's 4 (it crashed with its 1024-octet buffer before); hangs on an SII chain without end --
     # each one line, the hang stopped at its time limit
     assert result["none"]["sdo read (kickcat)"]["returncode"] == 0
-    assert result["upload-endless"]["sdo read (kickcat)"]["stderr"].startswith("ecattool: error: the master crashed ")
+    assert result["upload-endless"]["sdo read (kickcat)"]["stderr"] == (
+        "ecattool: error: slave 0, 0x1018:01: CoE.cc:43: Error while reading SDO (KickCAT read at most 4 octets)\n")
     assert result["sii-no-end"]["sdo read (kickcat)"]["stderr"].startswith(
         "ecattool: error: the master did not answer within 15 s opening the bus on kickcat:ecat0")
     # the baseline: every command works against the well-behaved slave

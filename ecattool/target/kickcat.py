@@ -90,7 +90,11 @@ class KickcatSlave:
         except Exception as exc:  # noqa: BLE001
             if _too_small(exc):
                 raise SdoTooLarge(index, subindex, self.position, UNKNOWN_SIZE_MAX, known=False) from None
-            raise self._error(exc, index, subindex) from None
+            error = self._error(exc, index, subindex)
+            if type(error) is TargetError:  # KickCAT 2.5 says "Error while reading SDO" of a reply that announces
+                # more than its buffer, as of a malformed one: the bound is named
+                raise TargetError(f"{error.message} (KickCAT read at most {first} octets)") from None
+            raise error from None
         return check_upload(data, size, index, subindex, self.position)
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
