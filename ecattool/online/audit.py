@@ -17,6 +17,7 @@ from typing import Any
 from ecattool.errors import InputError, SdoAbort, TargetError
 from ecattool.od.model import EcState
 from ecattool.target.isolated import MasterGone
+from ecattool.target.base import entry_size
 from ecattool.findings import Finding, Severity
 from ecattool.online.dictionary import decode
 from ecattool.online.live import LiveBus, describe_slave
@@ -161,7 +162,7 @@ def audit_drive(rd: Any, slave: Any, report: AuditReport, sw_checksums: bool = F
         report.checked += 1
         entry = device.dictionary.entry(index, sub)
         try:
-            actual = slave.sdo_upload(index, sub, ca)
+            actual = slave.sdo_upload(index, sub, ca, size=None if ca else max(len(cmd.data), entry_size(entry) or 0))
         except SdoAbort as exc:
             report.drifts.append(Drift(name, rd.position, "abort", where, cmd.data.hex(), f"0x{exc.code:08X}",
                                        f"{where}: reading it back was refused: {exc}", cmd.source))

@@ -36,7 +36,9 @@ class LiveSlave(Protocol):
         """The identity the master read from the slave's SII (KickCAT: from 1018h, it gives no SII access)."""
         ...
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes: ...
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        """As :meth:`ecattool.target.base.SlaveTarget.sdo_upload`: ``size`` bounds the reply."""
+        ...
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None: ...
@@ -226,9 +228,9 @@ class SimLiveSlave:
         h = parse_header(self.sii)
         return Identity(h.vendor_id, h.product_code, h.revision, h.serial)
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
         try:
-            return bytes(self.drive.sdo_upload(index, subindex, complete_access))
+            return bytes(self.drive.sdo_upload(index, subindex, complete_access, size=size))
         finally:
             self._note_writes()
 

@@ -56,9 +56,10 @@ class ScannedSlave:
 
 
 def _coe_identity(slave: Any) -> Identity:
-    v, p, r = (int.from_bytes(slave.sdo_upload(0x1018, sub), "little") for sub in (1, 2, 3))
+    # 1018h's entries are UDINTs (CiA-301): no reply of more than 4 octets is taken
+    v, p, r = (int.from_bytes(slave.sdo_upload(0x1018, sub, size=4), "little") for sub in (1, 2, 3))
     try:
-        serial = int.from_bytes(slave.sdo_upload(0x1018, 4), "little")
+        serial = int.from_bytes(slave.sdo_upload(0x1018, 4, size=4), "little")
     except SdoAbort:  # the serial number is optional (CiA-301)
         serial = 0
     return Identity(v, p, r, serial)
