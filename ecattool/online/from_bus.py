@@ -20,6 +20,7 @@ from ecattool.esi.model import Device, Identity
 from ecattool.od.model import EcState
 from ecattool.online.library import Library, Match, family_device, family_match
 from ecattool.online.live import LiveBus, describe_slave, sii_facts
+from ecattool.target.base import entry_size
 
 #: the objects a project usually sets, written as parameters with the value the drive holds now; the
 #: interpolation period 60C2h (its unit, sub 2, before its value: a drive checks the period they make) that a
@@ -63,7 +64,7 @@ def identify_named(slave: Any, library: Library | None) -> tuple[Identity, Match
 
 
 def _u(slave: Any, index: int, sub: int) -> int:
-    return int.from_bytes(slave.sdo_upload(index, sub), "little")
+    return int.from_bytes(slave.sdo_upload(index, sub, size=4), "little")  # PDO assignment and mapping: 32 bits at most
 
 
 def read_pdos(slave: Any, assign: int) -> list[tuple[int, list[str]]]:
@@ -183,7 +184,7 @@ def mode_found(slave: Any, device: Device) -> int | None:
         if e is None or e.datatype is None:
             continue
         try:
-            value = e.decode(slave.sdo_upload(index, 0))
+            value = e.decode(slave.sdo_upload(index, 0, size=entry_size(e)))
         except EcatToolError:
             continue
         if isinstance(value, int) and value:
@@ -224,7 +225,7 @@ def drive_yaml(bus: LiveBus, slave: Any, name: str, pinned: Pinned) -> str:
         if e is None or not e.access.writable(EcState.PREOP) or e.datatype is None or (index, sub) in rx_mapped:
             continue  # an object the outputs carry is set every cycle, not by a parameter
         try:
-            value = e.decode(slave.sdo_upload(index, sub))
+            value = e.decode(slave.sdo_upload(index, sub, size=entry_size(e)))
         except EcatToolError:
             continue
         comment = _q(f"{e.name}, as read from the bus")
