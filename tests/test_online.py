@@ -15,8 +15,8 @@ from ecattool.errors import SdoAbort
 from ecattool.online import Library, audit, open_bus, scan, sim_bus
 from ecattool.online.dictionary import typed
 from ecattool.online.objects import dump, read_value, write_value
-from ecattool.online.pysoem_bus import open_pysoem
 from ecattool.online.sii_access import write_checks
+from ecattool.online.targets import open_pysoem
 from ecattool.project.lint import lint_project
 from ecattool.sii.crc import preamble_crc
 from ecattool.sii.image import parse_header
@@ -396,7 +396,7 @@ from hypothesis import given, settings, strategies as st  # noqa: E402
 def test_sii_read_takes_the_chain_to_its_end_marker(header: bytes, cats: list[tuple[int, bytes]], tail: bytes,
                                                     width: int) -> None:
     """Whatever the categories, the reader stops right after the end marker, reading 4 or 8 bytes at a time."""
-    from ecattool.online.live import read_sii
+    from ecattool.sii.eeprom import read_sii
 
     body = b"".join(t.to_bytes(2, "little") + (len(d) // 2).to_bytes(2, "little") + d for t, d in cats)
     image = header + body + b"\xff\xff"

@@ -10,7 +10,7 @@ from ecattool.errors import TargetError
 from ecattool.od.model import EcState
 from ecattool.online import bus_state
 from ecattool.online.bus_state import Found, guard, restore
-from ecattool.online.live import Unsupported
+from ecattool.target.base import Unsupported
 
 
 class Slave:

@@ -17,7 +17,7 @@ from ecattool.errors import TargetError
 from ecattool.od.model import EcState
 from ecattool.online import open_bus
 from ecattool.online.backup import MANIFEST, backup
-from ecattool.online.live import SimLiveSlave
+from ecattool.target.sim import SimLiveSlave
 from ecattool.sii.crc import preamble_crc
 from tests.conftest import ROOT, run
 
@@ -229,7 +229,8 @@ def test_a_sii_write_cut_anywhere_never_leaves_an_image_that_checks_out() -> Non
     """Issue 37.3: 2 of 20 kills during `sii write` left a mixed EEPROM (new header with a valid CRC, old
     categories) that `sii check` passes. Cut after every single word write of the sequence: the EEPROM is the old
     image whole, the new one whole, or fails its CRC."""
-    from ecattool.online.sii_access import read_problems, write_sequence
+    from ecattool.online.sii_access import read_problems
+    from ecattool.sii.eeprom import write_sequence
 
     with open_bus("sim:technosoft-ipos") as bus:
         old = bus.slaves[0].sii
@@ -255,8 +256,9 @@ def test_a_sii_write_cut_anywhere_never_leaves_an_image_that_checks_out() -> Non
 def test_sii_write_sends_that_sequence_word_by_word_and_a_cut_write_fails_the_crc(tmp_path: Path) -> None:
     """The same through a master (the fake pysoem module, word by word): the writes are the sequence, and a write
     cut half-way (the master's EEPROM write fails) leaves an EEPROM whose CRC fails."""
-    from ecattool.online.pysoem_bus import open_pysoem
-    from ecattool.online.sii_access import read_problems, sii_write, write_sequence
+    from ecattool.online.sii_access import read_problems, sii_write
+    from ecattool.online.targets import open_pysoem
+    from ecattool.sii.eeprom import write_sequence
     from ecattool.sim import Drive
     from tests import fake_pysoem
 

@@ -15,8 +15,8 @@ from tests.conftest import ROOT, run
 
 #: what ``ecattool sdo read 0x1018:01 --target pysoem:IF`` imports on its way (the CLI, the live bus, the master)
 PATH = ("ecattool.cli", "ecattool.cli.sdo", "ecattool.cli.online", "ecattool.online.targets",
-        "ecattool.online.objects", "ecattool.online.dictionary", "ecattool.online.pysoem_bus",
-        "ecattool.online.bus_state", "ecattool.target.isolated", "ecattool.target.pysoem", "ecattool.sim.bus.raw",
+        "ecattool.online.objects", "ecattool.online.dictionary", "ecattool.online.bus_state",
+        "ecattool.target.isolated", "ecattool.target.pysoem", "ecattool.sim.bus.raw",
         "ecattool.sim.bus.frame")
 #: what it must not: each was on the way before (lxml through ecattool.esi, the audit through ecattool.online, the
 #: simulator's engine through the raw socket's module, the families through the dictionary)

@@ -14,9 +14,8 @@ import pytest
 
 from ecattool.errors import SdoTooLarge
 from ecattool.online.dictionary import typed
-from ecattool.online.live import sim_bus
+from ecattool.online.targets import sim_bus
 from ecattool.online.objects import read_value
-from ecattool.online.pysoem_bus import PysoemLiveSlave
 from ecattool.online.scan import scan_slave
 from ecattool.sim import Drive
 from ecattool.target.base import UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX
@@ -51,7 +50,7 @@ def _answer(drive: Drive, index: int, subindex: int, data: bytes) -> None:
 
 def test_a_typed_read_asks_soem_for_exactly_the_type_size() -> None:
     target, drive, sizes = _pysoem()
-    slave = PysoemLiveSlave(target.slaves()[0], target.pysoem)
+    slave = target.slaves()[0]
     t = typed(slave)  # the built-in HDT family types the objects
     v = read_value(slave, t, 0x1018, 1)
     assert v.value == drive.identity().vendor_id
@@ -62,7 +61,7 @@ def test_a_typed_read_asks_soem_for_exactly_the_type_size() -> None:
 
 def test_a_reply_larger_than_the_type_is_refused_naming_the_slave_and_the_object() -> None:
     target, drive, sizes = _pysoem()
-    slave = PysoemLiveSlave(target.slaves()[0], target.pysoem)
+    slave = target.slaves()[0]
     t = typed(slave)
     _answer(drive, 0x1018, 1, bytes(64))  # a "UDINT" of 64 octets
     with pytest.raises(SdoTooLarge) as ei:
@@ -87,7 +86,7 @@ def test_an_unknown_type_is_bounded_soem_default_then_one_larger_try() -> None:
 
 def test_scan_reads_the_identity_object_as_udints() -> None:
     target, drive, sizes = _pysoem()
-    slave = PysoemLiveSlave(target.slaves()[0], target.pysoem)
+    slave = target.slaves()[0]
     scanned = scan_slave(slave)
     assert scanned.coe_identity is not None and scanned.coe_identity.vendor_id == drive.identity().vendor_id
     assert sizes == [4, 4, 4, 4]  # 1018h:01-04

@@ -42,7 +42,7 @@ def _warm() -> None:
     loaded machine)."""
     import ecattool.cli
     from ecattool.cli import audit, backup, bus, sdo, sii  # noqa: F401
-    from ecattool.online import audit as _audit, bus_state, objects, pysoem_bus, scan  # noqa: F401
+    from ecattool.online import audit as _audit, bus_state, objects, scan, targets  # noqa: F401
     from ecattool.target import isolated  # noqa: F401
 
     ecattool.cli.cli.list_commands  # noqa: B018 - the group itself

@@ -137,7 +137,7 @@ def install() -> dict[str, Any]:
         r["server_pysoem"] = stop_server(server)
     server, _ = start_server([INSTALL_PROJECT])
     try:
-        from ecattool.online.kickcat_bus import open_kickcat
+        from ecattool.online.targets import open_kickcat
         from ecattool.project.machine import load_machine
 
         live = open_kickcat(MASTER_IF)  # bus init with the timeouts the virtual bus needs

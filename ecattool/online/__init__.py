@@ -15,13 +15,13 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from ecattool.online.audit import AuditReport, Drift, audit
     from ecattool.online.library import Library, Match
-    from ecattool.online.live import LiveBus, LiveSlave, Unsupported, sim_bus
+    from ecattool.online.live import LiveBus
     from ecattool.online.scan import ScannedSlave, scan
-    from ecattool.online.targets import open_bus
+    from ecattool.online.targets import open_bus, sim_bus
 
 #: each public name and the module that defines it
 _WHERE = {"AuditReport": "audit", "Drift": "audit", "audit": "audit", "Library": "library", "Match": "library",
-          "LiveBus": "live", "LiveSlave": "live", "Unsupported": "live", "sim_bus": "live", "ScannedSlave": "scan",
+          "LiveBus": "live", "sim_bus": "targets", "ScannedSlave": "scan",
           "scan": "scan", "open_bus": "targets"}
 
 
@@ -47,5 +47,5 @@ class _Package(types.ModuleType):
 sys.modules[__name__].__class__ = _Package
 
 
-__all__ = ["AuditReport", "Drift", "Library", "LiveBus", "LiveSlave", "Match", "ScannedSlave", "Unsupported",
-           "audit", "open_bus", "scan", "sim_bus"]
+__all__ = ["AuditReport", "Drift", "Library", "LiveBus", "Match", "ScannedSlave", "audit", "open_bus", "scan",
+           "sim_bus"]

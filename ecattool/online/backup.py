@@ -27,8 +27,9 @@ from typing import Any
 
 from ecattool.errors import InputError, Location, TargetError
 from ecattool.online.dictionary import typed
-from ecattool.online.live import LiveBus, Unsupported, describe_slave, sii_facts
+from ecattool.online.live import LiveBus, describe_slave, sii_facts
 from ecattool.online.objects import dump
+from ecattool.target.base import Unsupported
 
 #: the file that makes a folder an ecattool back-up (the only kind of folder ``--force`` replaces)
 MANIFEST = "ecattool-backup.json"

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from ecattool.errors import TargetError
 from ecattool.od.model import EcState
-from ecattool.online.live import Unsupported
+from ecattool.target.base import Unsupported
 
 #: the AL status register (ETG.1000.4, 0x0130): bits 0-3 the state, bit 4 the error indication
 AL_STATUS = 0x0130

@@ -11,7 +11,8 @@ from ecattool.abort import al_status_text
 from ecattool.errors import EcatToolError, SdoAbort
 from ecattool.esi.model import Identity
 from ecattool.online.library import Library, Match, family_match
-from ecattool.online.live import LiveBus, Unsupported, sii_facts
+from ecattool.online.live import LiveBus, sii_facts
+from ecattool.target.base import Unsupported
 
 
 def _ident_json(i: Identity | None) -> dict[str, int] | None:

@@ -94,45 +94,6 @@ def read_checked(slave: Any) -> bytes:
     return data
 
 
-#: word address of the checksum word (CRC-8 of bytes 0-13 in its low byte)
-CRC_WORD = 7
-#: words of the fixed area (0x00-0x3F); the categories start after it
-HEADER_WORDS = 64
-
-
-def write_sequence(image: bytes, current: bytes) -> list[tuple[int, bytes]]:
-    """The word writes (word address, 2 bytes) that put ``image`` into an EEPROM that holds ``current``, in an
-    order an interruption cannot turn into an image that checks out:
-
-    1. the checksum word first, with a checksum byte that is the CRC of none of the contents words 0-6 pass
-       through on the way (so from here on the image fails its CRC, whatever else is written);
-    2. the categories (word 0x40 on), then the rest of the fixed area (words 8-0x3F), then words 0-6;
-    3. the checksum word with the right CRC last.
-
-    A write cut anywhere after step 1 leaves a CRC that does not match (``sii check`` and the slave's own load
-    refuse it); one cut before it leaves the old image whole. (A mixed EEPROM with a valid CRC was what a kill
-    during a write left before: new header and CRC first, old categories after.)"""
-    from ecattool.sii.crc import preamble_crc
-
-    data = bytes(image) + (b"\xff" if len(image) % 2 else b"")
-    words = [data[2 * w:2 * w + 2] for w in range(len(data) // 2)]
-    if len(words) <= CRC_WORD:
-        return list(enumerate(words))
-    old = bytearray(bytes(current[:14]).ljust(14, b"\xff"))
-    passed = {preamble_crc(bytes(old))}
-    for w in range(CRC_WORD):  # words 0-6 are written in this order in step 2
-        old[2 * w:2 * w + 2] = words[w]
-        passed.add(preamble_crc(bytes(old)))
-    invalid = next(x for x in range(256) if x not in passed)
-    crc_word = words[CRC_WORD]
-    seq = [(CRC_WORD, bytes([invalid, crc_word[1]]))]
-    seq += [(w, words[w]) for w in range(HEADER_WORDS, len(words))]
-    seq += [(w, words[w]) for w in range(CRC_WORD + 1, min(HEADER_WORDS, len(words)))]
-    seq += [(w, words[w]) for w in range(CRC_WORD)]
-    seq.append((CRC_WORD, crc_word))
-    return seq
-
-
 def sii_write(slave: Any, image_bytes: bytes, source: str, backup: str | Path, any_identity: bool = False,
               overwrite_backup: bool = False) -> list[str]:
     """Check ``image_bytes`` against the slave (its identity too, unless ``any_identity``), write the slave's
@@ -140,6 +101,7 @@ def sii_write(slave: Any, image_bytes: bytes, source: str, backup: str | Path, a
     read it back. Returns the problems that stopped the write (nothing was written then); a read-back that differs
     is an :class:`InputError`."""
     from ecattool.fileio import write_atomic
+    from ecattool.sii.eeprom import write_sequence
 
     current = slave.sii_read()
     problems = write_checks(image_bytes, current, source, any_identity)

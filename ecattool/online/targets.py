@@ -1,16 +1,17 @@
 """Opening a live bus from a target spec (read by :func:`ecattool.target.opener.parse_target`): the simulator,
-pysoem or KickCAT."""
+pysoem or KickCAT, each through its one adapter module (``ecattool.target.sim``, ``.pysoem``, ``.kickcat``)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
+from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
-from ecattool.online.live import LiveBus, sim_bus
-from ecattool.target.base import Target
-from ecattool.target.opener import MASTERS, open_target, parse_target, sim_devices
+from ecattool.online.live import LiveBus
+from ecattool.target.base import LiveSlave, Target
+from ecattool.target.opener import MASTERS, open_master, open_target, parse_target, sim_devices
 
 if TYPE_CHECKING:
     from ecattool.target.timeouts import BusLimits
@@ -44,16 +45,52 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
     # a real master runs in a child process (ecattool.target.isolated): one that crashes or hangs on what a slave
     # answers becomes a one-line error naming the slave and the object, never the end of ecattool
     if parsed.kind == "pysoem":
-        from ecattool.online.pysoem_bus import open_pysoem
         from ecattool.target.pysoem import _import_pysoem
 
-        _import_pysoem()
-        return _restoring(isolated_bus(spec, lambda: open_pysoem(parsed.interface, limits=limits), limits), found)
-    from ecattool.online.kickcat_bus import open_kickcat
-    from ecattool.target.kickcat import import_kickcat
+        _import_pysoem()  # a missing extra is said here, and the child starts with the module loaded
+    else:
+        from ecattool.target.kickcat import import_kickcat
 
-    import_kickcat()
-    return _restoring(isolated_bus(spec, lambda: open_kickcat(parsed.interface, limits=limits), limits), found)
+        import_kickcat()
+    return _restoring(isolated_bus(spec, lambda: open_live(parsed.kind, parsed.interface, limits=limits), limits),
+                      found)
+
+
+def open_live(kind: str, ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> LiveBus:
+    """A real master (``kind`` 'pysoem' or 'kickcat') on ``ifname`` in this process, every slave in PRE-OP, as a
+    live bus (:func:`ecattool.target.opener.open_master`); ``module``: the binding (a test's fake)."""
+    target = open_master(kind, ifname, limits, module)
+    return LiveBus(f"{kind}:{ifname}", _live(target.slaves()), closer=target.close)
+
+
+def open_pysoem(ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> LiveBus:
+    """A pysoem master on ``ifname`` in this process as a live bus (:func:`open_live`)."""
+    return open_live("pysoem", ifname, module, limits)
+
+
+def open_kickcat(ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> LiveBus:
+    """A KickCAT master on ``ifname`` in this process as a live bus (:func:`open_live`)."""
+    return open_live("kickcat", ifname, module, limits)
+
+
+def sim_bus(drives: Iterable[Any], spec: str = "sim") -> LiveBus:
+    """A live bus of simulated drives (e.g. those of a ``SimTarget`` a test commissioned), each with the SII
+    ``ecattool sii build`` makes of its device (as ``sim serve`` gives it): :func:`ecattool.target.sim.live_slaves`."""
+    from ecattool.target.sim import live_slaves
+
+    log: list[str] = []
+    slaves = live_slaves(drives, log)
+    return LiveBus(spec, list(slaves), write_log=log, devices=[s.drive.device for s in slaves])
+
+
+def _live(slaves: Iterable[Any]) -> list[LiveSlave]:
+    """The slaves of a master adapter, each a :class:`LiveSlave` (every adapter's slave class is one)."""
+    out: list[LiveSlave] = []
+    for s in slaves:
+        if not isinstance(s, LiveSlave):
+            raise TypeError(f"{type(s).__name__} is not a LiveSlave")
+        out.append(s)
+    return out
 
 
 def open_guarded(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False) -> Target:

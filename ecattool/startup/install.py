@@ -12,7 +12,7 @@ master's type.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from types import ModuleType
 from typing import Any, Literal
 
@@ -48,36 +48,16 @@ def _placed(configs: Sequence[SlaveConfig], count: int) -> list[tuple[int, Slave
     return out
 
 
-def _writer(cfg: SlaveConfig, wkc_error: type[BaseException]) -> Callable[[Any], None]:
-    def write(slave: Any) -> None:
-        for cmd in cfg.commands:
-            try:
-                slave.sdo_write(cmd.index, cmd.subindex, bytes(cmd.data), cmd.complete_access)
-            except wkc_error:
-                if cmd.expect_reply:
-                    raise  # only a write the drive answers by resetting may go without a reply
-    return write
-
-
 def install_pysoem(configs: Sequence[SlaveConfig], master: Any, *, exact_revision: bool = False,
                    pysoem_module: ModuleType | None = None) -> list[int]:
     """Attach each configuration's startup list to its pysoem slave (identity checked first, every slave before
-    any is touched). Returns the positions configured. Sets ``manual_state_change`` so that ``config_map()``
-    leaves the state changes to the program."""
-    if pysoem_module is None:
-        from ecattool.target.pysoem import _import_pysoem
+    any is touched; :func:`ecattool.target.pysoem.attach_startup`). Returns the positions configured. Sets
+    ``manual_state_change`` so that ``config_map()`` leaves the state changes to the program."""
+    from ecattool.target.pysoem import attach_startup
 
-        pysoem_module = _import_pysoem()
-    wkc_error = pysoem_module.WkcError
-    slaves = master.slaves
-    placed = _placed(configs, len(slaves))
-    for pos, cfg in placed:
-        s = slaves[pos]
-        check_identity(cfg, pos, Identity(int(s.man), int(s.id), int(s.rev)), exact_revision)
-    for pos, cfg in placed:
-        write = _writer(cfg, wkc_error)
-        slaves[pos].config_func = lambda p, _w=write: _w(master.slaves[p])
-    master.manual_state_change = 1
+    placed = _placed(configs, len(master.slaves))
+    attach_startup(master, [(pos, cfg.commands) for pos, cfg in placed],
+                   lambda i, found: check_identity(placed[i][1], placed[i][0], found, exact_revision), pysoem_module)
     return [p for p, _ in placed]
 
 

@@ -325,8 +325,8 @@ class MasterProcess:
 
 
 class RemoteSlave:
-    """A slave of a :class:`MasterProcess`: every method of the slave runs in the child (LiveSlave and
-    SlaveTarget alike)."""
+    """A slave of a :class:`MasterProcess`: every method of the slave runs in the child (a
+    :class:`~ecattool.target.base.LiveSlave`: the core and every capability)."""
 
     def __init__(self, master: MasterProcess, position: int) -> None:
         self._master = master
@@ -367,6 +367,9 @@ class RemoteSlave:
     def sii_write(self, image: bytes) -> None:
         # word by word through the EEPROM: a 4 KiB image takes some seconds on a real bus
         self._call("sii_write", bytes(image), timeout_s=max(CALL_TIMEOUT_S, len(image) / 2 * 0.05))
+
+    def sii_write_word(self, word: int, data: bytes) -> None:
+        self._call("sii_write_word", word, bytes(data))
 
     def sdo_info(self) -> Any:
         # the SDO Information service reads every object's and entry's description: minutes on a large dictionary

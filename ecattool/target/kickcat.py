@@ -1,6 +1,15 @@
-"""A KickCAT slave reached through KickCAT's Python master (``kickcat`` 2.5): identity through 1018h, SDO upload
-and download through the slave's mailbox, the state. The master-facing base of ``online.kickcat_bus`` (the live
-bus) and of ``startup.install`` (a project's startup list written from a master program).
+"""The one adapter of KickCAT's Python master (``kickcat`` 2.5): :class:`KickcatTarget` opens the bus,
+:class:`KickcatSlave` is each slave as a :class:`~ecattool.target.base.LiveSlave` (the live bus) and the slave
+``startup.install`` writes a project's startup list to from a master program. No other module imports kickcat
+(tests/test_fitness.py).
+
+What the binding allows: bus init (every slave to PRE-OP), SDO upload (``Bus.read_sdo``), SDO download (the
+slave's mailbox ``write_sdo``, then ``process_mailboxes`` until it is done), the state of each slave. What it does
+not: the SII EEPROM (no EEPROM access is bound, so no SII identity, ``sii read/write`` or mailbox protocol and DC
+words; the identity is read from 1018h), the AL status code, a state request for one slave, process data and DC
+set-up through this adapter, and the SDO Information service's OD list (only
+``read_object_description``/``read_entry_description`` of an index already known are bound). Those raise
+:class:`~ecattool.target.base.Unsupported`.
 
 SDO aborts: against the virtual bus (whose abort frames SOEM decodes with their codes), KickCAT 2.5's ``read_sdo``
 raises ``RuntimeError("… Error while reading SDO - Timeout")`` for an aborted upload, and the message of a refused
@@ -10,19 +19,30 @@ that does carry an abort code is reported as one.
 
 from __future__ import annotations
 
+import ctypes
+import os
 import re
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from types import ModuleType
 from typing import Any
 
 from ecattool.errors import SdoAbort, SdoTimeout, SdoTooLarge, TargetError
 from ecattool.esi.model import Identity
-from ecattool.od.model import EcState
-from ecattool.target.base import UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX, check_upload
+from ecattool.od.model import EcState, ObjectDictionary
+from ecattool.target.base import UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX, SlaveTarget, Unsupported, check_upload
 from ecattool.target.timeouts import BusLimits
 
 SDO_TIMEOUT_S = 3.0
 #: mailbox polls one SDO download may take (each is one exchange of frames)
 POLLS = 5000
+#: bus init timeouts (s): short first (KickCAT waits the whole timeout per SII read for a redundant port's copy)
+INIT_TIMEOUTS_S = (0.02, 0.1)
+LINK_TIMEOUT_S = 0.25
+WATCHDOG_S = 1.0
+#: what the binding gives no SII EEPROM access for
+_NO_SII = "kickcat: the Python binding gives no SII EEPROM access (use pysoem:IF)"
 _ABORT = re.compile(r"0x([0-9a-fA-F]{8})")
 #: what KickCAT says of a reply larger than the buffer it was given
 _TOO_SMALL = re.compile(r"too (small|big|large)|buffer|size", re.IGNORECASE)
@@ -42,7 +62,8 @@ def import_kickcat() -> ModuleType:
 
 
 class KickcatSlave:
-    """One slave of a KickCAT ``Bus``: identity (1018h), SDO upload/download, state."""
+    """One slave of a KickCAT ``Bus``: identity (1018h), SDO upload/download, state; what the binding does not bind
+    raises :class:`~ecattool.target.base.Unsupported`."""
 
     def __init__(self, bus: Any, slave: Any, position: int, module: ModuleType, limits: BusLimits | None = None) -> None:
         #: how long one SDO waits for its answer: the slave's mailbox window (its ESI's request + response
@@ -128,3 +149,86 @@ class KickcatSlave:
             if s == k:
                 return v
         raise TargetError(f"slave {self.position}: KickCAT reports state {s!r}")
+
+    def request_state(self, state: EcState) -> None:
+        raise Unsupported("kickcat: the Python binding requests a state for the whole bus, not for one slave (use "
+                          "pysoem:IF)")
+
+    def exchange(self, outputs: bytes) -> bytes:
+        raise Unsupported("kickcat: ecattool reads a live bus through KickCAT and exchanges no process data (use "
+                          "pysoem:IF)")
+
+    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0, sync0_shift_ns: int = 0) -> None:
+        raise Unsupported("kickcat: ecattool reads a live bus through KickCAT and sets up no distributed clocks (use "
+                          "pysoem:IF)")
+
+    def al_status_code(self) -> int | None:
+        return None  # not bound
+
+    def sii_read(self) -> bytes:
+        raise Unsupported(_NO_SII)
+
+    def sii_write(self, image: bytes) -> None:
+        raise Unsupported(_NO_SII)
+
+    def sii_write_word(self, word: int, data: bytes) -> None:
+        raise Unsupported(_NO_SII)
+
+    def sdo_info(self) -> ObjectDictionary:
+        raise Unsupported("kickcat: the Python binding has no SDO Information OD list (use pysoem:IF, or type the "
+                          "objects with --library/--device)")
+
+
+@contextmanager
+def _quiet_stdout() -> Iterator[None]:
+    """KickCAT prints "Opening nominal interface…" on the process's stdout (fd 1), where a command's --json
+    document goes (and an error stays one line on stderr): while it opens the link, fd 1 is /dev/null."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        yield
+    finally:
+        try:
+            ctypes.CDLL(None).fflush(None)  # the C library's buffer, before fd 1 is stdout again
+        except (OSError, AttributeError):
+            pass
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(null)
+
+
+class KickcatTarget:
+    """A KickCAT master on ``ifname``, every slave in PRE-OP (a :class:`~ecattool.target.base.Target`);
+    ``limits``: the slaves' timeouts (an SDO waits one mailbox window of theirs)."""
+
+    def __init__(self, ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> None:
+        kc = module or import_kickcat()
+        try:
+            with _quiet_stdout():
+                link = kc.create_link(ifname, "")
+        except Exception as exc:  # noqa: BLE001 - RuntimeError/OSError from the binding
+            from ecattool.target.pysoem import open_advice
+
+            raise TargetError(f"cannot open EtherCAT interface {ifname!r} with KickCAT: {exc}"
+                              f"{open_advice(ifname)}") from None
+        bus = kc.Bus(link)
+        for attempt, timeout in enumerate(INIT_TIMEOUTS_S):
+            link.set_timeout(timeout)
+            try:
+                bus.init(WATCHDOG_S)
+                break
+            except Exception as exc:  # noqa: BLE001
+                if attempt == len(INIT_TIMEOUTS_S) - 1:
+                    raise TargetError(f"KickCAT bus init on {ifname!r} failed: {exc}") from None
+        link.set_timeout(LINK_TIMEOUT_S)
+        self._slaves = [KickcatSlave(bus, s, i, kc, limits) for i, s in enumerate(bus.slaves())]
+        if not self._slaves:
+            raise TargetError(f"no EtherCAT slaves found on {ifname!r}")
+
+    def slaves(self) -> list[SlaveTarget]:
+        return list(self._slaves)
+
+    def close(self) -> None:
+        self._slaves = []  # KickCAT closes its link when the bus object goes

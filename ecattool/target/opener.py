@@ -20,10 +20,15 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
 from ecattool.target.base import SlaveTarget, Target
+
+if TYPE_CHECKING:
+    from ecattool.target.timeouts import BusLimits
 
 #: the forms of a target spec, for help texts and errors
 TARGET_FORMS = "'sim', 'sim:PROFILE,ESI…', 'pysoem:<interface>' or 'kickcat:<interface>'"
@@ -89,6 +94,22 @@ def open_target(spec: str, devices: Iterable[Device] = ()) -> Target:
         return pysoem_target(parsed.interface, bus_limits(devices))
     raise SelectionError(f"target {spec!r}: KickCAT reads a live bus (ecattool bus scan, audit, backup; sii read) "
                          f"and does not act on slaves here: use {SLAVE_TARGET_FORMS}")
+
+
+def open_master(kind: str, interface: str, limits: BusLimits | None = None, module: ModuleType | None = None) -> Target:
+    """A real master (``kind`` 'pysoem' or 'kickcat', :data:`MASTERS`) on ``interface`` in this process, every slave
+    in PRE-OP, for reading a live bus (``ecattool.online.targets.open_bus`` runs it in the master's child process):
+    no process data is set up, the commands that read a bus never take a slave past PRE-OP. ``limits``: the slaves'
+    timeouts; ``module``: the binding (a test's fake), else the installed one."""
+    if kind == "pysoem":
+        from ecattool.target.pysoem import PysoemTarget
+
+        return PysoemTarget(interface, pysoem_module=module, keep_cycling=False, limits=limits)
+    if kind == "kickcat":
+        from ecattool.target.kickcat import KickcatTarget
+
+        return KickcatTarget(interface, module, limits)
+    raise SelectionError(f"unknown master {kind!r} (use {' or '.join(MASTERS)})")
 
 
 def slave_at(target: Target, position: int) -> SlaveTarget:

@@ -1,8 +1,11 @@
 """A real EtherCAT master through pysoem (optional extra: ``pip install ecattool[pysoem]``).
 
-Implements the same :class:`~ecattool.target.base.SlaveTarget` interface as the simulator, translating
-pysoem's exceptions into ecattool's (SdoAbort with the abort code, StateChangeError with the AL status).
-The pysoem module is injectable so the adapter is tested with a fake in the test suite.
+The one adapter of SOEM: implements the same :class:`~ecattool.target.base.LiveSlave` as the simulator (the
+commissioning core and what the live-bus commands read besides: the SII EEPROM through ``eeprom_read``/
+``eeprom_write``, word addressed; the AL status code; the SDO Information service through ``slave.od``, SOEM's OD
+list and descriptions), translating pysoem's exceptions into ecattool's (SdoAbort with the abort code,
+StateChangeError with the AL status). No other module touches pysoem or its slave objects
+(tests/test_fitness.py). The pysoem module is injectable so the adapter is tested with a fake in the test suite.
 
 What pysoem (1.1, over SOEM) requires, and how the adapter meets it:
 
@@ -41,14 +44,16 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from types import ModuleType
-from typing import Any, TypeVar
+from typing import Any, Protocol, TypeVar
 
 from ecattool.abort import al_status_text
 from ecattool.errors import SdoAbort, SdoTimeout, SdoTooLarge, StateChangeError, TargetError
 from ecattool.esi.model import Identity
-from ecattool.od.model import EcState
+from ecattool.od.model import Access, EcState, Entry, ObjectCode, ObjectDictionary, OdObject
+from ecattool.od.types import lookup
+from ecattool.sii.eeprom import read_sii, write_sequence
 from ecattool.target.base import UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX, SlaveTarget, check_upload
 from ecattool.target.timeouts import REPEATS, BusLimits, window_text
 
@@ -80,6 +85,10 @@ STATE_POLL_S = 0.1
 SDO_TIMEOUT_US = 2_000_000
 _STATE_NAMES = {EcState.INIT: "INIT_STATE", EcState.PREOP: "PREOP_STATE", EcState.BOOT: "BOOT_STATE",
                 EcState.SAFEOP: "SAFEOP_STATE", EcState.OP: "OP_STATE"}
+#: SOEM's EEPROM access timeout per word, in microseconds (pysoem's default is 20 ms)
+EEPROM_TIMEOUT_US = 20_000
+_CODES = {7: ObjectCode.VAR, 8: ObjectCode.ARRAY, 9: ObjectCode.RECORD}
+_ACCESS_STATES = (EcState.PREOP, EcState.SAFEOP, EcState.OP)
 #: PacketError.error_code of SOEM: "data container too small for type"
 _PACKET_TOO_SMALL = 3
 _T = TypeVar("_T")
@@ -130,8 +139,51 @@ def dc_sync_args(assign_activate: int, sync0_cycle_ns: int, sync0_shift_ns: int 
                       "SYNC0 + SYNC1 (0x0700), or switch DC off (0x0000)")
 
 
+def access_of(word: int) -> Access:
+    """The per-state access of an ObjectAccess word (bits 0-2 read, 3-5 write in PRE-OP, SAFE-OP, OP)."""
+    return Access(frozenset(s for i, s in enumerate(_ACCESS_STATES) if word & (1 << i)),
+                  frozenset(s for i, s in enumerate(_ACCESS_STATES) if word & (8 << i)))
+
+
+def _text(value: Any) -> str:
+    """pysoem gives names as bytes (the slave's VISIBLE_STRING)."""
+    return value.decode("latin-1") if isinstance(value, (bytes, bytearray)) else str(value)
+
+
+def _entry(sub: int, name: str, data_type: int, bits: int | None, access: int | None) -> Entry:
+    dt = lookup(int(data_type))
+    if bits is None:
+        bits = dt.bits if dt is not None and dt.bits is not None else 0
+    if access is None:  # SOEM reads no entry description of a VAR: its access is not known, PRE-OP..OP assumed
+        return Entry(sub, name, dt, int(bits))
+    mapping = ("R" if access & 0x40 else "") + ("T" if access & 0x80 else "")
+    return Entry(sub, name, dt, int(bits), access=access_of(int(access)), pdo_mapping=mapping)
+
+
+def dictionary_from_soem(objects: Any) -> ObjectDictionary:
+    """pysoem's ``slave.od`` as an ecattool dictionary: objects with index, name, object code and data type, and
+    for an ARRAY/RECORD its entries (name, data type, bit length, access word; SOEM lists every sub-index up to
+    the highest, a gap with an empty name and no bits). A VAR comes without entries: its size is its type's."""
+    od = ObjectDictionary()
+    for o in objects:
+        code = _CODES.get(int(o.object_code), ObjectCode.VAR)
+        name = _text(o.name)
+        entries: dict[int, Entry] = {}
+        subs = list(o.entries or [])
+        if code is ObjectCode.VAR or not subs:
+            bits, access = getattr(o, "bit_length", None), getattr(o, "obj_access", None)
+            entries[0] = _entry(0, name, int(o.data_type), bits or None, access if bits else None)
+        else:
+            for sub, e in enumerate(subs):
+                if not e.name and not e.bit_length:
+                    continue
+                entries[sub] = _entry(sub, _text(e.name), int(e.data_type), int(e.bit_length), int(e.obj_access))
+        od.add(OdObject(int(o.index), name, code, entries))
+    return od
+
+
 class PysoemSlave:
-    """One slave of a pysoem master, as an ecattool SlaveTarget."""
+    """One slave of a pysoem master, as an ecattool :class:`~ecattool.target.base.LiveSlave`."""
 
     def __init__(self, master: "PysoemTarget", position: int, slave: Any) -> None:
         self._master = master
@@ -152,7 +204,7 @@ class PysoemSlave:
 
     @property
     def raw(self) -> Any:
-        """The pysoem slave itself (SII EEPROM, SDO Information, AL status: ``ecattool.online`` reads them)."""
+        """The pysoem slave itself (for the adapter's tests; no other module touches it)."""
         return self._slave
 
     def identity(self) -> Identity:
@@ -355,6 +407,37 @@ class PysoemSlave:
             raise TargetError(f"slave {self.position} left OP by itself: it is in {self._decode(raw).value} with AL "
                               f"status code 0x{code:04X} ({al_status_text(code)})")
 
+    # ------------------------------------------------------------------------------------ the live-bus capabilities
+    def al_status_code(self) -> int | None:
+        self.state()  # reads the AL status of the bus
+        return int(self._slave.al_status or 0)
+
+    def _eeprom(self, fn: Callable[[], _T], word: int) -> _T:
+        try:
+            return fn()
+        except self._mod.EepromError as exc:
+            raise TargetError(f"slave {self.position}: SII word 0x{word:04X}: {exc}") from None
+
+    def sii_read(self) -> bytes:
+        return read_sii(lambda w: self._eeprom(lambda: bytes(self._slave.eeprom_read(w, EEPROM_TIMEOUT_US)), w))
+
+    def sii_write(self, image: bytes) -> None:
+        for w, word in write_sequence(image, self.sii_read()):
+            self.sii_write_word(w, word)
+
+    def sii_write_word(self, word: int, data: bytes) -> None:
+        self._eeprom(lambda: self._slave.eeprom_write(word, data, EEPROM_TIMEOUT_US), word)
+
+    def sdo_info(self) -> ObjectDictionary:
+        mod = self._mod
+        try:
+            objects = self._slave.od
+        except (mod.SdoInfoError, mod.MailboxError, mod.WkcError) as exc:
+            # tried once: what the refusal left in SOEM's error list must not fail the requests that follow
+            self._master.drain_errors()
+            raise TargetError(f"slave {self.position} offers no SDO Information ({exc})") from None
+        return dictionary_from_soem(objects)
+
 
 class PysoemTarget:
     """A pysoem master on a network interface, e.g. ``PysoemTarget("eth0")``."""
@@ -519,6 +602,49 @@ class PysoemTarget:
             self._keeper.join(timeout=1.0)
         with self.lock:
             self.master.close()
+
+
+class SdoWrite(Protocol):
+    """One SDO write of a startup list (``ecattool.startup.model.StartupCommand`` is one)."""
+
+    @property
+    def index(self) -> int: ...
+    @property
+    def subindex(self) -> int: ...
+    @property
+    def data(self) -> bytes: ...
+    @property
+    def complete_access(self) -> bool: ...
+    @property
+    def expect_reply(self) -> bool: ...
+
+
+def attach_startup(master: Any, lists: Sequence[tuple[int, Sequence[SdoWrite]]],
+                   check: Callable[[int, Identity], None], pysoem_module: ModuleType | None = None) -> None:
+    """Attach to the slaves of a program's own pysoem ``master`` (after ``config_init``) each list of ``lists``
+    (bus position, SDO writes) as a ``config_func`` that writes it when SOEM maps the slave (in PRE-OP);
+    ``check(i, identity)`` is called for every one (``i``: its place in ``lists``) before any is touched. Sets ``manual_state_change`` so that
+    ``config_map()`` leaves the state changes to the program (``ecattool.startup.install``)."""
+    wkc_error = (pysoem_module or _import_pysoem()).WkcError
+    slaves = master.slaves
+    for i, (pos, _) in enumerate(lists):
+        s = slaves[pos]
+        check(i, Identity(int(s.man), int(s.id), int(s.rev)))
+
+    def writer(commands: Sequence[SdoWrite]) -> Callable[[Any], None]:
+        def write(slave: Any) -> None:
+            for cmd in commands:
+                try:
+                    slave.sdo_write(cmd.index, cmd.subindex, bytes(cmd.data), cmd.complete_access)
+                except wkc_error:
+                    if cmd.expect_reply:
+                        raise  # only a write the drive answers by resetting may go without a reply
+        return write
+
+    for pos, commands in lists:
+        write = writer(commands)
+        slaves[pos].config_func = lambda p, _w=write: _w(master.slaves[p])
+    master.manual_state_change = 1
 
 
 #: the most process data bytes SOEM puts into one LRW (EC_MAXLRWDATA less the first frame's DC datagram)
