@@ -171,7 +171,7 @@ def test_sii_write_goes_to_the_eeprom_word_by_word_after_the_backup(tmp_path) ->
     mod = fake_pysoem.make_module([drive])
     bus = open_pysoem("eth0", mod)
     try:
-        raw = bus.slaves[0]._raw
+        raw = bus.slaves[0].raw  # type: ignore[attr-defined]
         old = bytes(raw.sii)
         new = bytearray(old)
         new[8:10] = b"\x34\x12"  # the alias word (0x0004)

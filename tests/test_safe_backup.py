@@ -265,7 +265,7 @@ def test_sii_write_sends_that_sequence_word_by_word_and_a_cut_write_fails_the_cr
     for cut in (None, 3, 200):
         bus = open_pysoem("eth0", fake_pysoem.make_module([Drive.from_profile("technosoft-ipos")]))
         try:
-            raw = bus.slaves[0]._raw
+            raw = bus.slaves[0].raw  # type: ignore[attr-defined]
             old = bytes(raw.sii)
             new = _other_image(old)
             real_write = raw.eeprom_write
