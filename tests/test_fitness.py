@@ -9,6 +9,8 @@ fails naming the file and line that breaks its claim:
 * the CiA-402 statusword masks, state bits and controlword commands are defined once (``od/cia402.py``);
 * the typed ``FamilyRules`` is read by field, never with ``getattr(rules, "…", default)``;
 * every SDO upload through a master outside the simulator gives its size bound (issue 37.1);
+* each master has one adapter module (issue 36.3): only ``target/pysoem.py`` imports pysoem or touches its
+  master's and slaves' objects, only ``target/kickcat.py`` KickCAT's; only the opener constructs a target;
 * no ``family == "…"`` decision outside the built-in families (``profiles/``) and the simulator's family modules,
   but for today's remaining places, listed below with their counts: the list may only shrink.
 """
@@ -292,3 +294,56 @@ def calls_of(trees: dict[str, ast.Module], name: str) -> list[str]:
     """Where the package calls the function ``name`` (by its bare or dotted name)."""
     return [f"{_where(rel, node)} in {owner or 'module level'}" for rel, tree in trees.items()
             for owner, node in _functions(tree) if isinstance(node, ast.Call) and _called_name(node) == name]
+
+
+# --- each master has one adapter module (issue 36.3) ------------------------------------------------------------
+
+#: each master binding and its one adapter module: only it imports the binding
+ADAPTERS = {"pysoem": "target/pysoem.py", "kickcat": "target/kickcat.py"}
+#: what only a binding's own objects have, by binding: SOEM's master and slave objects through pysoem (the SII
+#: EEPROM, SDO Information's ``od``, the SDO calls, the state machine, DC, process data, the startup hook) and
+#: KickCAT's bus, link and mailbox. An attribute of ``self`` does not count (``self.od``: a checker's dictionary)
+BINDING_ATTRIBUTES = {
+    "pysoem": frozenset({"eeprom_read", "eeprom_write", "od", "sdo_read", "sdo_write", "add_emergency_callback",
+                         "state_check", "write_state", "config_init", "config_map", "config_dc", "send_processdata",
+                         "receive_processdata", "config_func", "manual_state_change", "always_release_gil"}),
+    "kickcat": frozenset({"read_sdo", "write_sdo", "process_mailboxes", "create_link", "get_state", "set_timeout",
+                          "create_mapping"}),
+}
+
+
+def binding_uses(trees: dict[str, ast.Module]) -> list[str]:
+    """Where a module other than a binding's adapter imports the binding (``import pysoem``, ``from kickcat…``) or
+    uses what only the binding's objects have (:data:`BINDING_ATTRIBUTES`)."""
+    found = []
+    for rel, tree in trees.items():
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import) or (isinstance(node, ast.ImportFrom) and not node.level):
+                names = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or ""]
+                for name in names:
+                    binding = name.split(".")[0]
+                    if binding in ADAPTERS and rel != ADAPTERS[binding]:
+                        found.append(f"{_where(rel, node)}: import {name} (only {ADAPTERS[binding]} may)")
+            elif isinstance(node, ast.Attribute) and not (isinstance(node.value, ast.Name) and node.value.id == "self"):
+                for binding, attributes in BINDING_ATTRIBUTES.items():
+                    if node.attr in attributes and rel != ADAPTERS[binding]:
+                        found.append(f"{_where(rel, node)}: {ast.unparse(node)} ({binding}'s object: only "
+                                      f"{ADAPTERS[binding]} may)")
+    return found
+
+
+def test_each_master_has_one_adapter_module() -> None:
+    found = binding_uses(_trees())
+    assert not found, ("a master binding reached outside its adapter module (put it into the adapter, the rest of the "
+                       "package talks to target.base.LiveSlave):\n" + "\n".join(found))
+
+
+def test_the_adapters_are_the_ones_that_reach_their_bindings() -> None:
+    """The check above looks for the right things: each adapter holds its binding's import and objects' names."""
+    for binding, adapter in ADAPTERS.items():
+        alone = {rel: tree for rel, tree in _trees().items() if rel == adapter}
+        moved = {"elsewhere.py": tree for tree in alone.values()}
+        assert not binding_uses(alone), adapter
+        uses = binding_uses(moved)
+        assert any(f"import {binding}" in u for u in uses), (adapter, uses)
+        assert any(a in u for u in uses for a in BINDING_ATTRIBUTES[binding]), (adapter, uses)
