@@ -16,7 +16,7 @@ from ecattool.online import Library, audit, open_bus, scan, sim_bus
 from ecattool.online.dictionary import typed
 from ecattool.online.objects import dump, read_value, write_value
 from ecattool.online.sii_access import write_checks
-from ecattool.online.targets import open_pysoem
+from ecattool.online.targets import open_live
 from ecattool.project.lint import lint_project
 from ecattool.sii.crc import preamble_crc
 from ecattool.sii.image import parse_header
@@ -122,7 +122,7 @@ def test_fake_pysoem_scan_sdo_info_and_sii() -> None:
 
     drives = [Drive.from_profile("hdt"), Drive.from_profile("technosoft-ipos")]
     mod = fake_pysoem.make_module(drives)
-    bus = open_pysoem("eth0", mod)
+    bus = open_live("pysoem", "eth0", mod)
     try:
         rows = scan(bus)
         assert [r.match.profile for r in rows] == ["hdt", "technosoft-ipos"]
@@ -169,7 +169,7 @@ def test_sii_write_goes_to_the_eeprom_word_by_word_after_the_backup(tmp_path) ->
 
     drive = Drive.from_profile("technosoft-ipos")
     mod = fake_pysoem.make_module([drive])
-    bus = open_pysoem("eth0", mod)
+    bus = open_live("pysoem", "eth0", mod)
     try:
         raw = bus.slaves[0].raw  # type: ignore[attr-defined]
         old = bytes(raw.sii)

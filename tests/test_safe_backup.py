@@ -257,13 +257,13 @@ def test_sii_write_sends_that_sequence_word_by_word_and_a_cut_write_fails_the_cr
     """The same through a master (the fake pysoem module, word by word): the writes are the sequence, and a write
     cut half-way (the master's EEPROM write fails) leaves an EEPROM whose CRC fails."""
     from ecattool.online.sii_access import read_problems, sii_write
-    from ecattool.online.targets import open_pysoem
+    from ecattool.online.targets import open_live
     from ecattool.sii.eeprom import write_sequence
     from ecattool.sim import Drive
     from tests import fake_pysoem
 
     for cut in (None, 3, 200):
-        bus = open_pysoem("eth0", fake_pysoem.make_module([Drive.from_profile("technosoft-ipos")]))
+        bus = open_live("pysoem", "eth0", fake_pysoem.make_module([Drive.from_profile("technosoft-ipos")]))
         try:
             raw = bus.slaves[0].raw  # type: ignore[attr-defined]
             old = bytes(raw.sii)

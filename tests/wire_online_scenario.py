@@ -137,10 +137,10 @@ def install() -> dict[str, Any]:
         r["server_pysoem"] = stop_server(server)
     server, _ = start_server([INSTALL_PROJECT])
     try:
-        from ecattool.online.targets import open_kickcat
+        from ecattool.online.targets import open_live
         from ecattool.project.machine import load_machine
 
-        live = open_kickcat(MASTER_IF)  # bus init with the timeouts the virtual bus needs
+        live = open_live("kickcat", MASTER_IF)  # bus init with the timeouts the virtual bus needs
         bus = live.slaves[0]._bus
         r["kickcat_positions"] = load_machine(INSTALL_PROJECT).install(bus)  # a kickcat.Bus, by its type
         bus.create_mapping()

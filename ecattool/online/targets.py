@@ -63,16 +63,6 @@ def open_live(kind: str, ifname: str, module: ModuleType | None = None, limits: 
     return LiveBus(f"{kind}:{ifname}", _live(target.slaves()), closer=target.close)
 
 
-def open_pysoem(ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> LiveBus:
-    """A pysoem master on ``ifname`` in this process as a live bus (:func:`open_live`)."""
-    return open_live("pysoem", ifname, module, limits)
-
-
-def open_kickcat(ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> LiveBus:
-    """A KickCAT master on ``ifname`` in this process as a live bus (:func:`open_live`)."""
-    return open_live("kickcat", ifname, module, limits)
-
-
 def sim_bus(drives: Iterable[Any], spec: str = "sim") -> LiveBus:
     """A live bus of simulated drives (e.g. those of a ``SimTarget`` a test commissioned), each with the SII
     ``ecattool sii build`` makes of its device (as ``sim serve`` gives it): :func:`ecattool.target.sim.live_slaves`."""

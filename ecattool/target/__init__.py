@@ -2,9 +2,10 @@
 
 from typing import Any
 
-from ecattool.target.base import SlaveTarget, Target
+from ecattool.target.base import AlStatusReport, LiveSlave, SdoInformation, SiiAccess, SlaveTarget, Target, Unsupported
 
-__all__ = ["SlaveTarget", "Target", "SimTarget", "open_target", "slave_at"]
+__all__ = ["AlStatusReport", "LiveSlave", "SdoInformation", "SiiAccess", "SlaveTarget", "Target", "Unsupported",
+           "SimTarget", "open_target", "slave_at"]
 
 
 def __getattr__(name: str) -> Any:
