@@ -310,3 +310,21 @@ def test_sii_write_force_only_overwrites_files_and_any_identity_is_its_own_flag(
     code, out, err = run(capsys, "sii", "write", str(path), "--target", "sim:hdt", "--backup", str(backup_file),
                          "--any-identity", "--force")
     assert code == 0 and "written" in out, err
+
+
+def test_sii_write_through_the_masters_child_process(tmp_path: Path) -> None:
+    """``sii write`` on a real master goes through the master's child process (ecattool.target.isolated): the
+    child's slave is the one adapter's, every capability of the slave protocol is served there, the word writes of
+    the sequence included (the remote slave had no ``sii_write_word`` before the bus layer was one)."""
+    from ecattool.online.sii_access import sii_write
+    from ecattool.online.targets import isolated_bus, open_live
+    from ecattool.sim import Drive
+    from tests import fake_pysoem
+
+    module = fake_pysoem.make_module([Drive.from_profile("technosoft-ipos")])
+    with isolated_bus("pysoem:eth0", lambda: open_live("pysoem", "eth0", module)) as bus:
+        slave = bus.slave(0)
+        old = slave.sii_read()
+        new = _other_image(old)
+        assert sii_write(slave, new, "new.bin", tmp_path / "old.bin") == []
+        assert slave.sii_read()[:len(new)] == new and (tmp_path / "old.bin").read_bytes() == old
