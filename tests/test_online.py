@@ -436,3 +436,28 @@ def test_an_eds_given_as_the_device_types_the_objects(capsys: pytest.CaptureFixt
     code, out, _ = run(capsys, "sdo", "read", "0x6060:00", "--target", "sim:technosoft-ipos", "--device", eds, "--json")
     got = json.loads(out)
     assert code == 0 and got["dictionary"] == "device" and got["type"] == "SINT"
+
+
+def test_every_masters_slave_is_the_one_slave_protocol() -> None:
+    """Issue 36.3: one slave protocol (the core and its capability parts, ecattool.target.base), one adapter per
+    master; each adapter's slave class has every method of every part, and the master process's remote slave too.
+    What KickCAT's binding cannot do raises Unsupported (docs/at-the-machine.md, "What each target can do")."""
+    from ecattool.od.model import EcState
+    from ecattool.target.base import AlStatusReport, SdoInformation, SiiAccess, SlaveTarget, Unsupported
+    from ecattool.target.isolated import RemoteSlave
+    from ecattool.target.kickcat import KickcatSlave
+    from ecattool.target.pysoem import PysoemSlave
+    from ecattool.target.sim import SimLiveSlave
+
+    parts = (SlaveTarget, AlStatusReport, SiiAccess, SdoInformation)
+    methods = {n for p in parts for n, v in vars(p).items() if callable(v) and not n.startswith("_")}
+    assert {"sdo_upload", "exchange", "configure_dc", "al_status_code", "sii_write_word", "sdo_info"} <= methods
+    for cls in (PysoemSlave, KickcatSlave, SimLiveSlave, RemoteSlave):
+        assert not [m for m in sorted(methods) if not callable(getattr(cls, m, None))], cls
+
+    kc = KickcatSlave(object(), object(), 0, object())  # type: ignore[arg-type]
+    assert kc.al_status_code() is None
+    for call in (kc.sii_read, lambda: kc.sii_write(b"\0" * 128), lambda: kc.sii_write_word(0, b"\0\0"), kc.sdo_info,
+                 lambda: kc.request_state(EcState.SAFEOP), lambda: kc.exchange(b""), lambda: kc.configure_dc(0x300)):
+        with pytest.raises(Unsupported, match="^kickcat: .*use pysoem:IF"):
+            call()
