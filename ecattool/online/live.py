@@ -9,6 +9,7 @@ Every target's slaves are :class:`ecattool.target.base.LiveSlave` objects, one a
 from __future__ import annotations
 
 import weakref
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -23,7 +24,7 @@ class LiveBus:
 
     spec: str
     slaves: list[LiveSlave]
-    closer: Any = None
+    closer: Callable[[], None] | None = None
     #: the simulator's log of writes (SDO downloads, SII writes) since the bus was opened; None on a real master
     write_log: list[str] | None = None
     #: the devices a simulator bus was made of (its own dictionaries), by position

@@ -107,7 +107,8 @@ def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:
         try:
             bus.notes.extend(restore(bus.slaves, found))
         finally:
-            close()
+            if close is not None:
+                close()
 
     bus.closer = closer
     return bus
