@@ -35,6 +35,8 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from ecattool.errors import EcatToolError, TargetError
+from ecattool.esi.model import Identity
+from ecattool.od.model import EcState, ObjectDictionary
 from ecattool.target.base import SlaveTarget
 from ecattool.target.timeouts import BusLimits
 
@@ -335,9 +337,10 @@ class RemoteSlave:
     def _call(self, method: str, *args: Any, **kwargs: Any) -> Any:
         return self._master.call(self.position, method, *args, **kwargs)
 
-    def identity(self) -> Any:
+    def identity(self) -> Identity:
         # pysoem's identity is the SII's (no request); KickCAT's is 1018h:01-03, three SDOs
-        return self._call("identity", timeout_s=3 * self._master.limits.sdo_call_s)
+        ident: Identity = self._call("identity", timeout_s=3 * self._master.limits.sdo_call_s)
+        return ident
 
     def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
         data: bytes = self._call("sdo_upload", index, subindex, complete_access, size=size,
@@ -349,10 +352,11 @@ class RemoteSlave:
         self._call("sdo_download", index, subindex, bytes(data), complete_access, expect_reply,
                    timeout_s=self._master.limits.sdo_call_s)
 
-    def state(self) -> Any:
-        return self._call("state")
+    def state(self) -> EcState:
+        state: EcState = self._call("state")
+        return state
 
-    def request_state(self, state: Any) -> None:
+    def request_state(self, state: EcState) -> None:
         # pysoem gives a drive on its way to OP 2 s of paced cycles plus a state check per cycle (~22 s at 1 ms)
         self._call("request_state", state, timeout_s=3 * CALL_TIMEOUT_S)
 
@@ -371,9 +375,10 @@ class RemoteSlave:
     def sii_write_word(self, word: int, data: bytes) -> None:
         self._call("sii_write_word", word, bytes(data))
 
-    def sdo_info(self) -> Any:
+    def sdo_info(self) -> ObjectDictionary:
         # the SDO Information service reads every object's and entry's description: minutes on a large dictionary
-        return self._call("sdo_info", timeout_s=10 * CALL_TIMEOUT_S)
+        dictionary: ObjectDictionary = self._call("sdo_info", timeout_s=10 * CALL_TIMEOUT_S)
+        return dictionary
 
     def exchange(self, outputs: bytes) -> bytes:
         data: bytes = self._call("exchange", bytes(outputs))
