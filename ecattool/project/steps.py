@@ -11,6 +11,7 @@ from typing import Any
 
 from ecattool.errors import EcatToolError, Location
 from ecattool.esi.model import Device, Direction
+from ecattool.esi.power_on import without_trailing_padding
 from ecattool.findings import Finding, Severity
 from ecattool.profiles.rules import FamilyRules, NO_RULES
 from ecattool.pdo.model import Mapping, without_virtual
@@ -343,15 +344,6 @@ class MappingDifference:
     location: Location | None
 
 
-def _without_trailing_padding(values: list[int]) -> list[int]:
-    """Mapping values without the gaps and dummies (index below 20h) at their end: they pad the PDO and carry
-    nothing, so a mapping object that differs from the PDO list only by them lays out the same data."""
-    out = list(values)
-    while out and (out[-1] >> 16) < 0x20:
-        out.pop()
-    return out
-
-
 def dictionary_mapping_differences(device: Device, mapping: Mapping,
                                    rules: FamilyRules | None = None) -> list[MappingDifference]:
     """The PDOs of ``mapping`` that the slave keeps as it has them (not given with entries, or Fixed: commission
@@ -383,7 +375,7 @@ def dictionary_mapping_differences(device: Device, mapping: Mapping,
             continue
         held = [v for v in held_or_none if v is not None]
         listed = [e.mapping_value for e in mp.entries]
-        if held == listed or _without_trailing_padding(held) == _without_trailing_padding(listed):
+        if held == listed or without_trailing_padding(held) == without_trailing_padding(listed):
             continue
         same_layout = [v & 0xFF for v in held] == [v & 0xFF for v in listed]
         if same_layout and all(_maps_validly(device, v, direction) for v in held):
