@@ -35,7 +35,7 @@ def _project(tmp_path: Path, esi: str, select: str | None, extra: str = "", poli
 @pytest.mark.parametrize("name", SAMPLES)
 def test_a_sample_is_one_typed_machine_of_axes(name):
     machine = load_machine(sample(name))
-    assert isinstance(machine, Machine) and machine.findings == [] and machine.loaded is not None
+    assert isinstance(machine, Machine) and machine.findings == () and machine.loaded is not None
     for s in machine.in_bus_order():
         assert s.kind == "axis" and s.enables
         assert isinstance(s.rules, FamilyRules) and isinstance(s.mapping, Mapping)
@@ -218,11 +218,11 @@ def test_one_target_parser_for_every_command():
                                             ("kickcat:eth0", False), ("sim:hdt", False)])
 def test_a_project_target_commission_cannot_open_fails_lint(tmp_path, target, ok):
     """A project that lints clean must commission: its target: is checked at lint (PRJ001, with its line)."""
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
     path = tmp_path / "machine.yaml"
     path.write_text(f"ecattool: 1\ntarget: {target}\ndrives:\n  - name: x\n    device: {{profile: hdt}}\n")
-    findings = [f for f in lint_project(path).findings if f.rule == "PRJ001"]
+    findings = [f for f in load_machine(path).findings if f.rule == "PRJ001"]
     if ok:
         assert findings == []
     else:
@@ -314,7 +314,7 @@ def test_a_project_wide_disable_holds_for_commission_too(tmp_path):
     p.write_text("ecattool: 1\ndisable_rules: [{rule: PDO027, reason: the ESC pads the fixed 2 bits}]\ndrives:\n"
                  f"  - name: s\n    device: {{esi: {EL1XXX}, select: EL1002, policy: newest}}\n", encoding="utf-8")
     machine = load_machine(p)
-    assert machine.findings == []
+    assert machine.findings == ()
     assert commission(machine).ok
 
 

@@ -17,7 +17,7 @@ from ecattool.online.dictionary import typed
 from ecattool.online.objects import dump, read_value, write_value
 from ecattool.online.pysoem_bus import open_pysoem
 from ecattool.online.sii_access import write_checks
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from ecattool.sii.crc import preamble_crc
 from ecattool.sii.image import parse_header
 from ecattool.target.sim import SimTarget
@@ -45,8 +45,8 @@ def test_scan_names_an_unknown_device() -> None:
 
 
 def _commissioned(project: str) -> tuple[SimTarget, object]:
-    result = lint_project(project)
-    target = SimTarget.from_devices([rd.device for rd in sorted(result.drives, key=lambda r: r.position)])
+    result = load_machine(project)
+    target = SimTarget.from_devices([rd.device for rd in sorted(result.slaves, key=lambda r: r.position)])
     assert commission(project, target).ok
     return target, sim_bus(target.slaves())
 
@@ -257,7 +257,7 @@ def test_project_from_the_bus_lints_clean_and_commissions_the_same_bus(tmp_path)
     with open_bus(FOUR) as bus:
         out.write_text(project_from_bus(bus, Library(ROOT / "samples" / "generic_esi"), out))
         devices = [s.drive.device for s in bus.slaves]
-        result = lint_project(out)
+        result = load_machine(out)
         assert not result.findings, [str(f) for f in result.findings]
         target = SimTarget([drive_for_device(d) for d in devices])  # the same bus, powered up again
         report = commission(out, target)
@@ -271,7 +271,7 @@ def test_machine_install_checks_identity_and_attaches_the_startup_list() -> None
 
     project = "samples/hdt/project.yaml"
     machine = load_machine(project)
-    (rd,) = machine.drives
+    (rd,) = machine.slaves
     drive = Drive.from_device(rd.device)
     mod = fake_pysoem.make_module([drive])
     master = mod.Master()
@@ -299,7 +299,7 @@ def test_a_project_file_installs_through_its_machine() -> None:
     from ecattool.sim import Drive
 
     project = "samples/hdt/project.yaml"
-    (rd,) = lint_project(project).drives
+    (rd,) = load_machine(project).slaves
     mod = fake_pysoem.make_module([Drive.from_device(rd.device)])
     master = mod.Master()
     master.open("eth0")
@@ -317,7 +317,7 @@ def test_install_kickcat_writes_through_the_mailbox_after_checking_1018h() -> No
     from ecattool.startup.install import master_kind
 
     machine = load_machine("samples/hdt/project.yaml")
-    (rd,) = machine.drives
+    (rd,) = machine.slaves
     drive = Drive.from_device(rd.device)
     drive.request_state(EcState.PREOP)  # where kickcat's bus.init() leaves it
 

@@ -172,11 +172,11 @@ def test_unknown_key_names_the_nearest_known_key():
 
 
 def test_a_schema_error_in_one_drive_does_not_hide_the_others(tmp_path):
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
     p = tmp_path / "p.yaml"
     p.write_text(TWO_DRIVES)
-    result = lint_project(p)
+    result = load_machine(p)
     got = [(f.rule, f.location.line) for f in result.findings]
     # the typo in drive x (line 5), and drive y's own finding, located in the file as written (line 10)
     assert ("PRJ001", 5) in got and ("PRJ010", 10) in got, got

@@ -83,10 +83,10 @@ def test_force_replaces_only_a_back_up(tmp_path: Path, capsys: pytest.CaptureFix
 
 # --------------------------------------------------------------------------------------------- never lie
 def _hdt_bus():  # type: ignore[no-untyped-def]
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
-    result = lint_project(HDT)
-    return open_bus("sim", [rd.device for rd in result.drives])
+    result = load_machine(HDT)
+    return open_bus("sim", [rd.device for rd in result.slaves])
 
 
 def _blank_end(sii: bytes) -> bytes:

@@ -15,7 +15,8 @@ from ecattool.errors import EcatToolError, SdoAbort, StateChangeError, TargetErr
 from ecattool.findings import Finding, has_errors
 from ecattool.od.model import EcState
 from ecattool.project.machine import Machine, load_machine
-from ecattool.project.resolve import TRANSITION_STATE, ResolvedDrive, Slave
+from ecattool.project.resolve import TRANSITION_STATE
+from ecattool.project.slave import Slave
 from ecattool.startup.model import StartupCommand
 from ecattool.target.base import SlaveTarget, Target
 
@@ -102,7 +103,7 @@ _NOT_SEEDED = frozenset({0x6040, 0x6042, 0x6071, 0x60FF, 0x60B1, 0x60B2})
 class ProcessIo:
     """Objects in the process image by (index, sub); SDO for objects that are not mapped."""
 
-    def __init__(self, slave: SlaveTarget, rd: ResolvedDrive, trace: DriveTrace | None = None) -> None:
+    def __init__(self, slave: SlaveTarget, rd: Slave, trace: DriveTrace | None = None) -> None:
         from ecattool import pdo
 
         self.slave = slave
@@ -213,13 +214,13 @@ def _goto(slave: SlaveTarget, state: EcState, report: DriveReport) -> None:
     report.trace.ec_state(state.value)
 
 
-def _speaks_coe(rd: ResolvedDrive) -> bool:
+def _speaks_coe(rd: Slave) -> bool:
     """Whether the slave has a CoE mailbox: a slave without one (an EL2008, a fixed process image) is never sent
     an SDO; its identity is read from its EEPROM."""
     return rd.device is not None and rd.device.has_coe
 
 
-def _check_identity(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+def _check_identity(slave: SlaveTarget, rd: Slave, report: DriveReport) -> None:
     assert rd.device is not None
     want = rd.device.identity
     policy = rd.drive.identity
@@ -248,7 +249,7 @@ def _check_identity(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) 
                                                 f"revision 0x{revision:08X} ({how})"))
 
 
-def _send(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, trace: DriveTrace) -> None:
+def _send(slave: SlaveTarget, rd: Slave, cmd: StartupCommand, trace: DriveTrace) -> None:
     """Write one startup command and read it back, recording both in the trace."""
     sent = trace.startup_write(cmd)
     try:
@@ -258,7 +259,7 @@ def _send(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, trace: Dri
         raise
 
 
-def _send_verified(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, sent: StartupWrite) -> None:
+def _send_verified(slave: SlaveTarget, rd: Slave, cmd: StartupCommand, sent: StartupWrite) -> None:
     assert rd.device is not None
 
     def write() -> None:
@@ -278,7 +279,7 @@ def _send_verified(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, s
                            f"read back {bytes(back).hex()} after writing {cmd.data.hex()} ({cmd.comment})"))
 
 
-def _startup(slave: SlaveTarget, rd: ResolvedDrive, transitions: tuple[str, ...], report: DriveReport) -> None:
+def _startup(slave: SlaveTarget, rd: Slave, transitions: tuple[str, ...], report: DriveReport) -> None:
     cmds = [c for c in rd.startup if c.transition in transitions]
     for c in cmds:
         _send(slave, rd, c, report.trace)
@@ -286,7 +287,7 @@ def _startup(slave: SlaveTarget, rd: ResolvedDrive, transitions: tuple[str, ...]
         report.steps.append(Step(f"startup {'/'.join(transitions)}", True, f"{len(cmds)} write(s) verified"))
 
 
-def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+def _sw(slave: SlaveTarget, rd: Slave, report: DriveReport) -> None:
     from ecattool import sw
 
     cfg = rd.drive.sw_config
@@ -340,7 +341,7 @@ def _set_mode(io: ProcessIo, mode: int) -> None:
     raise _Failed(Step("move", False, f"the drive did not switch to mode {mode} (6061h stays {io.read(0x6061, 0)})"))
 
 
-def _preselect_mode(io: ProcessIo, rd: ResolvedDrive) -> None:
+def _preselect_mode(io: ProcessIo, rd: Slave) -> None:
     """Write the move's mode before the enable sequence: Control Techniques refuses a change of 6060h in
     OPERATION ENABLED (7.3.6, SDO abort 0800 0022h), so a mode chosen only for the move must be set first.
     A drive that shows the mode only once enabled (Technosoft) is checked by the move itself."""
@@ -361,7 +362,7 @@ def _hold_position(io: ProcessIo) -> None:
         io.write(0x607A, 0, io.read(0x6064, 0))
 
 
-def _zero_objects(io: ProcessIo, rd: ResolvedDrive, mode: str) -> str:
+def _zero_objects(io: ProcessIo, rd: Slave, mode: str) -> str:
     """Why a move failed, where the drive shows it: a PP move's profile velocity or acceleration at 0, or a
     zero part of the position factor (``steps.zero_factor_parts``), as the drive holds them (the process image
     for mapped outputs, else SDO)."""
@@ -386,7 +387,7 @@ def _zero_objects(io: ProcessIo, rd: ResolvedDrive, mode: str) -> str:
     return f": the drive holds 0 in {', '.join(names)}, which the move needs non-zero" if names else ""
 
 
-def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
+def _move(io: ProcessIo, rd: Slave, report: DriveReport) -> None:
     from ecattool.commission.profiletime import check_move_time
     from ecattool.project.steps import MOVE_MODE_CODES, move_mode
 
@@ -436,7 +437,7 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     report.steps.append(Step("move", True, detail + took))
 
 
-def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fraction, trace: DriveTrace) -> None:
+def _run_move(io: ProcessIo, rd: Slave, mode: str, p0: int, dist: Fraction, trace: DriveTrace) -> None:
     """The motion: one profile-position set-point (pp), or 100 cyclic set-points then 50 cycles (csp)."""
     target = int(p0 + dist)
     if mode == "pp":
@@ -516,14 +517,14 @@ def _prove_process_data(io: ProcessIo, rd: Slave, report: DriveReport) -> None:
                              f"byte(s) read ({len(io.in_pos)} object(s)" + (f": {shown}" if shown else "") + ")"))
 
 
-def _expected_readbacks(rd: ResolvedDrive) -> list[FactorObject]:
+def _expected_readbacks(rd: Slave) -> list[FactorObject]:
     """Factor objects the drive computes from its own hardware configuration (Control Techniques' read-only
     608Fh): the scaling is only right if the drive reports the value the project's feedback assumes."""
     group = rd.factor_group
     return [o for o in getattr(group, "objects", ()) if not o.write] if group is not None else []
 
 
-def _check_readbacks(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+def _check_readbacks(slave: SlaveTarget, rd: Slave, report: DriveReport) -> None:
     assert rd.device is not None
     expected = _expected_readbacks(rd)
     checked: list[str] = []
@@ -542,7 +543,7 @@ def _check_readbacks(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport)
         report.steps.append(Step("scaling", True, "drive reports " + ", ".join(checked)))
 
 
-def _dc(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+def _dc(slave: SlaveTarget, rd: Slave, report: DriveReport) -> None:
     if rd.dc is None:
         return
     act = rd.dc.assign_activate
@@ -578,7 +579,7 @@ class _DriveRun:
     :meth:`prepare` does everything in PRE-OP (identity, .sw, startup list, read-backs, DC), :meth:`finish`
     goes to SAFE-OP and OP, enables and moves. A failure in either stops the drive safely."""
 
-    def __init__(self, slave: SlaveTarget, rd: ResolvedDrive, allow_errors: bool = False) -> None:
+    def __init__(self, slave: SlaveTarget, rd: Slave, allow_errors: bool = False) -> None:
         self.slave = slave
         self.rd = rd
         self.allow_errors = allow_errors
@@ -651,7 +652,7 @@ class _DriveRun:
         report.final_state = slave.state().value
 
 
-def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
+def commission_drive(slave: SlaveTarget, rd: Slave) -> DriveReport:
     """Commission one drive on its own (both phases at once)."""
     run = _DriveRun(slave, rd)
     run.prepare()
@@ -659,7 +660,7 @@ def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
     return run.report
 
 
-def _drive_error(slave: SlaveTarget, rd: ResolvedDrive) -> str:
+def _drive_error(slave: SlaveTarget, rd: Slave) -> str:
     """What the drive itself says went wrong, for a failure report: its error code 603Fh (the last EMCY), named
     from the family's table; "" where there is none, or it cannot be read (no mailbox, no 603Fh)."""
     from ecattool.od.emcy import error_text

@@ -22,7 +22,7 @@ from ecattool.errors import EcatToolError
 if TYPE_CHECKING:
     from ecattool.findings import Finding
     from ecattool.pdo.layout import Layout
-    from ecattool.project.resolve import ResolvedDrive
+    from ecattool.project.slave import Slave
     from ecattool.startup.model import StartupCommand
 
 class ProcessImage(Protocol):
@@ -219,7 +219,7 @@ class DriveTrace:
     _move_start_wall: float = 0.0
 
     @classmethod
-    def for_drive(cls, rd: ResolvedDrive) -> DriveTrace:
+    def for_drive(cls, rd: Slave) -> DriveTrace:
         """The static context of a drive: its process image, lint findings and units."""
         trace = cls(findings=list(rd.findings), counts_per_unit=rd.counts_per_unit)
         if rd.device is not None and rd.mapping is not None:
