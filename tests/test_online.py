@@ -53,7 +53,7 @@ def _commissioned(project: str) -> tuple[SimTarget, object]:
 
 def test_audit_of_a_freshly_commissioned_bus_reports_nothing_and_never_writes() -> None:
     _, bus = _commissioned(TECHNOSOFT)
-    report = audit(TECHNOSOFT, bus)
+    report = audit(load_machine(TECHNOSOFT), bus)
     assert report.ok and report.checked > 10
     assert bus.write_log == []  # the simulator saw no SDO download, no SII write
 
@@ -65,7 +65,7 @@ def test_audit_reports_exactly_the_three_changed_objects() -> None:
                              (0x6091, 1, (7).to_bytes(4, "little"))):
         slave.sdo_download(index, sub, data)
     bus.write_log.clear()
-    report = audit(TECHNOSOFT, bus)
+    report = audit(load_machine(TECHNOSOFT), bus)
     assert sorted(d.address for d in report.drifts) == ["0x6081:00", "0x6083:00", "0x6091:01"]
     assert {d.kind for d in report.drifts} == {"value"} and bus.write_log == []
     assert any(d.actual == 12345 for d in report.drifts)  # decoded by the dictionary
@@ -226,7 +226,7 @@ def test_backup_writes_sii_dictionary_and_sw_in_one_folder(tmp_path) -> None:
     from ecattool.online.backup import backup
 
     _, bus = _commissioned(TECHNOSOFT)
-    report = backup(TECHNOSOFT, bus, tmp_path / "b")
+    report = backup(load_machine(TECHNOSOFT), bus, tmp_path / "b")
     assert report.files == ["00-z_axis.dict.json", "00-z_axis.sii.bin", "00-z_axis.sw"]
     assert (tmp_path / "b" / "00-z_axis.sw").read_bytes() == (ROOT / "samples" / "technosoft_ipos" /
                                                               "setup.sw").read_bytes()
@@ -245,7 +245,7 @@ def test_backup_that_fails_half_way_leaves_no_folder(tmp_path) -> None:
 
     bus.slaves[0].drive.sdo_upload = lost  # the bus goes quiet during the .sw read
     with pytest.raises(SdoTimeout):
-        backup(TECHNOSOFT, bus, tmp_path / "b")
+        backup(load_machine(TECHNOSOFT), bus, tmp_path / "b")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -377,7 +377,7 @@ def test_backup_cli(tmp_path, capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_audit_against_another_device_is_identity_drift_and_the_write_log_would_see_a_write() -> None:
     with open_bus("sim:technosoft-ipos") as bus:
-        report = audit("samples/hdt/project.yaml", bus)
+        report = audit(load_machine("samples/hdt/project.yaml"), bus)
         assert {d.address for d in report.drifts if d.kind == "identity"} == {"vendor_id", "product_code"}
         assert bus.write_log == []
         with pytest.raises(SdoAbort):  # the witness: a write, even one the drive refuses, is in the log

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import click
 
@@ -53,17 +53,17 @@ def _mechanics_options(f: Any) -> Any:
 
 
 def _spec(spec: str | None, family: str | None, firmware: str | None, counts: str | None, lines: str | None,
-          steps: str | None, feedback_on: str | None, gear: str | None, transmission: str | None, pos_unit: str | None,
+          steps: str | None, feedback_on: Literal["motor", "load"] | None, gear: str | None, transmission: str | None, pos_unit: str | None,
           vel_unit: str | None, acc_unit: str | None, jerk_unit: str | None, slow_loop: str | None,
           reverse: bool | None, approximation: str | None) -> Any:
     from ecattool.errors import InputError
+    from ecattool.scaling.model import FeedbackSection, ScalingSection, UnitsSection
     from ecattool.scaling.spec import load_spec, spec_from_dict
 
-    data: dict[str, Any] = {}
     base = None
     if spec:
         base = load_spec(spec)
-    fb: dict[str, Any] = {}
+    fb: FeedbackSection = {}
     if counts:
         fb["counts_per_rev"] = counts
     if lines:
@@ -72,7 +72,7 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
         if "x" not in steps.lower():
             raise click.BadParameter("write STEPSxMICROSTEPS, e.g. 200x256", param_hint="--steps")
         s, m = steps.lower().split("x", 1)
-        fb.update(steps=s, microsteps=m)
+        fb["steps"], fb["microsteps"] = s, m
     if feedback_on:
         fb["on"] = feedback_on
     if transmission:  # a mechanics string the user typed: its error names the option
@@ -85,14 +85,19 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
     if base is None:
         if not fb or not any(k in fb for k in ("counts_per_rev", "lines", "steps")):
             raise InputError("give a SPEC file or the feedback (--counts-per-rev, --lines or --steps)")
-        data["feedback"] = fb
-        data["gear"] = gear
-        data["transmission"] = transmission
-        data["units"] = {k: v for k, v in (("position", pos_unit), ("velocity", vel_unit), ("acceleration", acc_unit),
-                                           ("jerk", jerk_unit)) if v}
+        units: UnitsSection = {}
+        if pos_unit:
+            units["position"] = pos_unit
+        if vel_unit:
+            units["velocity"] = vel_unit
+        if acc_unit:
+            units["acceleration"] = acc_unit
+        if jerk_unit:
+            units["jerk"] = jerk_unit
+        data: ScalingSection = {"feedback": fb, "gear": gear, "transmission": transmission, "units": units,
+                                "reverse": bool(reverse)}
         if slow_loop:
             data["slow_loop"] = slow_loop
-        data["reverse"] = bool(reverse)
         parsed = spec_from_dict(data)
     else:
         from dataclasses import replace

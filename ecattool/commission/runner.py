@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from functools import partial
@@ -678,7 +678,7 @@ def _drive_error(slave: SlaveTarget, rd: Slave) -> str:
     return f"; the drive reports error 603Fh = 0x{code:04X} ({error_text(code, rd.rules.family if rd.rules is not None else None)})"
 
 
-def open_target(spec: str, drives: list[Slave]) -> tuple[Target, str]:
+def open_target(spec: str, drives: Sequence[Slave]) -> tuple[Target, str]:
     """The target ``spec`` names (:func:`ecattool.target.opener.open_target`) with the slaves' devices for a
     simulator; and the target's name for the report. A slave whose device did not resolve cannot be simulated:
     an InputError naming it and why (the file and line lint names)."""
@@ -687,11 +687,11 @@ def open_target(spec: str, drives: list[Slave]) -> tuple[Target, str]:
 
     parsed = parse_target(spec)
     # a bare 'sim' simulates the project's slaves
-    devices = [d for _, d in Machine("", slaves=list(drives)).devices()] if parsed.own_slaves else []
+    devices = [d for _, d in Machine("", slaves=tuple(drives)).devices()] if parsed.own_slaves else []
     return open_spec(spec, devices), spec
 
 
-def _set_plants(slaves: list[SlaveTarget], drives: list[Slave]) -> None:
+def _set_plants(slaves: list[SlaveTarget], drives: Sequence[Slave]) -> None:
     """Put each simulated drive on the plant its project sets (``plant:``); a real slave has its own."""
     from ecattool.project.plant import plant_params
 

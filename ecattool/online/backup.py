@@ -23,7 +23,7 @@ import os
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 from ecattool.errors import InputError, Location, TargetError
 from ecattool.esi.model import Identity
@@ -32,6 +32,9 @@ from ecattool.online.live import LiveBus, LiveSlave, Unsupported, describe_slave
 from ecattool.online.objects import dump
 from ecattool.project.machine import Machine
 from ecattool.project.slave import Slave
+
+if TYPE_CHECKING:
+    from ecattool.target.base import SlaveTarget
 
 #: the file that makes a folder an ecattool back-up (the only kind of folder ``--force`` replaces)
 MANIFEST = "ecattool-backup.json"
@@ -119,7 +122,8 @@ def collect(machine: Machine, bus: LiveBus) -> tuple[dict[str, bytes], list[str]
             from ecattool.sw.image import write
             from ecattool.sw.upload import upload
 
-            image, checks = upload(slave, [(b.start, b.end) for b in rd.sw_image.blocks])
+            # see online.audit: a live slave changes state too, which LiveSlave does not list yet (issue 36 item 3)
+            image, checks = upload(cast("SlaveTarget", slave), [(b.start, b.end) for b in rd.sw_image.blocks])
             bad = [c.describe() for c in checks if not c.ok]
             if bad:
                 raise InputError(f"drive {rd.drive.name!r}: the .sw read back does not check out: {bad[0]}")

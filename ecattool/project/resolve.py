@@ -118,8 +118,12 @@ def resolve_address(device: Device, text: str | int, location: Location) -> tupl
     return found
 
 
-def _coerce(entry: Entry, value: Any, location: Location) -> Any:
-    """Turn an engineering-form value into what the entry's data type encodes."""
+#: a value as a project writes it (``parameters:``, ``esi_init_cmds:``)
+WrittenValue = int | float | str | bool | list[int] | None
+
+
+def _coerce(entry: Entry, value: WrittenValue, location: Location) -> int | float | str | bool | bytes | None:
+    """Turn an engineering-form value into what the entry's data type encodes (bytes: the data as given)."""
     dt = entry.datatype
     if isinstance(value, str):
         v = value.strip()

@@ -15,7 +15,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
-from typing import Any
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import ConfigDict, Field, with_config
+from typing_extensions import TypedDict
 
 from ecattool.errors import InputError, Location, did_you_mean
 from ecattool.od.numbers import check_exponent, parse_fraction
@@ -262,6 +265,100 @@ class Axis:
         return replace(self, **changes)
 
 
+# --- the shape of a spec (a spec file, a project drive's scaling: section) ---------------------------------
+
+#: a spec's mappings take only their own keys (the project schema says so; :func:`axis_from_dict` reports others)
+_SPEC_CONFIG = ConfigDict(extra="forbid")
+#: a number as a spec writes it: an integer, a decimal, or a string read exactly (``"12.7"``, ``"1/3"``)
+Number = Union[int, float, str]
+#: a length or a time with its unit (``5 mm``, ``1 ms``)
+Quantity = str
+
+
+@with_config(_SPEC_CONFIG)
+class FeedbackSection(TypedDict, total=False):
+    """``feedback:``: the position sensor, one of counts_per_rev, lines, steps (+ microsteps) or resolution."""
+
+    counts_per_rev: Annotated[Number, Field(description="Encoder counts per revolution")]
+    lines: Annotated[Number, Field(description="Encoder lines per revolution (4 counts per line)")]
+    steps: Annotated[Number, Field(description="Stepper full steps per revolution")]
+    microsteps: Annotated[Number, Field(description="Microsteps per full step (with steps)")]
+    resolution: Annotated[Quantity, Field(description="Linear scale resolution, with its unit (1 um)")]
+    on: Annotated[Literal["motor", "load"], Field(description="Where the sensor sits (default motor)")]
+
+
+@with_config(_SPEC_CONFIG)
+class GearSection(TypedDict, total=False):
+    """``gear:`` as a mapping: motor revolutions per load (driving shaft) revolutions."""
+
+    motor: Number
+    load: Number
+
+
+@with_config(_SPEC_CONFIG)
+class TransmissionSection(TypedDict, total=False):
+    """``transmission:``: the mechanics from the driving shaft to the load (docs/scaling.md, Transmissions)."""
+
+    type: Annotated[str, Field(description="rotary, ballscrew, hollow_shaft, belt, rack, linear_motor or label")]
+    pitch: Quantity
+    lead: Quantity
+    driving_teeth: Number
+    driven_teeth: Number
+    driving_diameter: Quantity
+    driven_diameter: Quantity
+    teeth: Number
+    tooth_pitch: Quantity
+    module: Quantity
+    diameter: Quantity
+    pitch_diameter: Quantity
+    pulley_diameter: Quantity
+    pole_pitch: Quantity
+    name: str
+    units: Number
+    motor_revs: Number
+
+
+@with_config(_SPEC_CONFIG)
+class UnitsSection(TypedDict, total=False):
+    """``units:``: the user units (docs/scaling.md: ``mm``, ``deg``, ``mm/s`` …)."""
+
+    position: str
+    velocity: str
+    acceleration: str
+    jerk: str
+    time: Annotated[str, Field(description="Time unit of the obsolete 2071h factor (s, ms, us, min)")]
+
+
+@with_config(_SPEC_CONFIG)
+class ScalingSection(TypedDict, total=False):
+    """A scaling spec: mechanics and units for the factor group (docs/scaling.md, "The spec file")."""
+
+    name: str
+    family: Annotated[str, Field(description="technosoft-ipos, hdt, controltechniques or generic "
+                                             "(default: the device's)")]
+    firmware: Annotated[Union[str, int], Field(description="Technosoft firmware (before F515K: the obsolete "
+                                                           "factor objects)")]
+    feedback: Annotated[Union[Number, FeedbackSection], Field(description="The position sensor (a number: counts "
+                                                                          "per revolution)")]
+    gear: Annotated[Union[Number, GearSection, None], Field(description="Motor : load revolutions (\"3:1\" or "
+                                                                        "{motor: 3, load: 1})")]
+    transmission: Annotated[Union[str, TransmissionSection, None],
+                            Field(description="Mechanics (a mapping, or 'ballscrew pitch=5mm')")]
+    units: UnitsSection
+    slow_loop: Annotated[Union[Quantity, Number], Field(description="Technosoft slow loop period (1 ms)")]
+    polarity: Annotated[Literal["normal", "reversed", "reverse", "inverted"],
+                        Field(description="reversed: 607Eh = 0xC0")]
+    reverse: bool
+    approximation: Annotated[Literal["best", "max-scale"], Field(description="Technosoft default max-scale, "
+                                                                              "others best")]
+    vl_setpoint: Annotated[Union[str, int], Field(description="Control Techniques 604Bh ratio (1/1)")]
+    device: Annotated[str, Field(description="Accepted for spec files that name their device; not read")]
+
+
+#: the keys a spec may have (:class:`ScalingSection`): any other is an error naming the nearest
+SPEC_KEYS = frozenset(ScalingSection.__annotations__)
+
+
 # --- loading from a mapping (YAML spec files, CLI options) ---------------------------------------------
 
 
@@ -380,8 +477,7 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
     """Build an :class:`Axis` from a spec mapping (see docs/scaling.md); ``locate(path)`` gives locations."""
     if not isinstance(data, dict):
         raise InputError("a scaling spec must be a mapping", source)
-    known = {"family", "feedback", "gear", "transmission", "units", "slow_loop", "polarity", "reverse", "name",
-             "firmware", "approximation", "device", "vl_setpoint"}
+    known = SPEC_KEYS
     for key in data:
         if key not in known:
             hint = did_you_mean(str(key), known) or f" (expected one of {', '.join(sorted(known))})"

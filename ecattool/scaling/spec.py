@@ -1,15 +1,24 @@
-"""Scaling spec files (YAML): one axis plus the family options, with located errors."""
+"""Scaling spec files (YAML): one axis plus the family options, with located errors.
+
+:class:`~ecattool.scaling.model.ScalingSection` is the shape of a spec (a spec file, or a project drive's ``scaling:`` section): the
+project schema's ``scaling:`` is generated from it, and :func:`spec_from_dict` is its one validator (every value
+checked with the file and line of its error; the project model passes the section through unvalidated).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from ecattool.errors import InputError, Location
 from ecattool.scaling.exact import Strategy
-from ecattool.scaling.model import Axis, axis_from_dict
+from ecattool.scaling.model import Axis, ScalingSection, axis_from_dict
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
 
 
 @dataclass(frozen=True, slots=True)
@@ -21,7 +30,10 @@ class Spec:
     vl_setpoint: tuple[int, int] = (1, 1)
 
 
-def spec_from_dict(data: Any, locate: Any = None, source: Location | None = None) -> Spec:
+def spec_from_dict(data: ScalingSection, locate: Callable[[tuple[str, ...]], Location | None] | None = None,
+                   source: Location | None = None) -> Spec:
+    """The :class:`Spec` of a spec mapping, every value checked (``locate(path)``: where a key's value is, for
+    the errors; ``source``: where the mapping is)."""
     axis = axis_from_dict(data, locate, source)
     approx = data.get("approximation")
     if approx is not None and approx not in ("best", "max-scale"):

@@ -240,7 +240,7 @@ def describe_dimension(dimension: int, notation: int) -> str:
     return f"{base} (notation {notation})"
 
 
-def time_seconds(text: str, location: Location | None = None) -> Fraction:
+def time_seconds(text: str | int | float, location: Location | None = None) -> Fraction:
     """``1 ms``, ``0.5ms``, ``250 us``, ``0.001`` (seconds) → seconds as a Fraction."""
     s = str(text).strip().replace(" ", "")
     m = re.fullmatch(r"([0-9]*\.?[0-9]+(?:[eE]-?[0-9]+)?)([a-zµ]*)", s)
