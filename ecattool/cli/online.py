@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
+from ecattool.cli.common import Decorated
 from ecattool.project.machine import ALLOW_ERRORS_HELP
 
 if TYPE_CHECKING:
@@ -35,11 +36,11 @@ reset_bus_option = click.option(
          "the machine stops). Without it such a bus is refused.")
 
 
-def target_option(required: bool = True) -> Callable[..., Any]:
+def target_option(required: bool = True) -> Callable[[Decorated], Decorated]:
     """``--target`` and ``--reset-bus``."""
     target = click.option("--target", "target", required=required, metavar="TARGET", help=TARGET_HELP)
 
-    def both(f: Callable[..., Any]) -> Callable[..., Any]:
+    def both(f: Decorated) -> Decorated:
         return target(reset_bus_option(f))
 
     return both
@@ -64,17 +65,17 @@ def reset_bus_given() -> bool:
     return bool(ctx is not None and ctx.meta.get(RESET_BUS))
 
 
-def slave_option(f: Callable[..., Any]) -> Callable[..., Any]:
+def slave_option(f: Decorated) -> Decorated:
     return click.option("--slave", "slave", type=int, default=0, show_default=True,
                         help="Position of the slave on the bus (0 = first).")(f)
 
 
-def library_option(f: Callable[..., Any]) -> Callable[..., Any]:
+def library_option(f: Decorated) -> Decorated:
     return click.option("--library", "library", type=click.Path(file_okay=False), metavar="DIR",
                         help="A folder of ESI/EDS files to match the slaves against (cached as lint caches ESI).")(f)
 
 
-def device_option(f: Callable[..., Any]) -> Callable[..., Any]:
+def device_option(f: Decorated) -> Decorated:
     return click.option("--device", "device", metavar="DEVICE",
                         help="The slave's device: an ESI file (FILE or FILE@SELECTOR) or a built-in profile name "
                              "(overrides the library and the slave's SDO Information).")(f)

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import click
 
-from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
+from ecattool.cli.common import (Decorated, console, file_output_option, json_option, output_option, policy_option, print_json,
                                  table, write_output)
 from ecattool.cli.paths import InputFile
 from ecattool.cli.startup import lossy_option, write_startup
@@ -20,8 +20,8 @@ if TYPE_CHECKING:
     from ecattool.scaling.group import FactorGroup
 
 
-def _mechanics_options(f: Any) -> Any:
-    opts: list[Callable[..., Any]] = [
+def _mechanics_options(f: Decorated) -> Decorated:
+    opts: list[Callable[[Decorated], Decorated]] = [
         click.argument("spec", required=False, type=InputFile(allow_dash=True)),
         shared_option("--profile", "family", type=click.Choice(_FAMILIES),
                       help="Drive family (default: the spec's, else technosoft-ipos)."),

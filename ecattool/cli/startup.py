@@ -6,7 +6,7 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.common import Decorated, console, json_option, output_option, print_json, table, write_output
 from ecattool.cli.paths import InputFile
 
 _FORMAT_NAMES = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv", "lcec")
@@ -86,14 +86,14 @@ def write_startup(configs: list[Any], fmt: str, output: str | None, inputs: tupl
         click.echo(f"{len(lost)} part(s) of the configuration are not in the {fmt} output (--lossy)", err=True)
 
 
-def lossy_option(f: Any) -> Any:
+def lossy_option(f: Decorated) -> Decorated:
     return click.option("--lossy", is_flag=True,
                         help="Write the output even where the format cannot carry part of the configuration "
                              "(one-shot writes, DC, SoE, PDO tables, identity); each loss is printed. Without "
                              "it such an export fails and lists them.")(f)
 
 
-def _sync0_option(f: Any) -> Any:
+def _sync0_option(f: Decorated) -> Decorated:
     return click.option("--sync0-cycle", type=click.IntRange(min=1, max=0xFFFFFFFF), metavar="NS",
                         help="SYNC0 cycle in ns for slaves that activate DC without giving a cycle (ros2 files); "
                              "an ENI needs it.")(f)

@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.common import Decorated, console, json_option, output_option, print_json, table, write_output
 from ecattool.cli.paths import InputFile
 from ecattool.errors import InputError, Location
 
@@ -159,7 +159,7 @@ _preload_option = click.option("--preload", type=InputFile(),
                                help="Simulator only: program this .sw into the simulated EEPROM first.")
 
 
-def _target_options(f: Any) -> Any:
+def _target_options(f: Decorated) -> Decorated:
     """--target, --slave, --project, --drive, --preload and --allow-errors (verify and download)."""
     for option in (_allow_errors_option, _preload_option, _drive_option, _project_option, _slave_option,
                    _target_option):
@@ -300,14 +300,14 @@ def download(file: str | None, dry_run: bool, mode: str, force: bool, no_reset: 
     if as_json:
         print_json(report.to_json())
     else:
-        c = console()
+        out = console()
         if not report.written:
-            c.print(f"{file}: every block already matches the drive; nothing written", markup=False)
+            out.print(f"{file}: every block already matches the drive; nothing written", markup=False)
         else:
-            c.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
+            out.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
             for start, err in report.write_errors.items():
-                c.print(f"block 0x{start:04X}: write failed: {err}", markup=False)
-            c.print(_reset_line(report, no_reset))
+                out.print(f"block 0x{start:04X}: write failed: {err}", markup=False)
+            out.print(_reset_line(report, no_reset))
     if not report.ok:
         sys.exit(1)
 

@@ -13,6 +13,7 @@ A linear motor is modelled as a "motor revolution" of one pole pitch.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Annotated, Any, Literal, Union
@@ -39,7 +40,7 @@ MIN_LENGTH, MAX_LENGTH = Fraction(1, 10**12), Fraction(1000)
 MIN_NUMBER, MAX_NUMBER = Fraction(1, 10**9), Fraction(10**12)
 #: the drive's slow-loop (position loop) period, seconds: 1 µs .. 10 s
 MIN_SLOW_LOOP, MAX_SLOW_LOOP = Fraction(1, 10**6), Fraction(10)
-def _bounded(f: Fraction, shown: Any, what: str, location: Location | None, lo: Fraction, hi: Fraction,
+def _bounded(f: Fraction, shown: object, what: str, location: Location | None, lo: Fraction, hi: Fraction,
              unit: str = "") -> None:
     if f <= 0:
         raise InputError(f"{what} must be positive, got {shown!r}", location)
@@ -52,7 +53,7 @@ def _plain(f: Fraction) -> str:
         if str(f.denominator).strip("0") == "1" else str(f)
 
 
-def _frac(value: Any, what: str, location: Location | None, positive: bool = True,
+def _frac(value: object, what: str, location: Location | None, positive: bool = True,
           lo: Fraction = MIN_NUMBER, hi: Fraction = MAX_NUMBER) -> Fraction:
     f = parse_fraction(value, location, what)  # a boolean is never a number; 1e999 is refused before it is exact
     if positive:
@@ -60,7 +61,7 @@ def _frac(value: Any, what: str, location: Location | None, positive: bool = Tru
     return f
 
 
-def _length(value: Any, what: str, location: Location | None, meant: str | None = None) -> Exact:
+def _length(value: object, what: str, location: Location | None, meant: str | None = None) -> Exact:
     """A length from a spec or an option, within :data:`MIN_LENGTH` .. :data:`MAX_LENGTH` (a bare number is an
     error that shows it with ``meant``, the unit it probably meant)."""
     if isinstance(value, bool):
@@ -71,7 +72,7 @@ def _length(value: Any, what: str, location: Location | None, meant: str | None 
     return q
 
 
-def _integer(value: Any, what: str, location: Location | None, hi: int) -> int:
+def _integer(value: object, what: str, location: Location | None, hi: int) -> int:
     f = _frac(value, what, location, lo=Fraction(1), hi=Fraction(hi))
     if f.denominator != 1:
         raise InputError(f"{what} must be an integer, got {value!r}", location)
@@ -362,11 +363,15 @@ SPEC_KEYS = frozenset(ScalingSection.__annotations__)
 # --- loading from a mapping (YAML spec files, CLI options) ---------------------------------------------
 
 
-def _loc(locate: Any, *path: Any) -> Location | None:
+#: where the value at a path of a spec mapping is (``("transmission", "pitch")`` → file:line:column), for errors
+Locate = Callable[[tuple[str, ...]], Location | None]
+
+
+def _loc(locate: Locate | None, *path: str) -> Location | None:
     return locate(path) if locate else None
 
 
-def feedback_from(data: Any, locate: Any = None) -> Feedback:
+def feedback_from(data: Number | FeedbackSection, locate: Locate | None = None) -> Feedback:
     loc = _loc(locate, "feedback")
     if isinstance(data, (int, str)) and not isinstance(data, bool):
         return Feedback.encoder(_frac(data, "feedback counts_per_rev", loc, lo=Fraction(1), hi=Fraction(MAX_COUNTS)))
@@ -390,7 +395,7 @@ def feedback_from(data: Any, locate: Any = None) -> Feedback:
     raise InputError("feedback needs counts_per_rev, lines, steps (+ microsteps) or resolution (linear scale)", loc)
 
 
-def gear_from(data: Any, locate: Any = None) -> Gear:
+def gear_from(data: Number | GearSection | None, locate: Locate | None = None) -> Gear:
     loc = _loc(locate, "gear")
     if data is None:
         return Gear()
@@ -403,14 +408,14 @@ def gear_from(data: Any, locate: Any = None) -> Gear:
     return Gear(_frac(data, "gear ratio", loc))
 
 
-def transmission_from(data: Any, locate: Any = None, meant: str | None = None) -> Transmission:
+def transmission_from(section: str | TransmissionSection | None, locate: Locate | None = None,
+                      meant: str | None = None) -> Transmission:
     """The transmission of a spec mapping or a ``type key=value …`` string. Every length needs its unit; an error
     for a bare number suggests ``meant`` (the axis's length unit), else mm."""
     loc = _loc(locate, "transmission")
-    if data is None:
+    if section is None:
         return Transmission.rotary()
-    if isinstance(data, str):
-        data = parse_kv(data, loc)
+    data: Mapping[str, object] = parse_kv(section, loc) if isinstance(section, str) else section
     if not isinstance(data, dict):
         raise InputError("transmission must be a mapping with a 'type'", loc)
     kind = str(data.get("type", "rotary")).replace("-", "_").replace(" ", "_").lower()
@@ -421,7 +426,7 @@ def transmission_from(data: Any, locate: Any = None, meant: str | None = None) -
     def q(key: str) -> Exact:
         return _length(data[key], key, _loc(locate, "transmission", key), meant)
 
-    def n(key: str, default: Any = None) -> Fraction:
+    def n(key: str, default: object = None) -> Fraction:
         return _frac(data.get(key, default), key, _loc(locate, "transmission", key))
 
     if kind == "rotary":
@@ -473,7 +478,7 @@ def parse_kv(text: str, location: Location | None = None) -> dict[str, str]:
     return out
 
 
-def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None) -> Axis:
+def axis_from_dict(data: ScalingSection, locate: Locate | None = None, source: Location | None = None) -> Axis:
     """Build an :class:`Axis` from a spec mapping (see docs/scaling.md); ``locate(path)`` gives locations."""
     if not isinstance(data, dict):
         raise InputError("a scaling spec must be a mapping", source)
@@ -513,7 +518,7 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
     return axis
 
 
-def _time_unit(value: Any, location: Location | None) -> str:
+def _time_unit(value: object, location: Location | None) -> str:
     """The time unit of the obsolete 2071h factor: a unit name (ms, s, us, min), checked where it is read."""
     text = str(value).strip()
     if isinstance(value, bool) or not text.isalpha():
@@ -522,7 +527,7 @@ def _time_unit(value: Any, location: Location | None) -> str:
     return text
 
 
-def slow_loop_from(value: Any, location: Location | None = None) -> Fraction:
+def slow_loop_from(value: object, location: Location | None = None) -> Fraction:
     """The slow-loop period (``1ms``, ``250 us``), within :data:`MIN_SLOW_LOOP` .. :data:`MAX_SLOW_LOOP`."""
     if isinstance(value, bool):
         raise InputError(f"slow_loop must be a time, not {str(value).lower()}", location)
@@ -532,7 +537,7 @@ def slow_loop_from(value: Any, location: Location | None = None) -> Fraction:
     return t
 
 
-def length_unit(text: Any) -> str | None:
+def length_unit(text: object) -> str | None:
     """The name of ``text`` when it is a length unit (``inch``, ``mm``): what a bare length probably meant."""
     try:
         unit = parse_unit(str(text), order=0) if text is not None else None

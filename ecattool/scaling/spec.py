@@ -10,14 +10,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from ecattool.errors import InputError, Location
 from ecattool.scaling.exact import Strategy
-from ecattool.scaling.model import Axis, ScalingSection, axis_from_dict
-
-if TYPE_CHECKING:
-    from collections.abc import Callable
+from ecattool.scaling.model import Axis, Locate, ScalingSection, axis_from_dict
 
 
 
@@ -30,8 +26,7 @@ class Spec:
     vl_setpoint: tuple[int, int] = (1, 1)
 
 
-def spec_from_dict(data: ScalingSection, locate: Callable[[tuple[str, ...]], Location | None] | None = None,
-                   source: Location | None = None) -> Spec:
+def spec_from_dict(data: ScalingSection, locate: Locate | None = None, source: Location | None = None) -> Spec:
     """The :class:`Spec` of a spec mapping, every value checked (``locate(path)``: where a key's value is, for
     the errors; ``source``: where the mapping is)."""
     axis = axis_from_dict(data, locate, source)
