@@ -353,3 +353,23 @@ def test_dc_is_resolved_once_per_slave_and_consumers_read_it(monkeypatch: pytest
     assert resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="nope")}), device) is None  # PRJ040's
     assert resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="nope", assign_activate=0)}),
                       device) == SlaveDc(0, "nope", None, None)
+
+
+def test_a_slave_is_frozen_and_assembled_in_one_place() -> None:
+    """issue 36: the steps return what they resolve; build_slave makes the Slave from those values (the one
+    place the package constructs one) and nothing changes a Slave or a Machine afterwards."""
+    import dataclasses
+
+    from tests.test_fitness import _trees, calls_of
+
+    sites = calls_of(_trees(), "Slave")
+    assert sites and all(s.startswith("ecattool/project/machine.py:") and s.endswith(" in build_slave")
+                         for s in sites), sites
+    machine = load_machine(sample("technosoft_ipos"))
+    (s,) = machine.slaves
+    assert s.mapping is not None and s.factor_group is not None and s.sw_image is not None and len(s.startup)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        s.mapping = None  # type: ignore[misc]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        machine.slaves = ()  # type: ignore[misc]
+    assert isinstance(s.findings, tuple) and isinstance(machine.slaves, tuple) and isinstance(machine.findings, tuple)

@@ -6,13 +6,16 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from ecattool.project import machine as machine_module
-from ecattool.project.loader import LoadedProject
-from ecattool.project.slave import Slave
 from tests.conftest import ROOT, run
+
+if TYPE_CHECKING:
+    from ecattool.project.loader import LoadedProject
+    from ecattool.project.slave import Slave
 
 HDT = ROOT / "samples" / "hdt" / "project.yaml"
 #: a parameter writing an object the HDT TomCat does not have: lint's PRJ010, an error; the drive still resolves

@@ -78,6 +78,26 @@ def test_duplicate_keys_refused(tmp_path):
     assert ei.value.location.line == 3
 
 
+def test_the_schemas_scaling_is_the_scaling_specs_model_and_its_reader_validates_it(tmp_path: Path) -> None:
+    """issue 36: the project schema's scaling: is typed from scaling's own model (its keys, no others), and the
+    file has one validator for it: an unknown key is the spec reader's PRJ050 at its line with the nearest key
+    named (as for a spec file), not a schema error."""
+    from ecattool.project.machine import load_machine
+    from ecattool.scaling.model import SPEC_KEYS
+
+    schema = json_schema()
+    ref = schema["$defs"]["Drive"]["properties"]["scaling"]["anyOf"][0]["$ref"].rsplit("/", 1)[1]
+    section = schema["$defs"][ref]
+    assert set(section["properties"]) == SPEC_KEYS and section["additionalProperties"] is False
+    text = (ROOT / "samples" / "hdt" / "project.yaml").read_text()
+    assert "      transmission: {type: rotary}\n" in text
+    path = tmp_path / "project.yaml"
+    path.write_text(text.replace("      transmission:", "      transmision:"))
+    (f,) = load_machine(path).findings
+    assert (f.rule, f.location.line if f.location else None) == ("PRJ050", 13), f
+    assert "transmision" in f.message and "'transmission'" in f.message
+
+
 def test_checked_in_schema_has_not_drifted():
     checked_in = json.loads((ROOT / "schemas" / "project.schema.json").read_text())
     assert checked_in == json.loads(json.dumps(json_schema()))
