@@ -103,7 +103,7 @@ def resolve_esi_init(lp: LoadedProject, i: int, device: Device, rules: FamilyRul
             have = "; ".join(f"{c.transition} {c.index:04X}:{c.subindex:02X}" for c in esi_startup(device))
             where = f" in {o.transition}" if o.transition else ""
             found.error("PRJ022", f"the ESI has no init command writing {index:04X}:{sub:02X}{where} "
-                               f"(its init commands: {have or 'none'})", loc)
+                                  f"(its init commands: {have or 'none'})", loc)
             continue
         for k in hits:
             old = cmds[k]
@@ -127,5 +127,5 @@ def resolve_esi_init(lp: LoadedProject, i: int, device: Device, rules: FamilyRul
         why = refusal(device, c)
         if why is not None:
             found.error("PRJ021", f"{why}: the drive would abort it; if it does, skip it under the drive's "
-                               f"esi_init_cmds: - {skip_hint(c)}", c.source)
+                                  f"esi_init_cmds: - {skip_hint(c)}", c.source)
     return [c for c in cmds if c is not None], found

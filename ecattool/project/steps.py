@@ -219,13 +219,13 @@ def check_move(lp: LoadedProject, i: int, slave: Slave) -> Found:
     lacking = [f"{index:04X}h" for index in (0x6060, 0x607A, 0x6064) if slave.device.dictionary.entry(index, 0) is None]
     if lacking:
         found.error("PRJ018", f"the {mode} move needs {', '.join(lacking)}, which {slave.device.type_name} does not have "
-                           "(leave out move:)", loc)
+                              "(leave out move:)", loc)
         return found
     code = MOVE_MODE_CODES[mode]
     modes = (slave.rules or NO_RULES).supported_modes
     if modes and code not in modes:
         found.error("PRJ017", f"the {mode} move needs mode {code}, which {slave.device.type_name} does not support "
-                           f"(supported: {', '.join(str(m) for m in modes)}); leave out move:", loc)
+                              f"(supported: {', '.join(str(m) for m in modes)}); leave out move:", loc)
         return found
     if not _move_fits(lp, i, slave, mode, found):
         return found
@@ -245,8 +245,8 @@ def check_move(lp: LoadedProject, i: int, slave: Slave) -> Found:
             esi_zero = e.default is not None and slave.drive.device.esi is not None and e.location is not None \
                 and bool(e.location.line)
             found.error("PRJ019", f"the pp move runs at {name} {index:04X}h, which the project does not set and "
-                                 f"{slave.device.type_name} leaves at 0 (or does not document): the drive would not "
-                                 f"move; add a parameter {index:04X}:00", e.location if esi_zero else loc)
+                                    f"{slave.device.type_name} leaves at 0 (or does not document): the drive would not "
+                                    f"move; add a parameter {index:04X}:00", e.location if esi_zero else loc)
     return found
 
 
@@ -270,15 +270,15 @@ def _move_fits(lp: LoadedProject, i: int, slave: Slave, mode: str, found: Found)
             entry.encode(target)
         except EncodeError as exc:
             found.error("PRJ024", f"the {mode} move of {dist} user units goes to {target}, which the "
-                               f"target position 607Ah ({entry.type_name}) cannot hold: {exc.message}; "
-                               "move a shorter distance", loc)
+                                  f"target position 607Ah ({entry.type_name}) cannot hold: {exc.message}; "
+                                  "move a shorter distance", loc)
             return False
     limits = [_effective(slave, 0x607D, sub)[0] for sub in (1, 2)]
     low, high = limits
     if low is not None and high is not None and low < high and not low <= target <= high:
         found.error("PRJ024", f"the {mode} move of {dist} user units goes to {target}, outside the "
-                           f"software position limits 607Dh [{low}, {high}] of {slave.device.type_name}; move a shorter "
-                           "distance or set 607Dh", loc)
+                              f"software position limits 607Dh [{low}, {high}] of {slave.device.type_name}; move a shorter "
+                              "distance or set 607Dh", loc)
         return False
     return True
 
@@ -293,8 +293,8 @@ def check_mailbox(lp: LoadedProject, i: int, slave: Slave) -> Found:
     cmd = slave.startup.commands[0]
     why = "the mailbox speaks " + ", ".join(slave.device.mailbox.protocols) if slave.device.mailbox else "it has no mailbox"
     found.error("PRJ028", f"{len(slave.startup.commands)} startup SDO(s) ({cmd.address} first) for {slave.device.type_name}, "
-                       f"which has no CoE mailbox ({why}): a fixed process image that nothing can write; leave them "
-                       "out", cmd.source or lp.drive_location(i, "device"))
+                          f"which has no CoE mailbox ({why}): a fixed process image that nothing can write; leave them "
+                          "out", cmd.source or lp.drive_location(i, "device"))
     return found
 
 
@@ -305,11 +305,11 @@ def check_kind(lp: LoadedProject, i: int, slave: Slave) -> Found:
     assert slave.device is not None
     if slave.drive.enable and slave.kind == "io":
         found.error("PRJ025", f"enable: true, but {slave.device.type_name} is not a CiA-402 axis (it has no controlword "
-                           "6040h and statusword 6041h of a drive profile 402): commission proves an I/O slave's "
-                           "states, mapping and process data; remove enable:", lp.drive_location(i, "enable"))
+                              "6040h and statusword 6041h of a drive profile 402): commission proves an I/O slave's "
+                              "states, mapping and process data; remove enable:", lp.drive_location(i, "enable"))
     if slave.drive.move is not None and slave.kind == "io" and slave.drive.enable is None:
         found.error("PRJ018", f"move: on {slave.device.type_name}, which is not a CiA-402 axis; leave out move:",
-                 lp.drive_location(i, "move"))
+                    lp.drive_location(i, "move"))
     return found
 
 
@@ -353,18 +353,18 @@ def check_pdo_objects(lp: LoadedProject, i: int, slave: Slave) -> Found:
         if foreign and soe:  # without a mailbox the indices are only names: the master lays out the SMs
             p = foreign[0]
             found.error("PRJ026", f"{device.type_name}'s {'Rx' if key == 'rx' else 'Tx'}PDO 0x{p.index:04X} ({p.name}) "
-                               "is not a CoE mapping object (16xxh/1Axxh): the device is configured over SoE (its "
-                               f"mailbox speaks {', '.join(protocols)}, not CoE); ecattool configures "
-                               "and commissions CoE slaves only", p.location if p.location and p.location.line else loc)
+                                  "is not a CoE mapping object (16xxh/1Axxh): the device is configured over SoE (its "
+                                  f"mailbox speaks {', '.join(protocols)}, not CoE); ecattool configures "
+                                  "and commissions CoE slaves only", p.location if p.location and p.location.line else loc)
             return found
     if slave.mapping is None:
         return found
     for diff in dictionary_mapping_differences(device, slave.mapping, slave.rules):
         found.error("PRJ027", f"the dictionary's mapping object 0x{diff.index:04X} maps "
-                           f"{', '.join(f'0x{v:08X}' for v in diff.held) or 'nothing'}, the ESI's PDO list "
-                           f"{', '.join(f'0x{v:08X}' for v in diff.listed) or 'nothing'}: {device.type_name} would run "
-                           "with the dictionary's mapping, which differs from the one checked; give the mapping in pdo: "
-                           "so that commission programs it", diff.location)
+                              f"{', '.join(f'0x{v:08X}' for v in diff.held) or 'nothing'}, the ESI's PDO list "
+                              f"{', '.join(f'0x{v:08X}' for v in diff.listed) or 'nothing'}: {device.type_name} would run "
+                              "with the dictionary's mapping, which differs from the one checked; give the mapping in pdo: "
+                              "so that commission programs it", diff.location)
         return found
     return found
 
@@ -521,9 +521,9 @@ def check_interpolation_period(lp: LoadedProject, i: int, slave: Slave) -> Found
         step = rules.ip_period_step_ns
         allowed = ", ".join(f"{p // 1000} us" for p in rules.ip_periods_ns) + (f", k x {step // 1000} us" if step else "")
         found.error("PRJ043", f"after this write 60C2h = {state[1]} x 10^{state[2]} s = {float(ns) / 1000:g} us, which "
-                           f"{slave.device.type_name} refuses (it accepts {allowed}); write sub-index 2 first where "
-                           "the unit changes (e.g. 60C2:02 = -3, then 60C2:01 = 1 for 1 ms)",
-                 cmd.source or lp.drive_location(i, "parameters"))
+                              f"{slave.device.type_name} refuses (it accepts {allowed}); write sub-index 2 first where "
+                              "the unit changes (e.g. 60C2:02 = -3, then 60C2:01 = 1 for 1 ms)",
+                    cmd.source or lp.drive_location(i, "parameters"))
         return found
     # the guide expects the interpolation cycle to equal the sync interval (Control Techniques 8.1); a 1 ms
     # SYNC0 with the 250 us default period interpolates each set-point as if it came four times as often
@@ -534,8 +534,8 @@ def check_interpolation_period(lp: LoadedProject, i: int, slave: Slave) -> Found
         hint = (f"60C2:02 = -3, then 60C2:01 = {cycle // 1_000_000}" if cycle % 1_000_000 == 0
                 else "a period equal to the cycle")
         found.warning("PRJ044", f"interpolation period 60C2h = {float(period) / 1000:g} us differs from the SYNC0 cycle "
-                             f"{cycle / 1000:g} us; {slave.device.type_name} expects the master's set-points once per "
-                             f"interpolation period: set {hint}", lp.drive_location(i, "dc", "cycle_ns"))
+                                f"{cycle / 1000:g} us; {slave.device.type_name} expects the master's set-points once per "
+                                f"interpolation period: set {hint}", lp.drive_location(i, "dc", "cycle_ns"))
     return found
 
 
@@ -549,7 +549,7 @@ def check_dc(lp: LoadedProject, i: int, slave: Slave) -> Found:
         names = [m.name for m in slave.device.dc_opmodes]
         if dc.opmode not in names:
             found.error("PRJ040", f"DC OpMode {dc.opmode!r} is not in the device's ESI (has: {', '.join(names) or 'none'})",
-                     lp.drive_location(i, "dc", "opmode"))
+                        lp.drive_location(i, "dc", "opmode"))
             return found
     rules = slave.rules or NO_RULES
     active = slave.dc is not None and slave.dc.active
@@ -558,7 +558,7 @@ def check_dc(lp: LoadedProject, i: int, slave: Slave) -> Found:
         for mode, loc in _modes_run(lp, i, slave):
             if mode in needs:
                 found.error("PRJ041", f"mode {mode} needs distributed clocks on {slave.device.type_name} (the drive stays in "
-                                   "SAFE-OP without them); add dc: {opmode: DC, cycle_ns: 1000000}", loc)
+                                      "SAFE-OP without them); add dc: {opmode: DC, cycle_ns: 1000000}", loc)
                 break
             supported = rules.supported_modes
             if mode == 8 and (not supported or 8 in supported):  # csp: set-points taken on SYNC0 each cycle
@@ -566,8 +566,8 @@ def check_dc(lp: LoadedProject, i: int, slave: Slave) -> Found:
                 hint = (f"dc: {{opmode: {names[0]}, cycle_ns: 1000000}} (the ESI's DC modes: {', '.join(names)})"
                         if names else "dc: {assign_activate: 0x0300, cycle_ns: 1000000}")
                 found.warning("PRJ045", f"cyclic synchronous position (csp) without distributed clocks: "
-                                     f"{slave.device.type_name} would take the set-points unsynchronised (or refuse "
-                                     f"SAFE-OP where it needs SYNC0); add {hint}", loc)
+                                        f"{slave.device.type_name} would take the set-points unsynchronised (or refuse "
+                                        f"SAFE-OP where it needs SYNC0); add {hint}", loc)
                 break
         return found
     step, most = rules.dc_sync0_step_ns, rules.dc_sync0_max_steps
@@ -577,8 +577,8 @@ def check_dc(lp: LoadedProject, i: int, slave: Slave) -> Found:
         if cycle <= 0 or cycle % step or not 1 <= cycle // step <= most:
             what = f"SYNC0 cycle {cycle} ns" if slave.dc.cycle_ns is not None else "dc: gives no SYNC0 cycle_ns"
             found.error("PRJ042", f"{what}: {slave.device.type_name} accepts n x {step} ns for n = 1..{most} "
-                               f"(e.g. cycle_ns: 1000000)",
-                     lp.drive_location(i, "dc", "cycle_ns") if dc.cycle_ns is not None else lp.drive_location(i, "dc"))
+                                  f"(e.g. cycle_ns: 1000000)",
+                        lp.drive_location(i, "dc", "cycle_ns") if dc.cycle_ns is not None else lp.drive_location(i, "dc"))
     return found
 
 
