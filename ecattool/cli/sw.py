@@ -4,13 +4,23 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import click
 
 from ecattool.cli.common import Decorated, console, json_option, output_option, print_json, table, write_output
 from ecattool.cli.paths import InputFile
 from ecattool.errors import InputError, Location
+
+if TYPE_CHECKING:
+    from rich.table import Table
+
+    from ecattool.esi.model import Device
+    from ecattool.project.slave import Slave
+    from ecattool.sw.apply import BlockCheck, DownloadReport
+    from ecattool.sw.image import Block, SwImage
+    from ecattool.sw.params import ParameterTable
+    from ecattool.target.base import SlaveTarget
 
 
 @click.group(epilog="""\b
@@ -23,13 +33,13 @@ def sw() -> None:
     """Technosoft .sw EEPROM setup images: inspect, check, convert, patch, build and download."""
 
 
-def _image(path: str) -> Any:
+def _image(path: str) -> SwImage:
     from ecattool.sw.build import load_image
 
     return load_image(Path(path))
 
 
-def _params(path: str | None) -> Any:
+def _params(path: str | None) -> ParameterTable | None:
     if path is None:
         return None
     from ecattool.sw.params import read_parameters
@@ -109,7 +119,7 @@ def from_foe_cmd(file: str, output: str | None) -> None:
 
 
 # ---------------------------------------------------------------------------------------------- targets
-def _open_target(spec: str, slave: int, device: Any = None) -> Any:
+def _open_target(spec: str, slave: int, device: Device | None = None) -> SlaveTarget:
     """The slave at ``slave`` of the target ``spec`` (ecattool.target.opener): with ``sim``, a simulated bus of
     ``device`` at that position (a Technosoft iPOS without one)."""
     from ecattool.target.opener import open_target, parse_target, slave_at
@@ -127,7 +137,7 @@ def _open_target(spec: str, slave: int, device: Any = None) -> Any:
     return slave_at(open_target(spec), slave)
 
 
-def _project_drive(project: str, name: str | None, allow_errors: bool = False) -> tuple[Any, str]:
+def _project_drive(project: str, name: str | None, allow_errors: bool = False) -> tuple[Slave, str]:
     """The slave ``name`` of a project's machine (or its only slave, or the one with an ``sw:``) and the
     project's default target; a project with lint errors for it is refused unless ``allow_errors``."""
     from ecattool.project.machine import load_machine
@@ -168,7 +178,7 @@ def _target_options(f: Decorated) -> Decorated:
 
 
 def _project_slave(project: str, drive_name: str | None, allow_errors: bool, target: str | None,
-                   slave: int | None) -> tuple[Any, str | None, int | None]:
+                   slave: int | None) -> tuple[Slave, str | None, int | None]:
     """(the project's slave, the target: the option's else the project's, the position: the option's else the
     slave's) for the commands that take --project."""
     rd, project_target = _project_drive(project, drive_name, allow_errors)
@@ -177,7 +187,7 @@ def _project_slave(project: str, drive_name: str | None, allow_errors: bool, tar
 
 def _target_and_image(file: str | None, target: str | None, slave: int | None, project: str | None,
                       drive_name: str | None, preload: str | None,
-                      allow_errors: bool = False) -> tuple[Any, Any, str, str]:
+                      allow_errors: bool = False) -> tuple[SlaveTarget, SwImage, str, str]:
     """(target, image, image name, target name) for verify/download."""
     device = None
     image = None
@@ -200,7 +210,7 @@ def _target_and_image(file: str | None, target: str | None, slave: int | None, p
     return _open_preloaded(spec, slave, device, preload), image, name or "", spec
 
 
-def _open_preloaded(spec: str, slave: int | None, device: Any, preload: str | None) -> Any:
+def _open_preloaded(spec: str, slave: int | None, device: Device | None, preload: str | None) -> SlaveTarget:
     """The slave of ``spec``; on the simulator with ``preload`` programmed into its EEPROM first."""
     if preload:
         from ecattool.target.opener import parse_target
@@ -216,7 +226,7 @@ def _open_preloaded(spec: str, slave: int | None, device: Any, preload: str | No
     return tgt
 
 
-def _checks_table(title: str, checks: list[Any]) -> Any:
+def _checks_table(title: str, checks: list[BlockCheck]) -> Table:
     from rich.text import Text
 
     t = table(title, ["start", "end", "words", "file", "drive", "result"])
@@ -312,7 +322,7 @@ def download(file: str | None, dry_run: bool, mode: str, force: bool, no_reset: 
         sys.exit(1)
 
 
-def _reset_line(report: Any, no_reset: bool) -> str:
+def _reset_line(report: DownloadReport, no_reset: bool) -> str:
     """The last line of a download that wrote something: whether the drive was reset, and why not."""
     if report.reset:
         return "drive reset to load the new setup"
@@ -321,7 +331,8 @@ def _reset_line(report: Any, no_reset: bool) -> str:
     return "drive NOT reset: some blocks are still different; run the download again"
 
 
-def _run_download(image: Any, target: Any, mode: int, reset: bool, force: bool, show_progress: bool) -> Any:
+def _run_download(image: SwImage, target: SlaveTarget, mode: int, reset: bool, force: bool,
+                  show_progress: bool) -> DownloadReport:
     from ecattool.sw.apply import download as download_image
 
     if not (show_progress and sys.stderr.isatty()):
@@ -332,7 +343,7 @@ def _run_download(image: Any, target: Any, mode: int, reset: bool, force: bool, 
                   console=console(stderr=True), transient=True) as bar:
         task = bar.add_task("EEPROM", total=None)
 
-        def progress(done: int, total: int, block: Any) -> None:
+        def progress(done: int, total: int, block: Block) -> None:
             bar.update(task, completed=done, total=total, description=f"block 0x{block.start:04X}")
 
         return download_image(image, target, progress, mode, reset, force)
