@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from ecattool.commission import cia402
 from ecattool.commission.trace import DriveTrace, StartupWrite
@@ -21,7 +21,11 @@ from ecattool.startup.model import StartupCommand
 from ecattool.target.base import SlaveTarget, Target
 
 if TYPE_CHECKING:
+    from ecattool.od.model import Entry
     from ecattool.scaling.group import FactorObject
+
+#: what an SDO step returns
+_T = TypeVar("_T")
 
 #: transitions whose commands are sent while the slave is in PRE-OP on the way up
 _PREOP_TRANSITIONS = ("IP", "PS")
@@ -143,7 +147,7 @@ class ProcessIo:
             if len(raw) * 8 == pos.bit_len:
                 _put_bits(self.outputs, pos.bit_offset, pos.bit_len, int.from_bytes(raw, "little"))
 
-    def _entry(self, index: int, sub: int) -> Any:
+    def _entry(self, index: int, sub: int) -> Entry:
         assert self.rd.device is not None
         e = self.rd.device.dictionary.entry(index, sub)
         if e is None:
@@ -197,7 +201,7 @@ def _get_bits(buf: bytes, bit_offset: int, bit_len: int) -> int:
 # --------------------------------------------------------------------------------------------
 
 
-def _sdo_step(name: str, fn: Callable[[], Any]) -> Any:
+def _sdo_step(name: str, fn: Callable[[], _T]) -> _T:
     try:
         return fn()
     except SdoAbort as exc:

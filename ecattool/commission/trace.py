@@ -24,6 +24,7 @@ if TYPE_CHECKING:
     from ecattool.pdo.layout import Layout
     from ecattool.project.slave import Slave
     from ecattool.startup.model import StartupCommand
+    from ecattool.sw.apply import BlockCheck, DownloadReport
 
 class ProcessImage(Protocol):
     """What the trace reads after a cycle (the runner's ``ProcessIo``): objects by (index, sub-index), from the
@@ -244,13 +245,13 @@ class DriveTrace:
         self.startup.append(w)
         return w
 
-    def sw_checked(self, checks: list[Any], file: str) -> None:
+    def sw_checked(self, checks: list[BlockCheck], file: str) -> None:
         """The verify before any download (``sw.BlockCheck`` list)."""
         self.sw_file = file
         self.sw_blocks = [SwBlock(c.block.start, c.block.end, c.block.count, c.expected, c.actual, error=c.error)
                           for c in checks]
 
-    def sw_downloaded(self, result: Any, after: list[Any]) -> None:
+    def sw_downloaded(self, result: DownloadReport, after: list[BlockCheck]) -> None:
         """A download (``sw.DownloadReport``) and the verify after the drive's reset."""
         written = {b.start for b in result.written}
         final = {c.block.start: c for c in after}
