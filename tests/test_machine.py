@@ -373,3 +373,23 @@ def test_a_slave_is_frozen_and_assembled_in_one_place() -> None:
     with pytest.raises(dataclasses.FrozenInstanceError):
         machine.slaves = ()  # type: ignore[misc]
     assert isinstance(s.findings, tuple) and isinstance(machine.slaves, tuple) and isinstance(machine.findings, tuple)
+
+
+#: the machine's former names (issue 36): none is left in the package or the tests, so nothing calls them
+FORMER_NAMES = (r"\blint_project\b", r"\bResolvedDrive\b", r"\bProjectResult\b", r"\bbuild_drive\b",
+                r"\bdrive_config\(", r"\bloaded is None\b")
+
+
+def test_the_former_names_of_the_machine_are_gone() -> None:
+    import re
+
+    from ecattool.project import export, lint
+
+    here = Path(__file__).resolve()
+    root = here.parent.parent
+    found = [f"{path.relative_to(root)}: {pattern}"
+             for path in sorted([*(root / "ecattool").rglob("*.py"), *(root / "tests").rglob("*.py")]) if path != here
+             for pattern in FORMER_NAMES if re.search(pattern, path.read_text(encoding="utf-8"))]
+    assert not found, found
+    assert not hasattr(Machine, "drives") and not hasattr(export, "refuse_errors") and not hasattr(export, "drive_config")
+    assert not hasattr(lint, "lint_project") and not hasattr(lint, "ProjectResult")
