@@ -77,6 +77,48 @@ def test_every_option_ecattool_mentions_exists() -> None:
     assert not unknown, unknown
 
 
+#: "ecattool <command words> <the rest of the sentence>": the options in the rest are that command's
+_COMMAND_TEXT = re.compile(r"ecattool((?: [a-z{][a-z0-9{}-]*)+)([^`;\n]*)")
+
+
+def _named_command(words: list[str]) -> tuple[click.Command, list[str]]:
+    """The command the longest run of leading words names, with those words."""
+    cmd: click.Command = cli
+    used: list[str] = []
+    for word in words:
+        sub = cmd.get_command(click.Context(cmd), word) if isinstance(cmd, click.Group) else None
+        if sub is None:
+            break
+        cmd, used = sub, [*used, word]
+    return cmd, used
+
+
+def test_every_option_a_text_gives_to_a_command_is_an_option_of_that_command() -> None:
+    """An example or advice that reads "ecattool sim serve --device …" names an option ``sim serve`` has (the
+    first test only asks that some command has it). ``ecattool map {cmd} …`` (a help text made for each
+    command of a group) is checked against every command of the group; prose ("the ecattool project file")
+    names a group, not a command, and is not advice."""
+    wrong, checked = [], 0
+    for path in sorted((ROOT / "ecattool").rglob("*.py")):
+        for line, text in _strings(path):
+            for m in _COMMAND_TEXT.finditer(text):
+                words = m.group(1).split()
+                cmd, used = _named_command(words)
+                rest = words[len(used):]
+                if isinstance(cmd, click.Group):
+                    if not rest or not rest[0].startswith("{"):
+                        continue  # prose naming a group
+                    accepted = set().union(*(_options(c) for c in _tree(cmd)[1:]))
+                else:
+                    accepted = _options(cmd)
+                flags = set(_FLAG.findall(" ".join(rest) + m.group(2))) - set(FOREIGN)
+                checked += bool(flags)
+                if flags - accepted:
+                    wrong.append(f"{path.relative_to(ROOT)}:{line}: ecattool {' '.join(used)}: "
+                                 f"{sorted(flags - accepted)}")
+    assert checked > 50 and not wrong, (checked, wrong)
+
+
 def _ambiguous(tmp_path: Path) -> Path:
     esi = tmp_path / "el1xxx.xml"  # EL1008 has three revisions
     shutil.copy(corpus_path("esi", "beckhoff_EL1xxx.xml"), esi)

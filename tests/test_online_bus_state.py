@@ -50,3 +50,37 @@ def test_each_slave_is_put_back_where_it_can_be_and_the_rest_is_named() -> None:
                      "slave 3 (INIT) could not be put back in INIT: no answer",
                      "slave 4 (INIT) was left in PRE-OP: kickcat: the Python binding requests a state for the whole "
                      "bus, not for one slave"]
+
+
+#: every command that acts on slaves through a real master (they take every slave through INIT too), with the
+#: arguments after its --target
+ACTING = {
+    "commission": ["commission", "samples/technosoft_ipos/project.yaml"],
+    "sw verify": ["sw", "verify", "samples/technosoft_ipos/setup.sw"],
+    "sw download": ["sw", "download", "samples/technosoft_ipos/setup.sw"],
+    "sw upload": ["sw", "upload", "--like", "samples/technosoft_ipos/setup.sw", "-o", "-"],
+    "scale explain": ["scale", "explain", "--profile", "hdt"],
+}
+
+
+@pytest.mark.parametrize("command", sorted(ACTING))
+def test_a_command_that_acts_on_slaves_refuses_a_running_bus_until_told(
+        monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], command: str) -> None:
+    from ecattool.target import isolated
+    from tests.conftest import ROOT, run
+
+    monkeypatch.chdir(ROOT)
+    monkeypatch.setattr(bus_state, "read_states", lambda ifname: [Found(0, 0x02), Found(1, 0x08)])
+    opened: list[str] = []
+
+    def master(ifname: str) -> None:
+        opened.append(ifname)
+        raise TargetError(f"(the master would open {ifname} here)")
+
+    monkeypatch.setattr(isolated, "pysoem_target", master)
+    args = [*ACTING[command], "--target", "pysoem:ecat9"]
+    code, _, err = run(capsys, *args)
+    assert code == 1 and opened == [], err
+    assert "slave 1 (OP) on 'ecat9' is running" in err and "--reset-bus" in err and len(err.splitlines()) == 1, err
+    code, _, err = run(capsys, *args, "--reset-bus")
+    assert opened == ["ecat9"] and "the master would open ecat9 here" in err, err

@@ -249,3 +249,24 @@ def test_whole_mapping_syntax_never_crashes(text: str) -> None:
     except InputError:
         return
     assert all(0 < p.index <= 0xFFFF for p in m.rx)
+
+
+def test_a_mapping_file_is_read_by_the_library_with_located_errors(tmp_path) -> None:
+    """``map … --mapping FILE`` reads through ``Mapping.from_file``: rx/tx at the top or under a project drive's
+    ``pdo:``; a file with neither is an error at its line (it would silently keep the device's default)."""
+    from ecattool import profiles
+
+    device = profiles.load("technosoft-ipos")
+    top, nested, empty = tmp_path / "top.yaml", tmp_path / "nested.yaml", tmp_path / "empty.yaml"
+    top.write_text("rx:\n  - index: 0x1600\n    entries: [controlword, 0x607A:00/32]\n")
+    nested.write_text("name: x\npdo:\n  rx:\n    - index: 0x1600\n      entries: [controlword, 0x607A:00/32]\n")
+    empty.write_text("name: x\nother: 1\n")
+    a, b = Mapping.from_file(str(top), device), Mapping.from_file(str(nested), device)
+    assert [e.index for e in a.rx[0].entries] == [e.index for e in b.rx[0].entries] == [0x6040, 0x607A]
+    with pytest.raises(InputError) as bad:
+        Mapping.from_file(str(empty), device)
+    assert "needs rx: and/or tx:" in bad.value.message and bad.value.location.file == str(empty)
+    nested.write_text("pdo:\n  rx:\n    - index: 0x1600\n      entries: [no_such_object]\n")
+    with pytest.raises(InputError) as bad:
+        Mapping.from_file(str(nested), device)
+    assert bad.value.location.line == 4, bad.value

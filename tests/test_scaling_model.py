@@ -158,3 +158,24 @@ def test_ct_negative_setpoint_allowed_and_no_polarity_object() -> None:
     g = compute(Axis(Feedback.encoder(4096), reverse=True), "controltechniques", vl_setpoint=(-1, 1))
     assert g.pair(0x604B) == (-1, 1) and g.get(0x604B, 1).hex == "0xFFFF"
     assert g.get(0x607E, 0) is None and any(f.rule == "scaling.no-polarity" for f in g.findings)
+
+
+def test_command_line_options_build_the_spec_a_file_would() -> None:
+    """The flags of ``scale compute`` are a typed object of the library (AxisOptions), turned into the same Spec a
+    spec file gives: alone, or over a file where each option said replaces that key only."""
+    from ecattool.scaling.spec import AxisOptions, spec_from_dict, spec_with
+    from tests.conftest import ROOT
+
+    alone = spec_with(None, AxisOptions(lines="500", gear="3:1", transmission="ballscrew pitch=5mm", position="mm",
+                                        velocity="mm/s", slow_loop="1ms"))
+    assert alone == spec_from_dict({"feedback": {"lines": "500"}, "gear": "3:1",
+                                    "transmission": "ballscrew pitch=5mm", "units": {"position": "mm",
+                                    "velocity": "mm/s"}, "slow_loop": "1ms", "reverse": False})
+    base = load_spec(ROOT / "samples" / "scaling" / "ballscrew.yaml")
+    over = spec_with(base, AxisOptions(gear="5:1", steps=("200", "256"), reverse=True))
+    assert over.axis.gear != base.axis.gear and over.axis.reverse and not base.axis.reverse
+    assert over.axis.feedback != base.axis.feedback and over.axis.transmission == base.axis.transmission
+    assert over.axis.position == base.axis.position and over.family == base.family
+    assert spec_with(base, AxisOptions(feedback_on="load")).axis.feedback.on == "load"
+    with pytest.raises(InputError, match="give a SPEC file or the feedback"):
+        spec_with(None, AxisOptions(position="mm"))

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import click
 
 from ecattool.cli.common import console, dump_json, file_output_option, output_option, write_output
+from ecattool.cli.online import reset_bus_given, reset_bus_option
 from ecattool.cli.paths import InputFile
 
 if TYPE_CHECKING:
@@ -26,6 +27,7 @@ Exit codes: 0 every drive commissioned, 1 a drive failed or the project is inval
 )
 @click.argument("projects", nargs=-1, required=True, type=InputFile())
 @click.option("--target", default=None, help="'sim' (default: the project's target) or 'pysoem:<interface>'.")
+@reset_bus_option
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @click.option("--allow-errors", is_flag=True, help="Commission drives even when lint reports errors for them (by "
               "default such a drive is not touched and its report names the first error).")
@@ -70,7 +72,7 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, all
             for s in dr.steps:
                 con.print(f"    {'ok ' if s.ok else 'ERR'} {s.name}: {s.detail}", markup=False,
                           style=None if s.ok else "red")
-        reports.append(run(path, target=target, on_drive=show, allow_errors=allow_errors))
+        reports.append(run(path, target=target, on_drive=show, allow_errors=allow_errors, reset_bus=reset_bus_given()))
     data = {"ok": all(r.ok for r in reports), "projects": [r.to_json() for r in reports]}
     if as_json:
         click.echo(dump_json(data))

@@ -83,24 +83,7 @@ def _load_mapping(device: Device, rx: tuple[str, ...], tx: tuple[str, ...], mapp
     if mapping_file:
         if rx or tx:
             raise click.UsageError("give the mapping either with --rx/--tx or with --mapping, not both")
-        from ecattool.fileio import read_input
-        from ecattool.yamlloc import load_yaml
-
-        raw = read_input(mapping_file)
-        source = "<stdin>" if mapping_file == "-" else mapping_file
-        doc = load_yaml(raw, source)
-        data = doc.data
-        prefix: tuple[str, ...] = ()
-        if isinstance(data, dict) and "pdo" in data and "rx" not in data and "tx" not in data:
-            data, prefix = data["pdo"], ("pdo",)
-        if not isinstance(data, dict) or not {"rx", "tx"} & set(data):
-            from ecattool.errors import InputError, Location
-
-            # an empty file (or one without rx/tx) would silently leave the device's default mapping
-            raise InputError("a mapping file needs rx: and/or tx: PDO lists (or a 'pdo:' section holding them)",
-                             doc.locations.get(prefix, Location(source, 1)))
-        locations = {path[len(prefix):]: loc for path, loc in doc.locations.items() if path[:len(prefix)] == prefix}
-        return pdo.Mapping.from_data(data, device=device, locations=locations, source=source)
+        return pdo.Mapping.from_file(mapping_file, device)
     return pdo.Mapping.from_text(rx=list(rx) if rx else None, tx=list(tx) if tx else None, device=device)
 
 

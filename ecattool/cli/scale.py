@@ -9,6 +9,7 @@ import click
 
 from ecattool.cli.common import (Decorated, console, file_output_option, json_option, output_option, policy_option, print_json,
                                  table, write_output)
+from ecattool.cli.online import reset_bus_given, reset_bus_option
 from ecattool.cli.paths import InputFile
 from ecattool.cli.startup import lossy_option, write_startup
 from ecattool.cli.vocab import WRITE_FORMATS, device_option, shared_option
@@ -53,76 +54,27 @@ def _mechanics_options(f: Decorated) -> Decorated:
 
 
 def _spec(spec: str | None, family: str | None, firmware: str | None, counts: str | None, lines: str | None,
-          steps: str | None, feedback_on: Literal["motor", "load"] | None, gear: str | None, transmission: str | None, pos_unit: str | None,
+          steps: str | None, feedback_on: Literal["motor", "load"] | None, gear: str | None, transmission: str | None,
+          pos_unit: str | None,
           vel_unit: str | None, acc_unit: str | None, jerk_unit: str | None, slow_loop: str | None,
           reverse: bool | None, approximation: str | None) -> Any:
+    """(the spec the flags say, over SPEC where given; the family, firmware and approximation to use)."""
     from ecattool.errors import InputError
-    from ecattool.scaling.model import FeedbackSection, ScalingSection, UnitsSection
-    from ecattool.scaling.spec import load_spec, spec_from_dict
+    from ecattool.scaling.model import length_unit, transmission_from
+    from ecattool.scaling.spec import AxisOptions, load_spec, spec_with
 
-    base = None
-    if spec:
-        base = load_spec(spec)
-    fb: FeedbackSection = {}
-    if counts:
-        fb["counts_per_rev"] = counts
-    if lines:
-        fb["lines"] = lines
-    if steps:
-        if "x" not in steps.lower():
-            raise click.BadParameter("write STEPSxMICROSTEPS, e.g. 200x256", param_hint="--steps")
-        s, m = steps.lower().split("x", 1)
-        fb["steps"], fb["microsteps"] = s, m
-    if feedback_on:
-        fb["on"] = feedback_on
+    base = load_spec(spec) if spec else None
+    if steps and "x" not in steps.lower():
+        raise click.BadParameter("write STEPSxMICROSTEPS, e.g. 200x256", param_hint="--steps")
     if transmission:  # a mechanics string the user typed: its error names the option
-        from ecattool.scaling.model import length_unit, transmission_from
-
         try:
             transmission_from(transmission, meant=length_unit(pos_unit or (base.axis.position if base else None)))
         except InputError as exc:
             raise click.BadParameter(exc.message, param_hint="'--transmission'") from None
-    if base is None:
-        if not fb or not any(k in fb for k in ("counts_per_rev", "lines", "steps")):
-            raise InputError("give a SPEC file or the feedback (--counts-per-rev, --lines or --steps)")
-        units: UnitsSection = {}
-        if pos_unit:
-            units["position"] = pos_unit
-        if vel_unit:
-            units["velocity"] = vel_unit
-        if acc_unit:
-            units["acceleration"] = acc_unit
-        if jerk_unit:
-            units["jerk"] = jerk_unit
-        data: ScalingSection = {"feedback": fb, "gear": gear, "transmission": transmission, "units": units,
-                                "reverse": bool(reverse)}
-        if slow_loop:
-            data["slow_loop"] = slow_loop
-        parsed = spec_from_dict(data)
-    else:
-        from dataclasses import replace
-
-        from ecattool.scaling.model import feedback_from, gear_from, slow_loop_from, transmission_from
-
-        ax = base.axis
-        changes: dict[str, Any] = {}
-        if fb:
-            changes["feedback"] = feedback_from(fb) if any(k in fb for k in ("counts_per_rev", "lines", "steps")) else \
-                replace(ax.feedback, on=fb["on"])
-        if gear:
-            changes["gear"] = gear_from(gear)
-        if transmission:
-            changes["transmission"] = transmission_from(transmission)
-        for key, val in (("position", pos_unit), ("velocity", vel_unit), ("acceleration", acc_unit), ("jerk", jerk_unit)):
-            if val:
-                changes[key] = val
-        if slow_loop:
-            changes["slow_loop"] = slow_loop_from(slow_loop)
-        if reverse is not None:
-            changes["reverse"] = reverse
-        parsed = replace(base, axis=replace(ax, **changes))
-        for order in range(4):
-            parsed.axis.unit(order)
+    stepper = steps.lower().split("x", 1) if steps else None
+    parsed = spec_with(base, AxisOptions(counts, lines, (stepper[0], stepper[1]) if stepper else None, feedback_on,
+                                         gear, transmission, pos_unit, vel_unit, acc_unit, jerk_unit, slow_loop,
+                                         reverse))
     fam = family or parsed.family or "technosoft-ipos"
     return parsed, fam, firmware or parsed.firmware, approximation or parsed.approximation
 
@@ -280,53 +232,6 @@ def startup_cmd(fmt: str, transition: str, lossy: bool, output: str | None, **kw
     write_startup([commands], fmt, output, inputs, lossy)
 
 
-def _values_from_file(path: str) -> dict[tuple[int, int], int]:
-    """Values from a startup file of any format, an ecattool `scale compute --json` file, or a YAML/JSON mapping."""
-    import json
-
-    from ecattool.errors import InputError, Location
-    from ecattool.fileio import read_bytes
-    from ecattool.od.numbers import parse_address, parse_int
-
-    raw = read_bytes(path)
-    try:
-        doc = json.loads(raw)
-    except (ValueError, UnicodeDecodeError, RecursionError):  # RecursionError: [[[[… nested 100000 deep
-        doc = None
-    if isinstance(doc, dict) and "objects" in doc and "factor_set" in doc:
-        objects = doc["objects"]
-        found: dict[tuple[int, int], int] = {}
-        for i, o in enumerate(objects if isinstance(objects, list) else [objects]):
-            if not isinstance(o, dict) or not {"index", "subindex", "value"} <= set(o):
-                raise InputError(f"objects[{i}] of a `scale compute --json` file needs index, subindex and value",
-                                 Location(path))
-            try:
-                found[(parse_int(o["index"]), parse_int(o["subindex"]))] = parse_int(o["value"])
-            except InputError as exc:
-                raise InputError(f"objects[{i}]: {exc.message}", Location(path)) from None
-        return found
-    if doc is None and raw.lstrip()[:1] not in (b"<",):
-        from ecattool.yamlloc import load_yaml
-
-        try:
-            y = load_yaml(raw, path)  # bytes: load_yaml decodes (BOM, invalid UTF-8 as an InputError)
-            doc = y.data
-        except InputError:
-            doc = None
-    if isinstance(doc, dict) and doc and all(":" in str(k) for k in doc):
-        return {parse_address(str(k), Location(path)): parse_int(v if isinstance(v, (int, str)) else str(v), Location(path))
-                for k, v in doc.items()}
-    from ecattool.startup import import_file
-
-    values: dict[tuple[int, int], int] = {}
-    for cfg in import_file(path):
-        for c in cfg.commands:
-            values[(c.index, c.subindex)] = c.int_value
-    if not values:
-        raise InputError("no object values found", Location(path))
-    return values
-
-
 @scale.command("explain", epilog="""\b
 Examples:
   ecattool scale explain --profile technosoft-ipos 6093:01=4294967295 6093:02=13493038
@@ -343,6 +248,7 @@ Examples:
 @click.option("--from", "source", type=InputFile(),
               help="Read values from a startup file (any format), a `scale compute --json` file or a YAML mapping.")
 @click.option("--target", help="Read the values from a drive: 'sim' (the family's simulated drive) or 'pysoem:IFACE'.")
+@reset_bus_option
 @click.option("--slave", type=int, default=0, show_default=True, help="Bus position of the drive (with --target).")
 @click.option("--project", type=InputFile(), help="Read the values a project's drive holds after its startup list "
               "(its writes, else the device's defaults) and take its family.")
@@ -363,11 +269,12 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     from ecattool.errors import InputError
     from ecattool.od.numbers import parse_address, parse_int
     from ecattool.scaling import explain
+    from ecattool.scaling.explain import values_from_file
     from ecattool.scaling.model import slow_loop_from
 
     _html_prerequisites(html, as_json)
 
-    values = _values_from_file(source) if source else {}
+    values = values_from_file(source) if source else {}
     if project:
         from ecattool.project.machine import load_machine
 
@@ -417,7 +324,8 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
 
 def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> Any:
     from ecattool.errors import InputError, SelectionError
-    from ecattool.target.opener import SLAVE_TARGET_FORMS, open_target, parse_target, slave_at
+    from ecattool.online.targets import open_guarded
+    from ecattool.target.opener import SLAVE_TARGET_FORMS, parse_target, slave_at
 
     devices = []
     try:
@@ -429,7 +337,7 @@ def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> A
                 raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
             devices = [profiles.load(family, revision=firmware) if firmware else profiles.load(family)]
             slave = 0
-        found = slave_at(open_target(spec, devices), slave)
+        found = slave_at(open_guarded(spec, devices, reset_bus_given()), slave)
     except SelectionError as exc:
         if exc.message.startswith("unknown target"):
             raise click.BadParameter(f"use {SLAVE_TARGET_FORMS}", param_hint="--target") from None

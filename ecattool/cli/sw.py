@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import click
 
 from ecattool.cli.common import Decorated, console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.online import reset_bus_given, reset_bus_option
 from ecattool.cli.paths import InputFile
 from ecattool.errors import InputError, Location
 
@@ -122,7 +123,8 @@ def from_foe_cmd(file: str, output: str | None) -> None:
 def _open_target(spec: str, slave: int, device: Device | None = None) -> SlaveTarget:
     """The slave at ``slave`` of the target ``spec`` (ecattool.target.opener): with ``sim``, a simulated bus of
     ``device`` at that position (a Technosoft iPOS without one)."""
-    from ecattool.target.opener import open_target, parse_target, slave_at
+    from ecattool.online.targets import open_guarded
+    from ecattool.target.opener import parse_target, slave_at
 
     parsed = parse_target(spec)
     if parsed.own_slaves:
@@ -130,11 +132,11 @@ def _open_target(spec: str, slave: int, device: Device | None = None) -> SlaveTa
             from ecattool import profiles
 
             device = profiles.load("technosoft-ipos")
-        tgt = open_target(spec, [device])
+        tgt = open_guarded(spec, [device])
         found = slave_at(tgt, 0)
         found.position = slave
         return found
-    return slave_at(open_target(spec), slave)
+    return slave_at(open_guarded(spec, reset_bus=reset_bus_given()), slave)
 
 
 def _project_drive(project: str, name: str | None, allow_errors: bool = False) -> tuple[Slave, str]:
@@ -170,9 +172,9 @@ _preload_option = click.option("--preload", type=InputFile(),
 
 
 def _target_options(f: Decorated) -> Decorated:
-    """--target, --slave, --project, --drive, --preload and --allow-errors (verify and download)."""
+    """--target, --reset-bus, --slave, --project, --drive, --preload and --allow-errors (verify, download, upload)."""
     for option in (_allow_errors_option, _preload_option, _drive_option, _project_option, _slave_option,
-                   _target_option):
+                   reset_bus_option, _target_option):
         f = option(f)
     return f
 

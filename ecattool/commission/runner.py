@@ -682,17 +682,18 @@ def _drive_error(slave: SlaveTarget, rd: Slave) -> str:
     return f"; the drive reports error 603Fh = 0x{code:04X} ({error_text(code, rd.rules.family if rd.rules is not None else None)})"
 
 
-def open_target(spec: str, drives: Sequence[Slave]) -> tuple[Target, str]:
-    """The target ``spec`` names (:func:`ecattool.target.opener.open_target`) with the slaves' devices for a
-    simulator; and the target's name for the report. A slave whose device did not resolve cannot be simulated:
-    an InputError naming it and why (the file and line lint names)."""
-    from ecattool.target.opener import open_target as open_spec
+def open_target(spec: str, drives: Sequence[Slave], reset_bus: bool = False) -> tuple[Target, str]:
+    """The target ``spec`` names (:func:`ecattool.online.targets.open_guarded`: a real bus with slaves in SAFE-OP
+    or OP is refused unless ``reset_bus``) with the slaves' devices for a simulator; and the target's name for the
+    report. A slave whose device did not resolve cannot be simulated: an InputError naming it and why (the file
+    and line lint names)."""
+    from ecattool.online.targets import open_guarded
     from ecattool.target.opener import parse_target
 
     parsed = parse_target(spec)
     # a bare 'sim' simulates the project's slaves
     devices = [d for _, d in Machine("", slaves=tuple(drives)).devices()] if parsed.own_slaves else []
-    return open_spec(spec, devices), spec
+    return open_guarded(spec, devices, reset_bus), spec
 
 
 def _set_plants(slaves: list[SlaveTarget], drives: Sequence[Slave]) -> None:
@@ -709,7 +710,7 @@ def _set_plants(slaves: list[SlaveTarget], drives: Sequence[Slave]) -> None:
 
 def commission(path: str | Path | Machine, target: str | Target | None = None,
                on_drive: Callable[[DriveReport], None] | None = None, *,
-               allow_errors: bool = False) -> CommissionReport:
+               allow_errors: bool = False, reset_bus: bool = False) -> CommissionReport:
     """Commission every slave of the project at ``path`` (or of a :class:`Machine` already built) on ``target``.
 
     An axis goes to OP, is enabled through CiA-402 and makes the project's move; an I/O slave goes to OP and
@@ -718,13 +719,15 @@ def commission(path: str | Path | Machine, target: str | Target | None = None,
 
     ``target`` is a spec string (``"sim"``, ``"pysoem:eth0"``; default: the project's, i.e. ``"sim"``) or a
     ready :class:`~ecattool.target.base.Target` object (e.g. a ``SimTarget`` of prepared simulated drives with
-    faults scheduled); a target object passed in is not closed, its owner closes it.
+    faults scheduled); a target object passed in is not closed, its owner closes it. A real bus with a slave in
+    SAFE-OP or OP is refused before it is touched, unless ``reset_bus`` (commissioning takes every slave through
+    INIT: a running machine would stop).
     """
     machine = path if isinstance(path, Machine) else load_machine(path)
     machine.require_loaded()
     owned = target is None or isinstance(target, str)
     if target is None or isinstance(target, str):
-        tgt, name = open_target(target or machine.target, machine.slaves)
+        tgt, name = open_target(target or machine.target, machine.slaves, reset_bus)
     else:
         tgt, name = target, type(target).__name__
     report = CommissionReport(machine.path, name, findings=list(machine.findings))

@@ -9,7 +9,8 @@ from typing import Any
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
 from ecattool.online.live import LiveBus, sim_bus
-from ecattool.target.opener import parse_target, sim_devices
+from ecattool.target.base import Target
+from ecattool.target.opener import MASTERS, open_target, parse_target, sim_devices
 
 
 def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False) -> LiveBus:
@@ -45,6 +46,19 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
 
     import_kickcat()
     return _restoring(isolated_bus(spec, lambda: open_kickcat(parsed.interface)), found)
+
+
+def open_guarded(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False) -> Target:
+    """The target ``spec`` names (:func:`ecattool.target.opener.open_target`, for the commands that act on slaves:
+    ``commission``, ``sw verify/download/upload``, ``scale explain --target``), a real master's bus first read
+    for slaves in SAFE-OP or OP and refused where it has any, unless ``reset_bus`` (:func:`bus_state.guard`):
+    these commands take every slave through INIT too, and a running machine is never stopped by surprise."""
+    parsed = parse_target(spec)
+    if parsed.kind in MASTERS:
+        from ecattool.online.bus_state import guard
+
+        guard(parsed.interface, reset_bus)
+    return open_target(spec, devices)
 
 
 def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:

@@ -162,6 +162,26 @@ class Mapping:
         return out
 
     @classmethod
+    def from_file(cls, path: str, device: Device | None = None) -> "Mapping":
+        """The mapping of a YAML file (``-``: stdin) with ``rx:``/``tx:`` PDO lists, at its top or under a
+        ``pdo:`` section (a project drive's), every error located in the file. A file without either list is an
+        error: it would silently leave the device's default mapping."""
+        from ecattool.fileio import read_input
+        from ecattool.yamlloc import load_yaml
+
+        source = "<stdin>" if path == "-" else path
+        doc = load_yaml(read_input(path), source)
+        data = doc.data
+        prefix: tuple[str, ...] = ()
+        if isinstance(data, AbcMapping) and "pdo" in data and "rx" not in data and "tx" not in data:
+            data, prefix = data["pdo"], ("pdo",)
+        if not isinstance(data, AbcMapping) or not {"rx", "tx"} & set(data):
+            raise InputError("a mapping file needs rx: and/or tx: PDO lists (or a 'pdo:' section holding them)",
+                             doc.locations.get(prefix, Location(source, 1)))
+        locations = {where[len(prefix):]: loc for where, loc in doc.locations.items() if where[:len(prefix)] == prefix}
+        return cls.from_data(data, device=device, locations=locations, source=source)
+
+    @classmethod
     def from_data(
         cls,
         data: AbcMapping[str, Any] | None,

@@ -275,3 +275,49 @@ def read_values(slave: Any) -> Values:
                 break
             values[(index, sub)] = int.from_bytes(data, "little", signed=index in _SIGNED)
     return values
+
+
+def values_from_file(path: str) -> Values:
+    """Values from a startup file of any format, an ecattool `scale compute --json` file, or a YAML/JSON mapping."""
+    import json
+
+    from ecattool.fileio import read_bytes
+    from ecattool.od.numbers import parse_address, parse_int
+
+    raw = read_bytes(path)
+    try:
+        doc = json.loads(raw)
+    except (ValueError, UnicodeDecodeError, RecursionError):  # RecursionError: [[[[… nested 100000 deep
+        doc = None
+    if isinstance(doc, dict) and "objects" in doc and "factor_set" in doc:
+        objects = doc["objects"]
+        found: dict[tuple[int, int], int] = {}
+        for i, o in enumerate(objects if isinstance(objects, list) else [objects]):
+            if not isinstance(o, dict) or not {"index", "subindex", "value"} <= set(o):
+                raise InputError(f"objects[{i}] of a `scale compute --json` file needs index, subindex and value",
+                                 Location(path))
+            try:
+                found[(parse_int(o["index"]), parse_int(o["subindex"]))] = parse_int(o["value"])
+            except InputError as exc:
+                raise InputError(f"objects[{i}]: {exc.message}", Location(path)) from None
+        return found
+    if doc is None and raw.lstrip()[:1] not in (b"<",):
+        from ecattool.yamlloc import load_yaml
+
+        try:
+            y = load_yaml(raw, path)  # bytes: load_yaml decodes (BOM, invalid UTF-8 as an InputError)
+            doc = y.data
+        except InputError:
+            doc = None
+    if isinstance(doc, dict) and doc and all(":" in str(k) for k in doc):
+        return {parse_address(str(k), Location(path)): parse_int(v if isinstance(v, (int, str)) else str(v), Location(path))
+                for k, v in doc.items()}
+    from ecattool.startup import import_file
+
+    values: dict[tuple[int, int], int] = {}
+    for cfg in import_file(path):
+        for c in cfg.commands:
+            values[(c.index, c.subindex)] = c.int_value
+    if not values:
+        raise InputError("no object values found", Location(path))
+    return values
