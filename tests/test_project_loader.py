@@ -96,6 +96,12 @@ def test_the_schemas_scaling_is_the_scaling_specs_model_and_its_reader_validates
     (f,) = load_machine(path).findings
     assert (f.rule, f.location.line if f.location else None) == ("PRJ050", 13), f
     assert "transmision" in f.message and "'transmission'" in f.message
+    # what the schema's type says stays the schema's: a section that is no mapping is PRJ001, as before
+    import re
+
+    path.write_text(re.sub(r"    scaling:\n(      .*\n)+", "    scaling: 5\n", text))
+    (f,) = load_machine(path).findings
+    assert (f.rule, f.message) == ("PRJ001", "drives.0.scaling: Input should be a valid dictionary"), f
 
 
 def test_checked_in_schema_has_not_drifted():

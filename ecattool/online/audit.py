@@ -39,8 +39,8 @@ class Drift:
     position: int
     kind: str
     address: str
-    expected: Any
-    actual: Any
+    expected: object
+    actual: object
     message: str
     location: Location | None = None
 

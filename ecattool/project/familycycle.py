@@ -22,7 +22,7 @@ def _slow_loop_ns(slave: Slave) -> Fraction:
     """The project's slow loop (``scaling.slow_loop``) in ns; 1 ms where not given or not readable."""
     from ecattool.scaling.units import time_seconds
 
-    raw = (slave.drive.scaling or {}).get("slow_loop")
+    raw = slave.drive.scaling.get("slow_loop") if slave.drive.scaling is not None else None
     if raw is None:
         return Fraction(1_000_000)
     try:

@@ -252,6 +252,15 @@ class Drive(_Strict):
     plant: Literal["ideal"] | PlantConfig | None = Field(
         default=None, description="The simulated motor and load (default: the family's); 'ideal': actual = demand")
 
+    @field_validator("scaling", mode="before")
+    @classmethod
+    def _scaling_is_a_mapping(cls, value: object) -> object:
+        """The section is a mapping (what the schema's type says, in pydantic's words); its keys and values are
+        the scaling spec reader's to check (PRJ050, at their lines)."""
+        if value is not None and not isinstance(value, (dict, bool)):  # a boolean is _no_boolean_numbers'
+            raise ValueError("Input should be a valid dictionary")
+        return value
+
     @property
     def sw_config(self) -> SwConfig | None:
         if isinstance(self.sw, str):
