@@ -93,8 +93,9 @@ def _check_identity(rd: Slave, slave: LiveSlave, sdo: bool = True) -> None:
 def collect(machine: Machine, bus: LiveBus) -> tuple[dict[str, bytes], list[str]]:
     """The files of a backup (name -> content) and what was skipped, read from the bus and checked (module text):
     a :class:`TargetError` naming the slave when something read cannot be vouched for. A slave without a CoE mailbox
-    (its SII says so) is never sent an SDO: its SII is its backup. ``machine``: the project, built once by the
-    caller (:func:`ecattool.project.machine.load_machine`) and not refused for lint errors by :func:`backup`."""
+    (its SII says so) is never sent an SDO: its SII is its backup. ``machine``: the project's machine, built
+    once by the caller (:func:`ecattool.project.machine.load_machine`; :func:`backup` refuses one with lint
+    errors before anything is read)."""
     from ecattool.online.sii_access import read_checked
 
     files: dict[str, bytes] = {}
