@@ -21,7 +21,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from types import ModuleType
-from typing import Any
 
 from ecattool.errors import EcatToolError, InputError, Location
 from ecattool.esi.model import Device
@@ -33,7 +32,7 @@ from ecattool.project.resolve import resolve_dc, resolve_device, resolve_paramet
 from ecattool.project.rules import disable
 from ecattool.project.slave import Slave, SlaveDc, SlaveKind, is_axis
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.install import MasterKind
+from ecattool.startup.install import KickcatBus, MasterKind, PysoemMaster
 from ecattool.startup.model import StartupCommand, StartupList
 
 __all__ = ["ALLOW_ERRORS_HELP", "Machine", "Slave", "SlaveDc", "SlaveKind", "is_axis", "load_machine", "slave_config"]
@@ -126,8 +125,9 @@ class Machine:
         self.refuse_errors("export the startup configuration", allow_errors=allow_errors)
         return [slave_config(s) for s in self.in_bus_order()]
 
-    def install(self, master: Any, *, kind: MasterKind | None = None, exact_revision: bool = False,
-                allow_errors: bool = False, module: ModuleType | None = None) -> list[int]:
+    def install(self, master: PysoemMaster | KickcatBus, *, kind: MasterKind | None = None,
+                exact_revision: bool = False, allow_errors: bool = False,
+                module: ModuleType | None = None) -> list[int]:
         """Attach every slave's startup list to ``master`` in a master program, with the identity check
         (:func:`ecattool.startup.install.install`): a ``pysoem.Master`` after ``config_init()`` gets a
         ``config_func`` per slave; a ``kickcat.Bus`` after ``init()`` is written at once. Returns the positions
