@@ -17,7 +17,7 @@ FORMAT_VERSION = 1
 IntLike = Annotated[int | str, Field(description="An integer: 8, 0x1C12 or #x1C12")]
 
 
-def _takes_bool(annotation: Any) -> bool:
+def _takes_bool(annotation: object) -> bool:
     """Whether a field's type admits true/false (``bool`` itself, or in a union)."""
     if annotation is bool:
         return True
@@ -29,7 +29,7 @@ class _Strict(BaseModel):
 
     @field_validator("*", mode="before")
     @classmethod
-    def _no_boolean_numbers(cls, value: Any, info: ValidationInfo) -> Any:
+    def _no_boolean_numbers(cls, value: object, info: ValidationInfo) -> object:
         """A boolean is never a number: pydantic would take ``position: true`` as 1 (issue 28.3)."""
         if isinstance(value, bool) and info.field_name is not None:
             field = cls.model_fields.get(info.field_name)
