@@ -11,7 +11,7 @@ changes nothing the drive keeps), so ``sw_checksums=True`` sends those writes an
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, TypedDict, cast
 
 from ecattool.errors import Location, SdoAbort, TargetError
 from ecattool.esi.model import Identity
@@ -30,6 +30,40 @@ if TYPE_CHECKING:
     from ecattool.target.base import SlaveTarget
 
 
+class DriftJson(TypedDict):
+    """A drift as ``audit --json`` prints it."""
+
+    drive: str
+    position: int
+    kind: str
+    address: str
+    expected: object
+    actual: object
+    message: str
+    location: str | None
+
+
+class ProcessDataRow(TypedDict):
+    """A value the project sets on an object mapped into an RxPDO, and what SDO read there (not compared)."""
+
+    drive: str
+    position: int
+    address: str
+    project: object
+    read: object
+
+
+class AuditJson(TypedDict):
+    """The report as ``audit --json`` prints it."""
+
+    project: str
+    target: str
+    ok: bool
+    checked: int
+    drifts: list[DriftJson]
+    process_data: list[ProcessDataRow]
+
+
 @dataclass
 class Drift:
     """One difference between the project and a drive: ``kind`` is ``value``, ``identity``, ``abort``,
@@ -44,7 +78,7 @@ class Drift:
     message: str
     location: Location | None = None
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> DriftJson:
         return {"drive": self.drive, "position": self.position, "kind": self.kind, "address": self.address,
                 "expected": self.expected, "actual": self.actual, "message": self.message,
                 "location": None if self.location is None else str(self.location)}
@@ -62,13 +96,13 @@ class AuditReport:
     checked: int = 0
     #: values the project sets on objects mapped into the drive's RxPDOs: the master writes them every cycle, so
     #: what SDO reads there is process data, not a setting (listed, not drift)
-    process_data: list[dict[str, Any]] = field(default_factory=list)
+    process_data: list[ProcessDataRow] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
         return not self.drifts
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> AuditJson:
         return {"project": self.project, "target": self.target, "ok": self.ok, "checked": self.checked,
                 "drifts": [d.to_json() for d in self.drifts], "process_data": self.process_data}
 
