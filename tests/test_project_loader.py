@@ -104,6 +104,20 @@ def test_the_schemas_scaling_is_the_scaling_specs_model_and_its_reader_validates
     assert (f.rule, f.message) == ("PRJ001", "drives.0.scaling: Input should be a valid dictionary"), f
 
 
+def test_a_project_without_scaling_does_not_import_the_scaling_package(tmp_path: Path) -> None:
+    """The schema's scaling: comes from scaling's model when the schema is generated; reading and linting a
+    project imports the scaling package only where a drive has a scaling: section (bench_lint's warm run)."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "project.yaml"
+    path.write_text("ecattool: 1\ndrives:\n  - name: a\n    device: {profile: hdt, product: tomcat}\n")
+    code = ("import sys\nfrom ecattool.project.machine import load_machine\n"
+            f"assert load_machine({str(path)!r}).findings == ()\nprint('ecattool.scaling' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert done.returncode == 0 and done.stdout.strip() == "False", done.stderr
+
+
 def test_checked_in_schema_has_not_drifted():
     checked_in = json.loads((ROOT / "schemas" / "project.schema.json").read_text())
     assert checked_in == json.loads(json.dumps(json_schema()))

@@ -5,11 +5,32 @@ See docs/project.md for the format with examples. Paths inside the file are rela
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, get_args
+from typing import TYPE_CHECKING, Annotated, Any, Literal, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, SkipValidation, ValidationInfo, field_validator, model_validator
+from pydantic import (BaseModel, ConfigDict, Field, GetJsonSchemaHandler, SkipValidation, ValidationInfo, field_validator,
+                      model_validator)
+from pydantic.json_schema import JsonSchemaValue
 
-from ecattool.scaling.model import ScalingSection
+if TYPE_CHECKING:
+    from ecattool.scaling.model import ScalingSection
+
+    #: a drive's ``scaling:`` section: the scaling spec's own shape
+    ScalingField = ScalingSection | None
+else:
+    class _ScalingSchema:
+        """The JSON schema of ``scaling:``: the scaling spec's own model (``ScalingSection``), imported when the
+        schema is generated, not when a project is read (linting a project without scaling stays as fast as it
+        was: the scaling package is imported by the step that computes a factor group)."""
+
+        @classmethod
+        def __get_pydantic_json_schema__(cls, core_schema: object, handler: GetJsonSchemaHandler) -> JsonSchemaValue:
+            from pydantic import TypeAdapter
+
+            from ecattool.scaling.model import ScalingSection
+
+            return handler(TypeAdapter(ScalingSection | None).core_schema)
+
+    ScalingField = Annotated[dict[str, object] | None, _ScalingSchema]
 
 #: The project file format version this ecattool writes and reads.
 FORMAT_VERSION = 1
@@ -232,7 +253,7 @@ class Drive(_Strict):
     pdo: PdoConfig | None = None
     # typed from scaling's own model; validated by it alone (scaling.spec.spec_from_dict: lint's PRJ050 at the
     # value's line), so the project model passes the mapping through as written
-    scaling: SkipValidation[ScalingSection | None] = Field(
+    scaling: SkipValidation[ScalingField] = Field(
         default=None, description="Mechanics and units for the factor group (see docs/scaling.md)"
     )
     parameters: list[Parameter] = Field(default_factory=list)
