@@ -94,12 +94,32 @@ class SdoAbort(TargetError):
 class SdoTimeout(TargetError):
     """An SDO request got no reply in time."""
 
-    def __init__(self, index: int, subindex: int, position: int | None = None) -> None:
+    def __init__(self, index: int, subindex: int, position: int | None = None, name: str = "",
+                 detail: str = "no reply") -> None:
         self.index = index
         self.subindex = subindex
         self.position = position
-        of = "" if position is None else f" of slave {position}"
-        super().__init__(f"SDO timeout on 0x{index:04X}:{subindex:02X}{of}: no reply")
+        self.name = name
+        of = "" if position is None else f" of slave {position}" + (f" ({name})" if name else "")
+        super().__init__(f"SDO timeout on 0x{index:04X}:{subindex:02X}{of}: {detail}")
+
+
+class SdoTooLarge(TargetError):
+    """A slave answered an SDO upload with more octets than the object can have (its type's size, or the
+    documented bound where the type is not known): the reply is refused, never copied on."""
+
+    def __init__(self, index: int, subindex: int, position: int | None, size: int, got: int | None = None,
+                 known: bool = True) -> None:
+        self.index = index
+        self.subindex = subindex
+        self.position = position
+        self.size = size
+        self.got = got
+        of = "" if position is None else f"slave {position}: "
+        said = "the slave announced more than" if got is None else f"the reply has {got} octets, more than"
+        bound = (f"the {size} the object can have" if known else
+                 f"the {size} octets read of an object whose type is not known")
+        super().__init__(f"{of}0x{index:04X}:{subindex:02X}: {said} {bound} (refused)")
 
 
 class StateChangeError(TargetError):

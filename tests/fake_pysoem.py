@@ -346,6 +346,8 @@ def make_module(drives, interfaces=("eth0", "eth-test")):
             self._wkc = -1
             self.clock = None  # a VirtualClock the test shares with the adapter, to record when frames go out
             self.sent_at = []
+            self.sdo_read_timeout = self.sdo_write_timeout = 700000  # SOEM's EC_TIMEOUTRXM, in microseconds
+            self.state_checks = []  # (expected state, timeout in microseconds) of every bus-wide state check
 
         def check_context_is_initialized(self):
             if not self.context_initialized:
@@ -410,6 +412,7 @@ def make_module(drives, interfaces=("eth0", "eth-test")):
         def state_check(self, expected_state, timeout=50000):
             """All slaves (a broadcast read: the AL status bits of every slave ORed)."""
             self.check_context_is_initialized()
+            self.state_checks.append((expected_state, timeout))
             found = 0
             for s in self.slaves:
                 s._observe()

@@ -8,6 +8,7 @@ fails naming the file and line that breaks its claim:
   table, literal default or ``al_status=`` literal argument holds one;
 * the CiA-402 statusword masks, state bits and controlword commands are defined once (``od/cia402.py``);
 * the typed ``FamilyRules`` is read by field, never with ``getattr(rules, "…", default)``;
+* every SDO upload through a master outside the simulator gives its size bound (issue 37.1);
 * no ``family == "…"`` decision outside the built-in families (``profiles/``) and the simulator's family modules,
   but for today's remaining places, listed below with their counts: the list may only shrink.
 """
@@ -241,6 +242,22 @@ def test_no_new_family_name_decisions() -> None:
              for rel, lines in sorted(found.items()) if len(lines) > FAMILY_COMPARISONS_LEFT.get(rel, 0)]
     assert not grown, ("a decision by family name outside profiles/ and the family modules: make it FamilyRules "
                        "data (or move it into the family module):\n" + "\n".join(grown))
+
+
+# --- every upload through a master is bounded -------------------------------------------------------------------
+
+def unbounded_uploads(trees: dict[str, ast.Module]) -> list[str]:
+    """The ``sdo_upload(…)`` calls outside the simulator that give no ``size`` (issue 37.1: never ask a master for
+    more than the object can be; the simulator's own calls read its own store)."""
+    return [f"{_where(rel, node)}: {ast.unparse(node)[:80]}" for rel, tree in trees.items()
+            if not rel.startswith("sim/") for node in ast.walk(tree)
+            if isinstance(node, ast.Call) and _called_name(node) == "sdo_upload"
+            and "size" not in {k.arg for k in node.keywords} and len(node.args) < 4]
+
+
+def test_every_upload_through_a_master_is_bounded_by_its_object() -> None:
+    found = unbounded_uploads(_trees())
+    assert not found, "an SDO upload without its size bound (pass size=, the object's type's size):\n" + "\n".join(found)
 
 
 # --- one target opener, DC resolved once (the claims two tests of tests/test_machine.py are named after) ----------

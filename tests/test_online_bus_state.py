@@ -73,7 +73,7 @@ def test_a_command_that_acts_on_slaves_refuses_a_running_bus_until_told(
     monkeypatch.setattr(bus_state, "read_states", lambda ifname: [Found(0, 0x02), Found(1, 0x08)])
     opened: list[str] = []
 
-    def master(ifname: str) -> None:
+    def master(ifname: str, limits: object = None) -> None:  # limits: the slaves' timeouts (target.timeouts)
         opened.append(ifname)
         raise TargetError(f"(the master would open {ifname} here)")
 

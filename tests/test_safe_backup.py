@@ -141,7 +141,8 @@ def test_a_slave_that_refuses_every_object_fails_the_back_up(tmp_path: Path,
 
     real = SimLiveSlave.sdo_upload
 
-    def refuse(self: SimLiveSlave, index: int, subindex: int, complete_access: bool = False) -> bytes:
+    def refuse(self: SimLiveSlave, index: int, subindex: int, complete_access: bool = False,
+               size: int | None = None) -> bytes:
         if index == 0x1018:
             return real(self, index, subindex, complete_access)
         raise SdoAbort(index, subindex, 0x08000000)
@@ -160,7 +161,8 @@ def test_a_udint_of_the_wrong_size_fails_the_back_up_and_sdo_read(
     """A slave answering 64 (or 0) bytes to every UDINT: backed up as such, and printed by `sdo read`, before."""
     real = SimLiveSlave.sdo_upload
 
-    def odd(self: SimLiveSlave, index: int, subindex: int, complete_access: bool = False) -> bytes:
+    def odd(self: SimLiveSlave, index: int, subindex: int, complete_access: bool = False,
+            **bound: int | None) -> bytes:  # an adapter that ignores the bound (``size``): read_value checks again
         data = real(self, index, subindex, complete_access)
         entry = self.drive.device.dictionary.entry(index, subindex)
         return bytes(size) if entry is not None and entry.type_name == "UDINT" else data

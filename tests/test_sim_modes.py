@@ -592,6 +592,24 @@ def test_n25_technosoft_polarity_reverses_targets_and_actual_values():
     assert d.internal_position == 1000 and d.value(0x6064) == 1000
 
 
+def test_n25_technosoft_polarity_reverses_the_actual_values_on_the_plant_too():
+    """The same on the family's default plant (issue 33 item 2): 6064h, 6062h, 606Ch and 60F4h reversed, as the
+    ideal plant reports them (they were the unreversed plant values)."""
+    manual_says(TS_TEXT, 4222, "This object is used to multiply by 1 or -1 position and velocity objects.")
+    d = at("technosoft-ipos", OP, plant=None)
+    assert d.plant is not None
+    w(d, 0x607E, 0, 0xC0, 1)
+    w(d, 0x6060, 0, 8, 1)
+    for cw in (0x06, 0x07, 0x0F):
+        w(d, 0x6040, 0, cw, 2)
+    for k in range(1, 50):
+        w(d, 0x607A, 0, 10 * k, 4)
+        d.step(1)
+    assert d.internal_position == -490
+    assert d.value(0x6062) == 490 and 0 < d.value(0x6064) <= 490  # the sample of §3.2.2 lags one cycle
+    assert d.value(0x60F4) == d.value(0x6062) - d.value(0x6064) and d.value(0x606C) > 0
+
+
 def test_n25_hdt_polarity_reverses_the_targets():
     manual_says(HDT_TEXT, 3418, "if the bit is equal to 1, the value’s sign is reversed.")
     d = at("hdt", PRE)

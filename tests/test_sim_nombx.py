@@ -166,9 +166,10 @@ def _live_mixed() -> tuple[object, list[list[tuple[int, int]]]]:
     for slave, log in zip(bus.slaves, sent):
         upload = slave.sdo_upload
 
-        def spy(index: int, sub: int, complete_access: bool = False, _up=upload, _log=log) -> bytes:
+        def spy(index: int, sub: int, complete_access: bool = False, size: int | None = None, _up=upload,
+                _log=log) -> bytes:
             _log.append((index, sub))
-            return bytes(_up(index, sub, complete_access))
+            return bytes(_up(index, sub, complete_access, size=size))
 
         slave.sdo_upload = spy
     return bus, sent

@@ -32,7 +32,7 @@ class StandIn:
     def identity(self) -> Identity:
         return Identity(0x289, 0x1234, 7, 42)
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
         if (index, subindex) == (0x1018, 1):
             ctypes.string_at(0)  # SIGSEGV in the master's process
         if index == 0x2000:

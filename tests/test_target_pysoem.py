@@ -252,3 +252,39 @@ def test_a_drive_that_leaves_op_by_itself_is_reported():
     with pytest.raises(TargetError, match="slave 0 left OP by itself: it is in SAFEOP"):
         for _ in range(200):  # 100 ms of 1 ms cycles at the most
             s.exchange(bytes(len(s._slave.output)))
+
+
+def test_open_advice_names_root_or_cap_net_raw_and_a_missing_interface():
+    """Issue 35 item 8: a non-root pysoem user got "could not open interface" with no word of root."""
+    from ecattool.target.pysoem import open_advice
+
+    assert "run as root, or give the Python interpreter CAP_NET_RAW" in open_advice("lo", euid=1000)
+    assert open_advice("lo", euid=0) == ""
+    assert "this machine has no network interface 'nope0'" in open_advice("nope0", euid=1000)
+
+
+def test_a_non_root_user_is_told_about_root_and_cap_net_raw():
+    """The real pysoem and KickCAT, run as user 'nobody' on the loopback interface: one line naming the fix."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    if os.geteuid() != 0:
+        pytest.skip("needs root to run a command as another user")
+    root = Path(__file__).resolve().parent.parent
+    for spec in ("pysoem:lo", "kickcat:lo"):
+        try:
+            __import__(spec.split(":")[0])
+        except ImportError:
+            continue
+        try:
+            done = subprocess.run([sys.executable, "-m", "ecattool", "sdo", "read", "0x1018:01", "--target", spec],
+                                  capture_output=True, text=True, timeout=60, cwd=root, user=65534, group=65534,
+                                  extra_groups=[], env={**os.environ, "PYTHONPATH": str(root)})
+        except PermissionError:  # this interpreter lives where user 'nobody' may not go (e.g. under /root)
+            pytest.skip(f"user 'nobody' cannot run {sys.executable}")
+        assert done.returncode == 1 and done.stdout == "", done
+        lines = done.stderr.strip().splitlines()
+        assert len(lines) == 1 and "cannot open EtherCAT interface 'lo'" in lines[0], done.stderr
+        assert "run as root, or give the Python interpreter CAP_NET_RAW" in lines[0], done.stderr

@@ -93,13 +93,26 @@ def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
             elif rc == 0 and (why := _untrue(name, command, run, tmp_path)) is not None:
                 wrong.append(f"{where}: exit 0, {why}")
     assert not wrong, "\n".join(wrong)
-    # the crashes the master process keeps away: named, one line, with the slave and the object
     for name in ("upload-4gib", "upload-endless"):
-        assert "the master crashed reading 1018h:01 of slave 0" in result[name]["sdo read"]["stderr"], name
-    # KickCAT: reads the well-behaved slave; crashes on endless segments and hangs on an SII chain without end --
+        # an object of known type (1018h:01, a UDINT): SOEM's buffer is its 4 octets and the announced size is
+        # refused (issue 37 item 1; before, the master crashed here too)
+        assert result[name]["sdo read"]["stderr"] == ("ecattool: error: slave 0: 0x1018:01: the slave announced more "
+                                                      "than the 4 the object can have (refused)\n"), name
+    # where the type is not known: SOEM given a 256-octet buffer (not its static one, as pysoem passes size 0) reads
+    # the 4 GiB announcement as negative and pysoem refuses to make bytes of it: refused, no crash
+    assert result["upload-4gib"]["sdo read (unknown type)"]["stderr"] == (
+        "ecattool: error: slave 0: 0x2FFF:00: the slave announced more than the 256 octets read of an object whose "
+        "type is not known (refused)\n")
+    # the endless segments of an announced 200 octets fit the 256-octet buffer and SOEM copies on past its end: the
+    # crash the master's child process keeps away, named in one line with the slave and the object
+    assert "the master crashed reading 2FFFh:00 of slave 0" in result["upload-endless"]["sdo read (unknown type)"][
+        "stderr"]
+    # KickCAT: reads the well-behaved slave; refuses the endless segments' announcement of 200 octets now that its
+    # buffer is 1018h:01's 4 (it crashed with its 1024-octet buffer before); hangs on an SII chain without end --
     # each one line, the hang stopped at its time limit
     assert result["none"]["sdo read (kickcat)"]["returncode"] == 0
-    assert result["upload-endless"]["sdo read (kickcat)"]["stderr"].startswith("ecattool: error: the master crashed ")
+    assert result["upload-endless"]["sdo read (kickcat)"]["stderr"] == (
+        "ecattool: error: slave 0, 0x1018:01: CoE.cc:43: Error while reading SDO (KickCAT read at most 4 octets)\n")
     assert result["sii-no-end"]["sdo read (kickcat)"]["stderr"].startswith(
         "ecattool: error: the master did not answer within 15 s opening the bus on kickcat:ecat0")
     # the baseline: every command works against the well-behaved slave

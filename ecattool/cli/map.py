@@ -191,6 +191,9 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
         require("jinja2")  # before any work: a missing extra is one line, not a half-done run
     device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, drive,
                                 policy=policy)
+    # a PDO kept as the device has it is drawn as the slave powers on with it: where the ESI's dictionary and PDO
+    # element disagree, the dictionary's (docs/decisions.md, "An ESI that contradicts itself")
+    mapping, dictionary_pdos = pdo.powered_on(device, mapping)
     lay = pdo.layout(device, mapping)
     inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
     if svg:
@@ -200,7 +203,10 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
         if svg == "-":
             return
     if as_json or output not in (None, "-"):
-        write_output(output, dump_json(lay.to_json()) + "\n", inputs)
+        doc = lay.to_json()
+        if dictionary_pdos:  # drawn by the dictionary's mapping object (esi-pdo-default-differs)
+            doc["power_on_from_dictionary"] = [f"0x{i:04X}" for i in dictionary_pdos]
+        write_output(output, dump_json(doc) + "\n", inputs)
         return
     con = console()
     for img in (lay.outputs, lay.inputs):
@@ -211,6 +217,9 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
             t.add_row(e.offset, str(e.bit_len), f"0x{e.pdo:04X}", "gap" if e.is_gap else f"0x{e.index:04X}:{e.subindex:02X}",
                       e.name, e.type_name)
         con.print(t)
+    for index in dictionary_pdos:
+        click.echo(f"note: PDO 0x{index:04X} is drawn as the slave powers on with it, by the dictionary's mapping "
+                   "object: the ESI's PDO element differs (esi-pdo-default-differs; give its entries to use them)")
 
 
 @map_.command(epilog=_EXAMPLES.format(cmd="sdo"))

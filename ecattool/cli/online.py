@@ -98,10 +98,14 @@ def load_device(text: str | None) -> RunningDevice | None:
     return resolve_device(source, selector=selector or None)
 
 
-def open_live(target: str) -> LiveBus:
+def open_live(target: str, device: Any = None) -> LiveBus:
+    """The live bus of ``target``; ``device`` (``--device``): on a real master its ESI's timeouts bound the waits
+    (ecattool.target.timeouts); a simulator's slaves stay the target's own."""
     from ecattool.online.targets import open_bus
+    from ecattool.target.opener import parse_target
 
-    return _opened(open_bus(target, reset_bus=reset_bus_given()))
+    devices = [device] if device is not None and parse_target(target).kind != "sim" else []
+    return _opened(open_bus(target, devices, reset_bus=reset_bus_given()))
 
 
 #: ``--allow-errors`` on the commands that act on a project over a live bus (the same meaning as on commission)

@@ -47,10 +47,12 @@ def _object(text: str, address: tuple[int, int] | None, t: Any, slave: int) -> t
                      f"{slave}'s dictionary ({t.source}){did_you_mean(text, names)}")
 
 
-def _typed(slave: Any, library: str | None, device: str | None, sdo_info: bool = True) -> Any:
+def _typed(slave: Any, library: str | None, device: Any, sdo_info: bool = True) -> Any:
+    """The dictionary typing ``slave``'s objects: ``device`` (loaded by load_device), else the library, the family,
+    the slave's SDO Information."""
     from ecattool.online.dictionary import typed
 
-    return typed(slave, load_library(library), load_device(device), sdo_info=sdo_info)
+    return typed(slave, load_library(library), device, sdo_info=sdo_info)
 
 
 @click.group(epilog="""\b
@@ -81,10 +83,14 @@ def read(address: str, target: str, slave: int, library: str | None, device: str
     by its data type; without a dictionary, as raw bytes."""
     from ecattool.online.objects import read_value
 
+    from ecattool.online.dictionary import standard_typed
+
     addr = _address(address)
-    with open_live(target) as live:
+    # a CiA-301 object by its address (1018h:01 …) is typed by the standard: no identity, family or SDO Information
+    quick = standard_typed(*addr) if addr is not None and device is None and library is None else None
+    with open_live(target, dev := load_device(device)) as live:
         s = live.slave(slave)
-        t = _typed(s, library, device)  # the SDO Information service is asked at most once
+        t = quick or _typed(s, library, dev)  # the SDO Information service is asked at most once
         index, sub = _object(address, addr, t, slave)
         v = read_value(s, t, index, sub)
     if as_json:
@@ -112,9 +118,9 @@ def write(address: str, value: str, target: str, slave: int, library: str | None
     from ecattool.online.objects import write_value
 
     addr = _address(address)
-    with open_live(target) as live:
+    with open_live(target, dev := load_device(device)) as live:
         s = live.slave(slave)
-        t = _typed(s, library, device)
+        t = _typed(s, library, dev)
         index, sub = _object(address, addr, t, slave)
         data = write_value(s, t, index, sub, value)
     if as_json:
@@ -134,8 +140,8 @@ Examples:
 @json_option
 def info(target: str, slave: int, library: str | None, device: str | None, as_json: bool) -> None:
     """The slave's dictionary (objects, entries, types, access) and where it comes from."""
-    with open_live(target) as live:
-        t = _typed(live.slave(slave), library, device)
+    with open_live(target, dev := load_device(device)) as live:
+        t = _typed(live.slave(slave), library, dev)
     if not len(t.dictionary):
         from ecattool.errors import TargetError
 
@@ -171,9 +177,9 @@ def dump(target: str, slave: int, library: str | None, device: str | None, outpu
     from ecattool.cli.common import dump_json
     from ecattool.online.objects import dump as do_dump
 
-    with open_live(target) as live:
+    with open_live(target, dev := load_device(device)) as live:
         s = live.slave(slave)
-        snapshot = do_dump(s, _typed(s, library, device), target)
+        snapshot = do_dump(s, _typed(s, library, dev), target)
     write_output(output, dump_json(snapshot) + "\n")
 
 

@@ -18,7 +18,7 @@ from ecattool.project.machine import Machine, load_machine
 from ecattool.project.resolve import TRANSITION_STATE
 from ecattool.project.slave import Slave
 from ecattool.startup.model import StartupCommand
-from ecattool.target.base import SlaveTarget, Target
+from ecattool.target.base import SlaveTarget, Target, entry_size
 
 if TYPE_CHECKING:
     from ecattool.od.model import Entry
@@ -141,7 +141,7 @@ class ProcessIo:
             if index in _NOT_SEEDED or pos.bit_len % 8:
                 continue
             try:
-                raw = self.slave.sdo_upload(index, sub)
+                raw = self.slave.sdo_upload(index, sub, size=pos.bit_len // 8)
             except EcatToolError:
                 continue
             if len(raw) * 8 == pos.bit_len:
@@ -174,7 +174,7 @@ class ProcessIo:
         entry = self._entry(index, sub)
         pos = self.in_pos.get((index, sub))
         if pos is None:
-            value: int = entry.decode(self.slave.sdo_upload(index, sub))
+            value: int = entry.decode(self.slave.sdo_upload(index, sub, size=entry_size(entry)))
         else:
             raw = _get_bits(self.inputs, pos.bit_offset, pos.bit_len)
             value = entry.decode(raw.to_bytes(entry.byte_size, "little"))
@@ -231,9 +231,9 @@ def _check_identity(slave: SlaveTarget, rd: Slave, report: DriveReport) -> None:
     try:
         if not _speaks_coe(rd):
             raise TargetError("no mailbox: the identity is the EEPROM's")
-        vendor = int.from_bytes(slave.sdo_upload(0x1018, 1), "little")
-        product = int.from_bytes(slave.sdo_upload(0x1018, 2), "little")
-        revision = int.from_bytes(slave.sdo_upload(0x1018, 3), "little")
+        vendor = int.from_bytes(slave.sdo_upload(0x1018, 1, size=4), "little")  # UDINTs (CiA-301)
+        product = int.from_bytes(slave.sdo_upload(0x1018, 2, size=4), "little")
+        revision = int.from_bytes(slave.sdo_upload(0x1018, 3, size=4), "little")
         how = "1018h"
     except EcatToolError:
         ident = slave.identity()
@@ -276,7 +276,8 @@ def _send_verified(slave: SlaveTarget, rd: Slave, cmd: StartupCommand, sent: Sta
     state = TRANSITION_STATE.get(cmd.transition, EcState.PREOP)
     if entry is None or not entry.access.readable(state) or cmd.complete_access:
         return
-    back = _sdo_step(f"read back {cmd.address}", lambda: slave.sdo_upload(cmd.index, cmd.subindex))
+    bound = max(len(cmd.data), entry_size(entry) or 0)
+    back = _sdo_step(f"read back {cmd.address}", lambda: slave.sdo_upload(cmd.index, cmd.subindex, size=bound))
     sent.read_back, sent.verified = bytes(back), bytes(back) == cmd.data
     if bytes(back) != cmd.data:
         raise _Failed(Step(f"verify {cmd.address}", False,
@@ -377,12 +378,13 @@ def _zero_objects(io: ProcessIo, rd: Slave, mode: str) -> str:
 
     def read(index: int, sub: int) -> int | None:
         pos = io.out_pos.get((index, sub))
-        if device.dictionary.entry(index, sub) is None:
+        entry = device.dictionary.entry(index, sub)
+        if entry is None:
             return None
         try:
             if pos is not None:
                 return _get_bits(bytes(io.outputs), pos.bit_offset, pos.bit_len)
-            return int.from_bytes(bytes(io.slave.sdo_upload(index, sub)), "little")
+            return int.from_bytes(bytes(io.slave.sdo_upload(index, sub, size=entry_size(entry))), "little")
         except EcatToolError:
             return None
 
@@ -506,7 +508,7 @@ def _prove_process_data(io: ProcessIo, rd: Slave, report: DriveReport) -> None:
         if entry is None or not entry.access.readable(EcState.OP) or pos.bit_len % 8:
             continue
         try:
-            raw = bytes(io.slave.sdo_upload(index, sub))
+            raw = bytes(io.slave.sdo_upload(index, sub, size=max(entry_size(entry) or 0, pos.bit_len // 8)))
         except EcatToolError:
             continue  # no mailbox, or an object the slave will not read out: the cycle itself is the proof
         sent = _get_bits(bytes(io.outputs), pos.bit_offset, pos.bit_len)
@@ -537,7 +539,7 @@ def _check_readbacks(slave: SlaveTarget, rd: Slave, report: DriveReport) -> None
         if entry is None:
             continue
         address = f"0x{o.index:04X}:{o.subindex:02X}"
-        raw = _sdo_step(f"read {address}", partial(slave.sdo_upload, o.index, o.subindex))
+        raw = _sdo_step(f"read {address}", partial(slave.sdo_upload, o.index, o.subindex, size=entry_size(entry)))
         got = entry.decode(bytes(raw))
         if got != o.value:
             raise _Failed(Step("scaling", False, f"{address} ({o.name}: {o.part}) reads {got}, the project's scaling "
@@ -674,7 +676,7 @@ def _drive_error(slave: SlaveTarget, rd: Slave) -> str:
     try:
         if slave.state() not in (EcState.PREOP, EcState.SAFEOP, EcState.OP):
             return ""
-        code = int.from_bytes(bytes(slave.sdo_upload(0x603F, 0))[:2], "little")
+        code = int.from_bytes(bytes(slave.sdo_upload(0x603F, 0, size=2))[:2], "little")  # UINT (CiA-402)
     except EcatToolError:
         return ""
     if not code:

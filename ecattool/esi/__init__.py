@@ -24,8 +24,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ecattool.esi.model import Device, EsiFile
-from ecattool.esi.reader import load as _load
-from ecattool.esi.reader import load_bytes as _load_bytes
 from ecattool.esi.select import POLICIES, select, select_index
 
 if TYPE_CHECKING:
@@ -109,7 +107,9 @@ def load(path: str | Path, lazy: bool = False) -> EsiFile:
         from ecattool.esi.eds import load_eds
 
         return load_eds(p)
-    return _load(p, lazy)
+    from ecattool.esi.reader import load as read  # on first use: the model alone (a live bus's identity) needs no lxml
+
+    return read(p, lazy)
 
 
 def load_bytes(data: bytes, source: str = "<bytes>", base_dir: str | Path | None = None,
@@ -120,7 +120,9 @@ def load_bytes(data: bytes, source: str = "<bytes>", base_dir: str | Path | None
         from ecattool.esi.eds import load_eds_bytes
 
         return load_eds_bytes(data, source)
-    return _load_bytes(data, source, base_dir, lazy)
+    from ecattool.esi.reader import load_bytes as read
+
+    return read(data, source, base_dir, lazy)
 
 
 def load_device(path: str | Path, selector: str | None = None, policy: str = "exact") -> Device:

@@ -10,6 +10,10 @@
   other direction;
 * ``esi-sm-size`` — the default process image of a sync manager is larger than its MaxSize;
 * ``esi-exclude-missing`` — an Exclude names a PDO the device does not define;
+* ``esi-pdo-default-differs`` — a mapping object's DefaultData in the dictionary lays out other entries than
+  its ``<RxPdo>``/``<TxPdo>`` element (beyond trailing padding): the ESI contradicts itself; the slave powers on
+  with the dictionary's (:mod:`ecattool.esi.power_on`). An error where the image differs, a warning where only
+  the objects named differ;
 * ``esi-product-zero`` — the device's product code is 0 (an EDS without ProductNumber and 1018h:02 default,
   an ESI ProductCode of 0): a master configuration made from it expects product 0, which no real drive reports.
 """
@@ -32,6 +36,8 @@ RULES: dict[str, str] = {
     "esi-sm-size": "the default process image of a sync manager is larger than its MaxSize",
     "esi-exclude-missing": "an Exclude names a PDO the device does not define",
     "esi-product-zero": "the device's product code is 0: exported master configurations would expect product 0",
+    "esi-pdo-default-differs": "a mapping object's DefaultData contradicts its RxPdo/TxPdo element: the slave powers "
+                               "on with the dictionary's",
 }
 
 
@@ -144,6 +150,7 @@ def check_device(dev: Device) -> list[Finding]:
                 out.append(_f("esi-exclude-missing", Severity.WARNING,
                               f"{name}: PDO 0x{pdo.index:04X} excludes 0x{ex:04X}, which the device does not define",
                               pdo.location, pdo=pdo.index))
+    out.extend(_contradictions(dev, name))
     for sm in dev.sync_managers:
         if sm.max_size is None or sm.direction is None or sm.virtual:
             continue
@@ -153,6 +160,29 @@ def check_device(dev: Device) -> list[Finding]:
             out.append(_f("esi-sm-size", Severity.ERROR,
                           f"{name}: default process image of Sm {sm.number} is {size} bytes, more than its MaxSize {sm.max_size}",
                           sm.location, sm=sm.number, size=size))
+    return out
+
+
+def _values(values: list[int]) -> str:
+    return ", ".join(f"0x{v >> 16:04X}:{(v >> 8) & 0xFF:02X}/{v & 0xFF}" for v in values) or "nothing"
+
+
+def _contradictions(dev: Device, name: str) -> list[Finding]:
+    """``esi-pdo-default-differs``: at the dictionary object's line, naming the PDO element's."""
+    from ecattool.esi.power_on import contradictions
+
+    out = []
+    for c in contradictions(dev):
+        tag = "RxPdo" if c.pdo.direction is Direction.RX else "TxPdo"
+        line = c.pdo.location.line if c.pdo.location is not None else None
+        bits = sum(v & 0xFF for v in c.held), sum(v & 0xFF for v in c.listed)
+        what = ("the same bits, other objects" if c.same_image
+                else f"{bits[0]} bits against {bits[1]}: masters that read the slave lay out another image")
+        out.append(_f("esi-pdo-default-differs", Severity.WARNING if c.same_image else Severity.ERROR,
+                      f"{name}: the dictionary's mapping object 0x{c.pdo.index:04X} holds {_values(c.held)} by "
+                      f"default, its {tag} element{f' (line {line})' if line else ''} {_values(c.listed)} ({what}); "
+                      "the slave powers on with the dictionary's (ecattool's map layout, SII and simulator take it)",
+                      c.location or c.pdo.location, pdo=c.pdo.index))
     return out
 
 

@@ -939,6 +939,10 @@ class Reader:
                 cur = child.find("Electrical/EBusCurrent")
                 if cur is not None:
                     dev.ebus_current_ma = ctx.opt_number(cur.text, cur, "EBusCurrent")
+                for path in ("Mailbox/Timeout", "StateMachine/Timeout"):  # ms, read by ecattool.target.timeouts
+                    for t in child.iterfind(f"{path}/*"):
+                        if isinstance(t.tag, str):
+                            dev.extra[f"{path}/{t.tag}"] = (t.text or "").strip()
                 for vs in child.iterchildren("VendorSpecific"):
                     self._vendor_specific(vs, dev)
             elif tag == "VendorSpecific":

@@ -16,7 +16,6 @@ from typing import Any, TypeVar
 
 from ecattool.errors import InputError, SelectionError
 from ecattool.esi.model import Device, EsiFile
-from ecattool.esi.reader import LazyEsiFile
 from ecattool.od.numbers import parse_int
 
 # a Device, or a reader DeviceHead (type name and identity of a device not built yet)
@@ -108,6 +107,8 @@ def select_index(esi: EsiFile, selector: str | int | None = None, policy: str = 
 
     When the file had devices that could not be read (``esi-device-skipped`` findings), a failed selection
     names them: the device asked for may be one of them."""
+    from ecattool.esi.reader import LazyEsiFile  # here: the model and a selection need no XML reader (lxml)
+
     try:
         if isinstance(esi, LazyEsiFile) and esi.pending:
             head = _choose(esi.device_heads, esi.source, selector, policy)

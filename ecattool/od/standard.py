@@ -63,3 +63,17 @@ CIA402_NAMES: dict[str, int] = {
     "touchprobestatus": 0x60B9, "followingerroractualvalue": 0x60F4, "digitalinputs": 0x60FD,
     "targetvelocity": 0x60FF, "supporteddrivemodes": 0x6502,
 }
+
+
+#: CiA-301 communication objects whose name and data type are the same on every CoE slave (CiA 301, 7.5.2;
+#: ETG.1000.6 5.6.7.4): (index, sub-index) -> (name, type name). ``sdo read`` of one of them types the value with
+#: this table instead of loading a dictionary (ecattool.online.dictionary.standard_typed)
+CIA301_OBJECTS: dict[tuple[int, int], tuple[str, str]] = {
+    (0x1000, 0): ("Device type", "UDINT"), (0x1001, 0): ("Error register", "USINT"),
+    (0x1008, 0): ("Manufacturer device name", "VISIBLE_STRING"),
+    (0x1009, 0): ("Manufacturer hardware version", "VISIBLE_STRING"),
+    (0x100A, 0): ("Manufacturer software version", "VISIBLE_STRING"),
+    (0x1018, 0): ("Number of entries", "USINT"), (0x1018, 1): ("Vendor ID", "UDINT"),
+    (0x1018, 2): ("Product code", "UDINT"), (0x1018, 3): ("Revision number", "UDINT"),
+    (0x1018, 4): ("Serial number", "UDINT"),
+}

@@ -17,6 +17,7 @@ from ecattool.errors import Location, SdoAbort, TargetError
 from ecattool.esi.model import Identity
 from ecattool.od.model import EcState
 from ecattool.target.isolated import MasterGone
+from ecattool.target.base import entry_size
 from ecattool.findings import Finding, Severity
 from ecattool.online.dictionary import decode
 from ecattool.online.live import LiveBus, LiveSlave, describe_slave
@@ -205,7 +206,7 @@ def audit_drive(rd: Slave, slave: LiveSlave, report: AuditReport, sw_checksums: 
         report.checked += 1
         entry = device.dictionary.entry(index, sub)
         try:
-            actual = slave.sdo_upload(index, sub, ca)
+            actual = slave.sdo_upload(index, sub, ca, size=None if ca else max(len(cmd.data), entry_size(entry) or 0))
         except SdoAbort as exc:
             report.drifts.append(Drift(name, rd.position, "abort", where, cmd.data.hex(), f"0x{exc.code:08X}",
                                        f"{where}: reading it back was refused: {exc}", cmd.source))

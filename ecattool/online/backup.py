@@ -63,7 +63,7 @@ def _identity_1018(slave: LiveSlave) -> Identity:
     values = []
     for sub in (1, 2, 3):
         try:
-            data = slave.sdo_upload(0x1018, sub)
+            data = slave.sdo_upload(0x1018, sub, size=4)  # a UDINT (CiA-301)
         except SdoAbort:
             return slave.identity()
         if len(data) != 4:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import socket
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from ecattool.errors import TargetError
@@ -28,6 +28,12 @@ REPLY_S = 0.05
 ATTEMPTS = 3
 #: slaves read in one frame at most (12 octets of datagram head and data each: a frame holds ~120)
 MAX_SLAVES = 100
+#: the DC registers read per slave before the reset (SOEM's config_init clears 0x0981): the activation word
+#: (0x0980-0x0981) and the SYNC0 and SYNC1 cycle times (0x09A0-0x09A7)
+DC_ACTIVATION = 0x0980
+DC_SYNC_CYCLES = 0x09A0
+#: slaves whose DC registers one frame reads (2 datagrams, 34 octets, each: 40 fit an Ethernet frame)
+DC_SLAVES_PER_FRAME = 40
 _SRC = b"\x02\x00\x00\x00\xec\x01"
 _STATES = {0x01: EcState.INIT, 0x02: EcState.PREOP, 0x03: EcState.BOOT, 0x04: EcState.SAFEOP, 0x08: EcState.OP}
 RUNNING = (EcState.SAFEOP, EcState.OP)
@@ -41,6 +47,11 @@ class Found:
     position: int
     al_status: int
     al_status_code: int = 0
+    #: the slave's DC activation as found (ESC 0x0980-0x0981: the ESI's AssignActivate word; 0: no SYNC
+    #: signal) and its SYNC0/SYNC1 cycle times (0x09A0, 0x09A4, ns); None where they were not read
+    assign_activate: int | None = None
+    sync0_cycle_ns: int | None = None
+    sync1_cycle_ns: int | None = None
 
     @property
     def error(self) -> bool:
@@ -56,11 +67,14 @@ class Found:
         return f"slave {self.position} ({name}{', error' if self.al_status & 0x10 else ''})"
 
 
-def _exchange(sock: socket.socket, frame: bytes, index: int) -> bytes | None:
-    """``frame`` sent; the frame that comes back processed (bit 1 of the source MAC set by the first slave)."""
+def _exchange(sock: socket.socket, frame: bytes, index: int, resent: list[bool] | None = None) -> bytes | None:
+    """``frame`` sent; the frame that comes back processed (bit 1 of the source MAC set by the first slave).
+    ``resent``: set to [True] where the frame was sent again (a late answer to the first may still come)."""
     from ecattool.sim.bus.frame import parse_frame
 
-    for _ in range(ATTEMPTS):
+    for attempt in range(ATTEMPTS):
+        if attempt and resent is not None:
+            resent[:] = [True]
         sock.send(frame)
         deadline = time.monotonic() + REPLY_S
         while (left := deadline - time.monotonic()) > 0:
@@ -78,18 +92,48 @@ def _exchange(sock: socket.socket, frame: bytes, index: int) -> bytes | None:
     return None
 
 
+#: sends a frame and returns the frame that comes back with the datagram index given (None: no answer)
+Exchange = Callable[[bytes, int], bytes | None]
+
+
 def read_states(ifname: str) -> list[Found] | None:
-    """Each slave's AL status on ``ifname``, in bus order; None where it cannot be read (no raw socket, no
-    answer)."""
-    from ecattool.sim.bus.frame import Cmd, Datagram, FrameError, make_frame, parse_frame
+    """Each slave's AL status (and DC activation, :func:`read_found`) on ``ifname``, in bus order; None where it
+    cannot be read (no raw socket, no answer)."""
     from ecattool.sim.bus.raw import open_raw
 
     try:
         sock = open_raw(ifname)
     except TargetError:
         return None  # no raw socket here, or no such interface: the master's own open says why
+    resent: list[bool] = []
     try:
-        got = _exchange(sock, make_frame([Datagram.make(Cmd.BRD, 0, AL_STATUS, 2, index=0x51)], _SRC), 0x51)
+        return read_found(lambda frame, index: _exchange(sock, frame, index, resent))
+    except OSError:
+        return None
+    finally:
+        if resent:
+            _drain(sock)
+        sock.close()
+
+
+def _drain(sock: socket.socket) -> None:
+    """Take the late answers to frames sent again off the wire before the master opens its own socket (which
+    would read them as answers to its frames), until none comes for :data:`REPLY_S` (at most ``ATTEMPTS``)."""
+    for _ in range(ATTEMPTS):
+        sock.settimeout(REPLY_S)
+        try:
+            sock.recvfrom(2048)
+        except (OSError, socket.timeout):
+            return
+
+
+def read_found(exchange: Exchange) -> list[Found] | None:
+    """Each slave's AL status and DC registers, read through ``exchange``: a BRD of the AL status counts the
+    slaves, one APRD per slave reads its state (:func:`_with_dc` its DC activation)."""
+    from ecattool.sim.bus.frame import Cmd, Datagram, FrameError, make_frame, parse_frame
+
+    try:
+        got = exchange(make_frame([Datagram.make(Cmd.BRD, 0, AL_STATUS, 2, index=0x51)], _SRC), 0x51)
         if got is None:
             return None
         count = min(parse_frame(got).datagrams[0].wkc, MAX_SLAVES)  # type: ignore[union-attr]
@@ -97,17 +141,44 @@ def read_states(ifname: str) -> list[Found] | None:
             return []
         # 0x0130-0x0135: the AL status and the AL status code (0x0134)
         reads = [Datagram.make(Cmd.APRD, -p, AL_STATUS, 6, index=0x52) for p in range(count)]
-        got = _exchange(sock, make_frame(reads, _SRC), 0x52)
+        got = exchange(make_frame(reads, _SRC), 0x52)
         if got is None:
             return None
         frame = parse_frame(got)
         assert frame is not None
-        return [Found(p, int.from_bytes(d.data[:2], "little"), int.from_bytes(d.data[4:6], "little"))
-                for p, d in enumerate(frame.datagrams) if d.wkc]
-    except (OSError, FrameError):
+        found = [Found(p, int.from_bytes(d.data[:2], "little"), int.from_bytes(d.data[4:6], "little"))
+                 for p, d in enumerate(frame.datagrams) if d.wkc]
+        return _with_dc(exchange, found)
+    except FrameError:
         return None
-    finally:
-        sock.close()
+
+
+def _with_dc(exchange: Exchange, found: list[Found]) -> list[Found]:
+    """``found`` with each slave's DC activation and SYNC0/SYNC1 cycle times (:attr:`Found.assign_activate`),
+    read before the master resets the bus (SOEM's ``config_init`` writes 0x0981 := 0): what a commissioned bus
+    runs with, for ``project new --from-bus``. A slave that does not answer the read (no DC unit) keeps None."""
+    from dataclasses import replace
+
+    from ecattool.sim.bus.frame import Cmd, Datagram, make_frame, parse_frame
+
+    out = list(found)
+    for start in range(0, len(found), DC_SLAVES_PER_FRAME):
+        part = found[start:start + DC_SLAVES_PER_FRAME]
+        reads = []
+        for f in part:
+            reads.append(Datagram.make(Cmd.APRD, -f.position, DC_ACTIVATION, 2, index=0x53))
+            reads.append(Datagram.make(Cmd.APRD, -f.position, DC_SYNC_CYCLES, 8, index=0x53))
+        got = exchange(make_frame(reads, _SRC), 0x53)
+        frame = parse_frame(got) if got is not None else None
+        if frame is None or len(frame.datagrams) != 2 * len(part):
+            continue
+        for k, f in enumerate(part):
+            act, cycles = frame.datagrams[2 * k], frame.datagrams[2 * k + 1]
+            if act.wkc and cycles.wkc:
+                out[start + k] = replace(f, assign_activate=int.from_bytes(act.data[:2], "little"),
+                                         sync0_cycle_ns=int.from_bytes(cycles.data[:4], "little"),
+                                         sync1_cycle_ns=int.from_bytes(cycles.data[4:8], "little"))
+    return out
 
 
 def guard(ifname: str, reset_bus: bool) -> list[Found]:

@@ -6,18 +6,21 @@ are shown as they are."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import EcatToolError, InputError
 from ecattool.esi.model import Device, Identity
 from ecattool.od.model import Entry, ObjectDictionary
-from ecattool.online.library import Library, Match, family_device, family_match
+
+if TYPE_CHECKING:
+    from ecattool.online.library import Library, Match
 
 
 @dataclass
 class Typed:
     """A slave's dictionary and where it came from: ``device`` (given: ``--device``, or the project's), ``esi`` or
-    ``eds`` (the library), ``family``, ``sdo-info`` (the slave's own), or ``none``."""
+    ``eds`` (the library), ``family``, ``sdo-info`` (the slave's own), ``standard`` (one CiA-301 object,
+    :func:`standard_typed`), or ``none``."""
 
     dictionary: ObjectDictionary
     source: str
@@ -30,8 +33,28 @@ class Typed:
         return self.dictionary.entry(index, subindex)
 
 
+def standard_typed(index: int, subindex: int) -> Typed | None:
+    """A one-entry dictionary for a CiA-301 communication object whose type is the same on every slave (1000h,
+    1008h, 1018h:01 …; ``od.standard.CIA301_OBJECTS``), ``source`` "standard"; None for any other object. Reading
+    one of them needs no identity, family, library or SDO Information (``sdo read 0x1018:01``)."""
+    from ecattool.od.model import RO, ObjectCode, OdObject
+    from ecattool.od.standard import CIA301_OBJECTS
+    from ecattool.od.types import lookup
+
+    known = CIA301_OBJECTS.get((index, subindex))
+    dt = lookup(known[1]) if known is not None else None
+    if known is None or dt is None:
+        return None
+    entry = Entry(subindex, known[0], dt, dt.bits or 0, access=RO)
+    od = ObjectDictionary()
+    od.add(OdObject(index, known[0], ObjectCode.VAR if subindex == 0 else ObjectCode.RECORD, {subindex: entry}))
+    return Typed(od, "standard")
+
+
 def identify(slave: Any, library: Library | None = None) -> tuple[Identity, Match | None]:
     """The slave's identity and the library device or built-in family it matches (library first)."""
+    from ecattool.online.library import family_match
+
     ident: Identity = slave.identity()
     match = library.match(ident) if library is not None else None
     return ident, match or family_match(ident)
@@ -40,6 +63,8 @@ def identify(slave: Any, library: Library | None = None) -> tuple[Identity, Matc
 def typed(slave: Any, library: Library | None = None, device: Device | None = None,
           sdo_info: bool = True) -> Typed:
     """The dictionary of ``slave`` (see the module text for the order of the sources)."""
+    from ecattool.online.library import Match, family_device
+
     if device is not None:
         return Typed(device.dictionary, "device", Match("device", device.source, device.type_name, True), device)
     ident, match = identify(slave, library)

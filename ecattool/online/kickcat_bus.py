@@ -19,11 +19,15 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from types import ModuleType
+from typing import TYPE_CHECKING
 
 from ecattool.errors import TargetError
 from ecattool.od.model import EcState, ObjectDictionary
 from ecattool.online.live import LiveBus, Unsupported
 from ecattool.target.kickcat import KickcatSlave, import_kickcat
+
+if TYPE_CHECKING:
+    from ecattool.target.timeouts import BusLimits
 
 #: bus init timeouts (s): short first (KickCAT waits the whole timeout per SII read for a redundant port's copy)
 INIT_TIMEOUTS_S = (0.02, 0.1)
@@ -77,14 +81,17 @@ def _quiet_stdout() -> Iterator[None]:
         os.close(null)
 
 
-def open_kickcat(ifname: str, module: ModuleType | None = None) -> LiveBus:
-    """A KickCAT master on ``ifname``, every slave in PRE-OP."""
+def open_kickcat(ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> LiveBus:
+    """A KickCAT master on ``ifname``, every slave in PRE-OP; ``limits``: the slaves' timeouts (an SDO waits one
+    mailbox window of theirs)."""
     kc = module or _import()
     try:
         with _quiet_stdout():
             link = kc.create_link(ifname, "")
     except Exception as exc:  # noqa: BLE001 - RuntimeError/OSError from the binding
-        raise TargetError(f"cannot open EtherCAT interface {ifname!r} with KickCAT: {exc}") from None
+        from ecattool.target.pysoem import open_advice
+
+        raise TargetError(f"cannot open EtherCAT interface {ifname!r} with KickCAT: {exc}{open_advice(ifname)}") from None
     bus = kc.Bus(link)
     for attempt, timeout in enumerate(INIT_TIMEOUTS_S):
         link.set_timeout(timeout)
@@ -95,7 +102,7 @@ def open_kickcat(ifname: str, module: ModuleType | None = None) -> LiveBus:
             if attempt == len(INIT_TIMEOUTS_S) - 1:
                 raise TargetError(f"KickCAT bus init on {ifname!r} failed: {exc}") from None
     link.set_timeout(LINK_TIMEOUT_S)
-    slaves = [KickcatLiveSlave(bus, s, i, kc) for i, s in enumerate(bus.slaves())]
+    slaves = [KickcatLiveSlave(bus, s, i, kc, limits) for i, s in enumerate(bus.slaves())]
     if not slaves:
         raise TargetError(f"no EtherCAT slaves found on {ifname!r}")
     return LiveBus(f"kickcat:{ifname}", slaves)

@@ -4,13 +4,16 @@ project's ESI cache (:mod:`ecattool.project.cache`) so a second scan does not pa
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 from ecattool.errors import EcatToolError, InputError, Location
 from ecattool.esi.model import Device, Identity
 
 SUFFIXES = (".xml", ".eds", ".dcf")
+T = TypeVar("T")
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,11 +76,12 @@ class Library:
             except EcatToolError as exc:
                 self.skipped.append((str(path), str(exc)))
 
-    def match(self, identity: Identity) -> Match | None:
-        """The library device of ``identity``: exact, else the newest revision of the same product."""
+    def match(self, identity: Identity, name: str = "") -> Match | None:
+        """The library device of ``identity``: exact, else the newest revision of the same product; among devices
+        of the same identity, the one the SII's ``name`` names."""
         same = [d for d in self.devices if (d.identity.vendor_id, d.identity.product_code)
                 == (identity.vendor_id, identity.product_code)]
-        exact = [d for d in same if d.identity.revision == identity.revision]
+        exact = named([d for d in same if d.identity.revision == identity.revision], name, lambda d: (d.name,))
         pick = exact[0] if exact else max(same, key=lambda d: d.identity.revision, default=None)
         if pick is None:
             return None
@@ -89,17 +93,39 @@ class Library:
         return load_device_cached(match.source, match.selector, "exact")
 
 
-def family_match(identity: Identity) -> Match | None:
-    """The built-in family model of ``identity`` (vendor and product code; the revision is the family's)."""
+def _words(text: str) -> str:
+    return " ".join("".join(c if c.isalnum() else " " for c in text.lower()).split())
+
+
+def named(candidates: list[T], name: str, names: Callable[[T], tuple[str, ...]]) -> list[T]:
+    """``candidates`` with the ones the SII's ``name`` string names first (a name of theirs, e.g. "Digitax ST +
+    SM-EtherCAT" or the key "digitax-st", found in it word for word; the longest such name first), the others
+    after them in their order: models that share a product code (Control Techniques' SM-EtherCAT hosts) are told
+    apart by what the slave calls itself."""
+    said = f" {_words(name)} "
+    if not said.strip():
+        return list(candidates)
+
+    def score(c: T) -> int:
+        return max((len(w) for n in names(c) if (w := _words(n)) and f" {w} " in said), default=0)
+
+    return sorted(candidates, key=lambda c: -score(c))
+
+
+def family_match(identity: Identity, name: str = "") -> Match | None:
+    """The built-in family model of ``identity`` (vendor and product code; the revision is the family's); among
+    the models that share the product code, the one the SII's ``name`` names (else the first)."""
     from ecattool import profiles
 
     for info in profiles.list_profiles():
         if info.vendor_id != identity.vendor_id:
             continue
-        for p in info.products:
-            if p.product_code == identity.product_code:
-                return Match("family", f"profile:{info.name}", p.title or p.name, False, profile=info.name,
-                             product=p.name)
+        models = named([p for p in info.products if p.product_code == identity.product_code], name,
+                       lambda p: (p.title, p.name))
+        if models:
+            p = models[0]
+            return Match("family", f"profile:{info.name}", p.title or p.name, False, profile=info.name,
+                         product=p.name)
     return None
 
 

@@ -36,7 +36,9 @@ class LiveSlave(Protocol):
         """The identity the master read from the slave's SII (KickCAT: from 1018h, it gives no SII access)."""
         ...
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes: ...
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        """As :meth:`ecattool.target.base.SlaveTarget.sdo_upload`: ``size`` bounds the reply."""
+        ...
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None: ...
@@ -226,9 +228,9 @@ class SimLiveSlave:
         h = parse_header(self.sii)
         return Identity(h.vendor_id, h.product_code, h.revision, h.serial)
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
         try:
-            return bytes(self.drive.sdo_upload(index, subindex, complete_access))
+            return bytes(self.drive.sdo_upload(index, subindex, complete_access, size=size))
         finally:
             self._note_writes()
 
@@ -245,6 +247,11 @@ class SimLiveSlave:
 
     def request_state(self, state: EcState) -> None:
         self.drive.request_state(state)
+
+    def dc_activation(self) -> tuple[int, int, int]:
+        """The drive's DC as a master configured it (the ESC's 0x0980-0x0981 word, SYNC0 and SYNC1 cycle in ns)."""
+        act, cycle = getattr(self.drive, "dc", (0, 0))
+        return int(act), int(cycle), 0
 
     def al_status_code(self) -> int | None:
         for e in reversed(self.drive.events):

@@ -11,6 +11,7 @@ from ecattool.abort import abort_text
 from ecattool.errors import InputError, Location, SdoAbort, TargetError
 from ecattool.od.model import EcState, Entry
 from ecattool.online.dictionary import Typed, decode, encode
+from ecattool.target.base import entry_size
 
 SNAPSHOT_FORMAT = "ecattool-dictionary-snapshot"
 
@@ -64,7 +65,7 @@ def read_value(slave: Any, typed: Typed, index: int, subindex: int, *, keep_abor
     name = e.name if e is not None else ""
     type_name = e.type_name if e is not None else ""
     try:
-        data = slave.sdo_upload(index, subindex)
+        data = slave.sdo_upload(index, subindex, size=entry_size(e))
     except SdoAbort as exc:
         if not keep_aborts:
             raise

@@ -5,13 +5,16 @@ the AL status code and the SDO Information service (``slave.od``: SOEM's OD list
 from __future__ import annotations
 
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import TargetError
 from ecattool.esi.model import Identity
 from ecattool.od.model import Access, EcState, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.types import lookup
 from ecattool.online.live import LiveBus, read_sii
+
+if TYPE_CHECKING:
+    from ecattool.target.timeouts import BusLimits
 
 #: SOEM's EEPROM access timeout per word, in microseconds (pysoem's default is 20 ms)
 EEPROM_TIMEOUT_US = 20_000
@@ -73,8 +76,8 @@ class PysoemLiveSlave:
         ident: Identity = self._t.identity()
         return ident
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
-        data: bytes = self._t.sdo_upload(index, subindex, complete_access)
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        data: bytes = self._t.sdo_upload(index, subindex, complete_access, size=size)
         return data
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
@@ -120,11 +123,11 @@ class PysoemLiveSlave:
         return dictionary_from_soem(objects)
 
 
-def open_pysoem(ifname: str, module: ModuleType | None = None) -> LiveBus:
+def open_pysoem(ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> LiveBus:
     """A pysoem master on ``ifname`` with every slave in PRE-OP, as a live bus. No process data is set up: the
-    commands that read a bus never take a slave past PRE-OP."""
+    commands that read a bus never take a slave past PRE-OP. ``limits``: the slaves' timeouts."""
     from ecattool.target.pysoem import PysoemTarget
 
-    target = PysoemTarget(ifname, pysoem_module=module, keep_cycling=False)
+    target = PysoemTarget(ifname, pysoem_module=module, keep_cycling=False, limits=limits)
     slaves = [PysoemLiveSlave(s, target.pysoem) for s in target.slaves()]
     return LiveBus(f"pysoem:{ifname}", slaves, closer=target.close)

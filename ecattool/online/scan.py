@@ -56,9 +56,10 @@ class ScannedSlave:
 
 
 def _coe_identity(slave: Any) -> Identity:
-    v, p, r = (int.from_bytes(slave.sdo_upload(0x1018, sub), "little") for sub in (1, 2, 3))
+    # 1018h's entries are UDINTs (CiA-301): no reply of more than 4 octets is taken
+    v, p, r = (int.from_bytes(slave.sdo_upload(0x1018, sub, size=4), "little") for sub in (1, 2, 3))
     try:
-        serial = int.from_bytes(slave.sdo_upload(0x1018, 4), "little")
+        serial = int.from_bytes(slave.sdo_upload(0x1018, 4, size=4), "little")
     except SdoAbort:  # the serial number is optional (CiA-301)
         serial = 0
     return Identity(v, p, r, serial)
@@ -103,7 +104,8 @@ def scan_slave(slave: Any, library: Library | None = None) -> ScannedSlave:
     ident = sii_ident or coe
     match = None
     if ident is not None:
-        match = (library.match(ident) if library is not None else None) or family_match(ident)
+        # among models sharing the identity, the one the SII's name names (as project new --from-bus writes it)
+        match = (library.match(ident, name) if library is not None else None) or family_match(ident, name)
         if match is None:
             unknown.append("device: no library file or built-in family has this vendor and product code")
     if dc is None and match is not None:

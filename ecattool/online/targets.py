@@ -4,13 +4,16 @@ pysoem or KickCAT."""
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
 from ecattool.online.live import LiveBus, sim_bus
 from ecattool.target.base import Target
 from ecattool.target.opener import MASTERS, open_target, parse_target, sim_devices
+
+if TYPE_CHECKING:
+    from ecattool.target.timeouts import BusLimits
 
 
 def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False) -> LiveBus:
@@ -33,6 +36,11 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
     from ecattool.online.bus_state import guard
 
     found = guard(parsed.interface, reset_bus)
+    from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, bus_limits
+
+    # how long to wait: the slaves' own ESI timeouts where the command has devices (a project, --device), the bus
+    # init budgeted for as many slaves as the state read found (ecattool.target.timeouts)
+    limits = bus_limits(devices, len(found) or None, KICKCAT_SII_S if parsed.kind == "kickcat" else SII_S)
     # a real master runs in a child process (ecattool.target.isolated): one that crashes or hangs on what a slave
     # answers becomes a one-line error naming the slave and the object, never the end of ecattool
     if parsed.kind == "pysoem":
@@ -40,12 +48,12 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
         from ecattool.target.pysoem import _import_pysoem
 
         _import_pysoem()
-        return _restoring(isolated_bus(spec, lambda: open_pysoem(parsed.interface)), found)
+        return _restoring(isolated_bus(spec, lambda: open_pysoem(parsed.interface, limits=limits), limits), found)
     from ecattool.online.kickcat_bus import open_kickcat
     from ecattool.target.kickcat import import_kickcat
 
     import_kickcat()
-    return _restoring(isolated_bus(spec, lambda: open_kickcat(parsed.interface)), found)
+    return _restoring(isolated_bus(spec, lambda: open_kickcat(parsed.interface, limits=limits), limits), found)
 
 
 def open_guarded(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False) -> Target:
@@ -78,9 +86,10 @@ def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:
     return bus
 
 
-def isolated_bus(spec: str, opener: Callable[[], LiveBus]) -> LiveBus:
-    """The live bus ``opener`` opens, served from a child process (:class:`~ecattool.target.isolated.MasterProcess`)."""
+def isolated_bus(spec: str, opener: Callable[[], LiveBus], limits: BusLimits | None = None) -> LiveBus:
+    """The live bus ``opener`` opens, served from a child process (:class:`~ecattool.target.isolated.MasterProcess`);
+    ``limits``: how long it may take (the slaves' timeouts)."""
     from ecattool.target.isolated import MasterProcess, RemoteSlave
 
-    master = MasterProcess(spec, opener, lambda bus: bus.slaves)
+    master = MasterProcess(spec, opener, lambda bus: bus.slaves, limits=limits)
     return LiveBus(spec, [RemoteSlave(master, p) for p in master.positions], closer=master.close)

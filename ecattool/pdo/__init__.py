@@ -22,11 +22,12 @@ from ecattool.pdo.model import (
     parse_direction,
     parse_entry,
     pdo_direction,
+    powered_on,
 )
 from ecattool.pdo.program import ORDERS, program, resolve_rules
 
 __all__ = [
     "ImageEntry", "Layout", "MappedPdo", "Mapping", "ORDERS", "RULES", "SmImage", "check", "check_config", "declared_mapping", "default_assignment",
-    "default_mapping", "entry_text", "input_finding", "layout", "mapping_from_config", "mapping_from_startup", "parse_direction", "parse_entry", "pdo_direction", "program",
+    "default_mapping", "entry_text", "input_finding", "layout", "mapping_from_config", "mapping_from_startup", "parse_direction", "parse_entry", "pdo_direction", "powered_on", "program",
     "resolve_rules", "rule_ids",
 ]

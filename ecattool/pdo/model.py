@@ -546,6 +546,31 @@ def default_mapping(device: Device) -> Mapping:
     return out
 
 
+def powered_on(device: Device, mapping: Mapping) -> tuple[Mapping, list[int]]:
+    """``mapping`` as the slave holds it at power-on: each PDO kept as the device has it (not given with
+    entries) whose mapping object's DefaultData contradicts the ESI's PDO element
+    (:func:`ecattool.esi.power_on.contradictions`) takes the dictionary's entries, which the slave powers on with
+    and every CoE master reads (the simulator serves them, the SII builder describes them). With the indices of
+    those PDOs. A project is checked against the PDO element instead (lint's PRJ027 and
+    ``esi-pdo-default-differs`` say where they differ; ``pdo:`` with entries programs the one meant)."""
+    from ecattool.esi.power_on import contradictions
+
+    differing = {c.pdo.index for c in contradictions(device)}
+    changed: list[int] = []
+    out = Mapping(given=set(mapping.given), source=mapping.source)
+    for direction in Direction:
+        pdos = []
+        for p in mapping.pdos(direction):
+            own = _mapping_from_dictionary(device, p.index) if not p.explicit and p.index in differing else None
+            if own is None:
+                pdos.append(p)
+                continue
+            changed.append(p.index)
+            pdos.append(MappedPdo(p.index, own, False, p.name, p.location))
+        out.set_pdos(direction, pdos)
+    return out, changed
+
+
 def virtual_pdos(device: Device, mapping: Mapping) -> list[MappedPdo]:
     """The PDOs of ``mapping`` that are windows onto ESC registers on ``device`` (:meth:`Device.esc_registers`,
     and no real PDO of that index): DC latch times, sync activation that TwinCAT puts into the process image

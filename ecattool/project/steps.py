@@ -603,8 +603,21 @@ def check_esi(lp: LoadedProject, i: int, slave: Slave) -> Found:
         found.error("PRJ005", exc.message, exc.location)
         return found
     used = {p.index for p in (*slave.mapping.rx, *slave.mapping.tx)} if slave.mapping is not None else None
+    from ecattool.pdo.program import rewritten
+
+    assert slave.device is not None
+    # a mapping object whose DefaultData contradicts its PDO element matters where the slave runs it as it holds
+    # it: a PDO the mapping uses and commission does not program (docs/decisions.md, "An ESI that contradicts
+    # itself"); where PRJ027 reports the project's mapping against it (its first such PDO, at the same line, with
+    # what to do: give the mapping in pdo:), once is enough
+    kept = ({p.index for p in (*slave.mapping.rx, *slave.mapping.tx)
+             if not (p.explicit and rewritten(slave.device, p, slave.rules))} if slave.mapping is not None else set())
+    if slave.mapping is not None:
+        kept -= {d.index for d in dictionary_mapping_differences(slave.device, slave.mapping, slave.rules)}
     for f in findings:
         pdo_index = f.data.get("pdo")
+        if f.rule == "esi-pdo-default-differs" and pdo_index not in kept:
+            continue
         if used is not None and f.severity is Severity.ERROR and isinstance(pdo_index, int) and pdo_index not in used:
             f = Finding(f.rule, Severity.WARNING, f"{f.message} (a PDO this drive's mapping does not use)",
                         f.location, f.data)

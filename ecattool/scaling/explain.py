@@ -270,7 +270,7 @@ def read_values(slave: Any) -> Values:
     for index, subs in SCALING_OBJECTS:
         for sub in subs:
             try:
-                data = slave.sdo_upload(index, sub)
+                data = slave.sdo_upload(index, sub, size=4)  # every factor and SI unit object is 32 bits at most
             except TargetError:
                 break
             values[(index, sub)] = int.from_bytes(data, "little", signed=index in _SIGNED)

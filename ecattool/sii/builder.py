@@ -96,14 +96,18 @@ def _enable_byte(sm: SyncManager) -> int:
     return given | (4 if sm.virtual else 0) | (8 if sm.op_only else 0)
 
 
-def _pdo(p: Pdo, strings: StringTable) -> SiiPdo:
+def _pdo(device: Device, p: Pdo, strings: StringTable) -> SiiPdo:
+    """The PDO category entry of ``p`` with the entries the slave powers on with: where the ESI's dictionary gives
+    the mapping object another default than the PDO element, the dictionary's (``esi.power_on``)."""
+    from ecattool.esi.power_on import power_on_entries
+
     flags = 0
     for name, bit in PDO_FLAGS.items():
         if getattr(p, name, False):
             flags |= bit
     name_idx = strings.add(p.name)  # the PDO name comes before its entries' names, as in the dumps
     entries = [SiiPdoEntry(e.index, e.subindex, strings.add(e.name), data_type_code(e.data_type),
-                           e.bit_len & 0xFF, 0) for e in p.entries]
+                           e.bit_len & 0xFF, 0) for e in power_on_entries(device, p)]
     return SiiPdo(p.index, 0xFF if p.sm is None else p.sm, 0, name_idx, flags, entries)
 
 
@@ -193,8 +197,8 @@ def assemble(device: Device, *, pdo_categories: bool = True) -> SiiImage:
     # a virtual PDO that is a window onto ESC registers (Device.esc_registers, docs/esi.md "Virtual PDOs") is no
     # PDO of a sync manager: a master without CoE lays out its SMs from these categories (SOEM's config_map sums
     # every PDO with an SM number), so listing it would lay out an image the slave's mapping does not have
-    tx = [_pdo(p, strings) for p in device.tx_pdos if not device.esc_registers(p)] if pdo_categories else []
-    rx = [_pdo(p, strings) for p in device.rx_pdos if not device.esc_registers(p)] if pdo_categories else []
+    tx = [_pdo(device, p, strings) for p in device.tx_pdos if not device.esc_registers(p)] if pdo_categories else []
+    rx = [_pdo(device, p, strings) for p in device.rx_pdos if not device.esc_registers(p)] if pdo_categories else []
 
     # Eeprom/Category entries come first (as the vendor categories of the AKD/EL2262 dumps do); one of a
     # standard type (Elmo's boot devices give their own GENERAL and SYNCM) replaces the generated one.

@@ -111,6 +111,12 @@ class Cia402:
         self.quick_stop_option = 2
         #: the ramp of FAULT REACTION ACTIVE (605Eh), increments/s² (None: FAULT at once)
         self.fault_ramp: Fraction | None = None
+        #: a Shutdown / Disable Operation (/ Technosoft: Disable Voltage) whose option code 605Bh / 605Ch is 1 "slow
+        #: down with slow down ramp; disable the drive function": the state it ends in once :meth:`step` has ramped
+        #: the axis to standstill with :attr:`disable_ramp` (increments/s²); the drive stays OPERATION ENABLED until
+        #: then. None: no such ramp runs
+        self.disable_to: State | None = None
+        self.disable_ramp: Fraction | None = None
         #: transitions the drive made by itself during :meth:`step` (12, 14), for the drive to report
         self.automatic: list[tuple[State, State]] = []
         #: the homing acceleration 609Ah in increments/s² (None: the search starts at full speed)
@@ -122,6 +128,9 @@ class Cia402:
         #: an obstacle the axis cannot pass (internal position), and the side of it the axis is on
         self.obstacle: Fraction | None = None
         self.obstacle_side = 0
+        #: the obstacle blocks the plant's load, not the demand (the drive is on a plant): the profile runs on and
+        #: the plant's axis lags behind it; only a torque-limited profile (HDT -1) stops at it
+        self.obstacle_on_plant = False
         #: the profile's position demand where it differs from the actual position (the axis is blocked)
         self.demand: Fraction | None = None
         #: statusword bit 13 in profile position: the following error is outside its window too long
@@ -197,6 +206,7 @@ class Cia402:
 
     def _stop(self) -> None:
         """The power stage leaves OPERATION ENABLED (or faults): motion and any homing search end."""
+        self.disable_to = None
         self.velocity = Fraction(0)
         self.target = None
         self.move = None
@@ -242,8 +252,13 @@ class Cia402:
         return [(State.OPERATION_ENABLED, State.SWITCH_ON_DISABLED)]
 
     # --- state machine ----------------------------------------------------------------------------
-    def controlword_written(self, cw: int, *, ecat_op: bool, quick_stop_option: int) -> list[tuple[State, State]]:
-        """Apply a controlword; returns the transitions made (from, to)."""
+    def controlword_written(self, cw: int, *, ecat_op: bool, quick_stop_option: int,
+                            disable_ramp: Callable[[State], Fraction | None] | None = None
+                            ) -> list[tuple[State, State]]:
+        """Apply a controlword; returns the transitions made (from, to). ``disable_ramp(state)``: the ramp
+        (increments/s²) a transition out of OPERATION ENABLED to ``state`` (READY: Shutdown, 605Bh; SWITCHED ON:
+        Disable Operation, 605Ch; SWITCH ON DISABLED: Disable Voltage where the family's manual applies 605Ch) runs
+        before the state changes, None: at once. Asked only while the axis moves."""
         prev = self.controlword
         self.controlword = cw
         moves: list[tuple[State, State]] = []
@@ -289,9 +304,25 @@ class Cia402:
             elif enable:
                 go(State.OPERATION_ENABLED)
         elif s is State.OPERATION_ENABLED:
+            leave = (State.SWITCH_ON_DISABLED if disable_voltage else None if quick_stop else State.READY if shutdown
+                     else State.SWITCHED_ON if switch_on else None)
+            ramp = disable_ramp(leave) if leave is not None and disable_ramp is not None and self.vel_n else None
+            if leave is not None and ramp:
+                # 605Bh/605Ch = 1: slow down with the slow down ramp, then disable (the state changes in step)
+                if self.disable_to is None:
+                    self.disable_ramp = ramp
+                    self.target = None
+                    self.move = None
+                    if self.homing is Homing.IN_PROGRESS:
+                        self.homing = Homing.NOT_STARTED
+                self.disable_to = leave
+                return moves
+            if not quick_stop and leave is None:
+                self.disable_to = None  # Enable Operation again: the running slow-down ends, the axis follows
             if disable_voltage:
                 go(State.SWITCH_ON_DISABLED)
             elif quick_stop:
+                self.disable_to = None
                 go(State.QUICK_STOP)
                 self.target = None
                 self.move = None
@@ -325,6 +356,7 @@ class Cia402:
         if self.state is not State.FAULT:
             moves.append((self.state, State.FAULT_REACTION))
             powered = self.state in (State.OPERATION_ENABLED, State.QUICK_STOP)
+            self.disable_to = None
             if ramp and powered and self.velocity:
                 self.state = State.FAULT_REACTION
                 self.fault_ramp = ramp
@@ -403,6 +435,9 @@ class Cia402:
         if self.state is not State.OPERATION_ENABLED:
             self.velocity = Fraction(0)
             return
+        if self.disable_to is not None:
+            self._disable_step(dt, inc_per_s, vel_from_inc_per_s)
+            return
         if self.controlword & HALT:
             self._halt_step(mode, dt, halt_deceleration, inc_per_s, vel_from_inc_per_s)
             return
@@ -473,7 +508,7 @@ class Cia402:
                                     profile.acceleration, profile.deceleration or profile.acceleration,
                                     profile.jerk_time, dt, profile.jerk)
         position, velocity, done = self.move.step(dt)
-        if self.blocked_at(position):
+        if self.blocked_at(position) and (profile.torque_limited or not self.obstacle_on_plant):
             self._blocked_step(position, done, profile.torque_limited)
             return
         self.demand = None
@@ -506,6 +541,22 @@ class Cia402:
             self.automatic.append((State.QUICK_STOP, State.SWITCH_ON_DISABLED))
             self.state = State.SWITCH_ON_DISABLED
             self._stop()
+
+    def _disable_step(self, dt: Fraction, inc_per_s: _Convert, vel_from_inc_per_s: _Convert) -> None:
+        """One cycle of a Shutdown / Disable Operation with option code 1: ramp down in OPERATION ENABLED, and at
+        standstill make the transition (8, 5; Technosoft 9) the controlword asked for."""
+        ramp = self.disable_ramp
+        if ramp and self.velocity:
+            self._slow_down(dt, ramp, inc_per_s, vel_from_inc_per_s)
+        else:
+            self.velocity = Fraction(0)
+        if self.velocity:
+            return
+        to = self.disable_to
+        assert to is not None
+        self.automatic.append((State.OPERATION_ENABLED, to))
+        self.state = to
+        self._stop()
 
     # --- an obstacle in the way ---------------------------------------------------------------------------
     def set_obstacle(self, position: Fraction | None) -> None:
@@ -548,9 +599,9 @@ class Cia402:
     def _halt_step(self, mode: int, dt: Fraction, deceleration: Fraction | None, inc_per_s: _Convert,
                    vel_from_inc_per_s: _Convert) -> None:
         """Halt: the pending set-point (PP target, homing search) is kept for when bit 8 clears; the axis ramps
-        down with ``deceleration`` (PP, PV, homing; CSP/CSV and a 0 ramp stop within the cycle)."""
+        down with ``deceleration`` (a 0 or missing ramp stops within the cycle); CSP/CSV ignore their targets."""
         self.move = None  # a PP move resumes with a new plan from standstill
-        if mode in (CSP, CSV) or not deceleration or deceleration <= 0:
+        if not deceleration or deceleration <= 0:
             self.velocity = Fraction(0)
             return
         self._slow_down(dt, deceleration, inc_per_s, vel_from_inc_per_s)

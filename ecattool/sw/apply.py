@@ -64,7 +64,7 @@ def check_block(block: Block, target: SlaveTarget) -> BlockCheck:
     """Have the drive sum the block's range (2069h) and read the result (206Ah)."""
     try:
         target.sdo_download(OBJ_CHECKSUM_RANGE, 0, _u32(block.checksum_request))
-        data = target.sdo_upload(OBJ_CHECKSUM, 0)
+        data = target.sdo_upload(OBJ_CHECKSUM, 0, size=2)  # 206Ah: UNSIGNED16 (§17.2.6)
     except TargetError as exc:
         return BlockCheck(block, block.checksum, None, str(exc))
     return BlockCheck(block, block.checksum, int.from_bytes(data[:2], "little"))

@@ -30,11 +30,11 @@ def read_words(target: SlaveTarget, start: int, count: int) -> tuple[int, ...]:
     words: list[int] = []
     target.sdo_download(OBJ_CONFIG, 0, _u32(config_value(start, 32)))
     for _ in range(count // 2):
-        v = int.from_bytes(target.sdo_upload(OBJ_READ, 0)[:4].ljust(4, b"\0"), "little")
+        v = int.from_bytes(target.sdo_upload(OBJ_READ, 0, size=4)[:4].ljust(4, b"\0"), "little")
         words += [v & 0xFFFF, v >> 16]
     if count % 2:
         target.sdo_download(OBJ_CONFIG, 0, _u32(config_value(start + count - 1, 16)))
-        words.append(int.from_bytes(target.sdo_upload(OBJ_READ, 0)[:2].ljust(2, b"\0"), "little"))
+        words.append(int.from_bytes(target.sdo_upload(OBJ_READ, 0, size=4)[:2].ljust(2, b"\0"), "little"))
     return tuple(words)
 
 

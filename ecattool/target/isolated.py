@@ -23,19 +23,23 @@ from __future__ import annotations
 
 import ctypes
 import faulthandler
-import multiprocessing
 import os
+import pickle
+import select
 import signal
+import socket
+import struct
+import sys
+import time
 from collections.abc import Callable, Sequence
-from multiprocessing.connection import Connection
 from typing import Any
 
 from ecattool.errors import EcatToolError, TargetError
 from ecattool.target.base import SlaveTarget
+from ecattool.target.timeouts import BusLimits
 
-#: how long the bus init may take (a master reads every slave's SII; SOEM asks an empty bus again for 2 s)
-OPEN_TIMEOUT_S = 30.0
-#: how long one SDO, state or SII request may take (SOEM: 0.7 s per mailbox answer, a few for a segmented upload)
+#: how long one state or SII request may take (the bus init and SDO requests are bounded by the slaves' own
+#: timeouts instead: ecattool.target.timeouts.BusLimits)
 CALL_TIMEOUT_S = 20.0
 #: how long a closing master may take before it is stopped
 CLOSE_TIMEOUT_S = 5.0
@@ -107,6 +111,93 @@ def _signal_name(code: int | None) -> str:
     return f"exit status {code}"
 
 
+# ------------------------------------------------------------------------------------------------ the channel
+class Channel:
+    """One end of a socket pair carrying pickled messages (a 4-octet length, then the pickle): what
+    ``multiprocessing.Pipe`` gives, without importing ``multiprocessing`` (its connection module pulls in
+    ``tempfile``, ``shutil`` and the compression modules: a noticeable part of a one-object ``sdo read``)."""
+
+    def __init__(self, sock: socket.socket) -> None:
+        self._sock = sock
+
+    @classmethod
+    def pair(cls) -> tuple["Channel", "Channel"]:
+        a, b = socket.socketpair()
+        return cls(a), cls(b)
+
+    def send(self, obj: Any) -> None:
+        data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
+        self._sock.sendall(struct.pack("<I", len(data)) + data)
+
+    def _read(self, n: int) -> bytes:
+        buf = bytearray()
+        while len(buf) < n:
+            chunk = self._sock.recv(min(n - len(buf), 1 << 20))
+            if not chunk:
+                raise EOFError("the other end is closed")
+            buf += chunk
+        return bytes(buf)
+
+    def recv(self) -> Any:
+        (n,) = struct.unpack("<I", self._read(4))
+        return pickle.loads(self._read(n))
+
+    def poll(self, timeout_s: float) -> bool:
+        """Whether a message (or the other end's close) is there to read within ``timeout_s``."""
+        ready, _, _ = select.select([self._sock], [], [], max(0.0, timeout_s))
+        return bool(ready)
+
+    def close(self) -> None:
+        self._sock.close()
+
+
+class Child:
+    """A forked child process running ``target()`` (exit status 0, or 1 where it raised), as ``multiprocessing``'s
+    fork context starts one: ``exitcode`` negative for the signal that ended it."""
+
+    def __init__(self, target: Callable[[], None], before: Callable[[], None] = lambda: None) -> None:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        self.exitcode: int | None = None
+        pid = os.fork()
+        if pid == 0:  # the child: never returns into the caller's code
+            code = 1
+            try:
+                before()
+                target()
+                code = 0
+            finally:
+                os._exit(code)
+        self.pid = pid
+
+    def _reap(self, block: bool = False) -> None:
+        if self.exitcode is None:
+            try:
+                pid, status = os.waitpid(self.pid, 0 if block else os.WNOHANG)
+            except ChildProcessError:
+                self.exitcode = -int(signal.SIGKILL)
+                return
+            if pid:
+                self.exitcode = os.waitstatus_to_exitcode(status)
+
+    def is_alive(self) -> bool:
+        self._reap()
+        return self.exitcode is None
+
+    def join(self, timeout_s: float) -> None:
+        """Wait for the child to end, ``timeout_s`` at the most (polled every 10 ms)."""
+        deadline = time.monotonic() + timeout_s
+        while self.is_alive() and time.monotonic() < deadline:
+            time.sleep(0.01)
+
+    def kill(self) -> None:
+        if self.is_alive():
+            try:
+                os.kill(self.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
+
 # ------------------------------------------------------------------------------------------------ the child
 def _error_reply(exc: BaseException) -> tuple[Any, ...]:
     if isinstance(exc, EcatToolError):
@@ -114,7 +205,7 @@ def _error_reply(exc: BaseException) -> tuple[Any, ...]:
     return ("failed", f"{type(exc).__name__}: {exc}")
 
 
-def _serve(conn: Connection, factory: Callable[[], Any], slaves_of: Callable[[Any], Sequence[Any]]) -> None:
+def _serve(conn: Channel, factory: Callable[[], Any], slaves_of: Callable[[Any], Sequence[Any]]) -> None:
     """The child: open the master (``factory``), tell the parent the slaves' positions, then answer requests
     until the parent says ``None`` (close) or goes away."""
     try:  # the master never outlives ecattool (a killed parent leaves no master on the interface)
@@ -165,19 +256,20 @@ def _rebuild(reply: tuple[Any, ...], what: str) -> Exception:
 class MasterProcess:
     """A master opened by ``factory`` in a forked child; ``slaves_of(root)`` lists its slaves there.
 
-    ``name`` (``pysoem:eth0``) is used in errors. :attr:`positions` are the slaves' bus positions, in order."""
+    ``name`` (``pysoem:eth0``) is used in errors. :attr:`positions` are the slaves' bus positions, in order.
+    ``limits``: how long the bus init and each SDO request may take (the slaves' timeouts; ``open_timeout_s``
+    overrides the bus init's)."""
 
     def __init__(self, name: str, factory: Callable[[], Any], slaves_of: Callable[[Any], Sequence[Any]],
-                 open_timeout_s: float = OPEN_TIMEOUT_S) -> None:
+                 open_timeout_s: float | None = None, limits: BusLimits | None = None) -> None:
         self.name = name
+        self.limits = limits or BusLimits()
         self._dead: MasterGone | None = None
-        ctx = multiprocessing.get_context("fork")
-        self._conn, child_end = ctx.Pipe()
-        self._proc = ctx.Process(target=_serve, args=(child_end, factory, slaves_of), daemon=True,
-                                 name=f"ecattool-master-{name}")
-        self._proc.start()
+        self._conn, child_end = Channel.pair()
+        self._proc = Child(lambda: _serve(child_end, factory, slaves_of), before=self._conn.close)
         child_end.close()
-        self.positions: list[int] = self._answer(f"opening the bus on {name}", cap(open_timeout_s))
+        open_s = self.limits.open_s if open_timeout_s is None else open_timeout_s
+        self.positions: list[int] = self._answer(f"opening the bus on {name}", cap(open_s))
 
     def _answer(self, what: str, timeout_s: float) -> Any:
         """The child's reply to the request just sent (or to its start)."""
@@ -191,7 +283,8 @@ class MasterProcess:
             raise self._dead from None
         if reply is None:
             self._stop()
-            self._dead = MasterHung(f"the master did not answer within {timeout_s:g} s {what} ({self.name}; stopped)")
+            self._dead = MasterHung(f"the master did not answer within {timeout_s:g} s {what} ({self.name}; stopped; "
+                                    f"{self.limits.describe()})")
             raise self._dead
         if reply[0] == "ok":
             return reply[1]
@@ -243,15 +336,18 @@ class RemoteSlave:
         return self._master.call(self.position, method, *args, **kwargs)
 
     def identity(self) -> Any:
-        return self._call("identity")
+        # pysoem's identity is the SII's (no request); KickCAT's is 1018h:01-03, three SDOs
+        return self._call("identity", timeout_s=3 * self._master.limits.sdo_call_s)
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
-        data: bytes = self._call("sdo_upload", index, subindex, complete_access)
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        data: bytes = self._call("sdo_upload", index, subindex, complete_access, size=size,
+                                 timeout_s=self._master.limits.sdo_call_s)
         return data
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None:
-        self._call("sdo_download", index, subindex, bytes(data), complete_access, expect_reply)
+        self._call("sdo_download", index, subindex, bytes(data), complete_access, expect_reply,
+                   timeout_s=self._master.limits.sdo_call_s)
 
     def state(self) -> Any:
         return self._call("state")
@@ -298,9 +394,11 @@ class IsolatedTarget:
         self.master.close()
 
 
-def pysoem_target(ifname: str) -> IsolatedTarget:
-    """SOEM through pysoem on ``ifname`` (:class:`ecattool.target.pysoem.PysoemTarget`), in a child process."""
+def pysoem_target(ifname: str, limits: BusLimits | None = None) -> IsolatedTarget:
+    """SOEM through pysoem on ``ifname`` (:class:`ecattool.target.pysoem.PysoemTarget`), in a child process;
+    ``limits``: the slaves' timeouts (ecattool.target.timeouts)."""
     from ecattool.target.pysoem import PysoemTarget, _import_pysoem
 
     _import_pysoem()  # a missing extra is said here, and the child starts with the module loaded
-    return IsolatedTarget(MasterProcess(f"pysoem:{ifname}", lambda: PysoemTarget(ifname), lambda t: t.slaves()))
+    return IsolatedTarget(MasterProcess(f"pysoem:{ifname}", lambda: PysoemTarget(ifname, limits=limits),
+                                        lambda t: t.slaves(), limits=limits))

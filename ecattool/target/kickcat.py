@@ -14,16 +14,22 @@ import re
 from types import ModuleType
 from typing import Any
 
-from ecattool.errors import SdoAbort, SdoTimeout, TargetError
+from ecattool.errors import SdoAbort, SdoTimeout, SdoTooLarge, TargetError
 from ecattool.esi.model import Identity
 from ecattool.od.model import EcState
+from ecattool.target.base import UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX, check_upload
+from ecattool.target.timeouts import BusLimits
 
 SDO_TIMEOUT_S = 3.0
 #: mailbox polls one SDO download may take (each is one exchange of frames)
 POLLS = 5000
-#: KickCAT's read buffer for one SDO upload
-READ_BUFFER = 1024
 _ABORT = re.compile(r"0x([0-9a-fA-F]{8})")
+#: what KickCAT says of a reply larger than the buffer it was given
+_TOO_SMALL = re.compile(r"too (small|big|large)|buffer|size", re.IGNORECASE)
+
+
+def _too_small(exc: Exception) -> bool:
+    return bool(_TOO_SMALL.search(str(exc))) and "timeout" not in str(exc).lower()
 
 
 def import_kickcat() -> ModuleType:
@@ -38,7 +44,10 @@ def import_kickcat() -> ModuleType:
 class KickcatSlave:
     """One slave of a KickCAT ``Bus``: identity (1018h), SDO upload/download, state."""
 
-    def __init__(self, bus: Any, slave: Any, position: int, module: ModuleType) -> None:
+    def __init__(self, bus: Any, slave: Any, position: int, module: ModuleType, limits: BusLimits | None = None) -> None:
+        #: how long one SDO waits for its answer: the slave's mailbox window (its ESI's request + response
+        #: timeouts), never less than SDO_TIMEOUT_S
+        self.sdo_timeout_s = max(SDO_TIMEOUT_S, (limits or BusLimits()).mailbox_s)
         self._bus = bus
         self._slave = slave
         self._mod = module
@@ -54,22 +63,46 @@ class KickcatSlave:
         return TargetError(f"slave {self.position}, 0x{index:04X}:{subindex:02X}: {text}")
 
     def identity(self) -> Identity:
-        v, p, r = (int.from_bytes(self.sdo_upload(0x1018, s), "little") for s in (1, 2, 3))
+        v, p, r = (int.from_bytes(self.sdo_upload(0x1018, s, size=4), "little") for s in (1, 2, 3))
         return Identity(v, p, r)
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        """The object's value read into a KickCAT buffer of ``size`` octets (the object's type's; not known:
+        UNKNOWN_SIZE_FIRST, then once UNKNOWN_SIZE_MAX where KickCAT says the first was too small); whatever
+        KickCAT returns is checked against that bound again."""
         access = self._mod.Access.COMPLETE if complete_access else self._mod.Access.PARTIAL
+
+        def read(n: int) -> bytes:
+            return bytes(self._bus.read_sdo(self._slave, index, subindex, access, n, self.sdo_timeout_s))
+
+        first = UNKNOWN_SIZE_FIRST if size is None else max(1, size)
         try:
-            return bytes(self._bus.read_sdo(self._slave, index, subindex, access, READ_BUFFER, SDO_TIMEOUT_S))
-        except Exception as exc:  # noqa: BLE001 - ErrorCoE, RuntimeError: KickCAT's only exception types
-            raise self._error(exc, index, subindex) from None
+            try:
+                data = read(first)
+            except Exception as exc:  # noqa: BLE001 - ErrorCoE, RuntimeError: KickCAT's only exception types
+                if not _too_small(exc):
+                    raise
+                if size is not None:
+                    raise SdoTooLarge(index, subindex, self.position, size) from None
+                data = read(UNKNOWN_SIZE_MAX)
+        except SdoTooLarge:
+            raise
+        except Exception as exc:  # noqa: BLE001
+            if _too_small(exc):
+                raise SdoTooLarge(index, subindex, self.position, UNKNOWN_SIZE_MAX, known=False) from None
+            error = self._error(exc, index, subindex)
+            if type(error) is TargetError:  # KickCAT 2.5 says "Error while reading SDO" of a reply that announces
+                # more than its buffer, as of a malformed one: the bound is named
+                raise TargetError(f"{error.message} (KickCAT read at most {first} octets)") from None
+            raise error from None
+        return check_upload(data, size, index, subindex, self.position)
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None:
         from kickcat.mailbox.request import MessageStatus  # type: ignore[import-not-found, import-untyped, unused-ignore]
 
         try:
-            msg = self._slave.mailbox.write_sdo(index, subindex, complete_access, bytes(data), SDO_TIMEOUT_S)
+            msg = self._slave.mailbox.write_sdo(index, subindex, complete_access, bytes(data), self.sdo_timeout_s)
             for _ in range(POLLS):
                 if msg.status() != MessageStatus.RUNNING:
                     break

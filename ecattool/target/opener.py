@@ -83,7 +83,10 @@ def open_target(spec: str, devices: Iterable[Device] = ()) -> Target:
     if parsed.kind == "pysoem":
         from ecattool.target.isolated import pysoem_target
 
-        return pysoem_target(parsed.interface)  # SOEM in a child process: a crash in it cannot end ecattool
+        from ecattool.target.timeouts import bus_limits
+
+        # SOEM in a child process: a crash in it cannot end ecattool; waits bounded by the slaves' ESI timeouts
+        return pysoem_target(parsed.interface, bus_limits(devices))
     raise SelectionError(f"target {spec!r}: KickCAT reads a live bus (ecattool bus scan, audit, backup; sii read) "
                          f"and does not act on slaves here: use {SLAVE_TARGET_FORMS}")
 

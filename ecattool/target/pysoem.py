@@ -46,10 +46,11 @@ from types import ModuleType
 from typing import Any, TypeVar
 
 from ecattool.abort import al_status_text
-from ecattool.errors import SdoAbort, SdoTimeout, StateChangeError, TargetError
+from ecattool.errors import SdoAbort, SdoTimeout, SdoTooLarge, StateChangeError, TargetError
 from ecattool.esi.model import Identity
 from ecattool.od.model import EcState
-from ecattool.target.base import SlaveTarget
+from ecattool.target.base import UNKNOWN_SIZE_FIRST, UNKNOWN_SIZE_MAX, SlaveTarget, check_upload
+from ecattool.target.timeouts import REPEATS, BusLimits, window_text
 
 #: how long a state change may take, in microseconds (SOEM's own EC_TIMEOUTSTATE is 2 s)
 STATE_TIMEOUT_US = 2_000_000
@@ -77,13 +78,15 @@ STATE_POLL_S = 0.1
 #: how long SOEM waits for one SDO answer, in microseconds (its own default is 0.7 s); an upload that got none is
 #: asked once more (PysoemSlave.sdo_upload)
 SDO_TIMEOUT_US = 2_000_000
-#: pysoem reads into a 256-byte buffer unless told otherwise; a larger object is read again with this size
-LARGE_SDO_BYTES = 65536
 _STATE_NAMES = {EcState.INIT: "INIT_STATE", EcState.PREOP: "PREOP_STATE", EcState.BOOT: "BOOT_STATE",
                 EcState.SAFEOP: "SAFEOP_STATE", EcState.OP: "OP_STATE"}
 #: PacketError.error_code of SOEM: "data container too small for type"
 _PACKET_TOO_SMALL = 3
 _T = TypeVar("_T")
+
+
+class _Larger(Exception):
+    """The slave announced more than SOEM's default buffer holds, where the object's size is not known."""
 
 
 def _import_pysoem() -> ModuleType:
@@ -94,6 +97,20 @@ def _import_pysoem() -> ModuleType:
         raise TargetError("the pysoem target needs the optional extra: pip install 'ecattool[pysoem]'") from None
     module: ModuleType = pysoem
     return module
+
+
+def open_advice(ifname: str, euid: int | None = None, interfaces: str = "/sys/class/net") -> str:
+    """Why a master cannot open ``ifname`` where it can be told (appended to the error): an interface this machine
+    does not have, or a user without the right to open a raw socket on it (root or CAP_NET_RAW)."""
+    import os
+
+    if os.path.isdir(interfaces) and not os.path.exists(os.path.join(interfaces, ifname)):
+        return f" (this machine has no network interface {ifname!r}: 'ip link' lists them)"
+    uid = os.geteuid() if euid is None else euid
+    if uid != 0:
+        return (" (a master sends raw Ethernet frames: run as root, or give the Python interpreter CAP_NET_RAW, "
+                "e.g. sudo setcap cap_net_raw+ep \"$(readlink -f \"$(command -v python3)\")\")")
+    return ""
 
 
 def dc_sync_args(assign_activate: int, sync0_cycle_ns: int, sync0_shift_ns: int = 0) -> tuple[Any, ...]:
@@ -125,6 +142,8 @@ class PysoemSlave:
         slave.add_emergency_callback(self.emergencies.append)
         #: the state last requested (a slave asked for OP is watched for leaving it by itself)
         self.requested: EcState | None = None
+        #: uploads asked again because a try got no answer
+        self.repeats = 0
         self._state_read_at = master.clock()
 
     @property
@@ -139,6 +158,15 @@ class PysoemSlave:
     def identity(self) -> Identity:
         return Identity(int(self._slave.man), int(self._slave.id), int(self._slave.rev))
 
+    def _name(self) -> str:
+        """The slave's name as SOEM read it from the SII ('' where it has none)."""
+        try:
+            name = self._slave.name
+        except Exception:  # noqa: BLE001 - a name is a courtesy in an error
+            return ""
+        text = name.decode("latin-1", "replace") if isinstance(name, (bytes, bytearray)) else str(name or "")
+        return text.strip("\0 ")
+
     def _where(self, index: int, subindex: int) -> str:
         return f"slave {self.position}, 0x{index:04X}:{subindex:02X}"
 
@@ -151,7 +179,8 @@ class PysoemSlave:
         except mod.SdoError as exc:
             raise SdoAbort(index, subindex, int(exc.abort_code)) from None
         except mod.WkcError:  # the mailbox answer did not come (the working counter stayed 0)
-            raise SdoTimeout(index, subindex, self.position) from None
+            raise SdoTimeout(index, subindex, self.position, self._name(),
+                             f"no reply in {window_text(self._master.limits)}") from None
         except mod.MailboxError as exc:
             where = self._where(index, subindex)
             raise TargetError(f"{where}: mailbox error {exc.error_code}: {exc.desc}") from None
@@ -160,29 +189,65 @@ class PysoemSlave:
         except mod.Emergency as exc:  # only when no callback is registered; kept as a TargetError anyway
             raise TargetError(f"{self._where(index, subindex)}: emergency {exc}") from None
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
-        def read(size: int = 0) -> bytes:
-            return bytes(self._slave.sdo_read(index, subindex, size, ca=complete_access))
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        """The object's value, read into a buffer of exactly ``size`` octets (its type's): SOEM refuses an
+        announced size larger than its buffer ("data container too small", PacketError 3), which is an
+        :class:`SdoTooLarge` here. Without ``size``: SOEM's default buffer (UNKNOWN_SIZE_FIRST), then once
+        UNKNOWN_SIZE_MAX. SOEM copies the segments of a segmented upload without checking its buffer's end (docs/
+        at-the-machine.md, "When the master crashes"): that is why the master runs in a child process."""
+        mod = self._mod
 
-        def read_any_size() -> bytes:
+        def read(n: int) -> bytes:
             try:
-                return read()
-            except self._mod.PacketError as exc:
+                return bytes(self._slave.sdo_read(index, subindex, n, ca=complete_access))
+            except SystemError:
+                # SOEM read an announced size of 2^31 octets or more as negative and passed it on as the reply's
+                # length; pysoem cannot make bytes of it (with a larger buffer SOEM copies that much: a crash)
+                raise SdoTooLarge(index, subindex, self.position, n, known=size is not None) from None
+            except mod.PacketError as exc:
                 if exc.error_code != _PACKET_TOO_SMALL:
                     raise
-                return read(LARGE_SDO_BYTES)
+                if size is None and n < UNKNOWN_SIZE_MAX:
+                    raise _Larger() from None
+                raise SdoTooLarge(index, subindex, self.position, n, known=size is not None) from None
 
-        def read_again_once() -> bytes:
-            # an upload changes nothing on the slave: one that got no answer, or a stale mailbox error (the
-            # answer to an earlier request, e.g. a refused SDO Information request), is asked again once, with
-            # the next mailbox counter (SOEM counts on for each request), after SOEM's error list is emptied
+        def read_bounded() -> bytes:
+            if size is not None:
+                return check_upload(read(max(1, size)), size, index, subindex, self.position)
             try:
-                return read_any_size()
-            except (self._mod.WkcError, self._mod.MailboxError):
-                self._master.drain_errors()
-                return read_any_size()
+                return read(UNKNOWN_SIZE_FIRST)
+            except _Larger:
+                return check_upload(read(UNKNOWN_SIZE_MAX), None, index, subindex, self.position)
 
-        return self._sdo(read_again_once, index, subindex)
+        def read_again() -> bytes:
+            # an upload changes nothing on the slave: one that got no answer, or a stale mailbox error (the answer
+            # to an earlier request, e.g. a refused SDO Information request), is asked again, REPEATS times at the
+            # most, after SOEM's error list is emptied and not before the slave's mailbox window (its request and
+            # response timeouts) has passed since the last try: a request whose frames did not come back fails at
+            # once, and a slave that is away for a moment gets its whole window each time. SOEM gives each request
+            # the next mailbox counter (1..7, ETG.1000.6 5.6: the slave takes a request with the counter of the
+            # previous one as a repeated write), and itself toggles SM1's repeat request when a reply was lost on
+            # its way (ecx_mbxreceive): docs/at-the-machine.md, "Mailbox repeats"
+            window = self._master.limits.mailbox_s
+            for attempt in range(REPEATS + 1):
+                started = self._master.clock()
+                try:
+                    return read_bounded()
+                except (mod.WkcError, mod.MailboxError):
+                    if attempt == REPEATS:
+                        raise
+                    self._master.drain_errors()
+                    self.repeats += 1
+                    rest = started + window - self._master.clock()
+                    if rest > 0:
+                        self._master.sleep(rest)
+            raise AssertionError("unreachable")  # pragma: no cover
+
+        try:
+            return self._sdo(read_again, index, subindex)
+        except SdoTimeout:
+            raise SdoTimeout(index, subindex, self.position, self._name(),
+                             f"no reply in {REPEATS + 1} tries of {window_text(self._master.limits)}") from None
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
                      expect_reply: bool = True) -> None:
@@ -296,8 +361,11 @@ class PysoemTarget:
 
     def __init__(self, ifname: str, pysoem_module: ModuleType | None = None,
                  clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep,
-                 keep_cycling: bool = True, keeper_idle_s: float = KEEPER_IDLE_S) -> None:
+                 keep_cycling: bool = True, keeper_idle_s: float = KEEPER_IDLE_S,
+                 limits: BusLimits | None = None) -> None:
         self.pysoem = pysoem_module or _import_pysoem()
+        #: how long to wait for the slaves (their ESI timeouts where known: ecattool.target.timeouts)
+        self.limits = limits or BusLimits()
         #: the bus cycle in seconds: the SYNC0 cycle once DC is configured, else 1 ms
         self.cycle_s = DEFAULT_CYCLE_NS / 1e9
         self.clock = clock
@@ -316,15 +384,16 @@ class PysoemTarget:
         self.master = self.pysoem.Master()
         # SDO and process data calls wait in SOEM without the GIL: the keeper thread runs meanwhile
         self.master.always_release_gil = True
-        # SOEM waits 0.7 s for a mailbox answer (EC_TIMEOUTRXM); on a loaded machine a slave's answer (or the
-        # frame carrying it) can take longer. A longer wait costs nothing when the answer comes
+        # SOEM waits 0.7 s for a mailbox answer (EC_TIMEOUTRXM); the slave's own request + response timeouts (its
+        # ESI's, else 0.1 + 2 s) are what it may take, and on a loaded machine the frames carrying the answer too.
+        # A longer wait costs nothing when the answer comes
         for name in ("sdo_read_timeout", "sdo_write_timeout"):
             if hasattr(self.master, name):
-                setattr(self.master, name, SDO_TIMEOUT_US)
+                setattr(self.master, name, max(SDO_TIMEOUT_US, round(self.limits.mailbox_s * 1e6)))
         try:
             self.master.open(ifname)
         except Exception as exc:  # noqa: BLE001 - ConnectionError, or an OS error on some platforms
-            raise TargetError(f"cannot open EtherCAT interface {ifname!r}: {exc}") from None
+            raise TargetError(f"cannot open EtherCAT interface {ifname!r}: {exc}{open_advice(ifname)}") from None
         count = self.master.config_init()
         # a link that was just brought up (a NIC negotiating, a fresh veth pair) drops the first frames: ask again
         # for up to LINK_WAIT_S before saying the bus is empty
@@ -336,11 +405,15 @@ class PysoemTarget:
             self.master.close()
             raise TargetError(f"no EtherCAT slaves found on {ifname!r} (asked for {LINK_WAIT_S:g} s)")
         # config_init has requested PRE-OP (without waiting for it); from here on ecattool requests every state
-        self.master.state_check(int(self.pysoem.PREOP_STATE), STATE_TIMEOUT_US)
+        self.master.state_check(int(self.pysoem.PREOP_STATE), round(self.limits.preop_s * 1e6))
         self.master.manual_state_change = 1
         self._slaves = [PysoemSlave(self, i, s) for i, s in enumerate(self.master.slaves)]
         self.mapped = False
         self.dc_configured = False
+
+    def sleep(self, seconds: float) -> None:
+        """Wait (the injectable sleep: a test's virtual clock)."""
+        self._sleep(seconds)
 
     def drain_errors(self) -> None:
         """Empty SOEM's error list: an error left there (e.g. by a refused SDO Information request, one per

@@ -10,11 +10,14 @@ from __future__ import annotations
 import socket
 import struct
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from ecattool.errors import TargetError
-from ecattool.sim.bus.engine import Bus
 from ecattool.sim.bus.frame import ETHERTYPE_ECAT
-from ecattool.sim.bus.loop import FrameFault
+
+if TYPE_CHECKING:  # annotations only: a master's state read (online.bus_state) opens a socket without the engine
+    from ecattool.sim.bus.engine import Bus
+    from ecattool.sim.bus.loop import FrameFault
 
 #: the largest Ethernet frame (without FCS) the socket reads
 MAX_FRAME = 1514

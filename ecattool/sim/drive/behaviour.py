@@ -146,11 +146,43 @@ class Behaviour:
     vl_quick_stop_ramps: bool = False
     #: PP bit 10 waits for the position window 6067h held for 6068h (Technosoft §7.2.12)
     pp_position_window: bool = False
+    #: EMCY code -> bit of the alarm bitmap the drive's EMCY bytes 3..6 carry, every alarm present set (HDT §2.04.1
+    #: "every single bit of the bytes 3,4,5, and 6 identify an alarm", the FA_n table and the error code table of
+    #: §2.08.2, matched by the alarms' names); () : the drive sends no bitmap
+    alarm_bits: tuple[tuple[int, int], ...] = ()
+    #: the modes in which 6080h "max motor speed" limits the motor (Technosoft §15.2.3: "when the mode of operation
+    #: is CST or External Torque value"); None: every mode (Control Techniques 7.3.17 "used to protect the motor")
+    max_motor_speed_modes: frozenset[int] | None = None
+    #: Disable Voltage out of OPERATION ENABLED (transition 9) follows 605Ch as Disable Operation does (Technosoft
+    #: Table 4.1.1 transition 9: "The drive will execute the instructions from Object 605Ch: Disable operation
+    #: option code and finally transition into Switch on disabled state"); CiA-402: the power stage off at once
+    disable_voltage_uses_605c: bool = False
 
     @property
     def supply_bit_always(self) -> bool:
         return self.supply_undervoltage_fault is not None
 
+
+#: HDT: EMCY error code (§2.08.2, seeds/003 lines 383-420) -> alarm bit FA_(n+1) (§2.04.1, lines 103-131), where the
+#: two tables name the same alarm (FF0Bh "Hall sensors error" and 8130h "Life Guard Error" match no one FA_n: left out)
+HDT_ALARM_BITS: tuple[tuple[int, int], ...] = (
+    (0x7600, 0),  # FA_01 error parameters storage / "Parameter memorization error"
+    (0xFF01, 1),  # FA_02 error offset currents / "Current offset error"
+    (0x2340, 2),  # FA_03 power overcurrent / "Power circuit overcurrent"
+    (0x3210, 3),  # FA_04 over-voltage DC bus
+    (0xFF08, 7),  # FA_08 secure disable
+    (0x7120, 8),  # FA_09 over temperature motor
+    (0x7110, 9),  # FA_10 braking resistor
+    (0x3220, 11),  # FA_12 under voltage DC bus
+    (0x8611, 12),  # FA_13 position error / "Following Error  Position error"
+    (0xFF02, 13),  # FA_14 error home position
+    (0xFF03, 14),  # FA_15 warning I2t inverter
+    (0xFF04, 15),  # FA_16 warning I2t motor
+    (0xFF05, 16),  # FA_17 warning over speed
+    (0xFF09, 17),  # FA_18 secure disable error 1
+    (0xFF07, 20),  # FA_21 fault memory / "Memory Fault"
+    (0xFF0A, 21),  # FA_22 motor phases error
+)
 
 BEHAVIOURS: dict[str, Behaviour] = {
     "technosoft-ipos": Behaviour(
@@ -165,10 +197,11 @@ BEHAVIOURS: dict[str, Behaviour] = {
                            (0x9000, 14), (0x5441, 15)),
         csp_options=True, limit_switch_emcy=(0x5442, 0x5443), eeprom_objects=True, scurve_jerk="2023h",
         halt_ramps="6083h", home_keeps_position_bit=True, units="technosoft",
-        polarity="targets+actuals", pp_position_window=True,
+        polarity="targets+actuals", pp_position_window=True, disable_voltage_uses_605c=True,
+        max_motor_speed_modes=frozenset({10}),
         window_times_in_samples=True, following_error_zero_unset=True,
     ),
-    "hdt": Behaviour(following_error_cap=32768, homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
+    "hdt": Behaviour(alarm_bits=HDT_ALARM_BITS, following_error_cap=32768, homing_error_emcy=0xFF02, homing_error_emcy_data=(1 << 13).to_bytes(4, "little") + b"\x00",
                      home_offset_continuous=True, fault_reaction_codes=frozenset({0x3220, 0x8611}),
                      pp_single_setpoint=True, pp_acquire_at_end=True, vl_min_max_checked=True,
                      scurve_jerk="2011h/2021h", torque_limited_profile=True, halt_ramps="604Eh",

@@ -116,11 +116,18 @@ _PutPlan = tuple[tuple[tuple[int, int], ...], dict[tuple[int, int], Entry], int,
                  tuple[_PutSlot, ...]]
 
 _VERSIONS = itertools.count(1)
+#: settings the cycle reads every time and a master writes seldom: home offset 607Ch, software limits 607Dh,
+#: polarity 607Eh, max profile velocity 607Fh, max motor speed 6080h. A write to one of them changes the store's version too, so the
+#: cycle keeps what it made of them until then instead of reading them again
+SETTING_OBJECTS = frozenset({0x607C, 0x607D, 0x607E, 0x607F, 0x6080})
+#: the objects whose writes change the store's version
+VERSIONED = FACTOR_OBJECTS | SETTING_OBJECTS
 
 
 class Store(dict[tuple[int, int], bytes]):
     """The drive's object values by (index, subindex). ``version`` is new for every store and after every write
-    to an object the unit conversions derive from (FACTOR_OBJECTS), so they can be cached between writes.
+    to an object the unit conversions derive from (FACTOR_OBJECTS) or a setting the cycle reads (SETTING_OBJECTS),
+    so what is made of them can be cached between writes.
     ``changes`` counts the writes that changed what the store holds (a value written again as it was is no
     change): the cyclic exchange compares it to know that nothing was written between two cycles."""
 
@@ -132,7 +139,7 @@ class Store(dict[tuple[int, int], bytes]):
         self.changes = 0
 
     def __setitem__(self, key: tuple[int, int], value: bytes) -> None:
-        if key[0] in FACTOR_OBJECTS:
+        if key[0] in VERSIONED:
             self.version = next(_VERSIONS)
         if dict.get(self, key) != value:
             self.changes += 1
@@ -248,6 +255,8 @@ class DriveCore:
     plant: "Plant | None"
     supervision: "Supervision"
     _demand_before: tuple[int, int]
+    #: the store's version, the mode and the polarity signs at them (:func:`.polarity.target_signs`)
+    _polarity_cache: tuple[int, int, tuple[int, int]] = (0, 0, (1, 1))
 
     # ------------------------------------------------------------------------------------------
     # helpers on the store
@@ -295,7 +304,7 @@ class DriveCore:
                 e = entries.get(key)
                 if e is not None:
                     size = (e.bit_size + 7) >> 3
-                    (factor_slots if key[0] in FACTOR_OBJECTS else plain_slots).append(
+                    (factor_slots if key[0] in VERSIONED else plain_slots).append(
                         (at, key, size, (1 << (size << 3)) - 1))
             plan = self._put_plan = (keys, entries, len(entries), tuple(plain_slots), tuple(factor_slots))
         store = self._store

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 from ecattool.errors import SdoAbort
 from ecattool import abort as A
-from ecattool.sim.cia402 import HALT, HOMING, PP, PV, Homing, State
+from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, State
 from ecattool.sim.drive.velocity_mode import counts_per_rev
 
 if TYPE_CHECKING:
@@ -37,6 +37,8 @@ if TYPE_CHECKING:
     from ecattool.sim.drive.core import DriveCore
 
 HOMING_START = 0x0010  # controlword bit 4 in homing mode
+#: the modes a halt ramps down with a deceleration (the others stop within the cycle)
+_HALT_RAMP_MODES = frozenset({PV, PP, HOMING, CSP, CSV})
 
 #: methods whose home is the current position, per family (HDT 0 = zeroed at power-on is separate)
 CURRENT_POSITION = {"hdt": frozenset({35}), "technosoft-ipos": frozenset({35}),
@@ -253,10 +255,12 @@ def check_method(drive: DriveCore, sub: int, value: int) -> None:
 def halt_decel_for_step(drive: DriveCore, mode: int) -> Fraction | None:
     """The ramp a halt uses in the mode (increments/s²): profile velocity the option code's (see
     :func:`halt_deceleration`); profile position the slow-down ramp of the mode (HDT §4.07: 6084h; Technosoft
-    §4.4.10: 6083h, or 6085h for option 2); a homing search the homing acceleration 609Ah. CSP/CSV: None."""
-    if not drive.cia.controlword & HALT or mode not in (PV, PP, HOMING):
+    §4.4.10: 6083h, or 6085h for option 2); a homing search the homing acceleration 609Ah; CSP and CSV the option
+    code's ramp as in profile velocity (the target is ignored, statusword bit 12 = 0, while the axis slows down:
+    Technosoft §14.1.2 "Target velocity ignored. When 6040h.8 Halt is set to 1"); other modes: None."""
+    if not drive.cia.controlword & HALT or mode not in _HALT_RAMP_MODES:
         return None
-    if mode == PV:
+    if mode == PV or mode == CSP or mode == CSV:
         return halt_deceleration(drive)
     if mode == HOMING:
         return drive.cia.homing_acceleration
@@ -318,3 +322,33 @@ def fault_reaction_ramp(drive: DriveCore, code: int) -> Fraction | None:
     if option not in (1, 2, 3, 4):
         return None
     return halt_deceleration(drive, 1 if option == 1 else 2) or None
+
+
+#: the option code object each transition out of OPERATION ENABLED reads (CiA-402 transitions 8 Shutdown -> 605Bh,
+#: 5 Disable Operation -> 605Ch; 9 Disable Voltage -> 605Ch only where ``Behaviour.disable_voltage_uses_605c``)
+_DISABLE_OPTION = {State.READY: 0x605B, State.SWITCHED_ON: 0x605C, State.SWITCH_ON_DISABLED: 0x605C}
+
+
+def disable_option(drive: DriveCore, to: State) -> int | None:
+    """The option code (605Bh / 605Ch) a transition from OPERATION ENABLED to ``to`` follows; None: the drive has
+    no such object (HDT) or the transition reads none (Disable Voltage, CiA-402 transition 9, disables at once).
+    The value is the stored one: its power-on default is the family's profile data (Technosoft §4.4.8/§4.4.9:
+    605Bh 0, 605Ch 1), and the entry's range is the family's (Control Techniques Tables 7.10/7.12: 0 to 1)."""
+    if to is State.SWITCH_ON_DISABLED and not drive.behaviour.disable_voltage_uses_605c:
+        return None
+    index = _DISABLE_OPTION.get(to)
+    if index is None or (index, 0) not in drive._entries:
+        return None
+    return drive._read_int(index, 0)
+
+
+def disable_ramp(drive: DriveCore, to: State) -> Fraction | None:
+    """The ramp (increments/s²) the axis slows down with before the transition from OPERATION ENABLED to ``to``;
+    None: the drive function is disabled at once (option code 0, the manufacturer-specific and reserved codes, a
+    drive without the object). Option code 1 "slow down with slow down ramp; disable the drive function"
+    (Technosoft §4.4.8/§4.4.9, Control Techniques Tables 7.11/7.13): the slow-down ramp as the quick stop's code 1
+    takes it (:func:`quick_stop_ramp`: Technosoft 6083h, Control Techniques "the deceleration value of the used
+    mode of operations", CiA-402 6084h)."""
+    if disable_option(drive, to) != 1:
+        return None
+    return quick_stop_ramp(drive, 1) or None

@@ -18,6 +18,8 @@ class Injection(DriveCore):
 
     #: Motion Error Register bits latched by errors until a Fault Reset (the limit-switch bits are live)
     _motion_errors = 0
+    #: the alarms present (HDT: the bitmap of the EMCY's bytes 3..6), until a Fault Reset
+    _alarms = 0
 
     def motion_error(self, bit: int) -> None:
         """An error sets bit ``bit`` of the family's Motion Error Register (Technosoft 2000h)."""
@@ -33,6 +35,7 @@ class Injection(DriveCore):
     def fault_reset(self) -> None:
         """A Fault Reset has taken the drive out of FAULT: the error register 1001h is cleared, the "error reset"
         EMCY 0000h sent, the Motion Error Register's latched bits cleared but "invalid setup data" (bit 2)."""
+        self._alarms = 0
         if not self.behaviour.error_reset_emcy:
             return
         self._put(0x1001, 0, 0)
@@ -40,10 +43,15 @@ class Injection(DriveCore):
         self.emcy(0x0000)
 
     def inject_fault(self, code: int, data: bytes = b"") -> None:
-        """A drive fault: FAULT REACTION ACTIVE -> FAULT, 603Fh = code, EMCY with the code."""
+        """A drive fault: FAULT REACTION ACTIVE -> FAULT, 603Fh = code, EMCY with the code (and, where the family
+        sends one and ``data`` is not given, the bitmap of the alarms present: HDT §2.04.1)."""
         for error, bit in self.behaviour.motion_error_bits:
             if error == code:
                 self.motion_error(bit)
+        if not data:
+            for error, bit in self.behaviour.alarm_bits:
+                if error == code:
+                    data = self._alarm(bit)
         self._cia_moves(self.cia.fault(code, hh.fault_reaction_ramp(self, code)), f"fault 0x{code:04X}")
         self.emcy(code, data)
         self._refresh_inputs()
@@ -146,17 +154,32 @@ class Injection(DriveCore):
 
     def set_obstacle(self, position: int | None) -> None:
         """An obstacle at ``position`` (user units, as 6064h reads; None: taken away) that the axis cannot pass,
-        on the side of it the axis is on now. A profile position move runs into it: with HDT's profile type -1
-        (torque-limited ramp, §4.07.8) the profile stops and resumes once the obstacle is gone; otherwise the
-        profile runs on, the following error 60F4h grows, and past 6065h for 6066h ms the drive faults (8611h)."""
+        on the side of it the axis is on now. On a plant it blocks the load in every mode: the demand (profile, the
+        master's CSP set-points, the interpolator) runs on, the following error 60F4h grows through the plant, and
+        past 6065h for 6066h ms the drive faults (8611h); with HDT's profile type -1 (torque-limited ramp, §4.07.8)
+        the profile stops at it and resumes once the obstacle is gone. On the ideal plant a profile position move
+        runs into it the same way (the demand is held, the error is the demand's)."""
         internal = None if position is None else self.units.position_to_internal(position - self._home_offset())
-        self.cia.set_obstacle(internal)
+        cia = self.cia
+        plant = self.plant
+        cia.obstacle_on_plant = plant is not None
+        cia.set_obstacle(internal)
+        if plant is not None and internal is not None:
+            # the side of the obstacle the load is on: the actual position's, not the demand's
+            cia.obstacle_side = 1 if internal > cia.position + Fraction(round(plant.error * 65536), 65536) else -1
         self._log("inputs", obstacle=position)
         self._refresh_inputs()
 
+    def _alarm(self, bit: int) -> bytes:
+        """Alarm ``bit`` is present: the EMCY's manufacturer bytes 3..7, the bitmap of every alarm present (HDT
+        §2.04.1: "4 of these 5 Bytes are used to report all the current alarms of the Drive")."""
+        self._alarms |= 1 << bit
+        return self._alarms.to_bytes(4, "little") + b"\x00"
+
     def inject_hdt_alarm(self, alarm: int, code: int) -> None:
-        """HDT: alarm FA_n with EMCY ``code``; EMCY bytes 3..6 carry the alarm bitmap (bit n-1)."""
-        self.inject_fault(code, (1 << (alarm - 1)).to_bytes(4, "little") + b"\x00")
+        """HDT: alarm FA_n with EMCY ``code``; EMCY bytes 3..6 carry the alarm bitmap (bit n-1 and the alarms
+        already present)."""
+        self.inject_fault(code, self._alarm(alarm - 1))
 
     def inject_trip(self, trip: int) -> None:
         """Control Techniques: drive trip number -> 603Fh per Table 9.17 (unlisted trips 0x1000)."""

@@ -17,12 +17,17 @@ from ecattool.sim.drive.core import DriveCore, Store, sdo_abort
 from ecattool.sim.drive.plant_step import cycle as plant_cycle
 from ecattool.sim.drive.supervision import limit_stop, report_actual, supervise
 from ecattool.sim.drive.mode_parts import MOVED, PARTS, ModeParts
+from ecattool.sim.drive.torque_mode import TORQUE_MODES
 from ecattool.sim.units import floor_ratio
 
 _ZERO = Fraction(0)
 #: 607Dh's sub-indices 1 and 2 at the whole INTEGER32 range (no software limit)
 _OPEN_LOW, _OPEN_HIGH = (-(2**31)).to_bytes(4, "little", signed=True), (2**31 - 1).to_bytes(4, "little", signed=True)
 _ENABLED = State.OPERATION_ENABLED
+_LIMIT_LOW, _LIMIT_HIGH = (0x607D, 1), (0x607D, 2)
+#: the option code a slow-down before leaving OPERATION ENABLED followed, by the state it ended in (event reasons)
+_DISABLE_WHY = {State.READY: "605Bh = 1 (shutdown)", State.SWITCHED_ON: "605Ch = 1 (disable operation)",
+                State.SWITCH_ON_DISABLED: "605Ch = 1 (disable voltage)"}
 #: the states with the power stage on
 _POWERED = frozenset({State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION})
 #: every object :meth:`Motion._make_profile` reads
@@ -78,7 +83,8 @@ class Motion(DriveCore):
         option = hh.quick_stop_option(self)
         if self.cia.state is not State.QUICK_STOP:  # a running quick stop keeps its ramp
             self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
-        moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP, quick_stop_option=option)
+        moves = self.cia.controlword_written(cw, ecat_op=self.esm is EcState.OP, quick_stop_option=option,
+                                             disable_ramp=self._disable_ramp)
         self._cia_moves(moves, f"controlword 0x{cw:04X}")
         if moves and moves[0][0] is State.FAULT:
             self.fault_reset()
@@ -87,6 +93,10 @@ class Motion(DriveCore):
                 self._report_blocked_motion()
         hh.on_controlword(self, cw, prev)
         self._refresh_inputs()
+
+    def _disable_ramp(self, to: State) -> Fraction | None:
+        """:func:`.halt_homing.disable_ramp`: the slow-down before Shutdown / Disable Operation (605Bh/605Ch)."""
+        return hh.disable_ramp(self, to)
 
     def _report_blocked_motion(self) -> None:
         """A set-point the drive takes but cannot move to: a profile velocity or acceleration of 0, or a position
@@ -154,13 +164,13 @@ class Motion(DriveCore):
             # an enabled axis without halt follows the target of its mode; CSP and CSV in integers (the same
             # rationals as the Fraction conversions, numerator and denominator apart), the others through
             # Cia402.step, which converts only the targets the mode moves by
-            if cia.state is _ENABLED and not cia.controlword & HALT:
+            if cia.state is _ENABLED and not cia.controlword & HALT and cia.disable_to is None:
                 if (self.limit_active or self._soft_limits) and limit_stop(self, mode, dt):
                     self._after_step(dt, mode)
                     continue
                 if mode == CSP:
                     pn, pd, _, _, sn, sd = u.ratios()
-                    if csp.applies(self):  # Technosoft bit 6 relative, 2086h speed limit
+                    if self.behaviour.csp_options and csp.applies(self):  # Technosoft bit 6 relative, 2086h
                         goal = csp.target(self, dt)
                         cia.follow_position(goal.numerator, goal.denominator, dt, sd, sn)
                         self._after_step(dt, mode)
@@ -184,7 +194,9 @@ class Motion(DriveCore):
                 if mode in MOVED:  # vl, profile torque, interpolated position, CST: their own parts
                     self.modes.step(self, mode, dt)
                     self.modes.after(self, mode, dt)
-                    self._after_step(dt, mode)
+                    plant = self.plant
+                    self._after_step(dt, mode, self.modes.torque.newton_metres(plant.params.rated_torque)
+                                     if plant is not None and mode in TORQUE_MODES else None)
                     continue
                 moving = True
             else:
@@ -213,26 +225,40 @@ class Motion(DriveCore):
 
     @property
     def _soft_limits(self) -> bool:
-        """607Dh narrower than the whole INTEGER32 range (the stored bytes compared: every cycle asks)."""
-        get = self._store.get
-        return get((0x607D, 1), _OPEN_LOW) != _OPEN_LOW or get((0x607D, 2), _OPEN_HIGH) != _OPEN_HIGH
+        """607Dh narrower than the whole INTEGER32 range (compared again only when the store's version changed:
+        every cycle asks)."""
+        store = self._store
+        version = store.version  # a write to 607Dh changes it (core.SETTING_OBJECTS)
+        cached = self._soft_cache
+        if cached[0] == version:
+            return cached[1]
+        get = store.get
+        narrow = get(_LIMIT_LOW, _OPEN_LOW) != _OPEN_LOW or get(_LIMIT_HIGH, _OPEN_HIGH) != _OPEN_HIGH
+        self._soft_cache = (version, narrow)
+        return narrow
 
-    def _after_step(self, dt: Fraction, mode: int | None = None) -> None:
-        """What follows every cycle's motion: the following error's supervision, and the transitions the drive
-        made by itself (the end of a quick stop or of a fault reaction)."""
+    #: the store's version and whether 607Dh limits at it (:attr:`_soft_limits`)
+    _soft_cache: tuple[int, bool] = (0, False)
+
+    def _after_step(self, dt: Fraction, mode: int | None = None, torque: float | None = None) -> None:
+        """What follows every cycle's motion: the plant's step (``torque``: the torque mode's demand in N·m, which
+        the plant's motor makes instead of following a position or velocity), the following error's supervision,
+        and the transitions the drive made by itself (the end of a quick stop or of a fault reaction)."""
         cia = self.cia
         plant = self.plant
         if plant is not None:
             if mode is None:
                 mode = self.mode()
-            plant_cycle(self, plant, mode, dt, *self._demand_before)
+            plant_cycle(self, plant, mode, dt, *self._demand_before, torque)
             supervise(self, mode)
         elif cia.following_error:
             self._supervise_following_error(dt)
         if cia.automatic:
             done, cia.automatic = cia.automatic, []
-            self._cia_moves(done, "fault reaction completed" if done[0][0] is State.FAULT_REACTION
-                            else f"quick stop completed, 605Ah = {cia.quick_stop_option}")
+            first = done[0][0]
+            self._cia_moves(done, "fault reaction completed" if first is State.FAULT_REACTION
+                            else f"quick stop completed, 605Ah = {cia.quick_stop_option}" if first is State.QUICK_STOP
+                            else f"slow down completed, {_DISABLE_WHY.get(done[0][1], '')}")
 
     def _supervise_following_error(self, dt: Fraction) -> None:
         """A following error beyond the window 6065h (user position units) for longer than 6066h ms sets
@@ -340,10 +366,20 @@ class Motion(DriveCore):
                                        cia.fault_code, error))
 
     def _home_offset(self) -> int:
-        """607Ch where the family adds it to the measured position at all times (HDT), else 0."""
+        """607Ch where the family adds it to the measured position at all times (HDT), else 0 (decoded again only
+        when the store's version changed: every cycle asks, twice)."""
         if not self.behaviour.home_offset_continuous:
             return 0
-        return self._read_int(0x607C, 0) or 0
+        version = self._store.version  # a write to 607Ch changes it (core.SETTING_OBJECTS)
+        cached = self._home_cache
+        if cached[0] == version:
+            return cached[1]
+        value = self._read_int(0x607C, 0) or 0
+        self._home_cache = (version, value)
+        return value
+
+    #: the store's version and 607Ch at it (:meth:`_home_offset`)
+    _home_cache: tuple[int, int] = (0, 0)
 
     def _user_position(self) -> int:
         """6064h: the position in user units (HDT: sensor position + home offset 607Ch, §4.06.6)."""

@@ -120,7 +120,7 @@ class Plant:
     (N·m)."""
 
     __slots__ = ("params", "counts_per_rev", "dt", "error", "velocity", "torque", "load_torque", "torque_limit",
-                 "speed_limit", "pending", "sampled", "version", "_phi", "_j", "_b", "_tc", "_vmax", "_decay", "_tau_gain",
+                 "speed_limit", "pending", "sampled", "version", "limits_key", "limits_mode", "samples_first", "_ramp_lag", "_fixed", "_phi", "_j", "_b", "_tc", "_vmax", "_decay", "_tau_gain",
                  "_limited")
 
     def __init__(self, params: PlantParams, counts_per_rev: float, dt: float) -> None:
@@ -144,6 +144,9 @@ class Plant:
         self._limited = False
         #: the drive store's version the geometry was taken at
         self.version = 0
+        #: the drive store's version and the mode the speed limit (:attr:`speed_limit`) was made at (0: not yet)
+        self.limits_key = 0
+        self.limits_mode = 0
         self._derive()
 
     def _derive(self) -> None:
@@ -156,6 +159,13 @@ class Plant:
         self.speed_limit = self._vmax
         wn, zeta = p.position_bandwidth, p.damping
         self._phi = _expm2(0.0, 1.0, -wn * wn, -2 * zeta * wn, dt)
+        #: the steady error of the position loop per increment/s of a ramp, 2 zeta (1 - kff) / wn
+        self._ramp_lag = 2 * zeta * (1 - p.velocity_feedforward) / wn
+        #: the actual values are sampled before the reference (delay "sample")
+        self.samples_first = p.delay == "sample"
+        #: a position-loop cycle that left the plant as it found it: (the demand step, error, velocity, pending,
+        #: load torque, torque limit, speed limit) it started from (:meth:`follow_position`), else None
+        self._fixed: tuple[float, ...] | None = None
         self._decay = math.exp(-dt / p.velocity_tau) if p.velocity_tau > 0 else 0.0
         self._tau_gain = p.velocity_tau * (1 - self._decay)
         self.torque_limit = min(self.torque_limit, p.peak_torque) if self.torque_limit else p.peak_torque
@@ -165,6 +175,12 @@ class Plant:
         self.params = params
         self.torque_limit = params.peak_torque
         self._derive()
+        self.limits_key = 0
+
+    @property
+    def max_speed(self) -> float:
+        """The motor's own maximum speed, increments/s (:attr:`speed_limit` is at most this)."""
+        return self._vmax
 
     def set_geometry(self, counts_per_rev: float, dt: float) -> None:
         """Increments per motor revolution and the cycle in seconds (derived values made again on a change)."""
@@ -172,6 +188,7 @@ class Plant:
             self.dt = dt
             self.counts_per_rev = counts_per_rev
             self._derive()
+            self.limits_key = 0
 
     # --- the cycle -----------------------------------------------------------------------------------------
     def follow_position(self, moved: float, reference_delay: bool = True) -> None:
@@ -179,6 +196,20 @@ class Plant:
         ``reference_delay`` the loop sees the demand at once even where the family delays it (the mode's own
         generator already delayed it: Control Techniques interpolated position); a reference still held back from
         an earlier cycle is then passed on."""
+        fixed = self._fixed
+        e0, v0, p0 = self.error, self.velocity, self.pending
+        if fixed is not None and fixed[0] == moved and fixed == (moved, e0, v0, p0, self.load_torque,
+                                                               self.torque_limit, self.speed_limit, reference_delay):
+            # the cycle before started here with the same demand step and ended here (a steady ramp or a standstill
+            # settled to the float's last bit): this one does the same; only the delayed sample moves on
+            if self.samples_first:
+                self.sampled = (e0 - moved, v0)
+            return
+        self._step_position(moved, reference_delay)
+        self._fixed = (moved, e0, v0, p0, self.load_torque, self.torque_limit, self.speed_limit, reference_delay) \
+            if e0 == self.error and v0 == self.velocity and p0 == self.pending else None
+
+    def _step_position(self, moved: float, reference_delay: bool) -> None:
         p = self.params
         loop_moved, y0 = moved, self.error  # what the loop's reference moved by, the loop's error
         if p.delay == "reference" and reference_delay:
@@ -190,7 +221,7 @@ class Plant:
         elif p.delay == "sample":
             self.sampled = (self.error - moved, self.velocity)  # the previous actual, against the new demand
         s = loop_moved / self.dt
-        c = 2 * p.damping * (1 - p.velocity_feedforward) / p.position_bandwidth * s
+        c = self._ramp_lag * s
         v0 = self.velocity
         # in (z, w) = (error + c, velocity - s) the loop is autonomous over the cycle: one matrix step
         z0, w0 = y0 + c, v0 - s
@@ -201,6 +232,7 @@ class Plant:
     def follow_velocity(self, reference: float, moved: float) -> None:
         """One cycle in a velocity mode: the velocity loop towards ``reference`` increments/s; the demand position
         (the reference integrated) moved by ``moved``."""
+        self._fixed = None
         if self.params.delay == "sample":
             self.sampled = (self.error - moved, self.velocity)  # the previous actual, against the new demand
         v0 = self.velocity
@@ -211,6 +243,7 @@ class Plant:
     def apply_torque(self, torque: float, moved: float = 0.0) -> None:
         """One cycle with the motor making ``torque`` N·m (a torque mode, or 0 with the power stage off: the axis
         coasts against its friction and load); the demand moved by ``moved``."""
+        self._fixed = None
         if self.params.delay == "sample":
             self.sampled = (self.error - moved, self.velocity)  # the previous actual, against the new demand
         limit = self.torque_limit
@@ -266,7 +299,7 @@ class Plant:
     def reported(self) -> tuple[float, float]:
         """(error, velocity) as the drive measures them this cycle (the sample before the reference where the
         family samples first)."""
-        if self.params.delay == "sample":
+        if self.samples_first:
             return self.sampled
         return self.error, self.velocity
 
@@ -278,6 +311,7 @@ class Plant:
     def take_error(self, amount: float) -> None:
         """The drive moved its demand by ``amount`` increments onto the axis (power stage off: the demand follows
         the actual position)."""
+        self._fixed = None
         self.error -= amount
         if self.params.delay == "sample":
             self.sampled = (self.sampled[0] - amount, self.sampled[1])

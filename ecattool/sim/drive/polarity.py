@@ -26,10 +26,23 @@ def _bits(drive: DriveCore, mode: int) -> int:
     return drive._read_int(0x607E, 0) or 0
 
 
+#: the signs of no polarity
+_PLAIN = (1, 1)
+
+
 def target_signs(drive: DriveCore, mode: int) -> tuple[int, int]:
-    """(position, velocity) sign the targets 607Ah and 60FFh are read with in ``mode``."""
+    """(position, velocity) sign the targets 607Ah and 60FFh are read with in ``mode`` (kept per store version and
+    mode: a write to 607Eh changes the version, core.SETTING_OBJECTS; every cycle asks)."""
+    if not drive.behaviour.polarity:
+        return _PLAIN
+    version = drive._store.version
+    cached = drive._polarity_cache
+    if cached[0] == version and cached[1] == mode:
+        return cached[2]
     bits = _bits(drive, mode)
-    return (-1 if bits & 0x80 else 1), (-1 if bits & 0x40 else 1)
+    signs = (-1 if bits & 0x80 else 1), (-1 if bits & 0x40 else 1)
+    drive._polarity_cache = (version, mode, signs)
+    return signs
 
 
 def actual_signs(drive: DriveCore, mode: int) -> tuple[int, int]:

@@ -4,7 +4,7 @@ and range rules and abort codes, complete access, and the SDO faults a test plan
 from __future__ import annotations
 
 from ecattool import abort as A
-from ecattool.errors import SdoAbort, SdoTimeout
+from ecattool.errors import SdoAbort, SdoTimeout, SdoTooLarge
 from ecattool.od.model import MAILBOX_STATES, Entry, ObjectCode
 from ecattool.od.types import Kind
 from ecattool.sim import eeprom as ee
@@ -15,7 +15,9 @@ from ecattool.sim.drive.pdo import PdoConfig, is_assign, is_mapping
 class SdoServer(PdoConfig):
     """SDO upload/download (mapping and assignment writes go through :class:`PdoConfig`'s rules)."""
 
-    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False) -> bytes:
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        """The value of ``index:subindex``; ``size``: the most octets the master's buffer takes (a longer value is
+        an SdoTooLarge, as a master with a buffer of that size refuses it; ``target.base.SlaveTarget``)."""
         planned = self.faults.next_sdo()
         if not self.device.has_coe:  # a fixed process image (an EL2008): no mailbox answers
             self._log("sdo_timeout", index=index, subindex=subindex, reason="the slave has no CoE mailbox")
@@ -34,6 +36,8 @@ class SdoServer(PdoConfig):
             self._log("sdo_timeout", index=index, subindex=subindex, reason="reply dropped (fault injection)")
             raise SdoTimeout(index, subindex)
         self._log("sdo_upload", index=index, subindex=subindex, data=data.hex())
+        if size is not None and len(data) > size:
+            raise SdoTooLarge(index, subindex, getattr(self, "position", None), size, len(data))
         return data
 
     def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,

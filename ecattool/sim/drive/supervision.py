@@ -18,6 +18,7 @@ from math import floor
 from typing import TYPE_CHECKING
 
 from ecattool.sim.cia402 import CSP, HALT, HOMING, PP, State
+from ecattool.sim.drive import polarity
 from ecattool.sim.drive.supervision_state import Supervision
 from ecattool.sim.units import floor_ratio
 
@@ -82,7 +83,7 @@ def supervise(drive: "DriveCore", mode: int) -> None:
     if cia.state is not _ENABLED or mode not in POSITION_MODES:
         sup.outside_s = 0.0
         return
-    if -0.5 < plant.error < 0.5 and not cia.following_error:
+    if -0.5 < plant.error < 0.5 and not cia.following_error.numerator:
         sup.outside_s = 0.0  # measured in whole increments: no error, within any window
         return
     get = drive._store.get
@@ -130,19 +131,23 @@ def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
     assert plant is not None
     units = drive.units
     pn, pd, vn, vd, sn, sd = units.ratios()
-    error, velocity = plant.sampled if plant.params.delay == "sample" else (plant.error, plant.velocity)
+    error, velocity = plant.sampled if plant.samples_first else (plant.error, plant.velocity)
     k = round(error)
     offset = drive._home_offset()
     qn, qd = cia.pos_n, cia.pos_d
-    demand_user = floor_ratio(qn, qd, pn, pd) + offset
-    actual_user = floor_ratio(qn + k * qd, qd, pn, pd) + offset if k else demand_user
+    # floor_ratio, inline (every cycle): floor((q / qd) / (pn / pd)), 0 where the factor is 0
+    if pn:
+        demand_user = (qn * pd) // (qd * pn) + offset
+        actual_user = ((qn + k * qd) * pd) // (qd * pn) + offset if k else demand_user
+    else:
+        demand_user = actual_user = offset
     fe = cia.following_error
-    blocked = units.position_to_user_int(fe) if fe else 0
+    blocked = units.position_to_user_int(fe) if fe.numerator else 0
     user_velocity = velocity * sd * vd / (sn * vn) if sn and vn else 0.0
     # a velocity that is the demand's up to the float's last bits reads as the demand's (no floor below it)
     user_velocity = floor(user_velocity + 1e-9 * (user_velocity if user_velocity > 1.0 else
                                                   -user_velocity if user_velocity < -1.0 else 1.0))
-    if cia.state is State.OPERATION_ENABLED and mode == PP and not cia.controlword & HALT and sw & 0x0400 and not (
+    if mode == PP and cia.state is _ENABLED and not cia.controlword & HALT and sw & 0x0400 and not (
             _position_window(drive, actual_user)
             and drive.supervision.inside_s * 1000 >= _ms(drive, drive._read_int(0x6068, 0) or 0)):
         sw &= ~0x0400
@@ -150,8 +155,14 @@ def report_actual(drive: "DriveCore", sw: int, mode: int) -> None:
         sw |= 0x2000
     rated = plant.params.rated_torque
     torque = round(plant.torque / rated * 1000) if rated > 0 else 0
-    drive._put_all(_ACTUAL, (sw, qn // qd + k, actual_user, demand_user + blocked, user_velocity, cia.fault_code,
-                             blocked + (round(-error * pd / pn) if error and pn else 0), torque, torque))
+    demand_user += blocked
+    lag = blocked + (round(-error * pd / pn) if error and pn else 0)
+    if drive.behaviour.polarity == "targets+actuals":
+        # Technosoft §5.1.1: 607Eh multiplies the actual values too (as on the ideal plant, motion.py)
+        ps, vs = polarity.actual_signs(drive, mode)
+        actual_user, demand_user, lag, user_velocity = ps * actual_user, ps * demand_user, ps * lag, vs * user_velocity
+    drive._put_all(_ACTUAL, (sw, qn // qd + k, actual_user, demand_user, user_velocity, cia.fault_code, lag, torque,
+                             torque))
 
 
 # --- limit switches and software position limits ---------------------------------------------------------------

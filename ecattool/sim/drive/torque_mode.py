@@ -8,9 +8,11 @@
 * Both are limited to the maximum torque 6072h (per thousand, where the drive has it and it is not 0).
 * The torque actual value 6077h (and the torque demand 6074h where the drive has it) report the demand.
 
-The torque moves the axis through a :class:`TorqueLoad`: the interface the plant provides (acceleration of the
-axis for a torque at a speed). Without a plant, :class:`FreeInertia` turns the torque into acceleration through
-one inertia and no friction, ``a = T / J``, which the plant replaces with the project's mechanics.
+On a plant (the default) the plant's motor makes the demand torque (:meth:`.plant.Plant.apply_torque`): the
+project's inertia and friction, a load torque and the torque limits 6072h/60E0h/60E1h act, and the demand position
+follows the axis. On the ideal plant the torque moves the axis through a :class:`TorqueLoad` (acceleration of the
+axis for a torque at a speed): :class:`FreeInertia` turns the torque into acceleration through one inertia and no
+friction, ``a = T / J``.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ if TYPE_CHECKING:
 
 _ZERO = Fraction(0)
 PROFILE_TORQUE, CST = 4, 10
+TORQUE_MODES = frozenset({PROFILE_TORQUE, CST})
 
 
 class TorqueLoad(Protocol):
@@ -83,6 +86,11 @@ class TorqueMode:
         else:
             self.demand += slope * dt if goal > self.demand else -slope * dt
         cia = drive.cia
+        if drive.plant is not None:
+            # the plant's motor makes the torque (:func:`.plant_step.cycle`): its inertia, friction, load and the
+            # torque limits 6072h/60E0h/60E1h move the axis, the demand position follows it
+            cia.target_reached = self.demand == goal
+            return
         load = self.load
         if load is None:
             cpr = counts_per_rev(drive)
@@ -95,6 +103,11 @@ class TorqueMode:
         cia.velocity = units.velocity_from_increments_per_second(v1)
         # profile torque: bit 10 "target reached" once the demand is the target (CiA-402)
         cia.target_reached = self.demand == goal
+
+    def newton_metres(self, rated_torque: float) -> float:
+        """The demand in N·m (per thousand of the rated torque ``rated_torque``, 6076h)."""
+        demand = self.demand
+        return demand.numerator / demand.denominator / 1000 * rated_torque
 
     def report(self, drive: DriveCore) -> None:
         """6077h (and 6074h) from the demand; outside OPERATION ENABLED or in a halt the demand is 0."""
