@@ -8,7 +8,6 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from ecattool.cli.common import Decorated
-from ecattool.project.machine import ALLOW_ERRORS_HELP
 
 if TYPE_CHECKING:
     from ecattool.online.library import Library
@@ -108,8 +107,12 @@ def open_live(target: str, device: Any = None) -> LiveBus:
     return _opened(open_bus(target, devices, reset_bus=reset_bus_given()))
 
 
-#: ``--allow-errors`` on the commands that act on a project over a live bus (the same meaning as on commission)
-allow_errors_option = click.option("--allow-errors", is_flag=True, help=ALLOW_ERRORS_HELP)
+def allow_errors_option(f: Decorated) -> Decorated:
+    """``--allow-errors`` on the commands that act on a project over a live bus (the same meaning as on commission;
+    the project layer is imported by those commands only, not on the way of ``sdo read``)."""
+    from ecattool.project.machine import ALLOW_ERRORS_HELP
+
+    return click.option("--allow-errors", is_flag=True, help=ALLOW_ERRORS_HELP)(f)
 
 
 def project_machine(project: str, what: str, allow_errors: bool = False) -> Machine:
