@@ -6,6 +6,7 @@ Checks in ``esi``, ``pdo``, ``scaling``, ``sw``, ``sii`` and ``project`` return 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from enum import Enum
 from typing import Any
 
@@ -56,7 +57,7 @@ class Finding(FrozenRecord):
         }
 
 
-def has_errors(findings: list[Finding], strict: bool = False) -> bool:
+def has_errors(findings: Sequence[Finding], strict: bool = False) -> bool:
     """True when any finding fails a check (errors; warnings too when ``strict``)."""
     threshold = Severity.WARNING.rank if strict else Severity.ERROR.rank
     return any(f.severity.rank >= threshold for f in findings)

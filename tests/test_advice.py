@@ -21,7 +21,7 @@ import pytest
 
 from ecattool.cli import cli
 from ecattool.findings import Severity
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from tests.conftest import ROOT, corpus_path, run
 from tests.test_cli_contract import LEAVES
 
@@ -155,10 +155,10 @@ def test_the_selector_advice_in_a_project_file_is_accepted(tmp_path) -> None:
     esi = _ambiguous(tmp_path)
     project = tmp_path / "p.yaml"
     project.write_text(f"ecattool: 1\ndrives:\n  - name: a\n    device: {{esi: {esi.name}, select: EL1008}}\n")
-    found = [f for f in lint_project(project).findings if f.rule == "PRJ005"]
+    found = [f for f in load_machine(project).findings if f.rule == "PRJ005"]
     assert len(found) == 1 and "policy: newest under device:" in found[0].message
     project.write_text(project.read_text().replace("select: EL1008", "select: EL1008, policy: newest"))
-    assert [str(f) for f in lint_project(project).findings] == []
+    assert [str(f) for f in load_machine(project).findings] == []
 
 
 @pytest.mark.parametrize("name", ["synapticon_Somanet_CiA402-single.xml", "beckhoff_AX2xxx.xml"])
@@ -169,10 +169,10 @@ def test_proposed_disable_rules_are_accepted(capsys, tmp_path, name) -> None:
     text = out.read_text()
     proposed = re.findall(r"#\s+- \{rule: ([\w.-]+)", text)
     assert proposed, text
-    before = {f.rule for f in lint_project(out).findings if f.severity is Severity.ERROR}
+    before = {f.rule for f in load_machine(out).findings if f.severity is Severity.ERROR}
     assert set(proposed) <= before  # each proposal answers an error lint reports
     out.write_text(text.replace("    # disable_rules:", "    disable_rules:").replace("    #   - {rule", "      - {rule"))
-    after = lint_project(out).findings
+    after = load_machine(out).findings
     assert not [str(f) for f in after if f.rule in ("PRJ003", "PRJ004") or f.rule in proposed]
 
 
@@ -183,7 +183,7 @@ def test_prj003_flags_only_what_is_not_a_rule(tmp_path, rule, flagged) -> None:
     project = tmp_path / "p.yaml"
     project.write_text("ecattool: 1\ndisable_rules:\n  - {rule: \"%s\", reason: testing}\n"
                        "drives:\n  - name: a\n    device: {profile: hdt}\n" % rule)
-    found = [f for f in lint_project(project).findings if f.rule == "PRJ003"]
+    found = [f for f in load_machine(project).findings if f.rule == "PRJ003"]
     assert bool(found) is flagged, found
     if found:
         assert found[0].location is not None and found[0].location.line == 3

@@ -10,7 +10,7 @@ import pytest
 from ecattool.commission import commission
 from ecattool.commission.runner import open_target
 from ecattool.od.model import EcState
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from ecattool.target.pysoem import PysoemTarget
 from tests.project_helpers import SAMPLES, copy_sample, sample
 from tests.fake_pysoem import VirtualClock, make_module
@@ -25,7 +25,7 @@ def pysoem_on(drives):
 
 
 def sim_drives(path):
-    return open_target("sim", lint_project(path).drives)[0].slaves()
+    return open_target("sim", load_machine(path).slaves)[0].slaves()
 
 
 @pytest.mark.parametrize("name", SAMPLES)

@@ -11,7 +11,7 @@ import pytest
 from ecattool.commission import commission
 from ecattool.commission.runner import open_target
 from ecattool.od.model import EcState
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from ecattool.sim import Drive
 from ecattool.target.sim import SimTarget
 from tests.project_helpers import SAMPLES, copy_sample, sample
@@ -24,7 +24,7 @@ def sim_drives(path: Path, **profile: str) -> list[Drive]:
     built-in profile device of a single-drive project (another firmware on the bus)."""
     if profile:
         return [Drive.from_profile(**profile)]  # type: ignore[arg-type]
-    return open_target("sim", lint_project(path).drives)[0].slaves()  # type: ignore[return-value]
+    return open_target("sim", load_machine(path).slaves)[0].slaves()  # type: ignore[return-value]
 
 
 def run(path: Path, drives: list[Drive]):
@@ -151,7 +151,7 @@ def test_abort_in_the_middle_names_that_command():
     drives = sim_drives(path)
     drives[0].faults.abort_sdo(3 + 2 * 3 + 1, 0x08000022)  # the 4th write (each write is read back)
     _, dr = run(path, drives)
-    lint = lint_project(path).drives[0]
+    lint = load_machine(path).slaves[0]
     fourth = [c for c in lint.startup if c.transition in ("IP", "PS")][3]
     assert dr.steps[-1].name == f"write {fourth.address}" and dr.steps[-1].abort_code == 0x08000022
 
@@ -255,7 +255,7 @@ def test_corrupted_sw_on_the_drive_is_repaired_by_download():
     _, dr = run(path, drives)
     assert dr.ok and step(dr, "sw verify").ok and not any(s.name == "sw download" for s in dr.steps)
     # flip one word of the setup in the drive's EEPROM
-    lint = lint_project(path).drives[0]
+    lint = load_machine(path).slaves[0]
     block = lint.sw_image.blocks[0]
     address = block.start + 1
     drives[0].memory.eeprom[address] ^= 0x5A5A

@@ -21,7 +21,7 @@ from lxml import etree
 
 from ecattool.commission import commission
 from ecattool.findings import Severity
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from tests.conftest import corpus_path, run
 from tests.test_project_new import ESIS
 
@@ -93,7 +93,7 @@ def test_project_new_from_a_drive_esi_with_breaking_defaults(capsys, tmp_path, n
     text = (text.replace("    # disable_rules:", "    disable_rules:").replace("    #   - {rule", "      - {rule")
             .replace("    # esi_init_cmds:", "    esi_init_cmds:").replace("    #   - {object", "      - {object"))
     out.write_text(text)
-    errors = [f for f in lint_project(out).findings if f.severity is Severity.ERROR]
+    errors = [f for f in load_machine(out).findings if f.severity is Severity.ERROR]
     # project new never writes a skeleton that fails its own lint (issue 34 item 7)
     assert errors == [], [str(f) for f in errors]
     report = commission(out)
@@ -107,7 +107,7 @@ def test_project_new_from_a_drive_esi_with_breaking_defaults(capsys, tmp_path, n
     # with the value and the move the comment proposes, the drive commissions with the move
     text = re.sub(r"(\n    parameters:\n)", '\\1      - {object: "608F:01", value: 4096}\n', text, count=1)
     out.write_text(text + "    move: {distance: 1}\n")
-    assert [str(f) for f in lint_project(out).findings if f.severity is Severity.ERROR] == []
+    assert [str(f) for f in load_machine(out).findings if f.severity is Severity.ERROR] == []
     report = commission(out)
     assert report.ok and any(s.name == "move" for d in report.drives for s in d.steps), \
         [s.detail for d in report.drives for s in d.steps if not s.ok]

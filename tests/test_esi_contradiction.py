@@ -63,26 +63,26 @@ def test_esi_validate_locates_the_contradiction_and_says_nothing_where_both_agre
 
 def test_lint_reports_it_once_where_the_project_keeps_the_power_on_mapping_and_not_where_it_programs_one(
         tmp_path: Path) -> None:
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
     _contradicting(tmp_path)
     keep = tmp_path / "keep.yaml"
     keep.write_text("ecattool: 1\ndrives:\n  - name: a\n    device: {esi: contra.xml}\n", encoding="utf-8")
     # once, at the ESI's line: PRJ027 (the project keeps the mapping the ESI contradicts; pdo: programs one)
-    found = [f for f in lint_project(keep).findings if f.location is not None and f.location.line == OBJECT_LINE]
+    found = [f for f in load_machine(keep).findings if f.location is not None and f.location.line == OBJECT_LINE]
     assert [(f.rule, f.severity.name) for f in found] == [("PRJ027", "ERROR")]
     # the same image with other objects: PRJ027 leaves it to the ESI finding, a warning
     same = tmp_path / "same.xml"
     same.write_text(SOURCE.read_text(encoding="utf-8"), encoding="utf-8")  # the vendor's 607Ah:00 against :04
     keep.write_text("ecattool: 1\ndrives:\n  - name: a\n    device: {esi: same.xml}\n", encoding="utf-8")
-    found = [f for f in lint_project(keep).findings if f.rule in ("esi-pdo-default-differs", "PRJ027")]
+    found = [f for f in load_machine(keep).findings if f.rule in ("esi-pdo-default-differs", "PRJ027")]
     assert [(f.rule, f.severity.name, f.location.line) for f in found] == [  # type: ignore[union-attr]
         ("esi-pdo-default-differs", "WARNING", OBJECT_LINE)]
     given = tmp_path / "given.yaml"
     given.write_text("ecattool: 1\ndrives:\n  - name: a\n    device: {esi: contra.xml}\n    pdo:\n      rx:\n"
                      "        - {index: 0x1600, entries: [0x6040:00/16, 0x6060:00/8, 0x6071:00/16, 0x607A:00/32]}\n",
                      encoding="utf-8")
-    assert [f for f in lint_project(given).findings if f.rule == "esi-pdo-default-differs"] == []
+    assert [f for f in load_machine(given).findings if f.rule == "esi-pdo-default-differs"] == []
 
 
 def test_the_sii_map_layout_and_the_served_slave_agree_on_the_dictionary(

@@ -14,7 +14,7 @@ from lxml import etree
 from ecattool.commission import commission
 from ecattool.findings import Severity
 from ecattool.project.export import slave_configs
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from ecattool.startup import export, import_bytes
 from ecattool.startup.formats import FORMATS
 from ecattool.target.sim import SimTarget
@@ -53,7 +53,7 @@ def _project(tmp: Path, name: str, select: str | None, body: str = "") -> Path:
 def test_the_init_commands_of_each_corpus_esi_are_in_the_startup_list(tmp_path, name, select, device_no):
     want = _expected(name, device_no)
     assert want
-    (rd,) = lint_project(_project(tmp_path, name, select)).drives
+    (rd,) = load_machine(_project(tmp_path, name, select)).slaves
     got = [(c.transition, c.index, c.subindex, c.data, c.source.line) for c in rd.startup if c.source.file.endswith(name)]
     assert got == want
     assert all(c.source.file.endswith(name) for c in rd.startup)  # no parameters: nothing else
@@ -62,7 +62,7 @@ def test_the_init_commands_of_each_corpus_esi_are_in_the_startup_list(tmp_path, 
 def test_module_init_commands_follow_their_slot(tmp_path):
     """Copley XE2: each axis slot's default module (CSP) writes its own 6060h: 6060h and, one SlotIndexIncrement
     (0x800) on, 6860h; both from the module's one InitCmd."""
-    (rd,) = lint_project(_project(tmp_path, "copley_XE2_4.60.xml", None)).drives
+    (rd,) = load_machine(_project(tmp_path, "copley_XE2_4.60.xml", None)).slaves
     assert [(c.transition, c.index, c.data) for c in rd.startup] == [("PS", 0x6060, b"\x08"), ("PS", 0x6860, b"\x08")]
     assert rd.startup.commands[0].source.line == rd.startup.commands[1].source.line == 16661
 
@@ -72,7 +72,7 @@ def test_order_pdo_programming_then_esi_then_parameters(tmp_path):
     replaces the ESI's command (the project's value, written once)."""
     body = ("    pdo: {rx: [{index: 0x1600}], tx: [{index: 0x1A00}]}\n"
             "    parameters:\n      - {object: \"6060:00\", value: 1}\n")
-    (rd,) = lint_project(_project(tmp_path, "elmo_Elmo_ECAT_00010420_V11.xml", "2", body)).drives
+    (rd,) = load_machine(_project(tmp_path, "elmo_Elmo_ECAT_00010420_V11.xml", "2", body)).slaves
     addrs = [(c.index, c.subindex) for c in rd.startup]
     esi = addrs.index((0x60C2, 1))
     assert all(a[0] in (0x1C12, 0x1C13, 0x1600, 0x1A00) for a in addrs[:esi]) and esi > 0
@@ -83,9 +83,9 @@ def test_order_pdo_programming_then_esi_then_parameters(tmp_path):
 def test_esi_init_cmds_change_or_skip_one(tmp_path):
     body = ("    esi_init_cmds:\n      - {object: \"6060:00\", value: 1, comment: pp instead}\n"
             "      - {object: \"60C2:01\", transition: PS, skip: true}\n")
-    result = lint_project(_project(tmp_path, "elmo_Elmo_ECAT_00010420_V11.xml", "2", body))
+    result = load_machine(_project(tmp_path, "elmo_Elmo_ECAT_00010420_V11.xml", "2", body))
     assert [str(f) for f in result.findings] == []
-    (rd,) = result.drives
+    (rd,) = result.slaves
     assert [(c.index, c.data, c.comment) for c in rd.startup] == [(0x6060, b"\x01", "pp instead")]
     assert rd.startup.commands[0].source.line == 6  # the project's value, located in the project
 
@@ -97,14 +97,14 @@ def test_esi_init_cmds_change_or_skip_one(tmp_path):
 ])
 def test_an_entry_that_changes_nothing_or_writes_nonsense_is_an_error(tmp_path, entry, rule, words):
     body = f"    esi_init_cmds:\n      - {entry}\n"
-    found = [f for f in lint_project(_project(tmp_path, "elmo_Elmo_ECAT_00010420_V11.xml", "2", body)).findings
+    found = [f for f in load_machine(_project(tmp_path, "elmo_Elmo_ECAT_00010420_V11.xml", "2", body)).findings
              if f.severity is Severity.ERROR]
     assert [f.rule for f in found] == [rule] and words in found[0].message and found[0].location.line == 6, found
 
 
 def test_init_commands_the_esi_dictionary_refuses_are_named_at_their_line(tmp_path):
     """AX2000: its InitCmds write 6060h (read-only in its own dictionary) and 60C2h (not in it)."""
-    found = [f for f in lint_project(_project(tmp_path, "beckhoff_AX2xxx.xml", None)).findings if f.rule == "PRJ021"]
+    found = [f for f in load_machine(_project(tmp_path, "beckhoff_AX2xxx.xml", None)).findings if f.rule == "PRJ021"]
     assert [(f.location.line, f.severity) for f in found] == [(11020, Severity.ERROR), (11027, Severity.ERROR),
                                                              (11034, Severity.ERROR)]
     assert "read-only" in found[0].message and "does not have" in found[1].message
@@ -125,7 +125,7 @@ def test_project_new_lists_them_and_proposes_skipping_what_the_dictionary_refuse
     assert "    #   PS 60C2:01 = hex:02 (Cycle time, ESI line 11027)\n" in text
     out = tmp_path / "m.yaml"
     out.write_text(text.replace("    # esi_init_cmds:", "    esi_init_cmds:").replace("    #   - {object", "      - {object"))
-    assert not [f for f in lint_project(out).findings if f.rule in ("PRJ021", "PRJ022")]
+    assert not [f for f in load_machine(out).findings if f.rule in ("PRJ021", "PRJ022")]
 
 
 @pytest.fixture(scope="module")
@@ -148,7 +148,7 @@ def drive_projects(tmp_path_factory):
 
 
 def _esi_commands(path: Path) -> list[tuple[str, int, int, bytes]]:
-    (rd,) = lint_project(path).drives
+    (rd,) = load_machine(path).slaves
     return [(c.transition, c.index, c.subindex, c.data) for c in rd.startup
             if c.source is not None and c.source.file.endswith(".xml")]
 
@@ -170,7 +170,7 @@ def test_every_exporter_carries_them(drive_projects, fmt):
 
 def test_commission_writes_them_in_pre_op_before_the_parameters(drive_projects):
     for path in drive_projects:
-        (rd,) = lint_project(path).drives
+        (rd,) = load_machine(path).slaves
         target = SimTarget.from_devices([rd.device])
         report = commission(path, target)
         assert report.ok, [s.detail for d in report.drives for s in d.steps if not s.ok]

@@ -16,7 +16,7 @@ from ecattool.esi.checks import check_device
 from ecattool.esi.model import Direction, with_article
 from ecattool.esi.reader import sm_kind_from_control
 from ecattool.findings import Severity
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from tests.conftest import corpus_path, run
 
 
@@ -31,7 +31,7 @@ def _lint(capsys, tmp_path: Path, source: Path, select: str | None = None) -> li
     code, _, err = run(capsys, "project", "new", "--esi", str(source), *(["--select", select] if select else []),
                        "--policy", "newest", "-o", str(out))
     assert code == 0, err
-    return lint_project(out).findings
+    return load_machine(out).findings
 
 
 def _default_check(dev) -> list:
@@ -169,7 +169,7 @@ def test_eds_csp_project_is_told_the_eds_modes(capsys, tmp_path):
     findings = _lint(capsys, tmp_path, corpus_path("eds", "technosoft_iPOS.D.v1.04.eds"))
     text = (tmp_path / "m.yaml").read_text().replace("value: 1, comment: profile position mode", "value: 8")
     (tmp_path / "m.yaml").write_text(text)
-    findings = lint_project(tmp_path / "m.yaml").findings
+    findings = load_machine(tmp_path / "m.yaml").findings
     f = next(f for f in findings if f.rule == "PRJ017")
     assert "mode 8 is not supported" in f.message and "supported: 1, 3, 6, 7" in f.message
 

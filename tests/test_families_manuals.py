@@ -66,7 +66,7 @@ def test_2_technosoft_foe_setup_in_boot_from_f515i(revision, accepted):
 
 # 3 -------------------------------------------------------------------------------------------------------
 def _lint(tmp_path: Path, cycle_ns: int, period: tuple[int, int] | None, slow_loop: str | None = None) -> list:
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
     scaling = (f"    scaling: {{feedback: {{lines: 500}}, units: {{position: rev}}, slow_loop: {slow_loop}}}\n"
                if slow_loop else "")
@@ -76,7 +76,7 @@ def _lint(tmp_path: Path, cycle_ns: int, period: tuple[int, int] | None, slow_lo
             f"    dc: {{assign_activate: 0x0300, cycle_ns: {cycle_ns}}}\n{scaling}{params}")
     path = tmp_path / "p.yaml"
     path.write_text(text)
-    return [(f.rule, f.severity.value) for f in lint_project(path).findings if f.rule == "PRJ080"]
+    return [(f.rule, f.severity.value) for f in load_machine(path).findings if f.rule == "PRJ080"]
 
 
 def test_3_technosoft_sync0_is_the_slow_loop_or_a_multiple_and_60c2_the_sync_cycle(tmp_path):

@@ -13,7 +13,7 @@ import pytest
 from ecattool.commission.runner import commission
 from ecattool.online import Library, sim_bus
 from ecattool.online.from_bus import project_from_bus
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from ecattool.target.sim import SimTarget
 from tests.conftest import ROOT
 
@@ -23,8 +23,8 @@ INOVANCE = "inovance_SV660_EOE_1Axis_V9.12.xml"
 
 
 def _commissioned(project: str | Path) -> tuple[SimTarget, object]:
-    result = lint_project(project)
-    target = SimTarget.from_devices([rd.device for rd in sorted(result.drives, key=lambda r: r.position)])
+    result = load_machine(project)
+    target = SimTarget.from_devices([rd.device for rd in sorted(result.slaves, key=lambda r: r.position)])
     assert commission(project, target).ok
     return target, sim_bus(target.slaves())
 
@@ -46,9 +46,9 @@ def test_a_digitax_st_in_csp_on_dc_is_written_as_such_lints_clean_and_commission
     assert 'dc: {opmode: "DC", cycle_ns: 1000000}  # as found: AssignActivate 0x0300' in text, text
     assert '{object: "6060:00", value: 8,' in text, text
     assert 'revision: "01.02.00"' in text and "identity: {revision: exact}" in text
-    result = lint_project(out)
+    result = load_machine(out)
     assert not result.findings, [str(f) for f in result.findings]  # no PRJ041, and no PRJ044: 60C2h as found
-    (rd,) = result.drives
+    (rd,) = result.slaves
     assert rd.device.extra["product"] == "digitax-st" and rd.dc is not None and rd.dc.assign_activate == 0x0300
     report = commission(out, _again(target))
     assert report.ok, report.to_json()
@@ -92,7 +92,7 @@ def test_an_esi_reached_through_a_symlink_is_written_as_the_path_given(tmp_path:
     (tmp_path / "machine").rename(moved)  # the project and its library, taken to another machine
     (moved / "lib" / INOVANCE).unlink()
     (moved / "lib" / INOVANCE).write_bytes((GENERIC / INOVANCE).read_bytes())
-    assert not [f for f in lint_project(moved / "m.yaml").findings if f.severity.name == "ERROR"]
+    assert not [f for f in load_machine(moved / "m.yaml").findings if f.severity.name == "ERROR"]
 
 
 def test_a_library_without_the_revision_found_writes_the_policy_that_resolves_it(tmp_path: Path) -> None:
@@ -114,7 +114,7 @@ def test_a_library_without_the_revision_found_writes_the_policy_that_resolves_it
     assert f'select: "0x000C010D:0x{newer:08X}"\n      policy: newest-not-newer' in text, text
     assert "identity: {revision: at-least}" in text
     out.write_text(text, encoding="utf-8")
-    assert not [f for f in lint_project(out).findings if f.severity.name == "ERROR"]
+    assert not [f for f in load_machine(out).findings if f.severity.name == "ERROR"]
 
 
 def test_the_dc_registers_are_read_from_the_escs_before_the_bus_is_reset() -> None:
@@ -125,9 +125,9 @@ def test_the_dc_registers_are_read_from_the_escs_before_the_bus_is_reset() -> No
     from ecattool.sim.bus.engine import Bus
     from ecattool.sim.esc import registers as R
     from ecattool.sim.slave import VirtualSlave, drive_for_device
-    from ecattool.project.lint import lint_project as lp
+    from ecattool.project.machine import load_machine as lp
 
-    devices = [rd.device for rd in lp(CT).drives] * 2
+    devices = [rd.device for rd in lp(CT).slaves] * 2
     slaves = [VirtualSlave(drive_for_device(d), __import__("ecattool.sii.builder", fromlist=["build"]).build(d)
                            .to_bytes()) for d in devices]
     engine = Bus([s.esc for s in slaves])
@@ -152,7 +152,7 @@ def test_without_the_registers_the_project_says_so_and_takes_the_esi_dc_mode(tmp
     assert "# DC not read: sim gave no ESC register read" in text, text
     assert 'the ESI\'s DC OpMode DC is assumed, set your cycle\n    dc: {opmode: "DC", cycle_ns: 1000000}\n' in text
     out.write_text(text, encoding="utf-8")
-    assert "PRJ041" not in {f.rule for f in lint_project(out).findings}
+    assert "PRJ041" not in {f.rule for f in load_machine(out).findings}
 
 
 def test_bus_scan_names_the_model_the_sii_names() -> None:
@@ -175,7 +175,7 @@ def test_late_answers_to_frames_sent_again_are_taken_off_before_the_master_opens
     from ecattool.sim.slave import VirtualSlave, drive_for_device
     from ecattool.sii.builder import build
 
-    (rd,) = lint_project(CT).drives
+    (rd,) = load_machine(CT).slaves
     engine = Bus([VirtualSlave(drive_for_device(rd.device), build(rd.device).to_bytes()).esc])
 
     class LateWire:

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from ecattool.project import cache
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from tests.conftest import corpus_path
 from tests.project_helpers import BELT_PROJECT, DATA, SAMPLES, run, run_json, sample, write_project
 
@@ -193,7 +193,7 @@ def _entries(d: Path, kind: str) -> list[Path]:
 
 
 def test_second_lint_reads_the_pickles(cache_dir, monkeypatch):
-    first = lint_project(ESI_PROJECT)
+    first = load_machine(ESI_PROJECT)
     (device_entry,) = _entries(cache_dir, "device")
     (check_entry,) = _entries(cache_dir, "check")
     assert len(device_entry.stem) == 64  # a SHA-256
@@ -210,9 +210,9 @@ def test_second_lint_reads_the_pickles(cache_dir, monkeypatch):
     monkeypatch.setattr(esi, "load_bytes", no_parse)
     monkeypatch.setattr(esi, "check_structure", no_parse)
     monkeypatch.setattr(running, "complete_generic", no_parse)
-    second = lint_project(ESI_PROJECT)
-    assert second.findings == first.findings == []
-    assert second.drives[0].device.product_code == first.drives[0].device.product_code
+    second = load_machine(ESI_PROJECT)
+    assert second.findings == first.findings == ()
+    assert second.slaves[0].device.product_code == first.slaves[0].device.product_code
     assert _entries(cache_dir, "device") == [device_entry] and _entries(cache_dir, "check") == [check_entry]
 
 
@@ -226,22 +226,22 @@ def _inovance_checks(findings: object) -> bool:
 def test_cached_esi_findings_keep_their_locations(cache_dir, monkeypatch, tmp_path):
     esi = corpus_path("esi", "synapticon_Somanet_CiA402-single.xml")
     p = write_project(tmp_path, f"ecattool: 1\ndrives:\n  - name: s\n    device: {{esi: {esi}}}\n")
-    first = lint_project(p).findings
+    first = load_machine(p).findings
     fresh_process(monkeypatch)
-    second = lint_project(p).findings
+    second = load_machine(p).findings
     assert second == first and any(f.location.line == 898 for f in second)
 
 
 @pytest.mark.parametrize("kind, check", [("device", lambda o: type(o).__name__ == "RunningDevice"),
                                          ("check", lambda o: _inovance_checks(o))])
 def test_damaged_cache_entry_is_rebuilt(cache_dir, monkeypatch, kind, check):
-    lint_project(ESI_PROJECT)
+    load_machine(ESI_PROJECT)
     (entry,) = _entries(cache_dir, kind)
     good = entry.read_bytes()
     entry.write_bytes(b"not a pickle at all")
     fresh_process(monkeypatch)
-    result = lint_project(ESI_PROJECT)
-    assert result.findings == [] and result.drives[0].device is not None
+    result = load_machine(ESI_PROJECT)
+    assert result.findings == () and result.slaves[0].device is not None
     assert entry.read_bytes() != b"not a pickle at all"
     assert check(pickle.loads(entry.read_bytes())) and len(entry.read_bytes()) == len(good)
 
@@ -249,11 +249,11 @@ def test_damaged_cache_entry_is_rebuilt(cache_dir, monkeypatch, kind, check):
 @pytest.mark.parametrize("kind, check", [("device", lambda o: type(o).__name__ == "RunningDevice"),
                                          ("check", lambda o: _inovance_checks(o))])
 def test_foreign_pickle_is_not_trusted(cache_dir, monkeypatch, kind, check):
-    lint_project(ESI_PROJECT)
+    load_machine(ESI_PROJECT)
     (entry,) = _entries(cache_dir, kind)
     entry.write_bytes(pickle.dumps({"not": "what the cache wrote"}))
     fresh_process(monkeypatch)
-    assert lint_project(ESI_PROJECT).drives[0].device is not None
+    assert load_machine(ESI_PROJECT).slaves[0].device is not None
     assert check(pickle.loads(entry.read_bytes()))
 
 
@@ -264,15 +264,15 @@ def test_changed_esi_content_is_a_new_entry(cache_dir, tmp_path):
     (dst / "project.yaml").write_text(ESI_PROJECT.read_text())
     xml = (src / "inovance_SV660_EOE_1Axis_V9.12.xml").read_bytes()
     (dst / "inovance_SV660_EOE_1Axis_V9.12.xml").write_bytes(xml)
-    lint_project(dst / "project.yaml")
+    load_machine(dst / "project.yaml")
     (dst / "inovance_SV660_EOE_1Axis_V9.12.xml").write_bytes(xml + b"\n<!-- edited -->\n")
-    lint_project(dst / "project.yaml")
+    load_machine(dst / "project.yaml")
     assert len(_entries(cache_dir, "check")) == 2 and len(_entries(cache_dir, "device")) == 2
 
 
 def test_no_cache_env_writes_nothing(cache_dir, monkeypatch):
     monkeypatch.setenv("ECATTOOL_NO_CACHE", "1")
-    assert lint_project(ESI_PROJECT).findings == []
+    assert load_machine(ESI_PROJECT).findings == ()
     assert not cache_dir.exists()
 
 
@@ -291,19 +291,19 @@ def test_a_changed_dictionary_file_invalidates_the_esi_entries(cache_dir, tmp_pa
 <Profile><DictionaryFile>dict.xml</DictionaryFile></Profile></Device></Devices></Descriptions></EtherCATInfo>
 """)
     p = write_project(d, "ecattool: 1\ndrives:\n  - name: a\n    device: {esi: device.xml}\n")
-    lint_project(p)
+    load_machine(p)
     assert len(_entries(cache_dir, "device")) == 1
     (d / "dict.xml").write_text("<Dictionary/>\n")
     cache._DIGESTS.clear()
     cache._DEVICES.clear()
-    lint_project(p)
+    load_machine(p)
     assert len(_entries(cache_dir, "device")) == 2
 
 
 def test_changed_reader_code_is_a_new_entry(cache_dir, monkeypatch, tmp_path):
     """A development checkout whose esi/od/profiles code changed since an entry was written (same version, same
     model fields) must not be served the device the old code parsed."""
-    lint_project(ESI_PROJECT)
+    load_machine(ESI_PROJECT)
     assert len(_entries(cache_dir, "device")) == 1
     # the digest follows the code: one changed byte in a copy of the packages gives another digest
     copy = tmp_path / "pkg"
@@ -325,5 +325,5 @@ def test_changed_reader_code_is_a_new_entry(cache_dir, monkeypatch, tmp_path):
     completed = []
     real = running.complete_generic
     monkeypatch.setattr(running, "complete_generic", lambda *a, **k: completed.append(1) or real(*a, **k))
-    assert lint_project(ESI_PROJECT).findings == []
+    assert load_machine(ESI_PROJECT).findings == ()
     assert completed and len(_entries(cache_dir, "device")) == 2 and len(_entries(cache_dir, "check")) == 2

@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from ecattool.findings import Severity
-from ecattool.project.lint import PROJECT_RULES, lint_project
+from ecattool.project.lint import PROJECT_RULES
+from ecattool.project.machine import load_machine
 from tests.conftest import ROOT, corpus_path, need_corpus
 from tests.project_helpers import BELT_PROJECT, DATA, SAMPLES, sample, write_project
 
@@ -69,7 +70,7 @@ def test_broken_project_is_reported_at_its_line(name):
     path = DATA / name
     if "shared/corpus" in path.read_text(encoding="utf-8"):
         need_corpus()
-    result = lint_project(path)
+    result = load_machine(path)
     assert _found(result.findings) == EXPECTED[name]
     assert all(f.location.file == str(path) for f in result.findings)
 
@@ -88,17 +89,17 @@ def test_every_project_rule_has_a_broken_project():
 
 def test_sw_made_for_another_product_or_firmware():
     # identification 'P027314E221F515K' (manual §4.8.6: P027.314.E221 -> 27314221) against the drive's
-    (f,) = lint_project(DATA / "prj032_sw_other_drive.yaml").findings
+    (f,) = load_machine(DATA / "prj032_sw_other_drive.yaml").findings
     assert "product code 27314221" in f.message and "27214221" in f.message
     assert "firmware F515K, the drive has F515I" in f.message
     # the matching drive is clean; without a revision in the project the firmware is not compared
-    assert lint_project(sample("technosoft_ipos")).findings == []
+    assert load_machine(sample("technosoft_ipos")).findings == ()
 
 
 def test_messages_say_what_is_right():
     by_rule: dict[str, str] = {}
     for name in EXPECTED:
-        for f in lint_project(DATA / name).findings:
+        for f in load_machine(DATA / name).findings:
             by_rule[f.rule] = by_rule.get(f.rule, "") + f.message + "\n"
     assert "writable in PREOP" in by_rule["PRJ012"] and "map it in an RxPDO instead" in by_rule["PRJ012"]
     assert "write 0x6040:00/16" in by_rule["PDO007"]
@@ -122,7 +123,7 @@ def test_unreadable_sw_is_reported_at_its_own_line(tmp_path):
     # a real production image with a damaged line 207 ('9E9(E(')
     (tmp_path / "sw").mkdir()
     shutil.copy(corpus_path("sw", "march_imc_rotational_joint.sw"), tmp_path / "sw" / "joint.sw")
-    (f,) = lint_project(_sw_project(tmp_path, "joint.sw")).findings
+    (f,) = load_machine(_sw_project(tmp_path, "joint.sw")).findings
     assert (f.rule, f.severity, f.location.line) == ("PRJ030", E, 207)
     assert Path(f.location.file).resolve() == (tmp_path / "sw" / "joint.sw").resolve()
     # the project names the file: lint says where and what is wrong, never what the line holds (issue 37.4) —
@@ -136,13 +137,13 @@ def test_sw_with_a_wrong_checksum_word(tmp_path):
     # block 0x7ABD: address on line 1, 1267 words on lines 2..1268; the last is the setup checksum word
     lines[1267] = b"%X" % (int(lines[1267], 16) ^ 1)
     (tmp_path / "sw" / "bad.sw").write_bytes(b"\r\n".join(lines))
-    (f,) = lint_project(_sw_project(tmp_path, "bad.sw")).findings
+    (f,) = load_machine(_sw_project(tmp_path, "bad.sw")).findings
     assert (f.rule, f.severity, f.location.line) == ("PRJ030", E, 1)
     assert "[sw-setup-checksum]" in f.message and f.message.startswith("../sw/bad.sw: ")
 
 
 def test_missing_sw_file(tmp_path):
-    (f,) = lint_project(_sw_project(tmp_path, "gone.sw")).findings
+    (f,) = load_machine(_sw_project(tmp_path, "gone.sw")).findings
     assert (f.rule, f.location.line, f.location.column) == ("PRJ002", 5, 9)
     assert "'../sw/gone.sw' not found" in f.message
 
@@ -152,18 +153,18 @@ def test_missing_sw_file(tmp_path):
 def test_project_wide_disable_with_reason_removes_the_finding(tmp_path):
     text = (DATA / "prj017_mode.yaml").read_text().replace(
         "drives:", "disable_rules:\n  - {rule: PRJ017, reason: mode 5 is a vendor mode}\ndrives:", 1)
-    assert lint_project(write_project(tmp_path, text)).findings == []
+    assert load_machine(write_project(tmp_path, text)).findings == ()
 
 
 def test_project_wide_disable_without_reason_keeps_the_finding(tmp_path):
     text = (DATA / "prj017_mode.yaml").read_text().replace(
         "drives:", "disable_rules:\n  - {rule: PRJ017, reason: ''}\ndrives:", 1)
-    found = _found(lint_project(write_project(tmp_path, text)).findings)
+    found = _found(load_machine(write_project(tmp_path, text)).findings)
     assert found == {("PRJ004", E, 4, 28), ("PRJ017", E, 9, 45)}
 
 
 def test_drive_disable_affects_only_that_drive():
-    result = lint_project(DATA / "pdo021_disabled.yaml")
+    result = load_machine(DATA / "pdo021_disabled.yaml")
     pdo021 = [f for f in result.findings if f.rule == "PDO021"]
     assert [f.location.line for f in pdo021] == [13]  # drive b's parameter; drive a's is disabled
 
@@ -172,14 +173,14 @@ def test_drive_disable_affects_only_that_drive():
 
 @pytest.mark.parametrize("name", SAMPLES)
 def test_sample_lints_clean(name):
-    result = lint_project(sample(name))
-    assert result.findings == [] and len(result.drives) == 1 and result.drives[0].device is not None
+    result = load_machine(sample(name))
+    assert result.findings == () and len(result.slaves) == 1 and result.slaves[0].device is not None
 
 
 def test_synapticon_esi_maps_a_missing_subindex(tmp_path):
     esi = corpus_path("esi", "synapticon_Somanet_CiA402-single.xml")
     p = write_project(tmp_path, f"ecattool: 1\ndrives:\n  - name: s\n    device: {{esi: {esi}}}\n")
-    result = lint_project(p)
+    result = load_machine(p)
     errors = [f for f in result.findings if f.severity is E]
     hit = [f for f in errors if "0x607A:04" in f.message]
     assert len(hit) == 1 and hit[0].location.file == str(esi) and hit[0].location.line == 898
@@ -188,7 +189,7 @@ def test_synapticon_esi_maps_a_missing_subindex(tmp_path):
 
 def test_inexact_scaling_is_an_info_at_the_scaling_section(tmp_path):
     p = write_project(tmp_path, BELT_PROJECT)
-    findings = lint_project(p).findings
+    findings = load_machine(p).findings
     assert findings and {f.rule for f in findings} == {"scaling.approximated"}
     assert {(f.severity, f.location.line) for f in findings} == {(Severity.INFO, 6)}
     assert any("0x6093" in f.message and "π" in f.message for f in findings)
@@ -200,5 +201,5 @@ def test_esi_structure_findings_are_those_of_the_selected_device(tmp_path, selec
     # uses the drive device (index 2) is not blamed for them, one that uses a boot device is, at its own line.
     esi = corpus_path("esi", "elmo_Elmo_ECAT_00010420_V11.xml")
     p = write_project(tmp_path, f"ecattool: 1\ndrives:\n  - name: e\n    device: {{esi: {esi}, select: '{select}'}}\n")
-    hit = [f for f in lint_project(p).findings if f.rule == "esi-pdo-object-missing"]
+    hit = [f for f in load_machine(p).findings if f.rule == "esi-pdo-object-missing"]
     assert {f.location.line for f in hit} == lines and all(f.location.file == str(esi) for f in hit)

@@ -112,14 +112,14 @@ def test_lint_and_the_simulated_drive_agree_on_distributed_clocks(tmp_path, mode
     """Control Techniques 7.4/8.1.1: CSP needs DC, SYNC0 = n x 250 us (n = 1..60). Lint's PRJ041/PRJ042 error
     must be exactly what makes the simulated drive refuse OP (commissioned with the rules disabled)."""
     from ecattool.commission import commission
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
     dc = "" if cycle_ns is None else f"    dc: {{assign_activate: 0x0300, cycle_ns: {cycle_ns}}}\n"
     text = ("ecattool: 1\nOFFdrives:\n  - name: x\n    device: {profile: controltechniques, product: digitax-st}\n"
             f"{dc}    parameters:\n      - {{object: modes of operation, value: {mode}}}\n")
     path = tmp_path / "p.yaml"
     path.write_text(text.replace("OFF", ""))
-    lint = sorted(f.rule for f in lint_project(path).findings if f.severity.value == "error")
+    lint = sorted(f.rule for f in load_machine(path).findings if f.severity.value == "error")
     if cycle_ns == 0:  # no SYNC0 cycle at all: the project schema refuses it (dc.cycle_ns >= 1) before any drive
         assert lint == ["PRJ001"], lint
         return
@@ -138,7 +138,7 @@ def test_lint_and_the_simulated_drive_agree_on_the_commissioning_move(tmp_path, 
     """A move in a mode the drive lacks (Commander SK, Affinity: vl and tq only) linted clean and failed at
     commissioning; now lint refuses exactly the moves the simulated drive refuses."""
     from ecattool.commission import commission
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
     path = tmp_path / "p.yaml"
     path.write_text(f"ecattool: 1\ndrives:\n  - name: x\n    device: {{profile: {family}, product: {product}}}\n"
@@ -147,7 +147,7 @@ def test_lint_and_the_simulated_drive_agree_on_the_commissioning_move(tmp_path, 
                     # Technosoft's profile velocity/acceleration come from its setup (.sw); without one they are 0
                     + ("    parameters: [{object: '6081:00', value: 10000}, {object: '6083:00', value: 100000}]\n"
                        if family == "technosoft-ipos" else ""))
-    lint = [f for f in lint_project(path).findings if f.severity.value == "error"]
+    lint = [f for f in load_machine(path).findings if f.severity.value == "error"]
     assert {f.rule for f in lint} <= {"PRJ017"}, [str(f) for f in lint]
     path.write_text(path.read_text().replace("drives:", "disable_rules:\n  - {rule: PRJ017, reason: t}\ndrives:"))
     report = commission(path)
@@ -158,14 +158,14 @@ def test_lint_and_the_simulated_drive_agree_on_the_commissioning_move(tmp_path, 
 def test_a_pp_move_without_profile_velocity_is_flagged_and_does_not_move(tmp_path, velocity):
     """Technosoft leaves 6081h at 0 without a setup: lint warns (PRJ019) exactly when the simulated move fails."""
     from ecattool.commission import commission
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
     path = tmp_path / "p.yaml"
     path.write_text("ecattool: 1\ndrives:\n  - name: x\n    device: {profile: technosoft-ipos}\n    parameters:\n"
                     "      - {object: '6060:00', value: 1}\n      - {object: '6083:00', value: 100000}\n"
                     + (f"      - {{object: '6081:00', value: {velocity}}}\n" if velocity else "")
                     + "    move: {distance: 10}\n")
-    warned = [f.rule for f in lint_project(path).findings] == ["PRJ019"]
+    warned = [f.rule for f in load_machine(path).findings] == ["PRJ019"]
     assert warned is (velocity is None)
     assert commission(path).ok is not warned
 
@@ -180,13 +180,13 @@ PERIODS = [(250, -6), (25, -5), (50, -5), (5, -4), (1, -3), (10, -4), (100, -5),
 def test_lint_and_the_simulated_drive_agree_on_the_interpolation_period(tmp_path, base, exp, sub2_first):
     """Each write of 60C2h is checked with the other sub-index as it stands, so the order matters: lint follows
     the startup list (PRJ043) exactly where the simulated drive aborts."""
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
     writes = [(1, base), (2, exp)][::-1 if sub2_first else 1]
     path = tmp_path / "p.yaml"
     path.write_text("ecattool: 1\ndrives:\n  - name: x\n    device: {profile: controltechniques, product: digitax-st}\n"
                     "    parameters:\n" + "".join(f"      - {{object: '60C2:0{s}', value: {v}}}\n" for s, v in writes))
-    lint = [f.rule for f in lint_project(path).findings if f.severity.value == "error"]
+    lint = [f.rule for f in load_machine(path).findings if f.severity.value == "error"]
     drive = Drive.from_device(device("controltechniques"))
     drive.request_state(EcState.PREOP)
     refused = False

@@ -17,7 +17,7 @@ from ecattool.online.dictionary import typed
 from ecattool.online.objects import dump, read_value, write_value
 from ecattool.online.sii_access import write_checks
 from ecattool.online.targets import open_live
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from ecattool.sii.crc import preamble_crc
 from ecattool.sii.image import parse_header
 from ecattool.target.sim import SimTarget
@@ -45,15 +45,15 @@ def test_scan_names_an_unknown_device() -> None:
 
 
 def _commissioned(project: str) -> tuple[SimTarget, object]:
-    result = lint_project(project)
-    target = SimTarget.from_devices([rd.device for rd in sorted(result.drives, key=lambda r: r.position)])
+    result = load_machine(project)
+    target = SimTarget.from_devices([rd.device for rd in sorted(result.slaves, key=lambda r: r.position)])
     assert commission(project, target).ok
     return target, sim_bus(target.slaves())
 
 
 def test_audit_of_a_freshly_commissioned_bus_reports_nothing_and_never_writes() -> None:
     _, bus = _commissioned(TECHNOSOFT)
-    report = audit(TECHNOSOFT, bus)
+    report = audit(load_machine(TECHNOSOFT), bus)
     assert report.ok and report.checked > 10
     assert bus.write_log == []  # the simulator saw no SDO download, no SII write
 
@@ -65,7 +65,7 @@ def test_audit_reports_exactly_the_three_changed_objects() -> None:
                              (0x6091, 1, (7).to_bytes(4, "little"))):
         slave.sdo_download(index, sub, data)
     bus.write_log.clear()
-    report = audit(TECHNOSOFT, bus)
+    report = audit(load_machine(TECHNOSOFT), bus)
     assert sorted(d.address for d in report.drifts) == ["0x6081:00", "0x6083:00", "0x6091:01"]
     assert {d.kind for d in report.drifts} == {"value"} and bus.write_log == []
     assert any(d.actual == 12345 for d in report.drifts)  # decoded by the dictionary
@@ -226,7 +226,7 @@ def test_backup_writes_sii_dictionary_and_sw_in_one_folder(tmp_path) -> None:
     from ecattool.online.backup import backup
 
     _, bus = _commissioned(TECHNOSOFT)
-    report = backup(TECHNOSOFT, bus, tmp_path / "b")
+    report = backup(load_machine(TECHNOSOFT), bus, tmp_path / "b")
     assert report.files == ["00-z_axis.dict.json", "00-z_axis.sii.bin", "00-z_axis.sw"]
     assert (tmp_path / "b" / "00-z_axis.sw").read_bytes() == (ROOT / "samples" / "technosoft_ipos" /
                                                               "setup.sw").read_bytes()
@@ -245,7 +245,7 @@ def test_backup_that_fails_half_way_leaves_no_folder(tmp_path) -> None:
 
     bus.slaves[0].drive.sdo_upload = lost  # the bus goes quiet during the .sw read
     with pytest.raises(SdoTimeout):
-        backup(TECHNOSOFT, bus, tmp_path / "b")
+        backup(load_machine(TECHNOSOFT), bus, tmp_path / "b")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -257,7 +257,7 @@ def test_project_from_the_bus_lints_clean_and_commissions_the_same_bus(tmp_path)
     with open_bus(FOUR) as bus:
         out.write_text(project_from_bus(bus, Library(ROOT / "samples" / "generic_esi"), out))
         devices = [s.drive.device for s in bus.slaves]
-        result = lint_project(out)
+        result = load_machine(out)
         assert not result.findings, [str(f) for f in result.findings]
         target = SimTarget([drive_for_device(d) for d in devices])  # the same bus, powered up again
         report = commission(out, target)
@@ -271,7 +271,7 @@ def test_machine_install_checks_identity_and_attaches_the_startup_list() -> None
 
     project = "samples/hdt/project.yaml"
     machine = load_machine(project)
-    (rd,) = machine.drives
+    (rd,) = machine.slaves
     drive = Drive.from_device(rd.device)
     mod = fake_pysoem.make_module([drive])
     master = mod.Master()
@@ -299,7 +299,7 @@ def test_a_project_file_installs_through_its_machine() -> None:
     from ecattool.sim import Drive
 
     project = "samples/hdt/project.yaml"
-    (rd,) = lint_project(project).drives
+    (rd,) = load_machine(project).slaves
     mod = fake_pysoem.make_module([Drive.from_device(rd.device)])
     master = mod.Master()
     master.open("eth0")
@@ -317,7 +317,7 @@ def test_install_kickcat_writes_through_the_mailbox_after_checking_1018h() -> No
     from ecattool.startup.install import master_kind
 
     machine = load_machine("samples/hdt/project.yaml")
-    (rd,) = machine.drives
+    (rd,) = machine.slaves
     drive = Drive.from_device(rd.device)
     drive.request_state(EcState.PREOP)  # where kickcat's bus.init() leaves it
 
@@ -377,7 +377,7 @@ def test_backup_cli(tmp_path, capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_audit_against_another_device_is_identity_drift_and_the_write_log_would_see_a_write() -> None:
     with open_bus("sim:technosoft-ipos") as bus:
-        report = audit("samples/hdt/project.yaml", bus)
+        report = audit(load_machine("samples/hdt/project.yaml"), bus)
         assert {d.address for d in report.drifts if d.kind == "identity"} == {"vendor_id", "product_code"}
         assert bus.write_log == []
         with pytest.raises(SdoAbort):  # the witness: a write, even one the drive refuses, is in the log

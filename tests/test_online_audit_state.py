@@ -12,6 +12,7 @@ import pytest
 
 from ecattool.online import audit, open_bus
 from ecattool.online.bus_state import Found
+from ecattool.project.machine import load_machine
 from tests.conftest import run
 
 HDT = "samples/hdt/project.yaml"
@@ -19,7 +20,7 @@ HDT = "samples/hdt/project.yaml"
 
 def test_objects_in_the_rxpdos_are_process_data_not_drift() -> None:
     with open_bus("sim:hdt") as bus:
-        report = audit(HDT, bus)
+        report = audit(load_machine(HDT), bus)
     drifted = {d.address for d in report.drifts}
     assert "0x6081:00" not in drifted and "0x6083:00" not in drifted  # HDT maps both into its default RxPDOs
     assert {(p["address"], p["project"], p["read"]) for p in report.process_data} == {
@@ -36,7 +37,7 @@ def test_objects_in_the_rxpdos_are_process_data_not_drift() -> None:
 def test_a_drive_not_in_the_state_the_project_expects_is_drift(al_status: int, code: int, drift: str | None) -> None:
     with open_bus("sim:hdt") as bus:
         bus.found = [Found(0, al_status, code)]
-        report = audit(HDT, bus)
+        report = audit(load_machine(HDT), bus)
     states = [d for d in report.drifts if d.kind == "state"]
     if drift is None:
         assert states == []

@@ -78,6 +78,46 @@ def test_duplicate_keys_refused(tmp_path):
     assert ei.value.location.line == 3
 
 
+def test_the_schemas_scaling_is_the_scaling_specs_model_and_its_reader_validates_it(tmp_path: Path) -> None:
+    """issue 36: the project schema's scaling: is typed from scaling's own model (its keys, no others), and the
+    file has one validator for it: an unknown key is the spec reader's PRJ050 at its line with the nearest key
+    named (as for a spec file), not a schema error."""
+    from ecattool.project.machine import load_machine
+    from ecattool.scaling.model import SPEC_KEYS
+
+    schema = json_schema()
+    ref = schema["$defs"]["Drive"]["properties"]["scaling"]["anyOf"][0]["$ref"].rsplit("/", 1)[1]
+    section = schema["$defs"][ref]
+    assert set(section["properties"]) == SPEC_KEYS and section["additionalProperties"] is False
+    text = (ROOT / "samples" / "hdt" / "project.yaml").read_text()
+    assert "      transmission: {type: rotary}\n" in text
+    path = tmp_path / "project.yaml"
+    path.write_text(text.replace("      transmission:", "      transmision:"))
+    (f,) = load_machine(path).findings
+    assert (f.rule, f.location.line if f.location else None) == ("PRJ050", 13), f
+    assert "transmision" in f.message and "'transmission'" in f.message
+    # what the schema's type says stays the schema's: a section that is no mapping is PRJ001, as before
+    import re
+
+    path.write_text(re.sub(r"    scaling:\n(      .*\n)+", "    scaling: 5\n", text))
+    (f,) = load_machine(path).findings
+    assert (f.rule, f.message) == ("PRJ001", "drives.0.scaling: Input should be a valid dictionary"), f
+
+
+def test_a_project_without_scaling_does_not_import_the_scaling_package(tmp_path: Path) -> None:
+    """The schema's scaling: comes from scaling's model when the schema is generated; reading and linting a
+    project imports the scaling package only where a drive has a scaling: section (bench_lint's warm run)."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "project.yaml"
+    path.write_text("ecattool: 1\ndrives:\n  - name: a\n    device: {profile: hdt, product: tomcat}\n")
+    code = ("import sys\nfrom ecattool.project.machine import load_machine\n"
+            f"assert load_machine({str(path)!r}).findings == ()\nprint('ecattool.scaling' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert done.returncode == 0 and done.stdout.strip() == "False", done.stderr
+
+
 def test_checked_in_schema_has_not_drifted():
     checked_in = json.loads((ROOT / "schemas" / "project.schema.json").read_text())
     assert checked_in == json.loads(json.dumps(json_schema()))
@@ -172,11 +212,11 @@ def test_unknown_key_names_the_nearest_known_key():
 
 
 def test_a_schema_error_in_one_drive_does_not_hide_the_others(tmp_path):
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
     p = tmp_path / "p.yaml"
     p.write_text(TWO_DRIVES)
-    result = lint_project(p)
+    result = load_machine(p)
     got = [(f.rule, f.location.line) for f in result.findings]
     # the typo in drive x (line 5), and drive y's own finding, located in the file as written (line 10)
     assert ("PRJ001", 5) in got and ("PRJ010", 10) in got, got

@@ -12,7 +12,7 @@ import yaml
 from ecattool import profiles
 from ecattool.commission import commission
 from ecattool.findings import Severity
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from tests.conftest import corpus_path, run
 
 PRODUCTS = [(p.name, prod.name) for p in profiles.list_profiles() for prod in p.products]
@@ -27,7 +27,7 @@ ESIS = [("elmo_Elmo_ECAT_00010420_V11.xml", "2", 0), ("inovance_SV660_EOE_1Axis_
 
 
 def _errors(path: Path) -> list[str]:
-    return [str(f) for f in lint_project(path).findings if f.severity is Severity.ERROR]
+    return [str(f) for f in load_machine(path).findings if f.severity is Severity.ERROR]
 
 
 def _check(capsys, path: Path, *args: str, flaws: int = 0) -> dict:
@@ -111,7 +111,7 @@ def test_esi_flaws_in_pdos_the_mapping_does_not_use_are_warnings(tmp_path):
     shutil.copy(corpus_path("esi", "beckhoff_AX2xxx.xml"), tmp_path / "ax.xml")
     p = tmp_path / "m.yaml"
     p.write_text("ecattool: 1\ndrives:\n  - name: a\n    device: {esi: ax.xml}\n")
-    found = [f for f in lint_project(p).findings if f.rule == "esi-pdo-object-missing"]
+    found = [f for f in load_machine(p).findings if f.rule == "esi-pdo-object-missing"]
     errors = [f for f in found if f.severity is Severity.ERROR]
     warnings = [f for f in found if f.severity is Severity.WARNING]
     assert sorted(f.data["pdo"] for f in errors) == [0x1702, 0x1B03]

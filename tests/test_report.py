@@ -19,7 +19,7 @@ import pytest
 from ecattool import pdo, profiles
 from ecattool.esi.model import Direction
 from ecattool.pdo.layout import ImageEntry, Layout, SmImage
-from ecattool.project.lint import lint_project
+from ecattool.project.machine import load_machine
 from ecattool.report import diagram, process_image_svg
 from tests.conftest import ROOT
 from tests.project_helpers import run
@@ -60,8 +60,8 @@ def _boxes(svg: str) -> list[tuple[str, list[dict[str, str]]]]:
 
 @pytest.mark.parametrize("project", SAMPLES, ids=lambda p: p.parent.name)
 def test_diagram_has_one_box_per_mapped_entry_at_its_offset(project: Path) -> None:
-    result = lint_project(project)
-    for rd in result.drives:
+    result = load_machine(project)
+    for rd in result.slaves:
         assert rd.device is not None and rd.mapping is not None
         lay = pdo.layout(rd.device, rd.mapping)
         sections = _boxes(process_image_svg(lay, rd.drive.name))
@@ -155,7 +155,7 @@ def test_trace_records_the_startup_list_as_the_drive_received_it() -> None:
     from ecattool.target.sim import SimTarget
 
     path = ROOT / "samples" / "technosoft_ipos" / "project.yaml"
-    drives = open_target("sim", lint_project(path).drives)[0].slaves()
+    drives = open_target("sim", load_machine(path).slaves)[0].slaves()
     (dr,) = commission(path, target=SimTarget(drives)).drives
     trace = dr.trace
     # every write the drive received, in order: the .sw download's writes, then the startup list
@@ -186,7 +186,7 @@ def test_a_failed_write_is_in_the_trace_and_the_report(tmp_path: Path) -> None:
     from ecattool.target.sim import SimTarget
 
     path = ROOT / "samples" / "hdt" / "project.yaml"
-    drives = open_target("sim", lint_project(path).drives)[0].slaves()
+    drives = open_target("sim", load_machine(path).slaves)[0].slaves()
     drives[0].faults.abort_sdo(4, 0x06090030)  # type: ignore[attr-defined]  # the first startup write
     report = commission(path, target=SimTarget(drives))
     (dr,) = report.drives
@@ -205,7 +205,7 @@ def test_trace_through_the_pysoem_target() -> None:
     from tests.test_commission_pysoem import pysoem_on
 
     path = ROOT / "samples" / "controltechniques" / "project.yaml"
-    drives = open_target("sim", lint_project(path).drives)[0].slaves()
+    drives = open_target("sim", load_machine(path).slaves)[0].slaves()
     target, _ = pysoem_on(drives)
     (dr,) = commission(path, target=target).drives
     assert dr.ok and dr.trace.startup and dr.trace.events[-1].state == "operation enabled"
@@ -272,8 +272,8 @@ def test_report_of_the_four_samples_has_every_section(sample_report: tuple[Path,
     assert [p.text.split()[1] for p in projects] == [str(s) for s in SAMPLES]
     assert len(page.xpath("//h3[@class='findings']")) == 4
     for project in SAMPLES:
-        result = lint_project(project)
-        for rd in result.drives:
+        result = load_machine(project)
+        for rd in result.slaves:
             (sec,) = [s for s in page.xpath("//section[@class='drive']") if rd.drive.name in s.findtext("h3")]
             assert "OK" in sec.findtext("h3/span") and "vendor 0x" in sec.xpath(".//table[@class='identity']")[0].text_content()
             # the diagram: one box per mapped entry

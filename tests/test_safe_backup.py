@@ -17,8 +17,9 @@ from ecattool.errors import TargetError
 from ecattool.od.model import EcState
 from ecattool.online import open_bus
 from ecattool.online.backup import MANIFEST, backup
-from ecattool.target.sim import SimLiveSlave
+from ecattool.project.machine import load_machine
 from ecattool.sii.crc import preamble_crc
+from ecattool.target.sim import SimLiveSlave
 from tests.conftest import ROOT, run
 
 HDT = "samples/hdt/project.yaml"
@@ -83,10 +84,8 @@ def test_force_replaces_only_a_back_up(tmp_path: Path, capsys: pytest.CaptureFix
 
 # --------------------------------------------------------------------------------------------- never lie
 def _hdt_bus():  # type: ignore[no-untyped-def]
-    from ecattool.project.lint import lint_project
-
-    result = lint_project(HDT)
-    return open_bus("sim", [rd.device for rd in result.drives])
+    result = load_machine(HDT)
+    return open_bus("sim", [rd.device for rd in result.slaves])
 
 
 def _blank_end(sii: bytes) -> bytes:
@@ -107,7 +106,7 @@ def test_a_back_up_of_an_sii_that_does_not_check_out_fails_and_writes_nothing(
         slave = bus.slaves[0]
         slave.sii = sii(slave.sii)
         with pytest.raises(TargetError, match=f"slave 0: the SII read does not check out: .*{message}"):
-            backup(HDT, bus, tmp_path / "b")
+            backup(load_machine(HDT), bus, tmp_path / "b")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -131,7 +130,7 @@ def test_a_slave_that_gives_no_object_fails_the_back_up(tmp_path: Path) -> None:
     with _hdt_bus() as bus:
         bus.slaves[0].drive.request_state(EcState.INIT)  # its SII is fine; no object is readable in INIT
         with pytest.raises(TargetError, match=r"slave 0 \(table\) is in INIT: its mailbox does not answer"):
-            backup(HDT, bus, tmp_path / "b")
+            backup(load_machine(HDT), bus, tmp_path / "b")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -152,7 +151,7 @@ def test_a_slave_that_refuses_every_object_fails_the_back_up(tmp_path: Path,
     with _hdt_bus() as bus:
         with pytest.raises(TargetError, match=r"slave 0 \(table\) gave no object to back up \(state PREOP, \d+ "
                                               r"object\(s\) read, none with a value beyond the identity 1018h\)"):
-            backup(HDT, bus, tmp_path / "b")
+            backup(load_machine(HDT), bus, tmp_path / "b")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -185,7 +184,7 @@ def test_a_udint_of_the_wrong_size_fails_the_back_up_and_sdo_read(
 def test_a_back_up_of_another_device_than_the_projects_fails(tmp_path: Path) -> None:
     with open_bus("sim:technosoft-ipos") as bus:
         with pytest.raises(TargetError, match="slave 0 is not drive 'table' of the project: its vendor_id is"):
-            backup(HDT, bus, tmp_path / "b")
+            backup(load_machine(HDT), bus, tmp_path / "b")
     assert list(tmp_path.iterdir()) == []
 
 

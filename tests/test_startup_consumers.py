@@ -596,7 +596,7 @@ def test_generic_esi_sample_has_dc_in_every_export():
 def test_project_new_gives_a_dc_only_esi_dc_and_lint_is_clean(tmp_path, capsys):
     import shutil
 
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
 
     esi = tmp_path / "sv660.xml"
     shutil.copy(ROOT / "samples" / "generic_esi" / "inovance_SV660_EOE_1Axis_V9.12.xml", esi)
@@ -609,9 +609,9 @@ def test_project_new_gives_a_dc_only_esi_dc_and_lint_is_clean(tmp_path, capsys):
     with_move = text.replace("move: {distance: 1}", "move: {distance: 100, mode: csp}")
     assert "mode: csp" in with_move
     out.write_text(with_move)
-    assert "PRJ045" not in {f.rule for f in lint_project(out).findings}
+    assert "PRJ045" not in {f.rule for f in load_machine(out).findings}
     out.write_text(with_move.replace("    dc: {opmode: DC, cycle_ns: 1000000}\n", ""))
-    assert "PRJ045" in {f.rule for f in lint_project(out).findings}
+    assert "PRJ045" in {f.rule for f in load_machine(out).findings}
 
 
 def test_project_new_leaves_dc_to_the_user_where_the_esi_offers_free_run(tmp_path):

@@ -161,13 +161,13 @@ def test_frames_lost_half_way_give_one_line_and_no_backup(result: dict[str, Any]
 def test_a_master_program_installs_the_projects_startup_list(result: dict[str, Any]) -> None:
     """Machine.install on a pysoem.Master and a kickcat.Bus: the IO map each master reads from the drive is the project's mapping."""
     from ecattool.commission.runner import commission
-    from ecattool.project.lint import lint_project
+    from ecattool.project.machine import load_machine
     from ecattool.target.sim import SimTarget
 
     r = result["install"]
     assert "pysoem_error" not in r and "kickcat_error" not in r, r
     project = ROOT / "samples" / "controltechniques" / "project.yaml"  # its mapping is not the drive's default
-    target = SimTarget.from_devices([rd.device for rd in lint_project(project).drives])
+    target = SimTarget.from_devices([rd.device for rd in load_machine(project).slaves])
     commission(project, target)  # the same startup list, in process: the sizes it leads to
     want = [list(d.process_image_sizes()) for d in target.slaves()]
     assert r["pysoem_positions"] == r["kickcat_positions"] == [0]

@@ -7,7 +7,7 @@ import sys
 import click
 
 from ecattool.cli.common import dump_json, file_output_option, output_option, write_output
-from ecattool.cli.online import project_bus, target_option
+from ecattool.cli.online import allow_errors_option, project_bus, project_machine, target_option
 from ecattool.cli.paths import InputFile
 
 
@@ -15,7 +15,8 @@ from ecattool.cli.paths import InputFile
 Examples:
   ecattool audit machine.yaml --target pysoem:eth0
   ecattool audit machine.yaml --target pysoem:eth0 --format sarif -o audit.sarif
-  ecattool audit machine.yaml --target sim --json --html audit.html""")
+  ecattool audit machine.yaml --target sim --json --html audit.html
+  ecattool audit machine.yaml --target pysoem:eth0 --allow-errors   # a project lint reports errors for""")
 @click.argument("project", type=InputFile())
 @target_option()
 @click.option("--format", "fmt", type=click.Choice(["text", "json", "sarif"]), default="text", show_default=True,
@@ -24,16 +25,18 @@ Examples:
 @click.option("--sw-checksums", is_flag=True,
               help="Also have each Technosoft drive checksum its .sw blocks (writes the request object 2069h; "
                    "without this flag the audit never writes).")
+@allow_errors_option
 @output_option()
 @file_output_option("--html", "html", "Also write the drift report as an HTML page (the report extra).")
-def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool, output: str | None,
-          html: str | None) -> None:
+def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool, allow_errors: bool,
+          output: str | None, html: str | None) -> None:
     """Read back every object the project's startup list would write, and each drive's identity, and report
     where the drives differ from the project (drift). Reads only. Exit status 1 on drift."""
     from ecattool.online.audit import audit as do_audit
 
-    with project_bus(project, target) as live:
-        report = do_audit(project, live, sw_checksums=sw_checksums)
+    machine = project_machine(project, "audit", allow_errors)
+    with project_bus(machine, target) as live:
+        report = do_audit(machine, live, sw_checksums=sw_checksums, allow_errors=allow_errors)
     fmt = "json" if as_json else fmt
     if fmt == "json":
         text = dump_json(report.to_json()) + "\n"

@@ -5,15 +5,22 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
 from ecattool.errors import InputError
 from ecattool.record import Record
 
+if TYPE_CHECKING:
+    from rich.console import Console
+    from rich.table import Table
 
-def json_option(f: Callable[..., Any]) -> Callable[..., Any]:
+#: a click command function (or command) that an option decorator returns as it came, with the option added
+Decorated = TypeVar("Decorated", bound=Callable[..., object])
+
+
+def json_option(f: Decorated) -> Decorated:
     return click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON instead of tables.")(f)
 
 
@@ -21,7 +28,7 @@ def json_option(f: Callable[..., Any]) -> Callable[..., Any]:
 POLICIES = ("exact", "newest-not-newer", "newest")
 
 
-def policy_option(f: Callable[..., Any]) -> Callable[..., Any]:
+def policy_option(f: Decorated) -> Decorated:
     """``--policy``: how an ESI device selector picks a revision when several devices match it."""
     return click.option("--policy", type=click.Choice(POLICIES), default="exact", show_default=True,
                         help="How the device selector picks a revision when several match: exact, "
@@ -48,7 +55,7 @@ def force_requested() -> bool:
     return bool(ctx is not None and ctx.meta.get(_FORCE_KEY))
 
 
-def _with_force(f: Callable[..., Any]) -> Callable[..., Any]:
+def _with_force(f: Decorated) -> Decorated:
     """Add the shared ``--force`` to a command that writes files, once (a command with ``-o`` and ``--html`` gets
     one flag for both)."""
     params = getattr(f, "__click_params__", [])
@@ -64,26 +71,26 @@ def _output_path(ctx: click.Context, param: click.Parameter, value: str | None) 
 
 
 def output_option(required: bool = False, help: str = "Write to FILE (atomically; never over an input; an existing "
-                  "file only with --force). '-' = stdout.", force: bool = True) -> Callable[..., Any]:
+                  "file only with --force). '-' = stdout.", force: bool = True) -> Callable[[Decorated], Decorated]:
     """``-o/--output FILE`` plus the shared ``--force`` (unless ``force=False``: the command has its own flag that
     calls :func:`store_force`)."""
     option = click.option("-o", "--output", "output", type=click.Path(dir_okay=False, allow_dash=True),
                           required=required, callback=_output_path, help=help)
 
-    def decorate(f: Callable[..., Any]) -> Callable[..., Any]:
+    def decorate(f: Decorated) -> Decorated:
         f = option(f)
         return _with_force(f) if force else f
 
     return decorate
 
 
-def file_output_option(flag: str, name: str, help: str) -> Callable[..., Any]:
+def file_output_option(flag: str, name: str, help: str) -> Callable[[Decorated], Decorated]:
     """An option naming a file to write besides the main output (``--svg``, ``--report``, ``--html``): written
     atomically, never over an input, an existing file only with ``--force``, like ``-o``; '-' is stdout."""
     option = click.option(flag, name, type=click.Path(dir_okay=False, allow_dash=True), metavar="FILE",
                           callback=_output_path, help=help)
 
-    def decorate(f: Callable[..., Any]) -> Callable[..., Any]:
+    def decorate(f: Decorated) -> Decorated:
         return _with_force(option(f))
 
     return decorate
@@ -133,7 +140,7 @@ def print_json(data: Any) -> None:
     click.echo(dump_json(data))
 
 
-def console(stderr: bool = False) -> Any:
+def console(stderr: bool = False) -> Console:
     """A rich console; plain (no colour, no decoration) when not writing to a terminal."""
     from rich.console import Console
 
@@ -155,17 +162,18 @@ IDENTIFIER_COLUMNS = frozenset({
 NARROW = 120
 
 
-def table(title: str | None, columns: list[str], optional: tuple[str, ...] = ()) -> Any:
+def table(title: str | None, columns: list[str], optional: tuple[str, ...] = ()) -> Table:
     """A rich table. At any width (80 columns too) identifier columns stay whole and the others wrap; on a
     terminal narrower than :data:`NARROW` the ``optional`` columns are left out (rows are given in full)."""
     from rich import box
+    from rich.console import RenderableType
     from rich.table import Table
 
     narrow = sys.stdout.isatty() and console().width < NARROW
     keep = [i for i, c in enumerate(columns) if not (narrow and c in optional)]
 
     class _Table(Table):
-        def add_row(self, *cells: Any, **kwargs: Any) -> None:
+        def add_row(self, *cells: RenderableType | None, **kwargs: Any) -> None:
             super().add_row(*(cells[i] for i in keep if i < len(cells)), **kwargs)
 
     t = _Table(title=title, box=box.SIMPLE_HEAD if sys.stdout.isatty() else box.ASCII2, title_justify="left")

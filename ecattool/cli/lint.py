@@ -10,7 +10,7 @@ from ecattool.cli.common import console, dump_json, output_option, write_output
 from ecattool.cli.paths import InputFile
 
 if TYPE_CHECKING:
-    from ecattool.project.lint import ProjectResult
+    from ecattool.project.machine import Machine
 
 
 @click.command(
@@ -60,14 +60,14 @@ def lint(projects: tuple[str, ...], fmt: str, as_json: bool, strict: bool, outpu
     raise SystemExit(1 if failed else 0)
 
 
-def _text(results: list[ProjectResult], output: str | None, inputs: tuple[str, ...]) -> None:
+def _text(results: list[Machine], output: str | None, inputs: tuple[str, ...]) -> None:
     lines = []
     for r in results:
         for f in r.findings:
             lines.append(str(f))
         n_err = sum(1 for f in r.findings if f.severity.value == "error")
         n_warn = sum(1 for f in r.findings if f.severity.value == "warning")
-        drives = len(r.drives)
+        drives = len(r.slaves)
         lines.append(f"{r.path}: {drives} drive(s), {n_err} error(s), {n_warn} warning(s)")
     text = "\n".join(lines) + "\n"
     if output not in (None, "-"):

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
+from ecattool.cli.common import (Decorated, console, file_output_option, json_option, output_option, policy_option, print_json,
                                  store_force, table, write_output)
 from ecattool.cli.paths import InputFile
 from ecattool.cli.vocab import WRITE_FORMATS, AliasedOption
@@ -34,8 +34,8 @@ name (controlword, "modes of operation"), a raw value 0x60400010, or gap/8. A PD
 --mapping FILE.yaml holds {{rx: [{{index: 0x1600, entries: [controlword, ...]}}], tx: [...]}}."""
 
 
-def _device_options(f: Callable[..., Any]) -> Callable[..., Any]:
-    opts: list[Callable[..., Any]] = [
+def _device_options(f: Decorated) -> Decorated:
+    opts: list[Callable[[Decorated], Decorated]] = [
         click.option("--esi", type=InputFile(), help="ESI file of the device."),
         # without --esi, --device NAME still names a built-in profile, as it did before --profile existed
         click.option("--device", "selector", metavar="SEL",

@@ -7,9 +7,12 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
+from ecattool.cli.common import Decorated
+
 if TYPE_CHECKING:
     from ecattool.online.library import Library
     from ecattool.online.live import LiveBus
+    from ecattool.project.machine import Machine
     from ecattool.profiles.running import RunningDevice
 
 TARGET_HELP = ("Where the bus is: pysoem:IF or kickcat:IF (a real master on a network interface), or the simulator: "
@@ -32,11 +35,11 @@ reset_bus_option = click.option(
          "the machine stops). Without it such a bus is refused.")
 
 
-def target_option(required: bool = True) -> Callable[..., Any]:
+def target_option(required: bool = True) -> Callable[[Decorated], Decorated]:
     """``--target`` and ``--reset-bus``."""
     target = click.option("--target", "target", required=required, metavar="TARGET", help=TARGET_HELP)
 
-    def both(f: Callable[..., Any]) -> Callable[..., Any]:
+    def both(f: Decorated) -> Decorated:
         return target(reset_bus_option(f))
 
     return both
@@ -61,17 +64,17 @@ def reset_bus_given() -> bool:
     return bool(ctx is not None and ctx.meta.get(RESET_BUS))
 
 
-def slave_option(f: Callable[..., Any]) -> Callable[..., Any]:
+def slave_option(f: Decorated) -> Decorated:
     return click.option("--slave", "slave", type=int, default=0, show_default=True,
                         help="Position of the slave on the bus (0 = first).")(f)
 
 
-def library_option(f: Callable[..., Any]) -> Callable[..., Any]:
+def library_option(f: Decorated) -> Decorated:
     return click.option("--library", "library", type=click.Path(file_okay=False), metavar="DIR",
                         help="A folder of ESI/EDS files to match the slaves against (cached as lint caches ESI).")(f)
 
 
-def device_option(f: Callable[..., Any]) -> Callable[..., Any]:
+def device_option(f: Decorated) -> Decorated:
     return click.option("--device", "device", metavar="DEVICE",
                         help="The slave's device: an ESI file (FILE or FILE@SELECTOR) or a built-in profile name "
                              "(overrides the library and the slave's SDO Information).")(f)
@@ -104,19 +107,28 @@ def open_live(target: str, device: Any = None) -> LiveBus:
     return _opened(open_bus(target, devices, reset_bus=reset_bus_given()))
 
 
-def project_bus(project: str, target: str) -> LiveBus:
-    """The live bus of ``target`` for a project: the project is linted first (one that does not load or lint is
-    refused before the bus is opened); ``sim`` simulates the project's drives."""
-    from ecattool.errors import InputError
-    from ecattool.online.targets import open_bus
-    from ecattool.project.export import refuse_errors
-    from ecattool.project.lint import lint_project
+def allow_errors_option(f: Decorated) -> Decorated:
+    """``--allow-errors`` on the commands that act on a project over a live bus (the same meaning as on commission;
+    the project layer is imported by those commands only, not on the way of ``sdo read``)."""
+    from ecattool.project.machine import ALLOW_ERRORS_HELP
 
-    result = lint_project(project)
-    if result.loaded is None:
-        first = result.findings[0]
-        raise InputError(first.message, first.location)
-    refuse_errors(result, f"use {project} on a bus")
+    return click.option("--allow-errors", is_flag=True, help=ALLOW_ERRORS_HELP)(f)
+
+
+def project_machine(project: str, what: str, allow_errors: bool = False) -> Machine:
+    """The machine of ``project``, built once for the command: refused (one located line) where it does not load,
+    a device does not resolve, or, unless ``allow_errors``, lint reports errors; before any bus is opened."""
+    from ecattool.project.machine import load_machine
+
+    machine = load_machine(project)
+    machine.refuse_errors(what, allow_errors=allow_errors)
+    return machine
+
+
+def project_bus(machine: Machine, target: str) -> LiveBus:
+    """The live bus of ``target`` for a machine (:func:`project_machine`); ``sim`` simulates its drives."""
+    from ecattool.online.targets import open_bus
+
     # what a bare 'sim' simulates (open_bus reads the spec; a real master or sim:SOURCES ignore them)
-    devices = [rd.device for rd in sorted(result.drives, key=lambda r: r.position) if rd.device is not None]
+    devices = [device for _, device in machine.devices()]
     return _opened(open_bus(target, devices, reset_bus=reset_bus_given()))

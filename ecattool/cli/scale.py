@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import click
 
-from ecattool.cli.common import (console, file_output_option, json_option, output_option, policy_option, print_json,
+from ecattool.cli.common import (Decorated, console, file_output_option, json_option, output_option, policy_option, print_json,
                                  table, write_output)
 from ecattool.cli.online import reset_bus_given, reset_bus_option
 from ecattool.cli.paths import InputFile
@@ -21,8 +21,8 @@ if TYPE_CHECKING:
     from ecattool.scaling.group import FactorGroup
 
 
-def _mechanics_options(f: Any) -> Any:
-    opts: list[Callable[..., Any]] = [
+def _mechanics_options(f: Decorated) -> Decorated:
+    opts: list[Callable[[Decorated], Decorated]] = [
         click.argument("spec", required=False, type=InputFile(allow_dash=True)),
         shared_option("--profile", "family", type=click.Choice(_FAMILIES),
                       help="Drive family (default: the spec's, else technosoft-ipos)."),
@@ -54,7 +54,8 @@ def _mechanics_options(f: Any) -> Any:
 
 
 def _spec(spec: str | None, family: str | None, firmware: str | None, counts: str | None, lines: str | None,
-          steps: str | None, feedback_on: str | None, gear: str | None, transmission: str | None, pos_unit: str | None,
+          steps: str | None, feedback_on: Literal["motor", "load"] | None, gear: str | None, transmission: str | None,
+          pos_unit: str | None,
           vel_unit: str | None, acc_unit: str | None, jerk_unit: str | None, slow_loop: str | None,
           reverse: bool | None, approximation: str | None) -> Any:
     """(the spec the flags say, over SPEC where given; the family, firmware and approximation to use)."""

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -20,6 +20,11 @@ from ecattool.cli.common import (
 )
 from ecattool.cli.online import open_live, reset_bus_option
 from ecattool.cli.paths import InputFile
+
+if TYPE_CHECKING:
+    from ecattool.esi.model import Device
+    from ecattool.findings import Finding
+    from ecattool.sii.model import SiiImage
 
 
 @click.group("sii", epilog="""\b
@@ -48,13 +53,13 @@ def _stdin(path: str) -> bytes | None:
     return read_stdin(4 * MAX_IMAGE_BYTES)
 
 
-def _load(path: str) -> Any:
-    from ecattool.sii import load
+def _load(path: str) -> SiiImage:
+    from ecattool.sii.image import load
 
     return load("<stdin>" if path == "-" else path, _stdin(path))
 
 
-def _write_image(output: str, image: Any, inputs: tuple[str, ...]) -> None:
+def _write_image(output: str, image: SiiImage, inputs: tuple[str, ...]) -> None:
     data = image.to_bytes()
     if output.lower().endswith((".hex", ".ihex")):
         from ecattool.sii import write_intel_hex
@@ -64,7 +69,7 @@ def _write_image(output: str, image: Any, inputs: tuple[str, ...]) -> None:
         write_output(output, data, inputs)
 
 
-def _findings_out(findings: list[Any], as_json: bool, extra: dict[str, Any] | None = None) -> None:
+def _findings_out(findings: list[Finding], as_json: bool, extra: dict[str, Any] | None = None) -> None:
     from ecattool.findings import has_errors
 
     if as_json:
@@ -154,7 +159,7 @@ _POLICY = click.option("--policy", type=click.Choice(["exact", "newest-not-newer
                        show_default=True, help="How --device picks a revision when several match.")
 
 
-def _select(esi_path: str, selector: str | None, image: Any = None, policy: str = "exact") -> Any:
+def _select(esi_path: str, selector: str | None, image: SiiImage | None = None, policy: str = "exact") -> Device:
     from ecattool.esi import load, select
     from ecattool.esi.reader import LazyEsiFile
 

@@ -2,12 +2,18 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import click
 
-from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.common import Decorated, console, json_option, output_option, print_json, table, write_output
 from ecattool.cli.paths import InputFile
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from ecattool.startup.config import SlaveConfig
+    from ecattool.startup.model import StartupList
 
 _FORMAT_NAMES = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv", "lcec")
 #: the formats ecattool can read (igh and pysoem are written only; lcec is read only), as the format registry
@@ -30,7 +36,7 @@ def startup() -> None:
     """
 
 
-def _read_with_format(path: str, fmt: str | None) -> tuple[list[Any], str]:
+def _read_with_format(path: str, fmt: str | None) -> tuple[list[SlaveConfig], str]:
     """Read a startup configuration from a file, or from stdin for ``-``; also say which format it was."""
     from ecattool.fileio import read_input
     from ecattool.startup import detect_format, import_bytes
@@ -41,11 +47,11 @@ def _read_with_format(path: str, fmt: str | None) -> tuple[list[Any], str]:
     return import_bytes(data, source, name), name
 
 
-def _read(path: str, fmt: str | None) -> list[Any]:
+def _read(path: str, fmt: str | None) -> list[SlaveConfig]:
     return _read_with_format(path, fmt)[0]
 
 
-def _report_import(configs: list[Any], source: str) -> None:
+def _report_import(configs: list[SlaveConfig], source: str) -> None:
     """Every note the import made goes to stderr (what was skipped or reinterpreted); a source that gives
     nothing to convert is an error, not an empty file and exit 0."""
     from ecattool.errors import InputError, Location
@@ -63,7 +69,7 @@ def _report_import(configs: list[Any], source: str) -> None:
         click.echo(f"{source}: {len(skipped)} part(s) of the source were not converted (warnings above)", err=True)
 
 
-def _with_cycle(configs: list[Any], sync0_cycle: int | None) -> list[Any]:
+def _with_cycle(configs: list[SlaveConfig], sync0_cycle: int | None) -> list[SlaveConfig]:
     """``--sync0-cycle``: the SYNC0 cycle of slaves that activate DC without giving one (a ros2 file)."""
     if sync0_cycle is not None:
         for c in configs:
@@ -72,7 +78,7 @@ def _with_cycle(configs: list[Any], sync0_cycle: int | None) -> list[Any]:
     return configs
 
 
-def write_startup(configs: list[Any], fmt: str, output: str | None, inputs: tuple[str, ...], lossy: bool = False) -> None:
+def write_startup(configs: Sequence[SlaveConfig | StartupList], fmt: str, output: str | None, inputs: tuple[str, ...], lossy: bool = False) -> None:
     """Write ``configs`` in ``fmt``; what the format cannot carry refuses the export, or with ``--lossy`` is
     printed to stderr, one line each, with the count."""
     from ecattool.startup import export, losses
@@ -86,14 +92,14 @@ def write_startup(configs: list[Any], fmt: str, output: str | None, inputs: tupl
         click.echo(f"{len(lost)} part(s) of the configuration are not in the {fmt} output (--lossy)", err=True)
 
 
-def lossy_option(f: Any) -> Any:
+def lossy_option(f: Decorated) -> Decorated:
     return click.option("--lossy", is_flag=True,
                         help="Write the output even where the format cannot carry part of the configuration "
                              "(one-shot writes, DC, SoE, PDO tables, identity); each loss is printed. Without "
                              "it such an export fails and lists them.")(f)
 
 
-def _sync0_option(f: Any) -> Any:
+def _sync0_option(f: Decorated) -> Decorated:
     return click.option("--sync0-cycle", type=click.IntRange(min=1, max=0xFFFFFFFF), metavar="NS",
                         help="SYNC0 cycle in ns for slaves that activate DC without giving a cycle (ros2 files); "
                              "an ENI needs it.")(f)

@@ -4,14 +4,24 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import click
 
-from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.common import Decorated, console, json_option, output_option, print_json, table, write_output
 from ecattool.cli.online import reset_bus_given, reset_bus_option
 from ecattool.cli.paths import InputFile
 from ecattool.errors import InputError, Location
+
+if TYPE_CHECKING:
+    from rich.table import Table
+
+    from ecattool.esi.model import Device
+    from ecattool.project.slave import Slave
+    from ecattool.sw.apply import BlockCheck, DownloadReport
+    from ecattool.sw.image import Block, SwImage
+    from ecattool.sw.params import ParameterTable
+    from ecattool.target.base import SlaveTarget
 
 
 @click.group(epilog="""\b
@@ -24,13 +34,13 @@ def sw() -> None:
     """Technosoft .sw EEPROM setup images: inspect, check, convert, patch, build and download."""
 
 
-def _image(path: str) -> Any:
+def _image(path: str) -> SwImage:
     from ecattool.sw.build import load_image
 
     return load_image(Path(path))
 
 
-def _params(path: str | None) -> Any:
+def _params(path: str | None) -> ParameterTable | None:
     if path is None:
         return None
     from ecattool.sw.params import read_parameters
@@ -110,7 +120,7 @@ def from_foe_cmd(file: str, output: str | None) -> None:
 
 
 # ---------------------------------------------------------------------------------------------- targets
-def _open_target(spec: str, slave: int, device: Any = None) -> Any:
+def _open_target(spec: str, slave: int, device: Device | None = None) -> SlaveTarget:
     """The slave at ``slave`` of the target ``spec`` (ecattool.target.opener): with ``sim``, a simulated bus of
     ``device`` at that position (a Technosoft iPOS without one)."""
     from ecattool.online.targets import open_guarded
@@ -129,7 +139,7 @@ def _open_target(spec: str, slave: int, device: Any = None) -> Any:
     return slave_at(open_guarded(spec, reset_bus=reset_bus_given()), slave)
 
 
-def _project_drive(project: str, name: str | None, allow_errors: bool = False) -> tuple[Any, str]:
+def _project_drive(project: str, name: str | None, allow_errors: bool = False) -> tuple[Slave, str]:
     """The slave ``name`` of a project's machine (or its only slave, or the one with an ``sw:``) and the
     project's default target; a project with lint errors for it is refused unless ``allow_errors``."""
     from ecattool.project.machine import load_machine
@@ -161,7 +171,7 @@ _preload_option = click.option("--preload", type=InputFile(),
                                help="Simulator only: program this .sw into the simulated EEPROM first.")
 
 
-def _target_options(f: Any) -> Any:
+def _target_options(f: Decorated) -> Decorated:
     """--target, --reset-bus, --slave, --project, --drive, --preload and --allow-errors (verify, download, upload)."""
     for option in (_allow_errors_option, _preload_option, _drive_option, _project_option, _slave_option,
                    reset_bus_option, _target_option):
@@ -170,7 +180,7 @@ def _target_options(f: Any) -> Any:
 
 
 def _project_slave(project: str, drive_name: str | None, allow_errors: bool, target: str | None,
-                   slave: int | None) -> tuple[Any, str | None, int | None]:
+                   slave: int | None) -> tuple[Slave, str | None, int | None]:
     """(the project's slave, the target: the option's else the project's, the position: the option's else the
     slave's) for the commands that take --project."""
     rd, project_target = _project_drive(project, drive_name, allow_errors)
@@ -179,7 +189,7 @@ def _project_slave(project: str, drive_name: str | None, allow_errors: bool, tar
 
 def _target_and_image(file: str | None, target: str | None, slave: int | None, project: str | None,
                       drive_name: str | None, preload: str | None,
-                      allow_errors: bool = False) -> tuple[Any, Any, str, str]:
+                      allow_errors: bool = False) -> tuple[SlaveTarget, SwImage, str, str]:
     """(target, image, image name, target name) for verify/download."""
     device = None
     image = None
@@ -202,7 +212,7 @@ def _target_and_image(file: str | None, target: str | None, slave: int | None, p
     return _open_preloaded(spec, slave, device, preload), image, name or "", spec
 
 
-def _open_preloaded(spec: str, slave: int | None, device: Any, preload: str | None) -> Any:
+def _open_preloaded(spec: str, slave: int | None, device: Device | None, preload: str | None) -> SlaveTarget:
     """The slave of ``spec``; on the simulator with ``preload`` programmed into its EEPROM first."""
     if preload:
         from ecattool.target.opener import parse_target
@@ -218,7 +228,7 @@ def _open_preloaded(spec: str, slave: int | None, device: Any, preload: str | No
     return tgt
 
 
-def _checks_table(title: str, checks: list[Any]) -> Any:
+def _checks_table(title: str, checks: list[BlockCheck]) -> Table:
     from rich.text import Text
 
     t = table(title, ["start", "end", "words", "file", "drive", "result"])
@@ -302,19 +312,19 @@ def download(file: str | None, dry_run: bool, mode: str, force: bool, no_reset: 
     if as_json:
         print_json(report.to_json())
     else:
-        c = console()
+        out = console()
         if not report.written:
-            c.print(f"{file}: every block already matches the drive; nothing written", markup=False)
+            out.print(f"{file}: every block already matches the drive; nothing written", markup=False)
         else:
-            c.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
+            out.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
             for start, err in report.write_errors.items():
-                c.print(f"block 0x{start:04X}: write failed: {err}", markup=False)
-            c.print(_reset_line(report, no_reset))
+                out.print(f"block 0x{start:04X}: write failed: {err}", markup=False)
+            out.print(_reset_line(report, no_reset))
     if not report.ok:
         sys.exit(1)
 
 
-def _reset_line(report: Any, no_reset: bool) -> str:
+def _reset_line(report: DownloadReport, no_reset: bool) -> str:
     """The last line of a download that wrote something: whether the drive was reset, and why not."""
     if report.reset:
         return "drive reset to load the new setup"
@@ -323,7 +333,8 @@ def _reset_line(report: Any, no_reset: bool) -> str:
     return "drive NOT reset: some blocks are still different; run the download again"
 
 
-def _run_download(image: Any, target: Any, mode: int, reset: bool, force: bool, show_progress: bool) -> Any:
+def _run_download(image: SwImage, target: SlaveTarget, mode: int, reset: bool, force: bool,
+                  show_progress: bool) -> DownloadReport:
     from ecattool.sw.apply import download as download_image
 
     if not (show_progress and sys.stderr.isatty()):
@@ -334,7 +345,7 @@ def _run_download(image: Any, target: Any, mode: int, reset: bool, force: bool, 
                   console=console(stderr=True), transient=True) as bar:
         task = bar.add_task("EEPROM", total=None)
 
-        def progress(done: int, total: int, block: Any) -> None:
+        def progress(done: int, total: int, block: Block) -> None:
             bar.update(task, completed=done, total=total, description=f"block 0x{block.start:04X}")
 
         return download_image(image, target, progress, mode, reset, force)

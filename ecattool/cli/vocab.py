@@ -11,6 +11,8 @@ from typing import Any
 
 import click
 
+from ecattool.cli.common import Decorated
+
 #: the startup formats ecattool writes (``--format`` of map sdo, scale startup; lcec is read only)
 WRITE_FORMATS = ("eni", "twincat", "igh", "pysoem", "ros2", "ecmc", "json", "csv")
 
@@ -44,13 +46,13 @@ class AliasedOption(click.Option):
         return " / ".join(f"'{o}'" for o in self._shown())
 
 
-def shared_option(canonical: str, dest: str, **kwargs: Any) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+def shared_option(canonical: str, dest: str, **kwargs: Any) -> Callable[[Decorated], Decorated]:
     """``click.option(canonical, *old spellings, dest)`` with the old spellings hidden."""
     aliases = ALIASES.get(canonical, ())
     return click.option(canonical, *aliases, dest, cls=AliasedOption, aliases=aliases, **kwargs)
 
 
 def device_option(help: str = "Device in the ESI (type name, product[:revision] or list index) when it has "
-                  "several.") -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+                  "several.") -> Callable[[Decorated], Decorated]:
     """``--device SEL``: which device of an ESI file (old spelling ``--select``)."""
     return shared_option("--device", "selector", metavar="SEL", help=help)

@@ -18,7 +18,7 @@ from ecattool.errors import EcatToolError
 
 if TYPE_CHECKING:
     from ecattool.commission.trace import DriveTrace
-    from ecattool.project.resolve import ResolvedDrive
+    from ecattool.project.slave import Slave
 
 
 #: how much shorter than the profile's time a move may seem: the run counts the master's cycles, which on a real
@@ -61,7 +61,7 @@ def _ratio(summary: dict[str, object], key: str) -> Fraction | None:
         return None
 
 
-def check_move_time(io: _Io, rd: ResolvedDrive, trace: DriveTrace, mode: str, distance: Fraction) -> tuple[bool, str]:
+def check_move_time(io: _Io, rd: Slave, trace: DriveTrace, mode: str, distance: Fraction) -> tuple[bool, str]:
     """(ok, text for the move step): whether the PP move took at least the profile's time, less one cycle."""
     group = rd.factor_group
     if mode != "pp" or group is None or trace.move_cycles is None or rd.counts_per_unit is None:

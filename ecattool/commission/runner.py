@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from ecattool.commission import cia402
 from ecattool.commission.trace import DriveTrace, StartupWrite
@@ -15,12 +15,17 @@ from ecattool.errors import EcatToolError, SdoAbort, StateChangeError, TargetErr
 from ecattool.findings import Finding, has_errors
 from ecattool.od.model import EcState
 from ecattool.project.machine import Machine, load_machine
-from ecattool.project.resolve import TRANSITION_STATE, ResolvedDrive, Slave
+from ecattool.project.resolve import TRANSITION_STATE
+from ecattool.project.slave import Slave
 from ecattool.startup.model import StartupCommand
 from ecattool.target.base import SlaveTarget, Target, entry_size
 
 if TYPE_CHECKING:
+    from ecattool.od.model import Entry
     from ecattool.scaling.group import FactorObject
+
+#: what an SDO step returns
+_T = TypeVar("_T")
 
 #: transitions whose commands are sent while the slave is in PRE-OP on the way up
 _PREOP_TRANSITIONS = ("IP", "PS")
@@ -102,7 +107,7 @@ _NOT_SEEDED = frozenset({0x6040, 0x6042, 0x6071, 0x60FF, 0x60B1, 0x60B2})
 class ProcessIo:
     """Objects in the process image by (index, sub); SDO for objects that are not mapped."""
 
-    def __init__(self, slave: SlaveTarget, rd: ResolvedDrive, trace: DriveTrace | None = None) -> None:
+    def __init__(self, slave: SlaveTarget, rd: Slave, trace: DriveTrace | None = None) -> None:
         from ecattool import pdo
 
         self.slave = slave
@@ -142,7 +147,7 @@ class ProcessIo:
             if len(raw) * 8 == pos.bit_len:
                 _put_bits(self.outputs, pos.bit_offset, pos.bit_len, int.from_bytes(raw, "little"))
 
-    def _entry(self, index: int, sub: int) -> Any:
+    def _entry(self, index: int, sub: int) -> Entry:
         assert self.rd.device is not None
         e = self.rd.device.dictionary.entry(index, sub)
         if e is None:
@@ -196,7 +201,7 @@ def _get_bits(buf: bytes, bit_offset: int, bit_len: int) -> int:
 # --------------------------------------------------------------------------------------------
 
 
-def _sdo_step(name: str, fn: Callable[[], Any]) -> Any:
+def _sdo_step(name: str, fn: Callable[[], _T]) -> _T:
     try:
         return fn()
     except SdoAbort as exc:
@@ -213,13 +218,13 @@ def _goto(slave: SlaveTarget, state: EcState, report: DriveReport) -> None:
     report.trace.ec_state(state.value)
 
 
-def _speaks_coe(rd: ResolvedDrive) -> bool:
+def _speaks_coe(rd: Slave) -> bool:
     """Whether the slave has a CoE mailbox: a slave without one (an EL2008, a fixed process image) is never sent
     an SDO; its identity is read from its EEPROM."""
     return rd.device is not None and rd.device.has_coe
 
 
-def _check_identity(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+def _check_identity(slave: SlaveTarget, rd: Slave, report: DriveReport) -> None:
     assert rd.device is not None
     want = rd.device.identity
     policy = rd.drive.identity
@@ -248,7 +253,7 @@ def _check_identity(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) 
                                                 f"revision 0x{revision:08X} ({how})"))
 
 
-def _send(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, trace: DriveTrace) -> None:
+def _send(slave: SlaveTarget, rd: Slave, cmd: StartupCommand, trace: DriveTrace) -> None:
     """Write one startup command and read it back, recording both in the trace."""
     sent = trace.startup_write(cmd)
     try:
@@ -258,7 +263,7 @@ def _send(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, trace: Dri
         raise
 
 
-def _send_verified(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, sent: StartupWrite) -> None:
+def _send_verified(slave: SlaveTarget, rd: Slave, cmd: StartupCommand, sent: StartupWrite) -> None:
     assert rd.device is not None
 
     def write() -> None:
@@ -279,7 +284,7 @@ def _send_verified(slave: SlaveTarget, rd: ResolvedDrive, cmd: StartupCommand, s
                            f"read back {bytes(back).hex()} after writing {cmd.data.hex()} ({cmd.comment})"))
 
 
-def _startup(slave: SlaveTarget, rd: ResolvedDrive, transitions: tuple[str, ...], report: DriveReport) -> None:
+def _startup(slave: SlaveTarget, rd: Slave, transitions: tuple[str, ...], report: DriveReport) -> None:
     cmds = [c for c in rd.startup if c.transition in transitions]
     for c in cmds:
         _send(slave, rd, c, report.trace)
@@ -287,7 +292,7 @@ def _startup(slave: SlaveTarget, rd: ResolvedDrive, transitions: tuple[str, ...]
         report.steps.append(Step(f"startup {'/'.join(transitions)}", True, f"{len(cmds)} write(s) verified"))
 
 
-def _sw(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+def _sw(slave: SlaveTarget, rd: Slave, report: DriveReport) -> None:
     from ecattool import sw
 
     cfg = rd.drive.sw_config
@@ -341,7 +346,7 @@ def _set_mode(io: ProcessIo, mode: int) -> None:
     raise _Failed(Step("move", False, f"the drive did not switch to mode {mode} (6061h stays {io.read(0x6061, 0)})"))
 
 
-def _preselect_mode(io: ProcessIo, rd: ResolvedDrive) -> None:
+def _preselect_mode(io: ProcessIo, rd: Slave) -> None:
     """Write the move's mode before the enable sequence: Control Techniques refuses a change of 6060h in
     OPERATION ENABLED (7.3.6, SDO abort 0800 0022h), so a mode chosen only for the move must be set first.
     A drive that shows the mode only once enabled (Technosoft) is checked by the move itself."""
@@ -362,7 +367,7 @@ def _hold_position(io: ProcessIo) -> None:
         io.write(0x607A, 0, io.read(0x6064, 0))
 
 
-def _zero_objects(io: ProcessIo, rd: ResolvedDrive, mode: str) -> str:
+def _zero_objects(io: ProcessIo, rd: Slave, mode: str) -> str:
     """Why a move failed, where the drive shows it: a PP move's profile velocity or acceleration at 0, or a
     zero part of the position factor (``steps.zero_factor_parts``), as the drive holds them (the process image
     for mapped outputs, else SDO)."""
@@ -388,7 +393,7 @@ def _zero_objects(io: ProcessIo, rd: ResolvedDrive, mode: str) -> str:
     return f": the drive holds 0 in {', '.join(names)}, which the move needs non-zero" if names else ""
 
 
-def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
+def _move(io: ProcessIo, rd: Slave, report: DriveReport) -> None:
     from ecattool.commission.profiletime import check_move_time
     from ecattool.project.steps import MOVE_MODE_CODES, move_mode
 
@@ -438,7 +443,7 @@ def _move(io: ProcessIo, rd: ResolvedDrive, report: DriveReport) -> None:
     report.steps.append(Step("move", True, detail + took))
 
 
-def _run_move(io: ProcessIo, rd: ResolvedDrive, mode: str, p0: int, dist: Fraction, trace: DriveTrace) -> None:
+def _run_move(io: ProcessIo, rd: Slave, mode: str, p0: int, dist: Fraction, trace: DriveTrace) -> None:
     """The motion: one profile-position set-point (pp), or 100 cyclic set-points then 50 cycles (csp)."""
     target = int(p0 + dist)
     if mode == "pp":
@@ -518,14 +523,14 @@ def _prove_process_data(io: ProcessIo, rd: Slave, report: DriveReport) -> None:
                              f"byte(s) read ({len(io.in_pos)} object(s)" + (f": {shown}" if shown else "") + ")"))
 
 
-def _expected_readbacks(rd: ResolvedDrive) -> list[FactorObject]:
+def _expected_readbacks(rd: Slave) -> list[FactorObject]:
     """Factor objects the drive computes from its own hardware configuration (Control Techniques' read-only
     608Fh): the scaling is only right if the drive reports the value the project's feedback assumes."""
     group = rd.factor_group
     return [o for o in getattr(group, "objects", ()) if not o.write] if group is not None else []
 
 
-def _check_readbacks(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+def _check_readbacks(slave: SlaveTarget, rd: Slave, report: DriveReport) -> None:
     assert rd.device is not None
     expected = _expected_readbacks(rd)
     checked: list[str] = []
@@ -544,7 +549,7 @@ def _check_readbacks(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport)
         report.steps.append(Step("scaling", True, "drive reports " + ", ".join(checked)))
 
 
-def _dc(slave: SlaveTarget, rd: ResolvedDrive, report: DriveReport) -> None:
+def _dc(slave: SlaveTarget, rd: Slave, report: DriveReport) -> None:
     if rd.dc is None:
         return
     act = rd.dc.assign_activate
@@ -580,7 +585,7 @@ class _DriveRun:
     :meth:`prepare` does everything in PRE-OP (identity, .sw, startup list, read-backs, DC), :meth:`finish`
     goes to SAFE-OP and OP, enables and moves. A failure in either stops the drive safely."""
 
-    def __init__(self, slave: SlaveTarget, rd: ResolvedDrive, allow_errors: bool = False) -> None:
+    def __init__(self, slave: SlaveTarget, rd: Slave, allow_errors: bool = False) -> None:
         self.slave = slave
         self.rd = rd
         self.allow_errors = allow_errors
@@ -653,7 +658,7 @@ class _DriveRun:
         report.final_state = slave.state().value
 
 
-def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
+def commission_drive(slave: SlaveTarget, rd: Slave) -> DriveReport:
     """Commission one drive on its own (both phases at once)."""
     run = _DriveRun(slave, rd)
     run.prepare()
@@ -661,7 +666,7 @@ def commission_drive(slave: SlaveTarget, rd: ResolvedDrive) -> DriveReport:
     return run.report
 
 
-def _drive_error(slave: SlaveTarget, rd: ResolvedDrive) -> str:
+def _drive_error(slave: SlaveTarget, rd: Slave) -> str:
     """What the drive itself says went wrong, for a failure report: its error code 603Fh (the last EMCY), named
     from the family's table; "" where there is none, or it cannot be read (no mailbox, no 603Fh)."""
     from ecattool.od.emcy import error_text
@@ -679,7 +684,7 @@ def _drive_error(slave: SlaveTarget, rd: ResolvedDrive) -> str:
     return f"; the drive reports error 603Fh = 0x{code:04X} ({error_text(code, rd.rules.family if rd.rules is not None else None)})"
 
 
-def open_target(spec: str, drives: list[Slave], reset_bus: bool = False) -> tuple[Target, str]:
+def open_target(spec: str, drives: Sequence[Slave], reset_bus: bool = False) -> tuple[Target, str]:
     """The target ``spec`` names (:func:`ecattool.online.targets.open_guarded`: a real bus with slaves in SAFE-OP
     or OP is refused unless ``reset_bus``) with the slaves' devices for a simulator; and the target's name for the
     report. A slave whose device did not resolve cannot be simulated: an InputError naming it and why (the file
@@ -689,11 +694,11 @@ def open_target(spec: str, drives: list[Slave], reset_bus: bool = False) -> tupl
 
     parsed = parse_target(spec)
     # a bare 'sim' simulates the project's slaves
-    devices = [d for _, d in Machine("", slaves=list(drives)).devices()] if parsed.own_slaves else []
+    devices = [d for _, d in Machine("", slaves=tuple(drives)).devices()] if parsed.own_slaves else []
     return open_guarded(spec, devices, reset_bus), spec
 
 
-def _set_plants(slaves: list[SlaveTarget], drives: list[Slave]) -> None:
+def _set_plants(slaves: list[SlaveTarget], drives: Sequence[Slave]) -> None:
     """Put each simulated drive on the plant its project sets (``plant:``); a real slave has its own."""
     from ecattool.project.plant import plant_params
 

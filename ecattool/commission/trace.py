@@ -22,8 +22,9 @@ from ecattool.errors import EcatToolError
 if TYPE_CHECKING:
     from ecattool.findings import Finding
     from ecattool.pdo.layout import Layout
-    from ecattool.project.resolve import ResolvedDrive
+    from ecattool.project.slave import Slave
     from ecattool.startup.model import StartupCommand
+    from ecattool.sw.apply import BlockCheck, DownloadReport
 
 class ProcessImage(Protocol):
     """What the trace reads after a cycle (the runner's ``ProcessIo``): objects by (index, sub-index), from the
@@ -219,7 +220,7 @@ class DriveTrace:
     _move_start_wall: float = 0.0
 
     @classmethod
-    def for_drive(cls, rd: ResolvedDrive) -> DriveTrace:
+    def for_drive(cls, rd: Slave) -> DriveTrace:
         """The static context of a drive: its process image, lint findings and units."""
         trace = cls(findings=list(rd.findings), counts_per_unit=rd.counts_per_unit)
         if rd.device is not None and rd.mapping is not None:
@@ -244,13 +245,13 @@ class DriveTrace:
         self.startup.append(w)
         return w
 
-    def sw_checked(self, checks: list[Any], file: str) -> None:
+    def sw_checked(self, checks: list[BlockCheck], file: str) -> None:
         """The verify before any download (``sw.BlockCheck`` list)."""
         self.sw_file = file
         self.sw_blocks = [SwBlock(c.block.start, c.block.end, c.block.count, c.expected, c.actual, error=c.error)
                           for c in checks]
 
-    def sw_downloaded(self, result: Any, after: list[Any]) -> None:
+    def sw_downloaded(self, result: DownloadReport, after: list[BlockCheck]) -> None:
         """A download (``sw.DownloadReport``) and the verify after the drive's reset."""
         written = {b.start for b in result.written}
         final = {c.block.start: c for c in after}

@@ -23,13 +23,19 @@ import os
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 from ecattool.errors import InputError, Location, TargetError
+from ecattool.esi.model import Identity
 from ecattool.online.dictionary import typed
 from ecattool.online.live import LiveBus, describe_slave, sii_facts
 from ecattool.online.objects import dump
-from ecattool.target.base import Unsupported
+from ecattool.project.machine import Machine
+from ecattool.project.slave import Slave
+from ecattool.target.base import LiveSlave, Unsupported
+
+if TYPE_CHECKING:
+    from ecattool.target.base import SlaveTarget
 
 #: the file that makes a folder an ecattool back-up (the only kind of folder ``--force`` replaces)
 MANIFEST = "ecattool-backup.json"
@@ -50,23 +56,10 @@ def _safe(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) or "slave"
 
 
-def _project(project: str | Path) -> Any:
-    from ecattool.project.export import refuse_errors
-    from ecattool.project.lint import lint_project
-
-    result = lint_project(project)
-    if result.loaded is None:
-        first = result.findings[0]
-        raise InputError(first.message, first.location)
-    refuse_errors(result, "back up")
-    return result
-
-
-def _identity_1018(slave: Any) -> Any:
+def _identity_1018(slave: LiveSlave) -> Identity:
     """The identity object 1018h:01-03 (vendor, product code, revision) as the slave's CoE reports it; the
     identity the master read from the SII where the slave has no 1018h (an SDO abort)."""
     from ecattool.errors import SdoAbort
-    from ecattool.esi.model import Identity
 
     values = []
     for sub in (1, 2, 3):
@@ -80,7 +73,7 @@ def _identity_1018(slave: Any) -> Any:
     return Identity(*values)
 
 
-def _check_identity(rd: Any, slave: Any, sdo: bool = True) -> None:
+def _check_identity(rd: Slave, slave: LiveSlave, sdo: bool = True) -> None:
     """The slave at the drive's position is the project's device (the fields its ``identity:`` checks): by 1018h,
     or without ``sdo`` (a slave without a CoE mailbox) by the identity its SII holds."""
     from ecattool.od.model import MAILBOX_STATES
@@ -98,18 +91,17 @@ def _check_identity(rd: Any, slave: Any, sdo: bool = True) -> None:
                           f"0x{got:08X}, the project's device has 0x{want:08X}; nothing backed up")
 
 
-def collect(project: str | Path, bus: LiveBus, result: Any = None) -> tuple[dict[str, bytes], list[str]]:
+def collect(machine: Machine, bus: LiveBus) -> tuple[dict[str, bytes], list[str]]:
     """The files of a backup (name -> content) and what was skipped, read from the bus and checked (module text):
     a :class:`TargetError` naming the slave when something read cannot be vouched for. A slave without a CoE mailbox
-    (its SII says so) is never sent an SDO: its SII is its backup. ``result``: the project
-    already linted (:func:`ecattool.project.lint.lint_project`), else it is linted here."""
+    (its SII says so) is never sent an SDO: its SII is its backup. ``machine``: the project's machine, built
+    once by the caller (:func:`ecattool.project.machine.load_machine`; :func:`backup` refuses one with lint
+    errors before anything is read)."""
     from ecattool.online.sii_access import read_checked
 
-    if result is None:
-        result = _project(project)
     files: dict[str, bytes] = {}
     skipped: list[str] = []
-    for rd in sorted(result.drives, key=lambda r: r.position):
+    for rd in machine.in_bus_order():
         slave = bus.slave(rd.position)
         stem = f"{rd.position:02d}-{_safe(rd.drive.name)}"
         sii: bytes | None = None
@@ -132,7 +124,8 @@ def collect(project: str | Path, bus: LiveBus, result: Any = None) -> tuple[dict
             from ecattool.sw.image import write
             from ecattool.sw.upload import upload
 
-            image, checks = upload(slave, [(b.start, b.end) for b in rd.sw_image.blocks])
+            # see online.audit: a live slave changes state too, which LiveSlave does not list yet (issue 36 item 3)
+            image, checks = upload(cast("SlaveTarget", slave), [(b.start, b.end) for b in rd.sw_image.blocks])
             bad = [c.describe() for c in checks if not c.ok]
             if bad:
                 raise InputError(f"drive {rd.drive.name!r}: the .sw read back does not check out: {bad[0]}")
@@ -185,20 +178,16 @@ def _manifest(project: str | Path, spec: str, files: dict[str, bytes]) -> bytes:
     return (json.dumps(doc, indent=2, ensure_ascii=False) + "\n").encode()
 
 
-def check_folder(folder: str | Path, project: str | Path, overwrite: bool = False, named: list[Path] | None = None
-                 ) -> None:
-    """Everything :func:`backup` refuses about its folder, before the bus is read: an input, the project's folder,
-    a name that is no new folder; an existing one that is not a back-up, or one without ``overwrite``. ``named``:
-    the files the project names (else the project is loaded to find them)."""
+def check_folder(folder: str | Path, machine: Machine, overwrite: bool = False) -> None:
+    """Everything :func:`backup` refuses about its folder, before the bus is read: an input (the project file
+    of ``machine`` and the files it names), the project's folder, a name that is no new folder; an existing one
+    that is not a back-up, or one without ``overwrite``."""
     if str(folder) in ("", "-"):
         raise InputError("give a folder for the back-up (-o DIR)", Location(repr(str(folder))))
     target = Path(os.path.abspath(folder))
     if not target.name or target.name in (".", ".."):
         raise InputError("not a folder name a back-up can be created as", Location(str(folder)))
-    if named is None:
-        result = _project(project)
-        named = result.loaded.named_files() if result.loaded is not None else []
-    refuse_folder(folder, project, named)
+    refuse_folder(folder, machine.path, machine.require_loaded().named_files())
     if os.path.lexists(target):
         if not overwrite:
             raise InputError("file exists; use --force to replace the backup folder (or give a new one)",
@@ -208,17 +197,20 @@ def check_folder(folder: str | Path, project: str | Path, overwrite: bool = Fals
                              "back-up; give a new folder", Location(str(folder)))
 
 
-def backup(project: str | Path, bus: LiveBus, folder: str | Path, overwrite: bool = False) -> BackupReport:
-    """Read everything (:func:`collect`), then write it into the new folder ``folder`` in one rename. An existing
-    ``folder`` is refused unless ``overwrite``: then the complete new folder takes its place, and the old one is
-    removed only after that rename (an interrupted run leaves the old folder or the new one, never half of one)."""
-    result = _project(project)
-    named = result.loaded.named_files()
-    check_folder(folder, project, overwrite, named)
+def backup(machine: Machine, bus: LiveBus, folder: str | Path, overwrite: bool = False,
+           allow_errors: bool = False) -> BackupReport:
+    """Read everything (:func:`collect`) of the drives of ``machine`` (built once by the caller:
+    :func:`ecattool.project.machine.load_machine`), then write it into the new folder ``folder`` in one rename.
+    A machine with lint errors is refused unless ``allow_errors`` (:meth:`Machine.refuse_errors`, as
+    ``commission`` does). An existing ``folder`` is refused unless ``overwrite``: then the complete new folder
+    takes its place, and the old one is removed only after that rename (an interrupted run leaves the old folder
+    or the new one, never half of one)."""
+    machine.refuse_errors("back up", allow_errors=allow_errors)
+    check_folder(folder, machine, overwrite)
     target = Path(os.path.abspath(folder))
-    files, skipped = collect(project, bus, result)
-    check_folder(folder, project, overwrite, named)  # again: the bus took time, and the folder may have appeared
-    files[MANIFEST] = _manifest(project, bus.spec, files)
+    files, skipped = collect(machine, bus)
+    check_folder(folder, machine, overwrite)  # again: the bus took time, and the folder may have appeared
+    files[MANIFEST] = _manifest(machine.path, bus.spec, files)
     tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
     old = target.with_name(f".{target.name}.{os.getpid()}.old")
     try:

@@ -244,7 +244,7 @@ def project_from_bus(bus: LiveBus, library: Library | None, output: str | Path |
     """The text of a project file for every slave of ``bus`` (paths relative to ``output``'s folder). A slave
     that does not answer is named (position, name, identity) in ``problems`` and in a comment of the project,
     which goes on with the others; a bus where no slave answers is an error."""
-    from ecattool.project.resolve import is_axis
+    from ecattool.project.slave import is_axis
 
     base = Path(output).parent if output not in (None, "-") else Path(".")
     drives = []

@@ -17,19 +17,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from ecattool.findings import Finding, Severity
-from ecattool.project.machine import Machine, load_machine, slave_config
-from ecattool.project.resolve import ResolvedDrive
+from ecattool.project.machine import Machine, load_machine
 from ecattool.startup.config import SlaveConfig
-
-
-def drive_config(rd: ResolvedDrive) -> SlaveConfig:
-    """The slave configuration of one resolved (lint-clean) drive."""
-    return slave_config(rd)
-
-
-def refuse_errors(result: Machine, what: str) -> None:
-    """Raise a located InputError naming the first lint error of ``result`` (and how many there are)."""
-    result.refuse_errors(what)
 
 
 def slave_configs(path: str | Path | Machine, allow_errors: bool = False) -> list[SlaveConfig]:

@@ -18,7 +18,9 @@ from ecattool.esi.model import Device
 from ecattool.od.model import EcState
 from ecattool.project.loader import LoadedProject
 from ecattool.project.model import Parameter
-from ecattool.project.resolve import TRANSITION_STATE, ResolvedDrive, encode_parameter, resolve_address
+from ecattool.profiles.rules import FamilyRules
+from ecattool.project.resolve import TRANSITION_STATE, encode_parameter, resolve_address
+from ecattool.project.slave import Found
 from ecattool.startup.model import TRANSITIONS, StartupCommand
 
 
@@ -79,29 +81,29 @@ def skip_hint(cmd: StartupCommand) -> str:
     return f'{{object: "{cmd.index:04X}:{cmd.subindex:02X}", transition: {cmd.transition}, skip: true}}'
 
 
-def resolve_esi_init(lp: LoadedProject, i: int, rd: ResolvedDrive,
-                     params: list[StartupCommand] | None = None) -> list[StartupCommand]:
+def resolve_esi_init(lp: LoadedProject, i: int, device: Device, rules: FamilyRules | None,
+                     params: list[StartupCommand] | None = None) -> tuple[list[StartupCommand], Found]:
     """The ESI's init commands of drive ``i`` as its project changes them (``esi_init_cmds:``), with findings.
     A command whose object a parameter writes in the same transition gives way to it (``params``: the
     drive's parameters): the parameter is the project's value, and the drive gets one write, not two."""
-    assert rd.device is not None
-    cmds: list[StartupCommand | None] = list(esi_startup(rd.device))
+    found = Found()
+    cmds: list[StartupCommand | None] = list(esi_startup(device))
     changed: set[int] = set()
     written = {(c.index, c.subindex, c.transition) for c in params or ()}
-    for j, o in enumerate(rd.drive.esi_init_cmds):
+    for j, o in enumerate(lp.project.drives[i].esi_init_cmds):
         loc = lp.drive_location(i, "esi_init_cmds", j, "object")
         try:
-            index, sub = resolve_address(rd.device, o.object, loc)
+            index, sub = resolve_address(device, o.object, loc)
         except InputError as exc:
-            rd.error("PRJ022", exc.message, loc)
+            found.error("PRJ022", exc.message, loc)
             continue
         hits = [k for k, c in enumerate(cmds) if c is not None and (c.index, c.subindex) == (index, sub)
                 and (o.transition is None or c.transition == o.transition)]
         if not hits:
-            have = "; ".join(f"{c.transition} {c.index:04X}:{c.subindex:02X}" for c in esi_startup(rd.device))
+            have = "; ".join(f"{c.transition} {c.index:04X}:{c.subindex:02X}" for c in esi_startup(device))
             where = f" in {o.transition}" if o.transition else ""
-            rd.error("PRJ022", f"the ESI has no init command writing {index:04X}:{sub:02X}{where} "
-                               f"(its init commands: {have or 'none'})", loc)
+            found.error("PRJ022", f"the ESI has no init command writing {index:04X}:{sub:02X}{where} "
+                                  f"(its init commands: {have or 'none'})", loc)
             continue
         for k in hits:
             old = cmds[k]
@@ -113,17 +115,17 @@ def resolve_esi_init(lp: LoadedProject, i: int, rd: ResolvedDrive,
             assert o.value is not None  # the model requires a value where it does not skip
             p = Parameter(object=f"{index:04X}:{sub:02X}", value=o.value, transition=old.transition,
                           comment=o.comment or old.comment)
-            new, findings = encode_parameter(rd.device, p, loc, lp.drive_location(i, "esi_init_cmds", j, "value"),
-                                             rd.rules)
-            rd.findings.extend(findings)
+            new, findings = encode_parameter(device, p, loc, lp.drive_location(i, "esi_init_cmds", j, "value"),
+                                             rules)
+            found.extend(findings)
             cmds[k] = new
     for k, c in enumerate(cmds):
         if c is not None and k not in changed and (c.index, c.subindex, c.transition) in written:
             cmds[k] = None
         if c is None or k in changed or cmds[k] is None:
             continue
-        why = refusal(rd.device, c)
+        why = refusal(device, c)
         if why is not None:
-            rd.error("PRJ021", f"{why}: the drive would abort it; if it does, skip it under the drive's "
-                               f"esi_init_cmds: - {skip_hint(c)}", c.source)
-    return [c for c in cmds if c is not None]
+            found.error("PRJ021", f"{why}: the drive would abort it; if it does, skip it under the drive's "
+                                  f"esi_init_cmds: - {skip_hint(c)}", c.source)
+    return [c for c in cmds if c is not None], found

@@ -18,10 +18,9 @@ the ``--allow-errors`` option).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from pathlib import Path
 from types import ModuleType
-from typing import Any
 
 from ecattool.errors import EcatToolError, InputError, Location
 from ecattool.esi.model import Device
@@ -29,19 +28,12 @@ from ecattool.fileio import read_bytes
 from ecattool.findings import Finding, Severity
 from ecattool.project import familycycle
 from ecattool.project.loader import LoadedProject, parse_project
-from ecattool.project.resolve import (
-    Slave,
-    SlaveDc,
-    SlaveKind,
-    is_axis,
-    resolve_dc,
-    resolve_device,
-    resolve_parameters,
-)
+from ecattool.project.resolve import resolve_dc, resolve_device, resolve_parameters
 from ecattool.project.rules import disable
+from ecattool.project.slave import Slave, SlaveDc, SlaveKind, is_axis
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.install import MasterKind
-from ecattool.startup.model import StartupList
+from ecattool.startup.install import KickcatBus, MasterKind, PysoemMaster
+from ecattool.startup.model import StartupCommand, StartupList
 
 __all__ = ["ALLOW_ERRORS_HELP", "Machine", "Slave", "SlaveDc", "SlaveKind", "is_axis", "load_machine", "slave_config"]
 
@@ -50,20 +42,17 @@ ALLOW_ERRORS_HELP = ("Act on the project even when lint reports errors (by defau
                      "refused, naming the first error's file and line).")
 
 
-@dataclass(slots=True)
+@dataclass(frozen=True, slots=True)
 class Machine:
-    """The slaves of one project file, resolved, and every finding lint reports about them."""
+    """The slaves of one project file, resolved (in file order), and every finding lint reports about them.
+    Frozen: :func:`load_machine` builds it once, and every command consumes it."""
 
     path: str
-    slaves: list[Slave] = field(default_factory=list)
+    slaves: tuple[Slave, ...] = ()
     #: project-level findings and every slave's, after ``disable_rules``, de-duplicated
-    findings: list[Finding] = field(default_factory=list)
+    findings: tuple[Finding, ...] = ()
+    #: the project as loaded; None where the file does not load (its findings say why: :meth:`require_loaded`)
     loaded: LoadedProject | None = None
-
-    @property
-    def drives(self) -> list[Slave]:
-        """The slaves in file order (the project file calls them ``drives``)."""
-        return self.slaves
 
     @property
     def target(self) -> str:
@@ -97,10 +86,10 @@ class Machine:
 
     def require_loaded(self) -> LoadedProject:
         """The loaded project, or the InputError of why it does not load (file and line)."""
-        if self.loaded is None:
-            first = self.findings[0]
-            raise InputError(first.message, first.location or Location(self.path))
-        return self.loaded
+        if self.loaded is not None:
+            return self.loaded
+        first = self.findings[0]
+        raise InputError(first.message, first.location or Location(self.path))
 
     def refuse_errors(self, what: str, *, allow_errors: bool = False, slaves: Sequence[Slave] | None = None) -> None:
         """The one policy for acting on a project with lint errors: refuse (an InputError at the first error,
@@ -136,8 +125,9 @@ class Machine:
         self.refuse_errors("export the startup configuration", allow_errors=allow_errors)
         return [slave_config(s) for s in self.in_bus_order()]
 
-    def install(self, master: Any, *, kind: MasterKind | None = None, exact_revision: bool = False,
-                allow_errors: bool = False, module: ModuleType | None = None) -> list[int]:
+    def install(self, master: PysoemMaster | KickcatBus, *, kind: MasterKind | None = None,
+                exact_revision: bool = False, allow_errors: bool = False,
+                module: ModuleType | None = None) -> list[int]:
         """Attach every slave's startup list to ``master`` in a master program, with the identity check
         (:func:`ecattool.startup.install.install`): a ``pysoem.Master`` after ``config_init()`` gets a
         ``config_func`` per slave; a ``kickcat.Bus`` after ``init()`` is written at once. Returns the positions
@@ -162,77 +152,74 @@ def slave_config(s: Slave) -> SlaveConfig:
 
 def build_slave(lp: LoadedProject, i: int) -> Slave:
     """Resolve one slave: device, rules, startup list (PDO, ESI init commands, scaling, parameters), .sw image,
-    with the findings of every check."""
+    with the findings of every check. The one place a :class:`Slave` is assembled: each step returns what it
+    resolves, the slave is made from those values, and the checks read it."""
     from ecattool.project import steps
 
     drive = lp.project.drives[i]
-    s = Slave(i, drive)
-    resolve_device(lp, i, s)
-    if s.device is None:
-        return s
-    s.dc = resolve_dc(drive, s.device)
-    startup = StartupList(name=drive.name, vendor_id=s.device.vendor_id,
-                          product_code=s.device.product_code, revision=s.device.revision)
-    params = resolve_parameters(lp, i, s)
-    startup.extend(steps.pdo_commands(lp, i, s, params))
+    device, rules, found = resolve_device(lp, i)
+    if device is None:
+        return Slave(i, drive, findings=tuple(found))
+    dc = resolve_dc(drive, device)
+    params, params_found = resolve_parameters(lp, i, device, rules)
+    pdo = steps.pdo_commands(lp, i, device, rules, params)
+    init: list[StartupCommand] = []
+    init_found: list[Finding] = []
     if drive.device.esi is not None:  # the ESI's init commands, as TwinCAT sends them: after the PDO assignment
         from ecattool.project.initcmds import resolve_esi_init
 
-        startup.extend(resolve_esi_init(lp, i, s, params))
-    startup.extend(steps.scaling_commands(lp, i, s))
-    startup.extend(params)
-    s.startup = startup
-    steps.check_mailbox(lp, i, s)
-    steps.check_kind(lp, i, s)
-    steps.check_pdo_objects(lp, i, s)
-    steps.check_sw(lp, i, s)
-    steps.check_move(lp, i, s)
-    steps.check_factor_defaults(lp, i, s)
-    steps.check_interpolation_period(lp, i, s)
-    steps.check_dc(lp, i, s)
-    familycycle.check_dc_cycle(lp, i, s)
-    if s.device.source and not s.device.source.startswith("profile:"):
-        steps.check_esi(lp, i, s)
-    s.findings = disable(s.findings, drive.disable_rules, lp, ("drives", i, "disable_rules"))
-    return s
+        init, init_found = resolve_esi_init(lp, i, device, rules, params)
+    scaling = steps.scaling_commands(lp, i, device)
+    sw_image, sw_found = steps.resolve_sw(lp, i, device)
+    startup = StartupList(name=drive.name, vendor_id=device.vendor_id,
+                          product_code=device.product_code, revision=device.revision)
+    for commands in (pdo.commands, init, scaling.commands, params):
+        startup.extend(commands)
+    slave = Slave(i, drive, device=device, rules=rules, startup=startup, mapping=pdo.mapping,
+                  factor_group=scaling.factor_group, counts_per_unit=scaling.counts_per_unit, sw_image=sw_image, dc=dc)
+    findings = [*found, *params_found, *pdo.found, *init_found, *scaling.found,
+                *steps.check_mailbox(lp, i, slave), *steps.check_kind(lp, i, slave),
+                *steps.check_pdo_objects(lp, i, slave), *sw_found, *steps.check_move(lp, i, slave),
+                *steps.check_factor_defaults(lp, i, slave), *steps.check_interpolation_period(lp, i, slave),
+                *steps.check_dc(lp, i, slave), *familycycle.check_dc_cycle(lp, i, slave)]
+    if device.source and not device.source.startswith("profile:"):
+        findings.extend(steps.check_esi(lp, i, slave))
+    return replace(slave, findings=tuple(disable(findings, drive.disable_rules, lp, ("drives", i, "disable_rules"))))
 
 
 def load_machine(path: str | Path) -> Machine:
     """Build the machine of the project file at ``path``. Never raises for a bad project: a file that does not
     load is a Machine without slaves whose findings say why (PRJ001, at the file and line)."""
     p = Path(path)
-    machine = Machine(str(p))
     try:
         project, doc, schema_findings = parse_project(read_bytes(p, 16 * 1024 * 1024), str(p))
     except EcatToolError as exc:
-        machine.findings.append(Finding("PRJ001", Severity.ERROR, exc.message, exc.location or Location(str(p))))
-        return machine
-    machine.findings.extend(schema_findings)
+        return Machine(str(p), (), (Finding("PRJ001", Severity.ERROR, exc.message, exc.location or Location(str(p))),))
     if project is None:  # else the drives that are well-formed (schema errors in others) are still checked
-        return machine
+        return Machine(str(p), (), tuple(schema_findings))
     lp = LoadedProject(project, p, doc)
-    machine.loaded = lp
+    findings = list(schema_findings)
+    built: list[Slave] = []
     positions: dict[int, str] = {}
     for i in range(len(project.drives)):
         s = build_slave(lp, i)
-        machine.slaves.append(s)
         if s.position in positions:
-            s.findings.append(Finding("PRJ020", Severity.ERROR,
-                                      f"drive {s.name!r} has bus position {s.position}, like {positions[s.position]!r}",
-                                      lp.drive_location(i, "position")))
+            s = replace(s, findings=(*s.findings, Finding(
+                "PRJ020", Severity.ERROR, f"drive {s.name!r} has bus position {s.position}, like {positions[s.position]!r}",
+                lp.drive_location(i, "position"))))
         positions.setdefault(s.position, s.name)
-        machine.findings.extend(s.findings)
-    machine.findings = disable(machine.findings, project.disable_rules, lp, ("disable_rules",))
+        built.append(s)
+        findings.extend(s.findings)
+    findings = disable(findings, project.disable_rules, lp, ("disable_rules",))
     off = {o.rule for o in project.disable_rules if o.reason.strip()}
-    for s in machine.slaves:  # a project-wide disable holds for each slave too (commission checks a slave's own)
-        s.findings = [f for f in s.findings if f.rule not in off]
+    # a project-wide disable holds for each slave too (commission checks a slave's own)
+    slaves = tuple(replace(s, findings=tuple(f for f in s.findings if f.rule not in off)) for s in built)
     # de-duplicate (ESI findings of a file shared by several drives)
     seen = set()
     unique = []
-    for f in machine.findings:
+    for f in findings:
         key = (f.rule, f.message, str(f.location))
         if key not in seen:
             seen.add(key)
             unique.append(f)
-    machine.findings = unique
-    return machine
+    return Machine(str(p), slaves, tuple(unique), lp)

@@ -5,9 +5,32 @@ See docs/project.md for the format with examples. Paths inside the file are rela
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, get_args
+from typing import TYPE_CHECKING, Annotated, Any, Literal, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+from pydantic import (BaseModel, ConfigDict, Field, GetJsonSchemaHandler, SkipValidation, ValidationInfo, field_validator,
+                      model_validator)
+from pydantic.json_schema import JsonSchemaValue
+
+if TYPE_CHECKING:
+    from ecattool.scaling.model import ScalingSection
+
+    #: a drive's ``scaling:`` section: the scaling spec's own shape
+    ScalingField = ScalingSection | None
+else:
+    class _ScalingSchema:
+        """The JSON schema of ``scaling:``: the scaling spec's own model (``ScalingSection``), imported when the
+        schema is generated, not when a project is read (linting a project without scaling stays as fast as it
+        was: the scaling package is imported by the step that computes a factor group)."""
+
+        @classmethod
+        def __get_pydantic_json_schema__(cls, core_schema: object, handler: GetJsonSchemaHandler) -> JsonSchemaValue:
+            from pydantic import TypeAdapter
+
+            from ecattool.scaling.model import ScalingSection
+
+            return handler(TypeAdapter(ScalingSection | None).core_schema)
+
+    ScalingField = Annotated[dict[str, object] | None, _ScalingSchema]
 
 #: The project file format version this ecattool writes and reads.
 FORMAT_VERSION = 1
@@ -15,7 +38,7 @@ FORMAT_VERSION = 1
 IntLike = Annotated[int | str, Field(description="An integer: 8, 0x1C12 or #x1C12")]
 
 
-def _takes_bool(annotation: Any) -> bool:
+def _takes_bool(annotation: object) -> bool:
     """Whether a field's type admits true/false (``bool`` itself, or in a union)."""
     if annotation is bool:
         return True
@@ -27,7 +50,7 @@ class _Strict(BaseModel):
 
     @field_validator("*", mode="before")
     @classmethod
-    def _no_boolean_numbers(cls, value: Any, info: ValidationInfo) -> Any:
+    def _no_boolean_numbers(cls, value: object, info: ValidationInfo) -> object:
         """A boolean is never a number: pydantic would take ``position: true`` as 1 (issue 28.3)."""
         if isinstance(value, bool) and info.field_name is not None:
             field = cls.model_fields.get(info.field_name)
@@ -228,7 +251,9 @@ class Drive(_Strict):
     device: DeviceRef
     identity: IdentityCheck = Field(default_factory=IdentityCheck)
     pdo: PdoConfig | None = None
-    scaling: dict[str, Any] | None = Field(
+    # typed from scaling's own model; validated by it alone (scaling.spec.spec_from_dict: lint's PRJ050 at the
+    # value's line), so the project model passes the mapping through as written
+    scaling: SkipValidation[ScalingField] = Field(
         default=None, description="Mechanics and units for the factor group (see docs/scaling.md)"
     )
     parameters: list[Parameter] = Field(default_factory=list)
@@ -247,6 +272,15 @@ class Drive(_Strict):
     disable_rules: list[RuleOff] = Field(default_factory=list)
     plant: Literal["ideal"] | PlantConfig | None = Field(
         default=None, description="The simulated motor and load (default: the family's); 'ideal': actual = demand")
+
+    @field_validator("scaling", mode="before")
+    @classmethod
+    def _scaling_is_a_mapping(cls, value: object) -> object:
+        """The section is a mapping (what the schema's type says, in pydantic's words); its keys and values are
+        the scaling spec reader's to check (PRJ050, at their lines)."""
+        if value is not None and not isinstance(value, (dict, bool)):  # a boolean is _no_boolean_numbers'
+            raise ValueError("Input should be a valid dictionary")
+        return value
 
     @property
     def sw_config(self) -> SwConfig | None:

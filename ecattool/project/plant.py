@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from ecattool.project.resolve import Slave
+from ecattool.project.slave import Slave
 from ecattool.sim.drive.plant import PlantParams, plant_for, reflected_inertia
 
 

@@ -1,14 +1,14 @@
 """From a project drive to what it means for the device: the Device, its rules, and its startup list.
 
-Each function returns findings instead of stopping at the first problem, so that ``lint`` can report all of
-them; ``commission`` refuses to run when any of them is an error.
+Each step returns what it resolves and the findings it made (a :class:`~ecattool.project.slave.Found`)
+instead of stopping at the first problem, so that ``lint`` can report all of them; ``commission`` refuses to
+run when any of them is an error. :func:`ecattool.project.machine.build_slave` assembles the frozen
+:class:`~ecattool.project.slave.Slave` from the values.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING
 
 from ecattool.errors import EcatToolError, EncodeError, InputError, Location
 from ecattool.esi.model import Device
@@ -20,13 +20,11 @@ from ecattool.od.types import Kind
 from ecattool.project.loader import LoadedProject
 from ecattool.project.model import Drive, Parameter
 from ecattool.profiles.rules import NO_RULES
-from ecattool.startup.model import StartupCommand, StartupList
+from ecattool.project.slave import Found, SlaveDc
+from ecattool.startup.model import StartupCommand
 
 if TYPE_CHECKING:
-    from ecattool.pdo.model import Mapping
     from ecattool.profiles.rules import FamilyRules
-    from ecattool.scaling.group import FactorGroup
-    from ecattool.sw.image import SwImage
 
 #: the state a slave is in while the commands of a transition are sent
 TRANSITION_STATE = {
@@ -35,45 +33,6 @@ TRANSITION_STATE = {
     "OS": EcState.OP, "OP": EcState.OP, "OI": EcState.OP,
     "IB": EcState.INIT, "BI": EcState.BOOT, "II": EcState.INIT,
 }
-
-
-#: what a slave is: a CiA-402 axis (enabled and moved by commission) or an I/O slave (terminals, couplers,
-#: gateways: states, mapping and process data only)
-SlaveKind = Literal["axis", "io"]
-
-
-def is_axis(device: Device) -> bool:
-    """Whether ``device`` is a CiA-402 axis: its dictionary has the controlword 6040h and the statusword 6041h,
-    and it says it is a drive (profile 402 in the ESI ``<Profile>`` or the EDS/1000h device type) or has the
-    modes of operation 6060h. A terminal that uses 6041h for something else (a diagnostics channel) or lacks
-    6040h is an I/O slave (docs/decisions.md, "Machine: axis or I/O slave")."""
-    od = device.dictionary
-    if od.entry(0x6040, 0) is None or od.entry(0x6041, 0) is None:
-        return False
-    dtype = od.entry(0x1000, 0)
-    declared = device.profile_no == 402
-    if not declared and dtype is not None and dtype.default:
-        declared = int.from_bytes(dtype.default[:2], "little") == 402
-    return declared or od.entry(0x6060, 0) is not None
-
-
-@dataclass(frozen=True, slots=True)
-class SlaveDc:
-    """Distributed clocks of a slave as the project sets them, resolved once (:func:`resolve_dc`): the
-    AssignActivate word (the project's, else its ESI OpMode's), the SYNC0 cycle and shift (the project's, else
-    the OpMode's), and SYNC1 where the OpMode gives a cycle for it."""
-
-    assign_activate: int
-    opmode: str | None = None
-    cycle_ns: int | None = None
-    shift_ns: int | None = None
-    sync1_cycle_ns: int | None = None
-    sync1_shift_ns: int | None = None
-
-    @property
-    def active(self) -> bool:
-        """Whether the slave's SYNC signals are activated (a non-zero AssignActivate)."""
-        return bool(self.assign_activate)
 
 
 def resolve_dc(drive: Drive, device: Device) -> SlaveDc | None:
@@ -96,75 +55,6 @@ def resolve_dc(drive: Drive, device: Device) -> SlaveDc | None:
     return SlaveDc(act, dc.opmode, cycle, shift, sync1, sync1_shift)
 
 
-@dataclass(slots=True)
-class Slave:
-    """One slave of the machine as the project sets it up: the device as it runs (default modules plugged in,
-    communication objects completed), its family rules, PDO mapping, startup list, DC, and for an axis the
-    factor group and ``.sw`` image; plus the findings that concern it. Built by
-    :func:`ecattool.project.machine.load_machine`; never changed by the commands that consume it."""
-
-    index: int
-    drive: Drive
-    device: Device | None = None
-    rules: FamilyRules | None = None
-    startup: StartupList = field(default_factory=StartupList)
-    findings: list[Finding] = field(default_factory=list)
-    mapping: Mapping | None = None  # when the pdo section (or the device default) resolved
-    factor_group: FactorGroup | None = None  # when the scaling section resolved
-    counts_per_unit: Fraction | None = None  # internal position units per position user unit (ideal)
-    sw_image: SwImage | None = None  # when an image is configured and readable
-    dc: SlaveDc | None = None  # when the project's dc section resolves on the device
-
-    @property
-    def position(self) -> int:
-        return self.drive.position if self.drive.position is not None else self.index
-
-    @property
-    def name(self) -> str:
-        return self.drive.name
-
-    @property
-    def kind(self) -> SlaveKind:
-        """``axis`` where the device is a CiA-402 drive (:func:`is_axis`), else ``io``."""
-        return "axis" if self.device is not None and is_axis(self.device) else "io"
-
-    @property
-    def enables(self) -> bool:
-        """Whether commission enables the slave (CiA-402): the project's ``enable:``, by default for an axis."""
-        return self.drive.enable if self.drive.enable is not None else self.kind == "axis"
-
-    @property
-    def family(self) -> str:
-        return self.rules.family if self.rules is not None else "generic"
-
-    def object_values(self, indices: range | tuple[int, ...]) -> dict[tuple[int, int], int]:
-        """What the objects at ``indices`` hold once the startup list ran: the last write of the startup list,
-        else the device's default (unsigned, as startup files print them); for ``scale explain --project``."""
-        out: dict[tuple[int, int], int] = {}
-        if self.device is not None:
-            for index in indices:
-                obj = self.device.dictionary.get(index)
-                if obj is None:
-                    continue
-                for sub, e in obj.entries.items():
-                    if e.default is not None and e.datatype is not None and e.datatype.bits and (sub or len(obj.entries) == 1):
-                        out[(index, sub)] = int.from_bytes(e.default, "little")
-        for c in self.startup:
-            if c.index in indices and not c.complete_access:
-                out[(c.index, c.subindex)] = c.int_value
-        return out
-
-    def error(self, rule: str, message: str, location: Location | None) -> None:
-        self.findings.append(Finding(rule, Severity.ERROR, message, location))
-
-    def warning(self, rule: str, message: str, location: Location | None) -> None:
-        self.findings.append(Finding(rule, Severity.WARNING, message, location))
-
-
-#: the former name of :class:`Slave`
-ResolvedDrive = Slave
-
-
 def _shown(name: str) -> str:
     """A file name as a finding quotes it: whole up to 160 characters, else its start and its end (where the file's
     own name is) with the length between (a name of 4,000 is not repeated whole)."""
@@ -173,15 +63,17 @@ def _shown(name: str) -> str:
     return f"{name[:40]!r}…{name[-80:]!r} ({len(name)} characters)"
 
 
-def resolve_device(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
-    ref = rd.drive.device
+def resolve_device(lp: LoadedProject, i: int) -> tuple[Device | None, FamilyRules | None, Found]:
+    """The device of drive ``i`` as it runs (a built-in profile, or its ESI with the default modules plugged in
+    and the communication objects completed) and its family rules; None where it does not resolve (the
+    findings say why)."""
+    ref = lp.project.drives[i].device
+    found = Found()
     try:
-        from ecattool import profiles
-
         if ref.profile is not None:
             from ecattool.project.cache import load_profile_cached
 
-            rd.device = load_profile_cached(ref.profile, ref.product, ref.revision)
+            device = load_profile_cached(ref.profile, ref.product, ref.revision)
         else:
             from ecattool.project.cache import load_device_cached
 
@@ -189,26 +81,27 @@ def resolve_device(lp: LoadedProject, i: int, rd: ResolvedDrive) -> None:
             path = lp.resolve(ref.esi)
             problem = named_file_problem(path)  # a FIFO, a device, a directory, a name too long: never opened
             if problem == "not found":
-                rd.error("PRJ002", f"ESI file {ref.esi!r} not found (looked in {path})", lp.drive_location(i, "device", "esi"))
-                return
+                found.error("PRJ002", f"ESI file {ref.esi!r} not found (looked in {path})", lp.drive_location(i, "device", "esi"))
+                return None, None, found
             if problem is not None:
-                rd.error("PRJ005", f"ESI file {_shown(ref.esi)}: {problem}", lp.drive_location(i, "device", "esi"))
-                return
+                found.error("PRJ005", f"ESI file {_shown(ref.esi)}: {problem}", lp.drive_location(i, "device", "esi"))
+                return None, None, found
             # the device as it runs: default modules in its slots, synthesised mapping/assignment objects
-            rd.device = load_device_cached(path, None if ref.select is None else str(ref.select), ref.policy)
+            device = load_device_cached(path, None if ref.select is None else str(ref.select), ref.policy)
     except EcatToolError as exc:
         if exc.location and exc.location.line:
-            rd.error("PRJ005", exc.message, exc.location)
+            found.error("PRJ005", exc.message, exc.location)
         else:  # at the device entry; the ESI file (a directory, unreadable) named in the message then
             where = exc.location.file if exc.location else None
-            rd.error("PRJ005", f"{where}: {exc.message}" if where else exc.message, lp.drive_location(i, "device"))
-        return
+            found.error("PRJ005", f"{where}: {exc.message}" if where else exc.message, lp.drive_location(i, "device"))
+        return None, None, found
     try:
         from ecattool import profiles
 
-        rd.rules = profiles.rules_for(rd.device)
+        return device, profiles.rules_for(device), found
     except EcatToolError as exc:  # pragma: no cover - rules_for only raises for broken data
-        rd.error("PRJ005", exc.message, lp.drive_location(i, "device"))
+        found.error("PRJ005", exc.message, lp.drive_location(i, "device"))
+        return device, None, found
 
 
 def resolve_address(device: Device, text: str | int, location: Location) -> tuple[int, int]:
@@ -225,8 +118,12 @@ def resolve_address(device: Device, text: str | int, location: Location) -> tupl
     return found
 
 
-def _coerce(entry: Entry, value: Any, location: Location) -> Any:
-    """Turn an engineering-form value into what the entry's data type encodes."""
+#: a value as a project writes it (``parameters:``, ``esi_init_cmds:``)
+WrittenValue = int | float | str | bool | list[int] | None
+
+
+def _coerce(entry: Entry, value: WrittenValue, location: Location) -> int | float | str | bool | bytes | None:
+    """Turn an engineering-form value into what the entry's data type encodes (bytes: the data as given)."""
     dt = entry.datatype
     if isinstance(value, str):
         v = value.strip()
@@ -330,21 +227,23 @@ def encode_parameter(device: Device, p: Parameter, location: Location, value_loc
     return cmd, out
 
 
-def resolve_parameters(lp: LoadedProject, i: int, rd: ResolvedDrive) -> list[StartupCommand]:
-    assert rd.device is not None
+def resolve_parameters(lp: LoadedProject, i: int, device: Device,
+                       rules: FamilyRules | None) -> tuple[list[StartupCommand], Found]:
+    """The ``parameters:`` of drive ``i`` as startup commands on ``device``, with the findings that refuse some."""
+    found = Found()
     cmds: list[StartupCommand] = []
     seen: dict[tuple[int, int, str], int] = {}
-    for j, p in enumerate(rd.drive.parameters):
+    for j, p in enumerate(lp.project.drives[i].parameters):
         loc = lp.drive_location(i, "parameters", j, "object")
         vloc = lp.drive_location(i, "parameters", j, "value")
-        cmd, findings = encode_parameter(rd.device, p, loc, vloc, rd.rules)
-        rd.findings.extend(findings)
+        cmd, findings = encode_parameter(device, p, loc, vloc, rules)
+        found.extend(findings)
         if cmd is None:
             continue
         key = (cmd.index, cmd.subindex, cmd.transition)
         if key in seen:
-            rd.warning("PRJ016", f"{cmd.address} is written twice in {cmd.transition} (also parameter {seen[key] + 1}); "
-                                 "the last write wins", loc)
+            found.warning("PRJ016", f"{cmd.address} is written twice in {cmd.transition} (also parameter {seen[key] + 1}); "
+                                    "the last write wins", loc)
         seen[key] = j
         cmds.append(cmd)
-    return cmds
+    return cmds, found

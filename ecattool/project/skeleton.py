@@ -69,7 +69,7 @@ def new_project(device: Device, *, name: str | None = None, profile: str | None 
     """The text of a minimal project with one drive of ``device``, named as the user named it; ``findings``:
     the ESI's structural findings (:func:`esi_flaws`), pointed out where they concern the PDOs in use."""
     from ecattool import profiles
-    from ecattool.project.resolve import is_axis
+    from ecattool.project.slave import is_axis
 
     if name is None:  # a CiA-402 axis or an I/O slave (docs/project.md, "Axes and I/O slaves")
         name = "axis1" if is_axis(device) else "io1"
@@ -207,7 +207,7 @@ def _motion(device: Device, rules: FamilyRules) -> str:
     from ecattool.esi.model import Direction
     from ecattool.od.model import EcState
     from ecattool.pdo import default_mapping
-    from ecattool.project.resolve import is_axis
+    from ecattool.project.slave import is_axis
 
     mode = device.dictionary.entry(0x6060, 0)
     if not is_axis(device):

@@ -13,9 +13,13 @@ A linear motor is modelled as a "motor revolution" of one pole pitch.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
-from typing import Any
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import ConfigDict, Field, with_config
+from typing_extensions import TypedDict
 
 from ecattool.errors import InputError, Location, did_you_mean
 from ecattool.od.numbers import check_exponent, parse_fraction
@@ -36,7 +40,7 @@ MIN_LENGTH, MAX_LENGTH = Fraction(1, 10**12), Fraction(1000)
 MIN_NUMBER, MAX_NUMBER = Fraction(1, 10**9), Fraction(10**12)
 #: the drive's slow-loop (position loop) period, seconds: 1 µs .. 10 s
 MIN_SLOW_LOOP, MAX_SLOW_LOOP = Fraction(1, 10**6), Fraction(10)
-def _bounded(f: Fraction, shown: Any, what: str, location: Location | None, lo: Fraction, hi: Fraction,
+def _bounded(f: Fraction, shown: object, what: str, location: Location | None, lo: Fraction, hi: Fraction,
              unit: str = "") -> None:
     if f <= 0:
         raise InputError(f"{what} must be positive, got {shown!r}", location)
@@ -49,7 +53,7 @@ def _plain(f: Fraction) -> str:
         if str(f.denominator).strip("0") == "1" else str(f)
 
 
-def _frac(value: Any, what: str, location: Location | None, positive: bool = True,
+def _frac(value: object, what: str, location: Location | None, positive: bool = True,
           lo: Fraction = MIN_NUMBER, hi: Fraction = MAX_NUMBER) -> Fraction:
     f = parse_fraction(value, location, what)  # a boolean is never a number; 1e999 is refused before it is exact
     if positive:
@@ -57,7 +61,7 @@ def _frac(value: Any, what: str, location: Location | None, positive: bool = Tru
     return f
 
 
-def _length(value: Any, what: str, location: Location | None, meant: str | None = None) -> Exact:
+def _length(value: object, what: str, location: Location | None, meant: str | None = None) -> Exact:
     """A length from a spec or an option, within :data:`MIN_LENGTH` .. :data:`MAX_LENGTH` (a bare number is an
     error that shows it with ``meant``, the unit it probably meant)."""
     if isinstance(value, bool):
@@ -68,7 +72,7 @@ def _length(value: Any, what: str, location: Location | None, meant: str | None 
     return q
 
 
-def _integer(value: Any, what: str, location: Location | None, hi: int) -> int:
+def _integer(value: object, what: str, location: Location | None, hi: int) -> int:
     f = _frac(value, what, location, lo=Fraction(1), hi=Fraction(hi))
     if f.denominator != 1:
         raise InputError(f"{what} must be an integer, got {value!r}", location)
@@ -262,14 +266,112 @@ class Axis:
         return replace(self, **changes)
 
 
+# --- the shape of a spec (a spec file, a project drive's scaling: section) ---------------------------------
+
+#: a spec's mappings take only their own keys (the project schema says so; :func:`axis_from_dict` reports others)
+_SPEC_CONFIG = ConfigDict(extra="forbid")
+#: a number as a spec writes it: an integer, a decimal, or a string read exactly (``"12.7"``, ``"1/3"``)
+Number = Union[int, float, str]
+#: a length or a time with its unit (``5 mm``, ``1 ms``)
+Quantity = str
+
+
+@with_config(_SPEC_CONFIG)
+class FeedbackSection(TypedDict, total=False):
+    """``feedback:``: the position sensor, one of counts_per_rev, lines, steps (+ microsteps) or resolution."""
+
+    counts_per_rev: Annotated[Number, Field(description="Encoder counts per revolution")]
+    lines: Annotated[Number, Field(description="Encoder lines per revolution (4 counts per line)")]
+    steps: Annotated[Number, Field(description="Stepper full steps per revolution")]
+    microsteps: Annotated[Number, Field(description="Microsteps per full step (with steps)")]
+    resolution: Annotated[Quantity, Field(description="Linear scale resolution, with its unit (1 um)")]
+    on: Annotated[Literal["motor", "load"], Field(description="Where the sensor sits (default motor)")]
+
+
+@with_config(_SPEC_CONFIG)
+class GearSection(TypedDict, total=False):
+    """``gear:`` as a mapping: motor revolutions per load (driving shaft) revolutions."""
+
+    motor: Number
+    load: Number
+
+
+@with_config(_SPEC_CONFIG)
+class TransmissionSection(TypedDict, total=False):
+    """``transmission:``: the mechanics from the driving shaft to the load (docs/scaling.md, Transmissions)."""
+
+    type: Annotated[str, Field(description="rotary, ballscrew, hollow_shaft, belt, rack, linear_motor or label")]
+    pitch: Quantity
+    lead: Quantity
+    driving_teeth: Number
+    driven_teeth: Number
+    driving_diameter: Quantity
+    driven_diameter: Quantity
+    teeth: Number
+    tooth_pitch: Quantity
+    module: Quantity
+    diameter: Quantity
+    pitch_diameter: Quantity
+    pulley_diameter: Quantity
+    pole_pitch: Quantity
+    name: str
+    units: Number
+    motor_revs: Number
+
+
+@with_config(_SPEC_CONFIG)
+class UnitsSection(TypedDict, total=False):
+    """``units:``: the user units (docs/scaling.md: ``mm``, ``deg``, ``mm/s`` …)."""
+
+    position: str
+    velocity: str
+    acceleration: str
+    jerk: str
+    time: Annotated[str, Field(description="Time unit of the obsolete 2071h factor (s, ms, us, min)")]
+
+
+@with_config(_SPEC_CONFIG)
+class ScalingSection(TypedDict, total=False):
+    """A scaling spec: mechanics and units for the factor group (docs/scaling.md, "The spec file")."""
+
+    name: str
+    family: Annotated[str, Field(description="technosoft-ipos, hdt, controltechniques or generic "
+                                             "(default: the device's)")]
+    firmware: Annotated[Union[str, int], Field(description="Technosoft firmware (before F515K: the obsolete "
+                                                           "factor objects)")]
+    feedback: Annotated[Union[Number, FeedbackSection], Field(description="The position sensor (a number: counts "
+                                                                          "per revolution)")]
+    gear: Annotated[Union[Number, GearSection, None], Field(description="Motor : load revolutions (\"3:1\" or "
+                                                                        "{motor: 3, load: 1})")]
+    transmission: Annotated[Union[str, TransmissionSection, None],
+                            Field(description="Mechanics (a mapping, or 'ballscrew pitch=5mm')")]
+    units: UnitsSection
+    slow_loop: Annotated[Union[Quantity, Number], Field(description="Technosoft slow loop period (1 ms)")]
+    polarity: Annotated[Literal["normal", "reversed", "reverse", "inverted"],
+                        Field(description="reversed: 607Eh = 0xC0")]
+    reverse: bool
+    approximation: Annotated[Literal["best", "max-scale"], Field(description="Technosoft default max-scale, "
+                                                                              "others best")]
+    vl_setpoint: Annotated[Union[str, int], Field(description="Control Techniques 604Bh ratio (1/1)")]
+    device: Annotated[str, Field(description="Accepted for spec files that name their device; not read")]
+
+
+#: the keys a spec may have (:class:`ScalingSection`): any other is an error naming the nearest
+SPEC_KEYS = frozenset(ScalingSection.__annotations__)
+
+
 # --- loading from a mapping (YAML spec files, CLI options) ---------------------------------------------
 
 
-def _loc(locate: Any, *path: Any) -> Location | None:
+#: where the value at a path of a spec mapping is (``("transmission", "pitch")`` → file:line:column), for errors
+Locate = Callable[[tuple[str, ...]], Location | None]
+
+
+def _loc(locate: Locate | None, *path: str) -> Location | None:
     return locate(path) if locate else None
 
 
-def feedback_from(data: Any, locate: Any = None) -> Feedback:
+def feedback_from(data: Number | FeedbackSection, locate: Locate | None = None) -> Feedback:
     loc = _loc(locate, "feedback")
     if isinstance(data, (int, str)) and not isinstance(data, bool):
         return Feedback.encoder(_frac(data, "feedback counts_per_rev", loc, lo=Fraction(1), hi=Fraction(MAX_COUNTS)))
@@ -293,7 +395,7 @@ def feedback_from(data: Any, locate: Any = None) -> Feedback:
     raise InputError("feedback needs counts_per_rev, lines, steps (+ microsteps) or resolution (linear scale)", loc)
 
 
-def gear_from(data: Any, locate: Any = None) -> Gear:
+def gear_from(data: Number | GearSection | None, locate: Locate | None = None) -> Gear:
     loc = _loc(locate, "gear")
     if data is None:
         return Gear()
@@ -306,14 +408,14 @@ def gear_from(data: Any, locate: Any = None) -> Gear:
     return Gear(_frac(data, "gear ratio", loc))
 
 
-def transmission_from(data: Any, locate: Any = None, meant: str | None = None) -> Transmission:
+def transmission_from(section: str | TransmissionSection | None, locate: Locate | None = None,
+                      meant: str | None = None) -> Transmission:
     """The transmission of a spec mapping or a ``type key=value …`` string. Every length needs its unit; an error
     for a bare number suggests ``meant`` (the axis's length unit), else mm."""
     loc = _loc(locate, "transmission")
-    if data is None:
+    if section is None:
         return Transmission.rotary()
-    if isinstance(data, str):
-        data = parse_kv(data, loc)
+    data: Mapping[str, object] = parse_kv(section, loc) if isinstance(section, str) else section
     if not isinstance(data, dict):
         raise InputError("transmission must be a mapping with a 'type'", loc)
     kind = str(data.get("type", "rotary")).replace("-", "_").replace(" ", "_").lower()
@@ -324,7 +426,7 @@ def transmission_from(data: Any, locate: Any = None, meant: str | None = None) -
     def q(key: str) -> Exact:
         return _length(data[key], key, _loc(locate, "transmission", key), meant)
 
-    def n(key: str, default: Any = None) -> Fraction:
+    def n(key: str, default: object = None) -> Fraction:
         return _frac(data.get(key, default), key, _loc(locate, "transmission", key))
 
     if kind == "rotary":
@@ -376,12 +478,11 @@ def parse_kv(text: str, location: Location | None = None) -> dict[str, str]:
     return out
 
 
-def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None) -> Axis:
+def axis_from_dict(data: ScalingSection, locate: Locate | None = None, source: Location | None = None) -> Axis:
     """Build an :class:`Axis` from a spec mapping (see docs/scaling.md); ``locate(path)`` gives locations."""
     if not isinstance(data, dict):
         raise InputError("a scaling spec must be a mapping", source)
-    known = {"family", "feedback", "gear", "transmission", "units", "slow_loop", "polarity", "reverse", "name",
-             "firmware", "approximation", "device", "vl_setpoint"}
+    known = SPEC_KEYS
     for key in data:
         if key not in known:
             hint = did_you_mean(str(key), known) or f" (expected one of {', '.join(sorted(known))})"
@@ -417,7 +518,7 @@ def axis_from_dict(data: Any, locate: Any = None, source: Location | None = None
     return axis
 
 
-def _time_unit(value: Any, location: Location | None) -> str:
+def _time_unit(value: object, location: Location | None) -> str:
     """The time unit of the obsolete 2071h factor: a unit name (ms, s, us, min), checked where it is read."""
     text = str(value).strip()
     if isinstance(value, bool) or not text.isalpha():
@@ -426,7 +527,7 @@ def _time_unit(value: Any, location: Location | None) -> str:
     return text
 
 
-def slow_loop_from(value: Any, location: Location | None = None) -> Fraction:
+def slow_loop_from(value: object, location: Location | None = None) -> Fraction:
     """The slow-loop period (``1ms``, ``250 us``), within :data:`MIN_SLOW_LOOP` .. :data:`MAX_SLOW_LOOP`."""
     if isinstance(value, bool):
         raise InputError(f"slow_loop must be a time, not {str(value).lower()}", location)
@@ -436,7 +537,7 @@ def slow_loop_from(value: Any, location: Location | None = None) -> Fraction:
     return t
 
 
-def length_unit(text: Any) -> str | None:
+def length_unit(text: object) -> str | None:
     """The name of ``text`` when it is a length unit (``inch``, ``mm``): what a bare length probably meant."""
     try:
         unit = parse_unit(str(text), order=0) if text is not None else None

@@ -1,15 +1,21 @@
-"""Scaling spec files (YAML): one axis plus the family options, with located errors."""
+"""Scaling spec files (YAML): one axis plus the family options, with located errors.
+
+:class:`~ecattool.scaling.model.ScalingSection` is the shape of a spec (a spec file, or a project drive's ``scaling:`` section): the
+project schema's ``scaling:`` is generated from it, and :func:`spec_from_dict` is its one validator (every value
+checked with the file and line of its error; the project model passes the section through unvalidated).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from ecattool.errors import InputError, Location
 from ecattool.scaling.exact import Strategy
-from ecattool.scaling.model import Axis, axis_from_dict
+from ecattool.scaling.model import Axis, FeedbackSection, Locate, ScalingSection, UnitsSection, axis_from_dict
+
 
 
 @dataclass(frozen=True, slots=True)
@@ -21,7 +27,9 @@ class Spec:
     vl_setpoint: tuple[int, int] = (1, 1)
 
 
-def spec_from_dict(data: Any, locate: Any = None, source: Location | None = None) -> Spec:
+def spec_from_dict(data: ScalingSection, locate: Locate | None = None, source: Location | None = None) -> Spec:
+    """The :class:`Spec` of a spec mapping, every value checked (``locate(path)``: where a key's value is, for
+    the errors; ``source``: where the mapping is)."""
     axis = axis_from_dict(data, locate, source)
     approx = data.get("approximation")
     if approx is not None and approx not in ("best", "max-scale"):
@@ -63,7 +71,7 @@ class AxisOptions:
     counts_per_rev: str | None = None
     lines: str | None = None
     steps: tuple[str, str] | None = None
-    feedback_on: str | None = None
+    feedback_on: Literal["motor", "load"] | None = None
     gear: str | None = None
     transmission: str | None = None
     position: str | None = None
@@ -73,22 +81,30 @@ class AxisOptions:
     slow_loop: str | None = None
     reverse: bool | None = None
 
-    def feedback(self) -> dict[str, Any]:
+    def feedback(self) -> FeedbackSection:
         """The feedback keys said, as a spec file writes them."""
-        fb: dict[str, Any] = {}
+        fb: FeedbackSection = {}
         if self.counts_per_rev:
             fb["counts_per_rev"] = self.counts_per_rev
         if self.lines:
             fb["lines"] = self.lines
         if self.steps:
-            fb.update(steps=self.steps[0], microsteps=self.steps[1])
+            fb["steps"], fb["microsteps"] = self.steps
         if self.feedback_on:
             fb["on"] = self.feedback_on
         return fb
 
-    def units(self) -> dict[str, str]:
-        return {k: v for k, v in (("position", self.position), ("velocity", self.velocity),
-                                  ("acceleration", self.acceleration), ("jerk", self.jerk)) if v}
+    def units(self) -> UnitsSection:
+        units: UnitsSection = {}
+        if self.position:
+            units["position"] = self.position
+        if self.velocity:
+            units["velocity"] = self.velocity
+        if self.acceleration:
+            units["acceleration"] = self.acceleration
+        if self.jerk:
+            units["jerk"] = self.jerk
+        return units
 
 
 def spec_with(base: Spec | None, options: AxisOptions) -> Spec:
@@ -99,7 +115,7 @@ def spec_with(base: Spec | None, options: AxisOptions) -> Spec:
     if base is None:
         if not counted:
             raise InputError("give a SPEC file or the feedback (--counts-per-rev, --lines or --steps)")
-        data: dict[str, Any] = {"feedback": fb, "gear": options.gear, "transmission": options.transmission,
+        data: ScalingSection = {"feedback": fb, "gear": options.gear, "transmission": options.transmission,
                                 "units": options.units(), "reverse": bool(options.reverse)}
         if options.slow_loop:
             data["slow_loop"] = options.slow_loop

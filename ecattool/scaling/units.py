@@ -240,7 +240,7 @@ def describe_dimension(dimension: int, notation: int) -> str:
     return f"{base} (notation {notation})"
 
 
-def time_seconds(text: str, location: Location | None = None) -> Fraction:
+def time_seconds(text: object, location: Location | None = None) -> Fraction:
     """``1 ms``, ``0.5ms``, ``250 us``, ``0.001`` (seconds) → seconds as a Fraction."""
     s = str(text).strip().replace(" ", "")
     m = re.fullmatch(r"([0-9]*\.?[0-9]+(?:[eE]-?[0-9]+)?)([a-zµ]*)", s)
@@ -252,7 +252,7 @@ def time_seconds(text: str, location: Location | None = None) -> Fraction:
     return value
 
 
-def quantity(text: str | int | float, kinds: tuple[str, ...] = ("length",), location: Location | None = None,
+def quantity(text: object, kinds: tuple[str, ...] = ("length",), location: Location | None = None,
              what: str = "", meant: str | None = None) -> tuple[Exact, str]:
     """``5 mm``, ``0.2 inch``, ``12.5mm``, ``30 deg`` → (size in the kind's base, kind). Numbers are read exactly.
 

@@ -521,16 +521,20 @@ class Cia402:
             self.move = None
             self.target_reached = True
 
+    def _at_standstill(self, ramp: Fraction | None, dt: Fraction, inc_per_s: _Convert, vel_from_inc_per_s: _Convert) -> bool:
+        """One cycle down ``ramp`` (none: stop at once); True once the axis stands."""
+        if ramp and self.velocity:
+            self._slow_down(dt, ramp, inc_per_s, vel_from_inc_per_s)
+        else:
+            self.velocity = Fraction(0)
+        return not self.velocity
+
     def _reaction_step(self, dt: Fraction, inc_per_s: _Convert, vel_from_inc_per_s: _Convert) -> None:
         """One cycle of a quick stop or a fault reaction: ramp down, and at standstill make the automatic
         transition — 12 (QUICK STOP ACTIVE -> SWITCH ON DISABLED, option codes 1-4) or 14 (FAULT REACTION ACTIVE
         -> FAULT)."""
         ramp = self.quick_stop_ramp if self.state is State.QUICK_STOP else self.fault_ramp
-        if ramp and self.velocity:
-            self._slow_down(dt, ramp, inc_per_s, vel_from_inc_per_s)
-        else:
-            self.velocity = Fraction(0)
-        if self.velocity:
+        if not self._at_standstill(ramp, dt, inc_per_s, vel_from_inc_per_s):
             return
         if self.state is State.FAULT_REACTION:
             self.automatic.append((State.FAULT_REACTION, State.FAULT))
@@ -545,12 +549,7 @@ class Cia402:
     def _disable_step(self, dt: Fraction, inc_per_s: _Convert, vel_from_inc_per_s: _Convert) -> None:
         """One cycle of a Shutdown / Disable Operation with option code 1: ramp down in OPERATION ENABLED, and at
         standstill make the transition (8, 5; Technosoft 9) the controlword asked for."""
-        ramp = self.disable_ramp
-        if ramp and self.velocity:
-            self._slow_down(dt, ramp, inc_per_s, vel_from_inc_per_s)
-        else:
-            self.velocity = Fraction(0)
-        if self.velocity:
+        if not self._at_standstill(self.disable_ramp, dt, inc_per_s, vel_from_inc_per_s):
             return
         to = self.disable_to
         assert to is not None

@@ -12,9 +12,9 @@ master's type.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from types import ModuleType
-from typing import Any, Literal
+from typing import Literal, Protocol, cast
 
 from ecattool.errors import TargetError
 from ecattool.esi.model import Identity
@@ -22,6 +22,34 @@ from ecattool.startup.config import SlaveConfig
 
 #: the masters :func:`install` attaches to
 MasterKind = Literal["pysoem", "kickcat"]
+
+
+class PysoemSlave(Protocol):
+    """What :func:`install_pysoem` uses of a ``pysoem`` slave: its SII identity, the hook SOEM calls with the
+    0-based position when it maps the slave, and the SDO write."""
+
+    man: int
+    id: int
+    rev: int
+    config_func: Callable[[int], None] | None
+
+    def sdo_write(self, index: int, subindex: int, data: bytes, ca: bool = False) -> None: ...
+
+
+class PysoemMaster(Protocol):
+    """What :func:`install_pysoem` uses of a ``pysoem.Master`` after ``config_init()``."""
+
+    manual_state_change: int
+
+    @property
+    def slaves(self) -> Sequence[PysoemSlave]: ...
+
+
+class KickcatBus(Protocol):
+    """What :func:`install_kickcat` uses of a ``kickcat.Bus`` after ``init()`` (the slave access itself is
+    :class:`ecattool.target.kickcat.KickcatSlave`'s)."""
+
+    def slaves(self) -> Sequence[object]: ...
 
 
 def check_identity(cfg: SlaveConfig, position: int, found: Identity, exact_revision: bool = False) -> None:
@@ -48,7 +76,7 @@ def _placed(configs: Sequence[SlaveConfig], count: int) -> list[tuple[int, Slave
     return out
 
 
-def install_pysoem(configs: Sequence[SlaveConfig], master: Any, *, exact_revision: bool = False,
+def install_pysoem(configs: Sequence[SlaveConfig], master: PysoemMaster, *, exact_revision: bool = False,
                    pysoem_module: ModuleType | None = None) -> list[int]:
     """Attach each configuration's startup list to its pysoem slave (identity checked first, every slave before
     any is touched; :func:`ecattool.target.pysoem.attach_startup`). Returns the positions configured. Sets
@@ -61,7 +89,7 @@ def install_pysoem(configs: Sequence[SlaveConfig], master: Any, *, exact_revisio
     return [p for p, _ in placed]
 
 
-def install_kickcat(configs: Sequence[SlaveConfig], bus: Any, *, exact_revision: bool = False,
+def install_kickcat(configs: Sequence[SlaveConfig], bus: KickcatBus, *, exact_revision: bool = False,
                     kickcat_module: ModuleType | None = None) -> list[int]:
     """Write each configuration's startup list to its KickCAT slave now (identity through 1018h checked first for
     every slave). Call between ``bus.init()`` and ``bus.create_mapping()``."""
@@ -78,7 +106,7 @@ def install_kickcat(configs: Sequence[SlaveConfig], bus: Any, *, exact_revision:
     return [s.position for s, _ in live]
 
 
-def master_kind(master: Any) -> MasterKind:
+def master_kind(master: object) -> MasterKind:
     """``pysoem`` for a ``pysoem.Master`` (a ``slaves`` list and ``config_map``), ``kickcat`` for a
     ``kickcat.Bus`` (``slaves()`` a method and ``create_mapping``); a TargetError for anything else."""
     if hasattr(master, "create_mapping") and callable(getattr(master, "slaves", None)):
@@ -89,11 +117,12 @@ def master_kind(master: Any) -> MasterKind:
                       "config_init) or a kickcat.Bus (after init), or kind='pysoem'/'kickcat'")
 
 
-def install(configs: Sequence[SlaveConfig], master: Any, *, kind: MasterKind | None = None,
+def install(configs: Sequence[SlaveConfig], master: PysoemMaster | KickcatBus, *, kind: MasterKind | None = None,
             exact_revision: bool = False, module: ModuleType | None = None) -> list[int]:
     """:func:`install_pysoem` or :func:`install_kickcat`, by ``kind`` or else by the master's type
     (:func:`master_kind`); ``module`` is the pysoem or kickcat module to use (tests pass a fake)."""
     chosen = kind or master_kind(master)
+    # the kind (the caller's, else the master's type) says which of the two the master is
     if chosen == "kickcat":
-        return install_kickcat(configs, master, exact_revision=exact_revision, kickcat_module=module)
-    return install_pysoem(configs, master, exact_revision=exact_revision, pysoem_module=module)
+        return install_kickcat(configs, cast(KickcatBus, master), exact_revision=exact_revision, kickcat_module=module)
+    return install_pysoem(configs, cast(PysoemMaster, master), exact_revision=exact_revision, pysoem_module=module)
