@@ -72,9 +72,11 @@ def test_a_command_that_acts_on_slaves_refuses_a_running_bus_until_told(
     monkeypatch.chdir(ROOT)
     monkeypatch.setattr(bus_state, "read_states", lambda ifname: [Found(0, 0x02), Found(1, 0x08)])
     opened: list[str] = []
+    limited: list[int] = []
 
     def master(ifname: str, limits: object = None) -> None:  # limits: the slaves' timeouts (target.timeouts)
         opened.append(ifname)
+        limited.append(len(getattr(limits, "slaves", ())))
         raise TargetError(f"(the master would open {ifname} here)")
 
     monkeypatch.setattr(isolated, "pysoem_target", master)
@@ -84,3 +86,6 @@ def test_a_command_that_acts_on_slaves_refuses_a_running_bus_until_told(
     assert "slave 1 (OP) on 'ecat9' is running" in err and "--reset-bus" in err and len(err.splitlines()) == 1, err
     code, _, err = run(capsys, *args, "--reset-bus")
     assert opened == ["ecat9"] and "the master would open ecat9 here" in err, err
+    # the real master's waits are bounded by the timeouts of the devices the command has (a project's, the
+    # family's, the .sw's Technosoft drive), as a bare 'sim' holds those devices: one rule of the target spec
+    assert limited == [1], limited

@@ -327,17 +327,16 @@ def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> A
     from ecattool.online.targets import open_guarded
     from ecattool.target.opener import SLAVE_TARGET_FORMS, parse_target, slave_at
 
-    devices = []
     try:
         parsed = parse_target(spec)
-        if parsed.own_slaves:  # the one drive of the family
-            from ecattool import profiles
+        # the family's drive: a bare 'sim' holds it (at position 0), a real bus takes its timeouts
+        from ecattool import profiles
 
-            if family == "generic":
-                raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
-            devices = [profiles.load(family, revision=firmware) if firmware else profiles.load(family)]
-            slave = 0
-        found = slave_at(open_guarded(spec, devices, reset_bus_given()), slave)
+        devices = [] if family == "generic" else [profiles.load(family, revision=firmware) if firmware
+                                                  else profiles.load(family)]
+        if parsed.own_slaves and not devices:
+            raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
+        found = slave_at(open_guarded(spec, devices, reset_bus_given()), 0 if parsed.own_slaves else slave)
     except SelectionError as exc:
         if exc.message.startswith("unknown target"):
             raise click.BadParameter(f"use {SLAVE_TARGET_FORMS}", param_hint="--target") from None

@@ -126,17 +126,16 @@ def _open_target(spec: str, slave: int, device: Device | None = None) -> SlaveTa
     from ecattool.online.targets import open_guarded
     from ecattool.target.opener import parse_target, slave_at
 
-    parsed = parse_target(spec)
-    if parsed.own_slaves:
-        if device is None:
-            from ecattool import profiles
+    if device is None:  # .sw images are Technosoft's: a bare 'sim' is an iPOS, a real bus gets its timeouts
+        from ecattool import profiles
 
-            device = profiles.load("technosoft-ipos")
-        tgt = open_guarded(spec, [device])
-        found = slave_at(tgt, 0)
-        found.position = slave
-        return found
-    return slave_at(open_guarded(spec, reset_bus=reset_bus_given()), slave)
+        device = profiles.load("technosoft-ipos")
+    tgt = open_guarded(spec, [device], reset_bus_given())
+    if not parse_target(spec).own_slaves:
+        return slave_at(tgt, slave)
+    found = slave_at(tgt, 0)  # the one simulated drive answers as the slave asked for
+    found.position = slave
+    return found
 
 
 def _project_drive(project: str, name: str | None, allow_errors: bool = False) -> tuple[Slave, str]:

@@ -688,13 +688,13 @@ def open_target(spec: str, drives: Sequence[Slave], reset_bus: bool = False) -> 
     """The target ``spec`` names (:func:`ecattool.online.targets.open_guarded`: a real bus with slaves in SAFE-OP
     or OP is refused unless ``reset_bus``) with the slaves' devices for a simulator; and the target's name for the
     report. A slave whose device did not resolve cannot be simulated: an InputError naming it and why (the file
-    and line lint names)."""
+    and line lint names); a real master takes the devices that resolved (their ESI timeouts bound its waits)."""
     from ecattool.online.targets import open_guarded
     from ecattool.target.opener import parse_target
 
-    parsed = parse_target(spec)
-    # a bare 'sim' simulates the project's slaves
-    devices = [d for _, d in Machine("", slaves=tuple(drives)).devices()] if parsed.own_slaves else []
+    machine = Machine("", slaves=tuple(drives))
+    devices = ([d for _, d in machine.devices()] if parse_target(spec).own_slaves
+               else [s.device for s in machine.in_bus_order() if s.device is not None])
     return open_guarded(spec, devices, reset_bus), spec
 
 

@@ -11,7 +11,7 @@ from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
 from ecattool.online.live import LiveBus
 from ecattool.target.base import LiveSlave, Target
-from ecattool.target.opener import MASTERS, open_master, open_target, parse_target, sim_devices
+from ecattool.target.opener import MASTERS, open_master, open_target, parse_target
 
 if TYPE_CHECKING:
     from ecattool.target.timeouts import BusLimits
@@ -29,7 +29,7 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
     if parsed.kind == "sim":
         from ecattool.sim.slave import drive_for_device
 
-        devs = sim_devices(parsed, devices)
+        devs = parsed.sim_devices(devices)
         if not devs:
             raise SelectionError("target 'sim' without a project has no slaves: use sim:PROFILE,ESI… "
                                  "(e.g. sim:hdt,technosoft-ipos)")

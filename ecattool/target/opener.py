@@ -53,6 +53,16 @@ class TargetSpec:
         """A bare ``sim``: the simulator with the slaves the command has (a project's, a family's drive)."""
         return self.kind == "sim" and not self.sources
 
+    def sim_devices(self, devices: Iterable[Device] = ()) -> list[Device]:
+        """What the simulator of this spec holds, the one rule for every command: a ``sim:SOURCE,…`` spec its
+        sources' devices (profiles or ESI files), a bare ``sim`` the command's own ``devices`` (a project's
+        slaves, a family's drive), in bus order."""
+        if self.own_slaves:
+            return list(devices)
+        from ecattool.sim.bus.serve import device_source
+
+        return [device_source(s)[1] for s in self.sources]
+
 
 def parse_target(spec: str) -> TargetSpec:
     """``spec`` read (see the module docs); a SelectionError naming the forms when it is none of them."""
@@ -69,22 +79,13 @@ def parse_target(spec: str) -> TargetSpec:
     raise SelectionError(f"unknown target {spec!r} (use {TARGET_FORMS})")
 
 
-def sim_devices(spec: TargetSpec, devices: Iterable[Device] = ()) -> list[Device]:
-    """The devices a simulator of ``spec`` has: its sources' (profiles or ESI files), else ``devices``."""
-    if spec.own_slaves:
-        return list(devices)
-    from ecattool.sim.bus.serve import device_source
-
-    return [device_source(s)[1] for s in spec.sources]
-
-
 def open_target(spec: str, devices: Iterable[Device] = ()) -> Target:
     """The target ``spec`` names (see the module docs); ``devices``: the slaves a bare ``sim`` has, in bus order."""
     parsed = parse_target(spec)
     if parsed.kind == "sim":
         from ecattool.target.sim import SimTarget
 
-        return SimTarget.from_devices(sim_devices(parsed, devices))
+        return SimTarget.from_devices(parsed.sim_devices(devices))
     if parsed.kind == "pysoem":
         from ecattool.target.isolated import pysoem_target
 
