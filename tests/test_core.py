@@ -154,7 +154,7 @@ def test_the_suite_collects_from_any_directory(tmp_path):
     from tests.conftest import ROOT
 
     out = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:xdist",
-                          str(ROOT / "tests" / "test_startup_device.py")], cwd=tmp_path, capture_output=True, text=True)
+                          str(ROOT / "tests" / "startup" / "test_startup_device.py")], cwd=tmp_path, capture_output=True, text=True)
     assert out.returncode == 0 and "error" not in out.stdout.lower(), out.stdout[-2000:]
 
 

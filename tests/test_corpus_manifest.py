@@ -82,7 +82,7 @@ def test_without_the_corpus_its_tests_skip_in_one_line(tmp_path: Path) -> None:
     env = {**os.environ, "ECATTOOL_CORPUS": str(tmp_path / "no-corpus"), "ECATTOOL_REFERENCE": str(REFERENCE)}
     env.pop("PYTEST_XDIST_WORKER", None)
     done = subprocess.run([sys.executable, "-m", "pytest", "-rs", "-p", "no:cacheprovider", "-n", "0",
-                           "tests/test_sii_crc.py", "tests/test_esi_eds.py", "tests/test_scaling_model.py"],
+                           "tests/sii/test_sii_crc.py", "tests/esi/test_esi_eds.py", "tests/scaling/test_scaling_model.py"],
                           cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stdout[-3000:]
     skipped = [line for line in done.stdout.splitlines() if line.startswith("SKIPPED")]

@@ -262,7 +262,7 @@ def test_every_upload_through_a_master_is_bounded_by_its_object() -> None:
     assert not found, "an SDO upload without its size bound (pass size=, the object's type's size):\n" + "\n".join(found)
 
 
-# --- one target opener, DC resolved once (the claims two tests of tests/test_machine.py are named after) ----------
+# --- one target opener, DC resolved once (the claims two tests of tests/project/test_machine.py are named after) ----------
 
 #: the classes that are slave targets, and the constructor methods they have
 TARGET_CLASSES = ("SimTarget", "PysoemTarget", "KickcatTarget")

@@ -287,7 +287,7 @@ def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, 
         sys.stdout.flush()
 
     fault = None
-    if misbehave is not None:  # the hostile-slave test's switch (tests/test_wire_hostile_slave.py)
+    if misbehave is not None:  # the hostile-slave test's switch (tests/wire/test_wire_hostile_slave.py)
         from ecattool.sim.bus.misbehave import apply
 
         fault, workers = apply(misbehave, slaves), 1

@@ -2,7 +2,7 @@
 
 Where the generators in use disagree, the builder follows real device dumps (NI 9144, Beckhoff and
 Kollmorgen dumps quoted in the field notes); every such choice is listed in docs/decisions.md
-("SII images") and pinned by a named test in tests/test_sii_build.py.
+("SII images") and pinned by a named test in tests/sii/test_sii_build.py.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-// ecattool test harness (tests/test_startup_ros2_driver.py): ethercat_driver_ros2's generic slave reads a slave
+// ecattool test harness (tests/startup/test_startup_ros2_driver.py): ethercat_driver_ros2's generic slave reads a slave
 // file with its own code (generic_ec_slave.cpp from ../shared/consumers, built against yaml-cpp and IgH's ecrt.h,
 // pluginlib stubbed), and this prints what it would configure: identity, SDO bytes, PDO entries, sync managers.
 #include <cstdio>

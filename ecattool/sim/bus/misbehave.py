@@ -1,5 +1,5 @@
 """A served slave that misbehaves on purpose: the test hook of ``ecattool sim serve --misbehave NAME`` (a hidden
-option), with which the hostile-slave wire test (tests/test_wire_hostile_slave.py) checks that no answer of a slave
+option), with which the hostile-slave wire test (tests/wire/test_wire_hostile_slave.py) checks that no answer of a slave
 ends ecattool, or makes it hang or report what it did not read.
 
 Each misbehaviour is what a broken or hostile slave has been seen to do (issue 37); it is switched on for every

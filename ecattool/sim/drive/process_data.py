@@ -153,7 +153,7 @@ class ProcessData(PdoConfig):
         random numbers). When a cycle on outputs O leaves the state exactly as it found it (and logs and
         reports nothing), the next cycle on the same O from the same state does the same: nothing, with the
         same inputs. So :meth:`exchange` returns the inputs of the cycle before where the outputs and this
-        state are equal to that cycle's (tests/test_sim_quiet_cycle.py runs both ways and compares)."""
+        state are equal to that cycle's (tests/sim/test_sim_quiet_cycle.py runs both ways and compares)."""
         cia = self.cia
         rx, tx = self.layout[RX], self.layout[TX]
         store = self._store

@@ -549,7 +549,7 @@ class Esc:
         :class:`_Plan` made once per (address, length) until an SM or FMMU register is written: a few slice
         copies and the sync manager's bookkeeping, no segment search. Every other access (registers, mailbox
         areas, shares across SM boundaries or past the memory) takes :meth:`logical_general`, which the plan
-        equals wherever it applies (tests/test_esc_logical_plan.py)."""
+        equals wherever it applies (tests/sim/test_esc_logical_plan.py)."""
         key = (address, len(data))
         plan = self._plans.get(key)
         if plan is None:

@@ -1,0 +1,91 @@
+"""Never stop a running machine by surprise (issue 35 item 4), in process: the refusal of a bus with slaves in
+SAFE-OP or OP, ``--reset-bus``, and what is put back when the command ends. The raw read itself runs on the wire
+(tests/wire/test_wire_hostile_slave.py, "running bus")."""
+
+from __future__ import annotations
+
+import pytest
+
+from ecattool.errors import TargetError
+from ecattool.od.model import EcState
+from ecattool.online import bus_state
+from ecattool.online.bus_state import Found, guard, restore
+from ecattool.target.base import Unsupported
+
+
+class Slave:
+    def __init__(self, position: int, refuse: bool = False, whole_bus_only: bool = False) -> None:
+        self.position, self.refuse, self.whole_bus_only, self.asked = position, refuse, whole_bus_only, []
+
+    def request_state(self, state: EcState) -> None:
+        if self.whole_bus_only:
+            raise Unsupported("kickcat: the Python binding requests a state for the whole bus, not for one slave")
+        if self.refuse:
+            raise TargetError("no answer")
+        self.asked.append(state)
+
+
+def test_a_running_bus_is_refused_naming_its_running_slaves(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(bus_state, "read_states", lambda ifname: [Found(0, 0x02), Found(1, 0x08), Found(2, 0x14, 0x1B)])
+    with pytest.raises(TargetError) as refused:
+        guard("eth0", reset_bus=False)
+    assert str(refused.value) == ("slave 1 (OP), slave 2 (SAFEOP, error) on 'eth0' are running: opening the bus "
+                                  "resets every slave to INIT and would stop the machine; pass --reset-bus to do it "
+                                  "anyway")
+    assert [f.position for f in guard("eth0", reset_bus=True)] == [0, 1, 2]
+
+
+def test_a_bus_in_init_or_preop_or_unknown_opens(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(bus_state, "read_states", lambda ifname: [Found(0, 0x01), Found(1, 0x12, 0x1D)])
+    assert len(guard("eth0", reset_bus=False)) == 2
+    monkeypatch.setattr(bus_state, "read_states", lambda ifname: None)  # no raw socket, nothing answered
+    assert guard("eth0", reset_bus=False) == []
+
+
+def test_each_slave_is_put_back_where_it_can_be_and_the_rest_is_named() -> None:
+    slaves = [Slave(0), Slave(1), Slave(2), Slave(3, refuse=True), Slave(4, whole_bus_only=True)]
+    notes = restore(slaves, [Found(0, 0x01), Found(1, 0x02), Found(2, 0x08), Found(3, 0x01), Found(4, 0x01)])
+    assert slaves[0].asked == [EcState.INIT] and slaves[1].asked == [] and slaves[2].asked == []
+    assert notes == ["slave 2 (OP) was left in PRE-OP: ecattool has no configuration to take it back to OP",
+                     "slave 3 (INIT) could not be put back in INIT: no answer",
+                     "slave 4 (INIT) was left in PRE-OP: kickcat: the Python binding requests a state for the whole "
+                     "bus, not for one slave"]
+
+
+#: every command that acts on slaves through a real master (they take every slave through INIT too), with the
+#: arguments after its --target
+ACTING = {
+    "commission": ["commission", "samples/technosoft_ipos/project.yaml"],
+    "sw verify": ["sw", "verify", "samples/technosoft_ipos/setup.sw"],
+    "sw download": ["sw", "download", "samples/technosoft_ipos/setup.sw"],
+    "sw upload": ["sw", "upload", "--like", "samples/technosoft_ipos/setup.sw", "-o", "-"],
+    "scale explain": ["scale", "explain", "--profile", "hdt"],
+}
+
+
+@pytest.mark.parametrize("command", sorted(ACTING))
+def test_a_command_that_acts_on_slaves_refuses_a_running_bus_until_told(
+        monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], command: str) -> None:
+    from ecattool.target import isolated
+    from tests.conftest import ROOT, run
+
+    monkeypatch.chdir(ROOT)
+    monkeypatch.setattr(bus_state, "read_states", lambda ifname: [Found(0, 0x02), Found(1, 0x08)])
+    opened: list[str] = []
+    limited: list[int] = []
+
+    def master(ifname: str, limits: object = None) -> None:  # limits: the slaves' timeouts (target.timeouts)
+        opened.append(ifname)
+        limited.append(len(getattr(limits, "slaves", ())))
+        raise TargetError(f"(the master would open {ifname} here)")
+
+    monkeypatch.setattr(isolated, "pysoem_target", master)
+    args = [*ACTING[command], "--target", "pysoem:ecat9"]
+    code, _, err = run(capsys, *args)
+    assert code == 1 and opened == [], err
+    assert "slave 1 (OP) on 'ecat9' is running" in err and "--reset-bus" in err and len(err.splitlines()) == 1, err
+    code, _, err = run(capsys, *args, "--reset-bus")
+    assert opened == ["ecat9"] and "the master would open ecat9 here" in err, err
+    # the real master's waits are bounded by the timeouts of the devices the command has (a project's, the
+    # family's, the .sw's Technosoft drive), as a bare 'sim' holds those devices: one rule of the target spec
+    assert limited == [1], limited
