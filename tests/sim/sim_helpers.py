@@ -40,3 +40,13 @@ def at(name: str, state: EcState = PRE, **kw: Any) -> Drive:
         if s is state:
             break
     return d
+
+
+def in_mode(name: str, mode: int) -> Drive:
+    """A drive of profile ``name`` in OP with mode of operation ``mode`` (6060h written in PRE-OP), on the ideal
+    plant."""
+    d = at(name, PRE)
+    w(d, 0x6060, 0, mode, 1)
+    d.request_state(SAFE)
+    d.request_state(OP)
+    return d

@@ -9,7 +9,7 @@ from fractions import Fraction
 from ecattool.od.model import EcState
 from ecattool.sim import Drive
 from ecattool.sim.cia402 import State
-from tests.sim.sim_helpers import OP, PRE, SAFE, at, r, w
+from tests.sim.sim_helpers import OP, PRE, SAFE, at, in_mode, r, w
 from tests.conftest import seeds_path
 
 TS_TEXT, HDT_TEXT, CT_TEXT = "000_a0ab57c0bda88c2c.txt", "003_8679b1dde0e37523.txt", "004_b59360cba58a7982.txt"
@@ -134,10 +134,7 @@ def test_n5_hdt_vl_min_amount():
 def test_n7_ct_profile_torque_follows_the_slope_and_moves_the_axis():
     manual_says(CT_TEXT, 2233, "The value of this object is given per thousand of rated torque.")
     manual_says(CT_TEXT, 2271, "The value of this object is given in units of per thousand of rated torque per second.")
-    d = at("controltechniques", PRE)
-    w(d, 0x6060, 0, 4, 1)
-    d.request_state(SAFE)
-    d.request_state(OP)
+    d = in_mode("controltechniques", 4)
     w(d, 0x6087, 0, 1000, 4)  # 100 % of rated torque per second
     enable(d)
     w(d, 0x6071, 0, 500, 2)  # 50 %
@@ -153,10 +150,7 @@ def test_n7_ct_profile_torque_follows_the_slope_and_moves_the_axis():
 
 def test_n7_technosoft_cst_torque_is_the_cycle_demand_and_accelerates_by_torque_over_inertia():
     manual_says(CT_TEXT, 2233, "per thousand of rated torque")
-    d = at("technosoft-ipos", PRE)
-    w(d, 0x6060, 0, 10, 1)
-    d.request_state(SAFE)
-    d.request_state(OP)
+    d = in_mode("technosoft-ipos", 10)
     enable(d)
     from ecattool.sim.drive.torque_mode import FreeInertia
 
@@ -215,10 +209,7 @@ def test_n6_ct_interpolated_position_is_delayed_once_on_the_plant():
 def test_n6_hdt_interpolated_position_needs_bit4_and_reports_bit12():
     manual_says(HDT_TEXT, 4792, "1 Enables the Interpolator mode")
     manual_says(HDT_TEXT, 4860, "1 Interpolator enabled")
-    d = at("hdt", PRE)
-    w(d, 0x6060, 0, 7, 1)
-    d.request_state(SAFE)
-    d.request_state(OP)
+    d = in_mode("hdt", 7)
     enable(d)
     w(d, 0x60C1, 1, 5000, 4)
     d.step(3)
@@ -233,10 +224,7 @@ def test_n6_hdt_interpolated_position_needs_bit4_and_reports_bit12():
 
 # N8 N9 ---------------------------------------------------------------------------------------------------
 def _hdt_pv() -> Drive:
-    d = at("hdt", PRE)
-    w(d, 0x6060, 0, 3, 1)
-    d.request_state(SAFE)
-    d.request_state(OP)
+    d = in_mode("hdt", 3)
     enable(d)
     return d
 
@@ -285,10 +273,7 @@ def test_n9_hdt_pv_bit12_speed_zero_with_threshold_time():
 def test_n9_technosoft_pv_bit12_below_threshold():
     manual_says(TS_TEXT, 7675, "If the actual velocity of the drive / motor is below the velocity threshold, then bit "
                                "12 will be set, else it will be reset.")
-    d = at("technosoft-ipos", PRE)
-    w(d, 0x6060, 0, 3, 1)
-    d.request_state(SAFE)
-    d.request_state(OP)
+    d = in_mode("technosoft-ipos", 3)
     w(d, 0x606F, 0, 5, 2)
     w(d, 0x6083, 0, 1, 4)
     enable(d)
@@ -302,10 +287,7 @@ def test_n9_technosoft_pv_bit12_below_threshold():
 def test_n8_technosoft_pv_bit10_in_the_window():
     manual_says(TS_TEXT, 7744, "is in the velocity window for longer than the velocity window time (606E_h), the "
                                "*Target reached bit* (Statusword) is set")
-    d = at("technosoft-ipos", PRE)
-    w(d, 0x6060, 0, 3, 1)
-    d.request_state(SAFE)
-    d.request_state(OP)
+    d = in_mode("technosoft-ipos", 3)
     w(d, 0x6083, 0, 1 << 15, 4)  # 0.5 increment/sample² (15.16 fixed point)
     enable(d)
     w(d, 0x606D, 0, 40000, 2)  # 0.61 increment/sample
@@ -488,10 +470,7 @@ def test_n26_n27_motion_error_register_and_fault_reset():
 
 # N23 N24 (Technosoft CSP) ----------------------------------------------------------------------------------
 def _ts_csp() -> Drive:
-    d = at("technosoft-ipos", PRE)
-    w(d, 0x6060, 0, 8, 1)
-    d.request_state(SAFE)
-    d.request_state(OP)
+    d = in_mode("technosoft-ipos", 8)
     enable(d)
     return d
 
@@ -612,10 +591,7 @@ def test_n25_technosoft_polarity_reverses_the_actual_values_on_the_plant_too():
 
 def test_n25_hdt_polarity_reverses_the_targets():
     manual_says(HDT_TEXT, 3418, "if the bit is equal to 1, the value’s sign is reversed.")
-    d = at("hdt", PRE)
-    w(d, 0x6060, 0, 9, 1)  # CSV
-    d.request_state(SAFE)
-    d.request_state(OP)
+    d = in_mode("hdt", 9)  # CSV
     w(d, 0x607E, 0, 0x40, 1)  # velocity polarity
     enable(d)
     w(d, 0x60FF, 0, 1000, 4)
@@ -706,10 +682,7 @@ def test_ct_quick_stop_in_vl_ramps_along_604a():
 
 def test_n24_technosoft_csv_acceleration_limit_2086():
     manual_says(TS_TEXT, 8817, "During CSV mode, the maximum acceleration will be the one defined in object 6083_h.")
-    d = at("technosoft-ipos", PRE)
-    w(d, 0x6060, 0, 9, 1)
-    d.request_state(SAFE)
-    d.request_state(OP)
+    d = in_mode("technosoft-ipos", 9)
     enable(d)
     w(d, 0x2086, 0, 1, 2)
     w(d, 0x6083, 0, 1 << 16, 4)  # 1 increment/sample²
