@@ -9,8 +9,8 @@ from __future__ import annotations
 from ecattool.sim import Drive
 from ecattool.sim.cia402 import State
 from tests.sim.sim_helpers import OP, SAFE, at, code_of, r, w
-from test_families_manuals import CT_TEXT, TS_TEXT, manual_says
-from test_sim_stop_reactions import _moving
+from tests.profiles.test_families_manuals import CT_TEXT, TS_TEXT, manual_says
+from tests.sim.test_sim_stop_reactions import _moving
 
 #: the controlword that leaves OPERATION ENABLED, by the state it asks for
 SHUTDOWN, DISABLE_OPERATION, DISABLE_VOLTAGE = 0x06, 0x07, 0x00

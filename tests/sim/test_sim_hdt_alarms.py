@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from ecattool.sim.cia402 import State
 from tests.sim.sim_helpers import OP, at, r, w
-from test_families_manuals import HDT_TEXT, manual_says
-from test_sim_stop_reactions import REV, _hdt_move_into_an_obstacle
+from tests.profiles.test_families_manuals import HDT_TEXT, manual_says
+from tests.sim.test_sim_stop_reactions import REV, _hdt_move_into_an_obstacle
 
 
 def _bitmap(emcy_bytes: bytes) -> int:

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from ecattool.sim.cia402 import State
 from tests.sim.sim_helpers import OP, SAFE, at, r, w
-from test_families_manuals import HDT_TEXT, manual_says
-from test_sim_stop_reactions import REV
+from tests.profiles.test_families_manuals import HDT_TEXT, manual_says
+from tests.sim.test_sim_stop_reactions import REV
 
 OBSTACLE = 2000
 

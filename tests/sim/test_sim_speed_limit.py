@@ -7,7 +7,7 @@ from __future__ import annotations
 from ecattool.sim.cia402 import State
 from ecattool.sim.drive import Drive as SimDrive
 from tests.sim.sim_helpers import OP, PRE, SAFE, at, r, w
-from test_families_manuals import CT_TEXT, TS_TEXT, manual_says
+from tests.profiles.test_families_manuals import CT_TEXT, TS_TEXT, manual_says
 from tests.conftest import ROOT
 
 INOVANCE = ROOT / "samples" / "generic_esi" / "inovance_SV660_EOE_1Axis_V9.12.xml"

@@ -10,7 +10,7 @@ import pytest
 from ecattool.sim import Drive
 from ecattool.sim.cia402 import State
 from tests.sim.sim_helpers import OP, SAFE, at, code_of, r, w
-from test_families_manuals import CT_TEXT, HDT_TEXT, TS_TEXT, manual_says
+from tests.profiles.test_families_manuals import CT_TEXT, HDT_TEXT, TS_TEXT, manual_says
 
 #: per family: the writes that set up a moving axis with a slow-down ramp half as steep as the quick-stop ramp
 #: (the objects the manual names), and the profile velocity set-point (None: cyclic synchronous position)

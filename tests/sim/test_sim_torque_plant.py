@@ -11,7 +11,7 @@ import pytest
 from ecattool.sim.cia402 import State
 from ecattool.sim.drive.plant import PlantParams
 from tests.sim.sim_helpers import OP, PRE, SAFE, at, r, w
-from test_families_manuals import CT_TEXT, TS_TEXT, manual_says
+from tests.profiles.test_families_manuals import CT_TEXT, TS_TEXT, manual_says
 
 #: a motor of 1e-4 kg·m² with as much load, 0.1 N·m of Coulomb friction and no viscous friction
 PLANT = PlantParams(motor_inertia=1e-4, load_inertia=1e-4, coulomb=0.1, viscous=0.0, rated_torque=1.27,
