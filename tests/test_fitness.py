@@ -202,11 +202,6 @@ FAMILY_COMPARISONS_LEFT = {
     "project/steps.py": 1,
     "scaling/compute.py": 7,
     "scaling/explain.py": 3,
-    "sim/drive/halt_homing.py": 6,
-    "sim/drive/injection.py": 2,
-    "sim/drive/memory.py": 1,
-    "sim/drive/motion.py": 4,
-    "sim/units.py": 2,
 }
 
 
