@@ -182,6 +182,6 @@ def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
 def ideal_plant(monkeypatch: pytest.MonkeyPatch) -> None:
     """Drives built in the test have no plant (actual = demand), unless the test gives one: for the tests of the
     manuals' exact timings and traces (issue 33)."""
-    from ecattool.sim.drive import facade
+    from ecattool.sim.drive import family
 
-    monkeypatch.setattr(facade, "plant_for", lambda family: None)
+    monkeypatch.setattr(family, "plant_for", lambda name: None)  # the family part's default plant

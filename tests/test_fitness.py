@@ -257,6 +257,33 @@ def test_every_upload_through_a_master_is_bounded_by_its_object() -> None:
     assert not found, "an SDO upload without its size bound (pass size=, the object's type's size):\n" + "\n".join(found)
 
 
+# --- the simulated drive is composed of parts (issue 33, item 1) ----------------------------------------------
+
+def drive_part_inheritance(trees: dict[str, ast.Module]) -> list[str]:
+    """The classes of sim/drive/ that inherit another class of sim/drive/ (the drive's parts are objects the
+    drive holds and wires together, not mixins over a shared core)."""
+    drive_modules = {rel: tree for rel, tree in trees.items() if rel.startswith("sim/drive/")}
+    ours = {node.name for tree in drive_modules.values() for node in ast.walk(tree) if isinstance(node, ast.ClassDef)}
+    return [f"{_where(rel, node)}: class {node.name}({', '.join(ast.unparse(b) for b in node.bases)})"
+            for rel, tree in drive_modules.items() for node in ast.walk(tree) if isinstance(node, ast.ClassDef)
+            for base in node.bases
+            if (base.id if isinstance(base, ast.Name) else base.attr if isinstance(base, ast.Attribute) else "") in ours]
+
+
+def test_the_drive_is_composed_of_parts_not_mixins() -> None:
+    from ecattool.sim.drive import Drive
+
+    assert Drive.__mro__ == (Drive, object), f"Drive inherits {Drive.__mro__[1:-1]}: hold the part instead"
+    found = drive_part_inheritance(_trees())
+    assert not found, ("a class of the drive application inherits another of its parts: give it the part (or the "
+                       "collaborator it needs) at construction instead:\n" + "\n".join(found))
+    # the parts are there, one object per concern
+    drive = Drive.from_profile("hdt")
+    parts = ("objects", "event_log", "family_part", "pdo", "sdo", "process_data", "state_machine", "motion",
+             "injection", "nonvolatile")
+    assert len({id(getattr(drive, name)) for name in parts}) == len(parts)
+
+
 # --- one target opener, DC resolved once (the claims two tests of tests/project/test_machine.py are named after) ----------
 
 #: the classes that are slave targets, and the constructor methods they have

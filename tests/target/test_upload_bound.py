@@ -44,8 +44,9 @@ def _pysoem(profile: str = "hdt") -> tuple[PysoemTarget, Drive, list[int]]:
 
 def _answer(drive: Drive, index: int, subindex: int, data: bytes) -> None:
     """The drive answers ``data`` to an upload of ``index:subindex`` (a hostile or broken slave)."""
-    real = drive._upload  # type: ignore[attr-defined]
-    drive._upload = lambda i, s: data if (i, s) == (index, subindex) else real(i, s)  # type: ignore[attr-defined]
+    sdo = drive.sdo  # the drive's SDO access part answers the uploads
+    real = sdo._upload
+    sdo._upload = lambda i, s: data if (i, s) == (index, subindex) else real(i, s)  # type: ignore[method-assign]
 
 
 def test_a_typed_read_asks_soem_for_exactly_the_type_size() -> None:

@@ -1,34 +1,23 @@
-"""What the pieces of the drive application share: the object store, the event log, the two ways the drive
-reports (emergencies, refused state changes), and the methods one piece offers the others.
+"""The two parts every other part of the drive application uses: the object store (:class:`ObjectStore`, the
+values and their integer reads and writes) and the event log with the emergencies (:class:`EventLog`); and the
+data they hold (:class:`Store`, :class:`Event`, :class:`Emergency`, the process image :class:`Layout`).
 
-Each piece (:mod:`.sdo`, :mod:`.pdo`, :mod:`.process_data`, :mod:`.esm`, :mod:`.motion`, :mod:`.injection`,
-:mod:`.family`, :mod:`.memory`) is a class over :class:`DriveCore`; :class:`~ecattool.sim.drive.facade.Drive`
-combines them. A piece calls another only through a method declared here (or by subclassing the piece it
-builds on), so every module imports downward: core <- pieces <- facade.
+The other parts (:mod:`.sdo`, :mod:`.pdo`, :mod:`.process_data`, :mod:`.esm`, :mod:`.motion`, :mod:`.injection`,
+:mod:`.family`, :mod:`.memory`) are objects :class:`~ecattool.sim.drive.facade.Drive` holds and wires together
+at construction; none inherits another.
 """
 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable
 from dataclasses import dataclass, field
-from fractions import Fraction
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from ecattool.errors import SdoAbort, StateChangeError
-from ecattool.esi.model import Device, Direction
-from ecattool.od.model import EcState, Entry
+from ecattool.errors import SdoAbort
+from ecattool.esi.model import Direction
+from ecattool.od.model import Entry
 from ecattool.od.types import Kind
-from ecattool.profiles.rules import FamilyRules
-from ecattool.sim import eeprom as ee
-from ecattool.sim.cia402 import Cia402, State
-from ecattool.sim.drive.behaviour import Behaviour
-from ecattool.sim.faults import Faults
-
-if TYPE_CHECKING:
-    from ecattool.sim.drive.plant import Plant
-    from ecattool.sim.drive.supervision_state import Supervision
-from ecattool.sim.units import FACTOR_OBJECTS, Units
+from ecattool.sim.units import FACTOR_OBJECTS
 
 RX, TX = Direction.RX, Direction.TX
 
@@ -108,7 +97,7 @@ class Layout:
         return self._derive()[2]
 
 
-#: what :meth:`DriveCore._put_all` keeps: the keys and the dictionary (and its length) it was made for, and per
+#: what :meth:`ObjectStore.put_all` keeps: the keys and the dictionary (and its length) it was made for, and per
 #: key the dictionary has (its place among the values, key, byte size, mask): the keys of no factor object, then
 #: those of factor objects (stored through the store's version check)
 _PutSlot = tuple[int, tuple[int, int], int, int]
@@ -211,62 +200,27 @@ def _int_codec(e: Entry | None) -> tuple[int, int] | None:
     return (1 << bits) - 1, (1 << (bits - 1)) if e.datatype.kind is Kind.SIGNED else 0
 
 
-class DriveCore:
-    """The state every piece of the drive reads, the store helpers, and the methods pieces offer each other."""
+class ObjectStore:
+    """The object store part: the values by (index, subindex), the dictionary's entries, and the integer reads and
+    writes every other part makes through it (the drive binds :meth:`read_int`, :meth:`put`, :meth:`put_all` as its
+    ``_read_int``, ``_put``, ``_put_all``). A power-on or a reset gives it a new store and dictionary."""
 
-    #: seconds a homing method searches for its switch or index pulse before it reports a homing error
-    #: (the simulated axis has none connected; docs/decisions.md)
-    homing_search_s = Fraction(1)
+    __slots__ = ("store", "entries", "_int_codecs", "_put_plan")
 
-    # -- set at construction (facade) ------------------------------------------------------------
-    device: Device
-    rules: FamilyRules
-    family: str
-    behaviour: Behaviour
-    position: int
-    strict_pdo_length: bool
-    record_events: bool
-    faults: Faults
-    events: list[Event]
-    emergencies: list[Emergency]
-    memory: ee.Memory
-    _seq: int
-    _pdo_known: dict[Direction, set[tuple[int, int, int]]]
-    _fixed: set[int]
-    _pdo_only_set: frozenset[int]
-    _read_only_set: frozenset[int]
-    #: SDO download handlers: True to store the value, False to skip storing it, None when the drive does
-    #: not reply; upload handlers return the bytes; after-write reactions run once the value is stored
-    _handlers_down: dict[int, Callable[[int, bytes, int | None], bool | None]]
-    _handlers_up: dict[int, Callable[[int], bytes]]
-    _after_write: dict[int, Callable[[int, int | None], None]]
-    # -- set at power-on / reset -------------------------------------------------------------------
-    esm: EcState
-    _store: Store
-    _entries: dict[tuple[int, int], Entry]
-    layout: dict[Direction, Layout]
-    cia: Cia402
-    limit_active: bool
-    limit_switches: tuple[bool, bool]
-    homing_warning: bool
-    has_cia402: bool
-    units: Units
-    #: the motor and load between demand and actual values (None: the ideal tracker, actual = demand)
-    plant: "Plant | None"
-    supervision: "Supervision"
-    _demand_before: tuple[int, int]
-    #: the store's version, the mode and the polarity signs at them (:func:`.polarity.target_signs`)
-    _polarity_cache: tuple[int, int, tuple[int, int]] = (0, 0, (1, 1))
+    def __init__(self) -> None:
+        self.store = Store()
+        self.entries: dict[tuple[int, int], Entry] = {}
+        #: :meth:`read_int`'s :func:`_int_codec` per key, for one dictionary (and its length)
+        self._int_codecs: tuple[dict[tuple[int, int], Entry] | None, int,
+                                dict[tuple[int, int], tuple[int, int] | None]] = (None, 0, {})
+        self._put_plan: _PutPlan | None = None
 
-    # ------------------------------------------------------------------------------------------
-    # helpers on the store
-    # ------------------------------------------------------------------------------------------
-    def _read_int(self, index: int, sub: int) -> int | None:
+    def read_int(self, index: int, sub: int) -> int | None:
         key = (index, sub)
-        raw = self._store.get(key)
+        raw = self.store.get(key)
         if raw is None:
             return None
-        entries = self._entries
+        entries = self.entries
         codecs = self._int_codecs
         if codecs[0] is not entries or codecs[1] != len(entries):
             codecs = self._int_codecs = (entries, len(entries), {})
@@ -279,24 +233,20 @@ class DriveCore:
         v = int.from_bytes(raw, "little") & mask
         return v - (sign << 1) if v & sign else v
 
-    #: :meth:`_read_int`'s :func:`_int_codec` per key, for one dictionary (and its length)
-    _int_codecs: tuple[dict[tuple[int, int], Entry] | None, int, dict[tuple[int, int], tuple[int, int] | None]] \
-        = (None, 0, {})
-
-    def _put(self, index: int, sub: int, value: int) -> None:
-        e = self._entries.get((index, sub))
+    def put(self, index: int, sub: int, value: int) -> None:
+        e = self.entries.get((index, sub))
         if e is None:
             return
         size = (e.bit_size + 7) >> 3  # Entry.byte_size, without the property call (every cycle, every input)
         # two's complement of a negative value through the mask (signed and unsigned entries alike)
-        self._store[(index, sub)] = (value & ((1 << (size << 3)) - 1)).to_bytes(size, "little")
+        self.store[(index, sub)] = (value & ((1 << (size << 3)) - 1)).to_bytes(size, "little")
 
-    def _put_all(self, keys: tuple[tuple[int, int], ...], values: tuple[int, ...]) -> None:
-        """:meth:`_put` of each key with its value, for the keys stored every cycle: their sizes are looked up
+    def put_all(self, keys: tuple[tuple[int, int], ...], values: tuple[int, ...]) -> None:
+        """:meth:`put` of each key with its value, for the keys stored every cycle: their sizes are looked up
         once per dictionary (and key set), and objects that are no factor objects skip the store's version
         check (there is nothing to renew for them)."""
-        entries = self._entries
-        plan: _PutPlan | None = getattr(self, "_put_plan", None)
+        entries = self.entries
+        plan = self._put_plan
         if plan is None or plan[0] is not keys or plan[1] is not entries or plan[2] != len(entries):
             plain_slots: list[tuple[int, tuple[int, int], int, int]] = []
             factor_slots: list[tuple[int, tuple[int, int], int, int]] = []
@@ -307,7 +257,7 @@ class DriveCore:
                     (factor_slots if key[0] in VERSIONED else plain_slots).append(
                         (at, key, size, (1 << (size << 3)) - 1))
             plan = self._put_plan = (keys, entries, len(entries), tuple(plain_slots), tuple(factor_slots))
-        store = self._store
+        store = self.store
         plain = dict.__setitem__
         held = store.get
         changed = 0
@@ -322,103 +272,51 @@ class DriveCore:
 
     def value(self, index: int, sub: int = 0) -> Any:
         """The decoded value of an entry (no SDO rules, no side effects): for tests and inspection."""
-        e = self._entries.get((index, sub))
-        raw = self._store[(index, sub)]
+        e = self.entries.get((index, sub))
+        raw = self.store[(index, sub)]
         return e.decode(raw) if e is not None and e.datatype is not None else raw
 
-    def _log(self, kind: str, **data: Any) -> None:
-        if self.record_events:
-            self._seq += 1
-            self.events.append(Event(self._seq, kind, data))
 
-    # ------------------------------------------------------------------------------------------
-    # what the drive reports
-    # ------------------------------------------------------------------------------------------
+class EventLog:
+    """The events and emergencies part: what the drive did (:class:`Event`, when ``record_events``) and the
+    EMCY messages it sent, with the error register 1001h and the error history 1003h they set in the object
+    store it is given."""
+
+    __slots__ = ("objects", "events", "emergencies", "record_events", "seq")
+
+    def __init__(self, objects: ObjectStore, record_events: bool = True) -> None:
+        self.objects = objects
+        self.events: list[Event] = []
+        self.emergencies: list[Emergency] = []
+        self.record_events = record_events
+        self.seq = 0
+
+    def log(self, kind: str, **data: Any) -> None:
+        if self.record_events:
+            self.seq += 1
+            self.events.append(Event(self.seq, kind, data))
+
     def emcy(self, code: int, data: bytes = b"") -> Emergency:
         """Send an emergency message (and log it). Also sets 603Fh/1001h where the drive has them."""
-        register = self._read_int(0x1001, 0) or 0
+        objects = self.objects
+        register = objects.read_int(0x1001, 0) or 0
         if code:
             register |= 0x01
             register |= {0x2: 0x02, 0x3: 0x04, 0x4: 0x08, 0x8: 0x10}.get(code >> 12, 0)
-            self._put(0x1001, 0, register)
-        if code and (0x1003, 1) in self._entries:
+            objects.put(0x1001, 0, register)
+        if code and (0x1003, 1) in objects.entries:
             self._push_error_history(code)
         m = Emergency(code, register, bytes(data))
         self.emergencies.append(m)
-        self._log("emcy", code=code, register=register, data=bytes(data).hex())
+        self.log("emcy", code=code, register=register, data=bytes(data).hex())
         return m
 
     def _push_error_history(self, code: int) -> None:
         """1003h: newest error in sub-index 1, older ones shifted down, sub-index 0 = count (CiA-301)."""
-        subs = sorted(s for (i, s) in self._entries if i == 0x1003 and s > 0)
+        objects = self.objects
+        store = objects.store
+        subs = sorted(s for (i, s) in objects.entries if i == 0x1003 and s > 0)
         for s in reversed(subs[1:]):
-            self._store[(0x1003, s)] = self._store[(0x1003, s - 1)]
-        self._put(0x1003, 1, code)
-        self._put(0x1003, 0, min(len(subs), (self._read_int(0x1003, 0) or 0) + 1))
-
-    def _refuse(self, state: EcState, code: int, why: str) -> None:
-        self._log("state_refused", previous=self.esm.value, requested=state.value, al_status=code, reason=why)
-        from ecattool.abort import al_status_text
-
-        # the reason goes with the error, so that commission's text, JSON and HTML reports say why
-        raise StateChangeError(state.value, self.esm.value, code, f"{al_status_text(code)} ({why})")
-
-    # ------------------------------------------------------------------------------------------
-    # what the pieces offer each other (implemented by the piece named)
-    # ------------------------------------------------------------------------------------------
-    def mode(self) -> int:  # motion
-        raise NotImplementedError
-
-    def step(self, cycles: int = 1) -> None:  # motion
-        raise NotImplementedError
-
-    def _cia_moves(self, moves: list[tuple[State, State]], why: str) -> None:  # motion
-        raise NotImplementedError
-
-    def _refresh_inputs(self) -> None:  # motion
-        raise NotImplementedError
-
-    def _user_position(self) -> int:  # motion
-        raise NotImplementedError
-
-    def _home_offset(self) -> int:  # motion
-        raise NotImplementedError
-
-    def option_end_state(self, index: int, option: int, default: str) -> str:  # injection
-        raise NotImplementedError
-
-    def inject_fault(self, code: int, data: bytes = b"") -> None:  # injection
-        raise NotImplementedError
-
-    def motion_error(self, bit: int) -> None:  # injection
-        raise NotImplementedError
-
-    def motion_errors(self) -> int:  # injection
-        raise NotImplementedError
-
-    def fault_reset(self) -> None:  # injection
-        raise NotImplementedError
-
-    def _modes_snapshot(self) -> tuple[object, ...]:  # motion
-        raise NotImplementedError
-
-    def _fall_to_safeop(self, code: int, why: str) -> None:  # esm
-        raise NotImplementedError
-
-    def dc_active(self) -> bool:  # esm
-        raise NotImplementedError
-
-    def _esm_effects(self, previous: EcState, state: EcState) -> None:  # family
-        raise NotImplementedError
-
-    def _check_sm(self, d: Direction) -> Layout:  # process_data
-        raise NotImplementedError
-
-    def _power_loss(self) -> None:  # memory
-        raise NotImplementedError
-
-    def _power_on(self) -> None:  # facade
-        raise NotImplementedError
-
-    def _reset_application(self) -> None:  # facade
-        raise NotImplementedError
+            store[(0x1003, s)] = store[(0x1003, s - 1)]
+        objects.put(0x1003, 1, code)
+        objects.put(0x1003, 0, min(len(subs), (objects.read_int(0x1003, 0) or 0) + 1))

@@ -11,26 +11,30 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Literal
 
+from collections.abc import Callable
+from fractions import Fraction
+from typing import Any, Literal
+
 from ecattool.esi.model import Device, Direction, Identity
 from ecattool.od.model import EcState, Entry
 from ecattool.profiles.rules import FamilyRules
 from ecattool.sim import eeprom as ee
-from ecattool.sim.cia402 import Cia402
-from ecattool.sim.drive.behaviour import BEHAVIOURS
-from ecattool.sim.drive.core import RX, TX, Layout, Store
+from ecattool.sim.cia402 import Cia402, State
+from ecattool.sim.drive.core import RX, TX, Emergency, Event, EventLog, Layout, ObjectStore, Store
 from ecattool.sim.drive.esm import StateMachine
-from ecattool.sim.drive.family import FamilyQuirks
+from ecattool.sim.drive.family import Family
 from ecattool.sim.drive.injection import Injection
 from ecattool.sim.drive.memory import Memory
 from ecattool.sim.drive.mode_parts import ModeParts
 from ecattool.sim.drive.motion import Motion
-from ecattool.sim.drive.plant import Plant, PlantParams, plant_for
+from ecattool.sim.drive.pdo import PdoConfig
+from ecattool.sim.drive.plant import Plant, PlantParams
 from ecattool.sim.drive.plant_step import counts_per_rev
 from ecattool.sim.drive.process_data import ProcessData
 from ecattool.sim.drive.supervision_state import Supervision
 from ecattool.sim.drive.sdo import SdoServer
 from ecattool.sim.faults import Faults
-from ecattool.sim.units import units_for
+from ecattool.sim.units import Units, units_for
 
 
 #: the torque limits of CiA-402 (per mille of the rated torque 6076h)
@@ -57,8 +61,39 @@ def _standard_entry(sub: int, bits: int, d: Direction) -> Entry:
                  access=RO)
 
 
-class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirks, Memory):
-    """A simulated EtherCAT CoE slave (a servo drive when its dictionary has the CiA-402 objects)."""
+class Drive:
+    """A simulated EtherCAT CoE slave (a servo drive when its dictionary has the CiA-402 objects).
+
+    A facade over the parts of the drive application, each an object built and wired together here (none inherits
+    another): the object store (:class:`~.core.ObjectStore`), the event log and emergencies
+    (:class:`~.core.EventLog`), the family (:class:`~.family.Family`, chosen once from the family's data), the PDO
+    configuration (:class:`~.pdo.PdoConfig`), SDO access (:class:`~.sdo.SdoServer`), the process data
+    (:class:`~.process_data.ProcessData`), the ESM (:class:`~.esm.StateMachine`), the CiA-402 device control and
+    motion (:class:`~.motion.Motion`, with the mode parts, the profile generators of :class:`~ecattool.sim.cia402.
+    Cia402`, the plant and the supervision), faults and inputs (:class:`~.injection.Injection`) and the memory
+    (:class:`~.memory.Memory`). The drive holds the state the parts share, which a power-on or a reset renews:
+    the ESM state, the CiA-402 model, the mode parts, the plant, the unit conversions, the process image layout."""
+
+    #: seconds a homing method searches for its switch or index pulse before it reports a homing error
+    #: (the simulated axis has none connected; docs/decisions.md)
+    homing_search_s = Fraction(1)
+
+    # -- the state the parts share, renewed at power-on / reset ------------------------------------
+    esm: EcState
+    layout: dict[Direction, Layout]
+    cia: Cia402
+    modes: ModeParts
+    limit_active: bool
+    limit_switches: tuple[bool, bool]
+    homing_warning: bool
+    has_cia402: bool
+    units: Units
+    #: the motor and load between demand and actual values (None: the ideal tracker, actual = demand)
+    plant: Plant | None
+    supervision: Supervision
+    _demand_before: tuple[int, int]
+    #: the store's version, the mode and the polarity signs at them (:func:`.polarity.target_signs`)
+    _polarity_cache: tuple[int, int, tuple[int, int]] = (0, 0, (1, 1))
 
     def __init__(self, device: Device, rules: FamilyRules | None = None, *, position: int = 0,
                  strict_pdo_length: bool = True, record_events: bool = True,
@@ -66,28 +101,46 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         """``plant``: the motor and load between demand and actual values (None: the family's default plant,
         :func:`~ecattool.sim.drive.plant.plant_for`; ``"ideal"``: none, the actual values are the demand)."""
         self.device = device
-        self.rules = rules if rules is not None else _rules_for(device)
-        self.family = self.rules.family if self.rules.family in BEHAVIOURS else "generic"
-        self.behaviour = BEHAVIOURS[self.family]
         self.position = position
         self.strict_pdo_length = strict_pdo_length
-        self.record_events = record_events
         self.faults = Faults()
-        self._plant_params = self._params_of(plant)
-        self.events = []
-        self.emergencies = []
         self.memory = ee.Memory()
-        self._seq = 0
-        self._pdo_known = self._known_pdo_entries()
+        # the parts, each given what it works with
+        self.objects = objects = ObjectStore()
+        self.event_log = log = EventLog(objects, record_events)
+        self.family_part = family = Family(self, rules if rules is not None else _rules_for(device))
+        self.rules: FamilyRules = family.rules
+        self.family: str = family.name
+        self.behaviour = family.behaviour
+        self.pdo = PdoConfig(self)
+        self.sdo = SdoServer(self, self.pdo)
+        self.process_data = ProcessData(self, self.pdo)
+        self.state_machine = StateMachine(self)
+        self.motion = motion = Motion(self)
+        self.injection = Injection(self)
+        self.nonvolatile = Memory(self)
+        # what every part calls on the others, bound once (the cycle calls them without a facade in between)
+        self._read_int: Callable[[int, int], int | None] = objects.read_int
+        self._put: Callable[[int, int, int], None] = objects.put
+        self._put_all: Callable[[tuple[tuple[int, int], ...], tuple[int, ...]], None] = objects.put_all
+        self._log: Callable[..., None] = log.log
+        self._refresh_inputs: Callable[..., None] = motion._refresh_inputs
+        self._cia_moves: Callable[[list[tuple[State, State]], str], None] = motion._cia_moves
+        self._home_offset: Callable[[], int] = motion._home_offset
+        self._user_position: Callable[[], int] = motion._user_position
+        self._plant_params = self._params_of(plant)
+        self._pdo_known = self.pdo.known_entries()
         self._fixed = {p.index for p in (*device.rx_pdos, *device.tx_pdos) if p.fixed}
         self._pdo_only_set = self.rules.pdo_only_indices
         self._read_only_set = self.rules.read_only_indices
-        self._handlers_down = {}
-        self._handlers_up = {}
-        self._after_write = {}
-        self._install_motion_handlers()
-        self._install_family_handlers()
-        self._install_memory_handlers()
+        #: SDO download handlers: True to store the value, False to skip storing it, None when the drive does
+        #: not reply; upload handlers return the bytes; after-write reactions run once the value is stored
+        self._handlers_down: dict[int, Callable[[int, bytes, int | None], bool | None]] = {}
+        self._handlers_up: dict[int, Callable[[int], bytes]] = {}
+        self._after_write: dict[int, Callable[[int, int | None], None]] = {}
+        motion.install_handlers()
+        family.install_handlers()
+        self.nonvolatile.install_handlers()
         self._power_on()
 
     # ------------------------------------------------------------------------------------------
@@ -127,24 +180,25 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
     def _reset_application(self) -> None:
         """Dictionary to defaults, PDO configuration from the device description, CiA-402 restarted."""
         d = self.device
-        self._store = Store()
-        self._entries = {}
+        store = self.objects.store = Store()
+        entries: dict[tuple[int, int], Entry] = {}
+        self.objects.entries = entries
         for obj in d.dictionary:
             for e in obj.entries.values():
-                self._entries[(obj.index, e.subindex)] = e
-                self._store[(obj.index, e.subindex)] = self._default_bytes(e)
+                entries[(obj.index, e.subindex)] = e
+                store[(obj.index, e.subindex)] = self._default_bytes(e)
         for direction, dset in self._pdo_known.items():
             for idx, sub, bits in dset:
-                self._store.setdefault((idx, sub), b"\x00" * ((bits + 7) // 8))
-                if 0x1000 <= idx <= 0x1FFF and (idx, sub) not in self._entries:
+                store.setdefault((idx, sub), b"\x00" * ((bits + 7) // 8))
+                if 0x1000 <= idx <= 0x1FFF and (idx, sub) not in entries:
                     # a communication object the ESI's dictionary leaves out but its PDO list maps (a TxPDO's
                     # state and toggle 1800h:07/09, 1C32h:20h sync error): the slave has it, by SDO too
-                    self._entries[(idx, sub)] = _standard_entry(sub, bits, direction)
+                    entries[(idx, sub)] = _standard_entry(sub, bits, direction)
         self._identity_defaults()
-        self._encoder_resolution()
-        self._pdo_defaults()
+        self.family_part.report_encoder_resolution()
+        self.pdo.defaults()
         self.memory.reset()
-        self._sync_memory_objects()
+        self.nonvolatile.sync_objects()
         self.layout = {RX: Layout(), TX: Layout()}
         self.cia = Cia402(enable_needs_op=self.behaviour.enable_needs_op,
                           supply_bit_always=self.behaviour.supply_bit_always)
@@ -152,11 +206,11 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
         self.limit_active = False
         self.limit_switches = (False, False)  # (negative, positive) inputs, set_limit_switches()
         self.homing_warning = False  # Technosoft statusword bit 7 (homing start ignored)
-        self.has_cia402 = (0x6040, 0) in self._entries and (0x6041, 0) in self._entries
+        self.has_cia402 = (0x6040, 0) in entries and (0x6041, 0) in entries
         self.units = units_for(self.behaviour.units, self._read_int, revision=d.revision,
                              has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
-        self.units.version = lambda: self._store.version
-        if not self.behaviour.mode_display_on_enable and (0x6061, 0) in self._entries:
+        self.units.version = lambda: store.version
+        if not self.behaviour.mode_display_on_enable and (0x6061, 0) in entries:
             # 6061h shows the mode 6060h selects from power-on (HDT §4.02.2, CT Table 7.16: 6060h = 2 by
             # default, and that mode is the one the drive runs)
             self._put(0x6061, 0, self._read_int(0x6060, 0) or 0)
@@ -187,7 +241,7 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
             return
         limit = plant.params.peak_torque
         for index in _TORQUE_LIMITS:
-            raw = self._read_int(index, 0) if (index, 0) in self._entries else None
+            raw = self._read_int(index, 0) if (index, 0) in self.objects.entries else None
             if raw:
                 limit = min(limit, abs(raw) / 1000 * plant.params.rated_torque)
         plant.torque_limit = limit
@@ -202,7 +256,7 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
     def _params_of(self, plant: PlantParams | Literal["ideal"] | None) -> PlantParams | None:
         if plant == "ideal":
             return None
-        return plant if isinstance(plant, PlantParams) else plant_for(self.family)
+        return plant if isinstance(plant, PlantParams) else self.family_part.default_plant
 
     @property
     def plant_params(self) -> PlantParams | None:
@@ -221,12 +275,224 @@ class Drive(SdoServer, ProcessData, StateMachine, Motion, Injection, FamilyQuirk
     def _identity_defaults(self) -> None:
         ident = self.device.identity
         for sub, value in ((1, ident.vendor_id), (2, ident.product_code), (3, ident.revision), (4, ident.serial)):
-            e = self._entries.get((0x1018, sub))
+            e = self.objects.entries.get((0x1018, sub))
             if e is not None and e.default is None and e.byte_size == 4:
-                self._store[(0x1018, sub)] = value.to_bytes(4, "little")
+                self.objects.store[(0x1018, sub)] = value.to_bytes(4, "little")
 
     # ------------------------------------------------------------------------------------------
     # SlaveTarget
     # ------------------------------------------------------------------------------------------
     def identity(self) -> Identity:
         return self.device.identity
+
+    # ------------------------------------------------------------------------------------------
+    # the parts' public API, and the drive's shared state as the tests and tools read it
+    # ------------------------------------------------------------------------------------------
+    @property
+    def _store(self) -> Store:
+        return self.objects.store
+
+    @_store.setter
+    def _store(self, store: Store) -> None:
+        self.objects.store = store
+
+    @property
+    def _entries(self) -> dict[tuple[int, int], Entry]:
+        return self.objects.entries
+
+    def value(self, index: int, sub: int = 0) -> Any:
+        """The decoded value of an entry (no SDO rules, no side effects): for tests and inspection."""
+        return self.objects.value(index, sub)
+
+    @property
+    def events(self) -> list[Event]:
+        return self.event_log.events
+
+    @property
+    def emergencies(self) -> list[Emergency]:
+        return self.event_log.emergencies
+
+    @property
+    def record_events(self) -> bool:
+        return self.event_log.record_events
+
+    @record_events.setter
+    def record_events(self, on: bool) -> None:
+        self.event_log.record_events = on
+
+    def emcy(self, code: int, data: bytes = b"") -> Emergency:
+        """Send an emergency message (and log it). Also sets 603Fh/1001h where the drive has them."""
+        return self.event_log.emcy(code, data)
+
+    # SDO access
+    def sdo_upload(self, index: int, subindex: int, complete_access: bool = False, size: int | None = None) -> bytes:
+        """:meth:`.sdo.SdoServer.sdo_upload`."""
+        return self.sdo.sdo_upload(index, subindex, complete_access, size)
+
+    def sdo_download(self, index: int, subindex: int, data: bytes, complete_access: bool = False,
+                     expect_reply: bool = True) -> None:
+        """:meth:`.sdo.SdoServer.sdo_download`."""
+        self.sdo.sdo_download(index, subindex, data, complete_access, expect_reply)
+
+    def check_download(self, index: int, subindex: int, complete_access: bool = False) -> None:
+        """:meth:`.sdo.SdoServer.check_download`."""
+        self.sdo.check_download(index, subindex, complete_access)
+
+    def _upload(self, index: int, sub: int) -> bytes:
+        """One entry's upload without the mailbox's logging (the mailbox's segmented transfer reads through it)."""
+        return self.sdo._upload(index, sub)
+
+    def _download(self, index: int, sub: int, data: bytes) -> bool:
+        return self.sdo._download(index, sub, data)
+
+    # PDO configuration
+    def _assigned(self, d: Direction) -> list[int]:
+        return self.pdo._assigned(d)
+
+    def _pdo_entries(self, d: Direction, pdo: int) -> Any:
+        return self.pdo._pdo_entries(d, pdo)
+
+    # process data
+    def process_image_sizes(self) -> tuple[int, int]:
+        """(output bytes, input bytes) of the current layout (valid from SAFE-OP on)."""
+        return self.process_data.process_image_sizes()
+
+    def exchange(self, outputs: bytes) -> bytes:
+        """:meth:`.process_data.ProcessData.exchange`: one cycle."""
+        return self.process_data.exchange(outputs)
+
+    def _pack_inputs(self) -> bytes:
+        return self.process_data._pack_inputs()
+
+    @property
+    def _quiet(self) -> tuple[bytes, tuple[object, ...] | None, bytes] | None:
+        return self.process_data._quiet
+
+    @_quiet.setter
+    def _quiet(self, quiet: tuple[bytes, tuple[object, ...] | None, bytes] | None) -> None:
+        self.process_data._quiet = quiet
+
+    # ESM
+    def state(self) -> EcState:
+        return self.esm
+
+    def request_state(self, state: EcState) -> None:
+        """:meth:`.esm.StateMachine.request_state`."""
+        self.state_machine.request_state(state)
+
+    def dc_active(self) -> bool:
+        return self.state_machine.dc_active()
+
+    def configure_dc(self, assign_activate: int, sync0_cycle_ns: int = 0, sync0_shift_ns: int = 0) -> None:
+        """:meth:`.esm.StateMachine.configure_dc`."""
+        self.state_machine.configure_dc(assign_activate, sync0_cycle_ns, sync0_shift_ns)
+
+    @property
+    def dc(self) -> tuple[int, int]:
+        """(DC activation, SYNC0 cycle ns) as the master configured them."""
+        return self.state_machine.dc
+
+    @property
+    def dc_shift_ns(self) -> int:
+        return self.state_machine.dc_shift_ns
+
+    # CiA-402 and motion
+    def cycle_time(self) -> Fraction:
+        """:meth:`.motion.Motion.cycle_time`."""
+        return self.motion.cycle_time()
+
+    def cycle_ns(self) -> int:
+        """:meth:`.motion.Motion.cycle_ns`."""
+        return self.motion.cycle_ns()
+
+    def mode(self) -> int:
+        """The mode the drive runs (6061h, else 6060h)."""
+        return self.motion.mode()
+
+    def step(self, cycles: int = 1) -> None:
+        """Advance the motion model by ``cycles`` process-data cycles (see :meth:`cycle_time`)."""
+        self.motion.step(cycles)
+
+    @property
+    def internal_position(self) -> int:
+        """Position in the drive's internal units (increments), truncated as the drive stores it."""
+        return self.motion.internal_position
+
+    @property
+    def internal_velocity(self) -> int:
+        """Velocity in internal units (Technosoft: 16.16 increments per slow-loop sample)."""
+        return self.motion.internal_velocity
+
+    @property
+    def cia402_state(self) -> State:
+        return self.cia.state
+
+    # faults and inputs
+    def motion_error(self, bit: int) -> None:
+        self.injection.motion_error(bit)
+
+    def motion_errors(self) -> int:
+        return self.injection.motion_errors()
+
+    def fault_reset(self) -> None:
+        self.injection.fault_reset()
+
+    def inject_fault(self, code: int, data: bytes = b"") -> None:
+        """:meth:`.injection.Injection.inject_fault`."""
+        self.injection.inject_fault(code, data)
+
+    def lose_communication(self) -> None:
+        """:meth:`.injection.Injection.lose_communication`."""
+        self.injection.lose_communication()
+
+    def set_motor_supply(self, present: bool) -> None:
+        """:meth:`.injection.Injection.set_motor_supply`."""
+        self.injection.set_motor_supply(present)
+
+    def option_end_state(self, index: int, option: int, default: str) -> str:
+        return self.injection.option_end_state(index, option, default)
+
+    def set_limit_switches(self, *, negative: bool = False, positive: bool = False) -> None:
+        """:meth:`.injection.Injection.set_limit_switches`."""
+        self.injection.set_limit_switches(negative=negative, positive=positive)
+
+    def set_load_torque(self, torque: float) -> None:
+        """:meth:`.injection.Injection.set_load_torque`."""
+        self.injection.set_load_torque(torque)
+
+    def set_obstacle(self, position: int | None) -> None:
+        """:meth:`.injection.Injection.set_obstacle`."""
+        self.injection.set_obstacle(position)
+
+    def inject_hdt_alarm(self, alarm: int, code: int) -> None:
+        """:meth:`.injection.Injection.inject_hdt_alarm`."""
+        self.injection.inject_hdt_alarm(alarm, code)
+
+    def inject_trip(self, trip: int) -> None:
+        """:meth:`.injection.Injection.inject_trip`."""
+        self.injection.inject_trip(trip)
+
+    # the family
+    def set_encoder_resolution(self, increments: int, revolutions: int = 1) -> None:
+        """:meth:`.family.Family.set_encoder_resolution`."""
+        self.family_part.set_encoder_resolution(increments, revolutions)
+
+    # memory
+    def reset(self) -> None:
+        """:meth:`.memory.Memory.reset`: 2080h, the drive (not its EtherCAT interface) restarts."""
+        self.nonvolatile.reset()
+
+    def power_cycle(self) -> None:
+        """Switch the drive off and on: ESM back to INIT, RAM lost, EEPROM kept."""
+        self.nonvolatile.power_cycle()
+
+    def eeprom_words(self, start: int, count: int) -> list[int]:
+        return self.nonvolatile.eeprom_words(start, count)
+
+    def foe_accepts(self, name: str, password: int) -> bool:
+        """:meth:`.memory.Memory.foe_accepts`."""
+        return self.nonvolatile.foe_accepts(name, password)
+
+    def foe_write(self, name: str, data: bytes, password: int = 0) -> None:
+        """:meth:`.memory.Memory.foe_write`."""
+        self.nonvolatile.foe_write(name, data, password)

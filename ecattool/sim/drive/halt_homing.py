@@ -34,7 +34,8 @@ from ecattool.sim.drive.velocity_mode import counts_per_rev
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.behaviour import Behaviour
-    from ecattool.sim.drive.core import DriveCore
+    from ecattool.sim.drive.family import Family
+    from ecattool.sim.drive.facade import Drive
 
 HOMING_START = 0x0010  # controlword bit 4 in homing mode
 #: the modes a halt ramps down with a deceleration (the others stop within the cycle)
@@ -60,16 +61,16 @@ def reserved_method(behaviour: Behaviour, method: int) -> bool:
     return behaviour.homing_reserved_refused and method in _RESERVED
 
 
-def homing_kind(family: str, behaviour: Behaviour, method: int) -> str:
+def homing_kind(family: Family, method: int) -> str:
     """What a homing start does with ``method``: "current" (home here), "power_on" (HDT 0: the power-on
     zero is home), "none" (0: no homing is executed), "search" (needs a switch or index pulse) or
     "unavailable" (Technosoft EMCY FF03h; generic: a reserved method). The method tables are data per family
-    (:data:`CURRENT_POSITION`, :data:`SEARCH`)."""
-    if method in CURRENT_POSITION.get(family, CURRENT_POSITION["generic"]):
+    (:data:`CURRENT_POSITION`, :data:`SEARCH`), chosen once with the family (:class:`~.family.Family`)."""
+    if method in family.homing_current:
         return "current"
     if method == 0:
-        return "power_on" if behaviour.homing_zero_is_power_on else "none"
-    methods = SEARCH.get(family)
+        return "power_on" if family.behaviour.homing_zero_is_power_on else "none"
+    methods = family.homing_search
     if methods is None:  # generic CiA-402: 1..34 standard, negative = manufacturer specific
         return "unavailable" if method in _RESERVED or method == 36 or method > 37 else "search"
     return "search" if method in methods else "unavailable"
@@ -93,13 +94,13 @@ def search_direction(method: int) -> tuple[int, int]:
 
 
 # --- halt ---------------------------------------------------------------------------------------------
-def halt_option(drive: DriveCore) -> int:
+def halt_option(drive: Drive) -> int:
     """605Dh, or the CiA-402 default 1 where the drive has no such object."""
-    value = drive._read_int(0x605D, 0) if (0x605D, 0) in drive._entries else None
+    value = drive._read_int(0x605D, 0) if (0x605D, 0) in drive.objects.entries else None
     return 1 if value is None else value
 
 
-def halt_deceleration(drive: DriveCore, option: int | None = None) -> Fraction | None:
+def halt_deceleration(drive: Drive, option: int | None = None) -> Fraction | None:
     """The ramp a halt uses in profile velocity, in increments per second² (None: stop within the cycle);
     ``option`` 1 slow-down ramp, 2 quick-stop ramp (default: 605Dh)."""
     option = halt_option(drive) if option is None else option
@@ -116,13 +117,13 @@ def halt_deceleration(drive: DriveCore, option: int | None = None) -> Fraction |
     elif option in (3, 4):
         return None  # current / voltage limit: the model has no torque, the axis stops within the cycle
     else:
-        index = 0x6085 if option == 2 else (0x6084 if (0x6084, 0) in drive._entries else 0x6083)
+        index = 0x6085 if option == 2 else (0x6084 if (0x6084, 0) in drive.objects.entries else 0x6083)
     u = drive.units
     return abs(u.increments_per_second2(u.acceleration_to_internal(read(index, 0) or 0)))
 
 
 # --- controlword and mode reactions -------------------------------------------------------------------
-def on_controlword(drive: DriveCore, cw: int, prev: int) -> None:
+def on_controlword(drive: Drive, cw: int, prev: int) -> None:
     """Halt and homing reactions to a controlword, after the state machine has moved."""
     cia = drive.cia
     if (cw ^ prev) & HALT:
@@ -143,17 +144,17 @@ def on_controlword(drive: DriveCore, cw: int, prev: int) -> None:
         drive._log("homing", event="interrupted", reason="controlword bit 4 cleared")
 
 
-def on_mode(drive: DriveCore) -> None:
+def on_mode(drive: Drive) -> None:
     if drive.cia.homing is Homing.IN_PROGRESS and drive.mode() != HOMING:
         drive.cia.interrupt_homing()
         drive._log("homing", event="interrupted", reason=f"mode changed to {drive.mode()}")
 
 
-def start_homing(drive: DriveCore) -> None:
+def start_homing(drive: Drive) -> None:
     cia = drive.cia
-    method = drive._read_int(0x6098, 0) if (0x6098, 0) in drive._entries else 0
+    method = drive._read_int(0x6098, 0) if (0x6098, 0) in drive.objects.entries else 0
     method = method or 0
-    kind = homing_kind(drive.family, drive.behaviour, method)
+    kind = homing_kind(drive.family_part, method)
     enabled = cia.state is State.OPERATION_ENABLED
     outside = kind == "current" and drive.behaviour.homing_current_outside_enabled and \
         cia.state in (State.READY, State.SWITCHED_ON)
@@ -166,7 +167,7 @@ def start_homing(drive: DriveCore) -> None:
     drive.homing_warning = False
     drive._log("homing", event="start", method=method, procedure=kind, state=cia.state.value)
     # the search speeds up with the homing acceleration 609Ah (CiA-402; every family's manual lists it)
-    if (0x609A, 0) in drive._entries:
+    if (0x609A, 0) in drive.objects.entries:
         u = drive.units
         cia.homing_acceleration = abs(u.increments_per_second2(
             u.acceleration_to_internal(drive._read_int(0x609A, 0) or 0))) or None
@@ -193,23 +194,23 @@ def start_homing(drive: DriveCore) -> None:
     drive._log("homing", event="attained", method=method, position=drive._user_position())
 
 
-def _speed(drive: DriveCore, sub: int) -> Fraction:
+def _speed(drive: Drive, sub: int) -> Fraction:
     """Homing speed 6099h:``sub`` (1 switch search, 2 zero search) in internal velocity units."""
     return abs(drive.units.velocity_to_internal(drive._read_int(0x6099, sub) or 0))
 
 
-def _on_its_switch(drive: DriveCore, method: int) -> bool:
+def _on_its_switch(drive: Drive, method: int) -> bool:
     negative = LIMIT_SWITCH_METHODS.get(method)
     if negative is None:
         return False
     return drive.limit_switches[0 if negative else 1]
 
 
-def on_limit_switches(drive: DriveCore) -> None:
+def on_limit_switches(drive: Drive) -> None:
     """The limit-switch inputs changed: a limit-switch homing search finds the switch, leaves it at the zero
     search speed, and homes where it becomes inactive (17/18) or then looks for an index pulse (1/2)."""
     cia = drive.cia
-    method = drive._read_int(0x6098, 0) if (0x6098, 0) in drive._entries else None
+    method = drive._read_int(0x6098, 0) if (0x6098, 0) in drive.objects.entries else None
     if cia.homing is not Homing.IN_PROGRESS or drive.mode() != HOMING or method not in LIMIT_SWITCH_METHODS:
         return
     on_switch = _on_its_switch(drive, method)
@@ -226,18 +227,18 @@ def on_limit_switches(drive: DriveCore) -> None:
             drive._log("homing", event="limit switch left", method=method, position=drive._user_position())
 
 
-def home_position(drive: DriveCore) -> Fraction | None:
+def home_position(drive: Drive) -> Fraction | None:
     """The internal position the home gets: HDT resets the sensor to 0 (6064h = 0 + 607Ch); the others set
     6064h to 607Ch, except Technosoft with 210Bh bit 12 = 1 (position kept, §6.3.3)."""
     if drive.behaviour.home_offset_continuous:
         return Fraction(0)
     if drive.behaviour.home_keeps_position_bit and (drive._read_int(0x210B, 0) or 0) & 0x1000:
         return None
-    offset = drive._read_int(0x607C, 0) if (0x607C, 0) in drive._entries else 0
+    offset = drive._read_int(0x607C, 0) if (0x607C, 0) in drive.objects.entries else 0
     return drive.units.position_to_internal(offset or 0)
 
 
-def after_step(drive: DriveCore, before: Homing) -> None:
+def after_step(drive: Drive, before: Homing) -> None:
     """Log and signal a homing search that ended in this step (no switch or index pulse was found)."""
     if before is Homing.IN_PROGRESS and drive.cia.homing is Homing.ERROR:
         drive._log("homing", event="error", method=drive._read_int(0x6098, 0),
@@ -247,12 +248,12 @@ def after_step(drive: DriveCore, before: Homing) -> None:
             drive.emcy(code, drive.behaviour.homing_error_emcy_data)
 
 
-def check_method(drive: DriveCore, sub: int, value: int) -> None:
+def check_method(drive: Drive, sub: int, value: int) -> None:
     if reserved_method(drive.behaviour, value):
         raise SdoAbort(0x6098, sub, A.INVALID_VALUE)
 
 
-def halt_decel_for_step(drive: DriveCore, mode: int) -> Fraction | None:
+def halt_decel_for_step(drive: Drive, mode: int) -> Fraction | None:
     """The ramp a halt uses in the mode (increments/s²): profile velocity the option code's (see
     :func:`halt_deceleration`); profile position the slow-down ramp of the mode (HDT §4.07: 6084h; Technosoft
     §4.4.10: 6083h, or 6085h for option 2); a homing search the homing acceleration 609Ah; CSP and CSV the option
@@ -270,16 +271,16 @@ def halt_decel_for_step(drive: DriveCore, mode: int) -> Fraction | None:
     return halt_deceleration(drive)
 
 
-def quick_stop_option(drive: DriveCore) -> int:
+def quick_stop_option(drive: Drive) -> int:
     """The quick stop option code 605Ah a quick stop follows: 0-8 as stored (CiA-402 meanings; a family whose
     manual leaves 3, 4, 7 or 8 out refuses them by its value list — HDT, Control Techniques Table 7.9 — or
     stores them as reserved — Technosoft §4.4.7 — and then they act as CiA-402 defines them); a drive without
     605Ah, and any other (manufacturer-specific or reserved) value, acts as the default 2."""
-    value = drive._read_int(0x605A, 0) if (0x605A, 0) in drive._entries else None
+    value = drive._read_int(0x605A, 0) if (0x605A, 0) in drive.objects.entries else None
     return value if value is not None and 0 <= value <= 8 else 2
 
 
-def quick_stop_ramp(drive: DriveCore, option: int) -> Fraction | None:
+def quick_stop_ramp(drive: Drive, option: int) -> Fraction | None:
     """The ramp of QUICK STOP ACTIVE for quick stop option code ``option`` (605Ah), increments/s²; None where the
     drive function is disabled at once (0). 1 and 5 the slow-down ramp, 2 and 6 the quick-stop ramp, each as the
     family's manual names them (:func:`halt_deceleration`: Technosoft §4.4.7 6083h / 6085h, HDT §4.03.6 604Eh
@@ -295,7 +296,7 @@ def quick_stop_ramp(drive: DriveCore, option: int) -> Fraction | None:
     return halt_deceleration(drive, 1 if option in (1, 5) else 2)
 
 
-def vl_ramp(drive: DriveCore, index: int) -> Fraction | None:
+def vl_ramp(drive: Drive, index: int) -> Fraction | None:
     """A vl ramp record (delta speed in 6042h units, delta time in s) in increments/s²; None: delta time 0 or no
     known increments per revolution (the axis stops within the cycle)."""
     speed, time = drive._read_int(index, 1), drive._read_int(index, 2)
@@ -307,7 +308,7 @@ def vl_ramp(drive: DriveCore, index: int) -> Fraction | None:
     return Fraction(speed or 0, time) * dimension * cpr / 60
 
 
-def fault_reaction_ramp(drive: DriveCore, code: int) -> Fraction | None:
+def fault_reaction_ramp(drive: Drive, code: int) -> Fraction | None:
     """The ramp a fault with error code ``code`` stops the axis with before FAULT (605Eh), increments/s²; None:
     FAULT at once. Only the faults the family's manual gives a reaction (``Behaviour.fault_reaction_codes``:
     Technosoft §4.4.11's non-fatal errors, HDT §4.03.10's alarm table; Control Techniques 7.3.5 "ignored if the
@@ -316,7 +317,7 @@ def fault_reaction_ramp(drive: DriveCore, code: int) -> Fraction | None:
     current / voltage limit) the quick-stop ramp as a stand-in; Technosoft's −1 "no action" and other values:
     FAULT at once."""
     codes = drive.behaviour.fault_reaction_codes
-    if (0x605E, 0) not in drive._entries or (codes is not None and code not in codes):
+    if (0x605E, 0) not in drive.objects.entries or (codes is not None and code not in codes):
         return None
     option = drive._read_int(0x605E, 0)
     if option not in (1, 2, 3, 4):
@@ -329,7 +330,7 @@ def fault_reaction_ramp(drive: DriveCore, code: int) -> Fraction | None:
 _DISABLE_OPTION = {State.READY: 0x605B, State.SWITCHED_ON: 0x605C, State.SWITCH_ON_DISABLED: 0x605C}
 
 
-def disable_option(drive: DriveCore, to: State) -> int | None:
+def disable_option(drive: Drive, to: State) -> int | None:
     """The option code (605Bh / 605Ch) a transition from OPERATION ENABLED to ``to`` follows; None: the drive has
     no such object (HDT) or the transition reads none (Disable Voltage, CiA-402 transition 9, disables at once).
     The value is the stored one: its power-on default is the family's profile data (Technosoft §4.4.8/§4.4.9:
@@ -337,12 +338,12 @@ def disable_option(drive: DriveCore, to: State) -> int | None:
     if to is State.SWITCH_ON_DISABLED and not drive.behaviour.disable_voltage_uses_605c:
         return None
     index = _DISABLE_OPTION.get(to)
-    if index is None or (index, 0) not in drive._entries:
+    if index is None or (index, 0) not in drive.objects.entries:
         return None
     return drive._read_int(index, 0)
 
 
-def disable_ramp(drive: DriveCore, to: State) -> Fraction | None:
+def disable_ramp(drive: Drive, to: State) -> Fraction | None:
     """The ramp (increments/s²) the axis slows down with before the transition from OPERATION ENABLED to ``to``;
     None: the drive function is disabled at once (option code 0, the manufacturer-specific and reserved codes, a
     drive without the object). Option code 1 "slow down with slow down ramp; disable the drive function"

@@ -4,57 +4,69 @@ lost communication, limit-switch inputs."""
 from __future__ import annotations
 
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from ecattool.abort import AlStatus
 from ecattool.od.model import EcState
 from ecattool.sim.cia402 import State
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.behaviour import CT_TRIP_CODES
-from ecattool.sim.drive.core import DriveCore
+
+if TYPE_CHECKING:
+    from ecattool.sim.drive.facade import Drive
 
 
-class Injection(DriveCore):
-    """Faults, communication loss and inputs, with the reactions the family's rules give them."""
+class Injection:
+    """The faults part: faults, communication loss and inputs, with the reactions the family's rules give them,
+    and the error registers they latch."""
 
-    #: Motion Error Register bits latched by errors until a Fault Reset (the limit-switch bits are live)
-    _motion_errors = 0
-    #: the alarms present (HDT: the bitmap of the EMCY's bytes 3..6), until a Fault Reset
-    _alarms = 0
+    __slots__ = ("drive", "_motion_errors", "_alarms")
+
+    def __init__(self, drive: Drive) -> None:
+        self.drive = drive
+        #: Motion Error Register bits latched by errors until a Fault Reset (the limit-switch bits are live)
+        self._motion_errors = 0
+        #: the alarms present (HDT: the bitmap of the EMCY's bytes 3..6), until a Fault Reset
+        self._alarms = 0
 
     def motion_error(self, bit: int) -> None:
         """An error sets bit ``bit`` of the family's Motion Error Register (Technosoft 2000h)."""
-        if self.behaviour.motion_error_register is not None:
+        drive = self.drive
+        if drive.behaviour.motion_error_register is not None:
             self._motion_errors |= 1 << bit
 
     def motion_errors(self) -> int:
         """The Motion Error Register: the latched bits, and the limit switches (Technosoft Table 4.4.2: bit 7
         negative, bit 6 positive limit switch active, "Reset when ... inactive")."""
-        negative, positive = self.limit_switches
+        drive = self.drive
+        negative, positive = drive.limit_switches
         return self._motion_errors | (0x80 if negative else 0) | (0x40 if positive else 0)
 
     def fault_reset(self) -> None:
         """A Fault Reset has taken the drive out of FAULT: the error register 1001h is cleared, the "error reset"
         EMCY 0000h sent, the Motion Error Register's latched bits cleared but "invalid setup data" (bit 2)."""
+        drive = self.drive
         self._alarms = 0
-        if not self.behaviour.error_reset_emcy:
+        if not drive.behaviour.error_reset_emcy:
             return
-        self._put(0x1001, 0, 0)
+        drive._put(0x1001, 0, 0)
         self._motion_errors &= 1 << 2
-        self.emcy(0x0000)
+        drive.emcy(0x0000)
 
     def inject_fault(self, code: int, data: bytes = b"") -> None:
         """A drive fault: FAULT REACTION ACTIVE -> FAULT, 603Fh = code, EMCY with the code (and, where the family
         sends one and ``data`` is not given, the bitmap of the alarms present: HDT §2.04.1)."""
-        for error, bit in self.behaviour.motion_error_bits:
+        drive = self.drive
+        for error, bit in drive.behaviour.motion_error_bits:
             if error == code:
                 self.motion_error(bit)
         if not data:
-            for error, bit in self.behaviour.alarm_bits:
+            for error, bit in drive.behaviour.alarm_bits:
                 if error == code:
                     data = self._alarm(bit)
-        self._cia_moves(self.cia.fault(code, hh.fault_reaction_ramp(self, code)), f"fault 0x{code:04X}")
-        self.emcy(code, data)
-        self._refresh_inputs()
+        drive._cia_moves(drive.cia.fault(code, hh.fault_reaction_ramp(drive, code)), f"fault 0x{code:04X}")
+        drive.emcy(code, data)
+        drive._refresh_inputs()
 
     def lose_communication(self) -> None:
         """Fault injection: the process data stops (cable pulled, SM watchdog). The ESM drops from OP to
@@ -62,62 +74,66 @@ class Injection(DriveCore):
         0 no action, 1 fault (EMCY 0x8100), 2 disable voltage, 3 quick stop, unless the family's
         rules say otherwise (HDT 3: quick-stop ramp and stay enabled); Control Techniques always ends in
         SWITCH ON DISABLED (7.3.1)."""
-        if self.esm is EcState.OP:
-            self._log("state", previous="OP", state="SAFEOP", al_status=AlStatus.SM_WATCHDOG,
+        drive = self.drive
+        if drive.esm is EcState.OP:
+            drive._log("state", previous="OP", state="SAFEOP", al_status=AlStatus.SM_WATCHDOG,
                       reason="sync manager watchdog")
-            self.esm = EcState.SAFEOP
-            self._esm_effects(EcState.OP, EcState.SAFEOP)
-        if not self.has_cia402:
+            drive.esm = EcState.SAFEOP
+            drive.family_part.esm_effects(EcState.OP, EcState.SAFEOP)
+        if not drive.has_cia402:
             return
-        option = self._read_int(0x6007, 0)
+        option = drive._read_int(0x6007, 0)
         option = 1 if option is None else option
         end = self.option_end_state(0x6007, option,
                                     {0: "NO_ACTION", 1: "FAULT", 2: "SWITCH_ON_DISABLED"}.get(option, "QUICK_STOP"))
-        if self.behaviour.communication_lost_state is not None:
-            end = self.behaviour.communication_lost_state
-        self._log("cia402", reason=f"communication lost, 6007h = {option}", reaction=end)
+        if drive.behaviour.communication_lost_state is not None:
+            end = drive.behaviour.communication_lost_state
+        drive._log("cia402", reason=f"communication lost, 6007h = {option}", reaction=end)
         if end == "FAULT":
             self.inject_fault(0x8100)
         elif end == "SWITCH_ON_DISABLED":
-            self._cia_moves(self.cia.communication_lost(), "communication lost")
-        elif end == "QUICK_STOP" and self.cia.state is State.OPERATION_ENABLED:
-            option = hh.quick_stop_option(self)
-            self.cia.quick_stop_ramp = hh.quick_stop_ramp(self, option)
-            self._cia_moves(self.cia.controlword_written(self.cia.controlword & ~0x04 | 0x02, ecat_op=False,
+            drive._cia_moves(drive.cia.communication_lost(), "communication lost")
+        elif end == "QUICK_STOP" and drive.cia.state is State.OPERATION_ENABLED:
+            option = hh.quick_stop_option(drive)
+            drive.cia.quick_stop_ramp = hh.quick_stop_ramp(drive, option)
+            drive._cia_moves(drive.cia.controlword_written(drive.cia.controlword & ~0x04 | 0x02, ecat_op=False,
                                                         quick_stop_option=option),
                             "communication lost: quick stop")
         elif end == "OPERATION_ENABLED":
-            self.cia.velocity = Fraction(0)
-            self.cia.target = None
-            self.cia.interrupt_homing()
+            drive.cia.velocity = Fraction(0)
+            drive.cia.target = None
+            drive.cia.interrupt_homing()
         self._finish_reaction()
-        self._refresh_inputs()
+        drive._refresh_inputs()
 
     def _finish_reaction(self) -> None:
         """Out of OP no process-data cycle steps the model, yet the drive ramps down by itself: a quick stop or
         fault reaction the lost communication started runs to its end at once (the axis's cycles, counted by
         the drive's own clock)."""
+        drive = self.drive
         for _ in range(10**6):  # bounded: the slowest documented ramp (HDT 6050h 60 s at 250 us) is 240000
-            if self.esm is EcState.OP or self.cia.state not in (State.QUICK_STOP, State.FAULT_REACTION) \
-                    or not self.cia.velocity:
+            if drive.esm is EcState.OP or drive.cia.state not in (State.QUICK_STOP, State.FAULT_REACTION) \
+                    or not drive.cia.velocity:
                 return
-            self.step()
+            drive.step()
 
     def set_motor_supply(self, present: bool) -> None:
         """The motor supply (+Vmot) is switched on or off. Technosoft (§4.2.2 Remark 2): statusword bit 4
         follows it in every state; its loss in SWITCHED ON or OPERATION ENABLED is an undervoltage fault
         (3220h), in a lower state no fault. Other families: bit 4 (voltage enabled) clears, no reaction."""
-        self.cia.voltage = present
-        self._log("inputs", motor_supply=present)
-        code = self.behaviour.supply_undervoltage_fault
-        if not present and code is not None and self.cia.state in (State.SWITCHED_ON, State.OPERATION_ENABLED):
+        drive = self.drive
+        drive.cia.voltage = present
+        drive._log("inputs", motor_supply=present)
+        code = drive.behaviour.supply_undervoltage_fault
+        if not present and code is not None and drive.cia.state in (State.SWITCHED_ON, State.OPERATION_ENABLED):
             self.inject_fault(code)
             return
-        self._refresh_inputs()
+        drive._refresh_inputs()
 
     def option_end_state(self, index: int, option: int, default: str) -> str:
         """The end state the family rules give an option code (``option_code_end_states``), else ``default``."""
-        for i, v, end in self.rules.option_code_end_states:
+        drive = self.drive
+        for i, v, end in drive.rules.option_code_end_states:
             if i == index and v == option:
                 return str(end)
         return default
@@ -126,31 +142,33 @@ class Injection(DriveCore):
         """The limit-switch inputs change: 60FDh bits per the family (HDT swaps them: bit 0 = CW =
         positive); Technosoft sends EMCY 0x5442/0x5443 when one becomes active and 0x0000 when it clears
         (§3.1.3), and statusword bit 11 (internal limit active) follows."""
-        neg_bit, pos_bit = self.rules.limit_switch_bits
-        old = self._read_int(0x60FD, 0) or 0
+        drive = self.drive
+        neg_bit, pos_bit = drive.rules.limit_switch_bits
+        old = drive._read_int(0x60FD, 0) or 0
         new = old & ~((1 << neg_bit) | (1 << pos_bit))
         new |= (negative << neg_bit) | (positive << pos_bit)
-        self._put(0x60FD, 0, new)
+        drive._put(0x60FD, 0, new)
         was_neg, was_pos = bool(old >> neg_bit & 1), bool(old >> pos_bit & 1)
-        self.limit_active = negative or positive
-        self.limit_switches = (negative, positive)
-        self._log("inputs", digital_inputs=new)
-        codes = self.behaviour.limit_switch_emcy
+        drive.limit_active = negative or positive
+        drive.limit_switches = (negative, positive)
+        drive._log("inputs", digital_inputs=new)
+        codes = drive.behaviour.limit_switch_emcy
         if codes is not None:
             for was, now, code in ((was_neg, negative, codes[0]), (was_pos, positive, codes[1])):
                 if now and not was:
-                    self.emcy(code)
+                    drive.emcy(code)
                 elif was and not now:
-                    self.emcy(0x0000)
-        hh.on_limit_switches(self)
-        self._refresh_inputs()
+                    drive.emcy(0x0000)
+        hh.on_limit_switches(drive)
+        drive._refresh_inputs()
 
     def set_load_torque(self, torque: float) -> None:
         """An external torque on the motor shaft, N·m (a load, gravity on a vertical axis); the plant's axis
         works against it (the ideal plant ignores it)."""
-        if self.plant is not None:
-            self.plant.load_torque = float(torque)
-        self._log("inputs", load_torque=float(torque))
+        drive = self.drive
+        if drive.plant is not None:
+            drive.plant.load_torque = float(torque)
+        drive._log("inputs", load_torque=float(torque))
 
     def set_obstacle(self, position: int | None) -> None:
         """An obstacle at ``position`` (user units, as 6064h reads; None: taken away) that the axis cannot pass,
@@ -159,16 +177,17 @@ class Injection(DriveCore):
         past 6065h for 6066h ms the drive faults (8611h); with HDT's profile type -1 (torque-limited ramp, §4.07.8)
         the profile stops at it and resumes once the obstacle is gone. On the ideal plant a profile position move
         runs into it the same way (the demand is held, the error is the demand's)."""
-        internal = None if position is None else self.units.position_to_internal(position - self._home_offset())
-        cia = self.cia
-        plant = self.plant
+        drive = self.drive
+        internal = None if position is None else drive.units.position_to_internal(position - drive._home_offset())
+        cia = drive.cia
+        plant = drive.plant
         cia.obstacle_on_plant = plant is not None
         cia.set_obstacle(internal)
         if plant is not None and internal is not None:
             # the side of the obstacle the load is on: the actual position's, not the demand's
             cia.obstacle_side = 1 if internal > cia.position + Fraction(round(plant.error * 65536), 65536) else -1
-        self._log("inputs", obstacle=position)
-        self._refresh_inputs()
+        drive._log("inputs", obstacle=position)
+        drive._refresh_inputs()
 
     def _alarm(self, bit: int) -> bytes:
         """Alarm ``bit`` is present: the EMCY's manufacturer bytes 3..7, the bitmap of every alarm present (HDT

@@ -3,6 +3,8 @@ exchange of the output and input images."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from ecattool.abort import AlStatus
 from ecattool.errors import SdoAbort, TargetError
 from ecattool.esi.model import Direction
@@ -11,51 +13,66 @@ from ecattool.sim import eeprom as ee
 from ecattool.sim.drive.core import RX, TX, Layout
 from ecattool.sim.drive.pdo import PdoConfig
 
+if TYPE_CHECKING:
+    from ecattool.sim.drive.facade import Drive
+
 #: looked up once: every cycle asks (an enum member's lookup costs as much as the comparison's rest)
 _OP, _SAFEOP = EcState.OP, EcState.SAFEOP
 
 
-class ProcessData(PdoConfig):
-    """The process image: built from the assignment at PRE-OP -> SAFE-OP, exchanged each cycle."""
+class ProcessData:
+    """The process data part: the process image built from the assignment (through the :class:`PdoConfig` part)
+    at PRE-OP -> SAFE-OP, exchanged each cycle."""
+
+    __slots__ = ("drive", "pdo", "_quiet")
+
+    def __init__(self, drive: Drive, pdo: PdoConfig) -> None:
+        self.drive = drive
+        self.pdo = pdo
+        #: the last cycle in OP: (its outputs, the drive's state before and after it where the cycle changed
+        #: nothing, else None, its inputs). See :meth:`_quiet_state`.
+        self._quiet: tuple[bytes, tuple[object, ...] | None, bytes] | None = None
 
     def _mapping_is_fixed(self, assigned: list[int]) -> bool:
         """Whether the master cannot change what is assigned: no CoE mailbox, or only Fixed PDOs."""
-        mailbox = self.device.mailbox
-        return mailbox is None or mailbox.coe is None or all(p in self._fixed for p in assigned)
+        drive = self.drive
+        mailbox = drive.device.mailbox
+        return mailbox is None or mailbox.coe is None or all(p in drive._fixed for p in assigned)
 
-    def _check_sm(self, d: Direction) -> Layout:
+    def check_sm(self, d: Direction) -> Layout:
         """The SAFE-OP check of one direction's assigned PDOs; returns the process image layout."""
+        drive = self.drive
         code = AlStatus.INVALID_OUTPUT_CONFIG if d is RX else AlStatus.INVALID_INPUT_CONFIG
         layout = Layout()
-        assigned = self._assigned(d)
+        assigned = self.pdo._assigned(d)
         per_sm: dict[int, int] = {}  # SM number -> bits of the PDOs it carries
-        limit = self.rules.max_assigned_rx if d is RX else self.rules.max_assigned_tx
+        limit = drive.rules.max_assigned_rx if d is RX else drive.rules.max_assigned_tx
         if limit is not None and len(assigned) > limit:
-            self._refuse(EcState.SAFEOP, code, f"{len(assigned)} PDOs assigned, at most {limit}")
-        if self._slow_in_first(d, assigned):
-            self._refuse(EcState.SAFEOP, code, "a slow parameter is mapped in the first (high priority) PDO")
+            drive.state_machine.refuse(EcState.SAFEOP, code, f"{len(assigned)} PDOs assigned, at most {limit}")
+        if self.pdo._slow_in_first(d, assigned):
+            drive.state_machine.refuse(EcState.SAFEOP, code, "a slow parameter is mapped in the first (high priority) PDO")
         for pdo in assigned:
-            entries = self._pdo_entries(d, pdo)
+            entries = self.pdo._pdo_entries(d, pdo)
             if entries is None:
-                self._refuse(EcState.SAFEOP, code, f"assigned PDO 0x{pdo:04X} does not exist")
+                drive.state_machine.refuse(EcState.SAFEOP, code, f"assigned PDO 0x{pdo:04X} does not exist")
             assert entries is not None
             bits = 0
             for e in entries:
                 if e.index == 0 and e.bit_len == 0:
                     continue  # an empty gap some ESI PDO lists carry
                 try:
-                    self._mapping_entry_bits(d, pdo, 0, e.mapping_value)
+                    self.pdo._mapping_entry_bits(d, pdo, 0, e.mapping_value)
                 except SdoAbort:
-                    self._refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} maps an invalid entry 0x{e.mapping_value:08X}")
-                is_pad = e.index == 0 or e.index in self.rules.dummy_indices or e.index < 0x20
+                    drive.state_machine.refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} maps an invalid entry 0x{e.mapping_value:08X}")
+                is_pad = e.index == 0 or e.index in drive.rules.dummy_indices or e.index < 0x20
                 layout.entries.append((0 if is_pad else e.index, e.subindex, layout.bits + bits, e.bit_len))
                 bits += e.bit_len
-            if self.rules.max_pdo_bits is not None and bits > self.rules.max_pdo_bits:
-                if self.behaviour.pdo_length_emcy is not None:
-                    self.emcy(self.behaviour.pdo_length_emcy)
-                self._refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} is {bits} bits, at most {self.rules.max_pdo_bits}")
-            if self.rules.max_pdo_entries is not None and len(entries) > self.rules.max_pdo_entries:
-                self._refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} has {len(entries)} entries")
+            if drive.rules.max_pdo_bits is not None and bits > drive.rules.max_pdo_bits:
+                if drive.behaviour.pdo_length_emcy is not None:
+                    drive.emcy(drive.behaviour.pdo_length_emcy)
+                drive.state_machine.refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} is {bits} bits, at most {drive.rules.max_pdo_bits}")
+            if drive.rules.max_pdo_entries is not None and len(entries) > drive.rules.max_pdo_entries:
+                drive.state_machine.refuse(EcState.SAFEOP, code, f"PDO 0x{pdo:04X} has {len(entries)} entries")
             layout.bits += bits
             sm_no = self._sm_of(d, pdo)
             if sm_no is not None:
@@ -63,37 +80,40 @@ class ProcessData(PdoConfig):
         if layout.bits % 8 and not self._mapping_is_fixed(assigned):
             # a slave whose mapping the master cannot change (fixed PDOs, no CoE: an EL1002's 2 bits) has its
             # sync manager one byte long, the ESC pads the rest; a configurable one refuses the odd length
-            self._refuse(EcState.SAFEOP, code, f"{layout.bits} bits of process data is not a whole number of bytes")
+            drive.state_machine.refuse(EcState.SAFEOP, code, f"{layout.bits} bits of process data is not a whole number of bytes")
         for sm_no, bits in per_sm.items():
-            sm = self.device.sm(sm_no)
+            sm = drive.device.sm(sm_no)
             size = (bits + 7) // 8
             if sm is not None and sm.max_size is not None and size > sm.max_size:
-                self._refuse(EcState.SAFEOP, code, f"{size} bytes exceed SM{sm.number} maximum {sm.max_size}")
+                drive.state_machine.refuse(EcState.SAFEOP, code, f"{size} bytes exceed SM{sm.number} maximum {sm.max_size}")
         return layout
 
     def _sm_of(self, d: Direction, pdo: int) -> int | None:
         """The sync manager that carries PDO ``pdo``: the one its ESI ``Sm`` names where that is a real sync manager
         of the direction (an EQ2339's outputs are over SM0 and SM1, one byte each), else the direction's first."""
+        drive = self.drive
         kind = "Outputs" if d is RX else "Inputs"
-        for p in self.device.pdos(d):
-            if p.index == pdo and not self.device.esc_registers(p) and p.sm is not None:
-                sm = self.device.sm(p.sm)
+        for p in drive.device.pdos(d):
+            if p.index == pdo and not drive.device.esc_registers(p) and p.sm is not None:
+                sm = drive.device.sm(p.sm)
                 if sm is not None and sm.kind == kind and not sm.virtual:
                     return sm.number
-        first = next((s for s in self.device.sync_managers if s.kind == kind and not s.virtual), None)
+        first = next((s for s in drive.device.sync_managers if s.kind == kind and not s.virtual), None)
         return first.number if first is not None else None
 
     def process_image_sizes(self) -> tuple[int, int]:
         """(output bytes, input bytes) of the current layout (valid from SAFE-OP on)."""
-        return self.layout[RX].size, self.layout[TX].size
+        drive = self.drive
+        return drive.layout[RX].size, drive.layout[TX].size
 
     def exchange(self, outputs: bytes) -> bytes:
         """One cycle: in OP the outputs are written into the mapped objects and the motion advances one
         cycle; in SAFE-OP outputs are ignored. Returns the input image."""
-        esm = self.esm
+        drive = self.drive
+        esm = drive.esm
         if esm is not _OP and esm is not _SAFEOP:
             raise TargetError(f"no process data in {esm.value} (request SAFEOP or OP first)")
-        rx = self.layout[RX]
+        rx = drive.layout[RX]
         if len(outputs) != rx.size:
             raise TargetError(f"output image is {len(outputs)} bytes, the drive expects {rx.size}")
         if esm is _OP:
@@ -109,7 +129,7 @@ class ProcessData(PdoConfig):
             outputs = bytes(outputs)  # a no-op for bytes: the store keeps bytes, never a caller's buffer
             image: int | None = None
             reactions: list[tuple[int, int, bytes]] = []
-            stored = self._store.get
+            stored = drive.objects.store.get
             try:
                 for key, lo, hi, offset, bits in rx.slots():
                     if lo >= 0:
@@ -124,11 +144,11 @@ class ProcessData(PdoConfig):
                         reactions.append((key[0], key[1], raw))
             except ee.PowerLost:
                 # the drive drops off the bus; it comes back in INIT with the EEPROM as far as it was written
-                self._power_loss()
+                drive.nonvolatile.power_loss()
                 raise TargetError("the drive lost power during an EEPROM write (it is back in INIT)") from None
             for index, sub, raw in reactions:
-                self._after_write[index](sub, int.from_bytes(raw, "little"))
-            self.step()
+                drive._after_write[index](sub, int.from_bytes(raw, "little"))
+            drive.motion.step()
             inputs = self._pack_inputs()
             if state is None:
                 self._quiet = (outputs, None, b"")  # a candidate: the next cycle compares its state
@@ -138,10 +158,6 @@ class ProcessData(PdoConfig):
             return inputs
         self._quiet = None
         return self._pack_inputs()
-
-    #: the last cycle in OP: (its outputs, the drive's state before and after it where the cycle changed
-    #: nothing, else None, its inputs). See :meth:`_quiet_state`.
-    _quiet: tuple[bytes, tuple[object, ...] | None, bytes] | None = None
 
     def _quiet_state(self) -> tuple[object, ...]:
         """Everything a cycle in OP reads besides its outputs, compared by value, and what it reports through:
@@ -154,40 +170,43 @@ class ProcessData(PdoConfig):
         reports nothing), the next cycle on the same O from the same state does the same: nothing, with the
         same inputs. So :meth:`exchange` returns the inputs of the cycle before where the outputs and this
         state are equal to that cycle's (tests/sim/test_sim_quiet_cycle.py runs both ways and compares)."""
-        cia = self.cia
-        rx, tx = self.layout[RX], self.layout[TX]
-        store = self._store
+        drive = self.drive
+        cia = drive.cia
+        rx, tx = drive.layout[RX], drive.layout[TX]
+        store = drive.objects.store
         return (store, store.changes, cia, None if cia.move is None else object(), *vars(cia).values(),
-                *self._modes_snapshot(),
-                self.units, self._entries, len(self._entries), rx, tx, tuple(rx.entries), tuple(tx.entries),
+                *drive.modes.snapshot(),
+                drive.units, drive.objects.entries, len(drive.objects.entries), rx, tx, tuple(rx.entries), tuple(tx.entries),
                 rx.bits, tx.bits,
-                self.limit_active, self.limit_switches, self.homing_warning, self.behaviour, self.family,
-                self.has_cia402, self.homing_search_s, self.record_events, self._seq, len(self.emergencies),
-                None if self.plant is None else self.plant.state(), self.supervision.state())
+                drive.limit_active, drive.limit_switches, drive.homing_warning, drive.behaviour, drive.family,
+                drive.has_cia402, drive.homing_search_s, drive.record_events, drive.event_log.seq, len(drive.emergencies),
+                None if drive.plant is None else drive.plant.state(), drive.supervision.state())
 
     def _pdo_write(self, index: int, sub: int, raw: bytes) -> bool:
         """Store one mapped output that changed; True when the object has a reaction to run once the image is
         latched."""
+        drive = self.drive
         if index == 0x2065 or index == 0x2067:
-            handler = self._handlers_down.get(index)
+            handler = drive._handlers_down.get(index)
             if handler is not None:
                 try:
                     handler(sub, raw, int.from_bytes(raw, "little"))
                 except SdoAbort:
                     return False
-        e = self._entries.get((index, sub))
+        e = drive.objects.entries.get((index, sub))
         if e is not None and e.bit_size > 8 * len(raw):
             # a compact PDO maps the low bits of a larger object (EJ2521's 16-bit 7000h:12 of 32): they
             # replace the low bytes, the object keeps its high ones
-            old = self._store.get((index, sub), b"")
+            old = drive.objects.store.get((index, sub), b"")
             raw = raw + old[len(raw):(e.bit_size + 7) // 8].ljust((e.bit_size + 7) // 8 - len(raw), b"\x00")
-        self._store[(index, sub)] = raw
-        return index in self._after_write
+        drive.objects.store[(index, sub)] = raw
+        return index in drive._after_write
 
     def _pack_inputs(self) -> bytes:
         """The input image: each mapped object's value, cut or padded with zeros to its mapped length."""
-        tx = self.layout[TX]
-        stored = self._store.get
+        drive = self.drive
+        tx = drive.layout[TX]
+        stored = drive.objects.store.get
         whole = tx.pieces()
         if whole is not None:
             # on whole bytes: the values themselves, joined (a gap's key is in no store: its zeros)

@@ -24,7 +24,7 @@ from ecattool.sim.cia402 import HALT, State
 from ecattool.sim.drive.velocity_mode import counts_per_rev
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.core import DriveCore
+    from ecattool.sim.drive.facade import Drive
 
 _ZERO = Fraction(0)
 PROFILE_TORQUE, CST = 4, 10
@@ -66,21 +66,21 @@ class TorqueMode:
         return (self.demand, self.load)
 
     @staticmethod
-    def target(drive: DriveCore, mode: int) -> Fraction:
+    def target(drive: Drive, mode: int) -> Fraction:
         """The torque the mode asks for: 6071h (+ 60B2h in CST), limited by 6072h."""
         read = drive._read_int
         target = Fraction(read(0x6071, 0) or 0)
-        if mode == CST and (0x60B2, 0) in drive._entries:
+        if mode == CST and (0x60B2, 0) in drive.objects.entries:
             target += read(0x60B2, 0) or 0
-        limit = read(0x6072, 0) if (0x6072, 0) in drive._entries else None
+        limit = read(0x6072, 0) if (0x6072, 0) in drive.objects.entries else None
         if limit:
             target = max(-Fraction(limit), min(Fraction(limit), target))
         return target
 
-    def step(self, drive: DriveCore, mode: int, dt: Fraction) -> None:
+    def step(self, drive: Drive, mode: int, dt: Fraction) -> None:
         """One cycle in OPERATION ENABLED without halt: the demand towards the target, the axis accelerated."""
         goal = self.target(drive, mode)
-        slope = drive._read_int(0x6087, 0) if mode == PROFILE_TORQUE and (0x6087, 0) in drive._entries else 0
+        slope = drive._read_int(0x6087, 0) if mode == PROFILE_TORQUE and (0x6087, 0) in drive.objects.entries else 0
         if not slope or abs(goal - self.demand) <= slope * dt:
             self.demand = goal
         else:
@@ -109,7 +109,7 @@ class TorqueMode:
         demand = self.demand
         return demand.numerator / demand.denominator / 1000 * rated_torque
 
-    def report(self, drive: DriveCore) -> None:
+    def report(self, drive: Drive) -> None:
         """6077h (and 6074h) from the demand; outside OPERATION ENABLED or in a halt the demand is 0."""
         cia = drive.cia
         if cia.state is not State.OPERATION_ENABLED or cia.controlword & HALT:
