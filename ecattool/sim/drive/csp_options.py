@@ -16,22 +16,22 @@ from typing import TYPE_CHECKING
 from ecattool.sim.drive import polarity
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 RELATIVE = 0x0040
 
 
-def applies(drive: Drive) -> bool:
+def applies(drive: DriveApp) -> bool:
     """Whether this cycle's CSP target needs the options (else the plain integer path runs)."""
     return drive.behaviour.csp_options and (bool(drive.cia.controlword & RELATIVE)
                                             or drive._read_int(0x2086, 0) == 1)
 
 
-def csv_limited(drive: Drive) -> bool:
+def csv_limited(drive: DriveApp) -> bool:
     return drive.behaviour.csp_options and drive._read_int(0x2086, 0) == 1
 
 
-def csv_step(drive: Drive, dt: Fraction) -> None:
+def csv_step(drive: DriveApp, dt: Fraction) -> None:
     """One CSV cycle with 2086h = 1: the velocity towards 60FFh at most 6083h per second."""
     cia, units, read = drive.cia, drive.units, drive._read_int
     goal = units.velocity_to_internal(polarity.target_signs(drive, 9)[1] * (read(0x60FF, 0) or 0))
@@ -46,7 +46,7 @@ def csv_step(drive: Drive, dt: Fraction) -> None:
     cia.position += (now + units.increments_per_second(cia.velocity)) / 2 * dt
 
 
-def target(drive: Drive, dt: Fraction) -> Fraction:
+def target(drive: DriveApp, dt: Fraction) -> Fraction:
     """The position (internal units) CSP goes to this cycle."""
     cia, units, read = drive.cia, drive.units, drive._read_int
     value = (read(0x607A, 0) or 0) * polarity.target_signs(drive, 8)[0]

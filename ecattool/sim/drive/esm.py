@@ -11,7 +11,7 @@ from ecattool.od.model import EcState
 from ecattool.sim.drive.core import RX, TX
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 #: allowed ESM transitions (ETG.1000.6; Technosoft §3.1.1 derived matrix, HDT §3.02)
 TRANSITIONS: dict[EcState, frozenset[EcState]] = {
@@ -30,7 +30,7 @@ class StateMachine:
 
     __slots__ = ("drive", "dc", "dc_shift_ns")
 
-    def __init__(self, drive: Drive) -> None:
+    def __init__(self, drive: DriveApp) -> None:
         self.drive = drive
         #: DC activation (0x0981) and SYNC0 cycle in ns, as the master wrote them (:meth:`configure_dc`)
         self.dc = (0, 0)

@@ -82,7 +82,6 @@ class Drive:
     esm: EcState
     layout: dict[Direction, Layout]
     cia: Cia402
-    modes: ModeParts
     limit_active: bool
     limit_switches: tuple[bool, bool]
     homing_warning: bool
@@ -202,7 +201,7 @@ class Drive:
         self.layout = {RX: Layout(), TX: Layout()}
         self.cia = Cia402(enable_needs_op=self.behaviour.enable_needs_op,
                           supply_bit_always=self.behaviour.supply_bit_always)
-        self.modes = ModeParts()
+        self.motion.reset()
         self.limit_active = False
         self.limit_switches = (False, False)  # (negative, positive) inputs, set_limit_switches()
         self.homing_warning = False  # Technosoft statusword bit 7 (homing start ignored)
@@ -422,6 +421,11 @@ class Drive:
     def internal_velocity(self) -> int:
         """Velocity in internal units (Technosoft: 16.16 increments per slow-loop sample)."""
         return self.motion.internal_velocity
+
+    @property
+    def modes(self) -> ModeParts:
+        """The mode parts of the motion part (vl, PP set-points, PV windows, torque, interpolated position)."""
+        return self.motion.modes
 
     @property
     def cia402_state(self) -> State:

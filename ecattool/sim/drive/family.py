@@ -17,7 +17,7 @@ from ecattool.sim.drive.halt_homing import CURRENT_POSITION, SEARCH
 from ecattool.sim.drive.plant import PlantParams, plant_for
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 
 class Family:
@@ -29,7 +29,7 @@ class Family:
 
     __slots__ = ("drive", "name", "rules", "behaviour", "homing_current", "homing_search", "default_plant")
 
-    def __init__(self, drive: Drive, rules: FamilyRules) -> None:
+    def __init__(self, drive: DriveApp, rules: FamilyRules) -> None:
         self.drive = drive
         self.rules = rules
         self.name = rules.family if rules.family in BEHAVIOURS else "generic"

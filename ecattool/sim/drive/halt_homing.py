@@ -34,8 +34,8 @@ from ecattool.sim.drive.velocity_mode import counts_per_rev
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.behaviour import Behaviour
-    from ecattool.sim.drive.family import Family
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import FamilyData
+    from ecattool.sim.drive.app import DriveApp
 
 HOMING_START = 0x0010  # controlword bit 4 in homing mode
 #: the modes a halt ramps down with a deceleration (the others stop within the cycle)
@@ -61,7 +61,7 @@ def reserved_method(behaviour: Behaviour, method: int) -> bool:
     return behaviour.homing_reserved_refused and method in _RESERVED
 
 
-def homing_kind(family: Family, method: int) -> str:
+def homing_kind(family: FamilyData, method: int) -> str:
     """What a homing start does with ``method``: "current" (home here), "power_on" (HDT 0: the power-on
     zero is home), "none" (0: no homing is executed), "search" (needs a switch or index pulse) or
     "unavailable" (Technosoft EMCY FF03h; generic: a reserved method). The method tables are data per family
@@ -94,13 +94,13 @@ def search_direction(method: int) -> tuple[int, int]:
 
 
 # --- halt ---------------------------------------------------------------------------------------------
-def halt_option(drive: Drive) -> int:
+def halt_option(drive: DriveApp) -> int:
     """605Dh, or the CiA-402 default 1 where the drive has no such object."""
     value = drive._read_int(0x605D, 0) if (0x605D, 0) in drive.objects.entries else None
     return 1 if value is None else value
 
 
-def halt_deceleration(drive: Drive, option: int | None = None) -> Fraction | None:
+def halt_deceleration(drive: DriveApp, option: int | None = None) -> Fraction | None:
     """The ramp a halt uses in profile velocity, in increments per second² (None: stop within the cycle);
     ``option`` 1 slow-down ramp, 2 quick-stop ramp (default: 605Dh)."""
     option = halt_option(drive) if option is None else option
@@ -123,7 +123,7 @@ def halt_deceleration(drive: Drive, option: int | None = None) -> Fraction | Non
 
 
 # --- controlword and mode reactions -------------------------------------------------------------------
-def on_controlword(drive: Drive, cw: int, prev: int) -> None:
+def on_controlword(drive: DriveApp, cw: int, prev: int) -> None:
     """Halt and homing reactions to a controlword, after the state machine has moved."""
     cia = drive.cia
     if (cw ^ prev) & HALT:
@@ -144,13 +144,13 @@ def on_controlword(drive: Drive, cw: int, prev: int) -> None:
         drive._log("homing", event="interrupted", reason="controlword bit 4 cleared")
 
 
-def on_mode(drive: Drive) -> None:
+def on_mode(drive: DriveApp) -> None:
     if drive.cia.homing is Homing.IN_PROGRESS and drive.mode() != HOMING:
         drive.cia.interrupt_homing()
         drive._log("homing", event="interrupted", reason=f"mode changed to {drive.mode()}")
 
 
-def start_homing(drive: Drive) -> None:
+def start_homing(drive: DriveApp) -> None:
     cia = drive.cia
     method = drive._read_int(0x6098, 0) if (0x6098, 0) in drive.objects.entries else 0
     method = method or 0
@@ -194,19 +194,19 @@ def start_homing(drive: Drive) -> None:
     drive._log("homing", event="attained", method=method, position=drive._user_position())
 
 
-def _speed(drive: Drive, sub: int) -> Fraction:
+def _speed(drive: DriveApp, sub: int) -> Fraction:
     """Homing speed 6099h:``sub`` (1 switch search, 2 zero search) in internal velocity units."""
     return abs(drive.units.velocity_to_internal(drive._read_int(0x6099, sub) or 0))
 
 
-def _on_its_switch(drive: Drive, method: int) -> bool:
+def _on_its_switch(drive: DriveApp, method: int) -> bool:
     negative = LIMIT_SWITCH_METHODS.get(method)
     if negative is None:
         return False
     return drive.limit_switches[0 if negative else 1]
 
 
-def on_limit_switches(drive: Drive) -> None:
+def on_limit_switches(drive: DriveApp) -> None:
     """The limit-switch inputs changed: a limit-switch homing search finds the switch, leaves it at the zero
     search speed, and homes where it becomes inactive (17/18) or then looks for an index pulse (1/2)."""
     cia = drive.cia
@@ -227,7 +227,7 @@ def on_limit_switches(drive: Drive) -> None:
             drive._log("homing", event="limit switch left", method=method, position=drive._user_position())
 
 
-def home_position(drive: Drive) -> Fraction | None:
+def home_position(drive: DriveApp) -> Fraction | None:
     """The internal position the home gets: HDT resets the sensor to 0 (6064h = 0 + 607Ch); the others set
     6064h to 607Ch, except Technosoft with 210Bh bit 12 = 1 (position kept, §6.3.3)."""
     if drive.behaviour.home_offset_continuous:
@@ -238,7 +238,7 @@ def home_position(drive: Drive) -> Fraction | None:
     return drive.units.position_to_internal(offset or 0)
 
 
-def after_step(drive: Drive, before: Homing) -> None:
+def after_step(drive: DriveApp, before: Homing) -> None:
     """Log and signal a homing search that ended in this step (no switch or index pulse was found)."""
     if before is Homing.IN_PROGRESS and drive.cia.homing is Homing.ERROR:
         drive._log("homing", event="error", method=drive._read_int(0x6098, 0),
@@ -248,12 +248,12 @@ def after_step(drive: Drive, before: Homing) -> None:
             drive.emcy(code, drive.behaviour.homing_error_emcy_data)
 
 
-def check_method(drive: Drive, sub: int, value: int) -> None:
+def check_method(drive: DriveApp, sub: int, value: int) -> None:
     if reserved_method(drive.behaviour, value):
         raise SdoAbort(0x6098, sub, A.INVALID_VALUE)
 
 
-def halt_decel_for_step(drive: Drive, mode: int) -> Fraction | None:
+def halt_decel_for_step(drive: DriveApp, mode: int) -> Fraction | None:
     """The ramp a halt uses in the mode (increments/s²): profile velocity the option code's (see
     :func:`halt_deceleration`); profile position the slow-down ramp of the mode (HDT §4.07: 6084h; Technosoft
     §4.4.10: 6083h, or 6085h for option 2); a homing search the homing acceleration 609Ah; CSP and CSV the option
@@ -271,7 +271,7 @@ def halt_decel_for_step(drive: Drive, mode: int) -> Fraction | None:
     return halt_deceleration(drive)
 
 
-def quick_stop_option(drive: Drive) -> int:
+def quick_stop_option(drive: DriveApp) -> int:
     """The quick stop option code 605Ah a quick stop follows: 0-8 as stored (CiA-402 meanings; a family whose
     manual leaves 3, 4, 7 or 8 out refuses them by its value list — HDT, Control Techniques Table 7.9 — or
     stores them as reserved — Technosoft §4.4.7 — and then they act as CiA-402 defines them); a drive without
@@ -280,7 +280,7 @@ def quick_stop_option(drive: Drive) -> int:
     return value if value is not None and 0 <= value <= 8 else 2
 
 
-def quick_stop_ramp(drive: Drive, option: int) -> Fraction | None:
+def quick_stop_ramp(drive: DriveApp, option: int) -> Fraction | None:
     """The ramp of QUICK STOP ACTIVE for quick stop option code ``option`` (605Ah), increments/s²; None where the
     drive function is disabled at once (0). 1 and 5 the slow-down ramp, 2 and 6 the quick-stop ramp, each as the
     family's manual names them (:func:`halt_deceleration`: Technosoft §4.4.7 6083h / 6085h, HDT §4.03.6 604Eh
@@ -296,7 +296,7 @@ def quick_stop_ramp(drive: Drive, option: int) -> Fraction | None:
     return halt_deceleration(drive, 1 if option in (1, 5) else 2)
 
 
-def vl_ramp(drive: Drive, index: int) -> Fraction | None:
+def vl_ramp(drive: DriveApp, index: int) -> Fraction | None:
     """A vl ramp record (delta speed in 6042h units, delta time in s) in increments/s²; None: delta time 0 or no
     known increments per revolution (the axis stops within the cycle)."""
     speed, time = drive._read_int(index, 1), drive._read_int(index, 2)
@@ -308,7 +308,7 @@ def vl_ramp(drive: Drive, index: int) -> Fraction | None:
     return Fraction(speed or 0, time) * dimension * cpr / 60
 
 
-def fault_reaction_ramp(drive: Drive, code: int) -> Fraction | None:
+def fault_reaction_ramp(drive: DriveApp, code: int) -> Fraction | None:
     """The ramp a fault with error code ``code`` stops the axis with before FAULT (605Eh), increments/s²; None:
     FAULT at once. Only the faults the family's manual gives a reaction (``Behaviour.fault_reaction_codes``:
     Technosoft §4.4.11's non-fatal errors, HDT §4.03.10's alarm table; Control Techniques 7.3.5 "ignored if the
@@ -330,7 +330,7 @@ def fault_reaction_ramp(drive: Drive, code: int) -> Fraction | None:
 _DISABLE_OPTION = {State.READY: 0x605B, State.SWITCHED_ON: 0x605C, State.SWITCH_ON_DISABLED: 0x605C}
 
 
-def disable_option(drive: Drive, to: State) -> int | None:
+def disable_option(drive: DriveApp, to: State) -> int | None:
     """The option code (605Bh / 605Ch) a transition from OPERATION ENABLED to ``to`` follows; None: the drive has
     no such object (HDT) or the transition reads none (Disable Voltage, CiA-402 transition 9, disables at once).
     The value is the stored one: its power-on default is the family's profile data (Technosoft §4.4.8/§4.4.9:
@@ -343,7 +343,7 @@ def disable_option(drive: Drive, to: State) -> int | None:
     return drive._read_int(index, 0)
 
 
-def disable_ramp(drive: Drive, to: State) -> Fraction | None:
+def disable_ramp(drive: DriveApp, to: State) -> Fraction | None:
     """The ramp (increments/s²) the axis slows down with before the transition from OPERATION ENABLED to ``to``;
     None: the drive function is disabled at once (option code 0, the manufacturer-specific and reserved codes, a
     drive without the object). Option code 1 "slow down with slow down ramp; disable the drive function"

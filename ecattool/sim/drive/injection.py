@@ -13,7 +13,7 @@ from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive.behaviour import CT_TRIP_CODES
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 
 class Injection:
@@ -22,7 +22,7 @@ class Injection:
 
     __slots__ = ("drive", "_motion_errors", "_alarms")
 
-    def __init__(self, drive: Drive) -> None:
+    def __init__(self, drive: DriveApp) -> None:
         self.drive = drive
         #: Motion Error Register bits latched by errors until a Fault Reset (the limit-switch bits are live)
         self._motion_errors = 0

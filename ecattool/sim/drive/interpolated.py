@@ -19,7 +19,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 IP = 7
 ENABLE_IP = 0x0010  # controlword bit 4 in interpolated position mode
@@ -39,10 +39,10 @@ class Interpolated:
     def snapshot(self) -> tuple[object, ...]:
         return (tuple(self.pending), self.active)
 
-    def enabled(self, drive: Drive) -> bool:
+    def enabled(self, drive: DriveApp) -> bool:
         return not drive.behaviour.ip_enable_bit or bool(drive.cia.controlword & ENABLE_IP)
 
-    def step(self, drive: Drive, dt: Fraction) -> None:
+    def step(self, drive: DriveApp, dt: Fraction) -> None:
         """One interpolation period in OPERATION ENABLED without halt."""
         cia = drive.cia
         if not self.enabled(drive):

@@ -13,7 +13,7 @@ from ecattool.sim import eeprom as ee
 from ecattool.sim.drive.core import sdo_abort
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 
 class FoeError(TargetError):
@@ -31,7 +31,7 @@ class Memory:
 
     __slots__ = ("drive",)
 
-    def __init__(self, drive: Drive) -> None:
+    def __init__(self, drive: DriveApp) -> None:
         self.drive = drive
 
     def install_handlers(self) -> None:

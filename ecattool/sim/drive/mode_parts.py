@@ -16,7 +16,7 @@ from ecattool.sim.drive.torque_mode import CST, PROFILE_TORQUE, TorqueMode
 from ecattool.sim.drive.velocity_mode import VL, PvStatus, VlVelocity
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 PV = 3
 #: the modes a part moves (in OPERATION ENABLED without halt)
@@ -50,7 +50,7 @@ class ModeParts:
         self.pv.changing_s = Fraction(0)
         self.torque.demand = Fraction(0)
 
-    def step(self, drive: Drive, mode: int, dt: Fraction) -> None:
+    def step(self, drive: DriveApp, mode: int, dt: Fraction) -> None:
         """One cycle of ``mode`` (one of :data:`MOVED`) in OPERATION ENABLED without halt."""
         if mode == VL:
             self.vl.step(drive, dt)
@@ -59,7 +59,7 @@ class ModeParts:
         else:
             self.torque.step(drive, mode, dt)
 
-    def after(self, drive: Drive, mode: int, dt: Fraction) -> None:
+    def after(self, drive: DriveApp, mode: int, dt: Fraction) -> None:
         """After every cycle of ``mode``, moved or not: the values and bits the parts report."""
         if mode == VL:
             self.vl.report(drive)
@@ -70,7 +70,7 @@ class ModeParts:
         if self.ip.active and (mode != IP or not _moving(drive)):
             self.ip.stop()
 
-    def status_bits(self, drive: Drive, mode: int) -> int:
+    def status_bits(self, drive: DriveApp, mode: int) -> int:
         """Statusword bits the parts own: 12 "speed = 0" in PV, 12 "ip mode active" in IP, 12 "target torque
         followed" in CST (as CSP/CSV)."""
         if mode == PV:
@@ -82,7 +82,7 @@ class ModeParts:
         return 0
 
 
-def _moving(drive: Drive) -> bool:
+def _moving(drive: DriveApp) -> bool:
     """OPERATION ENABLED without halt: the mode's demand drives the axis."""
     cia = drive.cia
     return cia.state is State.OPERATION_ENABLED and not cia.controlword & HALT

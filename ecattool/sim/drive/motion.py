@@ -17,12 +17,12 @@ from ecattool.sim.drive import polarity
 from ecattool.sim.drive.core import Store, sdo_abort
 from ecattool.sim.drive.plant_step import cycle as plant_cycle
 from ecattool.sim.drive.supervision import limit_stop, report_actual, supervise
-from ecattool.sim.drive.mode_parts import MOVED, PARTS
+from ecattool.sim.drive.mode_parts import MOVED, PARTS, ModeParts
 from ecattool.sim.drive.torque_mode import TORQUE_MODES
 from ecattool.sim.units import floor_ratio
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 _ZERO = Fraction(0)
 #: 607Dh's sub-indices 1 and 2 at the whole INTEGER32 range (no software limit)
@@ -46,16 +46,27 @@ class Motion:
     the profile generators, the mode parts and the plant, and the actual values it reports. It reads the drive's
     shared state (``cia``, ``modes``, ``plant``, ``units``, the object store), which a reset renews."""
 
-    __slots__ = ("drive", "_cycle_cache", "_profile_cache", "_soft_cache", "_home_cache")
+    __slots__ = ("drive", "modes", "_cycle_cache", "_profile_cache", "_soft_cache", "_home_cache")
 
-    def __init__(self, drive: Drive) -> None:
+    def __init__(self, drive: DriveApp) -> None:
         self.drive = drive
+        #: the demand side of vl, PP set-points, PV windows, torque and interpolated position (:mod:`.mode_parts`);
+        #: renewed with the application (:meth:`reset`)
+        self.modes = ModeParts()
         self._cycle_cache: tuple[int, Fraction, int] | None = None
         self._profile_cache: tuple[tuple[object, ...], Profile] | None = None
         #: the store's version and whether 607Dh limits at it (:attr:`_soft_limits`)
         self._soft_cache: tuple[int, bool] = (0, False)
         #: the store's version and 607Ch at it (:meth:`_home_offset`)
         self._home_cache: tuple[int, int] = (0, 0)
+
+    def reset(self) -> None:
+        """The application restarts: the mode parts start afresh."""
+        self.modes = ModeParts()
+
+    def modes_snapshot(self) -> tuple[object, ...]:
+        """The mode parts' state, compared by value (the quiet-cycle skip of the process data part)."""
+        return self.modes.snapshot()
 
     def cycle_time(self) -> Fraction:
         """The process-data cycle in seconds: 60C2h (sub1 × 10^sub2) where present, else 1 ms (computed once per
@@ -99,7 +110,7 @@ class Motion:
         if moves and moves[0][0] is State.FAULT:
             drive.fault_reset()
         if drive.cia.state is State.OPERATION_ENABLED and self.mode() == PP:
-            if drive.modes.pp.on_controlword(drive, cw, prev):  # the set-point handshake (:mod:`.pp_setpoints`)
+            if self.modes.pp.on_controlword(drive, cw, prev):  # the set-point handshake (:mod:`.pp_setpoints`)
                 self._report_blocked_motion()
         hh.on_controlword(drive, cw, prev)
         self._refresh_inputs()
@@ -127,8 +138,8 @@ class Motion:
     def _on_mode(self, sub: int, value: int | None) -> None:
         drive = self.drive
         if value == PV:
-            drive.modes.pv.armed = False  # Technosoft §10.1 Remark 2: 60FFh must be written again
-        drive.modes.mode_changed()
+            self.modes.pv.armed = False  # Technosoft §10.1 Remark 2: 60FFh must be written again
+        self.modes.mode_changed()
         if drive.behaviour.dc_mode_in_op_drops_to_safeop and drive.esm is EcState.OP and not drive.dc_active() \
                 and value in drive.rules.dc_required_modes:
             drive.state_machine.fall_to_safeop(A.AlStatus.DC_INVALID_SYNC, f"mode {value} needs distributed clocks")
@@ -139,7 +150,7 @@ class Motion:
 
     def _on_target_velocity(self, sub: int, value: int | None) -> None:
         drive = self.drive
-        drive.modes.pv.armed = True
+        self.modes.pv.armed = True
 
     def _check_mode(self, sub: int, data: bytes, value: int | None) -> bool:
         drive = self.drive
@@ -208,10 +219,10 @@ class Motion:
                     self._after_step(dt, mode)
                     continue
                 if mode in MOVED:  # vl, profile torque, interpolated position, CST: their own parts
-                    drive.modes.step(drive, mode, dt)
-                    drive.modes.after(drive, mode, dt)
+                    self.modes.step(drive, mode, dt)
+                    self.modes.after(drive, mode, dt)
                     plant = drive.plant
-                    self._after_step(dt, mode, drive.modes.torque.newton_metres(plant.params.rated_torque)
+                    self._after_step(dt, mode, self.modes.torque.newton_metres(plant.params.rated_torque)
                                      if plant is not None and mode in TORQUE_MODES else None)
                     continue
                 moving = True
@@ -223,19 +234,19 @@ class Motion:
                 target_position=_ZERO,
                 target_velocity=u.velocity_to_internal(polarity.target_signs(drive, mode)[1]
                                                        * (drive._read_int(0x60FF, 0) or 0))
-                if moving and mode == PV and drive.modes.pv.target_live(drive) else _ZERO,
+                if moving and mode == PV and self.modes.pv.target_live(drive) else _ZERO,
                 profile_velocity=_ZERO, acceleration=_ZERO,
                 inc_per_s=u.increments_per_second, vel_from_inc_per_s=u.velocity_from_increments_per_second,
                 inc_per_s2=u.increments_per_second2, halt_deceleration=hh.halt_decel_for_step(drive, mode),
-                profile=(self._profile(mode) if mode == PV else drive.modes.pp.profile(drive, self._profile(mode)))
+                profile=(self._profile(mode) if mode == PV else self.modes.pp.profile(drive, self._profile(mode)))
                 if moving and mode in (PP, PV) else None,
             )
             if homing_before is not cia.homing:
                 hh.after_step(drive, homing_before)
-            if mode == PP and cia.target is None and drive.modes.pp.after_step(drive, dt):
+            if mode == PP and cia.target is None and self.modes.pp.after_step(drive, dt):
                 self._report_blocked_motion()  # the set-point that waited for the move is taken
             if mode in PARTS:
-                drive.modes.after(drive, mode, dt)
+                self.modes.after(drive, mode, dt)
             self._after_step(dt, mode)
         self._refresh_inputs(mode)  # the step changes no mode (6061h)
 
@@ -361,7 +372,7 @@ class Motion:
         cia = drive.cia
         sw = cia.statusword(mode=mode) | (0x0800 if drive.limit_active else 0)
         if mode in PARTS:
-            sw |= drive.modes.status_bits(drive, mode)
+            sw |= self.modes.status_bits(drive, mode)
         behaviour = drive.behaviour
         if behaviour.homing_busy_bits and mode == HOMING and cia.homing is Homing.IN_PROGRESS:
             sw |= 0x0100 | (0x0080 if drive.homing_warning else 0)  # §4.2.2 bit 8 homing executing, 7 warning

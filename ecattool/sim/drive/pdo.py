@@ -12,7 +12,7 @@ from ecattool.od.types import lookup
 from ecattool.sim.drive.core import RX, TX, sdo_abort
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 
 def is_mapping(index: int) -> Direction | None:
@@ -36,7 +36,7 @@ class PdoConfig:
 
     __slots__ = ("drive",)
 
-    def __init__(self, drive: Drive) -> None:
+    def __init__(self, drive: DriveApp) -> None:
         self.drive = drive
 
     def known_entries(self) -> dict[Direction, set[tuple[int, int, int]]]:

@@ -13,7 +13,7 @@ from ecattool.sim.drive.velocity_mode import counts_per_rev as _counts_per_rev
 
 if TYPE_CHECKING:
     from ecattool.sim.cia402 import Cia402
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 _ENABLED, _QUICK_STOP, _FAULT_REACTION = State.OPERATION_ENABLED, State.QUICK_STOP, State.FAULT_REACTION
 #: modes whose loop is the velocity loop (vl 2, PV 3, CSV 9); the others close the position loop
@@ -22,7 +22,7 @@ VELOCITY_MODES = frozenset({2, 3, 9})
 _IP = 7
 
 
-def counts_per_rev(drive: "Drive") -> float:
+def counts_per_rev(drive: "DriveApp") -> float:
     """Increments per motor revolution for the plant: 608Fh where the drive has it, else the family's fixed
     resolution (:func:`ecattool.sim.drive.velocity_mode.counts_per_rev`), else 65536 (HDT's, §4.06)."""
     cpr = _counts_per_rev(drive)
@@ -33,7 +33,7 @@ def counts_per_rev(drive: "Drive") -> float:
 _MAX_MOTOR_SPEED, _MAX_PROFILE_VELOCITY = (0x6080, 0), (0x607F, 0)
 
 
-def speed_limit(drive: "Drive", plant: Plant, mode: int) -> float:
+def speed_limit(drive: "DriveApp", plant: Plant, mode: int) -> float:
     """The speed the plant's motor cannot pass, increments/s: the motor's own (:attr:`Plant.max_speed`), and what
     the drive is told in 6080h max motor speed and 607Fh max profile velocity, where it has them and they are not 0
     (Technosoft §15.2.3: "The speed limitation is activated when setting a value different from zero"). The unit
@@ -61,7 +61,7 @@ def speed_limit(drive: "Drive", plant: Plant, mode: int) -> float:
     return limit
 
 
-def cycle(drive: "Drive", plant: Plant, mode: int, dt: Fraction, pn0: int, pd0: int,
+def cycle(drive: "DriveApp", plant: Plant, mode: int, dt: Fraction, pn0: int, pd0: int,
           torque: float | None = None) -> None:
     """Step ``plant`` one cycle ``dt`` after the drive's demand moved from ``pn0 / pd0`` to where its CiA-402 model
     is now (increments): the position loop or the velocity loop while the power stage is on (OPERATION ENABLED, a
@@ -123,7 +123,7 @@ def _block(cia: "Cia402", plant: Plant) -> None:
         plant.velocity = 0.0
 
 
-def _demand_follows(drive: "Drive", plant: Plant) -> None:
+def _demand_follows(drive: "DriveApp", plant: Plant) -> None:
     """No loop holds the axis on the demand: the demand follows the axis (in 1/65536 increments; the rest stays an
     error below that)."""
     error = plant.error

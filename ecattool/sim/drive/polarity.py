@@ -13,13 +13,13 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 #: the modes Technosoft's polarity applies to (PP, PV, CSP, CSV)
 _TS_MODES = frozenset({1, 3, 8, 9})
 
 
-def _bits(drive: Drive, mode: int) -> int:
+def _bits(drive: DriveApp, mode: int) -> int:
     kind = drive.behaviour.polarity
     if not kind or (kind == "targets+actuals" and mode not in _TS_MODES):
         return 0
@@ -30,7 +30,7 @@ def _bits(drive: Drive, mode: int) -> int:
 _PLAIN = (1, 1)
 
 
-def target_signs(drive: Drive, mode: int) -> tuple[int, int]:
+def target_signs(drive: DriveApp, mode: int) -> tuple[int, int]:
     """(position, velocity) sign the targets 607Ah and 60FFh are read with in ``mode`` (kept per store version and
     mode: a write to 607Eh changes the version, core.SETTING_OBJECTS; every cycle asks)."""
     if not drive.behaviour.polarity:
@@ -45,7 +45,7 @@ def target_signs(drive: Drive, mode: int) -> tuple[int, int]:
     return signs
 
 
-def actual_signs(drive: Drive, mode: int) -> tuple[int, int]:
+def actual_signs(drive: DriveApp, mode: int) -> tuple[int, int]:
     """(position, velocity) sign the actual values are reported with in ``mode``."""
     if drive.behaviour.polarity != "targets+actuals":
         return 1, 1

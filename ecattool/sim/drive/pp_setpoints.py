@@ -29,7 +29,7 @@ from ecattool.sim.cia402 import Profile, State
 from ecattool.sim.drive import polarity
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 NEW_SETPOINT, IMMEDIATE, RELATIVE, ADDITIVE = 0x0010, 0x0020, 0x0040, 0x0800
 COMMAND_ERROR = 0x9000
@@ -55,7 +55,7 @@ class PpSetpoints:
     def snapshot(self) -> tuple[object, ...]:
         return (self.pending, self.last_target, self.ramps, self.planned_velocity, self.settle_s)
 
-    def profile(self, drive: Drive, fresh: Profile) -> Profile:
+    def profile(self, drive: DriveApp, fresh: Profile) -> Profile:
         """The profile a PP cycle moves by. HDT §4.07.3 (``Behaviour.pp_ramps_at_standstill``): "The acceleration
         ramps ..., deceleration ramps ... and the 'rounding values' ... are adjusted when the motor is standstill
         and a new positioning is starting. The speed instead (profile velocity - index 6081h) is immediately
@@ -74,7 +74,7 @@ class PpSetpoints:
             return fresh
         return Profile(fresh.velocity, acc, dec, jerk, fresh.torque_limited)
 
-    def on_controlword(self, drive: Drive, cw: int, prev: int) -> bool:
+    def on_controlword(self, drive: DriveApp, cw: int, prev: int) -> bool:
         """A controlword in profile position, OPERATION ENABLED; True when a set-point was taken."""
         cia = drive.cia
         behaviour = drive.behaviour
@@ -94,7 +94,7 @@ class PpSetpoints:
             cia.setpoint_ack = False
         return False
 
-    def _settle(self, drive: Drive, dt: Fraction) -> None:
+    def _settle(self, drive: DriveApp, dt: Fraction) -> None:
         """Technosoft §7.2.12 (TS 6125): "If the position actual value is within the position window for a time
         period defined inside the position window time object, this target position is regarded as reached";
         6067h = 2^32 - 1 switches the window off ("reached when the position reference is reached"). 6068h counts
@@ -112,7 +112,7 @@ class PpSetpoints:
         cia.target_reached = inside and self.settle_s is not None and \
             self.settle_s * 1000 >= (read(0x6068, 0) or 0)
 
-    def take(self, drive: Drive, cw: int, target: int) -> None:
+    def take(self, drive: DriveApp, cw: int, target: int) -> None:
         cia = drive.cia
         relative = bool(cw & RELATIVE)
         target *= polarity.target_signs(drive, 1)[0]  # 607Eh bit 7
@@ -125,7 +125,7 @@ class PpSetpoints:
         self.last_target = cia.target
         self.settle_s = None
 
-    def after_step(self, drive: Drive, dt: Fraction) -> bool:
+    def after_step(self, drive: DriveApp, dt: Fraction) -> bool:
         """After a profile position cycle: the end of a single set-point move starts the waiting set-point and
         ends the handshake; the position window holds bit 10. True when a set-point was taken."""
         cia = drive.cia

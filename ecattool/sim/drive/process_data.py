@@ -14,7 +14,7 @@ from ecattool.sim.drive.core import RX, TX, Layout
 from ecattool.sim.drive.pdo import PdoConfig
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 #: looked up once: every cycle asks (an enum member's lookup costs as much as the comparison's rest)
 _OP, _SAFEOP = EcState.OP, EcState.SAFEOP
@@ -26,7 +26,7 @@ class ProcessData:
 
     __slots__ = ("drive", "pdo", "_quiet")
 
-    def __init__(self, drive: Drive, pdo: PdoConfig) -> None:
+    def __init__(self, drive: DriveApp, pdo: PdoConfig) -> None:
         self.drive = drive
         self.pdo = pdo
         #: the last cycle in OP: (its outputs, the drive's state before and after it where the cycle changed
@@ -175,7 +175,7 @@ class ProcessData:
         rx, tx = drive.layout[RX], drive.layout[TX]
         store = drive.objects.store
         return (store, store.changes, cia, None if cia.move is None else object(), *vars(cia).values(),
-                *drive.modes.snapshot(),
+                *drive.motion.modes_snapshot(),
                 drive.units, drive.objects.entries, len(drive.objects.entries), rx, tx, tuple(rx.entries), tuple(tx.entries),
                 rx.bits, tx.bits,
                 drive.limit_active, drive.limit_switches, drive.homing_warning, drive.behaviour, drive.family,

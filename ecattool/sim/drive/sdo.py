@@ -14,14 +14,14 @@ from ecattool.sim.drive.core import Store, decode_int, sdo_abort
 from ecattool.sim.drive.pdo import PdoConfig, is_assign, is_mapping
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 
 class SdoServer:
     """The SDO access part: upload/download with the dictionary's access, state, length and range rules (mapping
     and assignment writes go through the :class:`PdoConfig` part it is given), and the objects' handlers."""
 
-    def __init__(self, drive: Drive, pdo: PdoConfig) -> None:
+    def __init__(self, drive: DriveApp, pdo: PdoConfig) -> None:
         self.drive = drive
         self.pdo = pdo
 

@@ -25,7 +25,7 @@ from ecattool.sim.units import floor_ratio
 _ENABLED = State.OPERATION_ENABLED
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 #: the modes whose following error is supervised (CiA-402: pp, ip, hm, csp)
 POSITION_MODES = frozenset({PP, 7, HOMING, CSP})
@@ -34,7 +34,7 @@ _ACTUAL = ((0x6041, 0), (0x6063, 0), (0x6064, 0), (0x6062, 0), (0x606C, 0), (0x6
            (0x6078, 0))
 
 
-def following_error(drive: "Drive") -> float:
+def following_error(drive: "DriveApp") -> float:
     """Position demand minus actual position, increments (the plant's lag and an obstacle's block)."""
     plant = drive.plant
     lag = -plant.error if plant is not None else 0.0
@@ -42,7 +42,7 @@ def following_error(drive: "Drive") -> float:
     return lag + (fe.numerator / fe.denominator if fe else 0.0)
 
 
-def _ms(drive: "Drive", time: int) -> float:
+def _ms(drive: "DriveApp", time: int) -> float:
     """6066h/6068h in ms (the family's unit: ms, or control-loop samples)."""
     if drive.behaviour.window_times_in_samples:
         dt = drive.units.cycle_s
@@ -50,14 +50,14 @@ def _ms(drive: "Drive", time: int) -> float:
     return float(time)
 
 
-def _window_increments(drive: "Drive", window: int) -> float:
+def _window_increments(drive: "DriveApp", window: int) -> float:
     pn, pd = drive.units.ratios()[:2]
     inc = window * pn / pd
     cap = drive.behaviour.following_error_cap
     return min(inc, cap) if cap is not None else inc
 
 
-def _limits(drive: "Drive") -> tuple[float | None, float]:
+def _limits(drive: "DriveApp") -> tuple[float | None, float]:
     """(the following-error window in increments, None: no supervision; the time in ms) from 6065h/6066h."""
     window, timeout = drive._read_int(0x6065, 0), drive._read_int(0x6066, 0)
     if window is None or timeout is None or window == 0xFFFFFFFF or (
@@ -66,7 +66,7 @@ def _limits(drive: "Drive") -> tuple[float | None, float]:
     return _window_increments(drive, window), _ms(drive, timeout)
 
 
-def supervise(drive: "Drive", mode: int) -> None:
+def supervise(drive: "DriveApp", mode: int) -> None:
     """One cycle of supervision (after the plant's step) in ``mode`` (6061h)."""
     cia = drive.cia
     sup = drive.supervision
@@ -110,20 +110,20 @@ def supervise(drive: "Drive", mode: int) -> None:
         drive.inject_fault(0x8611)
 
 
-def _position_window(drive: "Drive", actual_user: int) -> bool:
+def _position_window(drive: "DriveApp", actual_user: int) -> bool:
     """PP: the actual position is within 6067h of the target 607Ah."""
     target = drive._read_int(0x607A, 0)
     return target is not None and abs(actual_user - target) <= (drive._read_int(0x6067, 0) or 0)
 
 
-def _actual_user(drive: "Drive", error: float) -> int:
+def _actual_user(drive: "DriveApp", error: float) -> int:
     """6064h for a plant error of ``error`` increments."""
     pn, pd = drive.units.ratios()[:2]
     qn, qd = drive.cia.pos_n, drive.cia.pos_d
     return floor_ratio(qn + round(error) * qd, qd, pn, pd) + drive._home_offset()
 
 
-def report_actual(drive: "Drive", sw: int, mode: int) -> None:
+def report_actual(drive: "DriveApp", sw: int, mode: int) -> None:
     """The actual values from the plant (see the module doc); ``sw``: the statusword as the state machine makes
     it."""
     cia = drive.cia
@@ -169,7 +169,7 @@ def report_actual(drive: "Drive", sw: int, mode: int) -> None:
 _FULL_RANGE = (-(2**31), 2**31 - 1)
 
 
-def _blocked(drive: "Drive") -> tuple[bool, bool]:
+def _blocked(drive: "DriveApp") -> tuple[bool, bool]:
     """(negative, positive) directions a limit blocks: the hardware limit-switch inputs, and the software position
     limits 607Dh (min, max, position user units) reached by the position demand — Technosoft §4.3.2 ("work just
     like the hardware limit switches"); HDT only with 201Ah bit 0 (§4.06.7). A 607Dh of the whole INTEGER32 range,
@@ -185,7 +185,7 @@ def _blocked(drive: "Drive") -> tuple[bool, bool]:
     return neg or demand <= low, pos or demand >= high
 
 
-def limit_stop(drive: "Drive", mode: int, dt: Fraction) -> bool:
+def limit_stop(drive: "DriveApp", mode: int, dt: Fraction) -> bool:
     """A limit switch (or software limit) in the direction the axis moves or is told to move: the axis ramps down
     with the quick-stop deceleration 6085h and holds, still OPERATION ENABLED; only a motion away from the limit
     is taken (Technosoft §4.3.1, seeds/000_a0ab57c0bda88c2c.txt line 2235: "Triggering a limit switch during a

@@ -24,7 +24,7 @@ from ecattool.sim.cia402 import HALT, State
 from ecattool.sim.drive.velocity_mode import counts_per_rev
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 _ZERO = Fraction(0)
 PROFILE_TORQUE, CST = 4, 10
@@ -66,7 +66,7 @@ class TorqueMode:
         return (self.demand, self.load)
 
     @staticmethod
-    def target(drive: Drive, mode: int) -> Fraction:
+    def target(drive: DriveApp, mode: int) -> Fraction:
         """The torque the mode asks for: 6071h (+ 60B2h in CST), limited by 6072h."""
         read = drive._read_int
         target = Fraction(read(0x6071, 0) or 0)
@@ -77,7 +77,7 @@ class TorqueMode:
             target = max(-Fraction(limit), min(Fraction(limit), target))
         return target
 
-    def step(self, drive: Drive, mode: int, dt: Fraction) -> None:
+    def step(self, drive: DriveApp, mode: int, dt: Fraction) -> None:
         """One cycle in OPERATION ENABLED without halt: the demand towards the target, the axis accelerated."""
         goal = self.target(drive, mode)
         slope = drive._read_int(0x6087, 0) if mode == PROFILE_TORQUE and (0x6087, 0) in drive.objects.entries else 0
@@ -109,7 +109,7 @@ class TorqueMode:
         demand = self.demand
         return demand.numerator / demand.denominator / 1000 * rated_torque
 
-    def report(self, drive: Drive) -> None:
+    def report(self, drive: DriveApp) -> None:
         """6077h (and 6074h) from the demand; outside OPERATION ENABLED or in a halt the demand is 0."""
         cia = drive.cia
         if cia.state is not State.OPERATION_ENABLED or cia.controlword & HALT:

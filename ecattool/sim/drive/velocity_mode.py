@@ -29,13 +29,13 @@ from ecattool.sim.cia402 import HALT, State
 from ecattool.sim.drive import polarity
 
 if TYPE_CHECKING:
-    from ecattool.sim.drive.facade import Drive
+    from ecattool.sim.drive.app import DriveApp
 
 _ZERO = Fraction(0)
 VL = 2
 
 
-def counts_per_rev(drive: Drive) -> Fraction | None:
+def counts_per_rev(drive: DriveApp) -> Fraction | None:
     """Increments per motor revolution: 608Fh (encoder increments / motor revolutions) where both are set, else
     the family's fixed resolution (HDT 65536), else None (the speed in rpm cannot move the position)."""
     inc, rev = drive._read_int(0x608F, 1), drive._read_int(0x608F, 2)
@@ -45,7 +45,7 @@ def counts_per_rev(drive: Drive) -> Fraction | None:
     return Fraction(cpr) if cpr else None
 
 
-def _ratio(drive: Drive, index: int) -> Fraction:
+def _ratio(drive: DriveApp, index: int) -> Fraction:
     """A numerator/denominator pair (sub 1 / sub 2); 1 where the drive has no such object or a part is 0."""
     num, den = drive._read_int(index, 1), drive._read_int(index, 2)
     return Fraction(num, den) if num and den else Fraction(1)
@@ -65,7 +65,7 @@ class VlVelocity:
 
     # --- the objects, as the drive reads them ------------------------------------------------------------
     @staticmethod
-    def limited(drive: Drive, target: int) -> int:
+    def limited(drive: DriveApp, target: int) -> int:
         """6042h limited by the minimum and maximum speeds: 6047h (sub 1/2 positive min/max, 3/4 negative) where
         the drive has it, else the amounts 6046h (sub 1 min, sub 2 max) both ways (HDT §4.11.6: "if the reference
         speed is positive, its minimum achievable value is '+ min velocity amount'"). 0 stays 0 (it has no
@@ -87,7 +87,7 @@ class VlVelocity:
         return size if target > 0 else -size
 
     @staticmethod
-    def _slope(drive: Drive, index: int) -> Fraction | None:
+    def _slope(drive: DriveApp, index: int) -> Fraction | None:
         """6048h/6049h/604Ah as a slope in 6042h units per second (delta speed / delta time); None: a delta time
         of 0, the reference is followed at once (HDT §4.11.7/4.11.8)."""
         speed, time = drive._read_int(index, 1), drive._read_int(index, 2)
@@ -96,12 +96,12 @@ class VlVelocity:
         return Fraction(speed or 0, time)
 
     @staticmethod
-    def rpm_per_unit(drive: Drive) -> Fraction:
+    def rpm_per_unit(drive: DriveApp) -> Fraction:
         """rpm per unit of 6042h/6043h/6044h: the dimension factor 604Ch times the set-point factor 604Bh."""
         return _ratio(drive, 0x604C) * _ratio(drive, 0x604B)
 
     # --- one cycle ---------------------------------------------------------------------------------------
-    def step(self, drive: Drive, dt: Fraction) -> None:
+    def step(self, drive: DriveApp, dt: Fraction) -> None:
         """One cycle of vl in OPERATION ENABLED without halt: ramp towards the (limited) target and move."""
         cia = drive.cia
         cpr = counts_per_rev(drive)
@@ -136,7 +136,7 @@ class VlVelocity:
             cia.position += inc_per_s * dt
         cia.target_reached = goal is None or self.rpm == goal
 
-    def report(self, drive: Drive) -> None:
+    def report(self, drive: DriveApp) -> None:
         """6043h (ramp output) and 6044h (actual speed) in the units of 6042h, truncated towards 0. Outside
         OPERATION ENABLED, in a halt or a quick stop, they follow the axis."""
         cia = drive.cia
@@ -166,7 +166,7 @@ class PvStatus:
     def snapshot(self) -> tuple[object, ...]:
         return (self.in_window_s, self.speed_zero, self.changing_s, self.armed)
 
-    def update(self, drive: Drive, dt: Fraction) -> None:
+    def update(self, drive: DriveApp, dt: Fraction) -> None:
         """After a profile velocity cycle: the window of bit 10 and the threshold of bit 12."""
         read, entries = drive._read_int, drive.objects.entries
         cia = drive.cia
@@ -194,7 +194,7 @@ class PvStatus:
         else:
             self.speed_zero = cia.vel_n == 0
 
-    def target_live(self, drive: Drive) -> bool:
+    def target_live(self, drive: DriveApp) -> bool:
         """Whether 60FFh drives the motion (Technosoft: not until it is written in profile velocity; an RxPDO
         that maps it writes it every cycle)."""
         if not drive.behaviour.pv_needs_new_target or self.armed:
