@@ -13,6 +13,7 @@ answers, nothing is known and the master goes on as before (it says itself why i
 from __future__ import annotations
 
 import socket
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -113,7 +114,15 @@ def read_states(ifname: str) -> list[Found] | None:
     finally:
         if resent:
             _drain(sock)
-        sock.close()
+        _close_aside(sock)
+
+
+def _close_aside(sock: socket.socket) -> None:
+    """Close ``sock`` in a thread of its own: Linux releases a packet socket only after every CPU has let go of
+    its receive hook (an RCU grace period, 10-15 ms on this project's virtual machines), a wait the command need
+    not sit through while it opens the master. (A frame the master sends meanwhile is copied to the socket and
+    dropped with it.)"""
+    threading.Thread(target=sock.close, name="ecattool-raw-close", daemon=True).start()
 
 
 def _drain(sock: socket.socket) -> None:
