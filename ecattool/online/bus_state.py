@@ -16,10 +16,12 @@ import socket
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ecattool.errors import TargetError
 from ecattool.od.model import EcState
+from ecattool.sim.bus.frame import Cmd, Datagram, FrameError, make_frame, parse_frame
+from ecattool.sim.bus import raw
 from ecattool.target.base import Unsupported
 
 #: the AL status register (ETG.1000.4, 0x0130): bits 0-3 the state, bit 4 the error indication
@@ -71,8 +73,6 @@ class Found:
 def _exchange(sock: socket.socket, frame: bytes, index: int, resent: list[bool] | None = None) -> bytes | None:
     """``frame`` sent; the frame that comes back processed (bit 1 of the source MAC set by the first slave).
     ``resent``: set to [True] where the frame was sent again (a late answer to the first may still come)."""
-    from ecattool.sim.bus.frame import parse_frame
-
     for attempt in range(ATTEMPTS):
         if attempt and resent is not None:
             resent[:] = [True]
@@ -100,10 +100,8 @@ Exchange = Callable[[bytes, int], bytes | None]
 def read_states(ifname: str) -> list[Found] | None:
     """Each slave's AL status (and DC activation, :func:`read_found`) on ``ifname``, in bus order; None where it
     cannot be read (no raw socket, no answer)."""
-    from ecattool.sim.bus.raw import open_raw
-
     try:
-        sock = open_raw(ifname)
+        sock = raw.open_raw(ifname)
     except TargetError:
         return None  # no raw socket here, or no such interface: the master's own open says why
     resent: list[bool] = []
@@ -139,8 +137,6 @@ def _drain(sock: socket.socket) -> None:
 def read_found(exchange: Exchange) -> list[Found] | None:
     """Each slave's AL status and DC registers, read through ``exchange``: a BRD of the AL status counts the
     slaves, one APRD per slave reads its state (:func:`_with_dc` its DC activation)."""
-    from ecattool.sim.bus.frame import Cmd, Datagram, FrameError, make_frame, parse_frame
-
     try:
         got = exchange(make_frame([Datagram.make(Cmd.BRD, 0, AL_STATUS, 2, index=0x51)], _SRC), 0x51)
         if got is None:
@@ -166,10 +162,6 @@ def _with_dc(exchange: Exchange, found: list[Found]) -> list[Found]:
     """``found`` with each slave's DC activation and SYNC0/SYNC1 cycle times (:attr:`Found.assign_activate`),
     read before the master resets the bus (SOEM's ``config_init`` writes 0x0981 := 0): what a commissioned bus
     runs with, for ``project new --from-bus``. A slave that does not answer the read (no DC unit) keeps None."""
-    from dataclasses import replace
-
-    from ecattool.sim.bus.frame import Cmd, Datagram, make_frame, parse_frame
-
     out = list(found)
     for start in range(0, len(found), DC_SLAVES_PER_FRAME):
         part = found[start:start + DC_SLAVES_PER_FRAME]
