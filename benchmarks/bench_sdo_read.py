@@ -5,7 +5,7 @@ a veth pair in a private network namespace that the script makes itself (never t
 * bare: ``python -c "import pysoem; m = pysoem.Master(); m.open(IF); m.config_init(); m.slaves[0].sdo_read(0x1018,
   1); m.close()"``;
 * ecattool: ``python -m ecattool sdo read 0x1018:01 --target pysoem:IF`` (the master in its child process,
-  ecattool.target.isolated; the value decoded by the drive's built-in family).
+  ecattool.target.isolated; the bus state read before and restored after; the value typed by the CiA-301 table).
 
 The two alternate (bare, ecattool, bare, …) so that a busy machine slows both alike; the figures are the median
 and the lower quartile wall time of a whole process, and their ratio. ``--against DIR``: a third command in the same
