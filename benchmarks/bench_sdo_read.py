@@ -95,7 +95,8 @@ def inside(rounds: int, against: str | None = None) -> dict[str, Any]:
               "values": sorted(outputs), "loadavg": os.getloadavg()}
     if against:
         a = fig(other)
-        result.update(against=against, against_sdo_read=a, against_ratio_median=round(a["median_s"] / b["median_s"], 2),
+        result.update(against=against, against_sdo_read=a,
+                      against_ratio_median=round(a["median_s"] / b["median_s"], 2),
                       against_ratio_q1=round(a["q1_s"] / b["q1_s"], 2))
     return result
 
@@ -136,8 +137,8 @@ def main() -> None:
     print(f"ratio                  median {result['ratio_median']:.2f}x      lower quartile {result['ratio_q1']:.2f}x")
     if against:
         a = result["against_sdo_read"]
-        print(f"--against sdo read     median {a['median_s'] * 1000:7.1f} ms   lower quartile {a['q1_s'] * 1000:7.1f} ms"
-              f"   ({against})")
+        print(f"--against sdo read     median {a['median_s'] * 1000:7.1f} ms   "
+              f"lower quartile {a['q1_s'] * 1000:7.1f} ms   ({against})")
         print(f"its ratio              median {result['against_ratio_median']:.2f}x      lower quartile "
               f"{result['against_ratio_q1']:.2f}x")
     print(f"values read: {result['values']}")
