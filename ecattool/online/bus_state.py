@@ -115,12 +115,24 @@ def read_states(ifname: str) -> list[Found] | None:
         _close_aside(sock)
 
 
+#: the threads closing state-read sockets (:func:`_close_aside`), until :func:`settle` has waited for them
+_closing: list[threading.Thread] = []
+
+
 def _close_aside(sock: socket.socket) -> None:
     """Close ``sock`` in a thread of its own: Linux releases a packet socket only after every CPU has let go of
     its receive hook (an RCU grace period, 10-15 ms on this project's virtual machines), a wait the command need
-    not sit through while it opens the master. (A frame the master sends meanwhile is copied to the socket and
-    dropped with it.)"""
-    threading.Thread(target=sock.close, name="ecattool-raw-close", daemon=True).start()
+    not sit through while it loads the master (:func:`settle` before the master's process is forked)."""
+    closing = threading.Thread(target=sock.close, name="ecattool-raw-close", daemon=True)
+    closing.start()
+    _closing.append(closing)
+
+
+def settle(timeout_s: float = 1.0) -> None:
+    """Wait (``timeout_s`` at most each) for the sockets :func:`_close_aside` is closing: a process forked before
+    would hold the socket open (and a fork beside a running thread is what Python 3.12 warns about)."""
+    while _closing:
+        _closing.pop().join(timeout_s)
 
 
 def _drain(sock: socket.socket) -> None:

@@ -48,6 +48,7 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
         from ecattool.target.kickcat import import_kickcat
 
         import_kickcat()
+    bus_state.settle()  # the state read's socket, closed meanwhile, is not the master's child's to hold
     return _restoring(isolated_bus(spec, lambda: open_live(parsed.kind, parsed.interface, limits=limits), limits),
                       found)
 
@@ -87,6 +88,7 @@ def open_guarded(spec: str, devices: Sequence[Device] = (), reset_bus: bool = Fa
     parsed = parse_target(spec)
     if parsed.kind in MASTERS:
         bus_state.guard(parsed.interface, reset_bus)
+        bus_state.settle()
     return open_target(spec, devices)
 
 

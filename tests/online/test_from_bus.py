@@ -6,7 +6,6 @@ simulator; the raw register read against the ESCs of the served simulator's bus 
 from __future__ import annotations
 
 import os
-import threading
 from pathlib import Path
 
 import pytest
@@ -214,7 +213,5 @@ def test_late_answers_to_frames_sent_again_are_taken_off_before_the_master_opens
     found = bus_state.read_states("veth")
     assert found is not None and found[0].assign_activate == 0 and wire.sent == 4
     assert wire.queue == []  # nothing left for the master's socket
-    for t in threading.enumerate():  # the socket is closed aside (bus_state._close_aside)
-        if t.name == "ecattool-raw-close":
-            t.join(10)
+    bus_state.settle(10)  # the socket is closed aside (bus_state._close_aside) until the master's fork
     assert wire.closed
