@@ -8,9 +8,11 @@ a veth pair in a private network namespace that the script makes itself (never t
   ecattool.target.isolated; the bus state read before and restored after; the value typed by the CiA-301 table).
 
 The two alternate (bare, ecattool, bare, …) so that a busy machine slows both alike; the figures are the median
-and the lower quartile wall time of a whole process, and their ratio. ``--against DIR``: a third command in the same
-rounds, ``sdo read`` of the package in DIR (another revision's checkout, e.g. ``git worktree add /tmp/base
-16d658f`` or a ``git archive`` of it), run from DIR with this interpreter.
+and the lower quartile wall time of a whole process, and their ratio, and the median CPU time of each (its own and
+its children's: a loaded machine's wall times follow it). A third command in the same rounds is the floor of any
+click command line that reads through pysoem, ``python -c "import click, pysoem"`` (no bus, no ecattool).
+``--against DIR``: one more command in the same rounds, ``sdo read`` of the package in DIR (another revision:
+``git archive REV ecattool | tar -x -C DIR``), run from DIR with this interpreter.
 
     .venv/bin/python benchmarks/bench_sdo_read.py [--rounds 15] [--against DIR] [--json]
 
@@ -22,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -40,13 +43,25 @@ BARE = ("import pysoem\nm = pysoem.Master()\nm.open({iface!r})\nassert m.config_
 ENV = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
 
 
-def _timed(argv: list[str], where: str | None = None) -> tuple[float, str]:
+#: the CPU time of every process run (and reaped) so far, in seconds, per command
+CPU: dict[str, list[float]] = {}
+
+
+def _cpu_s() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def _timed(argv: list[str], where: str | None = None, name: str = "") -> tuple[float, str]:
     """One whole process's wall time and its output; ``where``: the checkout whose package runs (``-m`` puts the
-    working directory first on the path)."""
+    working directory first on the path); ``name``: its CPU time is kept under that name in :data:`CPU`."""
     env = ENV if where is None else dict(ENV, PYTHONPATH=where)
+    cpu0 = _cpu_s()
     t0 = time.perf_counter()
     done = subprocess.run(argv, capture_output=True, text=True, timeout=60, cwd=where or ROOT, env=env)
     took = time.perf_counter() - t0
+    if name:
+        CPU.setdefault(name, []).append(_cpu_s() - cpu0)
     if done.returncode != 0:
         raise SystemExit(f"{argv[:4]} failed: {done.stderr[-1000:]}")
     return took, done.stdout.strip()
@@ -68,17 +83,19 @@ def inside(rounds: int, against: str | None = None) -> dict[str, Any]:
         _timed(tool_argv)
         if against:
             _timed(tool_argv, against)
-        bare, tool, other = [], [], []
+        floor_argv = [sys.executable, "-c", "import click, pysoem"]
+        bare, tool, other, floor = [], [], [], []
         outputs = set()
         for _ in range(rounds):
-            t, out = _timed(bare_argv)
+            t, out = _timed(bare_argv, name="bare")
             bare.append(t)
             outputs.add(("bare", out))
-            t, out = _timed(tool_argv)
+            t, out = _timed(tool_argv, name="ecattool")
             tool.append(t)
             outputs.add(("ecattool", out.split(" = ")[1].split(" ")[0] if " = " in out else out))
+            floor.append(_timed(floor_argv, name="floor")[0])
             if against:
-                t, out = _timed(tool_argv, against)
+                t, out = _timed(tool_argv, against, name="against")
                 other.append(t)
                 outputs.add(("against", out.split(" = ")[1].split(" ")[0] if " = " in out else out))
     finally:
@@ -89,9 +106,13 @@ def inside(rounds: int, against: str | None = None) -> dict[str, Any]:
         q = statistics.quantiles(xs, n=4)
         return {"median_s": round(statistics.median(xs), 4), "q1_s": round(q[0], 4), "min_s": round(min(xs), 4)}
 
-    b, e = fig(bare), fig(tool)
+    b, e, f = fig(bare), fig(tool), fig(floor)
+    cpu = {name: round(statistics.median(xs), 4) for name, xs in CPU.items()}
     result = {"rounds": rounds, "bare_pysoem": b, "ecattool_sdo_read": e,
               "ratio_median": round(e["median_s"] / b["median_s"], 2), "ratio_q1": round(e["q1_s"] / b["q1_s"], 2),
+              "import_click_pysoem": f, "floor_ratio_median": round(f["median_s"] / b["median_s"], 2),
+              "cpu_median_s": cpu, "cpu_ratio": round(cpu["ecattool"] / cpu["bare"], 2),
+              "floor_cpu_ratio": round(cpu["floor"] / cpu["bare"], 2),
               "values": sorted(outputs), "loadavg": os.getloadavg()}
     if against:
         a = fig(other)
@@ -135,6 +156,11 @@ def main() -> None:
     print(f"bare pysoem script     median {b['median_s'] * 1000:7.1f} ms   lower quartile {b['q1_s'] * 1000:7.1f} ms")
     print(f"ecattool sdo read      median {e['median_s'] * 1000:7.1f} ms   lower quartile {e['q1_s'] * 1000:7.1f} ms")
     print(f"ratio                  median {result['ratio_median']:.2f}x      lower quartile {result['ratio_q1']:.2f}x")
+    f, cpu = result["import_click_pysoem"], result["cpu_median_s"]
+    print(f"import click, pysoem   median {f['median_s'] * 1000:7.1f} ms   ({result['floor_ratio_median']:.2f}x of the "
+          "bare script: the floor of a click command line)")
+    print("CPU time, medians      " + ", ".join(f"{k} {v * 1000:.1f} ms" for k, v in cpu.items()) +
+          f"; ecattool {result['cpu_ratio']:.2f}x, the floor {result['floor_cpu_ratio']:.2f}x of the bare script")
     if against:
         a = result["against_sdo_read"]
         print(f"--against sdo read     median {a['median_s'] * 1000:7.1f} ms   "
