@@ -5,12 +5,16 @@ a veth pair in a private network namespace that the script makes itself (never t
 * bare: ``python -c "import pysoem; m = pysoem.Master(); m.open(IF); m.config_init(); m.slaves[0].sdo_read(0x1018,
   1); m.close()"``;
 * ecattool: ``python -m ecattool sdo read 0x1018:01 --target pysoem:IF`` (the master in its child process,
-  ecattool.target.isolated; the value decoded by the drive's built-in family).
+  ecattool.target.isolated; the bus state read before and restored after; the value typed by the CiA-301 table).
 
 The two alternate (bare, ecattool, bare, …) so that a busy machine slows both alike; the figures are the median
-and the lower quartile wall time of a whole process, and their ratio.
+and the lower quartile wall time of a whole process, and their ratio, and the median CPU time of each (its own and
+its children's: a loaded machine's wall times follow it). A third command in the same rounds is the floor of any
+click command line that reads through pysoem, ``python -c "import click, pysoem"`` (no bus, no ecattool).
+``--against DIR``: one more command in the same rounds, ``sdo read`` of the package in DIR (another revision:
+``git archive REV ecattool | tar -x -C DIR``), run from DIR with this interpreter.
 
-    .venv/bin/python benchmarks/bench_sdo_read.py [--rounds 15] [--json]
+    .venv/bin/python benchmarks/bench_sdo_read.py [--rounds 15] [--against DIR] [--json]
 
 Needs the ``wire`` extra (pysoem) and root (or unprivileged user namespaces). Every loop is bounded in count.
 """
@@ -20,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -38,16 +43,31 @@ BARE = ("import pysoem\nm = pysoem.Master()\nm.open({iface!r})\nassert m.config_
 ENV = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
 
 
-def _timed(argv: list[str]) -> tuple[float, str]:
+#: the CPU time of every process run (and reaped) so far, in seconds, per command
+CPU: dict[str, list[float]] = {}
+
+
+def _cpu_s() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def _timed(argv: list[str], where: str | None = None, name: str = "") -> tuple[float, str]:
+    """One whole process's wall time and its output; ``where``: the checkout whose package runs (``-m`` puts the
+    working directory first on the path); ``name``: its CPU time is kept under that name in :data:`CPU`."""
+    env = ENV if where is None else dict(ENV, PYTHONPATH=where)
+    cpu0 = _cpu_s()
     t0 = time.perf_counter()
-    done = subprocess.run(argv, capture_output=True, text=True, timeout=60, cwd=ROOT, env=ENV)
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=60, cwd=where or ROOT, env=env)
     took = time.perf_counter() - t0
+    if name:
+        CPU.setdefault(name, []).append(_cpu_s() - cpu0)
     if done.returncode != 0:
         raise SystemExit(f"{argv[:4]} failed: {done.stderr[-1000:]}")
     return took, done.stdout.strip()
 
 
-def inside(rounds: int) -> dict[str, Any]:
+def inside(rounds: int, against: str | None = None) -> dict[str, Any]:
     import select
 
     server = subprocess.Popen([sys.executable, "-m", "ecattool", "sim", "serve", "hdt", "--iface", SLAVE_IF],
@@ -61,15 +81,23 @@ def inside(rounds: int) -> dict[str, Any]:
         tool_argv = [sys.executable, "-m", "ecattool", "sdo", "read", "0x1018:01", "--target", f"pysoem:{MASTER_IF}"]
         _timed(bare_argv)  # the link's first frames, the page cache: not measured
         _timed(tool_argv)
-        bare, tool = [], []
+        if against:
+            _timed(tool_argv, against)
+        floor_argv = [sys.executable, "-c", "import click, pysoem"]
+        bare, tool, other, floor = [], [], [], []
         outputs = set()
         for _ in range(rounds):
-            t, out = _timed(bare_argv)
+            t, out = _timed(bare_argv, name="bare")
             bare.append(t)
             outputs.add(("bare", out))
-            t, out = _timed(tool_argv)
+            t, out = _timed(tool_argv, name="ecattool")
             tool.append(t)
             outputs.add(("ecattool", out.split(" = ")[1].split(" ")[0] if " = " in out else out))
+            floor.append(_timed(floor_argv, name="floor")[0])
+            if against:
+                t, out = _timed(tool_argv, against, name="against")
+                other.append(t)
+                outputs.add(("against", out.split(" = ")[1].split(" ")[0] if " = " in out else out))
     finally:
         server.terminate()
         server.wait(20)
@@ -78,21 +106,35 @@ def inside(rounds: int) -> dict[str, Any]:
         q = statistics.quantiles(xs, n=4)
         return {"median_s": round(statistics.median(xs), 4), "q1_s": round(q[0], 4), "min_s": round(min(xs), 4)}
 
-    b, e = fig(bare), fig(tool)
-    return {"rounds": rounds, "bare_pysoem": b, "ecattool_sdo_read": e,
-            "ratio_median": round(e["median_s"] / b["median_s"], 2), "ratio_q1": round(e["q1_s"] / b["q1_s"], 2),
-            "values": sorted(outputs), "loadavg": os.getloadavg()}
+    b, e, f = fig(bare), fig(tool), fig(floor)
+    cpu = {name: round(statistics.median(xs), 4) for name, xs in CPU.items()}
+    result = {"rounds": rounds, "bare_pysoem": b, "ecattool_sdo_read": e,
+              "ratio_median": round(e["median_s"] / b["median_s"], 2), "ratio_q1": round(e["q1_s"] / b["q1_s"], 2),
+              "import_click_pysoem": f, "floor_ratio_median": round(f["median_s"] / b["median_s"], 2),
+              "cpu_median_s": cpu, "cpu_ratio": round(cpu["ecattool"] / cpu["bare"], 2),
+              "floor_cpu_ratio": round(cpu["floor"] / cpu["bare"], 2),
+              "values": sorted(outputs), "loadavg": os.getloadavg()}
+    if against:
+        a = fig(other)
+        result.update(against=against, against_sdo_read=a,
+                      against_ratio_median=round(a["median_s"] / b["median_s"], 2),
+                      against_ratio_q1=round(a["q1_s"] / b["q1_s"], 2))
+    return result
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=15)
+    ap.add_argument("--against", metavar="DIR", help="also time the sdo read of the package in DIR (another revision)")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--inside", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     rounds = max(3, min(args.rounds, 200))
+    against = str(Path(args.against).resolve()) if args.against else None
+    if against and not (Path(against) / "ecattool" / "__main__.py").is_file():
+        raise SystemExit(f"--against {args.against}: no ecattool package there")
     if args.inside:
-        print(json.dumps(inside(rounds)))
+        print(json.dumps(inside(rounds, against)))
         return
     sys.path.insert(0, str(ROOT))
     from ecattool.sim.bus import netns
@@ -100,8 +142,9 @@ def main() -> None:
     reason = netns.unavailable()
     if reason:
         raise SystemExit(f"cannot make a private network namespace: {reason}")
-    argv = netns.command([sys.executable, __file__, "--inside", "--rounds", str(rounds)])
-    done = subprocess.run(argv, capture_output=True, text=True, timeout=60 + 20 * rounds, cwd=ROOT)
+    argv = netns.command([sys.executable, __file__, "--inside", "--rounds", str(rounds),
+                          *(["--against", against] if against else [])])
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=60 + 30 * rounds, cwd=ROOT)
     if done.returncode != 0:
         raise SystemExit(done.stderr[-2000:])
     result = json.loads(done.stdout.strip().splitlines()[-1])
@@ -113,6 +156,17 @@ def main() -> None:
     print(f"bare pysoem script     median {b['median_s'] * 1000:7.1f} ms   lower quartile {b['q1_s'] * 1000:7.1f} ms")
     print(f"ecattool sdo read      median {e['median_s'] * 1000:7.1f} ms   lower quartile {e['q1_s'] * 1000:7.1f} ms")
     print(f"ratio                  median {result['ratio_median']:.2f}x      lower quartile {result['ratio_q1']:.2f}x")
+    f, cpu = result["import_click_pysoem"], result["cpu_median_s"]
+    print(f"import click, pysoem   median {f['median_s'] * 1000:7.1f} ms   ({result['floor_ratio_median']:.2f}x of the "
+          "bare script: the floor of a click command line)")
+    print("CPU time, medians      " + ", ".join(f"{k} {v * 1000:.1f} ms" for k, v in cpu.items()) +
+          f"; ecattool {result['cpu_ratio']:.2f}x, the floor {result['floor_cpu_ratio']:.2f}x of the bare script")
+    if against:
+        a = result["against_sdo_read"]
+        print(f"--against sdo read     median {a['median_s'] * 1000:7.1f} ms   "
+              f"lower quartile {a['q1_s'] * 1000:7.1f} ms   ({against})")
+        print(f"its ratio              median {result['against_ratio_median']:.2f}x      lower quartile "
+              f"{result['against_ratio_q1']:.2f}x")
     print(f"values read: {result['values']}")
 
 

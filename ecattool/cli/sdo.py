@@ -6,7 +6,7 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.common import console, dump_json, json_option, output_option, print_json, table, write_output
 from ecattool.cli.paths import InputFile
 from ecattool.cli.online import (
     device_option,
@@ -17,13 +17,15 @@ from ecattool.cli.online import (
     slave_option,
     target_option,
 )
+from ecattool.errors import InputError, TargetError, did_you_mean
+from ecattool.od.numbers import parse_address
+from ecattool.online.dictionary import standard_typed, typed
+from ecattool.online.objects import diff_snapshots, load_snapshot, read_value, write_value
+from ecattool.online.objects import dump as do_dump
 
 
 def _address(text: str) -> tuple[int, int] | None:
     """``text`` as an object address (6060:00, 0x6060:0, 6060h), or None when it is not one (a name, then)."""
-    from ecattool.errors import InputError
-    from ecattool.od.numbers import parse_address
-
     try:
         return parse_address(text)
     except InputError:
@@ -34,8 +36,6 @@ def _object(text: str, address: tuple[int, int] | None, t: Any, slave: int) -> t
     """The object ``text`` names: its address, or a name found in the slave's dictionary ``t``."""
     if address is not None:
         return address
-    from ecattool.errors import InputError, did_you_mean
-
     found = t.dictionary.find(text)
     if found is not None:
         return found  # type: ignore[no-any-return]
@@ -50,8 +50,6 @@ def _object(text: str, address: tuple[int, int] | None, t: Any, slave: int) -> t
 def _typed(slave: Any, library: str | None, device: Any, sdo_info: bool = True) -> Any:
     """The dictionary typing ``slave``'s objects: ``device`` (loaded by load_device), else the library, the family,
     the slave's SDO Information."""
-    from ecattool.online.dictionary import typed
-
     return typed(slave, load_library(library), device, sdo_info=sdo_info)
 
 
@@ -81,10 +79,6 @@ Examples:
 def read(address: str, target: str, slave: int, library: str | None, device: str | None, as_json: bool) -> None:
     """Read one object (INDEX:SUB, or its name in the slave's dictionary: controlword) and show its value decoded
     by its data type; without a dictionary, as raw bytes."""
-    from ecattool.online.objects import read_value
-
-    from ecattool.online.dictionary import standard_typed
-
     addr = _address(address)
     # a CiA-301 object by its address (1018h:01 …) is typed by the standard: no identity, family or SDO Information
     quick = standard_typed(*addr) if addr is not None and device is None and library is None else None
@@ -115,8 +109,6 @@ Examples:
 def write(address: str, value: str, target: str, slave: int, library: str | None, device: str | None,
           as_json: bool) -> None:
     """Write one object: VALUE is encoded by the object's data type (range checked), or given as hex:BYTES."""
-    from ecattool.online.objects import write_value
-
     addr = _address(address)
     with open_live(target, dev := load_device(device)) as live:
         s = live.slave(slave)
@@ -174,9 +166,6 @@ Examples:
 def dump(target: str, slave: int, library: str | None, device: str | None, output: str | None) -> None:
     """Read every readable object of the slave's dictionary into a JSON snapshot (values, or the abort code
     where the slave refuses one). Written only when the whole bus read succeeded."""
-    from ecattool.cli.common import dump_json
-    from ecattool.online.objects import dump as do_dump
-
     with open_live(target, dev := load_device(device)) as live:
         s = live.slave(slave)
         snapshot = do_dump(s, _typed(s, library, dev), target)
@@ -193,8 +182,6 @@ Examples:
 def diff(a: str, b: str, as_json: bool) -> None:
     """Compare two dictionary snapshots ('sdo dump', 'backup'): the objects whose value or abort differs, and
     those only one of them has. Exit status 1 when they differ."""
-    from ecattool.online.objects import diff_snapshots, load_snapshot
-
     sa, sb = load_snapshot(a), load_snapshot(b)
     diffs = diff_snapshots(sa, sb)
     if as_json:

@@ -13,12 +13,15 @@ answers, nothing is known and the master goes on as before (it says itself why i
 from __future__ import annotations
 
 import socket
+import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ecattool.errors import TargetError
 from ecattool.od.model import EcState
+from ecattool.sim.bus.frame import Cmd, Datagram, FrameError, make_frame, parse_frame
+from ecattool.sim.bus import raw
 from ecattool.target.base import Unsupported
 
 #: the AL status register (ETG.1000.4, 0x0130): bits 0-3 the state, bit 4 the error indication
@@ -70,8 +73,6 @@ class Found:
 def _exchange(sock: socket.socket, frame: bytes, index: int, resent: list[bool] | None = None) -> bytes | None:
     """``frame`` sent; the frame that comes back processed (bit 1 of the source MAC set by the first slave).
     ``resent``: set to [True] where the frame was sent again (a late answer to the first may still come)."""
-    from ecattool.sim.bus.frame import parse_frame
-
     for attempt in range(ATTEMPTS):
         if attempt and resent is not None:
             resent[:] = [True]
@@ -99,10 +100,8 @@ Exchange = Callable[[bytes, int], bytes | None]
 def read_states(ifname: str) -> list[Found] | None:
     """Each slave's AL status (and DC activation, :func:`read_found`) on ``ifname``, in bus order; None where it
     cannot be read (no raw socket, no answer)."""
-    from ecattool.sim.bus.raw import open_raw
-
     try:
-        sock = open_raw(ifname)
+        sock = raw.open_raw(ifname)
     except TargetError:
         return None  # no raw socket here, or no such interface: the master's own open says why
     resent: list[bool] = []
@@ -113,7 +112,27 @@ def read_states(ifname: str) -> list[Found] | None:
     finally:
         if resent:
             _drain(sock)
-        sock.close()
+        _close_aside(sock)
+
+
+#: the threads closing state-read sockets (:func:`_close_aside`), until :func:`settle` has waited for them
+_closing: list[threading.Thread] = []
+
+
+def _close_aside(sock: socket.socket) -> None:
+    """Close ``sock`` in a thread of its own: Linux releases a packet socket only after every CPU has let go of
+    its receive hook (an RCU grace period, 10-15 ms on this project's virtual machines), a wait the command need
+    not sit through while it loads the master (:func:`settle` before the master's process is forked)."""
+    closing = threading.Thread(target=sock.close, name="ecattool-raw-close", daemon=True)
+    closing.start()
+    _closing.append(closing)
+
+
+def settle(timeout_s: float = 1.0) -> None:
+    """Wait (``timeout_s`` at most each) for the sockets :func:`_close_aside` is closing: a process forked before
+    would hold the socket open (and a fork beside a running thread is what Python 3.12 warns about)."""
+    while _closing:
+        _closing.pop().join(timeout_s)
 
 
 def _drain(sock: socket.socket) -> None:
@@ -130,8 +149,6 @@ def _drain(sock: socket.socket) -> None:
 def read_found(exchange: Exchange) -> list[Found] | None:
     """Each slave's AL status and DC registers, read through ``exchange``: a BRD of the AL status counts the
     slaves, one APRD per slave reads its state (:func:`_with_dc` its DC activation)."""
-    from ecattool.sim.bus.frame import Cmd, Datagram, FrameError, make_frame, parse_frame
-
     try:
         got = exchange(make_frame([Datagram.make(Cmd.BRD, 0, AL_STATUS, 2, index=0x51)], _SRC), 0x51)
         if got is None:
@@ -157,10 +174,6 @@ def _with_dc(exchange: Exchange, found: list[Found]) -> list[Found]:
     """``found`` with each slave's DC activation and SYNC0/SYNC1 cycle times (:attr:`Found.assign_activate`),
     read before the master resets the bus (SOEM's ``config_init`` writes 0x0981 := 0): what a commissioned bus
     runs with, for ``project new --from-bus``. A slave that does not answer the read (no DC unit) keeps None."""
-    from dataclasses import replace
-
-    from ecattool.sim.bus.frame import Cmd, Datagram, make_frame, parse_frame
-
     out = list(found)
     for start in range(0, len(found), DC_SLAVES_PER_FRAME):
         part = found[start:start + DC_SLAVES_PER_FRAME]

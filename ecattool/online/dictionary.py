@@ -10,7 +10,10 @@ from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import EcatToolError, InputError
 from ecattool.esi.model import Device, Identity
-from ecattool.od.model import Entry, ObjectDictionary
+from ecattool.od.model import RO, Entry, ObjectCode, ObjectDictionary, OdObject
+from ecattool.od.numbers import parse_int
+from ecattool.od.standard import CIA301_OBJECTS
+from ecattool.od.types import Kind, lookup
 
 if TYPE_CHECKING:
     from ecattool.online.library import Library, Match
@@ -37,10 +40,6 @@ def standard_typed(index: int, subindex: int) -> Typed | None:
     """A one-entry dictionary for a CiA-301 communication object whose type is the same on every slave (1000h,
     1008h, 1018h:01 …; ``od.standard.CIA301_OBJECTS``), ``source`` "standard"; None for any other object. Reading
     one of them needs no identity, family, library or SDO Information (``sdo read 0x1018:01``)."""
-    from ecattool.od.model import RO, ObjectCode, OdObject
-    from ecattool.od.standard import CIA301_OBJECTS
-    from ecattool.od.types import lookup
-
     known = CIA301_OBJECTS.get((index, subindex))
     dt = lookup(known[1]) if known is not None else None
     if known is None or dt is None:
@@ -102,8 +101,6 @@ def encode(entry: Entry | None, text: str, index: int, subindex: int) -> bytes:
     if entry is None or entry.datatype is None:
         raise InputError(f"{where}: no dictionary types this object; give the bytes as hex:0A0B… or a --library/"
                          "--device that describes it")
-    from ecattool.od.types import Kind
-
     value: Any = text
     kind = entry.datatype.kind
     if kind is Kind.REAL:
@@ -117,8 +114,6 @@ def encode(entry: Entry | None, text: str, index: int, subindex: int) -> bytes:
         except ValueError:
             raise InputError(f"{where} ({entry.type_name}): {text!r} is not hex bytes") from None
     elif kind not in (Kind.STRING, Kind.UNICODE):
-        from ecattool.od.numbers import parse_int
-
         value = parse_int(text, what=f"value of {where}")
     try:
         return entry.encode(value)

@@ -9,6 +9,7 @@ from typing import Any
 
 from ecattool.abort import abort_text
 from ecattool.errors import InputError, Location, SdoAbort, TargetError
+from ecattool.fileio import read_bytes
 from ecattool.od.model import EcState, Entry
 from ecattool.online.dictionary import Typed, decode, encode
 from ecattool.target.base import entry_size
@@ -112,8 +113,6 @@ def dump(slave: Any, typed: Typed, spec: str) -> dict[str, Any]:
 
 
 def load_snapshot(path: str) -> dict[str, Any]:
-    from ecattool.fileio import read_bytes
-
     try:
         data = json.loads(read_bytes(path))
     except (ValueError, UnicodeDecodeError) as exc:

@@ -5,16 +5,16 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 from types import ModuleType
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
+from ecattool.online import bus_state
 from ecattool.online.live import LiveBus
 from ecattool.target.base import LiveSlave, Target
+from ecattool.target.isolated import MasterProcess, RemoteSlave
 from ecattool.target.opener import MASTERS, open_master, open_target, parse_target
-
-if TYPE_CHECKING:
-    from ecattool.target.timeouts import BusLimits
+from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, BusLimits, bus_limits
 
 
 def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False) -> LiveBus:
@@ -34,11 +34,7 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
             raise SelectionError("target 'sim' without a project has no slaves: use sim:PROFILE,ESI… "
                                  "(e.g. sim:hdt,technosoft-ipos)")
         return sim_bus([drive_for_device(d) for d in devs], spec)
-    from ecattool.online.bus_state import guard
-
-    found = guard(parsed.interface, reset_bus)
-    from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, bus_limits
-
+    found = bus_state.guard(parsed.interface, reset_bus)
     # how long to wait: the slaves' own ESI timeouts where the command has devices (a project, --device), the bus
     # init budgeted for as many slaves as the state read found (ecattool.target.timeouts)
     limits = bus_limits(devices, len(found) or None, KICKCAT_SII_S if parsed.kind == "kickcat" else SII_S)
@@ -52,6 +48,7 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
         from ecattool.target.kickcat import import_kickcat
 
         import_kickcat()
+    bus_state.settle()  # the state read's socket, closed meanwhile, is not the master's child's to hold
     return _restoring(isolated_bus(spec, lambda: open_live(parsed.kind, parsed.interface, limits=limits), limits),
                       found)
 
@@ -90,22 +87,19 @@ def open_guarded(spec: str, devices: Sequence[Device] = (), reset_bus: bool = Fa
     these commands take every slave through INIT too, and a running machine is never stopped by surprise."""
     parsed = parse_target(spec)
     if parsed.kind in MASTERS:
-        from ecattool.online.bus_state import guard
-
-        guard(parsed.interface, reset_bus)
+        bus_state.guard(parsed.interface, reset_bus)
+        bus_state.settle()
     return open_target(spec, devices)
 
 
 def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:
     """``bus``, closed with each slave put back in the state it was found in (bus_state.restore) first."""
-    from ecattool.online.bus_state import restore
-
     close = bus.closer
     bus.found = list(found)
 
     def closer() -> None:
         try:
-            bus.notes.extend(restore(bus.slaves, found))
+            bus.notes.extend(bus_state.restore(bus.slaves, found))
         finally:
             if close is not None:
                 close()
@@ -117,7 +111,5 @@ def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:
 def isolated_bus(spec: str, opener: Callable[[], LiveBus], limits: BusLimits | None = None) -> LiveBus:
     """The live bus ``opener`` opens, served from a child process (:class:`~ecattool.target.isolated.MasterProcess`);
     ``limits``: how long it may take (the slaves' timeouts)."""
-    from ecattool.target.isolated import MasterProcess, RemoteSlave
-
     master = MasterProcess(spec, opener, lambda bus: bus.slaves, limits=limits)
     return LiveBus(spec, [RemoteSlave(master, p) for p in master.positions], closer=master.close)

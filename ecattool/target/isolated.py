@@ -171,6 +171,7 @@ class Child:
             finally:
                 os._exit(code)
         self.pid = pid
+        self._pidfd = self._open_pidfd()
 
     def _reap(self, block: bool = False) -> None:
         if self.exitcode is None:
@@ -187,10 +188,26 @@ class Child:
         return self.exitcode is None
 
     def join(self, timeout_s: float) -> None:
-        """Wait for the child to end, ``timeout_s`` at the most (polled every 10 ms)."""
+        """Wait for the child to end, ``timeout_s`` at the most: woken by its end through a pidfd (Linux 5.3)
+        where there is one, else polled every 10 ms (a closing master is waited for by every command: the poll
+        alone cost a one-object ``sdo read`` 5 ms on average)."""
         deadline = time.monotonic() + timeout_s
+        if self.is_alive() and self._pidfd is not None:
+            select.select([self._pidfd], [], [], max(0.0, timeout_s))
         while self.is_alive() and time.monotonic() < deadline:
             time.sleep(0.01)
+
+    def _open_pidfd(self) -> int | None:
+        try:
+            return os.pidfd_open(self.pid)
+        except (AttributeError, OSError):  # not Linux, or a kernel before 5.3
+            return None
+
+    def close(self) -> None:
+        """Let go of the pidfd (the child itself is reaped by join or kill)."""
+        if self._pidfd is not None:
+            os.close(self._pidfd)
+            self._pidfd = None
 
     def kill(self) -> None:
         if self.is_alive():
@@ -322,6 +339,7 @@ class MasterProcess:
             self._proc.join(cap(CLOSE_TIMEOUT_S))
         self._stop()
         self._conn.close()
+        self._proc.close()
         if self._dead is None:
             self._dead = MasterGone(f"the master on {self.name} is closed")
 

@@ -114,3 +114,32 @@ def test_requests_are_described_as_a_manual_names_them() -> None:
     assert describe("sdo_upload", 3, (0x6041, 0)) == "reading 6041h:00 of slave 3"
     assert describe("sdo_download", 0, (0x6060, 0, b"\x01")) == "writing 6060h:00 of slave 0"
     assert describe("request_state", 1, (EcState.SAFEOP,)) == "requesting SAFEOP of slave 1"
+
+
+def test_a_closing_master_is_waited_for_without_a_poll(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every command waits for its master's child to end; the wait wakes when the child ends (a pidfd), not on a
+    10 ms poll that cost a one-object ``sdo read`` 5 ms on average (benchmarks/bench_sdo_read.py). A child still
+    running is waited for up to the time given, and no poll either."""
+    import os
+
+    from ecattool.target import isolated
+
+    def no_poll(seconds: float) -> None:
+        raise AssertionError(f"join polled ({seconds} s)")
+
+    read_end, write_end = os.pipe()
+    child = isolated.Child(lambda: os.read(read_end, 1) and None)  # runs until the parent writes
+    try:
+        monkeypatch.setattr(isolated.time, "sleep", no_poll)
+        child.join(0.2)  # still running: waited 0.2 s in select, then given up on
+        assert child.is_alive()
+        os.write(write_end, b"x")
+        child.join(30)  # ends now: woken by its end
+        assert child.exitcode == 0
+    finally:
+        monkeypatch.undo()
+        child.kill()
+        child.join(5)
+        child.close()
+        os.close(read_end)
+        os.close(write_end)

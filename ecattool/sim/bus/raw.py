@@ -43,7 +43,10 @@ def open_raw(ifname: str) -> socket.socket:
     if not hasattr(socket, "AF_PACKET"):
         raise TargetError("raw Ethernet needs Linux (AF_PACKET sockets)")
     try:
-        sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(ETHERTYPE_ECAT))
+        # protocol 0 here, the EtherType with bind: Linux hooks a socket made with a protocol into the receive
+        # path at once, and bind then takes the hook out again and waits for every CPU to let go of it (an RCU
+        # grace period: 10-15 ms on this project's virtual machines, paid by every `sdo read`'s state read)
+        sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, 0)
     except PermissionError:
         raise TargetError("raw sockets are not permitted here: run as root or with CAP_NET_RAW, e.g. in a "
                           "private network namespace ('unshare -rn', see docs/virtual-bus.md)") from None
