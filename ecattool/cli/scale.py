@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Literal
 
 import click
@@ -18,7 +19,9 @@ _FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
 _STARTUP_FORMATS = WRITE_FORMATS
 
 if TYPE_CHECKING:
+    from ecattool.scaling.explain import Explanation
     from ecattool.scaling.group import FactorGroup
+    from ecattool.target.base import SlaveTarget
 
 
 def _mechanics_options(f: Decorated) -> Decorated:
@@ -264,27 +267,20 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
                 firmware: str | None, slow_loop: str, counts_per_rev: str | None, as_json: bool,
                 html: str | None) -> None:
     """What one user unit is in counts, and what velocity and acceleration units mean, from object values."""
-    from fractions import Fraction
-
-    from ecattool.errors import InputError
-    from ecattool.od.numbers import parse_address, parse_int
+    from ecattool.errors import InputError, Location
     from ecattool.scaling import explain
-    from ecattool.scaling.explain import values_from_file
+    from ecattool.scaling.explain import FACTOR_INDICES, explain_family, values_from_file
     from ecattool.scaling.model import slow_loop_from
 
     _html_prerequisites(html, as_json)
-
     values = values_from_file(source) if source else {}
     if project:
         from ecattool.project.machine import load_machine
 
-        machine = load_machine(project)
-        machine.require_loaded()
-        chosen = machine.slave(drive_name)
-        machine.refuse_errors(f"explain drive {chosen.name!r}", allow_errors=allow_errors, slaves=[chosen])
+        chosen = load_machine(project).slave_to_act_on(drive_name, "explain", allow_errors=allow_errors)
         if click.get_current_context().get_parameter_source("family") is click.core.ParameterSource.DEFAULT:
-            family = chosen.family if chosen.family in _FAMILIES else "generic"
-        values.update(chosen.object_values(range(0x6089, 0x60AC)))
+            family = explain_family(chosen.family)
+        values.update(chosen.object_values(FACTOR_INDICES))
         source = source or project
     elif drive_name is not None:
         raise click.UsageError("--drive needs --project")
@@ -292,18 +288,36 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
         from ecattool.scaling.explain import read_values
 
         values.update(read_values(_target_slave(target, family, slave, firmware)))
+    values.update(_assignments(assignments))
+    if not values:
+        raise InputError("give object values (6093:01=… 6093:02=…) or --from FILE")
+    e = explain(values, family, slow_loop=slow_loop_from(slow_loop), counts_per_rev=_fraction(counts_per_rev),
+                firmware=firmware, location=Location(source) if source else None)
+    _render_explanation(e, values, source, html, as_json)
+
+
+def _assignments(assignments: tuple[str, ...]) -> dict[tuple[int, int], int]:
+    """The INDEX:SUB=VALUE arguments as object values."""
+    from ecattool.od.numbers import parse_address, parse_int
+
+    values: dict[tuple[int, int], int] = {}
     for a in assignments:
         if "=" not in a:
             raise click.BadParameter(f"{a!r}: write INDEX:SUB=VALUE, e.g. 6093:01=2000", param_hint="ASSIGNMENTS")
         addr, val = a.split("=", 1)
         values[parse_address(addr)] = parse_int(val)
-    if not values:
-        raise InputError("give object values (6093:01=… 6093:02=…) or --from FILE")
-    cpr = Fraction(parse_int(counts_per_rev)) if counts_per_rev else None
-    from ecattool.errors import Location
+    return values
 
-    e = explain(values, family, slow_loop=slow_loop_from(slow_loop), counts_per_rev=cpr, firmware=firmware,
-                location=Location(source) if source else None)
+
+def _fraction(number: str | None) -> Fraction | None:
+    from ecattool.od.numbers import parse_int
+
+    return Fraction(parse_int(number)) if number else None
+
+
+def _render_explanation(e: Explanation, values: dict[tuple[int, int], int], source: str | None, html: str | None,
+                        as_json: bool) -> None:
+    """The explanation as a page (--html), JSON or a table with its findings."""
     if html:
         from ecattool.report import scaling_html
 
@@ -322,30 +336,23 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
         con.print(f"{f.severity.value}: {f.message} [{f.rule}]")
 
 
-def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> Any:
+def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> SlaveTarget:
+    """The drive at ``slave`` of ``spec`` (a bare 'sim' holds the family's drive), in PRE-OP; the target errors
+    name the option they are about."""
     from ecattool.errors import InputError, SelectionError
-    from ecattool.online.targets import open_guarded
-    from ecattool.target.opener import SLAVE_TARGET_FORMS, parse_target, slave_at
+    from ecattool.online.targets import open_slave
+    from ecattool.scaling.explain import family_drives
+    from ecattool.target.opener import SLAVE_TARGET_FORMS, parse_target
 
     try:
-        parsed = parse_target(spec)
-        # the family's drive: a bare 'sim' holds it (at position 0), a real bus takes its timeouts
-        from ecattool import profiles
-
-        devices = [] if family == "generic" else [profiles.load(family, revision=firmware) if firmware
-                                                  else profiles.load(family)]
-        if parsed.own_slaves and not devices:
+        devices = family_drives(family, firmware)
+        if parse_target(spec).own_slaves and not devices:
             raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
-        found = slave_at(open_guarded(spec, devices, reset_bus_given()), 0 if parsed.own_slaves else slave)
+        return open_slave(spec, devices, slave, reset_bus_given(), in_preop=True)
     except SelectionError as exc:
         if exc.message.startswith("unknown target"):
             raise click.BadParameter(f"use {SLAVE_TARGET_FORMS}", param_hint="--target") from None
         raise InputError(f"--slave {slave}: {exc.message}") from None
-    if parsed.kind == "sim":
-        from ecattool.od.model import EcState
-
-        found.request_state(EcState.PREOP)
-    return found
 
 
 @scale.command("si", epilog="""\b

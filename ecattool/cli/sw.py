@@ -121,21 +121,15 @@ def from_foe_cmd(file: str, output: str | None) -> None:
 
 # ---------------------------------------------------------------------------------------------- targets
 def _open_target(spec: str, slave: int, device: Device | None = None) -> SlaveTarget:
-    """The slave at ``slave`` of the target ``spec`` (ecattool.target.opener): with ``sim``, a simulated bus of
-    ``device`` at that position (a Technosoft iPOS without one)."""
-    from ecattool.online.targets import open_guarded
-    from ecattool.target.opener import parse_target, slave_at
+    """The slave at ``slave`` of the target ``spec`` (ecattool.online.targets.open_slave): with ``sim``, a simulated
+    bus of ``device`` at that position (a Technosoft iPOS without one)."""
+    from ecattool.online.targets import open_slave
 
     if device is None:  # .sw images are Technosoft's: a bare 'sim' is an iPOS, a real bus gets its timeouts
         from ecattool import profiles
 
         device = profiles.load("technosoft-ipos")
-    tgt = open_guarded(spec, [device], reset_bus_given())
-    if not parse_target(spec).own_slaves:
-        return slave_at(tgt, slave)
-    found = slave_at(tgt, 0)  # the one simulated drive answers as the slave asked for
-    found.position = slave
-    return found
+    return open_slave(spec, [device], slave, reset_bus_given())
 
 
 def _project_drive(project: str, name: str | None, allow_errors: bool = False) -> tuple[Slave, str]:

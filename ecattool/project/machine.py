@@ -71,6 +71,15 @@ class Machine:
             raise InputError(f"the project {why}; choose one ({names})", Location(self.path))
         return chosen[0]
 
+    def slave_to_act_on(self, name: str | None, verb: str, *, allow_errors: bool = False) -> Slave:
+        """The slave ``name`` (see :meth:`slave`) for a command that acts on one drive of the project (``scale
+        explain --project``, ``sw … --project``): refused as :meth:`refuse_errors` says, for the project-level
+        errors and the slave's own (``cannot {verb} drive 'x': …``)."""
+        self.require_loaded()
+        chosen = self.slave(name)
+        self.refuse_errors(f"{verb} drive {chosen.name!r}", allow_errors=allow_errors, slaves=[chosen])
+        return chosen
+
     def errors(self, slaves: Sequence[Slave] | None = None) -> list[Finding]:
         """The error findings of the project (or only those of ``slaves``, with the project-level ones)."""
         errs = [f for f in self.findings if f.severity is Severity.ERROR]
