@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 import os
+import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from ecattool.cli.common import console, json_option, output_option, policy_option, print_json, table, write_output
 from ecattool.cli.paths import InputFile
+
+if TYPE_CHECKING:
+    from ecattool.sim.bus.serve import Served
 
 
 @click.group("sim", epilog="""\b
@@ -248,35 +253,40 @@ def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, 
     model cannot serve is refused before serving starts, in one line naming it (exit 1). Prints one line when
     the slaves are ready; stops cleanly on SIGINT/SIGTERM. See docs/virtual-bus.md.
     """
-    import sys
-
-    from ecattool.project.bus import devices_in_bus_order
-    from ecattool.sim.bus.serve import device_source, serve, virtual_slaves
-
+    from ecattool.project.bus import served_devices
+    from ecattool.sim.bus.serve import serve, virtual_slaves
 
     if iface is None and not list_only:
         raise click.UsageError("--iface is required (or --list to only show the slaves)")
-    named = []
-    for src in sources:  # a project file: its drives in bus order; anything else: a profile or an ESI file
-        if src.lower().endswith((".yaml", ".yml")):
-            named += devices_in_bus_order(src, allow_errors)
-        else:
-            named.append(device_source(src, product=product, revision=revision, selector=selector))
-    slaves = virtual_slaves(named)
+    slaves = virtual_slaves(served_devices(sources, product=product, revision=revision, selector=selector,
+                                           allow_errors=allow_errors))
     if list_only:
-        if as_json:
-            print_json([s.describe() for s in slaves])
-            return
-        t = table(None, ["position", "name", "vendor", "product code", "revision"])
-        for i, s in enumerate(slaves):
-            d = s.describe()
-            t.add_row(str(i), s.name, f"0x{d['vendor_id']:08X}", f"0x{d['product_code']:08X}", f"0x{d['revision']:08X}")
-        console().print(t)
+        _render_slaves(slaves, as_json)
         return
     assert iface is not None
+    fault = None
+    if misbehave is not None:  # the hostile-slave test's switch (tests/wire/test_wire_hostile_slave.py)
+        from ecattool.sim.bus.misbehave import apply
 
+        fault, workers = apply(misbehave, slaves), 1
+    serve(slaves, iface, _ready_line(slaves, iface, as_json), frames, fault=fault, workers=workers)
+
+
+def _render_slaves(slaves: list[Served], as_json: bool) -> None:
+    """``sim serve --list``: the slaves in bus order."""
+    if as_json:
+        print_json([s.describe() for s in slaves])
+        return
+    t = table(None, ["position", "name", "vendor", "product code", "revision"])
+    for i, s in enumerate(slaves):
+        d = s.describe()
+        t.add_row(str(i), s.name, f"0x{d['vendor_id']:08X}", f"0x{d['product_code']:08X}", f"0x{d['revision']:08X}")
+    console().print(t)
+
+
+def _ready_line(slaves: list[Served], iface: str, as_json: bool) -> Callable[[], None]:
+    """What the server prints once its slaves are ready: one line, flushed (whoever started it waits for it)."""
     def ready() -> None:
-        # one line, flushed: whoever started the server waits for it
         if as_json:
             import json
 
@@ -286,9 +296,4 @@ def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, 
             click.echo(f"serving {len(slaves)} slave{'s' if len(slaves) != 1 else ''} on {iface} ({names})")
         sys.stdout.flush()
 
-    fault = None
-    if misbehave is not None:  # the hostile-slave test's switch (tests/wire/test_wire_hostile_slave.py)
-        from ecattool.sim.bus.misbehave import apply
-
-        fault, workers = apply(misbehave, slaves), 1
-    serve(slaves, iface, ready, frames, fault=fault, workers=workers)
+    return ready
