@@ -284,37 +284,46 @@ def download(file: str | None, dry_run: bool, mode: str, force: bool, no_reset: 
     reported and the command exits 1; running it again repairs the drive.
     """
     if dry_run:
-        from ecattool.sw.plan import download_plan
-
         if file is None:
             raise click.UsageError("--dry-run needs the .sw FILE")
-        image = _image(file)
-        plan = download_plan(image, int(mode), reset=not no_reset, name=file)
-        if as_json:
-            print_json({"mode": int(mode), "commands": [
-                {"index": c.index, "subindex": c.subindex, "value": c.int_value, "size": len(c.data),
-                 "expect_reply": c.expect_reply, "comment": c.comment} for c in plan]})
-            return
-        t = table(f"{file}: {len(plan)} SDO writes ({mode}-bit)", ["#", "object", "value", "comment"])
-        for n, c in enumerate(plan, 1):
-            t.add_row(str(n), c.address, f"0x{c.int_value:0{2 * len(c.data)}X}", c.comment)
-        console().print(t)
+        _render_plan(file, int(mode), not no_reset, as_json)
         return
     tgt, image, file, _ = _target_and_image(file, target, slave, project, drive_name, preload, allow_errors)
     report = _run_download(image, tgt, int(mode), not no_reset, force, show_progress=not as_json)
     if as_json:
         print_json(report.to_json())
     else:
-        out = console()
-        if not report.written:
-            out.print(f"{file}: every block already matches the drive; nothing written", markup=False)
-        else:
-            out.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
-            for start, err in report.write_errors.items():
-                out.print(f"block 0x{start:04X}: write failed: {err}", markup=False)
-            out.print(_reset_line(report, no_reset))
+        _render_download(file, report, no_reset)
     if not report.ok:
         sys.exit(1)
+
+
+def _render_plan(file: str, mode: int, reset: bool, as_json: bool) -> None:
+    """``download --dry-run``: the SDO writes of the download plan, as JSON or a table."""
+    from ecattool.sw.plan import download_plan
+
+    plan = download_plan(_image(file), mode, reset=reset, name=file)
+    if as_json:
+        print_json({"mode": mode, "commands": [
+            {"index": c.index, "subindex": c.subindex, "value": c.int_value, "size": len(c.data),
+             "expect_reply": c.expect_reply, "comment": c.comment} for c in plan]})
+        return
+    t = table(f"{file}: {len(plan)} SDO writes ({mode}-bit)", ["#", "object", "value", "comment"])
+    for n, c in enumerate(plan, 1):
+        t.add_row(str(n), c.address, f"0x{c.int_value:0{2 * len(c.data)}X}", c.comment)
+    console().print(t)
+
+
+def _render_download(file: str, report: DownloadReport, no_reset: bool) -> None:
+    """What a download did: nothing to write, or the blocks after writing, the write errors and the reset."""
+    out = console()
+    if not report.written:
+        out.print(f"{file}: every block already matches the drive; nothing written", markup=False)
+        return
+    out.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
+    for start, err in report.write_errors.items():
+        out.print(f"block 0x{start:04X}: write failed: {err}", markup=False)
+    out.print(_reset_line(report, no_reset))
 
 
 def _reset_line(report: DownloadReport, no_reset: bool) -> str:
@@ -463,7 +472,7 @@ def upload(like: str | None, ranges: tuple[str, ...], target: str | None, slave:
     another .sw (--like) or given (--range). Every block is checked by the drive's own checksum (2069h/206Ah);
     the file is written only when all of them match (exit status 1 otherwise)."""
     from ecattool.sw.image import write
-    from ecattool.sw.upload import parse_range, upload as do_upload
+    from ecattool.sw.upload import upload as do_upload, upload_ranges
 
     ref = _image(like) if like else None
     device = None
@@ -471,9 +480,8 @@ def upload(like: str | None, ranges: tuple[str, ...], target: str | None, slave:
         rd, target, slave = _project_slave(project, drive_name, allow_errors, target, slave)
         device = rd.device
         ref = ref or rd.sw_image
-    spans = [parse_range(r) for r in ranges] or ([(b.start, b.end) for b in ref.blocks] if ref is not None else [])
     spec = target or "sim"
-    image, checks = do_upload(_open_preloaded(spec, slave, device, preload), spans)
+    image, checks = do_upload(_open_preloaded(spec, slave, device, preload), upload_ranges(ranges, ref))
     ok = all(c.ok for c in checks)
     text = write(image)
     to_file = output not in (None, "-")
