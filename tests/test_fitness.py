@@ -196,7 +196,6 @@ FAMILY_MODULES = ("profiles/", "sim/drive/family.py", "sim/drive/behaviour.py")
 #: today's other places that decide by family name, and how many comparisons each holds. The list may only
 #: shrink: move a rule into FamilyRules (or the family module) and lower or remove its count here.
 FAMILY_COMPARISONS_LEFT = {
-    "cli/scale.py": 2,
     "pdo/check.py": 1,
     "project/skeleton.py": 1,
     "project/steps.py": 1,

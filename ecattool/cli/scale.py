@@ -170,38 +170,40 @@ Examples:
 @file_output_option("--html", "html", help=_HTML_HELP)
 def compute_cmd(with_startup: bool, as_json: bool, output: str | None, html: str | None, **kwargs: Any) -> None:
     """Table of scaling objects: value (decimal, hex), meaning, exactness; approximations with ppm error."""
-    from ecattool.cli.common import dump_json
-
     _html_prerequisites(html, as_json or output == "-")
     inputs = tuple(kwargs[k] for k in ("spec", "esi") if kwargs.get(k) not in (None, "-"))
     group = _compute(kwargs)
     if html:
         from ecattool.report import scaling_html
-        from ecattool.scaling import explain
+        from ecattool.scaling.explain import explain_group
 
-        e = explain(group.values, group.family,
-                    factor_set=group.factor_set if group.family == "technosoft-ipos" else None)
-        mechanics = {k: str(v) for k, v in group.summary.items()
-                     if k in ("feedback", "gear (motor:load)", "transmission", "position unit", "velocity unit")}
-        write_output(html, scaling_html(e, group.values, mechanics, title=str(kwargs.get("spec") or "")), inputs)
+        write_output(html, scaling_html(explain_group(group), group.values, group.mechanics,
+                                        title=str(kwargs.get("spec") or "")), inputs)
         if html == "-":
             return
     if as_json or output:
-        data = group.to_json()
-        if with_startup:
-            data["startup"] = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
-                                "data": c.data.hex(), "type": c.type_name, "value": c.value, "comment": c.comment}
-                               for c in group.startup()]
-        if output:
-            write_output(output, dump_json(data) + "\n", inputs)
-        else:
-            print_json(data)
+        _write_json(group, with_startup, output, inputs)
         return
     _render(group)
     if with_startup:
         from ecattool.startup import export
 
         click.echo(export(group.startup(), "twincat"), nl=False)
+
+
+def _write_json(group: FactorGroup, with_startup: bool, output: str | None, inputs: tuple[str, ...]) -> None:
+    """The group as JSON (with its startup writes where asked for), to ``output`` or stdout."""
+    from ecattool.cli.common import dump_json
+
+    data = group.to_json()
+    if with_startup:
+        data["startup"] = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
+                            "data": c.data.hex(), "type": c.type_name, "value": c.value, "comment": c.comment}
+                           for c in group.startup()]
+    if output:
+        write_output(output, dump_json(data) + "\n", inputs)
+    else:
+        print_json(data)
 
 
 @scale.command("startup", epilog="""\b

@@ -14,6 +14,7 @@ from ecattool.scaling.units import decode_si_unit, describe_dimension
 
 if TYPE_CHECKING:
     from ecattool.esi.model import Device
+    from ecattool.scaling.group import FactorGroup
 
 Values = dict[tuple[int, int], int]
 
@@ -268,6 +269,12 @@ def _technosoft(e: Explanation, r: _Reader, T: Fraction, unit_name: dict[int, st
                 e.lines.append((label, f"dimension {dim}, notation {notation}: {describe_dimension(dim, notation)}; "
                                        f"0x{factor:04X} {'active' if active else 'INACTIVE (indices 0)'}"))
     return out
+
+
+def explain_group(group: FactorGroup) -> Explanation:
+    """A computed factor group read back as :func:`explain` reads a drive's values (its own factor set, which
+    only a Technosoft family has more than one of): the page ``scale compute --html`` draws."""
+    return explain(group.values, group.family, factor_set=group.factor_set)
 
 
 #: every object explain() understands (index, sub-indices)
