@@ -271,7 +271,7 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     """What one user unit is in counts, and what velocity and acceleration units mean, from object values."""
     from ecattool.errors import InputError, Location
     from ecattool.scaling import explain
-    from ecattool.scaling.explain import FACTOR_INDICES, explain_family, values_from_file
+    from ecattool.scaling.explain import FACTOR_INDICES, explain_family, read_values, values_from_file
     from ecattool.scaling.model import slow_loop_from
 
     _html_prerequisites(html, as_json)
@@ -287,8 +287,6 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     elif drive_name is not None:
         raise click.UsageError("--drive needs --project")
     if target:
-        from ecattool.scaling.explain import read_values
-
         values.update(read_values(_target_slave(target, family, slave, firmware)))
     values.update(_assignments(assignments))
     if not values:
