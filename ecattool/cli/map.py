@@ -89,23 +89,6 @@ def _load_mapping(device: Device, rx: tuple[str, ...], tx: tuple[str, ...], mapp
     return pdo.Mapping.from_text(rx=list(rx) if rx else None, tx=list(tx) if tx else None, device=device)
 
 
-def _load_config(startup_file: str, drive: str | None) -> SlaveConfig:
-    from ecattool.errors import SelectionError
-    from ecattool.startup import describe_slaves, import_file, select_slaves
-
-    configs = import_file(startup_file)
-    if drive is None:
-        if len(configs) == 1:
-            return configs[0]
-        raise SelectionError(f"{startup_file} has {len(configs)} slaves; choose one with --drive NAME "
-                             f"({describe_slaves(configs)})")
-    chosen = select_slaves(configs, [drive])
-    if len(chosen) > 1:
-        raise SelectionError(f"{startup_file} has {len(chosen)} slaves named {drive!r}; choose one by its bus "
-                             f"position with --drive N ({describe_slaves(configs)})")
-    return chosen[0]
-
-
 def _setup(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
            rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None = None,
            drive: str | None = None, device: Device | None = None,
@@ -117,7 +100,9 @@ def _setup(esi: str | None, selector: str | None, profile: str | None, product: 
             raise click.UsageError("give the mapping with one of --rx/--tx, --mapping or --startup")
         from ecattool import pdo
 
-        config = _load_config(startup_file, drive)
+        from ecattool.startup import import_file, select_one
+
+        config = select_one(import_file(startup_file), drive, startup_file)
         return device, pdo.mapping_from_config(config, device), config
     return device, _load_mapping(device, rx, tx, mapping_file), None
 
