@@ -138,17 +138,7 @@ def _project_drive(project: str, name: str | None, allow_errors: bool = False) -
     from ecattool.project.machine import load_machine
 
     machine = load_machine(project)
-    machine.require_loaded()
-    if name is None:
-        with_sw = [s for s in machine.slaves if s.drive.sw_config is not None]
-        name = with_sw[0].name if len(with_sw) == 1 else None
-    chosen = machine.slave(name)
-    if chosen.drive.sw_config is not None and chosen.sw_image is None:  # configured but unreadable: lint's why
-        why = next((f for f in chosen.findings if f.rule in ("PRJ002", "PRJ030") and f.severity.value == "error"), None)
-        if why is not None:
-            raise InputError(f"drive {chosen.name!r}: {why.message}", why.location)
-    machine.refuse_errors(f"use drive {chosen.name!r}", allow_errors=allow_errors, slaves=[chosen])
-    return chosen, machine.target
+    return machine.sw_drive(name, allow_errors=allow_errors), machine.target
 
 
 _target_option = click.option("--target", default=None,
