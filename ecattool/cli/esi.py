@@ -14,6 +14,7 @@ if TYPE_CHECKING:
 
     from ecattool.esi.model import Device, EsiFile
     from ecattool.findings import Finding
+    from ecattool.od.model import Entry, OdObject
 
 _FILE = click.argument("file", type=InputFile(allow_dash=True))
 
@@ -129,7 +130,7 @@ def _render_pdos(con: Console, dev: Device) -> None:
         con.print(t)
 
 
-def _default(o: Any, e: Any) -> str:
+def _default(o: OdObject, e: Entry) -> str:
     """An entry's ESI default as a value (``10000 (0x2710)``), decoded by its data type; --json keeps the hex."""
     from ecattool.od.display import value_text
 

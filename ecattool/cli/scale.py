@@ -21,6 +21,8 @@ _STARTUP_FORMATS = WRITE_FORMATS
 if TYPE_CHECKING:
     from ecattool.scaling.explain import Explanation
     from ecattool.scaling.group import FactorGroup
+    from ecattool.scaling.exact import Strategy
+    from ecattool.scaling.spec import Spec
     from ecattool.target.base import SlaveTarget
 
 
@@ -60,7 +62,8 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
           steps: str | None, feedback_on: Literal["motor", "load"] | None, gear: str | None, transmission: str | None,
           pos_unit: str | None,
           vel_unit: str | None, acc_unit: str | None, jerk_unit: str | None, slow_loop: str | None,
-          reverse: bool | None, approximation: str | None) -> Any:
+          reverse: bool | None,
+          approximation: Strategy | None) -> tuple[Spec, str, str | None, Strategy | None]:
     """(the spec the flags say, over SPEC where given; the family, firmware and approximation to use)."""
     from ecattool.errors import InputError
     from ecattool.scaling.model import length_unit, transmission_from
