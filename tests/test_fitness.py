@@ -14,7 +14,7 @@ fails naming the file and line that breaks its claim:
 * no ``family == "…"`` decision outside the built-in families (``profiles/``) and the simulator's family modules,
   but for today's remaining places, listed below with their counts: the list may only shrink;
 * the CLI is thin (issue 36.4): no function in ``cli/`` runs longer than :data:`CLI_BODY_LINES` lines, but for the
-  few declaring or rendering ones listed with their reason; a command reads its flags, builds the model, calls
+  few declaring ones listed with their reason; a command reads its flags, builds the model, calls
   the library and renders, and the work between lives in the packages.
 """
 
@@ -353,13 +353,16 @@ def test_the_adapters_are_the_ones_that_reach_their_bindings() -> None:
 
 # --- the CLI is thin (issue 36.4) --------------------------------------------------------------------------------
 
-#: how long a function of ``cli/`` may be, in lines of its body without the docstring: room for flags → model →
-#: action → render; what needs more is domain work for a package, or rendering for a ``_render_…`` helper
-CLI_BODY_LINES = 25
-#: the longer ones that remain, (module, function) → why it may: each only declares or renders. The list may only
-#: shrink (an entry whose function got shorter or went away fails below, so that the list stays true)
+#: how long a function of ``cli/`` may be, in lines of its body without the docstring (a command's docstring is its
+#: --help): room for flags → model → action → render; what needs more is domain work for a package, or rendering
+#: for a ``_render_…`` helper (issue 36.4: "no cli/ function longer than about 20 lines does domain work")
+CLI_BODY_LINES = 20
+#: the longer ones that remain, (module, function) → why it may: none does domain work. The list may only shrink
+#: (an entry whose function got shorter or went away fails below, so that the list stays true)
 CLI_LONG_ALLOWED = {
     ("cli/scale.py", "_mechanics_options"): "declares the mechanics flags (a list of click options), no logic",
+    ("cli/map.py", "_device_options"): "declares the device and mapping flags (a list of click options), no logic",
+    ("cli/__init__.py", "main"): "the entry point: one except clause per kind of error, each its message and exit code",
 }
 
 

@@ -50,12 +50,7 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, all
     """
     from ecattool.commission import commission as run
 
-    if report:
-        from ecattool.report import require
-
-        require()  # a missing extra is one line before any drive is touched
-        if report == "-" and (as_json or output == "-"):
-            raise click.UsageError("--report - and the JSON report cannot both go to stdout")
+    _report_prerequisites(report, as_json or output == "-")
     inputs = _checked_outputs(projects, output, report)
     con = None if as_json or report == "-" else console()
     reports = [run(path, target=target, on_drive=_drive_printer(con, path), allow_errors=allow_errors,
@@ -72,6 +67,16 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, all
 
         write_output(report, commission_html(reports), inputs)
     raise SystemExit(0 if data["ok"] else 1)
+
+
+def _report_prerequisites(report: str | None, json_to_stdout: bool) -> None:
+    """Before any drive is touched: the report extra is there, and the page and the JSON do not both go to stdout."""
+    if report:
+        from ecattool.report import require
+
+        require()  # a missing extra is one line before any drive is touched
+        if report == "-" and json_to_stdout:
+            raise click.UsageError("--report - and the JSON report cannot both go to stdout")
 
 
 def _checked_outputs(projects: tuple[str, ...], *outputs: str | None) -> list[str]:

@@ -217,14 +217,17 @@ def show_cmd(file: str, selector: str | None, policy: str, pdos: bool, objects: 
         print_json(show_document(dev, index, warnings, pdos=pdos, objects=objects, sm=sm, dc=dc, init=init_cmds))
         return
     _echo_warnings(warnings)
+    _render_show(dev, pdos=pdos, objects=objects, sm=sm, dc=dc, init=init_cmds)
+
+
+def _render_show(dev: Device, *, pdos: bool, objects: bool, sm: bool, dc: bool, init: bool) -> None:
+    """The identity and summary, then the sections asked for (none asked for: sync managers and PDOs)."""
     con = console()
     _render_identity(con, dev)
-    if not (pdos or objects or sm or dc or init_cmds):
-        _render_sm(con, dev)
-        _render_pdos(con, dev)
-        return
+    if not (pdos or objects or sm or dc or init):
+        sm = pdos = True
     for shown, render in ((sm, _render_sm), (pdos, _render_pdos), (objects, _render_objects), (dc, _render_dc),
-                          (init_cmds, _render_init)):
+                          (init, _render_init)):
         if shown:
             render(con, dev)
 

@@ -176,12 +176,7 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
     """Show the process image per sync manager: byte.bit offsets, sizes, names and types."""
     from ecattool import pdo
 
-    if svg:
-        from ecattool.report import require
-
-        if svg == "-" and (as_json or output == "-"):
-            raise click.UsageError("--svg - and the JSON layout cannot both go to stdout")
-        require("jinja2")  # before any work: a missing extra is one line, not a half-done run
+    _svg_prerequisites(svg, as_json or output == "-")
     device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, drive,
                                 policy=policy)
     # a PDO kept as the device has it is drawn as the slave powers on with it: where the ESI's dictionary and PDO
@@ -196,6 +191,17 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
         if svg == "-":
             return
     _render_layout(lay, dictionary_pdos, output, inputs, as_json or output not in (None, "-"))
+
+
+def _svg_prerequisites(svg: str | None, json_to_stdout: bool) -> None:
+    """Before any work: the report extra is there (a missing one is one line, not a half-done run), and the
+    diagram and the JSON do not both go to stdout."""
+    if svg:
+        from ecattool.report import require
+
+        if svg == "-" and json_to_stdout:
+            raise click.UsageError("--svg - and the JSON layout cannot both go to stdout")
+        require("jinja2")
 
 
 def _inputs(*paths: str | None) -> tuple[str, ...]:

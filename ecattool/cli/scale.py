@@ -274,18 +274,13 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     """What one user unit is in counts, and what velocity and acceleration units mean, from object values."""
     from ecattool.errors import InputError, Location
     from ecattool.scaling import explain
-    from ecattool.scaling.explain import FACTOR_INDICES, explain_family, read_values, values_from_file
+    from ecattool.scaling.explain import read_values, values_from_file
     from ecattool.scaling.model import slow_loop_from
 
     _html_prerequisites(html, as_json)
     values = values_from_file(source) if source else {}
     if project:
-        from ecattool.project.machine import load_machine
-
-        chosen = load_machine(project).slave_to_act_on(drive_name, "explain", allow_errors=allow_errors)
-        if click.get_current_context().get_parameter_source("family") is click.core.ParameterSource.DEFAULT:
-            family = explain_family(chosen.family)
-        values.update(chosen.object_values(FACTOR_INDICES))
+        family = _project_values(project, drive_name, allow_errors, family, values)
         source = source or project
     elif drive_name is not None:
         raise click.UsageError("--drive needs --project")
@@ -297,6 +292,20 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     e = explain(values, family, slow_loop=slow_loop_from(slow_loop), counts_per_rev=_fraction(counts_per_rev),
                 firmware=firmware, location=Location(source) if source else None)
     _render_explanation(e, values, source, html, as_json)
+
+
+def _project_values(project: str, drive_name: str | None, allow_errors: bool, family: str,
+                    values: dict[tuple[int, int], int]) -> str:
+    """Add what the project's drive holds after its startup list to ``values``; the family to explain them in
+    (the drive's, unless --profile was given)."""
+    from ecattool.project.machine import load_machine
+    from ecattool.scaling.explain import FACTOR_INDICES, explain_family
+
+    chosen = load_machine(project).slave_to_act_on(drive_name, "explain", allow_errors=allow_errors)
+    values.update(chosen.object_values(FACTOR_INDICES))
+    if click.get_current_context().get_parameter_source("family") is click.core.ParameterSource.DEFAULT:
+        return explain_family(chosen.family)
+    return family
 
 
 def _assignments(assignments: tuple[str, ...]) -> dict[tuple[int, int], int]:

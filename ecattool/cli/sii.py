@@ -134,12 +134,7 @@ def _category_tables(d: dict[str, Any]) -> list[Table]:
     for cat in d["categories"]:
         ct.add_row(f"0x{cat['offset']:04X}", str(cat["type"]), cat["name"] + (" (!)" if cat.get("problem") else ""),
                    str(cat["words"]))
-    out = [ct]
-    if d["strings"]:
-        st = table("Strings", ["#", "text"])
-        for i, s in enumerate(d["strings"], 1):
-            st.add_row(str(i), s)
-        out.append(st)
+    out = [ct, *_strings_table(d["strings"])]
     if d["general"]:
         gt = table("General", ["field", "value"])
         for k, v in d["general"].items():
@@ -152,6 +147,16 @@ def _category_tables(d: dict[str, Any]) -> list[Table]:
                         s["kind"] or "unused")
         out.append(smt)
     return out
+
+
+def _strings_table(strings: list[str]) -> list[Table]:
+    """The strings category, numbered as the other categories refer to them (none where the image has none)."""
+    if not strings:
+        return []
+    st = table("Strings", ["#", "text"])
+    for i, s in enumerate(strings, 1):
+        st.add_row(str(i), s)
+    return [st]
 
 
 def _pdo_tables(d: dict[str, Any]) -> list[Table]:

@@ -141,20 +141,29 @@ def export_cmd(source: str | None, project: str | None, from_format: str | None,
     if project is not None:
         if from_format is not None:
             raise click.UsageError("--from-format belongs to --from, not --project")
-        from ecattool.project.export import export_warnings, slave_configs
         from ecattool.project.loader import project_inputs
-        from ecattool.project.machine import load_machine
 
-        machine = load_machine(project)
-        configs = select_slaves(slave_configs(machine, allow_errors), drives)
-        for f in export_warnings(machine, {c.name for c in configs}):
-            click.echo(str(f), err=True)
+        configs = _project_configs(project, drives, allow_errors)
         write_startup(_with_cycle(configs, sync0_cycle), fmt, output, tuple(project_inputs([project])), lossy)
         return
     assert source is not None
     configs = select_slaves(_read(source, from_format), drives)
     _report_import(configs, source)
     write_startup(_with_cycle(configs, sync0_cycle), fmt, output, (source,), lossy)
+
+
+def _project_configs(project: str, drives: tuple[str, ...], allow_errors: bool) -> list[SlaveConfig]:
+    """The slave configurations of the project's drives (those ``drives`` name, else all), its export warnings
+    for them on stderr."""
+    from ecattool.project.export import export_warnings, slave_configs
+    from ecattool.project.machine import load_machine
+    from ecattool.startup import select_slaves
+
+    machine = load_machine(project)
+    configs = select_slaves(slave_configs(machine, allow_errors), drives)
+    for f in export_warnings(machine, {c.name for c in configs}):
+        click.echo(str(f), err=True)
+    return configs
 
 
 @startup.command("convert", epilog="""\b

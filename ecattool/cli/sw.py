@@ -64,9 +64,7 @@ def info(file: str, as_json: bool) -> None:
 
     Exit status 1 when an integrity word (setup-table checksum, identification sums, setup pointer) is wrong.
     """
-    from ecattool.sw.layout import describe, integrity_findings
-
-    from rich.text import Text
+    from ecattool.sw.layout import integrity_findings
 
     image = _image(file)
     findings = integrity_findings(image)
@@ -74,18 +72,26 @@ def info(file: str, as_json: bool) -> None:
         print_json({"blocks": [{"start": b.start, "end": b.end, "count": b.count, "checksum": b.checksum}
                                for b in image.blocks]})
     else:
-        t = table(f"{file}: {len(image)} blocks, {image.total_words} words",
-                  ["start", "end", "words", "checksum", "2069h", "block"])
-        for i in describe(image):
-            b = i.block
-            t.add_row(f"0x{b.start:04X}", f"0x{b.end:04X}", str(b.count), f"0x{b.checksum:04X}",
-                      f"0x{b.checksum_request:08X}", Text(i.description))
-        c = console()
-        c.print(t)
+        console().print(_blocks_table(file, image))
         for f in findings:
             click.echo(str(f))
     if findings:
         sys.exit(1)
+
+
+def _blocks_table(file: str, image: SwImage) -> Table:
+    """One row a block: range, words, checksum, the 2069h value that asks the drive for it, what the block is."""
+    from rich.text import Text
+
+    from ecattool.sw.layout import describe
+
+    t = table(f"{file}: {len(image)} blocks, {image.total_words} words",
+              ["start", "end", "words", "checksum", "2069h", "block"])
+    for i in describe(image):
+        b = i.block
+        t.add_row(f"0x{b.start:04X}", f"0x{b.end:04X}", str(b.count), f"0x{b.checksum:04X}",
+                  f"0x{b.checksum_request:08X}", Text(i.description))
+    return t
 
 
 # ------------------------------------------------------------------------------------------------- FoE
@@ -473,14 +479,19 @@ def upload(like: str | None, ranges: tuple[str, ...], target: str | None, slave:
     spec = target or "sim"
     image, checks = do_upload(_open_preloaded(spec, slave, device, preload), upload_ranges(ranges, ref))
     ok = all(c.ok for c in checks)
-    text = write(image)
+    _write_upload(write(image), checks, ok, output, tuple(x for x in (like, project, preload) if x), as_json, spec)
+    if not ok:
+        sys.exit(1)
+
+
+def _write_upload(text: bytes, checks: list[BlockCheck], ok: bool, output: str | None, inputs: tuple[str, ...],
+                  as_json: bool, spec: str) -> None:
+    """The .sw read, written only when every block checks out, and the checks as JSON or a table."""
     to_file = output not in (None, "-")
     if ok and (to_file or not as_json):
-        write_output(output, text, tuple(x for x in (like, project, preload) if x))
+        write_output(output, text, inputs)
     if as_json:
         print_json({"ok": ok, "output": output if ok and to_file else None, "blocks": [c.to_json() for c in checks],
                     **({} if to_file or not ok else {"sw": text.decode("ascii", "replace")})})
     elif to_file:
         console().print(_checks_table(f"read from {spec}" + ("" if ok else ": NOT written"), checks))
-    if not ok:
-        sys.exit(1)
