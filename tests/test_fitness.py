@@ -393,17 +393,18 @@ def test_the_cli_is_thin() -> None:
     assert not grown, (f"a cli/ function longer than {CLI_BODY_LINES} lines: move its domain work into the package "
                        "it belongs to (a typed library function), and its printing into _render_… helpers:\n"
                        + "\n".join(grown))
-    stale = [f"{rel} {name}: {why}" for (rel, name), why in CLI_LONG_ALLOWED.items() if (rel, name) not in found]
+    stale = [f"{rel} {name}: {why}" for (rel, name), why in CLI_LONG_ALLOWED.items()
+             if (rel, name) not in found]
     assert not stale, "no longer long (or gone): remove from CLI_LONG_ALLOWED:\n" + "\n".join(stale)
 
 
 def test_the_thin_cli_check_finds_a_long_function() -> None:
-    """The check above looks at what it should: a command that assembles its inputs in 30 lines is found, one of
-    20 lines with a docstring of any length is not."""
+    """The check above looks at what it should: a command that assembles its inputs in 30 lines is found, one
+    of 20 lines with a docstring of any length is not."""
     def command(name: str, lines: int, doc_lines: int = 1) -> str:
         doc = '    """' + "\n    ".join(["help"] * doc_lines) + '"""\n'
         return f"def {name}(a):\n" + doc + "".join(f"    a = a + {i}\n" for i in range(lines))
     tree = ast.parse(command("assemble_cmd", 30) + command("render_cmd", 20, doc_lines=40))
     found = long_cli_functions({"cli/planted.py": tree, "scaling/planted.py": tree})
     assert list(found) == [("cli/planted.py", "assemble_cmd")], found
-    assert "ecattool/cli/planted.py:1: assemble_cmd() has 30 lines" == found[("cli/planted.py", "assemble_cmd")]
+    assert found[("cli/planted.py", "assemble_cmd")] == "ecattool/cli/planted.py:1: assemble_cmd() has 30 lines"
