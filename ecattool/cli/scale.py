@@ -280,8 +280,8 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     _html_prerequisites(html, as_json)
     values = values_from_file(source) if source else {}
     if project:
-        family = _project_values(project, drive_name, allow_errors, family, values)
-        source = source or project
+        held, family = _project_values(project, drive_name, allow_errors, family)
+        values, source = {**values, **held}, source or project
     elif drive_name is not None:
         raise click.UsageError("--drive needs --project")
     if target:
@@ -294,18 +294,17 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
     _render_explanation(e, values, source, html, as_json)
 
 
-def _project_values(project: str, drive_name: str | None, allow_errors: bool, family: str,
-                    values: dict[tuple[int, int], int]) -> str:
-    """Add what the project's drive holds after its startup list to ``values``; the family to explain them in
-    (the drive's, unless --profile was given)."""
+def _project_values(project: str, drive_name: str | None, allow_errors: bool,
+                    family: str) -> tuple[dict[tuple[int, int], int], str]:
+    """(what the project's drive holds after its startup list, the family to explain it in: the drive's, unless
+    --profile was given)."""
     from ecattool.project.machine import load_machine
     from ecattool.scaling.explain import FACTOR_INDICES, explain_family
 
     chosen = load_machine(project).slave_to_act_on(drive_name, "explain", allow_errors=allow_errors)
-    values.update(chosen.object_values(FACTOR_INDICES))
     if click.get_current_context().get_parameter_source("family") is click.core.ParameterSource.DEFAULT:
-        return explain_family(chosen.family)
-    return family
+        family = explain_family(chosen.family)
+    return chosen.object_values(FACTOR_INDICES), family
 
 
 def _assignments(assignments: tuple[str, ...]) -> dict[tuple[int, int], int]:
