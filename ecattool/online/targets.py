@@ -96,29 +96,6 @@ def open_guarded(spec: str, devices: Sequence[Device] = (), reset_bus: bool = Fa
     return open_target(spec, devices)
 
 
-def open_slave(spec: str, devices: Sequence[Device], position: int, reset_bus: bool = False, *,
-               in_preop: bool = False) -> SlaveTarget:
-    """The one slave a command acts on (``sw verify/download/upload``, ``scale explain --target``): the slave at bus
-    ``position`` of the target ``spec``, opened by :func:`open_guarded` with ``devices`` (what a bare ``sim``
-    simulates, and whose timeouts a real bus takes). A bare ``sim`` holds just those devices: its first drive
-    answers as the slave asked for (its ``position`` is ``position``). ``in_preop``: a simulated slave is taken to
-    PRE-OP first (it starts in INIT; a real master opens its slaves in PRE-OP)."""
-    from ecattool.target.opener import slave_at
-
-    parsed = parse_target(spec)
-    tgt = open_guarded(spec, devices, reset_bus)
-    if not parsed.own_slaves:
-        found = slave_at(tgt, position)
-    else:
-        found = slave_at(tgt, 0)
-        found.position = position
-    if in_preop and parsed.kind == "sim":
-        from ecattool.od.model import EcState
-
-        found.request_state(EcState.PREOP)
-    return found
-
-
 def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:
     """``bus``, closed with each slave put back in the state it was found in (bus_state.restore) first."""
     from ecattool.online.bus_state import restore
@@ -144,3 +121,26 @@ def isolated_bus(spec: str, opener: Callable[[], LiveBus], limits: BusLimits | N
 
     master = MasterProcess(spec, opener, lambda bus: bus.slaves, limits=limits)
     return LiveBus(spec, [RemoteSlave(master, p) for p in master.positions], closer=master.close)
+
+
+def open_slave(spec: str, devices: Sequence[Device], position: int, reset_bus: bool = False, *,
+               in_preop: bool = False) -> SlaveTarget:
+    """The one slave a command acts on (``sw verify/download/upload``, ``scale explain --target``): the slave at bus
+    ``position`` of the target ``spec``, opened by :func:`open_guarded` with ``devices`` (what a bare ``sim``
+    simulates, and whose timeouts a real bus takes). A bare ``sim`` holds just those devices: its first drive
+    answers as the slave asked for (its ``position`` is ``position``). ``in_preop``: a simulated slave is taken to
+    PRE-OP first (it starts in INIT; a real master opens its slaves in PRE-OP)."""
+    from ecattool.target.opener import slave_at
+
+    parsed = parse_target(spec)
+    tgt = open_guarded(spec, devices, reset_bus)
+    if not parsed.own_slaves:
+        found = slave_at(tgt, position)
+    else:
+        found = slave_at(tgt, 0)
+        found.position = position
+    if in_preop and parsed.kind == "sim":
+        from ecattool.od.model import EcState
+
+        found.request_state(EcState.PREOP)
+    return found
