@@ -12,7 +12,10 @@ fails naming the file and line that breaks its claim:
 * each master has one adapter module (issue 36.3): only ``target/pysoem.py`` imports pysoem or touches its
   master's and slaves' objects, only ``target/kickcat.py`` KickCAT's; only the opener constructs a target;
 * no ``family == "…"`` decision outside the built-in families (``profiles/``) and the simulator's family modules,
-  but for today's remaining places, listed below with their counts: the list may only shrink.
+  but for today's remaining places, listed below with their counts: the list may only shrink;
+* the CLI is thin (issue 36.4): no function in ``cli/`` runs longer than :data:`CLI_BODY_LINES` lines, but for the
+  few declaring ones listed with their reason; a command reads its flags, builds the model, calls
+  the library and renders, and the work between lives in the packages.
 """
 
 from __future__ import annotations
@@ -196,7 +199,6 @@ FAMILY_MODULES = ("profiles/", "sim/drive/family.py", "sim/drive/behaviour.py")
 #: today's other places that decide by family name, and how many comparisons each holds. The list may only
 #: shrink: move a rule into FamilyRules (or the family module) and lower or remove its count here.
 FAMILY_COMPARISONS_LEFT = {
-    "cli/scale.py": 2,
     "pdo/check.py": 1,
     "project/skeleton.py": 1,
     "project/steps.py": 1,
@@ -369,3 +371,62 @@ def test_the_adapters_are_the_ones_that_reach_their_bindings() -> None:
         uses = binding_uses(moved)
         assert any(f"import {binding}" in u for u in uses), (adapter, uses)
         assert any(a in u for u in uses for a in BINDING_ATTRIBUTES[binding]), (adapter, uses)
+
+
+# --- the CLI is thin (issue 36.4) --------------------------------------------------------------------------------
+
+#: how long a function of ``cli/`` may be, in lines of its body without the docstring (a command's docstring is its
+#: --help): room for flags → model → action → render; what needs more is domain work for a package, or rendering
+#: for a ``_render_…`` helper (issue 36.4: "no cli/ function longer than about 20 lines does domain work")
+CLI_BODY_LINES = 20
+#: the longer ones that remain, (module, function) → why it may: none does domain work. The list may only shrink
+#: (an entry whose function got shorter or went away fails below, so that the list stays true)
+CLI_LONG_ALLOWED = {
+    ("cli/scale.py", "_mechanics_options"): "declares the mechanics flags (a list of click options), no logic",
+    ("cli/map.py", "_device_options"): "declares the device and mapping flags (a list of click options), no logic",
+    ("cli/__init__.py", "main"): "the entry point: one except clause per kind of error, each its message and exit code",
+}
+
+
+def _body_lines(node: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
+    body = node.body
+    if (len(body) > 1 and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant)
+            and isinstance(body[0].value.value, str)):
+        body = body[1:]  # a click command's docstring is its --help text, not code
+    return (node.end_lineno or node.lineno) - body[0].lineno + 1
+
+
+def long_cli_functions(trees: dict[str, ast.Module]) -> dict[tuple[str, str], str]:
+    """(module, function) → where and how long, for every function of ``cli/`` longer than :data:`CLI_BODY_LINES`
+    (nested functions counted on their own and within their enclosing one)."""
+    found = {}
+    for rel, tree in trees.items():
+        if not rel.startswith("cli/"):
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and _body_lines(node) > CLI_BODY_LINES:
+                found[(rel, node.name)] = f"{_where(rel, node)}: {node.name}() has {_body_lines(node)} lines"
+    return found
+
+
+def test_the_cli_is_thin() -> None:
+    found = long_cli_functions(_trees())
+    grown = [where for key, where in sorted(found.items()) if key not in CLI_LONG_ALLOWED]
+    assert not grown, (f"a cli/ function longer than {CLI_BODY_LINES} lines: move its domain work into the package "
+                       "it belongs to (a typed library function), and its printing into _render_… helpers:\n"
+                       + "\n".join(grown))
+    stale = [f"{rel} {name}: {why}" for (rel, name), why in CLI_LONG_ALLOWED.items()
+             if (rel, name) not in found]
+    assert not stale, "no longer long (or gone): remove from CLI_LONG_ALLOWED:\n" + "\n".join(stale)
+
+
+def test_the_thin_cli_check_finds_a_long_function() -> None:
+    """The check above looks at what it should: a command that assembles its inputs in 30 lines is found, one
+    of 20 lines with a docstring of any length is not."""
+    def command(name: str, lines: int, doc_lines: int = 1) -> str:
+        doc = '    """' + "\n    ".join(["help"] * doc_lines) + '"""\n'
+        return f"def {name}(a):\n" + doc + "".join(f"    a = a + {i}\n" for i in range(lines))
+    tree = ast.parse(command("assemble_cmd", 30) + command("render_cmd", 20, doc_lines=40))
+    found = long_cli_functions({"cli/planted.py": tree, "scaling/planted.py": tree})
+    assert list(found) == [("cli/planted.py", "assemble_cmd")], found
+    assert found[("cli/planted.py", "assemble_cmd")] == "ecattool/cli/planted.py:1: assemble_cmd() has 30 lines"

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import sys
+from typing import TYPE_CHECKING
 
 import click
 
 from ecattool.cli.common import dump_json, file_output_option, output_option, write_output
 from ecattool.cli.online import allow_errors_option, project_bus, project_machine, target_option
 from ecattool.cli.paths import InputFile
+
+if TYPE_CHECKING:
+    from ecattool.online.audit import AuditReport
 
 
 @click.command(epilog="""\b
@@ -37,22 +41,7 @@ def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool
     machine = project_machine(project, "audit", allow_errors)
     with project_bus(machine, target) as live:
         report = do_audit(machine, live, sw_checksums=sw_checksums, allow_errors=allow_errors)
-    fmt = "json" if as_json else fmt
-    if fmt == "json":
-        text = dump_json(report.to_json()) + "\n"
-    elif fmt == "sarif":
-        from ecattool.project.report import to_sarif
-
-        text = dump_json(to_sarif(report.findings())) + "\n"
-    else:
-        lines = [f"{project} on {target}: {report.checked} values checked, "
-                 + ("no drift" if report.ok else f"{len(report.drifts)} drifted")]
-        lines += [f"  {d.drive} (slave {d.position}) {d.address}: {d.message}" for d in report.drifts]
-        if report.process_data:
-            lines.append("process data (objects in the RxPDOs: the master writes them every cycle, not compared):")
-            lines += [f"  {p['drive']} (slave {p['position']}) {p['address']}: the project sets {p['project']!r}, "
-                      f"read {p['read']!r}" for p in report.process_data]
-        text = "\n".join(lines) + "\n"
+    text = _audit_text(report, "json" if as_json else fmt, f"{project} on {target}")
     write_output(output, text, (project,))
     if html is not None:
         from ecattool.report.audit import audit_html
@@ -60,3 +49,21 @@ def audit(project: str, target: str, fmt: str, as_json: bool, sw_checksums: bool
         write_output(html, audit_html(report), (project,))
     if not report.ok:
         sys.exit(1)
+
+
+def _audit_text(report: AuditReport, fmt: str, title: str) -> str:
+    """The report as JSON, SARIF or text (the drifts, then the process-data objects left uncompared)."""
+    if fmt == "json":
+        return dump_json(report.to_json()) + "\n"
+    if fmt == "sarif":
+        from ecattool.project.report import to_sarif
+
+        return dump_json(to_sarif(report.findings())) + "\n"
+    lines = [f"{title}: {report.checked} values checked, "
+             + ("no drift" if report.ok else f"{len(report.drifts)} drifted")]
+    lines += [f"  {d.drive} (slave {d.position}) {d.address}: {d.message}" for d in report.drifts]
+    if report.process_data:
+        lines.append("process data (objects in the RxPDOs: the master writes them every cycle, not compared):")
+        lines += [f"  {p['drive']} (slave {p['position']}) {p['address']}: the project sets {p['project']!r}, "
+                  f"read {p['read']!r}" for p in report.process_data]
+    return "\n".join(lines) + "\n"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import click
@@ -11,7 +12,9 @@ from ecattool.cli.online import reset_bus_given, reset_bus_option
 from ecattool.cli.paths import InputFile
 
 if TYPE_CHECKING:
-    from ecattool.commission.runner import DriveReport
+    from rich.console import Console
+
+    from ecattool.commission.runner import CommissionReport, DriveReport
 
 
 @click.command(
@@ -47,40 +50,16 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, all
     """
     from ecattool.commission import commission as run
 
-    inputs: list[str] = []
-    if report:
-        from ecattool.report import require
-
-        require()  # a missing extra is one line before any drive is touched
-        if report == "-" and (as_json or output == "-"):
-            raise click.UsageError("--report - and the JSON report cannot both go to stdout")
-    for out in (output, report):
-        if out not in (None, "-"):  # refused before the drives are touched, not after
-            from ecattool.cli.common import check_output
-            from ecattool.project.loader import project_inputs
-
-            inputs = inputs or project_inputs(projects)  # the projects and the ESI/.sw files they name
-            check_output(out, inputs)
-    reports = []
+    _report_prerequisites(report, as_json or output == "-")
+    inputs = _checked_outputs(projects, output, report)
     con = None if as_json or report == "-" else console()
-    for path in projects:
-        def show(dr: DriveReport, path: str = path) -> None:
-            if con is None:
-                return
-            mark = "[green]OK[/green]" if dr.ok else "[red]FAILED[/red]"
-            con.print(f"{path}: drive {dr.name!s} (position {dr.position}): {mark}")
-            for s in dr.steps:
-                con.print(f"    {'ok ' if s.ok else 'ERR'} {s.name}: {s.detail}", markup=False,
-                          style=None if s.ok else "red")
-        reports.append(run(path, target=target, on_drive=show, allow_errors=allow_errors, reset_bus=reset_bus_given()))
+    reports = [run(path, target=target, on_drive=_drive_printer(con, path), allow_errors=allow_errors,
+                   reset_bus=reset_bus_given()) for path in projects]
     data = {"ok": all(r.ok for r in reports), "projects": [r.to_json() for r in reports]}
     if as_json:
         click.echo(dump_json(data))
     elif con is not None:
-        n = sum(len(r.drives) for r in reports)
-        bad = sum(1 for r in reports for d in r.drives if not d.ok)
-        con.print(f"{n - bad} of {n} drive(s) commissioned" + (f", {bad} failed" if bad else ""),
-                  style="green" if not bad else "red")
+        _render_summary(con, reports)
     if output:
         write_output(output, dump_json(data) + "\n", inputs)
     if report:
@@ -88,3 +67,48 @@ def commission(projects: tuple[str, ...], target: str | None, as_json: bool, all
 
         write_output(report, commission_html(reports), inputs)
     raise SystemExit(0 if data["ok"] else 1)
+
+
+def _report_prerequisites(report: str | None, json_to_stdout: bool) -> None:
+    """Before any drive is touched: the report extra is there, and the page and the JSON do not both go to stdout."""
+    if report:
+        from ecattool.report import require
+
+        require()  # a missing extra is one line before any drive is touched
+        if report == "-" and json_to_stdout:
+            raise click.UsageError("--report - and the JSON report cannot both go to stdout")
+
+
+def _checked_outputs(projects: tuple[str, ...], *outputs: str | None) -> list[str]:
+    """The projects and the ESI/.sw files they name, where an output goes to a file: each output is refused
+    before the drives are touched, not after, when it would replace one of them."""
+    inputs: list[str] = []
+    for out in outputs:
+        if out not in (None, "-"):
+            from ecattool.cli.common import check_output
+            from ecattool.project.loader import project_inputs
+
+            inputs = inputs or project_inputs(projects)
+            check_output(out, inputs)
+    return inputs
+
+
+def _drive_printer(con: Console | None, path: str) -> Callable[[DriveReport], None]:
+    """What is printed as each drive of ``path`` is done: OK or FAILED, and its steps (nothing without ``con``)."""
+    def show(dr: DriveReport) -> None:
+        if con is None:
+            return
+        mark = "[green]OK[/green]" if dr.ok else "[red]FAILED[/red]"
+        con.print(f"{path}: drive {dr.name!s} (position {dr.position}): {mark}")
+        for s in dr.steps:
+            con.print(f"    {'ok ' if s.ok else 'ERR'} {s.name}: {s.detail}", markup=False,
+                      style=None if s.ok else "red")
+
+    return show
+
+
+def _render_summary(con: Console, reports: list[CommissionReport]) -> None:
+    n = sum(len(r.drives) for r in reports)
+    bad = sum(1 for r in reports for d in r.drives if not d.ok)
+    con.print(f"{n - bad} of {n} drive(s) commissioned" + (f", {bad} failed" if bad else ""),
+              style="green" if not bad else "red")

@@ -2,17 +2,24 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from ecattool.cli.common import console, json_option, output_option, print_json, table, write_output
 from ecattool.cli.paths import InputFile
 
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from ecattool.esi.model import Device, EsiFile
+    from ecattool.findings import Finding
+    from ecattool.od.model import Entry, OdObject
+
 _FILE = click.argument("file", type=InputFile(allow_dash=True))
 
 
-def _load(file: str, lazy: bool = False) -> Any:
+def _load(file: str, lazy: bool = False) -> EsiFile:
     """Load FILE, or standard input for '-' (``lazy``: devices built when selected)."""
     from ecattool.esi import load, load_bytes
 
@@ -46,26 +53,6 @@ def esi() -> None:
 # --------------------------------------------------------------------------------------------
 # devices
 # --------------------------------------------------------------------------------------------
-def device_summary(dev: Any, index: int) -> dict[str, Any]:
-    return {
-        "index": index,
-        "type": dev.type_name,
-        "name": dev.name,
-        "vendor_id": dev.vendor_id,
-        "product_code": dev.product_code,
-        "revision": dev.revision,
-        "group": dev.group_type,
-        "rx_pdo_count": len(dev.rx_pdos),
-        "tx_pdo_count": len(dev.tx_pdos),
-        "object_count": len(dev.dictionary),
-        "sm_count": len(dev.sync_managers),
-        "protocols": list(dev.mailbox.protocols) if dev.mailbox else [],
-        "modules": len(dev.modules),
-        "slots": len(dev.slots),
-        "line": dev.location.line if dev.location else None,
-    }
-
-
 @esi.command("devices", epilog="""\b
 Examples:
   ecattool esi devices samples/esi/etg2001_cia402.xml
@@ -82,6 +69,7 @@ def devices_cmd(file: str, as_json: bool) -> None:
     under "warnings".
     """
     from ecattool.esi import device_findings, file_findings
+    from ecattool.esi.describe import device_summary
 
     doc = _load(file)
     rows = [device_summary(d, i) for i, d in enumerate(doc.devices)]
@@ -95,8 +83,15 @@ def devices_cmd(file: str, as_json: bool) -> None:
         if skipped:
             raise click.exceptions.Exit(1)
         return
-    con = console()
-    name = "<stdin>" if file == "-" else file
+    _render_devices("<stdin>" if file == "-" else file, doc, rows)
+    _echo_warnings(doc.warnings)
+    if skipped:
+        raise click.exceptions.Exit(1)
+
+
+def _render_devices(name: str, doc: EsiFile, rows: list[dict[str, Any]]) -> None:
+    """The devices of the file ``name`` as a table, titled with the vendor and, for a file that is not an
+    EtherCATInfo, what it holds."""
     title = f"{name}: {len(rows)} device(s), vendor {_hex(doc.vendor_id)} {doc.vendor_name}".rstrip()
     if doc.root in ("EDS", "DCF"):
         title += f" [CANopen {doc.root}]"
@@ -108,68 +103,13 @@ def devices_cmd(file: str, as_json: bool) -> None:
     for r in rows:
         t.add_row(str(r["index"]), r["type"], _hex(r["product_code"]), _hex(r["revision"]), str(r["rx_pdo_count"]),
                   str(r["tx_pdo_count"]), str(r["object_count"]), ",".join(r["protocols"]), r["name"])
-    con.print(t)
-    for w in doc.warnings[:20]:
-        click.echo(str(w), err=True)
-    if len(doc.warnings) > 20:
-        click.echo(f"… and {len(doc.warnings) - 20} more warnings (ecattool esi validate lists all)", err=True)
-    if skipped:
-        raise click.exceptions.Exit(1)
+    console().print(t)
 
 
 # --------------------------------------------------------------------------------------------
 # show
 # --------------------------------------------------------------------------------------------
-def _pdo_json(p: Any) -> dict[str, Any]:
-    return {
-        "direction": p.direction.value, "index": p.index, "name": p.name, "sm": p.sm, "fixed": p.fixed,
-        "mandatory": p.mandatory, "virtual": p.virtual, "excludes": p.excludes, "bit_size": p.bit_size,
-        "entries": [{"index": e.index, "subindex": e.subindex, "bit_len": e.bit_len, "name": e.name,
-                     "data_type": e.data_type} for e in p.entries],
-        "line": p.location.line if p.location else None,
-    }
-
-
-def _objects_json(od: Any) -> list[dict[str, Any]]:
-    out = []
-    for o in od:
-        out.append({
-            "index": o.index, "name": o.name, "object_code": o.object_code.value, "type": o.type_name,
-            "entries": [{"subindex": e.subindex, "name": e.name, "type": e.type_name,
-                         "datatype": e.datatype.name if e.datatype else None, "bit_size": e.bit_size,
-                         "bit_offset": e.bit_offset, "access": e.access.text, "pdo_mapping": e.pdo_mapping,
-                         "default": e.default.hex() if e.default is not None else None, "minimum": e.minimum,
-                         "maximum": e.maximum, "enum": {str(k): v for k, v in e.enum.items()},
-                         "backup": e.backup, "setting": e.setting} for e in o],
-        })
-    return out
-
-
-def _sm_json(dev: Any) -> list[dict[str, Any]]:
-    return [{"number": s.number, "kind": s.kind, "start_address": s.start_address, "default_size": s.default_size,
-             "min_size": s.min_size, "max_size": s.max_size, "control_byte": s.control_byte, "enable": s.enable,
-             "enable_byte": s.enable_byte}
-            for s in dev.sync_managers]
-
-
-def _dc_json(dev: Any) -> list[dict[str, Any]]:
-    keys = ("name", "desc", "assign_activate", "cycle_time_sync0", "cycle_time_sync0_factor", "shift_time_sync0",
-            "shift_time_sync0_factor", "cycle_time_sync1", "cycle_time_sync1_factor", "shift_time_sync1",
-            "shift_time_sync1_factor")
-    return [{k: getattr(m, k) for k in keys} for m in dev.dc_opmodes]
-
-
-def _init_cmds(dev: Any) -> list[Any]:
-    return list(dev.mailbox.init_cmds) if dev.mailbox else []
-
-
-def _init_json(dev: Any) -> list[dict[str, Any]]:
-    return [{"protocol": c.protocol, "transitions": c.transitions, "index": c.index, "subindex": c.subindex,
-             "data": c.data.hex(), "comment": c.comment, "fixed": c.fixed, "complete_access": c.complete_access}
-            for c in _init_cmds(dev)]
-
-
-def _render_pdos(con: Any, dev: Any) -> None:
+def _render_pdos(con: Console, dev: Device) -> None:
     groups = [("RxPDOs (outputs)", dev.rx_pdos), ("TxPDOs (inputs)", dev.tx_pdos)]
     if not dev.rx_pdos and not dev.tx_pdos and dev.modules:
         groups = []
@@ -190,14 +130,14 @@ def _render_pdos(con: Any, dev: Any) -> None:
         con.print(t)
 
 
-def _default(o: Any, e: Any) -> str:
+def _default(o: OdObject, e: Entry) -> str:
     """An entry's ESI default as a value (``10000 (0x2710)``), decoded by its data type; --json keeps the hex."""
     from ecattool.od.display import value_text
 
     return value_text(e.default, e.datatype, e.bit_size, o.index, e.unit) if e.default is not None else ""
 
 
-def _render_objects(con: Any, dev: Any) -> None:
+def _render_objects(con: Console, dev: Device) -> None:
     od = dev.dictionary
     t = table(f"Objects: {len(od)}", ["index", "sub", "name", "type", "bits", "access", "map", "default"])
     for o in od:
@@ -212,7 +152,7 @@ def _render_objects(con: Any, dev: Any) -> None:
     con.print(t)
 
 
-def _render_sm(con: Any, dev: Any) -> None:
+def _render_sm(con: Console, dev: Device) -> None:
     t = table("Sync managers", ["SM", "kind", "start", "default", "min", "max", "control", "enable"])
     for s in dev.sync_managers:
         t.add_row(str(s.number), s.kind or "(unused)", _hex(s.start_address, 4), str(s.default_size or ""),
@@ -223,7 +163,7 @@ def _render_sm(con: Any, dev: Any) -> None:
         con.print("FMMUs: " + ", ".join(f.kind or "(unused)" for f in dev.fmmus))
 
 
-def _render_dc(con: Any, dev: Any) -> None:
+def _render_dc(con: Console, dev: Device) -> None:
     t = table("DC op modes", ["name", "AssignActivate", "CycleTimeSync0", "ShiftTimeSync0", "CycleTimeSync1", "description"])
     for m in dev.dc_opmodes:
         def fmt(v: int | None, f: int | None) -> str:
@@ -234,11 +174,12 @@ def _render_dc(con: Any, dev: Any) -> None:
     con.print(t)
 
 
-def _render_init(con: Any, dev: Any) -> None:
+def _render_init(con: Console, dev: Device) -> None:
+    from ecattool.esi.describe import init_cmds
     from ecattool.od.display import value_text
 
     t = table("Init commands", ["transition", "protocol", "address", "data", "CA", "comment"])
-    for c in _init_cmds(dev):
+    for c in init_cmds(dev):
         addr = f"IDN {c.index}" if c.protocol == "SoE" else f"{c.index:04X}:{c.subindex:02X}"
         data = c.data.hex(" ") if c.protocol == "SoE" or c.complete_access else value_text(c.data, index=c.index)
         t.add_row(",".join(c.transitions), c.protocol, addr, data, "yes" if c.complete_access else "", c.comment)
@@ -265,39 +206,41 @@ def show_cmd(file: str, selector: str | None, policy: str, pdos: bool, objects: 
              init_cmds: bool, as_json: bool) -> None:
     """Show one device of FILE: identity and summary, or the chosen tables."""
     from ecattool.esi import select_index
+    from ecattool.esi.describe import show_document
 
     doc = _load(file, lazy=True)
     index, dev = select_index(doc, selector, policy)
-    any_section = pdos or objects or sm or dc or init_cmds
     len(dev.dictionary)  # the summary counts the objects: built now, so that its warnings are listed
     # a lazy load built only this device: the file's findings are its own and the file-level ones
     warnings = list(doc.warnings)
     if as_json:
-        data: dict[str, Any] = device_summary(dev, index)
-        data["warnings"] = [w.to_json() for w in warnings]
-        data.update({"physics": dev.physics, "profile_no": dev.profile_no, "group_name": dev.group_name,
-                     "url": dev.url, "ebus_current_ma": dev.ebus_current_ma, "source": dev.source})
-        if pdos or not any_section:
-            data["pdos"] = [_pdo_json(p) for p in (*dev.rx_pdos, *dev.tx_pdos)]
-            data["module_pdos"] = [{"type": m.type_name, "ident": m.ident, "name": m.name,
-                                    "pdos": [_pdo_json(p) for p in (*m.rx_pdos, *m.tx_pdos)]} for m in dev.modules]
-            data["slots"] = [{"name": s.name, "min_instances": s.min_instances, "max_instances": s.max_instances,
-                              "module_idents": s.module_idents, "default_module": s.default_module} for s in dev.slots]
-        if objects:
-            data["objects"] = _objects_json(dev.dictionary)
-        if sm or not any_section:
-            data["sync_managers"] = _sm_json(dev)
-        if dc:
-            data["dc_opmodes"] = _dc_json(dev)
-        if init_cmds:
-            data["init_cmds"] = _init_json(dev)
-        print_json(data)
+        print_json(show_document(dev, index, warnings, pdos=pdos, objects=objects, sm=sm, dc=dc, init=init_cmds))
         return
+    _echo_warnings(warnings)
+    _render_show(dev, pdos=pdos, objects=objects, sm=sm, dc=dc, init=init_cmds)
+
+
+def _render_show(dev: Device, *, pdos: bool, objects: bool, sm: bool, dc: bool, init: bool) -> None:
+    """The identity and summary, then the sections asked for (none asked for: sync managers and PDOs)."""
+    con = console()
+    _render_identity(con, dev)
+    if not (pdos or objects or sm or dc or init):
+        sm = pdos = True
+    for shown, render in ((sm, _render_sm), (pdos, _render_pdos), (objects, _render_objects), (dc, _render_dc),
+                          (init, _render_init)):
+        if shown:
+            render(con, dev)
+
+
+def _echo_warnings(warnings: list[Finding]) -> None:
+    """The first 20 warnings on standard error, and how many more there are."""
     for w in warnings[:20]:
         click.echo(str(w), err=True)
     if len(warnings) > 20:
         click.echo(f"… and {len(warnings) - 20} more warnings (ecattool esi validate lists all)", err=True)
-    con = console()
+
+
+def _render_identity(con: Console, dev: Device) -> None:
     con.print(f"{dev.type_name}  {dev.name}")
     con.print(f"  {dev.identity}   group {dev.group_type or '-'}   profile {dev.profile_no or '-'}")
     proto = ",".join(dev.mailbox.protocols) if dev.mailbox else "none"
@@ -305,20 +248,6 @@ def show_cmd(file: str, selector: str | None, policy: str, pdos: bool, objects: 
               f"   DC op modes {len(dev.dc_opmodes)}   slots {len(dev.slots)}   modules {len(dev.modules)}")
     if dev.location:
         con.print(f"  defined at {dev.location}")
-    if not any_section:
-        _render_sm(con, dev)
-        _render_pdos(con, dev)
-        return
-    if sm:
-        _render_sm(con, dev)
-    if pdos:
-        _render_pdos(con, dev)
-    if objects:
-        _render_objects(con, dev)
-    if dc:
-        _render_dc(con, dev)
-    if init_cmds:
-        _render_init(con, dev)
 
 
 # --------------------------------------------------------------------------------------------

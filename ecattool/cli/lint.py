@@ -35,7 +35,6 @@ def lint(projects: tuple[str, ...], fmt: str, as_json: bool, strict: bool, outpu
     Every finding has a rule id and names the file, line and column at fault. Rules can be disabled per
     project or per drive with `disable_rules: [{rule: PDO011, reason: "…"}]`.
     """
-    from ecattool.project import report
     from ecattool.project.lint import lint as run_lint
 
     results, failed = run_lint(list(projects), strict=strict)
@@ -44,20 +43,25 @@ def lint(projects: tuple[str, ...], fmt: str, as_json: bool, strict: bool, outpu
         from ecattool.project.loader import project_inputs
 
         inputs = tuple(project_inputs(projects))
-    findings = [f for r in results for f in r.findings]
-    if as_json:
-        fmt = "json"
-    if fmt == "json":
-        write_output(output, dump_json(report.to_json(findings, list(projects))) + "\n", inputs)
-    elif fmt == "sarif":
-        from ecattool.project.lint import rule_descriptions
-
-        write_output(output, dump_json(report.to_sarif(findings, rule_descriptions())) + "\n", inputs)
-    elif fmt == "github":
-        write_output(output, report.to_github(findings), inputs)
+    if as_json or fmt != "text":
+        write_output(output, _report_text("json" if as_json else fmt, results, projects), inputs)
     else:
         _text(results, output, inputs)
     raise SystemExit(1 if failed else 0)
+
+
+def _report_text(fmt: str, results: list[Machine], projects: tuple[str, ...]) -> str:
+    """Every finding as a JSON, SARIF or GitHub-annotation report."""
+    from ecattool.project import report
+
+    findings = [f for r in results for f in r.findings]
+    if fmt == "json":
+        return dump_json(report.to_json(findings, list(projects))) + "\n"
+    if fmt == "sarif":
+        from ecattool.project.lint import rule_descriptions
+
+        return dump_json(report.to_sarif(findings, rule_descriptions())) + "\n"
+    return report.to_github(findings)
 
 
 def _text(results: list[Machine], output: str | None, inputs: tuple[str, ...]) -> None:

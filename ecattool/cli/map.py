@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import click
 
@@ -14,9 +14,11 @@ from ecattool.cli.vocab import WRITE_FORMATS, AliasedOption
 
 if TYPE_CHECKING:
     from ecattool.esi.model import Device
+    from ecattool.findings import Finding
     from ecattool.pdo import Mapping
+    from ecattool.pdo.layout import Layout as ProcessLayout
     from ecattool.profiles.running import RunningDevice
-    from ecattool.startup import SlaveConfig
+    from ecattool.startup import SlaveConfig, StartupList
 
 _EXAMPLES = """\b
 Examples:
@@ -87,23 +89,6 @@ def _load_mapping(device: Device, rx: tuple[str, ...], tx: tuple[str, ...], mapp
     return pdo.Mapping.from_text(rx=list(rx) if rx else None, tx=list(tx) if tx else None, device=device)
 
 
-def _load_config(startup_file: str, drive: str | None) -> SlaveConfig:
-    from ecattool.errors import SelectionError
-    from ecattool.startup import describe_slaves, import_file, select_slaves
-
-    configs = import_file(startup_file)
-    if drive is None:
-        if len(configs) == 1:
-            return configs[0]
-        raise SelectionError(f"{startup_file} has {len(configs)} slaves; choose one with --drive NAME "
-                             f"({describe_slaves(configs)})")
-    chosen = select_slaves(configs, [drive])
-    if len(chosen) > 1:
-        raise SelectionError(f"{startup_file} has {len(chosen)} slaves named {drive!r}; choose one by its bus "
-                             f"position with --drive N ({describe_slaves(configs)})")
-    return chosen[0]
-
-
 def _setup(esi: str | None, selector: str | None, profile: str | None, product: str | None, revision: str | None,
            rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None, startup_file: str | None = None,
            drive: str | None = None, device: Device | None = None,
@@ -115,7 +100,9 @@ def _setup(esi: str | None, selector: str | None, profile: str | None, product: 
             raise click.UsageError("give the mapping with one of --rx/--tx, --mapping or --startup")
         from ecattool import pdo
 
-        config = _load_config(startup_file, drive)
+        from ecattool.startup import import_file, select_one
+
+        config = select_one(import_file(startup_file), drive, startup_file)
         return device, pdo.mapping_from_config(config, device), config
     return device, _load_mapping(device, rx, tx, mapping_file), None
 
@@ -152,21 +139,28 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
         print_json({"device": device.type_name, "ok": False, "findings": [pdo.input_finding(exc).to_json()]})
         raise SystemExit(1) from None
     findings = pdo.check_config(device, config)[1] if config is not None else pdo.check(device, mapping)
-    lay = pdo.layout(device, mapping)
     failed = has_errors(findings, strict=strict)
+    _render_check(device, mapping, findings, failed, as_json)
+    if failed:
+        raise SystemExit(1)
+
+
+def _render_check(device: Device, mapping: Mapping, findings: list[Finding], failed: bool, as_json: bool) -> None:
+    """The findings and the verdict with the process image's sizes (as JSON, or one line each)."""
+    from ecattool import pdo
+
+    lay = pdo.layout(device, mapping)
     if as_json:
         print_json({"device": device.type_name, "ok": not failed, "findings": [f.to_json() for f in findings],
                     "outputs_bytes": lay.outputs.byte_size, "inputs_bytes": lay.inputs.byte_size,
                     "mapping": mapping.to_json()})
-    else:
-        for f in findings:
-            click.echo(str(f))
-        verdict = "FAILED" if failed else "OK"
-        click.echo(f"{verdict}: {device.type_name}: outputs {lay.outputs.byte_size} bytes "
-                   f"({len(mapping.rx)} RxPDOs), inputs {lay.inputs.byte_size} bytes ({len(mapping.tx)} TxPDOs), "
-                   f"{len(findings)} finding(s)")
-    if failed:
-        raise SystemExit(1)
+        return
+    for f in findings:
+        click.echo(str(f))
+    verdict = "FAILED" if failed else "OK"
+    click.echo(f"{verdict}: {device.type_name}: outputs {lay.outputs.byte_size} bytes "
+               f"({len(mapping.rx)} RxPDOs), inputs {lay.inputs.byte_size} bytes ({len(mapping.tx)} TxPDOs), "
+               f"{len(findings)} finding(s)")
 
 
 @map_.command(epilog=_EXAMPLES.format(cmd="layout") + """
@@ -181,28 +175,47 @@ def layout(esi: str | None, selector: str | None, profile: str | None, product: 
            drive: str | None, as_json: bool, output: str | None, svg: str | None) -> None:
     """Show the process image per sync manager: byte.bit offsets, sizes, names and types."""
     from ecattool import pdo
-    from ecattool.cli.common import dump_json
 
-    if svg:
-        from ecattool.report import require
-
-        if svg == "-" and (as_json or output == "-"):
-            raise click.UsageError("--svg - and the JSON layout cannot both go to stdout")
-        require("jinja2")  # before any work: a missing extra is one line, not a half-done run
+    _svg_prerequisites(svg, as_json or output == "-")
     device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, drive,
                                 policy=policy)
     # a PDO kept as the device has it is drawn as the slave powers on with it: where the ESI's dictionary and PDO
     # element disagree, the dictionary's (docs/decisions.md, "An ESI that contradicts itself")
     mapping, dictionary_pdos = pdo.powered_on(device, mapping)
     lay = pdo.layout(device, mapping)
-    inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
+    inputs = _inputs(esi, mapping_file, startup_file)
     if svg:
         from ecattool.report import process_image_svg
 
         write_output(svg, process_image_svg(lay, device.type_name), inputs)
         if svg == "-":
             return
-    if as_json or output not in (None, "-"):
+    _render_layout(lay, dictionary_pdos, output, inputs, as_json or output not in (None, "-"))
+
+
+def _svg_prerequisites(svg: str | None, json_to_stdout: bool) -> None:
+    """Before any work: the report extra is there (a missing one is one line, not a half-done run), and the
+    diagram and the JSON do not both go to stdout."""
+    if svg:
+        from ecattool.report import require
+
+        if svg == "-" and json_to_stdout:
+            raise click.UsageError("--svg - and the JSON layout cannot both go to stdout")
+        require("jinja2")
+
+
+def _inputs(*paths: str | None) -> tuple[str, ...]:
+    """The input files among ``paths`` (an output never replaces one)."""
+    return tuple(p for p in paths if p and p != "-")
+
+
+def _render_layout(lay: ProcessLayout, dictionary_pdos: list[int], output: str | None, inputs: tuple[str, ...],
+                   as_json: bool) -> None:
+    """The process image as JSON (to ``output``), or a table per sync manager and a note per PDO drawn by the
+    dictionary's mapping object."""
+    if as_json:
+        from ecattool.cli.common import dump_json
+
         doc = lay.to_json()
         if dictionary_pdos:  # drawn by the dictionary's mapping object (esi-pdo-default-differs)
             doc["power_on_from_dictionary"] = [f"0x{i:04X}" for i in dictionary_pdos]
@@ -241,38 +254,50 @@ def sdo(esi: str | None, selector: str | None, profile: str | None, product: str
         as_json: bool, output: str | None) -> None:
     """Print the SDO writes that program the mapping, in the order drives require, with exact sizes."""
     from ecattool import pdo
-    from ecattool.cli.common import dump_json
-    from ecattool.findings import has_errors
 
     device, mapping, _ = _setup(esi, selector, profile, product, revision, rx, tx, mapping_file, startup_file, drive,
                                 policy=policy)
-    findings = pdo.check(device, mapping)
-    if has_errors(findings) and not force:
-        for f in findings:
-            click.echo(str(f), err=True)
-        click.echo("map sdo: the mapping has errors (above); --force prints the writes anyway", err=True)
-        raise SystemExit(1)
+    _refuse_mapping_errors(pdo.check(device, mapping), force)
     seq = pdo.program(device, mapping, complete_access=complete_access, transition=transition.upper(), order=order)
     coe = device.mailbox.coe if device.mailbox is not None else None
     if complete_access and not (coe is not None and coe.complete_access):
         click.echo(f"note: {device.type_name} does not advertise CoE complete access; writing single sub-indices",
                    err=True)
-    inputs = tuple(p for p in (esi, mapping_file, startup_file) if p and p != "-")
+    inputs = _inputs(esi, mapping_file, startup_file)
     if fmt:
         from ecattool.startup import SlaveConfig, export
 
         config = SlaveConfig.from_device(device, seq, mapping=mapping)  # with the process data it installs
         write_output(output, export(config, fmt.lower()), inputs)
         return
-    rows = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
-             "size": len(c.data), "data": c.data.hex(), "value": f"0x{c.int_value:X}" if not c.complete_access else None,
-             "complete_access": c.complete_access, "comment": c.comment} for c in seq]
-    if as_json or output not in (None, "-"):
+    _render_sdo(device, seq, output, inputs, as_json or output not in (None, "-"))
+
+
+def _refuse_mapping_errors(findings: list[Finding], force: bool) -> None:
+    """Exit 1 listing the findings when the mapping has errors, unless ``force``."""
+    from ecattool.findings import has_errors
+
+    if has_errors(findings) and not force:
+        for f in findings:
+            click.echo(str(f), err=True)
+        click.echo("map sdo: the mapping has errors (above); --force prints the writes anyway", err=True)
+        raise SystemExit(1)
+
+
+def _render_sdo(device: Device, seq: StartupList, output: str | None, inputs: tuple[str, ...],
+                as_json: bool) -> None:
+    """The writes as JSON rows (to ``output``) or a table."""
+    if as_json:
+        from ecattool.cli.common import dump_json
+
+        rows = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
+                 "size": len(c.data), "data": c.data.hex(), "value": f"0x{c.int_value:X}" if not c.complete_access else None,
+                 "complete_access": c.complete_access, "comment": c.comment} for c in seq]
         write_output(output, dump_json(rows) + "\n", inputs)
         return
-    t = table(f"{device.type_name}: {len(rows)} SDO writes", ["tr", "object", "size", "value", "comment"])
     from ecattool.od.display import int_text
 
+    t = table(f"{device.type_name}: {len(seq)} SDO writes", ["tr", "object", "size", "value", "comment"])
     for c in seq:
         value = c.data.hex(" ") if c.complete_access else int_text(c.int_value, len(c.data))
         t.add_row(c.transition, c.address + (" CA" if c.complete_access else ""), str(len(c.data)), value, c.comment)

@@ -75,16 +75,7 @@ def new(profile: str | None, product: str | None, esi_path: str | None, select: 
     if from_bus is not None:
         if profile is not None or esi_path is not None:
             raise click.UsageError("give --from-bus, or --profile/--esi, not both")
-        from ecattool.online.from_bus import project_from_bus
-        from ecattool.online.library import Library
-        from ecattool.cli.online import open_live
-
-        problems: list[str] = []
-        with open_live(from_bus) as live:
-            text = project_from_bus(live, Library(library) if library else None, output, problems=problems)
-        write_output(output, text)
-        for p in problems:  # a slave that did not answer: named, the project holds the others
-            click.echo(f"ecattool: warning: {p}", err=True)
+        _new_from_bus(from_bus, library, output)
         return
     if (profile is None) == (esi_path is None):
         raise click.UsageError("give --profile or --esi (or --from-bus)")
@@ -100,3 +91,18 @@ def new(profile: str | None, product: str | None, esi_path: str | None, select: 
     write_output(output, new_project(device, name=name, profile=profile, product=product, esi=esi_path,
                                      select=select, policy=policy, findings=findings),
                  (str(base / esi_path),) if esi_path is not None else ())
+
+
+def _new_from_bus(target: str, library: str | None, output: str | None) -> None:
+    """``project new --from-bus``: the project of every slave of the live bus, and a warning per slave that did
+    not answer (the project holds the others)."""
+    from ecattool.cli.online import open_live
+    from ecattool.online.from_bus import project_from_bus
+    from ecattool.online.library import Library
+
+    problems: list[str] = []
+    with open_live(target) as live:
+        text = project_from_bus(live, Library(library) if library else None, output, problems=problems)
+    write_output(output, text)
+    for p in problems:
+        click.echo(f"ecattool: warning: {p}", err=True)

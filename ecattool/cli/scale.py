@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Literal
 
 import click
@@ -18,7 +19,11 @@ _FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
 _STARTUP_FORMATS = WRITE_FORMATS
 
 if TYPE_CHECKING:
+    from ecattool.scaling.explain import Explanation
     from ecattool.scaling.group import FactorGroup
+    from ecattool.scaling.exact import Strategy
+    from ecattool.scaling.spec import Spec
+    from ecattool.target.base import SlaveTarget
 
 
 def _mechanics_options(f: Decorated) -> Decorated:
@@ -57,7 +62,8 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
           steps: str | None, feedback_on: Literal["motor", "load"] | None, gear: str | None, transmission: str | None,
           pos_unit: str | None,
           vel_unit: str | None, acc_unit: str | None, jerk_unit: str | None, slow_loop: str | None,
-          reverse: bool | None, approximation: str | None) -> Any:
+          reverse: bool | None,
+          approximation: Strategy | None) -> tuple[Spec, str, str | None, Strategy | None]:
     """(the spec the flags say, over SPEC where given; the family, firmware and approximation to use)."""
     from ecattool.errors import InputError
     from ecattool.scaling.model import length_unit, transmission_from
@@ -167,38 +173,40 @@ Examples:
 @file_output_option("--html", "html", help=_HTML_HELP)
 def compute_cmd(with_startup: bool, as_json: bool, output: str | None, html: str | None, **kwargs: Any) -> None:
     """Table of scaling objects: value (decimal, hex), meaning, exactness; approximations with ppm error."""
-    from ecattool.cli.common import dump_json
-
     _html_prerequisites(html, as_json or output == "-")
     inputs = tuple(kwargs[k] for k in ("spec", "esi") if kwargs.get(k) not in (None, "-"))
     group = _compute(kwargs)
     if html:
         from ecattool.report import scaling_html
-        from ecattool.scaling import explain
+        from ecattool.scaling.explain import explain_group
 
-        e = explain(group.values, group.family,
-                    factor_set=group.factor_set if group.family == "technosoft-ipos" else None)
-        mechanics = {k: str(v) for k, v in group.summary.items()
-                     if k in ("feedback", "gear (motor:load)", "transmission", "position unit", "velocity unit")}
-        write_output(html, scaling_html(e, group.values, mechanics, title=str(kwargs.get("spec") or "")), inputs)
+        write_output(html, scaling_html(explain_group(group), group.values, group.mechanics,
+                                        title=str(kwargs.get("spec") or "")), inputs)
         if html == "-":
             return
     if as_json or output:
-        data = group.to_json()
-        if with_startup:
-            data["startup"] = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
-                                "data": c.data.hex(), "type": c.type_name, "value": c.value, "comment": c.comment}
-                               for c in group.startup()]
-        if output:
-            write_output(output, dump_json(data) + "\n", inputs)
-        else:
-            print_json(data)
+        _write_json(group, with_startup, output, inputs)
         return
     _render(group)
     if with_startup:
         from ecattool.startup import export
 
         click.echo(export(group.startup(), "twincat"), nl=False)
+
+
+def _write_json(group: FactorGroup, with_startup: bool, output: str | None, inputs: tuple[str, ...]) -> None:
+    """The group as JSON (with its startup writes where asked for), to ``output`` or stdout."""
+    from ecattool.cli.common import dump_json
+
+    data = group.to_json()
+    if with_startup:
+        data["startup"] = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
+                            "data": c.data.hex(), "type": c.type_name, "value": c.value, "comment": c.comment}
+                           for c in group.startup()]
+    if output:
+        write_output(output, dump_json(data) + "\n", inputs)
+    else:
+        print_json(data)
 
 
 @scale.command("startup", epilog="""\b
@@ -264,46 +272,63 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
                 firmware: str | None, slow_loop: str, counts_per_rev: str | None, as_json: bool,
                 html: str | None) -> None:
     """What one user unit is in counts, and what velocity and acceleration units mean, from object values."""
-    from fractions import Fraction
-
-    from ecattool.errors import InputError
-    from ecattool.od.numbers import parse_address, parse_int
+    from ecattool.errors import InputError, Location
     from ecattool.scaling import explain
-    from ecattool.scaling.explain import values_from_file
+    from ecattool.scaling.explain import read_values, values_from_file
     from ecattool.scaling.model import slow_loop_from
 
     _html_prerequisites(html, as_json)
-
     values = values_from_file(source) if source else {}
     if project:
-        from ecattool.project.machine import load_machine
-
-        machine = load_machine(project)
-        machine.require_loaded()
-        chosen = machine.slave(drive_name)
-        machine.refuse_errors(f"explain drive {chosen.name!r}", allow_errors=allow_errors, slaves=[chosen])
-        if click.get_current_context().get_parameter_source("family") is click.core.ParameterSource.DEFAULT:
-            family = chosen.family if chosen.family in _FAMILIES else "generic"
-        values.update(chosen.object_values(range(0x6089, 0x60AC)))
-        source = source or project
+        held, family = _project_values(project, drive_name, allow_errors, family)
+        values, source = {**values, **held}, source or project
     elif drive_name is not None:
         raise click.UsageError("--drive needs --project")
     if target:
-        from ecattool.scaling.explain import read_values
-
         values.update(read_values(_target_slave(target, family, slave, firmware)))
+    values.update(_assignments(assignments))
+    if not values:
+        raise InputError("give object values (6093:01=… 6093:02=…) or --from FILE")
+    e = explain(values, family, slow_loop=slow_loop_from(slow_loop), counts_per_rev=_fraction(counts_per_rev),
+                firmware=firmware, location=Location(source) if source else None)
+    _render_explanation(e, values, source, html, as_json)
+
+
+def _project_values(project: str, drive_name: str | None, allow_errors: bool,
+                    family: str) -> tuple[dict[tuple[int, int], int], str]:
+    """(what the project's drive holds after its startup list, the family to explain it in: the drive's, unless
+    --profile was given)."""
+    from ecattool.project.machine import load_machine
+    from ecattool.scaling.explain import FACTOR_INDICES, explain_family
+
+    chosen = load_machine(project).slave_to_act_on(drive_name, "explain", allow_errors=allow_errors)
+    if click.get_current_context().get_parameter_source("family") is click.core.ParameterSource.DEFAULT:
+        family = explain_family(chosen.family)
+    return chosen.object_values(FACTOR_INDICES), family
+
+
+def _assignments(assignments: tuple[str, ...]) -> dict[tuple[int, int], int]:
+    """The INDEX:SUB=VALUE arguments as object values."""
+    from ecattool.od.numbers import parse_address, parse_int
+
+    values: dict[tuple[int, int], int] = {}
     for a in assignments:
         if "=" not in a:
             raise click.BadParameter(f"{a!r}: write INDEX:SUB=VALUE, e.g. 6093:01=2000", param_hint="ASSIGNMENTS")
         addr, val = a.split("=", 1)
         values[parse_address(addr)] = parse_int(val)
-    if not values:
-        raise InputError("give object values (6093:01=… 6093:02=…) or --from FILE")
-    cpr = Fraction(parse_int(counts_per_rev)) if counts_per_rev else None
-    from ecattool.errors import Location
+    return values
 
-    e = explain(values, family, slow_loop=slow_loop_from(slow_loop), counts_per_rev=cpr, firmware=firmware,
-                location=Location(source) if source else None)
+
+def _fraction(number: str | None) -> Fraction | None:
+    from ecattool.od.numbers import parse_int
+
+    return Fraction(parse_int(number)) if number else None
+
+
+def _render_explanation(e: Explanation, values: dict[tuple[int, int], int], source: str | None, html: str | None,
+                        as_json: bool) -> None:
+    """The explanation as a page (--html), JSON or a table with its findings."""
     if html:
         from ecattool.report import scaling_html
 
@@ -322,30 +347,23 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
         con.print(f"{f.severity.value}: {f.message} [{f.rule}]")
 
 
-def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> Any:
+def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> SlaveTarget:
+    """The drive at ``slave`` of ``spec`` (a bare 'sim' holds the family's drive), in PRE-OP; the target errors
+    name the option they are about."""
     from ecattool.errors import InputError, SelectionError
-    from ecattool.online.targets import open_guarded
-    from ecattool.target.opener import SLAVE_TARGET_FORMS, parse_target, slave_at
+    from ecattool.online.targets import open_slave
+    from ecattool.scaling.explain import family_drives
+    from ecattool.target.opener import SLAVE_TARGET_FORMS, parse_target
 
     try:
-        parsed = parse_target(spec)
-        # the family's drive: a bare 'sim' holds it (at position 0), a real bus takes its timeouts
-        from ecattool import profiles
-
-        devices = [] if family == "generic" else [profiles.load(family, revision=firmware) if firmware
-                                                  else profiles.load(family)]
-        if parsed.own_slaves and not devices:
+        devices = family_drives(family, firmware)
+        if parse_target(spec).own_slaves and not devices:
             raise InputError("--target sim needs a built-in family (technosoft-ipos, hdt, controltechniques)")
-        found = slave_at(open_guarded(spec, devices, reset_bus_given()), 0 if parsed.own_slaves else slave)
+        return open_slave(spec, devices, slave, reset_bus_given(), in_preop=True)
     except SelectionError as exc:
         if exc.message.startswith("unknown target"):
             raise click.BadParameter(f"use {SLAVE_TARGET_FORMS}", param_hint="--target") from None
         raise InputError(f"--slave {slave}: {exc.message}") from None
-    if parsed.kind == "sim":
-        from ecattool.od.model import EcState
-
-        found.request_state(EcState.PREOP)
-    return found
 
 
 @scale.command("si", epilog="""\b

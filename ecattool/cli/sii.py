@@ -22,6 +22,8 @@ from ecattool.cli.online import open_live, reset_bus_option
 from ecattool.cli.paths import InputFile
 
 if TYPE_CHECKING:
+    from rich.table import Table
+
     from ecattool.esi.model import Device
     from ecattool.findings import Finding
     from ecattool.sii.model import SiiImage
@@ -108,6 +110,13 @@ def info(image: str, as_json: bool) -> None:
         click.echo(dump_json(d))
         return
     c = console()
+    c.print(_fixed_table(image, d))
+    for t in (*_category_tables(d), *_pdo_tables(d)):
+        c.print(t)
+
+
+def _fixed_table(image: str, d: dict[str, Any]) -> Table:
+    """The fixed area (identity, mailbox, checksum …) of a described image."""
     t = table(f"SII image {image}", ["field", "value"])
     for key, fmt in (("vendor_id", "0x{:08X}"), ("product_code", "0x{:08X}"), ("revision", "0x{:08X}"),
                      ("serial", "0x{:08X}"), ("station_alias", "{}"), ("config_data", "{}"),
@@ -116,28 +125,43 @@ def info(image: str, as_json: bool) -> None:
         v = d[key]
         t.add_row(key, ", ".join(v) if isinstance(v, list) else _mailbox_text(v) if isinstance(v, dict)
                   else fmt.format(v))
-    c.print(t)
+    return t
+
+
+def _category_tables(d: dict[str, Any]) -> list[Table]:
+    """The categories, and the strings, general and sync manager categories where the image has them."""
     ct = table("Categories", ["offset", "type", "name", "words"])
     for cat in d["categories"]:
         ct.add_row(f"0x{cat['offset']:04X}", str(cat["type"]), cat["name"] + (" (!)" if cat.get("problem") else ""),
                    str(cat["words"]))
-    c.print(ct)
-    if d["strings"]:
-        st = table("Strings", ["#", "text"])
-        for i, s in enumerate(d["strings"], 1):
-            st.add_row(str(i), s)
-        c.print(st)
+    out = [ct, *_strings_table(d["strings"])]
     if d["general"]:
         gt = table("General", ["field", "value"])
         for k, v in d["general"].items():
             gt.add_row(k, ", ".join(v) if isinstance(v, list) else str(v))
-        c.print(gt)
+        out.append(gt)
     if d["sync_managers"]:
         smt = table("Sync managers", ["SM", "start", "length", "control", "enable", "type"])
         for i, s in enumerate(d["sync_managers"]):
             smt.add_row(str(i), f"0x{s['start']:04X}", str(s["length"]), f"0x{s['control']:02X}", str(s["enable"]),
                         s["kind"] or "unused")
-        c.print(smt)
+        out.append(smt)
+    return out
+
+
+def _strings_table(strings: list[str]) -> list[Table]:
+    """The strings category, numbered as the other categories refer to them (none where the image has none)."""
+    if not strings:
+        return []
+    st = table("Strings", ["#", "text"])
+    for i, s in enumerate(strings, 1):
+        st.add_row(str(i), s)
+    return [st]
+
+
+def _pdo_tables(d: dict[str, Any]) -> list[Table]:
+    """The TxPDO and RxPDO categories with their entries, and the DC op modes, where the image has them."""
+    out = []
     for key, title in (("tx_pdos", "TxPDOs (inputs)"), ("rx_pdos", "RxPDOs (outputs)")):
         if d[key]:
             pt = table(title, ["PDO", "SM", "entry", "bits", "type", "name"])
@@ -146,13 +170,14 @@ def info(image: str, as_json: bool) -> None:
                 for e in p["entries"]:
                     pt.add_row("", "", f"0x{e['index']:04X}:{e['subindex']:02X}", str(e["bit_len"]),
                                f"0x{e['data_type']:02X}", e["name"] or "")
-            c.print(pt)
+            out.append(pt)
     if d["dc_opmodes"]:
         dt = table("DC op modes", ["name", "assign activate", "cycle0", "shift0", "sync0 factor", "sync1 factor"])
         for o in d["dc_opmodes"]:
             dt.add_row(o["name"] or "", f"0x{o['assign_activate']:04X}", str(o["cycle_time0"]), str(o["shift_time0"]),
                        str(o["sync0_cycle_factor"]), str(o["sync1_cycle_factor"]))
-        c.print(dt)
+        out.append(dt)
+    return out
 
 
 _POLICY = click.option("--policy", type=click.Choice(["exact", "newest-not-newer", "newest"]), default="exact",
@@ -249,12 +274,22 @@ def build_cmd(esi: str, selector: str | None, no_pdo_categories: bool, size: str
               output: str) -> None:
     """Build an SII EEPROM image from an ESI device; unused space is filled with 0xFF."""
     from ecattool.sii.builder import build
+    from ecattool.sii.checks import built_image_problem
 
-    from ecattool.findings import Severity
-    from ecattool.sii.checks import check
+    byte_size = _size_arg(size)
+    device = _select(esi, selector, policy=policy)
+    img = build(device, pdo_categories=not no_pdo_categories, size=byte_size)
+    _write_image(output, img, (esi,))
+    # where the image does not pass `sii check` (the ESI's own categories), say so rather than stay silent
+    problem = built_image_problem(device, img)
+    if problem is not None:
+        click.echo(f"ecattool: warning: {output}: {problem}", err=True)
 
+
+def _size_arg(size: str | None) -> int | None:
+    """--size as a number of bytes an EEPROM can have, checked before the ESI is read (the option's own error)."""
     byte_size = parse_int_arg(size, "EEPROM size") if size is not None else None
-    if byte_size is not None:  # checked before the ESI is read, as the option's own error
+    if byte_size is not None:
         from ecattool.errors import InputError
         from ecattool.sii.builder import size_word_for
 
@@ -262,17 +297,7 @@ def build_cmd(esi: str, selector: str | None, no_pdo_categories: bool, size: str
             size_word_for(byte_size)
         except InputError as exc:
             raise click.BadParameter(exc.message, param_hint="'--size'") from None
-    device = _select(esi, selector, policy=policy)
-    img = build(device, pdo_categories=not no_pdo_categories, size=byte_size)
-    _write_image(output, img, (esi,))
-    # the image is what the ESI says; where that does not pass `sii check` (a vendor's own Eeprom/Category
-    # replacing a generated one, as Elmo's boot devices give a 9-byte SyncM), say so rather than stay silent
-    errors = [f for f in check(img) if f.severity is Severity.ERROR]
-    if errors:
-        given = sorted({c.cat_no for c in device.eeprom.categories}) if device.eeprom else []
-        why = f"; the ESI's Eeprom/Category {', '.join(map(str, given))} replaces what ecattool generates" if given else ""
-        click.echo(f"ecattool: warning: {output}: the image fails `sii check` with {len(errors)} error(s), first: "
-                   f"{errors[0].message}{why}", err=True)
+    return byte_size
 
 
 @sii.command("diff", epilog="""\b

@@ -2,14 +2,21 @@
 
 from __future__ import annotations
 
-import os
+import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from ecattool.cli.common import console, json_option, output_option, policy_option, print_json, table, write_output
 from ecattool.cli.paths import InputFile
+
+if TYPE_CHECKING:
+    from ecattool.esi.model import Device
+    from ecattool.sim.bus.serve import Served
+    from ecattool.sim.drive import Drive
+    from ecattool.sim.script import Line, Transcript
 
 
 @click.group("sim", epilog="""\b
@@ -49,20 +56,6 @@ def profiles_cmd(as_json: bool) -> None:
     console().print(t)
 
 
-def _pdo_rows(drive: Any) -> list[dict[str, Any]]:
-    from ecattool.esi.model import Direction
-
-    out = []
-    for d in (Direction.RX, Direction.TX):
-        assigned = drive._assigned(d)
-        for pdo in drive.device.pdos(d):
-            entries = drive._pdo_entries(d, pdo.index) or []
-            out.append({"direction": d.value, "index": pdo.index, "name": pdo.name, "assigned": pdo.index in assigned,
-                        "bits": sum(e.bit_len for e in entries),
-                        "entries": [f"0x{e.mapping_value:08X}" for e in entries]})
-    return out
-
-
 @sim.command("show", epilog="""\b
 Examples:
   ecattool sim show technosoft-ipos --revision F515I
@@ -76,26 +69,18 @@ Examples:
 def show_cmd(profile: str, product: str | None, revision: str | None, objects: bool, as_json: bool) -> None:
     """Show PROFILE: identity, family limits, default PDO mappings and assignment (and its dictionary)."""
     from ecattool.sim import Drive
+    from ecattool.sim.describe import describe_drive
 
     drive = Drive.from_profile(profile, product=product, revision=revision)
-    dev, rules = drive.device, drive.rules
-    info: dict[str, Any] = {
-        "profile": rules.family, "type": dev.type_name, "name": dev.name,
-        "vendor_id": dev.vendor_id, "product_code": dev.product_code, "revision": dev.revision,
-        "rules": {"max_pdo_bits": rules.max_pdo_bits, "max_pdo_entries": rules.max_pdo_entries,
-                  "max_assigned_rx": rules.max_assigned_rx, "max_assigned_tx": rules.max_assigned_tx,
-                  "supported_modes": list(rules.supported_modes)},
-        "pdos": _pdo_rows(drive),
-    }
-    if objects:
-        info["objects"] = [{"index": o.index, "name": o.name, "object_code": o.object_code.value,
-                            "entries": [{"subindex": e.subindex, "name": e.name, "type": e.type_name,
-                                         "access": e.access.text, "pdo_mapping": e.pdo_mapping,
-                                         "default": e.default.hex() if e.default is not None else None}
-                                        for e in o]} for o in dev.dictionary]
+    info = describe_drive(drive, objects)
     if as_json:
         print_json(info)
         return
+    _render_show(drive.device, info)
+
+
+def _render_show(dev: Device, info: dict[str, Any]) -> None:
+    """The identity line, the limits, the PDOs after reset and (where described) the dictionary."""
     c = console()
     c.print(f"{info['profile']}: {dev.name or dev.type_name}  vendor 0x{dev.vendor_id:08X}  "
             f"product 0x{dev.product_code:08X}  revision 0x{dev.revision:08X}")
@@ -105,7 +90,7 @@ def show_cmd(profile: str, product: str | None, revision: str | None, objects: b
         t.add_row(p["direction"], f"0x{p['index']:04X}", p["name"], "yes" if p["assigned"] else "", str(p["bits"]),
                   " ".join(p["entries"]))
     c.print(t)
-    if objects:
+    if "objects" in info:
         t = table("Dictionary", ["index", "sub", "name", "type", "access", "map", "default"])
         for o in info["objects"]:
             for e in o["entries"]:
@@ -114,7 +99,7 @@ def show_cmd(profile: str, product: str | None, revision: str | None, objects: b
         c.print(t)
 
 
-def _value_text(drive: Any, ln: Any) -> tuple[str, bool]:
+def _value_text(drive: Drive, ln: Line) -> tuple[str, bool]:
     """A value read or written, as people read it, and whether it was decoded from the raw bytes: ``= 1600
     (0x0640): switch on disabled, remote, target reached — SWITCH_ON_DISABLED`` (decimal and hex by the entry's
     data type; the statusword's bits and state named)."""
@@ -171,13 +156,9 @@ def run_cmd(source: str, script: str, product: str | None, revision: str | None,
     elsewhere is where a command runs: sim or pysoem:IF). Exits 1 at the first unexpected abort, timeout or
     refused state change.
     """
-    from ecattool.sim import Drive
-    from ecattool.sim.script import load_script, run_script
+    from ecattool.sim.script import drive_for_source, load_script, run_script
 
-    if os.path.isfile(source):  # (Path.is_file raises on a name too long)
-        drive = Drive.from_esi(source, selector, policy=policy)
-    else:
-        drive = Drive.from_profile(source, product=product, revision=revision)
+    drive = drive_for_source(source, product=product, revision=revision, selector=selector, policy=policy)
     steps, locations = load_script(script)
     tr = run_script(drive, steps, locations, script, Path(script).parent)
     if as_json:
@@ -185,17 +166,7 @@ def run_cmd(source: str, script: str, product: str | None, revision: str | None,
 
         write_output(output, dump_json(tr.to_json()) + "\n", [script, source])
     else:
-        lines = []
-        for ln in tr.lines:
-            mark = "ok " if ln.expected else "ERR"
-            code = f" 0x{ln.code:08X}" if ln.code is not None and ln.code > 0xFFFF else (
-                f" 0x{ln.code:04X}" if ln.code is not None else "")
-            val, decoded = _value_text(drive, ln)
-            data = f" [{ln.data}]" if ln.data and not decoded else ""
-            lines.append(f"{mark} {ln.step:3d} {ln.op:8s} {ln.target:10s} {ln.result}{code}{val}{data}"
-                         + (f"  {ln.detail}" if ln.detail else ""))
-        text = "\n".join(lines) + "\n"
-        write_output(output, text, [script, source])
+        write_output(output, _transcript_text(drive, tr), [script, source])
     failure = tr.failure
     if failure is not None:
         from ecattool.errors import Location, TargetError
@@ -203,6 +174,20 @@ def run_cmd(source: str, script: str, product: str | None, revision: str | None,
         code = f" 0x{failure.code:08X}" if failure.code is not None else ""
         raise TargetError(f"step {failure.step} ({failure.op} {failure.target}) ended with {failure.result}{code}"
                           + (f": {failure.detail}" if failure.detail else ""), Location(script, failure.line))
+
+
+def _transcript_text(drive: Drive, tr: Transcript) -> str:
+    """The transcript, one line a step: ok/ERR, step, operation, object, result, code, value as people read it."""
+    lines = []
+    for ln in tr.lines:
+        mark = "ok " if ln.expected else "ERR"
+        code = f" 0x{ln.code:08X}" if ln.code is not None and ln.code > 0xFFFF else (
+            f" 0x{ln.code:04X}" if ln.code is not None else "")
+        val, decoded = _value_text(drive, ln)
+        data = f" [{ln.data}]" if ln.data and not decoded else ""
+        lines.append(f"{mark} {ln.step:3d} {ln.op:8s} {ln.target:10s} {ln.result}{code}{val}{data}"
+                     + (f"  {ln.detail}" if ln.detail else ""))
+    return "\n".join(lines) + "\n"
 
 
 @sim.command("serve", epilog="""\b
@@ -248,35 +233,40 @@ def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, 
     model cannot serve is refused before serving starts, in one line naming it (exit 1). Prints one line when
     the slaves are ready; stops cleanly on SIGINT/SIGTERM. See docs/virtual-bus.md.
     """
-    import sys
-
-    from ecattool.project.bus import devices_in_bus_order
-    from ecattool.sim.bus.serve import device_source, serve, virtual_slaves
-
+    from ecattool.project.bus import served_devices
+    from ecattool.sim.bus.serve import serve, virtual_slaves
 
     if iface is None and not list_only:
         raise click.UsageError("--iface is required (or --list to only show the slaves)")
-    named = []
-    for src in sources:  # a project file: its drives in bus order; anything else: a profile or an ESI file
-        if src.lower().endswith((".yaml", ".yml")):
-            named += devices_in_bus_order(src, allow_errors)
-        else:
-            named.append(device_source(src, product=product, revision=revision, selector=selector))
-    slaves = virtual_slaves(named)
+    slaves = virtual_slaves(served_devices(sources, product=product, revision=revision, selector=selector,
+                                           allow_errors=allow_errors))
     if list_only:
-        if as_json:
-            print_json([s.describe() for s in slaves])
-            return
-        t = table(None, ["position", "name", "vendor", "product code", "revision"])
-        for i, s in enumerate(slaves):
-            d = s.describe()
-            t.add_row(str(i), s.name, f"0x{d['vendor_id']:08X}", f"0x{d['product_code']:08X}", f"0x{d['revision']:08X}")
-        console().print(t)
+        _render_slaves(slaves, as_json)
         return
     assert iface is not None
+    fault = None
+    if misbehave is not None:  # the hostile-slave test's switch (tests/wire/test_wire_hostile_slave.py)
+        from ecattool.sim.bus.misbehave import apply
 
+        fault, workers = apply(misbehave, slaves), 1
+    serve(slaves, iface, _ready_line(slaves, iface, as_json), frames, fault=fault, workers=workers)
+
+
+def _render_slaves(slaves: list[Served], as_json: bool) -> None:
+    """``sim serve --list``: the slaves in bus order."""
+    if as_json:
+        print_json([s.describe() for s in slaves])
+        return
+    t = table(None, ["position", "name", "vendor", "product code", "revision"])
+    for i, s in enumerate(slaves):
+        d = s.describe()
+        t.add_row(str(i), s.name, f"0x{d['vendor_id']:08X}", f"0x{d['product_code']:08X}", f"0x{d['revision']:08X}")
+    console().print(t)
+
+
+def _ready_line(slaves: list[Served], iface: str, as_json: bool) -> Callable[[], None]:
+    """What the server prints once its slaves are ready: one line, flushed (whoever started it waits for it)."""
     def ready() -> None:
-        # one line, flushed: whoever started the server waits for it
         if as_json:
             import json
 
@@ -286,9 +276,4 @@ def serve_cmd(sources: tuple[str, ...], iface: str | None, product: str | None, 
             click.echo(f"serving {len(slaves)} slave{'s' if len(slaves) != 1 else ''} on {iface} ({names})")
         sys.stdout.flush()
 
-    fault = None
-    if misbehave is not None:  # the hostile-slave test's switch (tests/wire/test_wire_hostile_slave.py)
-        from ecattool.sim.bus.misbehave import apply
-
-        fault, workers = apply(misbehave, slaves), 1
-    serve(slaves, iface, ready, frames, fault=fault, workers=workers)
+    return ready

@@ -12,6 +12,9 @@ from ecattool.cli.paths import InputFile
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
+    from rich.console import Console
+    from rich.table import Table
+
     from ecattool.startup.config import SlaveConfig
     from ecattool.startup.model import StartupList
 
@@ -138,20 +141,29 @@ def export_cmd(source: str | None, project: str | None, from_format: str | None,
     if project is not None:
         if from_format is not None:
             raise click.UsageError("--from-format belongs to --from, not --project")
-        from ecattool.project.export import export_warnings, slave_configs
         from ecattool.project.loader import project_inputs
-        from ecattool.project.machine import load_machine
 
-        machine = load_machine(project)
-        configs = select_slaves(slave_configs(machine, allow_errors), drives)
-        for f in export_warnings(machine, {c.name for c in configs}):
-            click.echo(str(f), err=True)
+        configs = _project_configs(project, drives, allow_errors)
         write_startup(_with_cycle(configs, sync0_cycle), fmt, output, tuple(project_inputs([project])), lossy)
         return
     assert source is not None
     configs = select_slaves(_read(source, from_format), drives)
     _report_import(configs, source)
     write_startup(_with_cycle(configs, sync0_cycle), fmt, output, (source,), lossy)
+
+
+def _project_configs(project: str, drives: tuple[str, ...], allow_errors: bool) -> list[SlaveConfig]:
+    """The slave configurations of the project's drives (those ``drives`` name, else all), its export warnings
+    for them on stderr."""
+    from ecattool.project.export import export_warnings, slave_configs
+    from ecattool.project.machine import load_machine
+    from ecattool.startup import select_slaves
+
+    machine = load_machine(project)
+    configs = select_slaves(slave_configs(machine, allow_errors), drives)
+    for f in export_warnings(machine, {c.name for c in configs}):
+        click.echo(str(f), err=True)
+    return configs
 
 
 @startup.command("convert", epilog="""\b
@@ -192,7 +204,6 @@ Examples:
 @json_option
 def import_cmd(input_file: str, from_format: str | None, as_json: bool) -> None:
     """Read a startup configuration and show what was read: slaves, commands, PDOs, notes."""
-    from ecattool.od.display import value_text
     from ecattool.startup.formats.jsonfmt import slave_to_json
 
     configs, fmt = _read_with_format(input_file, from_format)
@@ -204,25 +215,36 @@ def import_cmd(input_file: str, from_format: str | None, as_json: bool) -> None:
         return
     out = console()
     for c in configs:
-        ident = f"  {c.identity}" if c.identity else ""
-        pos = f" at position {c.position}" if c.position is not None else ""
-        out.print(f"[bold]{c.label}[/bold]{pos}{ident}")
-        if c.dc_assign_activate:
-            out.print(f"  DC assign activate 0x{c.dc_assign_activate:04X}"
-                      + (f", cycle {c.dc_cycle_ns} ns" if c.dc_cycle_ns else ""))
-        if c.commands:
-            t = table(f"{len(c.commands)} startup command(s)", ["line", "tr", "object", "value", "CA", "comment"])
-            for cmd in c.commands:
-                # decoded by size (2000 (0x000007D0), not d0070000); complete-access data stays bytes
-                value = cmd.data.hex(" ") if cmd.complete_access else value_text(cmd.data, index=cmd.index)
-                t.add_row(str(cmd.source.line if cmd.source and cmd.source.line else ""), cmd.transition,
-                          cmd.address, value, "CA" if cmd.complete_access else "", cmd.comment)
-            out.print(t)
-        for direction, pdos in (("RxPDO", c.rx_pdos), ("TxPDO", c.tx_pdos)):
-            for p in pdos:
-                entries = ", ".join(f"{e.index:04X}:{e.subindex:02X}/{e.bit_len}" for e in p.entries)
-                out.print(f"  {direction} 0x{p.index:04X} ({p.bit_size} bits): {entries}")
-        if c.soe_commands:
-            out.print(f"  {len(c.soe_commands)} SoE init command(s) (kept; shown with --json)")
-        for n in c.notes:
-            out.print(f"  {n}", markup=False)
+        _render_slave(out, c)
+
+
+def _render_slave(out: Console, c: SlaveConfig) -> None:
+    """What was read of one slave: identity and position, DC, its startup commands, PDOs, SoE count and notes."""
+    ident = f"  {c.identity}" if c.identity else ""
+    pos = f" at position {c.position}" if c.position is not None else ""
+    out.print(f"[bold]{c.label}[/bold]{pos}{ident}")
+    if c.dc_assign_activate:
+        out.print(f"  DC assign activate 0x{c.dc_assign_activate:04X}"
+                  + (f", cycle {c.dc_cycle_ns} ns" if c.dc_cycle_ns else ""))
+    if c.commands:
+        out.print(_commands_table(c))
+    for direction, pdos in (("RxPDO", c.rx_pdos), ("TxPDO", c.tx_pdos)):
+        for p in pdos:
+            entries = ", ".join(f"{e.index:04X}:{e.subindex:02X}/{e.bit_len}" for e in p.entries)
+            out.print(f"  {direction} 0x{p.index:04X} ({p.bit_size} bits): {entries}")
+    if c.soe_commands:
+        out.print(f"  {len(c.soe_commands)} SoE init command(s) (kept; shown with --json)")
+    for n in c.notes:
+        out.print(f"  {n}", markup=False)
+
+
+def _commands_table(c: SlaveConfig) -> Table:
+    from ecattool.od.display import value_text
+
+    t = table(f"{len(c.commands)} startup command(s)", ["line", "tr", "object", "value", "CA", "comment"])
+    for cmd in c.commands:
+        # decoded by size (2000 (0x000007D0), not d0070000); complete-access data stays bytes
+        value = cmd.data.hex(" ") if cmd.complete_access else value_text(cmd.data, index=cmd.index)
+        t.add_row(str(cmd.source.line if cmd.source and cmd.source.line else ""), cmd.transition,
+                  cmd.address, value, "CA" if cmd.complete_access else "", cmd.comment)
+    return t

@@ -64,9 +64,7 @@ def info(file: str, as_json: bool) -> None:
 
     Exit status 1 when an integrity word (setup-table checksum, identification sums, setup pointer) is wrong.
     """
-    from ecattool.sw.layout import describe, integrity_findings
-
-    from rich.text import Text
+    from ecattool.sw.layout import integrity_findings
 
     image = _image(file)
     findings = integrity_findings(image)
@@ -74,18 +72,26 @@ def info(file: str, as_json: bool) -> None:
         print_json({"blocks": [{"start": b.start, "end": b.end, "count": b.count, "checksum": b.checksum}
                                for b in image.blocks]})
     else:
-        t = table(f"{file}: {len(image)} blocks, {image.total_words} words",
-                  ["start", "end", "words", "checksum", "2069h", "block"])
-        for i in describe(image):
-            b = i.block
-            t.add_row(f"0x{b.start:04X}", f"0x{b.end:04X}", str(b.count), f"0x{b.checksum:04X}",
-                      f"0x{b.checksum_request:08X}", Text(i.description))
-        c = console()
-        c.print(t)
+        console().print(_blocks_table(file, image))
         for f in findings:
             click.echo(str(f))
     if findings:
         sys.exit(1)
+
+
+def _blocks_table(file: str, image: SwImage) -> Table:
+    """One row a block: range, words, checksum, the 2069h value that asks the drive for it, what the block is."""
+    from rich.text import Text
+
+    from ecattool.sw.layout import describe
+
+    t = table(f"{file}: {len(image)} blocks, {image.total_words} words",
+              ["start", "end", "words", "checksum", "2069h", "block"])
+    for i in describe(image):
+        b = i.block
+        t.add_row(f"0x{b.start:04X}", f"0x{b.end:04X}", str(b.count), f"0x{b.checksum:04X}",
+                  f"0x{b.checksum_request:08X}", Text(i.description))
+    return t
 
 
 # ------------------------------------------------------------------------------------------------- FoE
@@ -121,21 +127,15 @@ def from_foe_cmd(file: str, output: str | None) -> None:
 
 # ---------------------------------------------------------------------------------------------- targets
 def _open_target(spec: str, slave: int, device: Device | None = None) -> SlaveTarget:
-    """The slave at ``slave`` of the target ``spec`` (ecattool.target.opener): with ``sim``, a simulated bus of
-    ``device`` at that position (a Technosoft iPOS without one)."""
-    from ecattool.online.targets import open_guarded
-    from ecattool.target.opener import parse_target, slave_at
+    """The slave at ``slave`` of the target ``spec`` (ecattool.online.targets.open_slave): with ``sim``, a simulated
+    bus of ``device`` at that position (a Technosoft iPOS without one)."""
+    from ecattool.online.targets import open_slave
 
     if device is None:  # .sw images are Technosoft's: a bare 'sim' is an iPOS, a real bus gets its timeouts
         from ecattool import profiles
 
         device = profiles.load("technosoft-ipos")
-    tgt = open_guarded(spec, [device], reset_bus_given())
-    if not parse_target(spec).own_slaves:
-        return slave_at(tgt, slave)
-    found = slave_at(tgt, 0)  # the one simulated drive answers as the slave asked for
-    found.position = slave
-    return found
+    return open_slave(spec, [device], slave, reset_bus_given())
 
 
 def _project_drive(project: str, name: str | None, allow_errors: bool = False) -> tuple[Slave, str]:
@@ -144,17 +144,7 @@ def _project_drive(project: str, name: str | None, allow_errors: bool = False) -
     from ecattool.project.machine import load_machine
 
     machine = load_machine(project)
-    machine.require_loaded()
-    if name is None:
-        with_sw = [s for s in machine.slaves if s.drive.sw_config is not None]
-        name = with_sw[0].name if len(with_sw) == 1 else None
-    chosen = machine.slave(name)
-    if chosen.drive.sw_config is not None and chosen.sw_image is None:  # configured but unreadable: lint's why
-        why = next((f for f in chosen.findings if f.rule in ("PRJ002", "PRJ030") and f.severity.value == "error"), None)
-        if why is not None:
-            raise InputError(f"drive {chosen.name!r}: {why.message}", why.location)
-    machine.refuse_errors(f"use drive {chosen.name!r}", allow_errors=allow_errors, slaves=[chosen])
-    return chosen, machine.target
+    return machine.sw_drive(name, allow_errors=allow_errors), machine.target
 
 
 _target_option = click.option("--target", default=None,
@@ -290,37 +280,46 @@ def download(file: str | None, dry_run: bool, mode: str, force: bool, no_reset: 
     reported and the command exits 1; running it again repairs the drive.
     """
     if dry_run:
-        from ecattool.sw.plan import download_plan
-
         if file is None:
             raise click.UsageError("--dry-run needs the .sw FILE")
-        image = _image(file)
-        plan = download_plan(image, int(mode), reset=not no_reset, name=file)
-        if as_json:
-            print_json({"mode": int(mode), "commands": [
-                {"index": c.index, "subindex": c.subindex, "value": c.int_value, "size": len(c.data),
-                 "expect_reply": c.expect_reply, "comment": c.comment} for c in plan]})
-            return
-        t = table(f"{file}: {len(plan)} SDO writes ({mode}-bit)", ["#", "object", "value", "comment"])
-        for n, c in enumerate(plan, 1):
-            t.add_row(str(n), c.address, f"0x{c.int_value:0{2 * len(c.data)}X}", c.comment)
-        console().print(t)
+        _render_plan(file, int(mode), not no_reset, as_json)
         return
     tgt, image, file, _ = _target_and_image(file, target, slave, project, drive_name, preload, allow_errors)
     report = _run_download(image, tgt, int(mode), not no_reset, force, show_progress=not as_json)
     if as_json:
         print_json(report.to_json())
     else:
-        out = console()
-        if not report.written:
-            out.print(f"{file}: every block already matches the drive; nothing written", markup=False)
-        else:
-            out.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
-            for start, err in report.write_errors.items():
-                out.print(f"block 0x{start:04X}: write failed: {err}", markup=False)
-            out.print(_reset_line(report, no_reset))
+        _render_download(file, report, no_reset)
     if not report.ok:
         sys.exit(1)
+
+
+def _render_plan(file: str, mode: int, reset: bool, as_json: bool) -> None:
+    """``download --dry-run``: the SDO writes of the download plan, as JSON or a table."""
+    from ecattool.sw.plan import download_plan
+
+    plan = download_plan(_image(file), mode, reset=reset, name=file)
+    if as_json:
+        print_json({"mode": mode, "commands": [
+            {"index": c.index, "subindex": c.subindex, "value": c.int_value, "size": len(c.data),
+             "expect_reply": c.expect_reply, "comment": c.comment} for c in plan]})
+        return
+    t = table(f"{file}: {len(plan)} SDO writes ({mode}-bit)", ["#", "object", "value", "comment"])
+    for n, c in enumerate(plan, 1):
+        t.add_row(str(n), c.address, f"0x{c.int_value:0{2 * len(c.data)}X}", c.comment)
+    console().print(t)
+
+
+def _render_download(file: str, report: DownloadReport, no_reset: bool) -> None:
+    """What a download did: nothing to write, or the blocks after writing, the write errors and the reset."""
+    out = console()
+    if not report.written:
+        out.print(f"{file}: every block already matches the drive; nothing written", markup=False)
+        return
+    out.print(_checks_table(f"{file}: after writing {len(report.written)} block(s)", report.after))
+    for start, err in report.write_errors.items():
+        out.print(f"block 0x{start:04X}: write failed: {err}", markup=False)
+    out.print(_reset_line(report, no_reset))
 
 
 def _reset_line(report: DownloadReport, no_reset: bool) -> str:
@@ -469,7 +468,7 @@ def upload(like: str | None, ranges: tuple[str, ...], target: str | None, slave:
     another .sw (--like) or given (--range). Every block is checked by the drive's own checksum (2069h/206Ah);
     the file is written only when all of them match (exit status 1 otherwise)."""
     from ecattool.sw.image import write
-    from ecattool.sw.upload import parse_range, upload as do_upload
+    from ecattool.sw.upload import upload as do_upload, upload_ranges
 
     ref = _image(like) if like else None
     device = None
@@ -477,18 +476,22 @@ def upload(like: str | None, ranges: tuple[str, ...], target: str | None, slave:
         rd, target, slave = _project_slave(project, drive_name, allow_errors, target, slave)
         device = rd.device
         ref = ref or rd.sw_image
-    spans = [parse_range(r) for r in ranges] or ([(b.start, b.end) for b in ref.blocks] if ref is not None else [])
     spec = target or "sim"
-    image, checks = do_upload(_open_preloaded(spec, slave, device, preload), spans)
+    image, checks = do_upload(_open_preloaded(spec, slave, device, preload), upload_ranges(ranges, ref))
     ok = all(c.ok for c in checks)
-    text = write(image)
+    _write_upload(write(image), checks, ok, output, tuple(x for x in (like, project, preload) if x), as_json, spec)
+    if not ok:
+        sys.exit(1)
+
+
+def _write_upload(text: bytes, checks: list[BlockCheck], ok: bool, output: str | None, inputs: tuple[str, ...],
+                  as_json: bool, spec: str) -> None:
+    """The .sw read, written only when every block checks out, and the checks as JSON or a table."""
     to_file = output not in (None, "-")
     if ok and (to_file or not as_json):
-        write_output(output, text, tuple(x for x in (like, project, preload) if x))
+        write_output(output, text, inputs)
     if as_json:
         print_json({"ok": ok, "output": output if ok and to_file else None, "blocks": [c.to_json() for c in checks],
                     **({} if to_file or not ok else {"sw": text.decode("ascii", "replace")})})
     elif to_file:
         console().print(_checks_table(f"read from {spec}" + ("" if ok else ": NOT written"), checks))
-    if not ok:
-        sys.exit(1)

@@ -11,7 +11,7 @@ from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
 from ecattool.online import bus_state
 from ecattool.online.live import LiveBus
-from ecattool.target.base import LiveSlave, Target
+from ecattool.target.base import LiveSlave, SlaveTarget, Target
 from ecattool.target.isolated import MasterProcess, RemoteSlave
 from ecattool.target.opener import MASTERS, open_master, open_target, parse_target
 from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, BusLimits, bus_limits
@@ -113,3 +113,26 @@ def isolated_bus(spec: str, opener: Callable[[], LiveBus], limits: BusLimits | N
     ``limits``: how long it may take (the slaves' timeouts)."""
     master = MasterProcess(spec, opener, lambda bus: bus.slaves, limits=limits)
     return LiveBus(spec, [RemoteSlave(master, p) for p in master.positions], closer=master.close)
+
+
+def open_slave(spec: str, devices: Sequence[Device], position: int, reset_bus: bool = False, *,
+               in_preop: bool = False) -> SlaveTarget:
+    """The one slave a command acts on (``sw verify/download/upload``, ``scale explain --target``): the slave at bus
+    ``position`` of the target ``spec``, opened by :func:`open_guarded` with ``devices`` (what a bare ``sim``
+    simulates, and whose timeouts a real bus takes). A bare ``sim`` holds just those devices: its first drive
+    answers as the slave asked for (its ``position`` is ``position``). ``in_preop``: a simulated slave is taken to
+    PRE-OP first (it starts in INIT; a real master opens its slaves in PRE-OP)."""
+    from ecattool.target.opener import slave_at
+
+    parsed = parse_target(spec)
+    tgt = open_guarded(spec, devices, reset_bus)
+    if not parsed.own_slaves:
+        found = slave_at(tgt, position)
+    else:
+        found = slave_at(tgt, 0)
+        found.position = position
+    if in_preop and parsed.kind == "sim":
+        from ecattool.od.model import EcState
+
+        found.request_state(EcState.PREOP)
+    return found

@@ -71,6 +71,31 @@ class Machine:
             raise InputError(f"the project {why}; choose one ({names})", Location(self.path))
         return chosen[0]
 
+    def slave_to_act_on(self, name: str | None, verb: str, *, allow_errors: bool = False) -> Slave:
+        """The slave ``name`` (see :meth:`slave`) for a command that acts on one drive of the project (``scale
+        explain --project``, ``sw … --project``): refused as :meth:`refuse_errors` says, for the project-level
+        errors and the slave's own (``cannot {verb} drive 'x': …``)."""
+        self.require_loaded()
+        chosen = self.slave(name)
+        self.refuse_errors(f"{verb} drive {chosen.name!r}", allow_errors=allow_errors, slaves=[chosen])
+        return chosen
+
+    def sw_drive(self, name: str | None, *, allow_errors: bool = False) -> Slave:
+        """The drive ``sw verify/download/upload --project`` acts on: ``name``, else the only slave, else the only one
+        with an ``sw:``. One whose ``sw:`` is configured but does not read is refused with lint's reason (PRJ002,
+        PRJ030); then as :meth:`slave_to_act_on` says."""
+        self.require_loaded()
+        if name is None:
+            with_sw = [s for s in self.slaves if s.drive.sw_config is not None]
+            name = with_sw[0].name if len(with_sw) == 1 else None
+        chosen = self.slave(name)
+        if chosen.drive.sw_config is not None and chosen.sw_image is None:  # configured but unreadable: lint's why
+            why = next((f for f in chosen.findings if f.rule in ("PRJ002", "PRJ030") and f.severity is Severity.ERROR),
+                       None)
+            if why is not None:
+                raise InputError(f"drive {chosen.name!r}: {why.message}", why.location)
+        return self.slave_to_act_on(chosen.name, "use", allow_errors=allow_errors)
+
     def errors(self, slaves: Sequence[Slave] | None = None) -> list[Finding]:
         """The error findings of the project (or only those of ``slaves``, with the project-level ones)."""
         errs = [f for f in self.findings if f.severity is Severity.ERROR]

@@ -5,14 +5,37 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import InputError, Location
 from ecattool.findings import Finding, Severity
-from ecattool.scaling.compute import fixed_counts_per_rev, resolve_family, technosoft_factor_set
+from ecattool.scaling.compute import FAMILIES, fixed_counts_per_rev, resolve_family, technosoft_factor_set
 from ecattool.scaling.units import decode_si_unit, describe_dimension
 
+if TYPE_CHECKING:
+    from ecattool.esi.model import Device
+    from ecattool.scaling.group import FactorGroup
+
 Values = dict[tuple[int, int], int]
+
+#: the factor-group objects a project's startup list sets (6089h–60ABh): what ``scale explain --project`` reads
+FACTOR_INDICES = range(0x6089, 0x60AC)
+
+
+def explain_family(family: str | None) -> str:
+    """The family :func:`explain` reads a drive of ``family`` (a project slave's) as: the scaling family of that
+    name, else the generic CiA-402 one."""
+    return family if family in FAMILIES else "generic"
+
+
+def family_drives(family: str, firmware: str | None = None) -> list[Device]:
+    """What a bare simulator holds to explain ``family``'s values on (``scale explain --target sim``), and whose
+    timeouts a real bus takes: the built-in family's drive (at ``firmware`` where given); none for ``generic``."""
+    from ecattool import profiles
+
+    if family not in profiles.PROFILE_NAMES:
+        return []
+    return [profiles.load(family, revision=firmware) if firmware else profiles.load(family)]
 
 
 @dataclass(slots=True)
@@ -246,6 +269,12 @@ def _technosoft(e: Explanation, r: _Reader, T: Fraction, unit_name: dict[int, st
                 e.lines.append((label, f"dimension {dim}, notation {notation}: {describe_dimension(dim, notation)}; "
                                        f"0x{factor:04X} {'active' if active else 'INACTIVE (indices 0)'}"))
     return out
+
+
+def explain_group(group: FactorGroup) -> Explanation:
+    """A computed factor group read back as :func:`explain` reads a drive's values (its own factor set, which
+    only a Technosoft family has more than one of): the page ``scale compute --html`` draws."""
+    return explain(group.values, group.family, factor_set=group.factor_set)
 
 
 #: every object explain() understands (index, sub-indices)

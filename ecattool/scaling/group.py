@@ -107,6 +107,13 @@ class FactorGroup:
         return {(o.index, o.subindex): o.value for o in self.objects}
 
     @property
+    def mechanics(self) -> dict[str, str]:
+        """The chain from encoder to user unit as the summary gives it (feedback, gear, transmission, position and
+        velocity unit), as text: what the scaling page draws."""
+        return {k: str(v) for k, v in self.summary.items()
+                if k in ("feedback", "gear (motor:load)", "transmission", "position unit", "velocity unit")}
+
+    @property
     def exact(self) -> bool:
         return all(o.exact for o in self.objects)
 

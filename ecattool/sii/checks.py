@@ -201,6 +201,18 @@ _AGAINST: list[tuple[str, str, Severity, str]] = [
 ]
 
 
+def built_image_problem(device: Device, image: SiiImage) -> str | None:
+    """Why ``image``, built from ``device`` (``sii build``), fails :func:`check`, or None when it passes: the image is
+    what the ESI says, and where the ESI's own Eeprom/Category elements replace generated ones (as Elmo's boot
+    devices give a 9-byte SyncM) that is named as the likely cause."""
+    errors = [f for f in check(image) if f.severity is Severity.ERROR]
+    if not errors:
+        return None
+    given = sorted({c.cat_no for c in device.eeprom.categories}) if device.eeprom else []
+    why = f"; the ESI's Eeprom/Category {', '.join(map(str, given))} replaces what ecattool generates" if given else ""
+    return f"the image fails `sii check` with {len(errors)} error(s), first: {errors[0].message}{why}"
+
+
 def check_against(device: "Device", image: SiiImage) -> list[Finding]:
     """Where ``image`` and the ESI ``device`` disagree: identity, mailbox, ConfigData, SMs, FMMUs, PDOs, DC.
 

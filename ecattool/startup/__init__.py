@@ -14,6 +14,7 @@ from ecattool.startup.api import (
     import_bytes,
     import_file,
     losses,
+    select_one,
     select_slaves,
 )
 from ecattool.startup.config import SlaveConfig, SoeCommand
@@ -21,4 +22,5 @@ from ecattool.startup.formats import FORMATS, Format
 from ecattool.startup.model import KINDS, TRANSITIONS, StartupCommand, StartupList
 
 __all__ = ["FORMATS", "Format", "KINDS", "SlaveConfig", "SoeCommand", "StartupCommand", "StartupList", "TRANSITIONS",
-           "as_configs", "describe_slaves", "detect_format", "export", "import_bytes", "import_file", "losses", "select_slaves"]
+           "as_configs", "describe_slaves", "detect_format", "export", "import_bytes", "import_file", "losses",
+           "select_one", "select_slaves"]

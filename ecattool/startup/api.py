@@ -154,3 +154,18 @@ def select_slaves(configs: Sequence[SlaveConfig], selectors: Sequence[str]) -> l
             raise SelectionError(f"no slave named or at position {sel!r} (slaves: {describe_slaves(configs)})")
         chosen += [c for c in found if all(c is not x for x in chosen)]
     return [c for c in configs if any(c is x for x in chosen)]
+
+
+def select_one(configs: Sequence[SlaveConfig], selector: str | None, source: str) -> SlaveConfig:
+    """The one slave of ``source``'s ``configs`` that ``selector`` names (:func:`select_slaves`), or its only slave
+    without one; a SelectionError listing the slaves where that is not exactly one (``map … --startup``)."""
+    if selector is None:
+        if len(configs) == 1:
+            return configs[0]
+        raise SelectionError(f"{source} has {len(configs)} slaves; choose one with --drive NAME "
+                             f"({describe_slaves(configs)})")
+    chosen = select_slaves(configs, [selector])
+    if len(chosen) > 1:
+        raise SelectionError(f"{source} has {len(chosen)} slaves named {selector!r}; choose one by its bus "
+                             f"position with --drive N ({describe_slaves(configs)})")
+    return chosen[0]

@@ -51,6 +51,14 @@ def parse_range(text: str) -> tuple[int, int]:
     return start, end
 
 
+def upload_ranges(ranges: Sequence[str], like: SwImage | None = None) -> list[tuple[int, int]]:
+    """The word ranges ``sw upload`` reads: those given (``0x4000-0x40FF`` …, :func:`parse_range`), else the blocks
+    of ``like`` (another .sw, or a project drive's); none without either (``upload`` then says what to give)."""
+    if ranges:
+        return [parse_range(r) for r in ranges]
+    return [(b.start, b.end) for b in like.blocks] if like is not None else []
+
+
 def upload(target: SlaveTarget, ranges: Sequence[tuple[int, int]]) -> tuple[SwImage, list[BlockCheck]]:
     """The drive's EEPROM words of ``ranges`` (inclusive start, end) as a ``.sw`` image, and the drive's own
     checksum of each block compared with the words read."""
