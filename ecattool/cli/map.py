@@ -17,7 +17,6 @@ if TYPE_CHECKING:
     from ecattool.findings import Finding
     from ecattool.pdo import Mapping
     from ecattool.pdo.layout import Layout as ProcessLayout
-    from ecattool.profiles.running import RunningDevice
     from ecattool.startup import SlaveConfig, StartupList
 
 _EXAMPLES = """\b
@@ -63,20 +62,20 @@ def _device_options(f: Decorated) -> Decorated:
 
 
 def _load_device(esi: str | None, selector: str | None, profile: str | None, product: str | None,
-                 revision: str | None, policy: str = "exact") -> RunningDevice:
-    if esi:
-        if profile:
-            raise click.UsageError("give either --esi or --profile, not both")
-        from ecattool.profiles.running import device_from_file
-
-        # the device as it runs (default modules in its slots, mapping objects), as lint and the simulator see it
-        return device_from_file(esi, selector, revision, policy)
-    name = profile or selector
-    if not name:
+                 revision: str | None, policy: str = "exact") -> Device:
+    """The device of the one-slave machine the flags build (as a project entry ``device:`` would: the device as
+    it runs, default modules in its slots and mapping objects, as lint and the simulator see it)."""
+    if esi and profile:
+        raise click.UsageError("give either --esi or --profile, not both")
+    if not (esi or profile or selector):
         raise click.UsageError("name the device: --esi FILE [--device SEL] or --profile NAME")
-    from ecattool.profiles.running import device_from_profile
+    from ecattool.project.machine import Machine
 
-    return device_from_profile(name, product=product, revision=revision)
+    # without --esi, --device NAME names a built-in profile, as it did before --profile existed
+    machine = Machine.from_device_flags(esi=esi, select=selector, policy=policy,
+                                        profile=None if esi else profile or selector, product=product,
+                                        revision=revision)
+    return machine.slaves[0].require_device()
 
 
 def _load_mapping(device: Device, rx: tuple[str, ...], tx: tuple[str, ...], mapping_file: str | None) -> Mapping:

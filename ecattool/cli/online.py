@@ -13,7 +13,7 @@ if TYPE_CHECKING:
     from ecattool.online.library import Library
     from ecattool.online.live import LiveBus
     from ecattool.project.machine import Machine
-    from ecattool.profiles.running import RunningDevice
+    from ecattool.esi.model import Device
 
 TARGET_HELP = ("Where the bus is: pysoem:IF or kickcat:IF (a real master on a network interface), or the simulator: "
                "sim:PROFILE,ESI… (e.g. sim:hdt,technosoft-ipos).")
@@ -86,15 +86,15 @@ def load_library(folder: str | None) -> Library | None:
     return Library(folder) if folder else None
 
 
-def load_device(text: str | None) -> RunningDevice | None:
-    """The device ``--device`` names (FILE, FILE@SELECTOR or a built-in profile name) as it runs: the dictionary
-    lint and the simulator use (default modules plugged, communication objects completed)."""
+def load_device(text: str | None) -> Device | None:
+    """The device ``--device`` names (FILE, FILE@SELECTOR or a built-in profile name): the device of the one-slave
+    machine it builds, as a project entry would (default modules plugged, communication objects completed)."""
     if not text:
         return None
-    from ecattool.profiles.running import resolve_device
+    from ecattool.project.machine import Machine
 
     source, _, selector = text.partition("@")
-    return resolve_device(source, selector=selector or None)
+    return Machine.from_device_flags(source=source, select=selector or None).slaves[0].require_device()
 
 
 def open_live(target: str, device: Any = None) -> LiveBus:

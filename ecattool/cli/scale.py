@@ -93,9 +93,10 @@ def _compute(kwargs: dict[str, Any]) -> FactorGroup:
     device = None
     if esi:
         from ecattool.profiles import family_of
-        from ecattool.profiles.running import device_from_file
+        from ecattool.project.machine import Machine
 
-        device = device_from_file(esi, selector, policy=policy)
+        # the device of the one-slave machine --esi/--device/--policy build, as a project entry would
+        device = Machine.from_device_flags(esi=esi, select=selector, policy=policy).slaves[0].require_device()
         if not kwargs.get("family"):
             kwargs["family"] = family_of(device)
     spec, family, firmware, approximation = _spec(**kwargs)

@@ -68,15 +68,26 @@ Examples:
 @json_option
 def show_cmd(profile: str, product: str | None, revision: str | None, objects: bool, as_json: bool) -> None:
     """Show PROFILE: identity, family limits, default PDO mappings and assignment (and its dictionary)."""
-    from ecattool.sim import Drive
     from ecattool.sim.describe import describe_drive
 
-    drive = Drive.from_profile(profile, product=product, revision=revision)
+    drive = _sim_drive(profile=profile, product=product, revision=revision)
     info = describe_drive(drive, objects)
     if as_json:
         print_json(info)
         return
     _render_show(drive.device, info)
+
+
+def _sim_drive(*, source: str | None = None, profile: str | None = None, product: str | None = None,
+               revision: str | None = None, select: str | None = None, policy: str = "exact") -> Drive:
+    """The simulated drive of the one-slave machine the device flags build (a project entry's device and rules;
+    SOURCE: an ESI/EDS file, else a built-in profile name)."""
+    from ecattool.project.machine import Machine
+    from ecattool.sim.drive import Drive
+
+    slave = Machine.from_device_flags(source=source, profile=profile, product=product, revision=revision,
+                                      select=select, policy=policy).slaves[0]
+    return Drive.from_device(slave.require_device(), slave.rules)
 
 
 def _render_show(dev: Device, info: dict[str, Any]) -> None:
@@ -156,9 +167,9 @@ def run_cmd(source: str, script: str, product: str | None, revision: str | None,
     elsewhere is where a command runs: sim or pysoem:IF). Exits 1 at the first unexpected abort, timeout or
     refused state change.
     """
-    from ecattool.sim.script import drive_for_source, load_script, run_script
+    from ecattool.sim.script import load_script, run_script
 
-    drive = drive_for_source(source, product=product, revision=revision, selector=selector, policy=policy)
+    drive = _sim_drive(source=source, product=product, revision=revision, select=selector, policy=policy)
     steps, locations = load_script(script)
     tr = run_script(drive, steps, locations, script, Path(script).parent)
     if as_json:

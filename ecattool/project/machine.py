@@ -28,14 +28,17 @@ from ecattool.fileio import read_bytes
 from ecattool.findings import Finding, Severity
 from ecattool.project import familycycle
 from ecattool.project.loader import LoadedProject, parse_project
+from ecattool.project.model import DeviceRef, Drive, Project
 from ecattool.project.resolve import resolve_dc, resolve_device, resolve_parameters
 from ecattool.project.rules import disable
 from ecattool.project.slave import Slave, SlaveDc, SlaveKind, is_axis
 from ecattool.startup.config import SlaveConfig
 from ecattool.startup.install import KickcatBus, MasterKind, PysoemMaster
 from ecattool.startup.model import StartupCommand, StartupList
+from ecattool.yamlloc import LocatedYaml
 
-__all__ = ["ALLOW_ERRORS_HELP", "Machine", "Slave", "SlaveDc", "SlaveKind", "is_axis", "load_machine", "slave_config"]
+__all__ = ["ALLOW_ERRORS_HELP", "FLAGS_SOURCE", "Machine", "Slave", "SlaveDc", "SlaveKind", "device_entry", "is_axis",
+           "load_machine", "one_slave_machine", "slave_config"]
 
 #: the help of the ``--allow-errors`` option every command that acts on a project has
 ALLOW_ERRORS_HELP = ("Act on the project even when lint reports errors (by default a project with lint errors is "
@@ -58,6 +61,19 @@ class Machine:
     def target(self) -> str:
         """The project's default target spec (``sim`` where the project does not load)."""
         return self.loaded.project.target if self.loaded is not None else "sim"
+
+    @classmethod
+    def from_device_flags(cls, *, source: str | Path | None = None, esi: str | Path | None = None,
+                          select: str | int | None = None, policy: str = "exact", profile: str | None = None,
+                          product: str | None = None, revision: str | int | None = None) -> Machine:
+        """The one-slave machine the device flags of a command name: the project entry :func:`device_entry`
+        makes of them, built by :func:`one_slave_machine`; the command acts on ``machine.slaves[0]``.
+
+        >>> m = Machine.from_device_flags(esi="samples/esi/etg2001_modular.xml")   # doctest: +SKIP
+        >>> m.slaves[0].device.type_name, m.slaves[0].mapping                       # doctest: +SKIP
+        """
+        return one_slave_machine(device_entry(source=source, esi=esi, select=select, policy=policy, profile=profile,
+                                              product=product, revision=revision))
 
     def in_bus_order(self) -> list[Slave]:
         return sorted(self.slaves, key=lambda s: s.position)
@@ -210,6 +226,62 @@ def build_slave(lp: LoadedProject, i: int) -> Slave:
     if device.source and not device.source.startswith("profile:"):
         findings.extend(steps.check_esi(lp, i, slave))
     return replace(slave, findings=tuple(disable(findings, drive.disable_rules, lp, ("drives", i, "disable_rules"))))
+
+
+#: the source a machine built from command-line flags names (its drive has no file and line)
+FLAGS_SOURCE = "<command line>"
+
+
+def device_entry(*, source: str | Path | None = None, esi: str | Path | None = None, select: str | int | None = None,
+                 policy: str = "exact", profile: str | None = None, product: str | None = None,
+                 revision: str | int | None = None) -> DeviceRef:
+    """The project entry ``device: {...}`` that command-line device flags mean: ``esi`` (with ``select`` and
+    ``policy``; a ``revision`` narrows ``select`` to ``select:revision``, as ``--device SEL --revision R`` does),
+    or a built-in ``profile`` (``product``, ``revision``), or ``source``, which is either: an ESI/EDS file (a
+    ``.xml``/``.eds``/``.dcf`` name or an existing file) or else a profile name. Paths stay as given: relative
+    to the current directory. Bad combinations are an InputError (one line)."""
+    from pydantic import ValidationError
+
+    from ecattool.profiles.running import is_device_file
+
+    if source is not None:
+        if is_device_file(source):
+            esi = source
+        else:
+            profile = str(source)
+    if esi is not None:
+        if select not in (None, "") and revision not in (None, ""):
+            select = f"{select}:{revision}"
+        fields: dict[str, object] = {"esi": str(esi), "select": None if select == "" else select, "policy": policy}
+    else:
+        fields = {"profile": profile, "product": product, "revision": revision}
+    try:
+        return DeviceRef.model_validate(fields)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(str(p) for p in first.get("loc", ()))
+        msg = first.get("msg", "invalid device").removeprefix("Value error, ")
+        raise InputError(f"device {where}: {msg}" if where else f"device: {msg}") from None
+
+
+def one_slave_machine(device: DeviceRef, name: str = "device") -> Machine:
+    """The machine a project with one drive ``{name: ..., device: device}`` is: built by the same steps as
+    :func:`load_machine` (the device as it runs, rules, mapping, startup list, the findings lint has for it),
+    so a command given device flags acts on ``machine.slaves[0]`` exactly as on a project's slave. A device that
+    does not resolve raises its error (InputError, at the file and line where the problem is in a named file)
+    instead of being a finding: there is nothing to act on. Relative paths are relative to the current
+    directory."""
+    project = Project(ecattool=1, drives=[Drive(name=name, device=device)])
+    doc = LocatedYaml(project.model_dump(mode="json", exclude_defaults=True), {(): Location()}, FLAGS_SOURCE)
+    lp = LoadedProject(project, Path(FLAGS_SOURCE), doc)  # base: the current directory
+    slave = build_slave(lp, 0)
+    if slave.device is None:
+        why = next((f for f in slave.findings if f.severity is Severity.ERROR), None)
+        if why is None:  # pragma: no cover - a device that does not resolve always says why
+            raise InputError("the device did not resolve")
+        loc = why.location
+        raise InputError(why.message, loc if loc is not None and loc.file else None)
+    return Machine(FLAGS_SOURCE, (slave,), slave.findings, lp)
 
 
 def load_machine(path: str | Path) -> Machine:

@@ -113,6 +113,14 @@ class Slave:
         """Whether commission enables the slave (CiA-402): the project's ``enable:``, by default for an axis."""
         return self.drive.enable if self.drive.enable is not None else self.kind == "axis"
 
+    def require_device(self) -> Device:
+        """The device as it runs; an InputError where it did not resolve (the slave's findings say why)."""
+        if self.device is None:
+            from ecattool.errors import InputError
+
+            raise InputError(f"drive {self.name!r}: the device did not resolve (see `ecattool lint`)")
+        return self.device
+
     @property
     def family(self) -> str:
         return self.rules.family if self.rules is not None else "generic"

@@ -86,17 +86,6 @@ class Transcript:
         return {"source": self.source, "ok": self.ok, "steps": [ln.to_json() for ln in self.lines]}
 
 
-def drive_for_source(source: str, *, product: str | None = None, revision: str | None = None,
-                     selector: str | None = None, policy: str = "exact") -> Drive:
-    """The drive ``sim run`` runs a script on: an ESI (or CANopen EDS) file with ``selector``/``policy`` choosing
-    its device, else a built-in profile name with ``product``/``revision`` choosing the model."""
-    import os
-
-    if os.path.isfile(source):  # (Path.is_file raises on a name too long)
-        return Drive.from_esi(source, selector, policy=policy)
-    return Drive.from_profile(source, product=product, revision=revision)
-
-
 def load_script(path: str | Path) -> tuple[list[dict[str, Any]], list[Location]]:
     """The steps of a JSON/YAML script file and the location of each step."""
     from ecattool.fileio import read_bytes
