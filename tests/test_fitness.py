@@ -26,6 +26,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from ecattool.abort import AlStatus
+from ecattool.profiles import running
 from tests.test_layering import PKG, _modules
 
 ROOT = PKG.parent
@@ -430,3 +431,58 @@ def test_the_thin_cli_check_finds_a_long_function() -> None:
     found = long_cli_functions({"cli/planted.py": tree, "scaling/planted.py": tree})
     assert list(found) == [("cli/planted.py", "assemble_cmd")], found
     assert found[("cli/planted.py", "assemble_cmd")] == "ecattool/cli/planted.py:1: assemble_cmd() has 30 lines"
+
+
+# --- device flags build a one-slave machine (issue 36.4) --------------------------------------------------------
+
+#: what resolves a device outside a machine: the resolver's functions (its ``__all__`` but the type it marks
+#: devices with) and the simulator's constructors that call it
+RESOLVER_CALLS = frozenset(n for n in running.__all__ if n != "RunningDevice") | {"from_esi", "from_profile"}
+
+
+def cli_resolver_uses(trees: dict[str, ast.Module]) -> list[str]:
+    """Where a module of ``cli/`` calls the resolver, imports one of its functions, or imports the module itself
+    (``running.resolve_device(…)`` would be a call through it)."""
+    found = []
+    for rel, tree in trees.items():
+        if not rel.startswith("cli/"):
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call) and _called_name(node) in RESOLVER_CALLS:
+                found.append(f"{_where(rel, node)} calls {_called_name(node)}()")
+            elif isinstance(node, ast.ImportFrom) and node.module == "ecattool.profiles.running":
+                found.extend(f"{_where(rel, node)} imports {a.name} from the resolver" for a in node.names
+                             if a.name in RESOLVER_CALLS or a.name == "*")
+            elif isinstance(node, ast.ImportFrom) and node.module == "ecattool.profiles":
+                found.extend(f"{_where(rel, node)} imports the resolver module" for a in node.names
+                             if a.name == "running")
+            elif isinstance(node, ast.Import):
+                found.extend(f"{_where(rel, node)} imports the resolver module" for a in node.names
+                             if a.name == "ecattool.profiles.running")
+    return found
+
+
+def test_device_flags_build_a_machine_not_the_resolver() -> None:
+    found = cli_resolver_uses(_trees())
+    assert not found, ("cli/ resolves a device itself; build the one-slave machine the flags name instead "
+                       "(ecattool.project.machine.Machine.from_device_flags) and act on its slaves[0]:\n"
+                       + "\n".join(found))
+
+
+def test_the_resolver_check_finds_a_planted_call() -> None:
+    """The check above looks at what it should: each way a command could reach the resolver is found, the type
+    import and the machine are not."""
+    planted = ast.parse(
+        "from ecattool.profiles.running import RunningDevice, device_from_file\n"
+        "from ecattool.profiles import running\n"
+        "import ecattool.profiles.running\n"
+        "def cmd(esi):\n"
+        "    running.resolve_device(esi)\n"
+        "    Drive.from_esi(esi)\n"
+        "    return Machine.from_device_flags(esi=esi).slaves[0]\n")
+    found = cli_resolver_uses({"cli/planted.py": planted, "project/planted.py": planted})
+    assert found == ["ecattool/cli/planted.py:1 imports device_from_file from the resolver",
+                     "ecattool/cli/planted.py:2 imports the resolver module",
+                     "ecattool/cli/planted.py:3 imports the resolver module",
+                     "ecattool/cli/planted.py:5 calls resolve_device()",
+                     "ecattool/cli/planted.py:6 calls from_esi()"], found
