@@ -141,3 +141,23 @@ def test_time_passing_and_a_lost_communication_are_what_they_are_for_any_slave()
     drive.lose_communication()
     assert drive.state() is EcState.SAFEOP
     assert drive.events[-1].kind == "state" and drive.events[-1].data["al_status"] == 0x001B
+
+
+def test_a_repeated_cycle_answers_from_the_store_as_it_is_now() -> None:
+    """The I/O cycle skips the latch and the packing when the outputs and the store are those of the cycle before;
+    a write between two cycles on the same outputs is seen: an output object written behind the master's back is
+    latched again, an input set is sent."""
+    drive = _slave("beckhoff_EJ2xxx.xml", "EJ2008")
+    drive.exchange(bytes([0b0000_0001]))
+    drive.exchange(bytes([0b0000_0001]))
+    drive.objects.store[(0x7000, 1)] = b"\x00"
+    drive.exchange(bytes([0b0000_0001]))
+    assert drive.value(0x7000, 1) == 1
+    el = _slave("beckhoff_EL1xxx.xml", "EL1008")
+    assert [el.exchange(b"") for _ in range(2)] == [b"\x00", b"\x00"]
+    el.set_inputs({(0x6030, 1): 1})
+    assert el.exchange(b"") == b"\x08"
+    el.power_cycle()
+    for s in (EcState.PREOP, EcState.SAFEOP, EcState.OP):
+        el.request_state(s)
+    assert el.exchange(b"") == b"\x00"  # a new store: the inputs at their defaults
