@@ -161,3 +161,27 @@ def test_a_repeated_cycle_answers_from_the_store_as_it_is_now() -> None:
     for s in (EcState.PREOP, EcState.SAFEOP, EcState.OP):
         el.request_state(s)
     assert el.exchange(b"") == b"\x00"  # a new store: the inputs at their defaults
+
+
+def test_a_sim_run_script_sets_an_io_slaves_inputs_by_address(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """``sim run`` on an EL1008: ``inputs:`` takes input objects by address and the next exchange carries them; an
+    axis input on the terminal is the script's one-line error with its line, exit 1."""
+    import json
+
+    from tests.conftest import run
+
+    script = tmp_path / "io.yaml"
+    script.write_text("- state: PREOP\n- state: SAFEOP\n- state: OP\n- inputs: {'6000:01': 1, '6070:01': 1}\n"
+                      "- exchange: ''\n")
+    code, out, err = run(capsys, "sim", "run", str(ESI / "beckhoff_EL1xxx.xml"), str(script), "--device", "EL1008", "--policy", "newest",
+                         "--json")
+    assert code == 0, out + err
+    assert json.loads(out)["steps"][-1]["data"] == "81"
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("- state: PREOP\n- inputs: {limit_positive: true}\n")
+    code, out, err = run(capsys, "sim", "run", str(ESI / "beckhoff_EL1xxx.xml"), str(bad), "--device", "EL1008",
+                         "--policy", "newest")
+    assert code == 1
+    message = (out + err).strip()
+    assert "bad.yaml:2" in message and "EL1008 is an I/O slave (no CiA-402 objects 6040h/6041h): limit switches " \
+        "needs a drive" in message and "Traceback" not in message and len(message.splitlines()) == 1, message
