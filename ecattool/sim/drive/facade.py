@@ -79,7 +79,12 @@ class Drive:
     motion (:class:`~.motion.Motion`, with the mode parts, the profile generators of :class:`~ecattool.sim.cia402.
     Cia402`, the plant and the supervision), faults and inputs (:class:`~.injection.Injection`) and the memory
     (:class:`~.memory.Memory`). The drive holds the state the parts share, which a power-on or a reset renews:
-    the ESM state, the CiA-402 model, the mode parts, the plant, the unit conversions, the process image layout."""
+    the ESM state, the CiA-402 model, the mode parts, the plant, the unit conversions, the process image layout.
+
+    The application is chosen once, from the device (:func:`has_cia402`): a slave without 6040h/6041h (a terminal,
+    a coupler) holds the I/O application (:class:`~.io_app.IoApplication`, ``io``) instead of the motion and fault
+    parts, and has no CiA-402 model, units, plant or supervision; its process data is its object store as mapped,
+    and a call only an axis answers is a one-line :class:`~ecattool.errors.TargetError`."""
 
     #: seconds a homing method searches for its switch or index pulse before it reports a homing error
     #: (the simulated axis has none connected; docs/decisions.md)
