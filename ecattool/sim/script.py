@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ecattool.errors import EcatToolError, InputError, Location, SdoAbort, SdoTimeout, StateChangeError
+from ecattool.errors import EcatToolError, InputError, Location, SdoAbort, SdoTimeout, StateChangeError, TargetError
 from ecattool.od.model import EcState
 from ecattool.od.numbers import format_address, parse_address, parse_int
 from ecattool.sim.drive import Drive, FoeError
@@ -188,7 +188,10 @@ def _run_step(drive: Drive, step: dict[str, Any], n: int, loc: Location, base_di
     if "inputs" in step:
         return _inputs(drive, step["inputs"], n, loc)
     if "plant" in step:
-        return _plant(drive, step["plant"], n, loc)
+        try:
+            return _plant(drive, step["plant"], n, loc)
+        except TargetError as exc:
+            raise InputError(f"step {n} (plant): {exc}", loc) from None
     if "foe" in step:
         name = str(step["foe"])
         if "file" in step:
@@ -237,13 +240,30 @@ def _number(v: Any, loc: Location, what: str) -> float:
 
 
 def _inputs(drive: Drive, data: Any, n: int, loc: Location) -> Line:
-    """Switch inputs, a load torque or an obstacle (issue 33: what a script can do to the axis)."""
+    """Switch inputs, a load torque or an obstacle (issue 33: what a script can do to the axis), or an I/O slave's
+    input objects by address (``"6000:01": 1``)."""
     if not isinstance(data, dict) or not data:
-        raise InputError(f"step {n} (inputs): a mapping of {', '.join(_INPUTS)}", loc)
+        raise InputError(f"step {n} (inputs): a mapping of {', '.join(_INPUTS)} or input objects (\"6000:01\": 1)",
+                         loc)
+    objects: dict[tuple[int, int], int] = {}
     for key in data:
         if key not in _INPUTS:
-            raise InputError(f"step {n} (inputs): unknown input {key!r}{_suggest(str(key), frozenset(_INPUTS))} "
-                             f"(one of {', '.join(_INPUTS)})", loc)
+            try:
+                address = parse_address(str(key), loc)
+            except InputError:
+                raise InputError(f"step {n} (inputs): unknown input {key!r}{_suggest(str(key), frozenset(_INPUTS))} "
+                                 f"(one of {', '.join(_INPUTS)}, or an input object \"6000:01\")", loc) from None
+            objects[address] = _int(data[key], loc, f"input {key}")
+    try:
+        if objects:
+            drive.set_inputs(objects)
+        _axis_inputs(drive, data, n, loc)
+    except TargetError as exc:
+        raise InputError(f"step {n} (inputs): {exc}", loc) from None
+    return Line(n, loc.line, "inputs", ", ".join(f"{k}={v}" for k, v in data.items()), "ok")
+
+
+def _axis_inputs(drive: Drive, data: dict[str, Any], n: int, loc: Location) -> None:
     if "limit_negative" in data or "limit_positive" in data:
         neg, pos = drive.limit_switches
         for key in ("limit_negative", "limit_positive"):
@@ -255,7 +275,6 @@ def _inputs(drive: Drive, data: Any, n: int, loc: Location) -> Line:
         drive.set_load_torque(_number(data["load_torque"], loc, "load_torque"))
     if "obstacle" in data:
         drive.set_obstacle(None if data["obstacle"] is None else _int(data["obstacle"], loc, "obstacle"))
-    return Line(n, loc.line, "inputs", ", ".join(f"{k}={v}" for k, v in data.items()), "ok")
 
 
 def _plant(drive: Drive, data: Any, n: int, loc: Location) -> Line:

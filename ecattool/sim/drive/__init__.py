@@ -12,6 +12,8 @@ objects the drive builds and wires together at construction; none inherits anoth
 * :mod:`.motion` and :mod:`.halt_homing` — CiA-402 device control, the motion model, halt and homing; the mode
   parts (:mod:`.mode_parts`), the plant (:mod:`.plant`, :mod:`.plant_step`) and supervision (:mod:`.supervision`);
 * :mod:`.injection` — faults, trips, alarms, lost communication, limit-switch inputs;
+* :mod:`.io_app` — the I/O application of a slave without the CiA-402 objects (a terminal, a coupler), which it
+  holds instead of the motion and fault parts: its process data is its object store as mapped;
 * :mod:`.memory` — EEPROM objects, reset, power loss, FoE;
 * :mod:`.facade` — :class:`Drive`, the parts wired together, construction and power-on.
 """

@@ -60,6 +60,8 @@ class Esm(Protocol):
 
     def fall_to_safeop(self, code: int, why: str) -> None: ...
 
+    def watchdog(self) -> None: ...
+
 
 class Stepper(Protocol):
     """What the process data part calls on the motion part (:class:`~.motion.Motion`)."""

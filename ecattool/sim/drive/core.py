@@ -10,17 +10,28 @@ at construction; none inherits another.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from fractions import Fraction
 from typing import Any
 
 from ecattool.errors import SdoAbort
 from ecattool.esi.model import Direction
 from ecattool.od.model import Entry
 from ecattool.od.types import Kind
+from ecattool.profiles.rules import interpolation_period_ns
 from ecattool.sim.units import FACTOR_OBJECTS
 
 RX, TX = Direction.RX, Direction.TX
 
+
+
+def cycle_period(read_int: Callable[[int, int], int | None]) -> Fraction:
+    """The process-data cycle in seconds: 60C2h (sub1 x 10^sub2) where the slave has it, else 1 ms."""
+    base, exp = read_int(0x60C2, 1), read_int(0x60C2, 2)
+    if base and exp is not None and -9 <= exp <= 2:
+        return interpolation_period_ns(base, exp) / 10**9
+    return Fraction(1, 1000)
 
 @dataclass(frozen=True, slots=True)
 class Event:

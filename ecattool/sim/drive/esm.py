@@ -82,6 +82,16 @@ class StateMachine:
             drive._cia_moves(drive.cia.communication_lost(), "ESM left OP")
         drive.family_part.esm_effects(EcState.OP, EcState.SAFEOP)
 
+    def watchdog(self) -> None:
+        """The process data stops (cable pulled, SM watchdog): from OP the ESM drops to SAFE-OP, AL status 0x001B
+        (the application's reaction is its own: :meth:`.injection.Injection.lose_communication`)."""
+        drive = self.drive
+        if drive.esm is EcState.OP:
+            drive._log("state", previous="OP", state="SAFEOP", al_status=AlStatus.SM_WATCHDOG,
+                       reason="sync manager watchdog")
+            drive.esm = EcState.SAFEOP
+            drive.family_part.esm_effects(EcState.OP, EcState.SAFEOP)
+
     def dc_active(self) -> bool:
         return bool(self.dc[0])
 

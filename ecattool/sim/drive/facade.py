@@ -8,13 +8,12 @@ with the AL status code the drive sets. It satisfies :class:`ecattool.target.bas
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
+from fractions import Fraction
 from pathlib import Path
 from typing import Any, Literal
 
-from collections.abc import Callable
-from fractions import Fraction
-from typing import Any, Literal
-
+from ecattool.errors import TargetError
 from ecattool.esi.model import Device, Direction, Identity
 from ecattool.od.model import EcState, Entry
 from ecattool.profiles.rules import FamilyRules
@@ -24,6 +23,7 @@ from ecattool.sim.drive.core import RX, TX, Emergency, Event, EventLog, Layout, 
 from ecattool.sim.drive.esm import StateMachine
 from ecattool.sim.drive.family import Family
 from ecattool.sim.drive.injection import Injection
+from ecattool.sim.drive.io_app import IoApplication, mapped_values
 from ecattool.sim.drive.memory import Memory
 from ecattool.sim.drive.mode_parts import ModeParts
 from ecattool.sim.drive.motion import Motion
@@ -49,6 +49,13 @@ def _rules_for(device: Device) -> FamilyRules:
     return rules_for(device)
 
 
+def has_cia402(device: Device) -> bool:
+    """Whether ``device`` is a CiA-402 drive (its dictionary has the controlword 6040h and the statusword 6041h):
+    it runs the drive application, else the I/O application (:class:`~.io_app.IoApplication`)."""
+    indices = {obj.index for obj in device.dictionary if 0 in obj.entries}
+    return 0x6040 in indices and 0x6041 in indices
+
+
 def _standard_entry(sub: int, bits: int, d: Direction) -> Entry:
     """A read-only entry of ``bits`` (BOOL for one bit, else BITn or the unsigned type of that size) mappable
     in direction ``d``."""
@@ -72,7 +79,12 @@ class Drive:
     motion (:class:`~.motion.Motion`, with the mode parts, the profile generators of :class:`~ecattool.sim.cia402.
     Cia402`, the plant and the supervision), faults and inputs (:class:`~.injection.Injection`) and the memory
     (:class:`~.memory.Memory`). The drive holds the state the parts share, which a power-on or a reset renews:
-    the ESM state, the CiA-402 model, the mode parts, the plant, the unit conversions, the process image layout."""
+    the ESM state, the CiA-402 model, the mode parts, the plant, the unit conversions, the process image layout.
+
+    The application is chosen once, from the device (:func:`has_cia402`): a slave without 6040h/6041h (a terminal,
+    a coupler) holds the I/O application (:class:`~.io_app.IoApplication`, ``io``) instead of the motion and fault
+    parts, and has no CiA-402 model, units, plant or supervision; its process data is its object store as mapped,
+    and a call only an axis answers is a one-line :class:`~ecattool.errors.TargetError`."""
 
     #: seconds a homing method searches for its switch or index pulse before it reports a homing error
     #: (the simulated axis has none connected; docs/decisions.md)
@@ -93,6 +105,11 @@ class Drive:
     _demand_before: tuple[int, int]
     #: the store's version, the mode and the polarity signs at them (:func:`.polarity.target_signs`)
     _polarity_cache: tuple[int, int, tuple[int, int]] = (0, 0, (1, 1))
+    # -- the application, chosen once from the device (:func:`has_cia402`): a drive holds the motion and fault
+    # parts (and ``cia``, ``units``, ``supervision`` above), an I/O slave the I/O application instead
+    motion: Motion
+    injection: Injection
+    io: IoApplication | None
 
     def __init__(self, device: Device, rules: FamilyRules | None = None, *, position: int = 0,
                  strict_pdo_length: bool = True, record_events: bool = True,
@@ -113,21 +130,32 @@ class Drive:
         self.behaviour = family.behaviour
         self.pdo = PdoConfig(self)
         self.sdo = SdoServer(self, self.pdo)
+        self.has_cia402 = has_cia402(device)
         self.process_data = ProcessData(self, self.pdo)
         self.state_machine = StateMachine(self)
-        self.motion = motion = Motion(self)
-        self.injection = Injection(self)
         self.nonvolatile = Memory(self)
         # what every part calls on the others, bound once (the cycle calls them without a facade in between)
         self._read_int: Callable[[int, int], int | None] = objects.read_int
         self._put: Callable[[int, int, int], None] = objects.put
         self._put_all: Callable[[tuple[tuple[int, int], ...], tuple[int, ...]], None] = objects.put_all
         self._log: Callable[..., None] = log.log
-        self._refresh_inputs: Callable[..., None] = motion._refresh_inputs
-        self._cia_moves: Callable[[list[tuple[State, State]], str], None] = motion._cia_moves
-        self._home_offset: Callable[[], int] = motion._home_offset
-        self._user_position: Callable[[], int] = motion._user_position
-        self._plant_params = self._params_of(plant)
+        if self.has_cia402:
+            # a drive: CiA-402 device control and motion (with the plant and the supervision), faults and inputs
+            self.io = None
+            self.motion = motion = Motion(self)
+            self.injection = Injection(self)
+            self._refresh_inputs: Callable[..., None] = motion._refresh_inputs
+            self._cia_moves: Callable[[list[tuple[State, State]], str], None] = motion._cia_moves
+            self._home_offset: Callable[[], int] = motion._home_offset
+            self._user_position: Callable[[], int] = motion._user_position
+        else:
+            # an I/O slave: its process data is its object store as mapped; nothing is stepped
+            self.io = io = IoApplication(self)
+            self._refresh_inputs = io.refresh
+            self.plant = None
+            self.limit_active = False
+            self.limit_switches = (False, False)
+        self._plant_params = self._params_of(plant) if self.has_cia402 else None
         self._pdo_known = self.pdo.known_entries()
         self._fixed = {p.index for p in (*device.rx_pdos, *device.tx_pdos) if p.fixed}
         self._pdo_only_set = self.rules.pdo_only_indices
@@ -137,10 +165,17 @@ class Drive:
         self._handlers_down: dict[int, Callable[[int, bytes, int | None], bool | None]] = {}
         self._handlers_up: dict[int, Callable[[int], bytes]] = {}
         self._after_write: dict[int, Callable[[int, int | None], None]] = {}
-        motion.install_handlers()
+        if self.io is None:
+            self.motion.install_handlers()
         family.install_handlers()
         self.nonvolatile.install_handlers()
         self._power_on()
+
+    def _axis(self, what: str) -> Motion:
+        """The motion part, or the one-line error that an I/O slave has none (``what``: the call)."""
+        if self.io is not None:
+            raise self.io.no_axis(what)
+        return self.motion
 
     # ------------------------------------------------------------------------------------------
     # construction
@@ -199,13 +234,14 @@ class Drive:
         self.memory.reset()
         self.nonvolatile.sync_objects()
         self.layout = {RX: Layout(), TX: Layout()}
+        if self.io is not None:
+            return  # an I/O slave: no CiA-402 model, no units, no plant
         self.cia = Cia402(enable_needs_op=self.behaviour.enable_needs_op,
                           supply_bit_always=self.behaviour.supply_bit_always)
         self.motion.reset()
         self.limit_active = False
         self.limit_switches = (False, False)  # (negative, positive) inputs, set_limit_switches()
         self.homing_warning = False  # Technosoft statusword bit 7 (homing start ignored)
-        self.has_cia402 = (0x6040, 0) in entries and (0x6041, 0) in entries
         self.units = units_for(self.behaviour.units, self._read_int, revision=d.revision,
                              has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
         self.units.version = lambda: store.version
@@ -223,7 +259,7 @@ class Drive:
         params = self._plant_params
         self.supervision = Supervision()
         self._demand_before = (self.cia.pos_n, self.cia.pos_d)
-        if params is None or not self.has_cia402:
+        if params is None:
             self.plant = None
             return
         dt = self.cycle_time()
@@ -248,6 +284,7 @@ class Drive:
     def set_plant(self, plant: PlantParams | Literal["ideal"] | None = None) -> None:
         """Put the drive on another plant (None: the family's default; ``"ideal"``: the exact tracker). The axis
         keeps its position; the plant starts at rest on the demand."""
+        self._axis("a plant")
         self._plant_params = self._params_of(plant)
         self._new_plant()
         self._refresh_inputs()
@@ -397,88 +434,113 @@ class Drive:
 
     # CiA-402 and motion
     def cycle_time(self) -> Fraction:
-        """:meth:`.motion.Motion.cycle_time`."""
-        return self.motion.cycle_time()
+        """:meth:`.motion.Motion.cycle_time` (an I/O slave's: :meth:`.io_app.IoApplication.cycle_time`)."""
+        return self.motion.cycle_time() if self.io is None else self.io.cycle_time()
 
     def cycle_ns(self) -> int:
         """:meth:`.motion.Motion.cycle_ns`."""
-        return self.motion.cycle_ns()
+        return self.motion.cycle_ns() if self.io is None else self.io.cycle_ns()
 
     def mode(self) -> int:
         """The mode the drive runs (6061h, else 6060h)."""
-        return self.motion.mode()
+        return self._axis("a mode of operation").mode()
 
     def step(self, cycles: int = 1) -> None:
-        """Advance the motion model by ``cycles`` process-data cycles (see :meth:`cycle_time`)."""
-        self.motion.step(cycles)
+        """Advance the motion model by ``cycles`` process-data cycles (see :meth:`cycle_time`); an I/O slave has
+        nothing to advance (time passing changes none of its objects)."""
+        if self.io is None:
+            self.motion.step(cycles)
 
     @property
     def internal_position(self) -> int:
         """Position in the drive's internal units (increments), truncated as the drive stores it."""
-        return self.motion.internal_position
+        return self._axis("a position").internal_position
 
     @property
     def internal_velocity(self) -> int:
         """Velocity in internal units (Technosoft: 16.16 increments per slow-loop sample)."""
-        return self.motion.internal_velocity
+        return self._axis("a velocity").internal_velocity
 
     @property
     def modes(self) -> ModeParts:
         """The mode parts of the motion part (vl, PP set-points, PV windows, torque, interpolated position)."""
-        return self.motion.modes
+        return self._axis("the CiA-402 modes").modes
 
     @property
     def cia402_state(self) -> State:
+        self._axis("a CiA-402 state")
         return self.cia.state
 
-    # faults and inputs
+    # the I/O application
+    def set_inputs(self, values: Mapping[tuple[int, int], int]) -> None:
+        """:meth:`.io_app.IoApplication.set_inputs`: an I/O slave's input objects, by (index, sub) (a drive's
+        inputs are its actual values: :meth:`set_limit_switches`, :meth:`set_load_torque` … act on them)."""
+        if self.io is None:
+            raise TargetError(f"{self.device.type_name or self.device.name or 'drive'} is a CiA-402 drive: its "
+                              "inputs are its actual values (set limit switches, a load torque or an obstacle)")
+        self.io.set_inputs(values)
+
+    def process_values(self, d: Direction) -> dict[tuple[int, int], int]:
+        """The mapped objects of the process image in direction ``d`` by (index, sub), each its mapped bits as an
+        unsigned integer (RX: the outputs as the master last wrote them; TX: the inputs)."""
+        return mapped_values(self, d)
+
+    # faults and inputs (a drive's; an I/O slave has none but losing its communication)
+    def _faults(self, what: str) -> Injection:
+        self._axis(what)
+        return self.injection
+
     def motion_error(self, bit: int) -> None:
-        self.injection.motion_error(bit)
+        self._faults("a motion error").motion_error(bit)
 
     def motion_errors(self) -> int:
-        return self.injection.motion_errors()
+        return self._faults("a motion error register").motion_errors()
 
     def fault_reset(self) -> None:
-        self.injection.fault_reset()
+        self._faults("a fault reset").fault_reset()
 
     def inject_fault(self, code: int, data: bytes = b"") -> None:
         """:meth:`.injection.Injection.inject_fault`."""
-        self.injection.inject_fault(code, data)
+        self._faults(f"fault 0x{code:04X}").inject_fault(code, data)
 
     def lose_communication(self) -> None:
-        """:meth:`.injection.Injection.lose_communication`."""
-        self.injection.lose_communication()
+        """:meth:`.injection.Injection.lose_communication` (an I/O slave: its ESM drops to SAFE-OP, nothing else)."""
+        if self.io is None:
+            self.injection.lose_communication()
+        else:
+            self.state_machine.watchdog()
 
     def set_motor_supply(self, present: bool) -> None:
         """:meth:`.injection.Injection.set_motor_supply`."""
-        self.injection.set_motor_supply(present)
+        self._faults("a motor supply").set_motor_supply(present)
 
     def option_end_state(self, index: int, option: int, default: str) -> str:
-        return self.injection.option_end_state(index, option, default)
+        return self._faults("an option code").option_end_state(index, option, default)
 
     def set_limit_switches(self, *, negative: bool = False, positive: bool = False) -> None:
         """:meth:`.injection.Injection.set_limit_switches`."""
-        self.injection.set_limit_switches(negative=negative, positive=positive)
+        self._faults("limit switches").set_limit_switches(negative=negative, positive=positive)
 
     def set_load_torque(self, torque: float) -> None:
         """:meth:`.injection.Injection.set_load_torque`."""
-        self.injection.set_load_torque(torque)
+        self._faults("a load torque").set_load_torque(torque)
 
     def set_obstacle(self, position: int | None) -> None:
         """:meth:`.injection.Injection.set_obstacle`."""
-        self.injection.set_obstacle(position)
+        self._faults("an obstacle").set_obstacle(position)
 
     def inject_hdt_alarm(self, alarm: int, code: int) -> None:
         """:meth:`.injection.Injection.inject_hdt_alarm`."""
-        self.injection.inject_hdt_alarm(alarm, code)
+        self._faults("an HDT alarm").inject_hdt_alarm(alarm, code)
 
     def inject_trip(self, trip: int) -> None:
         """:meth:`.injection.Injection.inject_trip`."""
-        self.injection.inject_trip(trip)
+        self._faults("a trip").inject_trip(trip)
 
     # the family
     def set_encoder_resolution(self, increments: int, revolutions: int = 1) -> None:
         """:meth:`.family.Family.set_encoder_resolution`."""
+        self._axis("an encoder resolution")
         self.family_part.set_encoder_resolution(increments, revolutions)
 
     # memory

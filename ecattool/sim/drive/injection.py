@@ -6,7 +6,6 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from ecattool.abort import AlStatus
 from ecattool.od.model import EcState
 from ecattool.sim.cia402 import State
 from ecattool.sim.drive import halt_homing as hh
@@ -75,13 +74,7 @@ class Injection:
         rules say otherwise (HDT 3: quick-stop ramp and stay enabled); Control Techniques always ends in
         SWITCH ON DISABLED (7.3.1)."""
         drive = self.drive
-        if drive.esm is EcState.OP:
-            drive._log("state", previous="OP", state="SAFEOP", al_status=AlStatus.SM_WATCHDOG,
-                      reason="sync manager watchdog")
-            drive.esm = EcState.SAFEOP
-            drive.family_part.esm_effects(EcState.OP, EcState.SAFEOP)
-        if not drive.has_cia402:
-            return
+        drive.state_machine.watchdog()
         option = drive._read_int(0x6007, 0)
         option = 1 if option is None else option
         end = self.option_end_state(0x6007, option,

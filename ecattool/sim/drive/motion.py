@@ -9,12 +9,11 @@ from typing import TYPE_CHECKING
 
 from ecattool import abort as A
 from ecattool.od.model import EcState
-from ecattool.profiles.rules import interpolation_period_ns
 from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile, State
 from ecattool.sim.drive import csp_options as csp
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive import polarity
-from ecattool.sim.drive.core import Store, sdo_abort
+from ecattool.sim.drive.core import Store, cycle_period, sdo_abort
 from ecattool.sim.drive.plant_step import cycle as plant_cycle
 from ecattool.sim.drive.supervision import limit_stop, report_actual, supervise
 from ecattool.sim.drive.mode_parts import MOVED, PARTS, ModeParts
@@ -84,9 +83,7 @@ class Motion:
         cached = self._cycle_cache
         if cached is not None and cached[0] == store.version:
             return cached
-        base, exp = drive._read_int(0x60C2, 1), drive._read_int(0x60C2, 2)
-        cycle = interpolation_period_ns(base, exp) / 10**9 if base and exp is not None and -9 <= exp <= 2 \
-            else Fraction(1, 1000)
+        cycle = cycle_period(drive._read_int)
         cached = self._cycle_cache = (store.version, cycle, max(1, int(cycle * 1_000_000_000)))
         return cached
 

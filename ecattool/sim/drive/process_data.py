@@ -24,11 +24,16 @@ class ProcessData:
     """The process data part: the process image built from the assignment (through the :class:`PdoConfig` part)
     at PRE-OP -> SAFE-OP, exchanged each cycle."""
 
-    __slots__ = ("drive", "pdo", "_quiet")
+    __slots__ = ("drive", "pdo", "_quiet", "_axis", "_io_last")
 
     def __init__(self, drive: DriveApp, pdo: PdoConfig) -> None:
         self.drive = drive
         self.pdo = pdo
+        #: a CiA-402 drive (the cycle steps its motion); an I/O slave's cycle is the latch and the input image
+        self._axis = drive.has_cia402
+        #: an I/O slave's last cycle in OP: (its outputs, the store and its count of changes after the cycle, the
+        #: layouts' slots, its inputs). See :meth:`_io_cycle`.
+        self._io_last: tuple[bytes, object, int, object, object, bytes] | None = None
         #: the last cycle in OP: (its outputs, the drive's state before and after it where the cycle changed
         #: nothing, else None, its inputs). See :meth:`_quiet_state`.
         self._quiet: tuple[bytes, tuple[object, ...] | None, bytes] | None = None
@@ -116,6 +121,8 @@ class ProcessData:
         rx = drive.layout[RX]
         if len(outputs) != rx.size:
             raise TargetError(f"output image is {len(outputs)} bytes, the drive expects {rx.size}")
+        if esm is _OP and not self._axis:
+            return self._io_cycle(rx, outputs)
         if esm is _OP:
             quiet = self._quiet
             if quiet is not None and quiet[0] == outputs:
@@ -127,27 +134,7 @@ class ProcessData:
             # A drive latches the whole RxPDO image first and only then reacts to it (a new set-point in
             # the controlword must see the target position of the same cycle).
             outputs = bytes(outputs)  # a no-op for bytes: the store keeps bytes, never a caller's buffer
-            image: int | None = None
-            reactions: list[tuple[int, int, bytes]] = []
-            stored = drive.objects.store.get
-            try:
-                for key, lo, hi, offset, bits in rx.slots():
-                    if lo >= 0:
-                        raw = outputs[lo:hi]  # an entry on whole bytes: its bytes as they are
-                    else:
-                        if image is None:
-                            image = int.from_bytes(outputs, "little")
-                        raw = ((image >> offset) & ((1 << bits) - 1)).to_bytes((bits + 7) // 8, "little")
-                    if stored(key) == raw:
-                        continue  # unchanged: nothing to store and nothing to react to
-                    if self._pdo_write(key[0], key[1], raw):
-                        reactions.append((key[0], key[1], raw))
-            except ee.PowerLost:
-                # the drive drops off the bus; it comes back in INIT with the EEPROM as far as it was written
-                drive.nonvolatile.power_loss()
-                raise TargetError("the drive lost power during an EEPROM write (it is back in INIT)") from None
-            for index, sub, raw in reactions:
-                drive._after_write[index](sub, int.from_bytes(raw, "little"))
+            self._latch(rx, outputs)
             drive.motion.step()
             inputs = self._pack_inputs()
             if state is None:
@@ -158,6 +145,50 @@ class ProcessData:
             return inputs
         self._quiet = None
         return self._pack_inputs()
+
+    def _io_cycle(self, rx: Layout, outputs: bytes) -> bytes:
+        """An I/O slave's cycle in OP: its process data is its objects as mapped, nothing is stepped: the outputs
+        latched, the input image packed. The cycle is a function of the outputs, the store's values and the
+        layouts alone, so when the outputs are those of the cycle before and the store has not changed since
+        (the same store, the same count of changes) and the layouts are the same, its inputs are that cycle's
+        (the latch would store nothing, the image would pack the same values)."""
+        store = self.drive.objects.store
+        tx_slots = self.drive.layout[TX].slots()
+        last = self._io_last
+        if last is not None and last[0] == outputs and last[1] is store and last[2] == store.changes \
+                and last[3] is rx.slots() and last[4] is tx_slots:
+            return last[5]
+        outputs = bytes(outputs)  # the store keeps bytes, never a caller's buffer
+        self._latch(rx, outputs)
+        inputs = self._pack_inputs()
+        self._io_last = (outputs, store, store.changes, rx.slots(), tx_slots, inputs)
+        return inputs
+
+    def _latch(self, rx: Layout, outputs: bytes) -> None:
+        """The output image latched into the mapped objects that changed, then their reactions run (a drive
+        latches the whole RxPDO image first and only then reacts to it)."""
+        drive = self.drive
+        image: int | None = None
+        reactions: list[tuple[int, int, bytes]] = []
+        stored = drive.objects.store.get
+        try:
+            for key, lo, hi, offset, bits in rx.slots():
+                if lo >= 0:
+                    raw = outputs[lo:hi]  # an entry on whole bytes: its bytes as they are
+                else:
+                    if image is None:
+                        image = int.from_bytes(outputs, "little")
+                    raw = ((image >> offset) & ((1 << bits) - 1)).to_bytes((bits + 7) // 8, "little")
+                if stored(key) == raw:
+                    continue  # unchanged: nothing to store and nothing to react to
+                if self._pdo_write(key[0], key[1], raw):
+                    reactions.append((key[0], key[1], raw))
+        except ee.PowerLost:
+            # the drive drops off the bus; it comes back in INIT with the EEPROM as far as it was written
+            drive.nonvolatile.power_loss()
+            raise TargetError("the drive lost power during an EEPROM write (it is back in INIT)") from None
+        for index, sub, raw in reactions:
+            drive._after_write[index](sub, int.from_bytes(raw, "little"))
 
     def _quiet_state(self) -> tuple[object, ...]:
         """Everything a cycle in OP reads besides its outputs, compared by value, and what it reports through:
