@@ -24,7 +24,7 @@ from types import ModuleType
 
 from ecattool.errors import EcatToolError, InputError, Location
 from ecattool.esi.model import Device
-from ecattool.fileio import read_bytes
+from ecattool.fileio import named_file_problem, read_bytes
 from ecattool.findings import Finding, Severity
 from ecattool.project import familycycle
 from ecattool.project.loader import LoadedProject, parse_project
@@ -270,7 +270,11 @@ def one_slave_machine(device: DeviceRef, name: str = "device") -> Machine:
     so a command given device flags acts on ``machine.slaves[0]`` exactly as on a project's slave. A device that
     does not resolve raises its error (InputError, at the file and line where the problem is in a named file)
     instead of being a finding: there is nothing to act on. Relative paths are relative to the current
-    directory."""
+    directory. A named file that cannot be read is that file's one-line error (``FILE: not found``), as every
+    command that reads a file says it."""
+    problem = named_file_problem(device.esi) if device.esi is not None else None
+    if problem is not None:
+        raise InputError(problem, Location(device.esi))
     project = Project(ecattool=1, drives=[Drive(name=name, device=device)])
     doc = LocatedYaml(project.model_dump(mode="json", exclude_defaults=True), {(): Location()}, FLAGS_SOURCE)
     lp = LoadedProject(project, Path(FLAGS_SOURCE), doc)  # base: the current directory
