@@ -100,6 +100,10 @@ def test_errors_keep_their_one_line_form(tmp_path: Path) -> None:
     assert _message(cases[0][0]).startswith(f"{broken}:4:1: not well-formed XML")
     with pytest.raises(InputError, match="'esi' .*or 'profile'"):
         Machine.from_device_flags()
+    # a file that cannot be read: that file's error, as every reader says it (not lint's "ESI file … not found")
+    absent = tmp_path / "absent.xml"
+    assert _message(lambda: Machine.from_device_flags(esi=str(absent))) == f"{absent}: not found"
+    assert _message(lambda: Machine.from_device_flags(esi=str(tmp_path))) == f"{tmp_path}: is a directory, not a file"
 
 
 @pytest.mark.parametrize("args", [
