@@ -27,6 +27,8 @@ from ecattool.target.base import entry_size
 #: cyclic synchronous mode takes its set-points by (lint's PRJ044 against the SYNC0 cycle)
 USUAL_OBJECTS = ((0x6060, 0), (0x6065, 0), (0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6085, 0), (0x60C2, 2),
                  (0x60C2, 1))
+#: AssignActivate bit 10 (ESC 0x0981 bit 2): the SYNC1 signal is generated
+SYNC1_ACTIVE = 0x0400
 #: the cyclic synchronous modes (CiA 402: csp, csv, cst): set-points taken on SYNC0
 CYCLIC_SYNC_MODES = (8, 9, 10)
 
@@ -155,10 +157,12 @@ def dc_yaml(bus: LiveBus, slave: Any, device: Device, mode: int | None) -> str:
         names = [m.name for m in device.dc_opmodes if m.assign_activate == dc.assign_activate]
         what = f"opmode: {_q(names[0])}" if names else f"assign_activate: 0x{dc.assign_activate:04X}"
         cycle = f", cycle_ns: {dc.sync0_cycle_ns}" if dc.sync0_cycle_ns else ""
-        sync1 = (f", SYNC1 cycle {dc.sync1_cycle_ns} ns" if dc.assign_activate & 0x0400 and dc.sync1_cycle_ns
-                 else "")
-        return (f"    dc: {{{what}{cycle}}}  # as found: AssignActivate 0x{dc.assign_activate:04X}, "
-                f"SYNC0 cycle {dc.sync0_cycle_ns} ns{sync1}\n")
+        # SYNC1 where the activation word switches it on (bit 10, SYNC1 active): its cycle register as it runs
+        sync1_on = bool(dc.assign_activate & SYNC1_ACTIVE) and dc.sync1_cycle_ns is not None
+        sync1 = f", sync1_cycle_ns: {dc.sync1_cycle_ns}" if sync1_on else ""
+        seen = f", SYNC1 cycle {dc.sync1_cycle_ns} ns" if sync1_on else ""
+        return (f"    dc: {{{what}{cycle}{sync1}}}  # as found: AssignActivate 0x{dc.assign_activate:04X}, "
+                f"SYNC0 cycle {dc.sync0_cycle_ns} ns{seen}\n")
     only = dc_only_mode(device)
     if dc is not None:  # read: the slave runs without SYNC signals
         if only is None:

@@ -213,3 +213,27 @@ def test_late_answers_to_frames_sent_again_are_taken_off_before_the_master_opens
     found = bus_state.read_states("veth")
     assert found is not None and found[0].assign_activate == 0 and wire.sent == 4
     assert wire.queue == [] and wire.closed  # nothing left for the master's socket
+
+
+def test_a_slave_running_sync1_gets_its_sync1_cycle_in_the_project(tmp_path: Path) -> None:
+    """AssignActivate bit 10 (SYNC1 active) set in 0x0980: the SYNC1 cycle found in 0x09A4 is written as
+    ``dc: sync1_cycle_ns`` (it was a comment only: the project format had no SYNC1, issue 35 item 2), reads back
+    into the slave's DC and its exports, and the project lints clean. Without bit 10 no SYNC1 is written."""
+    from dataclasses import replace
+
+    from ecattool.online.bus_state import Found
+    from ecattool.project.machine import slave_config
+
+    target, bus = _commissioned(CT)
+    bus.found = [Found(0, 0x02, 0, 0x0700, 1_000_000, 250_000)]  # type: ignore[attr-defined]
+    out = tmp_path / "machine.yaml"
+    text = project_from_bus(bus, None, out)  # type: ignore[arg-type]
+    assert "dc: {assign_activate: 0x0700, cycle_ns: 1000000, sync1_cycle_ns: 250000}" in text, text
+    out.write_text(text, encoding="utf-8")
+    result = load_machine(out)
+    assert not result.findings, [str(f) for f in result.findings]
+    (rd,) = result.slaves
+    assert rd.dc is not None and (rd.dc.assign_activate, rd.dc.sync1_cycle_ns) == (0x0700, 250_000)
+    assert slave_config(rd).dc_sync1_cycle_ns == 250_000
+    bus.found = [replace(bus.found[0], assign_activate=0x0300)]  # type: ignore[attr-defined]
+    assert "sync1_cycle_ns" not in project_from_bus(bus, None, out)  # type: ignore[arg-type]
