@@ -129,6 +129,11 @@ def project_bus(machine: Machine, target: str) -> LiveBus:
     """The live bus of ``target`` for a machine (:func:`project_machine`); ``sim`` simulates its drives."""
     from ecattool.online.targets import open_bus
 
-    # what a bare 'sim' simulates (open_bus reads the spec; a real master or sim:SOURCES ignore them)
+    from functools import partial
+
+    from ecattool.commission.runner import put_back
+
+    # what a bare 'sim' simulates (open_bus reads the spec; a real master or sim:SOURCES ignore them); a slave
+    # found in SAFE-OP/OP is taken back there as the project configures it when the command ends
     devices = [device for _, device in machine.devices()]
-    return _opened(open_bus(target, devices, reset_bus=reset_bus_given()))
+    return _opened(open_bus(target, devices, reset_bus=reset_bus_given(), put_back=partial(put_back, machine.slaves)))

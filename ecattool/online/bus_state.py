@@ -3,8 +3,8 @@
 frame, built by the frame code the simulator's bus uses (``ecattool.sim.bus.frame``): a BRD of the AL status
 register (0x0130) counts the slaves, one APRD per slave reads its state. Where a slave is in SAFE-OP or OP the
 command is refused in one line naming them, unless the user passed ``--reset-bus``; when the command ends, each
-slave is put back in the state it was found in where ecattool can (INIT and PRE-OP), and what it could not is
-said (:func:`restore`).
+slave is put back in the state it was found in where ecattool can (INIT and PRE-OP; SAFE-OP and OP where the
+command has a project that configures the slave), and what it could not is said (:func:`restore`).
 
 The read needs what the master needs (a raw socket: root or CAP_NET_RAW); where it cannot be made, or nothing
 answers, nothing is known and the master goes on as before (it says itself why it cannot open the interface).
@@ -16,6 +16,7 @@ import socket
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from ecattool.errors import TargetError
 from ecattool.od.model import EcState
@@ -193,18 +194,36 @@ def guard(ifname: str, reset_bus: bool) -> list[Found]:
     return found
 
 
-def restore(slaves: Sequence[object], found: Sequence[Found]) -> list[str]:
-    """Put each slave back in the state it was found in where ecattool can (INIT; PRE-OP is where the bus commands
-    leave it); returns what it could not, one line per slave."""
-    notes = []
+#: takes slaves (each with the state it was found in: SAFE-OP or OP) back to that state as a project configures
+#: them, and returns one line per slave (what was done, or why not): ``ecattool.commission.runner.put_back``
+#: with the project's slaves, given by the commands that have a project (``audit``, ``backup``)
+PutBack = Callable[[Sequence[tuple[Any, EcState]]], list[str]]
+
+
+def restore(slaves: Sequence[object], found: Sequence[Found], put_back: PutBack | None = None) -> list[str]:
+    """Put each slave back in the state it was found in where ecattool can: INIT; PRE-OP (where the bus commands
+    leave it); SAFE-OP and OP where the command has the slaves' configuration (``put_back``: a project). Returns
+    one line per slave put back in SAFE-OP/OP, and per slave it could not put back."""
+    notes: list[str] = []
     by_position = {int(getattr(s, "position", i)): s for i, s in enumerate(slaves)}
+    running: list[tuple[Any, EcState]] = []
+    init: list[tuple[object, Found]] = []
     for f in found:
         slave = by_position.get(f.position)
         if slave is None or f.state in (None, EcState.PREOP):
             continue
-        if f.state in RUNNING or f.state is EcState.BOOT:
-            notes.append(f"{f} was left in PRE-OP: ecattool has no configuration to take it back to {f.state.value}")
-            continue
+        if f.state in RUNNING and put_back is not None:
+            running.append((slave, f.state))
+        elif f.state in RUNNING or f.state is EcState.BOOT:
+            notes.append(f"{f} was left in PRE-OP: ecattool has no configuration to take it back to {f.state.value}"
+                         + (" (give the command a project)" if f.state in RUNNING else ""))
+        else:
+            init.append((slave, f))
+    if running and put_back is not None:
+        # before any slave goes back to INIT: a master maps the whole bus on the first SAFE-OP request (SOEM's
+        # config_map reads every slave's PDO assignment over its mailbox, which a slave in INIT has not)
+        notes.extend(put_back(running))
+    for slave, f in init:
         try:
             slave.request_state(EcState.INIT)  # type: ignore[attr-defined]
         except Unsupported as exc:

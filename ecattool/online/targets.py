@@ -14,17 +14,20 @@ from ecattool.target.base import LiveSlave, Target
 from ecattool.target.opener import MASTERS, open_master, open_target, parse_target
 
 if TYPE_CHECKING:
+    from ecattool.online.bus_state import PutBack
     from ecattool.target.timeouts import BusLimits
 
 
-def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False) -> LiveBus:
+def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
+             put_back: PutBack | None = None) -> LiveBus:
     """The live bus of a target spec: ``sim`` (the simulator with ``devices``, e.g. a project's), ``sim:SOURCE,…``
     (profiles or ESI files), ``pysoem:IF`` or ``kickcat:IF`` (a real master on a network interface).
 
     A real master resets every slave when it opens the bus: first each slave's state is read
     (:mod:`ecattool.online.bus_state`), a bus with slaves in SAFE-OP or OP is refused unless ``reset_bus``, and
     when the bus is closed each slave is put back where it was found where that can be done (what could not is
-    in the bus's ``notes``)."""
+    in the bus's ``notes``): INIT and PRE-OP always, SAFE-OP and OP through ``put_back`` (a command with a
+    project: ``ecattool.commission.runner.put_back`` with its slaves; :func:`bus_state.restore`)."""
     parsed = parse_target(spec)
     if parsed.kind == "sim":
         from ecattool.sim.slave import drive_for_device
@@ -53,7 +56,7 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
 
         import_kickcat()
     return _restoring(isolated_bus(spec, lambda: open_live(parsed.kind, parsed.interface, limits=limits), limits),
-                      found)
+                      found, put_back)
 
 
 def open_live(kind: str, ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> LiveBus:
@@ -96,8 +99,9 @@ def open_guarded(spec: str, devices: Sequence[Device] = (), reset_bus: bool = Fa
     return open_target(spec, devices)
 
 
-def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:
-    """``bus``, closed with each slave put back in the state it was found in (bus_state.restore) first."""
+def _restoring(bus: LiveBus, found: Sequence[Any], put_back: PutBack | None = None) -> LiveBus:
+    """``bus``, closed with each slave put back in the state it was found in (bus_state.restore; SAFE-OP and OP
+    through ``put_back``) first."""
     from ecattool.online.bus_state import restore
 
     close = bus.closer
@@ -105,7 +109,7 @@ def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:
 
     def closer() -> None:
         try:
-            bus.notes.extend(restore(bus.slaves, found))
+            bus.notes.extend(restore(bus.slaves, found, put_back))
         finally:
             if close is not None:
                 close()

@@ -46,10 +46,82 @@ def test_each_slave_is_put_back_where_it_can_be_and_the_rest_is_named() -> None:
     slaves = [Slave(0), Slave(1), Slave(2), Slave(3, refuse=True), Slave(4, whole_bus_only=True)]
     notes = restore(slaves, [Found(0, 0x01), Found(1, 0x02), Found(2, 0x08), Found(3, 0x01), Found(4, 0x01)])
     assert slaves[0].asked == [EcState.INIT] and slaves[1].asked == [] and slaves[2].asked == []
-    assert notes == ["slave 2 (OP) was left in PRE-OP: ecattool has no configuration to take it back to OP",
+    assert notes == ["slave 2 (OP) was left in PRE-OP: ecattool has no configuration to take it back to OP (give "
+                     "the command a project)",
                      "slave 3 (INIT) could not be put back in INIT: no answer",
                      "slave 4 (INIT) was left in PRE-OP: kickcat: the Python binding requests a state for the whole "
                      "bus, not for one slave"]
+
+
+def _powered_up(project: str) -> tuple[object, list[object]]:
+    """The project's machine, and its drives simulated as a master leaves them after its bus init: in PRE-OP, the
+    device's default PDO mapping, no DC (what a project's configuration has to be written again into)."""
+    from ecattool.online import sim_bus
+    from ecattool.project.machine import load_machine
+    from ecattool.target.sim import SimTarget
+
+    machine = load_machine(project)
+    target = SimTarget.from_devices([rd.device for rd in sorted(machine.slaves, key=lambda r: r.position)])
+    bus = sim_bus(target.slaves())
+    for s in bus.slaves:
+        s.request_state(EcState.PREOP)
+    return machine, list(bus.slaves)
+
+
+def test_slaves_found_running_are_put_back_as_the_project_configures_them() -> None:
+    """Issue 35 item 4: "put each slave back in the state it was found in where it can (PRE-OP always; SAFE-OP/OP
+    with a project that configures them)". The Control Techniques sample runs csp on DC with a mapping that is not
+    the drive's default (6 output and 7 input octets, the default 4 and 4): found in OP, the drive is configured as
+    commissioning does (its PRE-OP startup list, DC; without them SAFE-OP is refused, AL 0x0030) and ends in OP with
+    the project's process image, its power stage disabled; the note says who must send process data now."""
+    from functools import partial
+
+    from ecattool.commission.runner import put_back
+
+    machine, slaves = _powered_up("samples/controltechniques/project.yaml")
+    (drive,) = slaves
+    notes = restore(slaves, [Found(0, 0x08)], put_back=partial(put_back, machine.slaves))  # type: ignore[attr-defined]
+    assert drive.state() is EcState.OP  # type: ignore[attr-defined]
+    assert list(drive.drive.process_image_sizes()) == [6, 7]  # type: ignore[attr-defined]
+    assert drive.dc_activation()[0] == 0x0300  # type: ignore[attr-defined]
+    assert notes == ["slave 0 was put back in OP as the project configures it; its process data must now come from "
+                     "the machine's master: ecattool's stops as the command ends (the power stage is left disabled), "
+                     "and without process data the slave's sync manager watchdog takes it to SAFE-OP (AL status code "
+                     "0x001B)"]
+    cw = int.from_bytes(drive.sdo_upload(0x6041, 0, size=2), "little")  # type: ignore[attr-defined]
+    assert cw & 0x6F != 0x27  # CiA-402 "operation enabled" is never set by putting a drive back
+
+
+def test_a_slave_found_in_safeop_goes_back_to_safeop_and_one_the_project_lacks_stays_in_preop() -> None:
+    from functools import partial
+
+    from ecattool.commission.runner import put_back
+
+    machine, slaves = _powered_up("samples/controltechniques/project.yaml")
+    notes = restore(slaves, [Found(0, 0x14, 0x1B)], put_back=partial(put_back, machine.slaves))
+    assert slaves[0].state() is EcState.SAFEOP  # type: ignore[attr-defined]
+    assert notes == ["slave 0 was put back in SAFEOP as the project configures it"]
+    _, slaves = _powered_up("samples/controltechniques/project.yaml")
+    notes = restore(slaves, [Found(0, 0x08)], put_back=partial(put_back, []))
+    assert slaves[0].state() is EcState.PREOP  # type: ignore[attr-defined]
+    assert notes == ["slave 0 (OP) was left in PRE-OP: the project configures no slave at position 0, ecattool "
+                     "cannot take it back to OP"]
+
+
+def test_a_slave_that_is_not_the_projects_device_is_not_configured() -> None:
+    """The identity is checked as commissioning checks it before anything is written: the HDT sample's project on
+    the Control Techniques drive leaves it in PRE-OP with the identity named."""
+    from functools import partial
+
+    from ecattool.commission.runner import put_back
+    from ecattool.project.machine import load_machine
+
+    _, slaves = _powered_up("samples/controltechniques/project.yaml")
+    other = load_machine("samples/hdt/project.yaml")
+    notes = restore(slaves, [Found(0, 0x08)], put_back=partial(put_back, other.slaves))
+    assert slaves[0].state() is EcState.PREOP  # type: ignore[attr-defined]
+    assert len(notes) == 1 and notes[0].startswith("slave 0 (OP) was left in PRE-OP: putting it back failed at "
+                                                   "identity: wrong device"), notes
 
 
 #: every command that acts on slaves through a real master (they take every slave through INIT too), with the
