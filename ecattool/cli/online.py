@@ -97,14 +97,15 @@ def load_device(text: str | None) -> RunningDevice | None:
     return resolve_device(source, selector=selector or None)
 
 
-def open_live(target: str, device: Any = None) -> LiveBus:
+def open_live(target: str, device: Any = None, read_sii: bool = False) -> LiveBus:
     """The live bus of ``target``; ``device`` (``--device``): on a real master its ESI's timeouts bound the waits
-    (ecattool.target.timeouts); a simulator's slaves stay the target's own."""
+    (ecattool.target.timeouts); a simulator's slaves stay the target's own. ``read_sii``: through a master that
+    reads no SII (KickCAT) each slave's SII is read before it opens (``project new --from-bus``)."""
     from ecattool.online.targets import open_bus
     from ecattool.target.opener import parse_target
 
     devices = [device] if device is not None and parse_target(target).kind != "sim" else []
-    return _opened(open_bus(target, devices, reset_bus=reset_bus_given()))
+    return _opened(open_bus(target, devices, reset_bus=reset_bus_given(), read_sii=read_sii))
 
 
 def allow_errors_option(f: Decorated) -> Decorated:

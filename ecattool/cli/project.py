@@ -80,7 +80,7 @@ def new(profile: str | None, product: str | None, esi_path: str | None, select: 
         from ecattool.cli.online import open_live
 
         problems: list[str] = []
-        with open_live(from_bus) as live:
+        with open_live(from_bus, read_sii=True) as live:
             text = project_from_bus(live, Library(library) if library else None, output, problems=problems)
         write_output(output, text)
         for p in problems:  # a slave that did not answer: named, the project holds the others

@@ -56,11 +56,30 @@ def dc_found(bus: LiveBus, slave: Any) -> DcFound | None:
     return None
 
 
-def identify_named(slave: Any, library: Library | None) -> tuple[Identity, Match | None]:
+def sii_found(bus: LiveBus, slave: Any) -> bytes | None:
+    """The SII image of ``slave`` read through its ESC before the master opened (``bus.found``: a master whose
+    binding reads no SII, KickCAT's); None where none was read."""
+    for f in bus.found:
+        if getattr(f, "position", None) == slave.position and getattr(f, "sii", None):
+            return bytes(f.sii)
+    return None
+
+
+def identify_named(slave: Any, library: Library | None, sii: bytes | None = None) -> tuple[Identity, Match | None]:
     """The slave's identity and the library device or built-in family it matches (library first); among the
-    devices or models that share the identity, the one the SII's name string names."""
-    ident: Identity = slave.identity()
-    name = sii_facts(slave).name
+    devices or models that share the identity, the one the SII's name string names. Where the master reads no
+    identity (KickCAT reads 1018h: a slave without a mailbox has none to give), the identity of the SII image
+    ``sii`` read before the master opened."""
+    try:
+        ident: Identity = slave.identity()
+    except EcatToolError:
+        if sii is None:
+            raise
+        from ecattool.sii.image import parse
+
+        h = parse(sii, source=f"slave {slave.position} SII").header
+        ident = Identity(h.vendor_id, h.product_code, h.revision)
+    name = sii_facts(slave, sii).name
     match = library.match(ident, name) if library is not None else None
     return ident, match or family_match(ident, name)
 
@@ -255,9 +274,10 @@ def project_from_bus(bus: LiveBus, library: Library | None, output: str | Path |
     unknown = []
     failed: list[str] = []
     for slave in bus.slaves:
-        sii_facts(slave)  # the SII first: whether the slave has a mailbox, and its name for any message
+        sii = sii_found(bus, slave)
+        sii_facts(slave, sii)  # the SII first: whether the slave has a mailbox, and its name for any message
         try:
-            ident, match = identify_named(slave, library)
+            ident, match = identify_named(slave, library, sii)
         except EcatToolError as exc:
             hint = "" if sii_facts(slave).protocols is not None else (
                 f" ({bus.spec} gives no SII: a slave without a mailbox has no identity to read here; use pysoem:IF)")

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 
 
 def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
-             put_back: PutBack | None = None) -> LiveBus:
+             put_back: PutBack | None = None, read_sii: bool = False) -> LiveBus:
     """The live bus of a target spec: ``sim`` (the simulator with ``devices``, e.g. a project's), ``sim:SOURCE,…``
     (profiles or ESI files), ``pysoem:IF`` or ``kickcat:IF`` (a real master on a network interface).
 
@@ -27,7 +27,10 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
     (:mod:`ecattool.online.bus_state`), a bus with slaves in SAFE-OP or OP is refused unless ``reset_bus``, and
     when the bus is closed each slave is put back where it was found where that can be done (what could not is
     in the bus's ``notes``): INIT and PRE-OP always, SAFE-OP and OP through ``put_back`` (a command with a
-    project: ``ecattool.commission.runner.put_back`` with its slaves; :func:`bus_state.restore`)."""
+    project: ``ecattool.commission.runner.put_back`` with its slaves; :func:`bus_state.restore`). ``read_sii``:
+    through KickCAT (whose binding reads no SII) each slave's SII image is read before the master opens, through
+    its ESC's EEPROM interface (:func:`bus_state.with_sii`; in the bus's ``found``), for ``project new
+    --from-bus``: the model the SII names, the mailbox it has, its identity where it has no 1018h."""
     parsed = parse_target(spec)
     if parsed.kind == "sim":
         from ecattool.sim.slave import drive_for_device
@@ -39,7 +42,7 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
         return sim_bus([drive_for_device(d) for d in devs], spec)
     from ecattool.online.bus_state import guard
 
-    found = guard(parsed.interface, reset_bus)
+    found = guard(parsed.interface, reset_bus, sii=read_sii and parsed.kind == "kickcat")
     from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, bus_limits
 
     # how long to wait: the slaves' own ESI timeouts where the command has devices (a project, --device), the bus
