@@ -26,7 +26,7 @@ class Slave:
 
 
 def test_a_running_bus_is_refused_naming_its_running_slaves(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(bus_state, "read_states", lambda ifname: [Found(0, 0x02), Found(1, 0x08), Found(2, 0x14, 0x1B)])
+    monkeypatch.setattr(bus_state, "read_states", lambda ifname, sii=False: [Found(0, 0x02), Found(1, 0x08), Found(2, 0x14, 0x1B)])
     with pytest.raises(TargetError) as refused:
         guard("eth0", reset_bus=False)
     assert str(refused.value) == ("slave 1 (OP), slave 2 (SAFEOP, error) on 'eth0' are running: opening the bus "
@@ -36,9 +36,9 @@ def test_a_running_bus_is_refused_naming_its_running_slaves(monkeypatch: pytest.
 
 
 def test_a_bus_in_init_or_preop_or_unknown_opens(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(bus_state, "read_states", lambda ifname: [Found(0, 0x01), Found(1, 0x12, 0x1D)])
+    monkeypatch.setattr(bus_state, "read_states", lambda ifname, sii=False: [Found(0, 0x01), Found(1, 0x12, 0x1D)])
     assert len(guard("eth0", reset_bus=False)) == 2
-    monkeypatch.setattr(bus_state, "read_states", lambda ifname: None)  # no raw socket, nothing answered
+    monkeypatch.setattr(bus_state, "read_states", lambda ifname, sii=False: None)  # no raw socket, nothing answered
     assert guard("eth0", reset_bus=False) == []
 
 
@@ -142,7 +142,7 @@ def test_a_command_that_acts_on_slaves_refuses_a_running_bus_until_told(
     from tests.conftest import ROOT, run
 
     monkeypatch.chdir(ROOT)
-    monkeypatch.setattr(bus_state, "read_states", lambda ifname: [Found(0, 0x02), Found(1, 0x08)])
+    monkeypatch.setattr(bus_state, "read_states", lambda ifname, sii=False: [Found(0, 0x02), Found(1, 0x08)])
     opened: list[str] = []
     limited: list[int] = []
 
