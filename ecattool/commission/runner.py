@@ -666,10 +666,13 @@ def commission_drive(slave: SlaveTarget, rd: Slave) -> DriveReport:
     return run.report
 
 
-#: what a slave put back in OP is told: ecattool's process data ends with the command
-OP_HANDOVER = ("its process data must now come from the machine's master: ecattool's stops as the command ends "
-               "(the power stage is left disabled), and without process data the slave's sync manager watchdog "
-               "takes it to SAFE-OP (AL status code 0x001B)")
+def op_handover(positions: Sequence[int]) -> str:
+    """What the slaves put back in OP are told, once: ecattool's process data ends with the command."""
+    one = len(positions) == 1
+    which = f"slave {positions[0]} is" if one else f"slaves {', '.join(map(str, positions))} are"
+    return (f"{which} in OP: the process data must now come from the machine's master (ecattool's stops as the "
+            f"command ends; a drive's power stage is left disabled), else the sync manager watchdog takes "
+            f"{'it' if one else 'them'} to SAFE-OP (AL status code 0x001B)")
 
 
 def put_back(drives: Sequence[Slave], wanted: Sequence[tuple[SlaveTarget, EcState]]) -> list[str]:
@@ -680,7 +683,8 @@ def put_back(drives: Sequence[Slave], wanted: Sequence[tuple[SlaveTarget, EcStat
     ``config_map``, reads every slave's mapping once, at the first SAFE-OP request), then SAFE-OP with the SO
     commands, then OP where it was found in OP. Never the CiA-402 enable and no move: a drive put back in OP has
     its power stage disabled. A slave the project does not configure, or whose step fails, is left in PRE-OP.
-    Returns one line per slave: what was done (OP: who must send the process data now) or why not."""
+    Returns one line per slave, what was done or why not, and one for the slaves put back in OP: who must send
+    their process data now (:func:`op_handover`)."""
     by_position = {rd.position: rd for rd in drives}
     notes: list[str] = []
     runs: list[tuple[SlaveTarget, Slave, EcState, DriveReport]] = []
@@ -715,6 +719,7 @@ def put_back(drives: Sequence[Slave], wanted: Sequence[tuple[SlaveTarget, EcStat
             failed(slave, state, exc.step, report)
             continue
         ready.append((slave, state, report))
+    in_op = []
     for slave, state, report in ready:  # OP last: the master's cycles on the way keep the others' watchdogs fed
         if state is EcState.OP:
             try:
@@ -722,9 +727,10 @@ def put_back(drives: Sequence[Slave], wanted: Sequence[tuple[SlaveTarget, EcStat
             except _Failed as exc:
                 failed(slave, state, exc.step, report)
                 continue
-            notes.append(f"slave {slave.position} was put back in OP as the project configures it; {OP_HANDOVER}")
-        else:
-            notes.append(f"slave {slave.position} was put back in {state.value} as the project configures it")
+            in_op.append(slave.position)
+        notes.append(f"slave {slave.position} was put back in {state.value} as the project configures it")
+    if in_op:
+        notes.append(op_handover(in_op))
     return notes
 
 

@@ -84,12 +84,12 @@ def test_slaves_found_running_are_put_back_as_the_project_configures_them() -> N
     assert drive.state() is EcState.OP  # type: ignore[attr-defined]
     assert list(drive.drive.process_image_sizes()) == [6, 7]  # type: ignore[attr-defined]
     assert drive.dc_activation()[0] == 0x0300  # type: ignore[attr-defined]
-    assert notes == ["slave 0 was put back in OP as the project configures it; its process data must now come from "
-                     "the machine's master: ecattool's stops as the command ends (the power stage is left disabled), "
-                     "and without process data the slave's sync manager watchdog takes it to SAFE-OP (AL status code "
-                     "0x001B)"]
-    cw = int.from_bytes(drive.sdo_upload(0x6041, 0, size=2), "little")  # type: ignore[attr-defined]
-    assert cw & 0x6F != 0x27  # CiA-402 "operation enabled" is never set by putting a drive back
+    assert notes == ["slave 0 was put back in OP as the project configures it",
+                     "slave 0 is in OP: the process data must now come from the machine's master (ecattool's stops "
+                     "as the command ends; a drive's power stage is left disabled), else the sync manager watchdog "
+                     "takes it to SAFE-OP (AL status code 0x001B)"]
+    statusword = int.from_bytes(drive.sdo_upload(0x6041, 0, size=2), "little")  # type: ignore[attr-defined]
+    assert statusword & 0x6F != 0x27  # CiA-402 "operation enabled" is never set by putting a drive back
 
 
 def test_a_slave_found_in_safeop_goes_back_to_safeop_and_one_the_project_lacks_stays_in_preop() -> None:
