@@ -161,3 +161,37 @@ def test_a_command_that_acts_on_slaves_refuses_a_running_bus_until_told(
     # the real master's waits are bounded by the timeouts of the devices the command has (a project's, the
     # family's, the .sw's Technosoft drive), as a bare 'sim' holds those devices: one rule of the target spec
     assert limited == [1], limited
+
+
+def test_an_sii_that_cannot_be_read_through_the_esc_is_left_unknown() -> None:
+    """with_sii (KickCAT's from-bus): a slave whose EEPROM interface does not answer, or reports an error (status
+    0x2000, no acknowledge), keeps no SII image; the others are read."""
+    from ecattool.online.bus_state import with_sii
+    from ecattool.sii.builder import build
+    from ecattool.profiles import load
+    from ecattool.sim.bus.engine import Bus
+    from ecattool.sim.bus.frame import parse_frame
+    from ecattool.sim.slave import VirtualSlave, drive_for_device
+
+    device = load("hdt")
+    image = build(device).to_bytes()
+    engine = Bus([VirtualSlave(drive_for_device(device), image).esc for _ in range(3)])
+
+    def exchange(frame: bytes, index: int) -> bytes | None:
+        parsed = parse_frame(frame)
+        assert parsed is not None
+        adp = parsed.datagrams[0].address & 0xFFFF
+        if adp == (-1 & 0xFFFF):
+            return None  # slave 1 does not answer
+        got = engine.process(frame)
+        if adp == (-2 & 0xFFFF) and index == 0x55 and got is not None:  # slave 2: the EEPROM reports no acknowledge
+            back = bytearray(got)
+            at = 14 + 2 + 10  # the first datagram's data (the status): Ethernet, EtherCAT and datagram headers
+            back[at:at + 2] = (0x2000).to_bytes(2, "little")
+            assert parse_frame(bytes(back)).datagrams[0].data[:2] == b"\x00\x20"  # type: ignore[union-attr]
+            return bytes(back)
+        return got
+
+    found = with_sii(exchange, [Found(0, 0x02), Found(1, 0x02), Found(2, 0x02)])
+    assert found[0].sii is not None and image[:len(found[0].sii)] == found[0].sii
+    assert found[1].sii is None and found[2].sii is None
