@@ -32,7 +32,9 @@ def _reset_bus(ctx: click.Context, param: click.Parameter, value: bool) -> None:
 reset_bus_option = click.option(
     "--reset-bus", is_flag=True, expose_value=False, callback=_reset_bus,
     help="Open the bus even when a slave is in SAFE-OP or OP (a real master's bus init takes every slave to INIT: "
-         "the machine stops). Without it such a bus is refused.")
+         "the machine stops). Without it such a bus is refused. When the command ends each slave is put back in "
+         "the state it was found in where ecattool can: SAFE-OP/OP only by audit and backup, as their project "
+         "configures the slave; a note names what it could not.")
 
 
 def target_option(required: bool = True) -> Callable[[Decorated], Decorated]:
