@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
+from ecattool.od.model import EcState
 from ecattool.online.live import LiveBus
 from ecattool.target.base import LiveSlave, Target
 from ecattool.target.opener import MASTERS, open_master, open_target, parse_target
@@ -43,6 +44,8 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
     from ecattool.online.bus_state import guard
 
     found = guard(parsed.interface, reset_bus, sii=read_sii and parsed.kind == "kickcat")
+    if parsed.kind == "kickcat" and put_back is not None:
+        put_back = kickcat_stays_preop  # nothing written to a slave that cannot be taken further
     from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, bus_limits
 
     # how long to wait: the slaves' own ESI timeouts where the command has devices (a project, --device), the bus
@@ -60,6 +63,13 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
         import_kickcat()
     return _restoring(isolated_bus(spec, lambda: open_live(parsed.kind, parsed.interface, limits=limits), limits),
                       found, put_back)
+
+
+def kickcat_stays_preop(wanted: Sequence[tuple[Any, EcState]]) -> list[str]:
+    """Through KickCAT a slave found in SAFE-OP/OP stays in PRE-OP: its binding requests a state for the whole bus
+    only (``Bus.request_state``) and sets up no process data here, so nothing of the project is written."""
+    return [f"slave {s.position} ({state.value}) was left in PRE-OP: KickCAT's Python binding takes no single slave "
+            f"to a state, ecattool cannot take it back to {state.value} (pysoem:IF can)" for s, state in wanted]
 
 
 def open_live(kind: str, ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> LiveBus:

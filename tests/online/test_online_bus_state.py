@@ -195,3 +195,20 @@ def test_an_sii_that_cannot_be_read_through_the_esc_is_left_unknown() -> None:
     found = with_sii(exchange, [Found(0, 0x02), Found(1, 0x02), Found(2, 0x02)])
     assert found[0].sii is not None and image[:len(found[0].sii)] == found[0].sii
     assert found[1].sii is None and found[2].sii is None
+
+
+def test_through_kickcat_a_running_slave_stays_in_preop_and_nothing_is_written(monkeypatch: pytest.MonkeyPatch) -> None:
+    """KickCAT's binding requests a state for the whole bus only: a slave found in SAFE-OP/OP is left in PRE-OP
+    with a note naming why, and the project's put-back (which would write its startup list) is not called."""
+    from ecattool.online import targets
+
+    called: list[object] = []
+    monkeypatch.setattr(bus_state, "read_states", lambda ifname, sii=False: [Found(0, 0x08), Found(1, 0x02)])
+    monkeypatch.setattr(targets, "isolated_bus", lambda spec, opener, limits=None: targets.LiveBus(
+        spec, [Slave(0), Slave(1)], closer=lambda: None))  # type: ignore[list-item]
+    monkeypatch.setattr("ecattool.target.kickcat.import_kickcat", lambda: None)
+    bus = targets.open_bus("kickcat:eth0", reset_bus=True, put_back=lambda wanted: called.append(wanted) or [])
+    bus.close()
+    assert called == []
+    assert bus.notes == ["slave 0 (OP) was left in PRE-OP: KickCAT's Python binding takes no single slave to a state, "
+                         "ecattool cannot take it back to OP (pysoem:IF can)"]
