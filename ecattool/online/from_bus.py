@@ -27,8 +27,6 @@ from ecattool.target.base import entry_size
 #: cyclic synchronous mode takes its set-points by (lint's PRJ044 against the SYNC0 cycle)
 USUAL_OBJECTS = ((0x6060, 0), (0x6065, 0), (0x6081, 0), (0x6083, 0), (0x6084, 0), (0x6085, 0), (0x60C2, 2),
                  (0x60C2, 1))
-#: AssignActivate bit 10 (ESC 0x0981 bit 2): the SYNC1 signal is generated
-SYNC1_ACTIVE = 0x0400
 #: the cyclic synchronous modes (CiA 402: csp, csv, cst): set-points taken on SYNC0
 CYCLIC_SYNC_MODES = (8, 9, 10)
 
@@ -177,6 +175,8 @@ def dc_yaml(bus: LiveBus, slave: Any, device: Device, mode: int | None) -> str:
         what = f"opmode: {_q(names[0])}" if names else f"assign_activate: 0x{dc.assign_activate:04X}"
         cycle = f", cycle_ns: {dc.sync0_cycle_ns}" if dc.sync0_cycle_ns else ""
         # SYNC1 where the activation word switches it on (bit 10, SYNC1 active): its cycle register as it runs
+        from ecattool.project.steps import SYNC1_ACTIVE
+
         sync1_on = bool(dc.assign_activate & SYNC1_ACTIVE) and dc.sync1_cycle_ns is not None
         sync1 = f", sync1_cycle_ns: {dc.sync1_cycle_ns}" if sync1_on else ""
         seen = f", SYNC1 cycle {dc.sync1_cycle_ns} ns" if sync1_on else ""
