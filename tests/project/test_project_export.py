@@ -313,6 +313,8 @@ drives:
     assert "0x0700, 1000000U, 0, 250000U, -1000);" in export([c], "igh", lossy=True)
     dc = etree.fromstring(export([c], "eni", lossy=True).encode()).find("Config/Slave/DC")
     assert dc is not None and dc.findtext("CycleTime1") == "250000"
+    (back,) = import_bytes(export([c], "json").encode(), "x.json")  # the round trip keeps both SYNC1 values
+    assert (back.dc_sync1_cycle_ns, back.dc_sync1_shift_ns) == (250_000, -1000)
 
 
 @pytest.mark.parametrize("dc, message", [
