@@ -20,7 +20,8 @@ Examples:
   ecattool audit machine.yaml --target pysoem:eth0
   ecattool audit machine.yaml --target pysoem:eth0 --format sarif -o audit.sarif
   ecattool audit machine.yaml --target sim --json --html audit.html
-  ecattool audit machine.yaml --target pysoem:eth0 --allow-errors   # a project lint reports errors for""")
+  ecattool audit machine.yaml --target pysoem:eth0 --allow-errors   # a project lint reports errors for
+  ecattool audit machine.yaml --target pysoem:eth0 --reset-bus   # a running bus, put back in SAFE-OP/OP after""")
 @click.argument("project", type=InputFile())
 @target_option()
 @click.option("--format", "fmt", type=click.Choice(["text", "json", "sarif"]), default="text", show_default=True,

@@ -32,7 +32,9 @@ def _reset_bus(ctx: click.Context, param: click.Parameter, value: bool) -> None:
 reset_bus_option = click.option(
     "--reset-bus", is_flag=True, expose_value=False, callback=_reset_bus,
     help="Open the bus even when a slave is in SAFE-OP or OP (a real master's bus init takes every slave to INIT: "
-         "the machine stops). Without it such a bus is refused.")
+         "the machine stops). Without it such a bus is refused. When the command ends each slave is put back in "
+         "the state it was found in where ecattool can: SAFE-OP/OP only by audit and backup, as their project "
+         "configures the slave; a note names what it could not.")
 
 
 def target_option(required: bool = True) -> Callable[[Decorated], Decorated]:
@@ -97,14 +99,15 @@ def load_device(text: str | None) -> Device | None:
     return Machine.from_device_flags(source=source, select=selector or None).slaves[0].require_device()
 
 
-def open_live(target: str, device: Any = None) -> LiveBus:
+def open_live(target: str, device: Any = None, read_sii: bool = False) -> LiveBus:
     """The live bus of ``target``; ``device`` (``--device``): on a real master its ESI's timeouts bound the waits
-    (ecattool.target.timeouts); a simulator's slaves stay the target's own."""
+    (ecattool.target.timeouts); a simulator's slaves stay the target's own. ``read_sii``: through a master that
+    reads no SII (KickCAT) each slave's SII is read before it opens (``project new --from-bus``)."""
     from ecattool.online.targets import open_bus
     from ecattool.target.opener import parse_target
 
     devices = [device] if device is not None and parse_target(target).kind != "sim" else []
-    return _opened(open_bus(target, devices, reset_bus=reset_bus_given()))
+    return _opened(open_bus(target, devices, reset_bus=reset_bus_given(), read_sii=read_sii))
 
 
 def allow_errors_option(f: Decorated) -> Decorated:
@@ -129,6 +132,11 @@ def project_bus(machine: Machine, target: str) -> LiveBus:
     """The live bus of ``target`` for a machine (:func:`project_machine`); ``sim`` simulates its drives."""
     from ecattool.online.targets import open_bus
 
-    # what a bare 'sim' simulates (open_bus reads the spec; a real master or sim:SOURCES ignore them)
+    from functools import partial
+
+    from ecattool.commission.runner import put_back
+
+    # what a bare 'sim' simulates (open_bus reads the spec; a real master or sim:SOURCES ignore them); a slave
+    # found in SAFE-OP/OP is taken back there as the project configures it when the command ends
     devices = [device for _, device in machine.devices()]
-    return _opened(open_bus(target, devices, reset_bus=reset_bus_given()))
+    return _opened(open_bus(target, devices, reset_bus=reset_bus_given(), put_back=partial(put_back, machine.slaves)))

@@ -101,7 +101,7 @@ def _new_from_bus(target: str, library: str | None, output: str | None) -> None:
     from ecattool.online.library import Library
 
     problems: list[str] = []
-    with open_live(target) as live:
+    with open_live(target, read_sii=True) as live:  # KickCAT gives no SII: read it through the ESCs
         text = project_from_bus(live, Library(library) if library else None, output, problems=problems)
     write_output(output, text)
     for p in problems:

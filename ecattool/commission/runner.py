@@ -666,6 +666,74 @@ def commission_drive(slave: SlaveTarget, rd: Slave) -> DriveReport:
     return run.report
 
 
+def op_handover(positions: Sequence[int]) -> str:
+    """What the slaves put back in OP are told, once: ecattool's process data ends with the command."""
+    one = len(positions) == 1
+    which = f"slave {positions[0]} is" if one else f"slaves {', '.join(map(str, positions))} are"
+    return (f"{which} in OP: the process data must now come from the machine's master (ecattool's stops as the "
+            f"command ends; a drive's power stage is left disabled), else the sync manager watchdog takes "
+            f"{'it' if one else 'them'} to SAFE-OP (AL status code 0x001B)")
+
+
+def put_back(drives: Sequence[Slave], wanted: Sequence[tuple[SlaveTarget, EcState]]) -> list[str]:
+    """Take each slave of ``wanted`` back to its state (SAFE-OP or OP, as it was found before a master reset the
+    bus: :mod:`ecattool.online.bus_state`) the way commissioning configures it, from the project's ``drives`` at
+    the same position: identity checked, the PRE-OP startup list (PDO assignment and mappings, the ESI's init
+    commands, scaling, parameters) and DC, for every slave first (a master with one IO map for the bus, SOEM's
+    ``config_map``, reads every slave's mapping once, at the first SAFE-OP request), then SAFE-OP with the SO
+    commands, then OP where it was found in OP. Never the CiA-402 enable and no move: a drive put back in OP has
+    its power stage disabled. A slave the project does not configure, or whose step fails, is left in PRE-OP.
+    Returns one line per slave, what was done or why not, and one for the slaves put back in OP: who must send
+    their process data now (:func:`op_handover`)."""
+    by_position = {rd.position: rd for rd in drives}
+    notes: list[str] = []
+    runs: list[tuple[SlaveTarget, Slave, EcState, DriveReport]] = []
+
+    def failed(slave: SlaveTarget, state: EcState, step: Step, report: DriveReport | None = None) -> None:
+        notes.append(f"slave {slave.position} ({state.value}) was left in PRE-OP: putting it back failed at "
+                     f"{step.name}: {step.detail}")
+        if report is not None:
+            _safe_stop(slave, None, report)
+
+    for slave, state in wanted:
+        rd = by_position.get(slave.position)
+        if rd is None or rd.device is None:
+            notes.append(f"slave {slave.position} ({state.value}) was left in PRE-OP: the project configures no "
+                         f"slave at position {slave.position}, ecattool cannot take it back to {state.value}")
+            continue
+        report = DriveReport(rd.drive.name, rd.position, rd.kind, trace=DriveTrace.for_drive(rd))
+        try:
+            _check_identity(slave, rd, report)
+            _startup(slave, rd, _PREOP_TRANSITIONS, report)
+            _dc(slave, rd, report)
+        except _Failed as exc:
+            failed(slave, state, exc.step)
+            continue
+        runs.append((slave, rd, state, report))
+    ready = []
+    for slave, rd, state, report in runs:  # every slave's PRE-OP writes are done: SAFE-OP, slave by slave
+        try:
+            _goto(slave, EcState.SAFEOP, report)
+            _startup(slave, rd, _SAFEOP_TRANSITIONS, report)
+        except _Failed as exc:
+            failed(slave, state, exc.step, report)
+            continue
+        ready.append((slave, state, report))
+    in_op = []
+    for slave, state, report in ready:  # OP last: the master's cycles on the way keep the others' watchdogs fed
+        if state is EcState.OP:
+            try:
+                _goto(slave, EcState.OP, report)
+            except _Failed as exc:
+                failed(slave, state, exc.step, report)
+                continue
+            in_op.append(slave.position)
+        notes.append(f"slave {slave.position} was put back in {state.value} as the project configures it")
+    if in_op:
+        notes.append(op_handover(in_op))
+    return notes
+
+
 def _drive_error(slave: SlaveTarget, rd: Slave) -> str:
     """What the drive itself says went wrong, for a failure report: its error code 603Fh (the last EMCY), named
     from the family's table; "" where there is none, or it cannot be read (no mailbox, no 603Fh)."""

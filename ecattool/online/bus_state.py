@@ -3,8 +3,8 @@
 frame, built by the frame code the simulator's bus uses (``ecattool.sim.bus.frame``): a BRD of the AL status
 register (0x0130) counts the slaves, one APRD per slave reads its state. Where a slave is in SAFE-OP or OP the
 command is refused in one line naming them, unless the user passed ``--reset-bus``; when the command ends, each
-slave is put back in the state it was found in where ecattool can (INIT and PRE-OP), and what it could not is
-said (:func:`restore`).
+slave is put back in the state it was found in where ecattool can (INIT and PRE-OP; SAFE-OP and OP where the
+command has a project that configures the slave), and what it could not is said (:func:`restore`).
 
 The read needs what the master needs (a raw socket: root or CAP_NET_RAW); where it cannot be made, or nothing
 answers, nothing is known and the master goes on as before (it says itself why it cannot open the interface).
@@ -16,7 +16,8 @@ import socket
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 from ecattool.errors import TargetError
 from ecattool.od.model import EcState
@@ -55,6 +56,9 @@ class Found:
     assign_activate: int | None = None
     sync0_cycle_ns: int | None = None
     sync1_cycle_ns: int | None = None
+    #: the slave's SII image (from word 0 to the end of the category list), read through the ESC's EEPROM
+    #: interface before the master opened, where asked (:func:`read_states` ``sii``: KickCAT binds no SII access)
+    sii: bytes | None = field(default=None, repr=False)
 
     @property
     def error(self) -> bool:
@@ -97,16 +101,20 @@ def _exchange(sock: socket.socket, frame: bytes, index: int, resent: list[bool] 
 Exchange = Callable[[bytes, int], bytes | None]
 
 
-def read_states(ifname: str) -> list[Found] | None:
-    """Each slave's AL status (and DC activation, :func:`read_found`) on ``ifname``, in bus order; None where it
-    cannot be read (no raw socket, no answer)."""
+def read_states(ifname: str, sii: bool = False) -> list[Found] | None:
+    """Each slave's AL status (and DC activation, :func:`read_found`) on ``ifname``, in bus order; with ``sii``
+    each slave's SII image too (:func:`with_sii`); None where it cannot be read (no raw socket, no answer)."""
     try:
         sock = raw.open_raw(ifname)
     except TargetError:
         return None  # no raw socket here, or no such interface: the master's own open says why
     resent: list[bool] = []
     try:
-        return read_found(lambda frame, index: _exchange(sock, frame, index, resent))
+        def exchange(frame: bytes, index: int) -> bytes | None:
+            return _exchange(sock, frame, index, resent)
+
+        found = read_found(exchange)
+        return with_sii(exchange, found) if sii and found else found
     except OSError:
         return None
     finally:
@@ -194,10 +202,78 @@ def _with_dc(exchange: Exchange, found: list[Found]) -> list[Found]:
     return out
 
 
-def guard(ifname: str, reset_bus: bool) -> list[Found]:
-    """The slaves' states before the bus is reset; a TargetError naming the slaves in SAFE-OP or OP unless
-    ``reset_bus``."""
-    found = read_states(ifname) or []
+#: the ESC's SII EEPROM interface (ETG.1000.4, 0x0500-0x050F): the configuration (0: the master, not the PDI,
+#: drives the EEPROM), control/status with the word address behind it (one write starts a read), the data
+EEPROM_CONFIG = 0x0500
+EEPROM_CONTROL = 0x0502
+EEPROM_DATA = 0x0508
+#: control/status bits: read command, 8 octets per read (else 4), the error bits, busy
+EE_CMD_READ = 0x0100
+EE_READ_8 = 0x0040
+EE_ERRORS = 0x7800
+EE_BUSY = 0x8000
+#: status reads one SII read waits for the EEPROM at most (each a frame of up to REPLY_S)
+EE_POLLS = 20
+
+
+def sii_words(exchange: Exchange, position: int) -> Callable[[int], bytes]:
+    """``read_words(word) -> bytes`` of the slave at bus ``position`` through its ESC's EEPROM interface, with
+    raw frames (auto-increment addressing: before the master assigns station addresses): the read command with
+    the word address in one write of 0x0502-0x0507, then the status and the data read together until the
+    EEPROM is not busy; 8 octets where the status says the ESC reads 8, else 4 (as SOEM's ``ec_readeeprom``)."""
+    from ecattool.sim.bus.frame import Cmd, Datagram, make_frame, parse_frame
+
+    def read_words(word: int) -> bytes:
+        start = EE_CMD_READ.to_bytes(2, "little") + word.to_bytes(4, "little")
+        got = exchange(make_frame([Datagram.make(Cmd.APWR, -position, EEPROM_CONTROL, start, index=0x54)],
+                                  _SRC), 0x54)
+        frame = parse_frame(got) if got is not None else None
+        if frame is None or not frame.datagrams[0].wkc:
+            raise TargetError(f"slave {position}: the SII read command at word 0x{word:04X} got no answer")
+        for _ in range(EE_POLLS):
+            reads = [Datagram.make(Cmd.APRD, -position, EEPROM_CONTROL, 2, index=0x55),
+                     Datagram.make(Cmd.APRD, -position, EEPROM_DATA, 8, index=0x55)]
+            got = exchange(make_frame(reads, _SRC), 0x55)
+            frame = parse_frame(got) if got is not None else None
+            if frame is None or len(frame.datagrams) != 2 or not frame.datagrams[0].wkc:
+                raise TargetError(f"slave {position}: the SII status at word 0x{word:04X} got no answer")
+            status = int.from_bytes(frame.datagrams[0].data[:2], "little")
+            if status & EE_BUSY:
+                continue
+            if status & EE_ERRORS:
+                raise TargetError(f"slave {position}: the SII read at word 0x{word:04X} failed (EEPROM status "
+                                  f"0x{status:04X})")
+            return bytes(frame.datagrams[1].data[:8 if status & EE_READ_8 else 4])
+        raise TargetError(f"slave {position}: the EEPROM stayed busy reading word 0x{word:04X}")
+
+    return read_words
+
+
+def with_sii(exchange: Exchange, found: list[Found]) -> list[Found]:
+    """``found`` with each slave's SII image (:attr:`Found.sii`), read through its ESC's EEPROM interface
+    (:func:`sii_words`, :func:`ecattool.sii.eeprom.read_sii`: the fixed area, then the categories to the end
+    marker) before a master whose binding reads no SII (KickCAT's) opens the bus. The master is given the EEPROM
+    first (0x0500 := 0); a slave whose EEPROM does not answer keeps None."""
+    from dataclasses import replace
+
+    from ecattool.sii.eeprom import read_sii
+    from ecattool.sim.bus.frame import Cmd, Datagram, make_frame
+
+    out = list(found)
+    for k, f in enumerate(found):
+        try:
+            exchange(make_frame([Datagram.make(Cmd.APWR, -f.position, EEPROM_CONFIG, b"\x00", index=0x56)],
+                                _SRC), 0x56)
+            out[k] = replace(f, sii=read_sii(sii_words(exchange, f.position)))
+        except TargetError:
+            continue
+    return out
+
+
+def guard(ifname: str, reset_bus: bool, sii: bool = False) -> list[Found]:
+    """The slaves' states before the bus is reset (with ``sii`` their SII images, :func:`with_sii`); a
+    TargetError naming the slaves in SAFE-OP or OP unless ``reset_bus``."""
+    found = read_states(ifname, sii) or []
     running = [f for f in found if f.state in RUNNING]
     if running and not reset_bus:
         raise TargetError(f"{', '.join(str(f) for f in running)} on {ifname!r} "
@@ -206,18 +282,36 @@ def guard(ifname: str, reset_bus: bool) -> list[Found]:
     return found
 
 
-def restore(slaves: Sequence[object], found: Sequence[Found]) -> list[str]:
-    """Put each slave back in the state it was found in where ecattool can (INIT; PRE-OP is where the bus commands
-    leave it); returns what it could not, one line per slave."""
-    notes = []
+#: takes slaves (each with the state it was found in: SAFE-OP or OP) back to that state as a project configures
+#: them, and returns one line per slave (what was done, or why not): ``ecattool.commission.runner.put_back``
+#: with the project's slaves, given by the commands that have a project (``audit``, ``backup``)
+PutBack = Callable[[Sequence[tuple[Any, EcState]]], list[str]]
+
+
+def restore(slaves: Sequence[object], found: Sequence[Found], put_back: PutBack | None = None) -> list[str]:
+    """Put each slave back in the state it was found in where ecattool can: INIT; PRE-OP (where the bus commands
+    leave it); SAFE-OP and OP where the command has the slaves' configuration (``put_back``: a project). Returns
+    one line per slave put back in SAFE-OP/OP, and per slave it could not put back."""
+    notes: list[str] = []
     by_position = {int(getattr(s, "position", i)): s for i, s in enumerate(slaves)}
+    running: list[tuple[Any, EcState]] = []
+    init: list[tuple[object, Found]] = []
     for f in found:
         slave = by_position.get(f.position)
         if slave is None or f.state in (None, EcState.PREOP):
             continue
-        if f.state in RUNNING or f.state is EcState.BOOT:
-            notes.append(f"{f} was left in PRE-OP: ecattool has no configuration to take it back to {f.state.value}")
-            continue
+        if f.state in RUNNING and put_back is not None:
+            running.append((slave, f.state))
+        elif f.state in RUNNING or f.state is EcState.BOOT:
+            notes.append(f"{f} was left in PRE-OP: ecattool has no configuration to take it back to {f.state.value}"
+                         + (" (give the command a project)" if f.state in RUNNING else ""))
+        else:
+            init.append((slave, f))
+    if running and put_back is not None:
+        # before any slave goes back to INIT: a master maps the whole bus on the first SAFE-OP request (SOEM's
+        # config_map reads every slave's PDO assignment over its mailbox, which a slave in INIT has not)
+        notes.extend(put_back(running))
+    for slave, f in init:
         try:
             slave.request_state(EcState.INIT)  # type: ignore[attr-defined]
         except Unsupported as exc:

@@ -54,11 +54,30 @@ def dc_found(bus: LiveBus, slave: Any) -> DcFound | None:
     return None
 
 
-def identify_named(slave: Any, library: Library | None) -> tuple[Identity, Match | None]:
+def sii_found(bus: LiveBus, slave: Any) -> bytes | None:
+    """The SII image of ``slave`` read through its ESC before the master opened (``bus.found``: a master whose
+    binding reads no SII, KickCAT's); None where none was read."""
+    for f in bus.found:
+        if getattr(f, "position", None) == slave.position and getattr(f, "sii", None):
+            return bytes(f.sii)
+    return None
+
+
+def identify_named(slave: Any, library: Library | None, sii: bytes | None = None) -> tuple[Identity, Match | None]:
     """The slave's identity and the library device or built-in family it matches (library first); among the
-    devices or models that share the identity, the one the SII's name string names."""
-    ident: Identity = slave.identity()
-    name = sii_facts(slave).name
+    devices or models that share the identity, the one the SII's name string names. Where the master reads no
+    identity (KickCAT reads 1018h: a slave without a mailbox has none to give), the identity of the SII image
+    ``sii`` read before the master opened."""
+    try:
+        ident: Identity = slave.identity()
+    except EcatToolError:
+        if sii is None:
+            raise
+        from ecattool.sii.image import parse
+
+        h = parse(sii, source=f"slave {slave.position} SII").header
+        ident = Identity(h.vendor_id, h.product_code, h.revision)
+    name = sii_facts(slave, sii).name
     match = library.match(ident, name) if library is not None else None
     return ident, match or family_match(ident, name)
 
@@ -155,10 +174,14 @@ def dc_yaml(bus: LiveBus, slave: Any, device: Device, mode: int | None) -> str:
         names = [m.name for m in device.dc_opmodes if m.assign_activate == dc.assign_activate]
         what = f"opmode: {_q(names[0])}" if names else f"assign_activate: 0x{dc.assign_activate:04X}"
         cycle = f", cycle_ns: {dc.sync0_cycle_ns}" if dc.sync0_cycle_ns else ""
-        sync1 = (f", SYNC1 cycle {dc.sync1_cycle_ns} ns" if dc.assign_activate & 0x0400 and dc.sync1_cycle_ns
-                 else "")
-        return (f"    dc: {{{what}{cycle}}}  # as found: AssignActivate 0x{dc.assign_activate:04X}, "
-                f"SYNC0 cycle {dc.sync0_cycle_ns} ns{sync1}\n")
+        # SYNC1 where the activation word switches it on (bit 10, SYNC1 active): its cycle register as it runs
+        from ecattool.project.steps import SYNC1_ACTIVE
+
+        sync1_on = bool(dc.assign_activate & SYNC1_ACTIVE) and dc.sync1_cycle_ns is not None
+        sync1 = f", sync1_cycle_ns: {dc.sync1_cycle_ns}" if sync1_on else ""
+        seen = f", SYNC1 cycle {dc.sync1_cycle_ns} ns" if sync1_on else ""
+        return (f"    dc: {{{what}{cycle}{sync1}}}  # as found: AssignActivate 0x{dc.assign_activate:04X}, "
+                f"SYNC0 cycle {dc.sync0_cycle_ns} ns{seen}\n")
     only = dc_only_mode(device)
     if dc is not None:  # read: the slave runs without SYNC signals
         if only is None:
@@ -251,9 +274,10 @@ def project_from_bus(bus: LiveBus, library: Library | None, output: str | Path |
     unknown = []
     failed: list[str] = []
     for slave in bus.slaves:
-        sii_facts(slave)  # the SII first: whether the slave has a mailbox, and its name for any message
+        sii = sii_found(bus, slave)
+        sii_facts(slave, sii)  # the SII first: whether the slave has a mailbox, and its name for any message
         try:
-            ident, match = identify_named(slave, library)
+            ident, match = identify_named(slave, library, sii)
         except EcatToolError as exc:
             hint = "" if sii_facts(slave).protocols is not None else (
                 f" ({bus.spec} gives no SII: a slave without a mailbox has no identity to read here; use pysoem:IF)")

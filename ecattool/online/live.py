@@ -29,7 +29,8 @@ class LiveBus:
     write_log: list[str] | None = None
     #: the devices a simulator bus was made of (its own dictionaries), by position
     devices: list[Device] = field(default_factory=list)
-    #: what closing the bus could not do (a slave found in OP and left in PRE-OP), one line each
+    #: what closing the bus did or could not do (a slave put back in OP, or found in OP and left in PRE-OP), one
+    #: line each
     notes: list[str] = field(default_factory=list)
     #: each slave's AL state as found before the master reset the bus (``bus_state.Found``; empty: not known)
     found: list[Any] = field(default_factory=list)

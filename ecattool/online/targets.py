@@ -9,7 +9,9 @@ from typing import Any
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
+from ecattool.od.model import EcState
 from ecattool.online import bus_state
+from ecattool.online.bus_state import PutBack
 from ecattool.online.live import LiveBus
 from ecattool.target.base import LiveSlave, SlaveTarget, Target
 from ecattool.target.isolated import MasterProcess, RemoteSlave
@@ -17,14 +19,19 @@ from ecattool.target.opener import MASTERS, open_master, open_target, parse_targ
 from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, BusLimits, bus_limits
 
 
-def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False) -> LiveBus:
+def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
+             put_back: PutBack | None = None, read_sii: bool = False) -> LiveBus:
     """The live bus of a target spec: ``sim`` (the simulator with ``devices``, e.g. a project's), ``sim:SOURCE,…``
     (profiles or ESI files), ``pysoem:IF`` or ``kickcat:IF`` (a real master on a network interface).
 
     A real master resets every slave when it opens the bus: first each slave's state is read
     (:mod:`ecattool.online.bus_state`), a bus with slaves in SAFE-OP or OP is refused unless ``reset_bus``, and
     when the bus is closed each slave is put back where it was found where that can be done (what could not is
-    in the bus's ``notes``)."""
+    in the bus's ``notes``): INIT and PRE-OP always, SAFE-OP and OP through ``put_back`` (a command with a
+    project: ``ecattool.commission.runner.put_back`` with its slaves; :func:`bus_state.restore`). ``read_sii``:
+    through KickCAT (whose binding reads no SII) each slave's SII image is read before the master opens, through
+    its ESC's EEPROM interface (:func:`bus_state.with_sii`; in the bus's ``found``), for ``project new
+    --from-bus``: the model the SII names, the mailbox it has, its identity where it has no 1018h."""
     parsed = parse_target(spec)
     if parsed.kind == "sim":
         from ecattool.sim.slave import drive_for_device
@@ -34,7 +41,9 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
             raise SelectionError("target 'sim' without a project has no slaves: use sim:PROFILE,ESI… "
                                  "(e.g. sim:hdt,technosoft-ipos)")
         return sim_bus([drive_for_device(d) for d in devs], spec)
-    found = bus_state.guard(parsed.interface, reset_bus)
+    found = bus_state.guard(parsed.interface, reset_bus, sii=read_sii and parsed.kind == "kickcat")
+    if parsed.kind == "kickcat" and put_back is not None:
+        put_back = kickcat_stays_preop  # nothing written to a slave that cannot be taken further
     # how long to wait: the slaves' own ESI timeouts where the command has devices (a project, --device), the bus
     # init budgeted for as many slaves as the state read found (ecattool.target.timeouts)
     limits = bus_limits(devices, len(found) or None, KICKCAT_SII_S if parsed.kind == "kickcat" else SII_S)
@@ -50,7 +59,14 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False)
         import_kickcat()
     bus_state.settle()  # the state read's socket, closed meanwhile, is not the master's child's to hold
     return _restoring(isolated_bus(spec, lambda: open_live(parsed.kind, parsed.interface, limits=limits), limits),
-                      found)
+                      found, put_back)
+
+
+def kickcat_stays_preop(wanted: Sequence[tuple[Any, EcState]]) -> list[str]:
+    """Through KickCAT a slave found in SAFE-OP/OP stays in PRE-OP: its binding requests a state for the whole bus
+    only (``Bus.request_state``) and sets up no process data here, so nothing of the project is written."""
+    return [f"slave {s.position} ({state.value}) was left in PRE-OP: KickCAT's Python binding takes no single slave "
+            f"to a state, ecattool cannot take it back to {state.value} (pysoem:IF can)" for s, state in wanted]
 
 
 def open_live(kind: str, ifname: str, module: ModuleType | None = None, limits: BusLimits | None = None) -> LiveBus:
@@ -92,14 +108,15 @@ def open_guarded(spec: str, devices: Sequence[Device] = (), reset_bus: bool = Fa
     return open_target(spec, devices)
 
 
-def _restoring(bus: LiveBus, found: Sequence[Any]) -> LiveBus:
-    """``bus``, closed with each slave put back in the state it was found in (bus_state.restore) first."""
+def _restoring(bus: LiveBus, found: Sequence[Any], put_back: PutBack | None = None) -> LiveBus:
+    """``bus``, closed with each slave put back in the state it was found in (bus_state.restore; SAFE-OP and OP
+    through ``put_back``) first."""
     close = bus.closer
     bus.found = list(found)
 
     def closer() -> None:
         try:
-            bus.notes.extend(bus_state.restore(bus.slaves, found))
+            bus.notes.extend(bus_state.restore(bus.slaves, found, put_back))
         finally:
             if close is not None:
                 close()

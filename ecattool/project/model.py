@@ -189,6 +189,19 @@ class DcConfig(_Strict):
     cycle_ns: int | None = Field(default=None, ge=1, le=0xFFFFFFFF, description="SYNC0 cycle time in ns (UNSIGNED32)")
     shift_ns: int | None = Field(default=None, ge=-(2**31), le=2**31 - 1,
                                  description="SYNC0 shift time in ns (INTEGER32)")
+    sync1_cycle_ns: int | None = Field(
+        default=None, ge=0, le=0xFFFFFFFF,
+        description="SYNC1 cycle time in ns (UNSIGNED32, the ESC's 0x09A4 and the ESI OpMode's CycleTimeSync1; "
+                    "0: SYNC1 with every SYNC0 pulse); the SYNC1 signal itself is switched on by AssignActivate "
+                    "bit 10 (0x0400)")
+    sync1_shift_ns: int | None = Field(default=None, ge=-(2**31), le=2**31 - 1,
+                                       description="SYNC1 shift time in ns (INTEGER32, the OpMode's ShiftTimeSync1)")
+
+    @model_validator(mode="after")
+    def _sync1_shift_needs_cycle(self) -> "DcConfig":
+        if self.sync1_shift_ns is not None and self.sync1_cycle_ns is None and self.opmode is None:
+            raise ValueError("sync1_shift_ns without sync1_cycle_ns (or an opmode that gives a SYNC1 cycle)")
+        return self
 
 
 class SwConfig(_Strict):

@@ -50,8 +50,16 @@ def resolve_dc(drive: Drive, device: Device) -> SlaveDc | None:
         return None
     cycle = dc.cycle_ns if dc.cycle_ns is not None else (mode.cycle_time_sync0 or None if mode is not None else None)
     shift = dc.shift_ns if dc.shift_ns is not None else (mode.shift_time_sync0 if mode is not None else None)
-    sync1 = mode.cycle_time_sync1 or None if mode is not None else None
-    sync1_shift = mode.shift_time_sync1 if mode is not None and sync1 else None
+    # SYNC1 as SYNC0: the project's values where given, else the OpMode's (a SYNC1 cycle of 0 given by the
+    # project is kept: the ESC then pulses SYNC1 with every SYNC0)
+    if dc.sync1_cycle_ns is not None:
+        sync1: int | None = dc.sync1_cycle_ns
+    else:
+        sync1 = mode.cycle_time_sync1 or None if mode is not None else None
+    if dc.sync1_shift_ns is not None:
+        sync1_shift: int | None = dc.sync1_shift_ns
+    else:
+        sync1_shift = mode.shift_time_sync1 if mode is not None and sync1 is not None else None
     return SlaveDc(act, dc.opmode, cycle, shift, sync1, sync1_shift)
 
 

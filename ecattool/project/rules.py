@@ -50,6 +50,7 @@ PROJECT_RULES: dict[str, str] = {
     "PRJ043": "a write to the interpolation period (60C2h) leaves a period the drive does not accept",
     "PRJ044": "the interpolation period (60C2h) differs from the SYNC0 cycle of an interpolated mode",
     "PRJ045": "the drive runs cyclic synchronous position (csp) without distributed clocks",
+    "PRJ046": "SYNC1 values are given but AssignActivate does not switch SYNC1 on",
     "PRJ050": "the scaling section cannot be computed",
     familycycle.RULE: familycycle.DESCRIPTION,
 }

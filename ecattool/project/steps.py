@@ -531,6 +531,10 @@ def check_interpolation_period(lp: LoadedProject, i: int, slave: Slave) -> Found
     return found
 
 
+#: AssignActivate bit 10 (ESC 0x0981 bit 2): the SYNC1 signal is generated
+SYNC1_ACTIVE = 0x0400
+
+
 def check_dc(lp: LoadedProject, i: int, slave: Slave) -> Found:
     """DC OpMode names; modes the drive runs only with distributed clocks (Control Techniques 7.4/8.1: ip and
     csp; without DC the drive stays in SAFE-OP, AL status 0x0030); SYNC0 cycle times the family accepts."""
@@ -564,6 +568,12 @@ def check_dc(lp: LoadedProject, i: int, slave: Slave) -> Found:
         return found
     step, most = rules.dc_sync0_step_ns, rules.dc_sync0_max_steps
     assert dc is not None and slave.dc is not None
+    given = "sync1_cycle_ns" if dc.sync1_cycle_ns is not None else "sync1_shift_ns" if dc.sync1_shift_ns is not None else None
+    if given is not None and not slave.dc.assign_activate & SYNC1_ACTIVE:
+        found.warning("PRJ046", f"dc: {given} is given but AssignActivate 0x{slave.dc.assign_activate:04X} does not "
+                                "switch SYNC1 on (bit 10, 0x0400): the ESC generates no SYNC1 pulse; use an OpMode "
+                                "or assign_activate with SYNC1 (e.g. 0x0700), or drop the SYNC1 values",
+                      lp.drive_location(i, "dc", given))
     if step and most:
         cycle = slave.dc.cycle_ns or 0
         if cycle <= 0 or cycle % step or not 1 <= cycle // step <= most:

@@ -215,3 +215,88 @@ def test_late_answers_to_frames_sent_again_are_taken_off_before_the_master_opens
     assert wire.queue == []  # nothing left for the master's socket
     bus_state.settle(10)  # the socket is closed aside (bus_state._close_aside) until the master's fork
     assert wire.closed
+
+
+def test_a_slave_running_sync1_gets_its_sync1_cycle_in_the_project(tmp_path: Path) -> None:
+    """AssignActivate bit 10 (SYNC1 active) set in 0x0980: the SYNC1 cycle found in 0x09A4 is written as
+    ``dc: sync1_cycle_ns`` (it was a comment only: the project format had no SYNC1, issue 35 item 2), reads back
+    into the slave's DC and its exports, and the project lints clean. Without bit 10 no SYNC1 is written."""
+    from dataclasses import replace
+
+    from ecattool.online.bus_state import Found
+    from ecattool.project.machine import slave_config
+
+    target, bus = _commissioned(CT)
+    bus.found = [Found(0, 0x02, 0, 0x0700, 1_000_000, 250_000)]  # type: ignore[attr-defined]
+    out = tmp_path / "machine.yaml"
+    text = project_from_bus(bus, None, out)  # type: ignore[arg-type]
+    assert "dc: {assign_activate: 0x0700, cycle_ns: 1000000, sync1_cycle_ns: 250000}" in text, text
+    out.write_text(text, encoding="utf-8")
+    result = load_machine(out)
+    assert not result.findings, [str(f) for f in result.findings]
+    (rd,) = result.slaves
+    assert rd.dc is not None and (rd.dc.assign_activate, rd.dc.sync1_cycle_ns) == (0x0700, 250_000)
+    assert slave_config(rd).dc_sync1_cycle_ns == 250_000
+    bus.found = [replace(bus.found[0], assign_activate=0x0300)]  # type: ignore[attr-defined]
+    assert "sync1_cycle_ns" not in project_from_bus(bus, None, out)  # type: ignore[arg-type]
+
+
+def _as_through_kickcat(bus: object) -> None:
+    """The slaves of ``bus`` as KickCAT's binding gives them: no SII access (the adapter's Unsupported)."""
+    from ecattool.target.base import Unsupported
+
+    def no_sii() -> bytes:
+        raise Unsupported("kickcat: the Python binding gives no SII EEPROM access (use pysoem:IF)")
+
+    for s in bus.slaves:  # type: ignore[attr-defined]
+        s.sii_read = no_sii
+
+
+def test_through_kickcat_the_sii_read_before_the_master_opens_names_the_model(tmp_path: Path) -> None:
+    """Through KickCAT (no SII in its binding) the model by SII name fell back to the first model of the product
+    code: the Digitax ST was written as ``unidrive-sp`` (issue 35, closing note). The SII is now read through each
+    ESC's EEPROM interface (0x0502-0x050F) with raw frames before the master opens, as the DC registers are; here
+    frame by frame through the served simulator's bus engine."""
+    from ecattool.online.bus_state import read_found, with_sii
+    from ecattool.sii.builder import build
+    from ecattool.sim.bus.engine import Bus
+    from ecattool.sim.esc import registers as R
+    from ecattool.sim.slave import VirtualSlave, drive_for_device
+
+    target, bus = _commissioned(CT)
+    _as_through_kickcat(bus)
+    out = tmp_path / "machine.yaml"
+    assert "product: unidrive-sp" in project_from_bus(bus, None, out)  # type: ignore[arg-type]  (no SII: the first)
+    devices = [s.drive.device for s in bus.slaves]  # type: ignore[attr-defined]
+    images = [build(d).to_bytes() for d in devices]
+    escs = [VirtualSlave(drive_for_device(d), image).esc for d, image in zip(devices, images)]
+    escs[0].mem[R.DC_SYNC0_CYCLE:R.DC_SYNC0_CYCLE + 4] = (1_000_000).to_bytes(4, "little")
+    escs[0].mem[R.DC_ACTIVATION] = 0x03  # the drive runs csp on DC, as commissioned
+    engine = Bus(escs)
+    found = with_sii(lambda frame, index: engine.process(frame), read_found(lambda f, i: engine.process(f)) or [])
+    assert [images[0][:len(f.sii or b"")] == f.sii and len(f.sii or b"") > 128 for f in found] == [True]
+    _, bus = _commissioned(CT)
+    _as_through_kickcat(bus)
+    bus.found = found  # type: ignore[attr-defined]
+    text = project_from_bus(bus, None, out)  # type: ignore[arg-type]
+    assert "product: digitax-st" in text, text
+    out.write_text(text, encoding="utf-8")
+    assert not load_machine(out).findings
+
+
+def test_a_slave_without_an_identity_through_the_master_is_named_from_the_sii_read_before(tmp_path: Path) -> None:
+    """KickCAT reads the identity from 1018h: a slave it cannot ask (no mailbox) has the identity of its SII."""
+    from ecattool.errors import SdoTimeout
+    from ecattool.online.bus_state import Found
+
+    _, bus = _commissioned(CT)
+    _as_through_kickcat(bus)
+    image = __import__("ecattool.sii.builder", fromlist=["build"]).build(bus.slaves[0].drive.device).to_bytes()  # type: ignore[attr-defined]
+
+    def no_identity() -> object:
+        raise SdoTimeout(0x1018, 1, 0)
+
+    bus.slaves[0].identity = no_identity  # type: ignore[attr-defined]
+    bus.found = [Found(0, 0x02, sii=image)]  # type: ignore[attr-defined]
+    text = project_from_bus(bus, None, tmp_path / "m.yaml")  # type: ignore[arg-type]
+    assert "product: digitax-st" in text, text

@@ -50,6 +50,7 @@ EXPECTED: dict[str, set[tuple[str, Severity, int, int | None]]] = {
     "prj043_interpolation_period.yaml": {("PRJ043", E, 7, 36)},
     "prj044_period_vs_sync0.yaml": {("PRJ044", W, 6, 45)},
     "prj045_csp_without_dc.yaml": {("PRJ045", W, 7, 11)},
+    "prj046_sync1_without_sync1.yaml": {("PRJ046", W, 6, 70)},
     "prj050_scaling.yaml": {("PRJ050", E, 7, 7)},
     "prj080_technosoft_cycle.yaml": {("PRJ080", E, 7, 45), ("PRJ080", W, 10, 36)},
     "pdo003_twice.yaml": {("PDO003", E, 10, 18)},

@@ -351,6 +351,13 @@ def test_dc_is_resolved_once_per_slave_and_consumers_read_it(monkeypatch: pytest
     device.dc_opmodes = [DcOpMode("Sync01", "", 0x0700, 2_000_000, None, 1000, None, 500_000, None, 100, None)]
     dc = resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="Sync01")}), device)
     assert dc == SlaveDc(0x0700, "Sync01", 2_000_000, 1000, 500_000, 100)
+    # the project's own SYNC1 values override the OpMode's, as cycle_ns does (0: SYNC1 with every SYNC0 pulse)
+    dc = resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="Sync01", sync1_cycle_ns=0,
+                                                              sync1_shift_ns=-20)}), device)
+    assert dc == SlaveDc(0x0700, "Sync01", 2_000_000, 1000, 0, -20)
+    dc = resolve_dc(s.drive.model_copy(update={"dc": DcConfig(assign_activate=0x0700, sync1_cycle_ns=125_000)}),
+                    device)
+    assert dc == SlaveDc(0x0700, None, None, None, 125_000, None)
     assert resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="nope")}), device) is None  # PRJ040's
     assert resolve_dc(s.drive.model_copy(update={"dc": DcConfig(opmode="nope", assign_activate=0)}),
                       device) == SlaveDc(0, "nope", None, None)

@@ -294,3 +294,37 @@ def test_export_prints_the_identity_warnings_of_what_it_writes(capsys, tmp_path)
     # a sample with a real product code exports without a word
     code, _, err = run(capsys, "startup", "export", "--project", str(sample("hdt")), "--format", "json")
     assert code == 0 and "esi-product-zero" not in err
+
+
+def test_sync1_from_the_project_overrides_the_opmode_and_reaches_the_exports(tmp_path):
+    """``dc: {sync1_cycle_ns, sync1_shift_ns}`` (issue 35 item 2: the project format had no SYNC1): explicit values
+    override the OpMode's as ``cycle_ns`` does, and flow into every export that carries SYNC1 (IgH's
+    ecrt_slave_config_dc arguments 4 and 5, the ENI's CycleTime1)."""
+    root = ROOT / "samples"
+    p = write_project(tmp_path, f"""ecattool: 1
+drives:
+  - name: a
+    device: {{esi: {root}/generic_esi/inovance_SV660_EOE_1Axis_V9.12.xml, select: InoSV660N}}
+    dc: {{assign_activate: 0x0700, cycle_ns: 1000000, sync1_cycle_ns: 250000, sync1_shift_ns: -1000}}
+""")
+    (c,) = slave_configs(p)
+    assert (c.dc_assign_activate, c.dc_cycle_ns, c.dc_sync1_cycle_ns, c.dc_sync1_shift_ns) == \
+        (0x0700, 1_000_000, 250_000, -1000)
+    assert "0x0700, 1000000U, 0, 250000U, -1000);" in export([c], "igh", lossy=True)
+    dc = etree.fromstring(export([c], "eni", lossy=True).encode()).find("Config/Slave/DC")
+    assert dc is not None and dc.findtext("CycleTime1") == "250000"
+    (back,) = import_bytes(export([c], "json").encode(), "x.json")  # the round trip keeps both SYNC1 values
+    assert (back.dc_sync1_cycle_ns, back.dc_sync1_shift_ns) == (250_000, -1000)
+
+
+@pytest.mark.parametrize("dc, message", [
+    ("{assign_activate: 0x0700, cycle_ns: 1000000, sync1_cycle_ns: -1}", "sync1_cycle_ns"),
+    ("{assign_activate: 0x0700, cycle_ns: 1000000, sync1_cycle_ns: 4294967296}", "sync1_cycle_ns"),
+    ("{assign_activate: 0x0700, cycle_ns: 1000000, sync1_shift_ns: 5}", "sync1_shift_ns without sync1_cycle_ns"),
+    ("{assign_activate: 0x0700, cycle_ns: 1000000, sync1_cycle: 5}", "sync1_cycle"),
+])
+def test_a_wrong_sync1_value_is_one_located_line(tmp_path, capsys, dc, message):
+    p = write_project(tmp_path, f"ecattool: 1\ndrives:\n  - name: a\n    device: {{profile: hdt}}\n    dc: {dc}\n")
+    code, out, err = run(capsys, "lint", str(p))
+    text = out + err
+    assert code == 1 and message in text and "project.yaml:5" in text and "Traceback" not in text, text

@@ -135,7 +135,7 @@ def test_a_hostile_slave_never_ends_ecattool(tmp_path: Path) -> None:
     reset = running["reset"]
     assert reset["returncode"] == 0 and f"= {_vendor()} " in reset["stdout"]
     assert reset["stderr"] == ("ecattool: note: slave 0 (SAFEOP) was left in PRE-OP: ecattool has no configuration "
-                               "to take it back to SAFEOP\n")
+                               "to take it back to SAFEOP (give the command a project)\n")
     # a slave found in INIT is read (INIT and PRE-OP are not refused) and put back in INIT
     assert running["init"] is True and running["in_init"]["returncode"] == 0, running["in_init"]
     assert running["after_init"] == ["slave 0 (INIT)"]

@@ -4,6 +4,7 @@ namespace that the test makes itself. One subprocess with a timeout; every comma
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 from typing import Any
@@ -132,6 +133,49 @@ def test_audit_reports_nothing_then_exactly_the_three_changes(result: dict[str, 
     kc = r["audit_kickcat"]
     assert kc["returncode"] == 1 and sorted(d["address"] for d in kc["stdout"]["drifts"]) == [
         "0x6081:00", "0x6083:00", "0x6091:01"]
+
+
+def test_a_running_bus_is_refused_and_audit_puts_the_drive_back_where_it_was_found(result: dict[str, Any]) -> None:
+    """Issue 35, done when: "a read on a bus in OP is refused without the reset flag, and with it each slave ends in
+    the state it was found in". The commissioned drive, whose watchdog took it to SAFE-OP (AL status code 0x001B)
+    once commission's process data stopped, is refused in one line; ``audit --reset-bus`` (SOEM's bus init takes it
+    to INIT) configures it again from the project and requests SAFE-OP: an independent raw read of the AL status
+    after the command shows SAFE-OP, without the error. A command without a project (``sdo write``) leaves it in
+    PRE-OP and says so."""
+    r = result["technosoft"]
+    refused = r["audit_refused"]
+    assert refused["returncode"] == 1 and "slave 0 (SAFEOP, error)" in refused["stderr"], refused
+    assert "--reset-bus" in refused["stderr"] and len(refused["stderr"].strip().splitlines()) == 1
+    assert r["states_before"] == [[0, 0x14, 0x001B]]  # SAFE-OP with the error indication, the watchdog's code
+    ok(r["audit_clean"])
+    assert "ecattool: note: slave 0 was put back in SAFEOP as the project configures it" in r["audit_clean"]["stderr"]
+    assert r["states_after"] == [[0, 0x04, 0]]  # SAFE-OP, as found; the error acknowledged
+    first = r["changes"][0]
+    assert "slave 0 (SAFEOP) was left in PRE-OP: ecattool has no configuration" in first["stderr"], first
+
+
+def test_backup_succeeds_10_of_10(result: dict[str, Any]) -> None:
+    """Issue 35 item 5: ``backup`` ten times in a row on the served bus, while the suite loads the machine: every
+    run succeeds and every folder is complete (the same files, the .sw equal to the project's, the SII and the
+    dictionary the first backup wrote)."""
+    r = result["technosoft"]
+    work = Path(result["work"])
+    runs = r["backups"]
+    assert [b["returncode"] for b in runs] == [0] * 10, [b["stderr"] for b in runs if b["returncode"]]
+    first = work / "backup"
+    names = sorted(p.name for p in first.iterdir())
+    for n in range(10):
+        folder = work / f"backup-{n}"
+        assert sorted(p.name for p in folder.iterdir()) == names, n
+        for name in ("00-z_axis.sw", "00-z_axis.sii.bin"):
+            assert (folder / name).read_bytes() == (first / name).read_bytes(), (n, name)
+        objects = json.loads((folder / "00-z_axis.dict.json").read_text())["objects"]
+        assert sorted(objects) == sorted(json.loads((first / "00-z_axis.dict.json").read_text())["objects"]), n
+        manifest = json.loads((folder / "ecattool-backup.json").read_text())
+        assert sorted(manifest["files"]) == [name for name in names if name != "ecattool-backup.json"]
+        for name, entry in manifest["files"].items():  # each file whole, as the manifest recorded it
+            data = (folder / name).read_bytes()
+            assert (len(data), hashlib.sha256(data).hexdigest()) == (entry["bytes"], entry["sha256"]), (n, name)
 
 
 def test_sw_upload_equals_the_sw_and_backup_holds_everything(result: dict[str, Any]) -> None:

@@ -129,6 +129,16 @@ def test_read_commands_on_the_mixed_bus_and_from_bus_commissions_it(mixed: Path,
                                                                   if i not in NO_MAILBOX]
     assert backup["stdout"].count("has no CoE mailbox") == len(NO_MAILBOX)
     assert out["server"] == {"returncode": 0, "stderr": ""}
+    # issue 35, done when: "with [the reset flag] each slave ends in the state it was found in". After commission
+    # every slave was in OP; the drives' watchdogs took them to SAFE-OP (0x001B) once its process data stopped,
+    # the coupler and the terminals (no application) stay in OP. audit and backup, each with a project, put every
+    # slave back where they found it, as the project configures it: the raw reads around them show the same
+    # states, the watchdog's error acknowledged
+    before, after_audit, after_backup = out["states"]
+    assert before is not None and len(before) == len(MIXED), before
+    assert all(al & 0x0F in (0x04, 0x08) for al, _ in before), before  # running: SAFE-OP or OP
+    assert after_audit == after_backup == [[al & 0x0F, 0] for al, _ in before], (before, after_audit, after_backup)
+    assert "was put back in" in audit["stderr"] and "left in PRE-OP" not in audit["stderr"], audit["stderr"]
 
 
 def _selector(devices: list[Any], k: int) -> str:

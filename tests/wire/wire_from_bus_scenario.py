@@ -3,12 +3,14 @@
 
     python wire_from_bus_scenario.py PROJECT DIR   commission PROJECT (a drive in CSP on DC: it ends in OP), then
                                                    project new --from-bus --reset-bus (DIR/from-bus.yaml), lint
-                                                   it, and commission the same bus with it
+                                                   it, and commission the same bus with it; then the same
+                                                   through KickCAT (DIR/from-bus-kickcat.yaml)
 
 Prints one JSON document on stdout. Every wait and loop is bounded (each command has a timeout)."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import subprocess
 import sys
@@ -34,6 +36,11 @@ def main(project: str, folder: str) -> dict[str, Any]:
         runs.append(_ecattool("project", "new", "--from-bus", target, "--reset-bus", "-o", made))
         runs.append(_ecattool("lint", made, "--format", "json"))
         runs.append(_ecattool("commission", made, "--target", target, "--json"))
+        # through KickCAT, whose binding reads no SII: the SII is read through the ESC before the master opens,
+        # and names the model among those sharing the product code
+        if importlib.util.find_spec("kickcat") is not None:
+            runs.append(_ecattool("project", "new", "--from-bus", f"kickcat:{MASTER_IF}", "--reset-bus", "-o",
+                                  str(Path(folder) / "from-bus-kickcat.yaml")))
     finally:
         stopped = stop_server(server)
     return {"ready": ready, "runs": runs, "server": stopped}

@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -27,14 +28,30 @@ ETG2001 = "samples/esi/etg2001_cia402.xml"
 CHANGES = [("0x6081:00", "12345"), ("0x6083:00", "777"), ("0x6091:01", "7")]
 
 
+#: how many backups run in a row on the served bus (issue 35: "backup 10 of 10")
+BACKUPS = 10
+
+
+def al_states() -> list[list[int]] | None:
+    """Each slave's AL status and AL status code on the master's interface, read with one raw frame
+    (ecattool.online.bus_state, as every live-bus command reads them first)."""
+    from ecattool.online.bus_state import read_states
+
+    found = read_states(MASTER_IF)
+    return None if found is None else [[f.position, f.al_status, f.al_status_code] for f in found]
+
+
 def ecattool(*args: str, timeout: int = 240) -> dict[str, Any]:
+    start = time.monotonic()
     done = subprocess.run([sys.executable, "-m", "ecattool", *args], capture_output=True, text=True, timeout=timeout)
+    took = time.monotonic() - start  # reported for the wire time budget, never asserted
     out: Any = done.stdout
     try:
         out = json.loads(done.stdout)
     except ValueError:
         pass
-    return {"args": list(args), "returncode": done.returncode, "stdout": out, "stderr": done.stderr[-1500:]}
+    return {"args": list(args), "returncode": done.returncode, "stdout": out, "stderr": done.stderr[-1500:],
+            "seconds": round(took, 2)}
 
 
 def four(work: Path) -> dict[str, Any]:
@@ -97,13 +114,23 @@ def technosoft(work: Path) -> dict[str, Any]:
     r: dict[str, Any] = {}
     try:
         r["commission"] = ecattool("commission", TECHNOSOFT, "--target", PYSOEM, "--json")
+        # the commissioned drive is running (SAFE-OP once its watchdog saw commission's process data stop): a read
+        # is refused without --reset-bus; with it, audit puts the drive back where it was found, as the project
+        # configures it (issue 35 item 4), which an independent raw read of the AL states shows after the command
+        r["audit_refused"] = ecattool("audit", TECHNOSOFT, "--target", PYSOEM, "--json")
+        r["states_before"] = al_states()
         r["audit_clean"] = ecattool("audit", TECHNOSOFT, "--target", PYSOEM, "--json", "--reset-bus")
-        r["changes"] = [ecattool("sdo", "write", a, v, "--target", PYSOEM) for a, v in CHANGES]
+        r["states_after"] = al_states()
+        r["changes"] = [ecattool("sdo", "write", a, v, "--target", PYSOEM, "--reset-bus") for a, v in CHANGES]
         r["audit_drift"] = ecattool("audit", TECHNOSOFT, "--target", PYSOEM, "--json")
         r["audit_kickcat"] = ecattool("audit", TECHNOSOFT, "--target", KICKCAT, "--json", "--reset-bus")
         r["upload"] = ecattool("sw", "upload", "--project", TECHNOSOFT, "--target", PYSOEM, "-o",
                                str(work / "back.sw"), "--json")
         r["backup"] = ecattool("backup", TECHNOSOFT, "--target", PYSOEM, "-o", str(work / "backup"), "--reset-bus")
+        # issue 35 item 5, "backup 10 of 10 on a loaded machine" (the suite itself loads the machine): ten more
+        # in a row, each its own folder
+        r["backups"] = [ecattool("backup", TECHNOSOFT, "--target", PYSOEM, "-o", str(work / f"backup-{n}"))
+                        for n in range(BACKUPS)]
     finally:
         r["server"] = stop_server(server)
     return r

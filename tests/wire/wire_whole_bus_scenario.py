@@ -9,7 +9,7 @@
                                                           on one served bus, through pysoem: bus scan, project new
                                                           --from-bus (DIR/from-bus.yaml), lint, commission, audit of
                                                           that project (--reset-bus: it is running), backup
-                                                          (DIR/backup)
+                                                          (DIR/backup), the AL states read around both
     python wire_whole_bus_scenario.py commission PROJECT  ecattool commission PROJECT --target pysoem
 
 Prints one JSON document on stdout. Every wait and loop is bounded."""
@@ -131,18 +131,34 @@ def commands(project: str, library: str, folder: str) -> dict[str, Any]:
     made = str(Path(folder) / "from-bus.yaml")
     server, ready = start_server([project])
     runs = []
+    states: list[list[list[int]] | None] = []
     try:
         runs.append(_ecattool("bus", "scan", "--target", target, "--library", library, "--json"))
         runs.append(_ecattool("project", "new", "--from-bus", target, "--library", library, "-o", made))
         runs.append(_ecattool("lint", made, "--format", "json"))
         runs.append(_ecattool("commission", made, "--target", target, "--json"))
         # the commissioned bus is running: opening it again takes --reset-bus (issue 35 item 4, as in
-        # wire_online_scenario.py); audit reads each slave's state before the reset and judges it
+        # wire_online_scenario.py); audit reads each slave's state before the reset and judges it, and puts each
+        # slave back in the state it was found in as the project configures it; so does backup. An independent
+        # raw read of the AL states before and after each shows it
+        states.append(_states())
         runs.append(_ecattool("audit", made, "--target", target, "--json", "--reset-bus"))
-        runs.append(_ecattool("backup", project, "--target", target, "-o", str(Path(folder) / "backup")))
+        states.append(_states())
+        runs.append(_ecattool("backup", project, "--target", target, "-o", str(Path(folder) / "backup"),
+                              "--reset-bus"))
+        states.append(_states())
     finally:
         stopped = stop_server(server)
-    return {"ready": ready, "runs": runs, "server": stopped}
+    return {"ready": ready, "runs": runs, "server": stopped, "states": states}
+
+
+def _states() -> list[list[int]] | None:
+    """Each slave's AL status (state and error indication) and AL status code, one raw read
+    (ecattool.online.bus_state, as every live-bus command reads them before its master opens)."""
+    from ecattool.online.bus_state import read_states
+
+    found = read_states(MASTER_IF)
+    return None if found is None else [[f.al_status, f.al_status_code] for f in found]
 
 
 def commission(project: str) -> dict[str, Any]:
