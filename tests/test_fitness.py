@@ -11,6 +11,9 @@ fails naming the file and line that breaks its claim:
 * every SDO upload through a master outside the simulator gives its size bound (issue 37.1);
 * each master has one adapter module (issue 36.3): only ``target/pysoem.py`` imports pysoem or touches its
   master's and slaves' objects, only ``target/kickcat.py`` KickCAT's; only the opener constructs a target;
+* an import inside a function defers something (issue 36.4: library imports at module level): every module it
+  loads is one its module has not loaded already; the lazy ones left keep a command's start lean or an optional
+  dependency optional;
 * no ``family == "…"`` decision outside the built-in families (``profiles/``) and the simulator's family modules,
   but for today's remaining places, listed below with their counts: the list may only shrink;
 * the CLI is thin (issue 36.4): no function in ``cli/`` runs longer than :data:`CLI_BODY_LINES` lines, but for the
@@ -22,6 +25,7 @@ from __future__ import annotations
 
 import ast
 import functools
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -486,3 +490,94 @@ def test_the_resolver_check_finds_a_planted_call() -> None:
                      "ecattool/cli/planted.py:3 imports the resolver module",
                      "ecattool/cli/planted.py:5 calls resolve_device()",
                      "ecattool/cli/planted.py:6 calls from_esi()"], found
+
+
+# --- a function-level import defers something ------------------------------------------------------------------
+
+def _placement(node: ast.AST, parents: dict[ast.AST, ast.AST]) -> str | None:
+    """"module" for an import run when its module is (top level, not under ``if TYPE_CHECKING:`` or ``try:``),
+    "function" for one inside a function (not guarded by ``try:``: an optional dependency), else None."""
+    inside, parent = "module", parents.get(node)
+    while parent is not None:
+        if isinstance(parent, ast.Try) or (isinstance(parent, ast.If) and "TYPE_CHECKING" in ast.unparse(parent.test)):
+            return None
+        if isinstance(parent, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            inside = "function"
+        parent = parents.get(parent)
+    return inside
+
+
+def _targets(node: ast.Import | ast.ImportFrom, module: str, is_package: bool, mods: dict[str, Path | None]) -> list[str]:
+    """The modules an import statement loads (``from a import b``: ``a.b`` where that is a module, else ``a``)."""
+    if isinstance(node, ast.Import):
+        return [alias.name for alias in node.names]
+    package = module if is_package else module.rpartition(".")[0]
+    source = node.module or ""
+    if node.level:
+        source = ".".join(package.split(".")[:len(package.split(".")) - node.level + 1] + ([source] if source else []))
+    return [f"{source}.{a.name}" if f"{source}.{a.name}" in mods else source for a in node.names]
+
+
+def _with_packages(name: str) -> set[str]:
+    """``a.b.c`` and the packages Python imports before it (``a``, ``a.b``)."""
+    parts = name.split(".")
+    return {".".join(parts[:i]) for i in range(1, len(parts) + 1)}
+
+
+def _imports_by_placement() -> dict[str, dict[str, list[tuple[ast.AST, list[str]]]]]:
+    """Module → {"module"/"function": [(import statement, the modules it loads)], "file": [(None, [its path])]}."""
+    mods = _modules()
+    out: dict[str, dict[str, list[tuple[ast.AST, list[str]]]]] = {}
+    for name, path in mods.items():
+        if path is None:
+            continue
+        tree = _trees()[path.relative_to(PKG).as_posix()]
+        parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
+        rel = path.relative_to(PKG).as_posix()
+        placed: dict[str, list[tuple[ast.AST, list[str]]]] = {"module": [], "function": [], "file": [(tree, [rel])]}
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                where = _placement(node, parents)
+                if where is not None:
+                    placed[where].append((node, _targets(node, name, path.name == "__init__.py", mods)))
+        out[name] = placed
+    return out
+
+
+def imports_that_defer_nothing() -> list[str]:
+    """The imports inside functions whose every module the enclosing module has already loaded when it was
+    imported (its module-level imports, followed through ecattool, with the packages Python imports first): such
+    an import keeps nothing off a start-up path, so it belongs at module level (issue 36.4). A lazy import that
+    loads something new stays: a lean command path, an optional dependency, the scaling package only for a drive
+    with a ``scaling:`` section."""
+    placed = _imports_by_placement()
+
+    @functools.cache
+    def loaded(module: str) -> frozenset[str]:
+        seen: set[str] = set()
+        todo = [module]
+        while todo:
+            current = todo.pop()
+            if current in seen:
+                continue
+            seen.add(current)
+            todo.extend(_with_packages(current) - {current})
+            for _, targets in placed.get(current, {}).get("module", []):
+                for target in targets:
+                    todo.extend(_with_packages(target))
+        return frozenset(seen)
+
+    std = sys.stdlib_module_names
+    found = []
+    for module, by_place in placed.items():
+        for node, targets in by_place["function"]:
+            if all(t.split(".")[0] in std or t.startswith("ecattool") for t in targets) \
+                    and all(t in loaded(module) and t != module for t in targets):
+                found.append(f"{_where(by_place['file'][0][1][0], node)}: {ast.unparse(node)}")
+    return found
+
+
+def test_a_function_level_import_defers_something() -> None:
+    found = imports_that_defer_nothing()
+    assert not found, ("imports inside a function whose modules are loaded at module level already: they defer "
+                       "nothing, import them at the top of the module:\n  " + "\n  ".join(found))
