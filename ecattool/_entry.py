@@ -9,12 +9,12 @@ from __future__ import annotations
 import sys
 from typing import Any
 
+from ecattool import __version__
+
 
 def main(argv: list[str] | None = None) -> Any:
     args = sys.argv[1:] if argv is None else argv
     if args in (["--version"], ["-V"]):
-        from ecattool import __version__
-
         print(f"ecattool, version {__version__}")  # the text click's version option prints
         return 0
     from ecattool.cli import main as cli_main

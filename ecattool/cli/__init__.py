@@ -14,6 +14,7 @@ from typing import Any
 import click
 
 from ecattool import __version__
+from ecattool.errors import EcatToolError
 
 #: command name -> (module, attribute, one-line help)
 COMMANDS: dict[str, tuple[str, str, str]] = {
@@ -108,8 +109,6 @@ def _name_the_flag(message: str, argv: list[str]) -> str:
 
 def main(argv: list[str] | None = None) -> Any:
     """Entry point: run the CLI, turning ecattool errors into one-line messages and exit code 1."""
-    from ecattool.errors import EcatToolError
-
     debug = "--debug" in (argv if argv is not None else sys.argv[1:]) or bool(os.environ.get("ECATTOOL_DEBUG"))
     try:
         return cli.main(args=argv, prog_name="ecattool", standalone_mode=False)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from typing import TYPE_CHECKING
 
 import click
@@ -36,8 +37,6 @@ def scan(target: str, library: str | None, as_json: bool) -> None:
     Reads only. Exit status 1 when a slave is unknown (no library device or family matches it) or its SII and
     1018h identities differ.
     """
-    import sys
-
     from ecattool.online.scan import scan as do_scan
 
     lib = load_library(library)

@@ -7,7 +7,14 @@ from typing import TYPE_CHECKING
 
 import click
 
-from ecattool.cli.common import console, dump_json, file_output_option, output_option, write_output
+from ecattool.cli.common import (
+    check_output,
+    console,
+    dump_json,
+    file_output_option,
+    output_option,
+    write_output,
+)
 from ecattool.cli.online import reset_bus_given, reset_bus_option
 from ecattool.cli.paths import InputFile
 
@@ -85,7 +92,6 @@ def _checked_outputs(projects: tuple[str, ...], *outputs: str | None) -> list[st
     inputs: list[str] = []
     for out in outputs:
         if out not in (None, "-"):
-            from ecattool.cli.common import check_output
             from ecattool.project.loader import project_inputs
 
             inputs = inputs or project_inputs(projects)

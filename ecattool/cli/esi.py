@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from typing import TYPE_CHECKING, Any
 
 import click
@@ -313,8 +314,6 @@ EEPROM image.""")
 @output_option(required=True)
 def export_cmd(source: str, product: str | None, revision: str | None, selector: str | None, output: str) -> None:
     """Write an ESI file for a built-in drive family (technosoft-ipos, hdt, controltechniques) or an EDS."""
-    import os
-
     from ecattool import profiles
     from ecattool.esi.export import device_to_esi
 

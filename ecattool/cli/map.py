@@ -7,10 +7,22 @@ from typing import TYPE_CHECKING
 
 import click
 
-from ecattool.cli.common import (Decorated, console, file_output_option, json_option, output_option, policy_option, print_json,
-                                 store_force, table, write_output)
+from ecattool.cli.common import (
+    Decorated,
+    console,
+    dump_json,
+    file_output_option,
+    json_option,
+    output_option,
+    policy_option,
+    print_json,
+    store_force,
+    table,
+    write_output,
+)
 from ecattool.cli.paths import InputFile
 from ecattool.cli.vocab import WRITE_FORMATS, AliasedOption
+from ecattool.errors import InputError
 
 if TYPE_CHECKING:
     from ecattool.esi.model import Device
@@ -98,7 +110,6 @@ def _setup(esi: str | None, selector: str | None, profile: str | None, product: 
         if rx or tx or mapping_file:
             raise click.UsageError("give the mapping with one of --rx/--tx, --mapping or --startup")
         from ecattool import pdo
-
         from ecattool.startup import import_file, select_one
 
         config = select_one(import_file(startup_file), drive, startup_file)
@@ -125,8 +136,6 @@ def check(esi: str | None, selector: str | None, profile: str | None, product: s
     """Check a PDO mapping statically; exit 1 when an error-level finding exists."""
     from ecattool import pdo
     from ecattool.findings import has_errors
-
-    from ecattool.errors import InputError
 
     device = _load_device(esi, selector, profile, product, revision, policy)
     try:
@@ -213,8 +222,6 @@ def _render_layout(lay: ProcessLayout, dictionary_pdos: list[int], output: str |
     """The process image as JSON (to ``output``), or a table per sync manager and a note per PDO drawn by the
     dictionary's mapping object."""
     if as_json:
-        from ecattool.cli.common import dump_json
-
         doc = lay.to_json()
         if dictionary_pdos:  # drawn by the dictionary's mapping object (esi-pdo-default-differs)
             doc["power_on_from_dictionary"] = [f"0x{i:04X}" for i in dictionary_pdos]
@@ -287,8 +294,6 @@ def _render_sdo(device: Device, seq: StartupList, output: str | None, inputs: tu
                 as_json: bool) -> None:
     """The writes as JSON rows (to ``output``) or a table."""
     if as_json:
-        from ecattool.cli.common import dump_json
-
         rows = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
                  "size": len(c.data), "data": c.data.hex(), "value": f"0x{c.int_value:X}" if not c.complete_access else None,
                  "complete_access": c.complete_access, "comment": c.comment} for c in seq]

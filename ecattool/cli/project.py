@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from ecattool.cli.common import dump_json, output_option, policy_option, write_output
-from ecattool.cli.online import reset_bus_option
+from ecattool.cli.online import open_live, reset_bus_option
 from ecattool.cli.paths import InputFile
 from ecattool.cli.vocab import shared_option
 
@@ -79,7 +81,6 @@ def new(profile: str | None, product: str | None, esi_path: str | None, select: 
         return
     if (profile is None) == (esi_path is None):
         raise click.UsageError("give --profile or --esi (or --from-bus)")
-    from pathlib import Path
 
     from ecattool.project.skeleton import esi_flaws, new_project, resolve
 
@@ -96,7 +97,6 @@ def new(profile: str | None, product: str | None, esi_path: str | None, select: 
 def _new_from_bus(target: str, library: str | None, output: str | None) -> None:
     """``project new --from-bus``: the project of every slave of the live bus, and a warning per slave that did
     not answer (the project holds the others)."""
-    from ecattool.cli.online import open_live
     from ecattool.online.from_bus import project_from_bus
     from ecattool.online.library import Library
 

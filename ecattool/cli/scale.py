@@ -8,20 +8,31 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import click
 
-from ecattool.cli.common import (Decorated, console, file_output_option, json_option, output_option, policy_option, print_json,
-                                 table, write_output)
+from ecattool.cli.common import (
+    Decorated,
+    console,
+    dump_json,
+    file_output_option,
+    json_option,
+    output_option,
+    policy_option,
+    print_json,
+    table,
+    write_output,
+)
 from ecattool.cli.online import reset_bus_given, reset_bus_option
 from ecattool.cli.paths import InputFile
 from ecattool.cli.startup import lossy_option, write_startup
 from ecattool.cli.vocab import WRITE_FORMATS, device_option, shared_option
+from ecattool.errors import InputError, Location, SelectionError
 
 _FAMILIES = ("technosoft-ipos", "hdt", "controltechniques", "generic")
 _STARTUP_FORMATS = WRITE_FORMATS
 
 if TYPE_CHECKING:
+    from ecattool.scaling.exact import Strategy
     from ecattool.scaling.explain import Explanation
     from ecattool.scaling.group import FactorGroup
-    from ecattool.scaling.exact import Strategy
     from ecattool.scaling.spec import Spec
     from ecattool.target.base import SlaveTarget
 
@@ -65,7 +76,6 @@ def _spec(spec: str | None, family: str | None, firmware: str | None, counts: st
           reverse: bool | None,
           approximation: Strategy | None) -> tuple[Spec, str, str | None, Strategy | None]:
     """(the spec the flags say, over SPEC where given; the family, firmware and approximation to use)."""
-    from ecattool.errors import InputError
     from ecattool.scaling.model import length_unit, transmission_from
     from ecattool.scaling.spec import AxisOptions, load_spec, spec_with
 
@@ -197,8 +207,6 @@ def compute_cmd(with_startup: bool, as_json: bool, output: str | None, html: str
 
 def _write_json(group: FactorGroup, with_startup: bool, output: str | None, inputs: tuple[str, ...]) -> None:
     """The group as JSON (with its startup writes where asked for), to ``output`` or stdout."""
-    from ecattool.cli.common import dump_json
-
     data = group.to_json()
     if with_startup:
         data["startup"] = [{"transition": c.transition, "index": f"0x{c.index:04X}", "subindex": c.subindex,
@@ -234,7 +242,6 @@ def startup_cmd(fmt: str, transition: str, lossy: bool, output: str | None, **kw
     group = _compute(kwargs)
     commands = group.startup(transition.upper())
     if not commands:  # e.g. an ESI whose dictionary has none of the factor objects: say so, do not write nothing
-        from ecattool.errors import InputError, Location
 
         raise InputError("the device has none of the scaling objects (608Fh, 6091h-6097h, 60A2h, 60A8h-60ABh); "
                          "no startup list to write", Location(esi) if esi else None)
@@ -273,7 +280,6 @@ def explain_cmd(assignments: tuple[str, ...], family: str, source: str | None, t
                 firmware: str | None, slow_loop: str, counts_per_rev: str | None, as_json: bool,
                 html: str | None) -> None:
     """What one user unit is in counts, and what velocity and acceleration units mean, from object values."""
-    from ecattool.errors import InputError, Location
     from ecattool.scaling import explain
     from ecattool.scaling.explain import read_values, values_from_file
     from ecattool.scaling.model import slow_loop_from
@@ -351,7 +357,6 @@ def _render_explanation(e: Explanation, values: dict[tuple[int, int], int], sour
 def _target_slave(spec: str, family: str, slave: int, firmware: str | None) -> SlaveTarget:
     """The drive at ``slave`` of ``spec`` (a bare 'sim' holds the family's drive), in PRE-OP; the target errors
     name the option they are about."""
-    from ecattool.errors import InputError, SelectionError
     from ecattool.online.targets import open_slave
     from ecattool.scaling.explain import family_drives
     from ecattool.target.opener import SLAVE_TARGET_FORMS, parse_target

@@ -6,8 +6,15 @@ from typing import Any
 
 import click
 
-from ecattool.cli.common import console, dump_json, json_option, output_option, print_json, table, write_output
-from ecattool.cli.paths import InputFile
+from ecattool.cli.common import (
+    console,
+    dump_json,
+    json_option,
+    output_option,
+    print_json,
+    table,
+    write_output,
+)
 from ecattool.cli.online import (
     device_option,
     library_option,
@@ -17,6 +24,7 @@ from ecattool.cli.online import (
     slave_option,
     target_option,
 )
+from ecattool.cli.paths import InputFile
 from ecattool.errors import InputError, TargetError, did_you_mean
 from ecattool.od.numbers import parse_address
 from ecattool.online.dictionary import standard_typed, typed
@@ -135,8 +143,6 @@ def info(target: str, slave: int, library: str | None, device: str | None, as_js
     with open_live(target, dev := load_device(device)) as live:
         t = _typed(live.slave(slave), library, dev)
     if not len(t.dictionary):
-        from ecattool.errors import TargetError
-
         why = t.sdo_info_error or f"slave {slave} offers no SDO Information"
         raise TargetError(f"{why}; and no --device, --library or built-in family describes it: its objects can still "
                           "be read as raw bytes, 'ecattool sdo read INDEX:SUB'")

@@ -20,6 +20,7 @@ from ecattool.cli.common import (
 )
 from ecattool.cli.online import open_live, reset_bus_option
 from ecattool.cli.paths import InputFile
+from ecattool.errors import InputError, TargetError
 
 if TYPE_CHECKING:
     from rich.table import Table
@@ -290,7 +291,6 @@ def _size_arg(size: str | None) -> int | None:
     """--size as a number of bytes an EEPROM can have, checked before the ESI is read (the option's own error)."""
     byte_size = parse_int_arg(size, "EEPROM size") if size is not None else None
     if byte_size is not None:
-        from ecattool.errors import InputError
         from ecattool.sii.builder import size_word_for
 
         try:
@@ -354,8 +354,6 @@ def read_cmd(target: str, slave: int, output: str, unchecked: bool) -> None:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         text = f"slave {slave}: the SII read does not check out: {problems[0]}{more}"
         if not unchecked:
-            from ecattool.errors import TargetError
-
             raise TargetError(f"{text}; nothing written (--unchecked saves it anyway)")
         click.echo(f"ecattool: warning: {text}; saved as read (--unchecked)", err=True)
     write_output(output, data)
@@ -395,8 +393,6 @@ def write_cmd(image: str, target: str, slave: int, backup: str, any_identity: bo
     with open_live(target) as live:
         problems = sii_write(live.slave(slave), data, image, backup, any_identity, overwrite_backup=force_requested())
     if problems:
-        from ecattool.errors import InputError
-
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         raise InputError(f"refused, nothing written: {problems[0]}{more}")
     click.echo(f"written; the old image is in {backup}")

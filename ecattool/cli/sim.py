@@ -9,8 +9,18 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from ecattool.cli.common import console, json_option, output_option, policy_option, print_json, table, write_output
+from ecattool.cli.common import (
+    console,
+    dump_json,
+    json_option,
+    output_option,
+    policy_option,
+    print_json,
+    table,
+    write_output,
+)
 from ecattool.cli.paths import InputFile
+from ecattool.errors import EcatToolError, Location, TargetError
 
 if TYPE_CHECKING:
     from ecattool.esi.model import Device
@@ -117,7 +127,6 @@ def _value_text(drive: Drive, ln: Line) -> tuple[str, bool]:
     plain = f" = {ln.value!r}" if ln.value is not None else ""
     if not ln.data or not (isinstance(ln.value, int) or (ln.value is None and ln.op == "write")):
         return plain, False
-    from ecattool.errors import EcatToolError
     from ecattool.od.display import value_text
     from ecattool.od.numbers import parse_address
     from ecattool.sim.cia402 import decode_statusword
@@ -173,15 +182,11 @@ def run_cmd(source: str, script: str, product: str | None, revision: str | None,
     steps, locations = load_script(script)
     tr = run_script(drive, steps, locations, script, Path(script).parent)
     if as_json:
-        from ecattool.cli.common import dump_json
-
         write_output(output, dump_json(tr.to_json()) + "\n", [script, source])
     else:
         write_output(output, _transcript_text(drive, tr), [script, source])
     failure = tr.failure
     if failure is not None:
-        from ecattool.errors import Location, TargetError
-
         code = f" 0x{failure.code:08X}" if failure.code is not None else ""
         raise TargetError(f"step {failure.step} ({failure.op} {failure.target}) ended with {failure.result}{code}"
                           + (f": {failure.detail}" if failure.detail else ""), Location(script, failure.line))

@@ -6,8 +6,17 @@ from typing import TYPE_CHECKING
 
 import click
 
-from ecattool.cli.common import Decorated, console, json_option, output_option, print_json, table, write_output
+from ecattool.cli.common import (
+    Decorated,
+    console,
+    json_option,
+    output_option,
+    print_json,
+    table,
+    write_output,
+)
 from ecattool.cli.paths import InputFile
+from ecattool.errors import InputError, Location
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -57,7 +66,6 @@ def _read(path: str, fmt: str | None) -> list[SlaveConfig]:
 def _report_import(configs: list[SlaveConfig], source: str) -> None:
     """Every note the import made goes to stderr (what was skipped or reinterpreted); a source that gives
     nothing to convert is an error, not an empty file and exit 0."""
-    from ecattool.errors import InputError, Location
     from ecattool.findings import Severity
 
     notes = [n for c in configs for n in c.notes]

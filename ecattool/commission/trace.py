@@ -11,13 +11,14 @@ object that cannot be sampled is dropped from the samples, not reported as a fai
 from __future__ import annotations
 
 import time
-
 from collections.abc import Container
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Protocol
 
+from ecattool.commission.cia402 import state_of
 from ecattool.errors import EcatToolError
+from ecattool.profiles.rules import interpolation_period_ns
 
 if TYPE_CHECKING:
     from ecattool.findings import Finding
@@ -274,8 +275,6 @@ class DriveTrace:
         move, a sample."""
         self.cycles += 1
         if (0x6041, 0) in io.in_pos:
-            from ecattool.commission.cia402 import state_of
-
             sw = io.read(0x6041, 0)
             state = state_of(sw)
             last = next((e for e in reversed(self.events) if e.layer == "cia402"), None)
@@ -309,7 +308,6 @@ class DriveTrace:
         None where it has none or will not tell."""
         if not io.has(0x60C2, 1):
             return None
-        from ecattool.profiles.rules import interpolation_period_ns
 
         try:
             base, exponent = io.read(0x60C2, 1), io.read(0x60C2, 2)

@@ -24,6 +24,7 @@ from typing import Any
 
 from lxml import etree
 
+from ecattool.errors import EncodeError
 from ecattool.esi.model import Device, Pdo
 from ecattool.od.model import MAILBOX_STATES, EcState, Entry, ObjectCode, OdObject
 from ecattool.od.types import BY_CODE, Kind, lookup
@@ -434,8 +435,6 @@ def check_own_output(root: Any, device: Device) -> None:
     checked here, and every ``esi export`` is checked): DataType names unique (DataTypeKey), SubItem names
     unique within a DataType (SubItemKey), and every DataType a BaseType, SubItem or Object names defined
     (BaseTypeRef, SubItemTypeRef, ObjectTypesRef). An ESI that breaks one is never returned: EncodeError."""
-    from ecattool.errors import EncodeError
-
     label = device.type_name or device.name or "device"
     for dictionary in root.iter("Dictionary"):
         defined: set[str] = set()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ecattool.errors import EcatToolError, InputError, Location
+from ecattool.errors import EcatToolError, InputError, Location, XmlSecurityError
 from ecattool.findings import Finding, Severity
 
 #: root element → schema file name
@@ -55,8 +55,6 @@ def validate(path: str | Path, schema_dir: str | Path | None = None) -> list[Fin
     from ecattool.esi.checks import check_structure
     from ecattool.esi.reader import _read, load_bytes
     from ecattool.xmlsafe import parse_xml
-
-    from ecattool.errors import XmlSecurityError
 
     p = Path(path)
     data = _read(p)

@@ -7,11 +7,10 @@ from collections.abc import Iterator
 from enum import Enum
 from typing import Any
 
-from ecattool.errors import Location
+from ecattool.errors import EncodeError, Location
 from ecattool.od.standard import CIA402_NAMES
 from ecattool.od.types import DataType, Kind
 from ecattool.record import FrozenRecord, Record, set_field
-
 
 _AL_CODES = {"INIT": 1, "PREOP": 2, "BOOT": 3, "SAFEOP": 4, "OP": 8}
 
@@ -193,8 +192,6 @@ class Entry(Record):
     def encode(self, value: Any) -> bytes:
         """Encode ``value`` with this entry's exact size; raises EncodeError on type/range problems."""
         if self.datatype is None:
-            from ecattool.errors import EncodeError
-
             raise EncodeError(f"entry {self.name!r} has an unknown data type {self.type_name!r}")
         if self.datatype.bits is None or self.datatype.kind in (Kind.BITS, Kind.BOOL):
             return self.datatype.encode(value, self.bit_size)

@@ -13,18 +13,19 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, TypedDict, cast
 
+from ecattool.abort import al_status_text
 from ecattool.errors import Location, SdoAbort, TargetError
 from ecattool.esi.model import Identity
-from ecattool.od.model import EcState
-from ecattool.target.isolated import MasterGone
-from ecattool.target.base import LiveSlave, entry_size
 from ecattool.findings import Finding, Severity
+from ecattool.od.model import EcState
 from ecattool.online.dictionary import decode
 from ecattool.online.live import LiveBus, describe_slave
 from ecattool.online.objects import address
 from ecattool.project.machine import Machine
 from ecattool.project.slave import Slave
 from ecattool.startup.model import StartupCommand
+from ecattool.target.base import LiveSlave, entry_size
+from ecattool.target.isolated import MasterGone
 
 if TYPE_CHECKING:
     from ecattool.online.bus_state import Found
@@ -167,7 +168,6 @@ def state_drift(rd: Slave, found: Found) -> Drift | None:
     """A drive found (before the master reset the bus) in INIT or BOOT, or with the AL error indication: the project
     expects every drive at least in PRE-OP with its mailbox running and no error (commissioning takes it on). A
     drive in SAFE-OP with the watchdog's code 0x001B is one whose master stopped: not drift."""
-    from ecattool.abort import al_status_text
     from ecattool.online.bus_state import RUNNING
 
     state = found.state

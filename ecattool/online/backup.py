@@ -25,8 +25,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
-from ecattool.errors import InputError, Location, TargetError
+from ecattool.errors import InputError, Location, SdoAbort, TargetError
 from ecattool.esi.model import Identity
+from ecattool.od.model import MAILBOX_STATES
 from ecattool.online.dictionary import typed
 from ecattool.online.live import LiveBus, describe_slave, sii_facts
 from ecattool.online.objects import dump
@@ -59,8 +60,6 @@ def _safe(name: str) -> str:
 def _identity_1018(slave: LiveSlave) -> Identity:
     """The identity object 1018h:01-03 (vendor, product code, revision) as the slave's CoE reports it; the
     identity the master read from the SII where the slave has no 1018h (an SDO abort)."""
-    from ecattool.errors import SdoAbort
-
     values = []
     for sub in (1, 2, 3):
         try:
@@ -76,7 +75,6 @@ def _identity_1018(slave: LiveSlave) -> Identity:
 def _check_identity(rd: Slave, slave: LiveSlave, sdo: bool = True) -> None:
     """The slave at the drive's position is the project's device (the fields its ``identity:`` checks): by 1018h,
     or without ``sdo`` (a slave without a CoE mailbox) by the identity its SII holds."""
-    from ecattool.od.model import MAILBOX_STATES
     from ecattool.online.audit import identity_differences
 
     if sdo:

@@ -21,8 +21,8 @@ from typing import Any
 
 from ecattool.errors import TargetError
 from ecattool.od.model import EcState
-from ecattool.sim.bus.frame import Cmd, Datagram, FrameError, make_frame, parse_frame
 from ecattool.sim.bus import raw
+from ecattool.sim.bus.frame import Cmd, Datagram, FrameError, make_frame, parse_frame
 from ecattool.target.base import Unsupported
 
 #: the AL status register (ETG.1000.4, 0x0130): bits 0-3 the state, bit 4 the error indication
@@ -221,8 +221,6 @@ def sii_words(exchange: Exchange, position: int) -> Callable[[int], bytes]:
     raw frames (auto-increment addressing: before the master assigns station addresses): the read command with
     the word address in one write of 0x0502-0x0507, then the status and the data read together until the
     EEPROM is not busy; 8 octets where the status says the ESC reads 8, else 4 (as SOEM's ``ec_readeeprom``)."""
-    from ecattool.sim.bus.frame import Cmd, Datagram, make_frame, parse_frame
-
     def read_words(word: int) -> bytes:
         start = EE_CMD_READ.to_bytes(2, "little") + word.to_bytes(4, "little")
         got = exchange(make_frame([Datagram.make(Cmd.APWR, -position, EEPROM_CONTROL, start, index=0x54)],
@@ -254,10 +252,7 @@ def with_sii(exchange: Exchange, found: list[Found]) -> list[Found]:
     (:func:`sii_words`, :func:`ecattool.sii.eeprom.read_sii`: the fixed area, then the categories to the end
     marker) before a master whose binding reads no SII (KickCAT's) opens the bus. The master is given the EEPROM
     first (0x0500 := 0); a slave whose EEPROM does not answer keeps None."""
-    from dataclasses import replace
-
     from ecattool.sii.eeprom import read_sii
-    from ecattool.sim.bus.frame import Cmd, Datagram, make_frame
 
     out = list(found)
     for k, f in enumerate(found):

@@ -10,7 +10,7 @@ from typing import Any
 from ecattool.abort import al_status_text
 from ecattool.errors import EcatToolError, SdoAbort
 from ecattool.esi.model import Identity
-from ecattool.online.library import Library, Match, family_match
+from ecattool.online.library import Library, Match, family_device, family_match
 from ecattool.online.live import LiveBus, sii_facts
 from ecattool.target.base import Unsupported
 
@@ -118,8 +118,6 @@ def scan_slave(slave: Any, library: Library | None = None) -> ScannedSlave:
 
 
 def _dc_from_match(match: Match, library: Library | None) -> bool | None:
-    from ecattool.online.library import family_device
-
     try:
         dev = library.device(match) if match.kind == "esi" and library is not None else family_device(match)
     except EcatToolError:

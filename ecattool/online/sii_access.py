@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ecattool.errors import InputError, Location
+from ecattool.errors import InputError, Location, TargetError
 from ecattool.findings import Finding, Severity
 
 
@@ -84,8 +84,6 @@ def read_problems(data: bytes) -> list[str]:
 def read_checked(slave: Any) -> bytes:
     """The slave's SII image, checked by :func:`read_problems`: a :class:`TargetError` naming the slave and the
     first problem when it does not check out."""
-    from ecattool.errors import TargetError
-
     data: bytes = slave.sii_read()
     problems = read_problems(data)
     if problems:

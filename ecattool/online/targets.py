@@ -15,7 +15,7 @@ from ecattool.online.bus_state import PutBack
 from ecattool.online.live import LiveBus
 from ecattool.target.base import LiveSlave, SlaveTarget, Target
 from ecattool.target.isolated import MasterProcess, RemoteSlave
-from ecattool.target.opener import MASTERS, open_master, open_target, parse_target
+from ecattool.target.opener import MASTERS, open_master, open_target, parse_target, slave_at
 from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, BusLimits, bus_limits
 
 
@@ -139,8 +139,6 @@ def open_slave(spec: str, devices: Sequence[Device], position: int, reset_bus: b
     simulates, and whose timeouts a real bus takes). A bare ``sim`` holds just those devices: its first drive
     answers as the slave asked for (its ``position`` is ``position``). ``in_preop``: a simulated slave is taken to
     PRE-OP first (it starts in INIT; a real master opens its slaves in PRE-OP)."""
-    from ecattool.target.opener import slave_at
-
     parsed = parse_target(spec)
     tgt = open_guarded(spec, devices, reset_bus)
     if not parsed.own_slaves:
@@ -149,7 +147,5 @@ def open_slave(spec: str, devices: Sequence[Device], position: int, reset_bus: b
         found = slave_at(tgt, 0)
         found.position = position
     if in_preop and parsed.kind == "sim":
-        from ecattool.od.model import EcState
-
         found.request_state(EcState.PREOP)
     return found

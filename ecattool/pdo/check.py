@@ -21,10 +21,13 @@ from ecattool.pdo.model import (
     TX_RANGE,
     MappedPdo,
     Mapping,
+    declared_mapping,
     default_mapping,
     entry_keys,
+    mapping_from_config,
     pdo_direction,
     power_on_entries,
+    programs_pdos,
     without_virtual,
 )
 from ecattool.pdo.program import resolve_rules
@@ -503,8 +506,6 @@ def check_config(
     """Check a master configuration (:class:`ecattool.startup.SlaveConfig`): the mapping it leaves the drive
     with (:func:`ecattool.pdo.model.mapping_from_config`), its other startup SDOs (PDO021), and whether the
     entries it declares sit where its startup SDOs put them (PDO028)."""
-    from ecattool.pdo.model import declared_mapping, mapping_from_config, programs_pdos
-
     mapping = mapping_from_config(config, device)
     others = [c for c in config.commands if c.index not in (0x1C12, 0x1C13) and pdo_direction(c.index) is None]
     findings = check(device, mapping, rules=rules, startup=others)

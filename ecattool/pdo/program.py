@@ -23,6 +23,7 @@ from collections.abc import Iterable
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device, Direction
 from ecattool.pdo.model import MappedPdo, Mapping, default_mapping, entry_keys, without_virtual
+from ecattool.profiles import rules_for
 from ecattool.profiles.rules import FamilyRules
 from ecattool.startup.model import StartupCommand, StartupList
 
@@ -57,7 +58,6 @@ def resolve_rules(device: Device, rules: FamilyRules | None) -> FamilyRules:
     """The family rules to use: the given ones, else the device family's (``ecattool.profiles.rules_for``)."""
     if rules is not None:
         return rules
-    from ecattool.profiles import rules_for
 
     return rules_for(device)
 

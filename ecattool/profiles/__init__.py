@@ -20,6 +20,7 @@ Example::
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from dataclasses import replace
 from types import ModuleType
@@ -51,8 +52,6 @@ _ALIASES = {
 
 
 def _module(name: str) -> ModuleType:
-    import importlib
-
     return importlib.import_module(f"ecattool.profiles.{_MODULES[name]}")
 
 

@@ -13,7 +13,7 @@ import copy
 from ecattool.errors import Location
 from ecattool.esi.model import Device, Direction, InitCmd, Module, Pdo, Slot
 from ecattool.od.model import RO, Access, Entry, ObjectCode, ObjectDictionary, OdObject
-from ecattool.od.types import STRING, UDINT, UINT, USINT, DataType
+from ecattool.od.types import STRING, UDINT, UINT, USINT, DataType, for_size, lookup
 from ecattool.profiles.rules import FamilyRules
 
 #: SM kinds → 1C00h communication type values (ETG.1000.6: 1 mailbox out, 2 mailbox in, 3 outputs, 4 inputs)
@@ -198,8 +198,6 @@ def complete_generic(device: Device) -> Device:
 
 def _add_mapped_objects(od: ObjectDictionary, device: Device, where: str) -> None:
     """Objects that a PDO maps but the ESI's dictionary lacks, from the PDO entry (name, type, bit length)."""
-    from ecattool.od.types import for_size, lookup
-
     for p in (*device.rx_pdos, *device.tx_pdos):
         for e in p.entries:
             if e.is_gap or od.entry(e.index, e.subindex) is not None or e.index < 0x1000:

@@ -25,7 +25,9 @@ import copy
 import os
 from pathlib import Path
 
+from ecattool import esi
 from ecattool.esi.model import Device
+from ecattool.profiles import load
 from ecattool.profiles.generic import complete_generic
 
 __all__ = ["RunningDevice", "as_running", "device_from_file", "device_from_profile", "is_device_file",
@@ -68,16 +70,12 @@ def device_from_file(path: str | Path, selector: str | None = None, revision: st
     """The device ``selector`` (type name, product[:revision] or list index) of the ESI/EDS file at ``path``, as
     it runs. ``revision`` narrows a ``selector`` to that revision (``selector:revision``); ``policy`` is the
     revision policy of :func:`ecattool.esi.select`."""
-    from ecattool import esi
-
     sel = f"{selector}:{revision}" if selector and revision is not None and revision != "" else selector
     return as_running(esi.load_device(path, sel, policy))
 
 
 def device_from_profile(name: str, product: str | None = None, revision: str | int | None = None) -> RunningDevice:
     """A built-in family's device (:func:`ecattool.profiles.load`), marked as it runs."""
-    from ecattool.profiles import load
-
     return as_running(load(name, product=product, revision=revision))
 
 

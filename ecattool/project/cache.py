@@ -31,10 +31,13 @@ import pickle
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ecattool import __version__
+from ecattool import __version__, esi
+from ecattool.esi import model as esi_model
 from ecattool.esi.model import EsiFile
 from ecattool.fileio import read_bytes, write_atomic
 from ecattool.findings import Finding
+from ecattool.od import model as od_model
+from ecattool.record import Record
 
 if TYPE_CHECKING:
     from ecattool.profiles.running import RunningDevice
@@ -59,10 +62,6 @@ def _model_layout() -> bytes:
     """The field names of every model record a cache entry pickles: an entry written by a build whose model had
     other fields (a development checkout between versions) gets another key instead of unpickling into objects
     that lack a field."""
-    from ecattool.esi import model as esi_model
-    from ecattool.od import model as od_model
-    from ecattool.record import Record
-
     classes = [c for m in (esi_model, od_model) for c in vars(m).values()
                if isinstance(c, type) and issubclass(c, Record) and c.__module__ == m.__name__]
     return repr(sorted((c.__qualname__, c._fields) for c in classes)).encode()
@@ -153,8 +152,6 @@ def _references_signature(path: str | Path, data: bytes) -> bytes:
 
 
 def _esi(path: str | Path) -> EsiFile:
-    from ecattool import esi
-
     key, data = _content_key(path)
     # by path too: the file's locations (and the device and check entries derived from it) name its path; the
     # same content at another path (a copy) is another file
@@ -178,7 +175,6 @@ def load_device_cached(path: str | Path, select: str | None, policy: str) -> Run
     """The device ``select`` of the ESI at ``path`` as it runs (``profiles.running.as_running``), with a
     memory and disk cache keyed by the ESI content, the selector, the policy and the path. Shared: do not
     modify the returned device."""
-    from ecattool import esi
     from ecattool.profiles.running import RunningDevice, as_running
 
     content, _ = _content_key(path)
@@ -197,7 +193,6 @@ def load_device_cached(path: str | Path, select: str | None, policy: str) -> Run
 def esi_findings_cached(path: str | Path, select: str | None, policy: str) -> list[Finding]:
     """The reader's findings about numbers inside the device ``select`` of the ESI at ``path`` (``esi-number-*`` of
     ``esi.device_findings``: identifiers read with a tolerated spelling) and its structural findings (``esi.checks.check_device``), not those of the file's other devices, with a memory and disk cache (content, selector, policy and path)."""
-    from ecattool import esi
     from ecattool.esi.checks import check_device
 
     content, _ = _content_key(path)

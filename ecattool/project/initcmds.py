@@ -16,9 +16,10 @@ from __future__ import annotations
 from ecattool.errors import EcatToolError, InputError
 from ecattool.esi.model import Device
 from ecattool.od.model import EcState
+from ecattool.profiles.generic import init_cmds
+from ecattool.profiles.rules import FamilyRules
 from ecattool.project.loader import LoadedProject
 from ecattool.project.model import Parameter
-from ecattool.profiles.rules import FamilyRules
 from ecattool.project.resolve import TRANSITION_STATE, encode_parameter, resolve_address
 from ecattool.project.slave import Found
 from ecattool.startup.model import TRANSITIONS, StartupCommand
@@ -32,8 +33,6 @@ def esi_startup(device: Device) -> list[StartupCommand]:
     """The CoE init commands of ``device`` (its own and its default modules', see
     :func:`ecattool.profiles.generic.init_cmds`) as startup commands: one per transition it names, in
     transition order (IP before PS before SO …), each located at its ESI line."""
-    from ecattool.profiles.generic import init_cmds
-
     out: list[StartupCommand] = []
     for cmd in init_cmds(device):
         if cmd.protocol != "CoE":

@@ -33,7 +33,7 @@ from ecattool.project.resolve import resolve_dc, resolve_device, resolve_paramet
 from ecattool.project.rules import disable
 from ecattool.project.slave import Slave, SlaveDc, SlaveKind, is_axis
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.install import KickcatBus, MasterKind, PysoemMaster
+from ecattool.startup.install import KickcatBus, MasterKind, PysoemMaster, install
 from ecattool.startup.model import StartupCommand, StartupList
 from ecattool.yamlloc import LocatedYaml
 
@@ -173,8 +173,6 @@ class Machine:
         (:func:`ecattool.startup.install.install`): a ``pysoem.Master`` after ``config_init()`` gets a
         ``config_func`` per slave; a ``kickcat.Bus`` after ``init()`` is written at once. Returns the positions
         configured; refused on lint errors unless ``allow_errors``."""
-        from ecattool.startup.install import install
-
         self.refuse_errors("install the startup list", allow_errors=allow_errors)
         return install([slave_config(s) for s in self.in_bus_order()], master, kind=kind,
                        exact_revision=exact_revision, module=module)

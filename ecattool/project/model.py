@@ -7,9 +7,19 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Annotated, Any, Literal, get_args
 
-from pydantic import (BaseModel, ConfigDict, Field, GetJsonSchemaHandler, SkipValidation, ValidationInfo, field_validator,
-                      model_validator)
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    GetJsonSchemaHandler,
+    SkipValidation,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 from pydantic.json_schema import JsonSchemaValue
+
+from ecattool.errors import InputError, SelectionError
 
 if TYPE_CHECKING:
     from ecattool.scaling.model import ScalingSection
@@ -176,7 +186,6 @@ class DcConfig(_Strict):
         """AssignActivate is the 16-bit register 0x0980: checked where it is read."""
         if value is None:
             return value
-        from ecattool.errors import InputError
         from ecattool.od.numbers import parse_int
 
         try:
@@ -318,7 +327,6 @@ class Project(_Strict):
     def _target(cls, v: str) -> str:
         """A spec commission can open for this project (ecattool.target.opener): its own drives simulated, or a
         real master; lint says so, not commission."""
-        from ecattool.errors import SelectionError
         from ecattool.target.opener import parse_target
 
         try:

@@ -14,12 +14,12 @@ from ecattool.errors import EcatToolError, EncodeError, InputError, Location
 from ecattool.esi.model import Device
 from ecattool.fileio import named_file_problem
 from ecattool.findings import Finding, Severity
-from ecattool.od.model import EcState, Entry
+from ecattool.od.model import EcState, Entry, normalize_name
 from ecattool.od.numbers import parse_address, parse_int
 from ecattool.od.types import Kind
+from ecattool.profiles.rules import NO_RULES
 from ecattool.project.loader import LoadedProject
 from ecattool.project.model import Drive, Parameter
-from ecattool.profiles.rules import NO_RULES
 from ecattool.project.slave import Found, SlaveDc
 from ecattool.startup.model import StartupCommand
 
@@ -143,8 +143,6 @@ def _coerce(entry: Entry, value: WrittenValue, location: Location) -> int | floa
         if dt is not None and dt.kind in (Kind.STRING, Kind.UNICODE, Kind.OCTETS):
             return value
         if entry.enum:
-            from ecattool.od.model import normalize_name
-
             for k, name in entry.enum.items():
                 if normalize_name(name) == normalize_name(v):
                     return k

@@ -13,8 +13,11 @@ import json
 import re
 from pathlib import Path
 
-from ecattool.esi.model import Device
-from ecattool.findings import Finding
+from ecattool import profiles
+from ecattool.errors import EcatToolError, InputError
+from ecattool.esi.model import Device, Direction
+from ecattool.findings import Finding, Severity
+from ecattool.od.model import EcState
 from ecattool.profiles.rules import FamilyRules
 
 _PLAIN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-/]*")
@@ -46,8 +49,6 @@ def resolve(profile: str | None, product: str | None, esi: str | None, select: s
 
     problem = named_file_problem(path)  # a FIFO, a device, a directory, a name too long: never opened
     if problem is not None:
-        from ecattool.errors import InputError
-
         if problem == "not found":
             raise InputError(f"ESI file {esi!r} not found (looked in {path}; --esi is relative to the project file)")
         from ecattool.project.resolve import _shown
@@ -68,7 +69,6 @@ def new_project(device: Device, *, name: str | None = None, profile: str | None 
                 findings: list[Finding] | None = None) -> str:
     """The text of a minimal project with one drive of ``device``, named as the user named it; ``findings``:
     the ESI's structural findings (:func:`esi_flaws`), pointed out where they concern the PDOs in use."""
-    from ecattool import profiles
     from ecattool.project.slave import is_axis
 
     if name is None:  # a CiA-402 axis or an I/O slave (docs/project.md, "Axes and I/O slaves")
@@ -96,12 +96,8 @@ def _pdo(device: Device) -> str:
     """``pdo:`` for a device whose dictionary's mapping objects hold another power-on mapping than its ESI's PDO
     list (lint PRJ027): the PDO list of each such direction, the differing PDOs with their entries, so that
     commission programs the mapping lint checks; with a comment saying why. Nothing where they agree."""
-    from ecattool.pdo import default_mapping, entry_text
+    from ecattool.pdo import MappedPdo, check, default_mapping, entry_text
     from ecattool.project.steps import dictionary_mapping_differences
-
-    from ecattool.esi.model import Direction
-    from ecattool.pdo import MappedPdo, check
-    from ecattool.findings import Severity
 
     mapping = default_mapping(device)
     diffs = dictionary_mapping_differences(device, mapping)
@@ -180,7 +176,6 @@ def _dc(device: Device) -> str:
 def _accept_flaws(device: Device, findings: list[Finding]) -> str:
     """Commented-out ``disable_rules`` for the vendor ESI's own flaws in the PDOs this drive uses by default
     (lint reports them as errors; only the user can say the drive has the objects the file leaves out)."""
-    from ecattool.findings import Severity
     from ecattool.pdo import default_mapping
 
     mapping = default_mapping(device)
@@ -204,8 +199,6 @@ _PROFILE = ((0x6081, 10_000, "profile velocity, slow (drive units until a scalin
 def _motion(device: Device, rules: FamilyRules) -> str:
     """The parameters: and move: lines (or a comment saying why there are none)."""
     modes = tuple(rules.supported_modes or ())
-    from ecattool.esi.model import Direction
-    from ecattool.od.model import EcState
     from ecattool.pdo import default_mapping
     from ecattool.project.slave import is_axis
 
@@ -258,7 +251,6 @@ _ONE = {(0x608F, 2), (0x6091, 1), (0x6091, 2), (0x6092, 2)}
 def _factor_parts(device: Device, rx: set[tuple[int, int]], rules: FamilyRules) -> tuple[list[str], str]:
     """Parameters for the zero parts of the position factor the ESI's defaults leave (lint PRJ023) that the
     skeleton can set, and a comment asking for those it cannot."""
-    from ecattool.errors import EcatToolError
     from ecattool.project.steps import zero_factor_parts
 
     if rules.family not in ("generic", "controltechniques"):

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, Literal
 
-from ecattool.errors import Location
+from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device
 from ecattool.findings import Finding, Severity
 from ecattool.project.model import Drive
@@ -116,8 +116,6 @@ class Slave:
     def require_device(self) -> Device:
         """The device as it runs; an InputError where it did not resolve (the slave's findings say why)."""
         if self.device is None:
-            from ecattool.errors import InputError
-
             raise InputError(f"drive {self.name!r}: the device did not resolve (see `ecattool lint`)")
         return self.device
 

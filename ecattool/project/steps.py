@@ -10,12 +10,15 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, NamedTuple
 
-from ecattool.errors import EcatToolError, Location
+from ecattool import pdo
+from ecattool.errors import EcatToolError, EncodeError, Location
 from ecattool.esi.model import Device, Direction
 from ecattool.esi.power_on import without_trailing_padding
+from ecattool.fileio import named_file_problem
 from ecattool.findings import Finding, Severity
-from ecattool.profiles.rules import FamilyRules, NO_RULES
 from ecattool.pdo.model import Mapping, without_virtual
+from ecattool.pdo.program import rewritten
+from ecattool.profiles.rules import NO_RULES, FamilyRules, interpolation_period_ns
 from ecattool.project.loader import LoadedProject
 from ecattool.project.model import Drive
 from ecattool.project.slave import Found, Slave
@@ -44,8 +47,6 @@ class PdoResolved(NamedTuple):
 def pdo_commands(lp: LoadedProject, i: int, device: Device, rules: FamilyRules | None,
                  params: list[StartupCommand]) -> PdoResolved:
     """Check the drive's PDO configuration (or its default) and program it."""
-    from ecattool import pdo
-
     found = Found()
     cfg = lp.project.drives[i].pdo
     loc = lp.drive_location(i, "pdo")
@@ -125,7 +126,6 @@ def resolve_sw(lp: LoadedProject, i: int, device: Device) -> tuple[SwImage | Non
     if device.vendor_id != 0x1A3:
         found.warning("PRJ031", f".sw images are Technosoft setups; {device.type_name} is vendor 0x{device.vendor_id:X}", loc)
     path = lp.resolve(cfg.file)
-    from ecattool.fileio import named_file_problem
     from ecattool.project.resolve import _shown
 
     problem = named_file_problem(path)  # a FIFO, a device, a directory, a name too long: never opened
@@ -232,7 +232,6 @@ def check_move(lp: LoadedProject, i: int, slave: Slave) -> Found:
         return found
     if mode != "pp" or slave.drive.sw_config is not None:  # a Technosoft setup image may hold them
         return found
-    from ecattool.esi.model import Direction
 
     written = {(c.index, c.subindex) for c in slave.startup}
     mapped = {(e.index, e.subindex) for p in (slave.mapping.pdos(Direction.RX) if slave.mapping is not None else ())
@@ -255,10 +254,6 @@ def _move_fits(lp: LoadedProject, i: int, slave: Slave, mode: str, found: Found)
     """PRJ024: the move's target (the actual position, 0 after power-on, plus the distance) must be a value of
     the target position 607Ah's data type and lie within the software position limits 607Dh where the device
     sets them; commission would otherwise fail writing 607Ah (or the drive would stop at the limit)."""
-    from fractions import Fraction
-
-    from ecattool.errors import EncodeError
-
     assert slave.device is not None and slave.drive.move is not None
     loc = lp.drive_location(i, "move", "distance")
     if loc.line is None:
@@ -391,8 +386,6 @@ def dictionary_mapping_differences(device: Device, mapping: Mapping,
     padding (an EL6692's 1600h: a gap of 8 bits against an empty PDO). The slave powers on with the dictionary's
     mapping; ``project new`` writes such a PDO list as ``pdo:`` so that commission programs it, lint reports it
     (PRJ027) where the project keeps the power-on mapping."""
-    from ecattool.pdo.program import rewritten
-
     out = []
     for direction, mp in [(Direction.RX, p) for p in mapping.rx] + [(Direction.TX, p) for p in mapping.tx]:
         if mp.explicit and rewritten(device, mp, rules):
@@ -491,7 +484,6 @@ def check_interpolation_period(lp: LoadedProject, i: int, slave: Slave) -> Found
     k x 1 ms) refuses each write that leaves another, so the order of the two writes matters: follow the
     startup list from the device defaults."""
     found = Found()
-    from ecattool.profiles.rules import interpolation_period_ns
 
     rules = slave.rules
     assert slave.device is not None
@@ -605,7 +597,6 @@ def check_esi(lp: LoadedProject, i: int, slave: Slave) -> Found:
         found.error("PRJ005", exc.message, exc.location)
         return found
     used = {p.index for p in (*slave.mapping.rx, *slave.mapping.tx)} if slave.mapping is not None else None
-    from ecattool.pdo.program import rewritten
 
     assert slave.device is not None
     # a mapping object whose DefaultData contradicts its PDO element matters where the slave runs it as it holds

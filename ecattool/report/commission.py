@@ -12,6 +12,9 @@ import datetime as _dt
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from ecattool import __version__
+from ecattool.report.extra import environment, require
+
 if TYPE_CHECKING:
     from ecattool.commission.runner import CommissionReport, DriveReport
     from ecattool.commission.trace import DriveTrace
@@ -63,9 +66,6 @@ def _generated() -> str:
 
 def commission_html(reports: list[CommissionReport]) -> str:
     """The report page of ``reports`` (one per project file)."""
-    from ecattool import __version__
-    from ecattool.report.extra import environment, require
-
     require()
     projects = [ProjectView(r, [drive_view(d, f"p{i}d{j}") for j, d in enumerate(r.drives)])
                 for i, r in enumerate(reports)]

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ecattool.pdo.layout import ImageEntry, Layout, SmImage
+from ecattool.report.extra import environment
 
 #: bits drawn per row (4 bytes), the width of one bit and the height of one row, in SVG user units
 BITS_PER_ROW = 32
@@ -146,8 +147,6 @@ def sections(layout: Layout, top: float = 40.0) -> list[Section]:
 def process_image_svg(layout: Layout, title: str = "", standalone: bool = True, uid: str = "pi") -> str:
     """SVG text of the diagram; ``standalone`` adds the XML declaration (for a file of its own), ``uid``
     prefixes the ids inside (several diagrams inline in one page must not share ids)."""
-    from ecattool.report.extra import environment
-
     secs = sections(layout, 40.0 if title else 4.0)
     height = secs[-1].y + secs[-1].height + 8
     return str(environment().get_template("process_image.svg.j2").render(

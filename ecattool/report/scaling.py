@@ -14,6 +14,9 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
+from ecattool import __version__
+from ecattool.report.extra import environment
+
 if TYPE_CHECKING:
     from ecattool.scaling.explain import Explanation
 
@@ -99,9 +102,6 @@ def check(values: Values, pf: Fraction | None) -> str | None:
 def scaling_html(explanation: Explanation, values: Values, mechanics: dict[str, str] | None = None,
                  title: str = "") -> str:
     """The scaling page: the chain, what each unit means, the object values and the findings."""
-    from ecattool import __version__
-    from ecattool.report.extra import environment
-
     pf = explanation.data.get("counts per position unit")
     rows = [(f"0x{i:04X}:{s:02X}", v) for (i, s), v in sorted(values.items())]
     return str(environment().get_template("scaling.html.j2").render(

@@ -14,10 +14,11 @@ from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import InputError, Location, SelectionError
 from ecattool.findings import Finding, Severity
+from ecattool.od.types import require
 from ecattool.scaling.exact import Approximation, Exact, Strategy, approximate
-from ecattool.scaling.group import FactorGroup
+from ecattool.scaling.group import FactorGroup, FactorObject
 from ecattool.scaling.model import Axis
-from ecattool.scaling.units import Unit, dimension_notation
+from ecattool.scaling.units import Unit, dimension_notation, time_seconds
 
 if TYPE_CHECKING:
     from ecattool.esi.model import Device
@@ -147,7 +148,6 @@ class _Builder:
         if type_name is None:
             self._skip(index, name)
             return None
-        from ecattool.od.types import require
 
         rng = require(type_name).range() or (0, U32)
         hi = rng[1]
@@ -291,8 +291,6 @@ def _technosoft_402_2(b: _Builder, ctx: _Ctx) -> None:
 
 
 def _technosoft_obsolete(b: _Builder, ctx: _Ctx) -> None:
-    from ecattool.scaling.units import time_seconds
-
     ax, u, T = ctx.axis, ctx.u, Exact(ctx.axis.slow_loop)
     b.pair(0x6093, "Position factor", ("Numerator", "Divisor"), ctx.pf, f"IU (counts) per {u[0].text}", scale_exact=True)
     b.pair(0x6094, "Velocity encoder factor", ("Numerator", "Divisor"), ctx.cps(1) * T * TWO16,
@@ -389,8 +387,6 @@ def _controltechniques(b: _Builder, ctx: _Ctx, vl: bool, setpoint: tuple[int, in
 
 
 def _setpoint_object(index: int, sub: int, value: int) -> FactorObject:
-    from ecattool.scaling.group import FactorObject
-
     return FactorObject(index, sub, "vl setpoint factor", ("Numerator", "Denominator")[sub - 1], value, "INT",
                         "resolution of 6042h (not applied to limits and ramps)")
 

@@ -7,10 +7,20 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
-from ecattool.errors import InputError, Location
+from ecattool.errors import InputError, Location, TargetError
 from ecattool.findings import Finding, Severity
-from ecattool.scaling.compute import FAMILIES, fixed_counts_per_rev, resolve_family, technosoft_factor_set
+from ecattool.od.numbers import parse_address, parse_int
+from ecattool.od.types import lookup
+from ecattool.scaling.compute import (
+    FAMILIES,
+    _types,
+    fixed_counts_per_rev,
+    resolve_family,
+    technosoft_factor_set,
+)
+from ecattool.scaling.model import MAX_COUNTS, MAX_SLOW_LOOP, MIN_SLOW_LOOP
 from ecattool.scaling.units import decode_si_unit, describe_dimension
+from ecattool.startup import import_file
 
 if TYPE_CHECKING:
     from ecattool.esi.model import Device
@@ -103,9 +113,6 @@ _STANDARD_TYPES = {0x604B: "INTEGER16", 0x604C: "INTEGER32", 0x607E: "UNSIGNED8"
 def _check_types(values: Values, family: str, firmware: str | None, location: Location | None) -> None:
     """Every value fits the data type of the object it is given for (the family's dictionary, else CiA 402's;
     UNSIGNED32 for the factor pairs): 6093:01 = 2^32 or -1 is refused, never wrapped or taken as a ratio."""
-    from ecattool.od.types import lookup
-    from ecattool.scaling.compute import _types
-
     od = _types(None, family, firmware)
     for (index, sub), value in values.items():
         if isinstance(value, bool) or not isinstance(value, int):
@@ -131,7 +138,6 @@ def explain(values: Values, family: str = "technosoft-ipos", *, slow_loop: Fract
     """
     fam = resolve_family(family, location)
     _check_types(values, fam, firmware, location)
-    from ecattool.scaling.model import MAX_COUNTS, MAX_SLOW_LOOP, MIN_SLOW_LOOP
 
     if not MIN_SLOW_LOOP <= Fraction(slow_loop) <= MAX_SLOW_LOOP:
         raise InputError(f"slow-loop period {Fraction(slow_loop)} s is out of range ({MIN_SLOW_LOOP} .. {MAX_SLOW_LOOP} s)",
@@ -293,8 +299,6 @@ def read_values(slave: Any) -> Values:
 
     Objects the drive aborts on (absent, not readable) are skipped; the result feeds :func:`explain`.
     """
-    from ecattool.errors import TargetError
-
     values: Values = {}
     for index, subs in SCALING_OBJECTS:
         for sub in subs:
@@ -311,7 +315,6 @@ def values_from_file(path: str) -> Values:
     import json
 
     from ecattool.fileio import read_bytes
-    from ecattool.od.numbers import parse_address, parse_int
 
     raw = read_bytes(path)
     try:
@@ -341,7 +344,6 @@ def values_from_file(path: str) -> Values:
     if isinstance(doc, dict) and doc and all(":" in str(k) for k in doc):
         return {parse_address(str(k), Location(path)): parse_int(v if isinstance(v, (int, str)) else str(v), Location(path))
                 for k, v in doc.items()}
-    from ecattool.startup import import_file
 
     values: dict[tuple[int, int], int] = {}
     for cfg in import_file(path):

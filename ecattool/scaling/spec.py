@@ -13,9 +13,20 @@ from pathlib import Path
 from typing import Any, Literal
 
 from ecattool.errors import InputError, Location
+from ecattool.od.numbers import parse_fraction
 from ecattool.scaling.exact import Strategy
-from ecattool.scaling.model import Axis, FeedbackSection, Locate, ScalingSection, UnitsSection, axis_from_dict
-
+from ecattool.scaling.model import (
+    Axis,
+    FeedbackSection,
+    Locate,
+    ScalingSection,
+    UnitsSection,
+    axis_from_dict,
+    feedback_from,
+    gear_from,
+    slow_loop_from,
+    transmission_from,
+)
 
 
 @dataclass(frozen=True, slots=True)
@@ -36,7 +47,6 @@ def spec_from_dict(data: ScalingSection, locate: Locate | None = None, source: L
         raise InputError(f"approximation must be best or max-scale, got {approx!r}",
                          locate(("approximation",)) if locate else source)
     sp = data.get("vl_setpoint", "1/1")
-    from ecattool.od.numbers import parse_fraction
 
     where = locate(("vl_setpoint",)) if locate else source
     try:
@@ -120,7 +130,6 @@ def spec_with(base: Spec | None, options: AxisOptions) -> Spec:
         if options.slow_loop:
             data["slow_loop"] = options.slow_loop
         return spec_from_dict(data)
-    from ecattool.scaling.model import feedback_from, gear_from, slow_loop_from, transmission_from
 
     ax = base.axis
     changes: dict[str, Any] = dict(options.units())

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from ecattool.errors import InputError, Location
 from ecattool.esi.model import Device, Pdo, SyncManager
+from ecattool.od.types import lookup
 from ecattool.sii.image import parse, parse_category
 from ecattool.sii.model import (
     HEADER_BYTES,
@@ -28,10 +29,10 @@ from ecattool.sii.model import (
     SiiPdoEntry,
     SiiSyncManager,
     StringsCategory,
+    SyncMCategory,
     category_body,
     fix_crc,
     strings_content,
-    SyncMCategory,
 )
 
 SM_TYPE_CODES = {"MBoxOut": 1, "MBoxIn": 2, "Outputs": 3, "Inputs": 4}
@@ -68,8 +69,6 @@ class StringTable:
 
 def data_type_code(name: str) -> int:
     """The SII entry data-type byte for an ESI type name (0 when not a standard type)."""
-    from ecattool.od.types import lookup
-
     key = name.strip().upper()
     if key in BITSTRING_AS_UNSIGNED:
         return BITSTRING_AS_UNSIGNED[key]

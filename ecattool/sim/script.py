@@ -27,14 +27,23 @@ Steps (one mapping each)::
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from ecattool.errors import EcatToolError, InputError, Location, SdoAbort, SdoTimeout, StateChangeError, TargetError
+from ecattool.errors import (
+    EcatToolError,
+    InputError,
+    Location,
+    SdoAbort,
+    SdoTimeout,
+    StateChangeError,
+    TargetError,
+)
 from ecattool.od.model import EcState
 from ecattool.od.numbers import format_address, parse_address, parse_int
 from ecattool.sim.drive import Drive, FoeError
+from ecattool.sim.drive.plant import PlantParams
 
 _KINDS = ("state", "read", "write", "exchange", "cycles", "foe", "inputs", "plant")
 #: what an ``inputs:`` step sets
@@ -279,10 +288,6 @@ def _axis_inputs(drive: Drive, data: dict[str, Any], n: int, loc: Location) -> N
 
 def _plant(drive: Drive, data: Any, n: int, loc: Location) -> Line:
     """New plant parameters (or ``ideal``) for the drive."""
-    from dataclasses import fields
-
-    from ecattool.sim.drive.plant import PlantParams
-
     if data == "ideal":
         drive.set_plant("ideal")
         return Line(n, loc.line, "plant", "ideal", "ok")

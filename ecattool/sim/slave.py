@@ -24,8 +24,9 @@ import struct
 from dataclasses import dataclass
 from pathlib import Path
 
+from ecattool import esi as esi_pkg
 from ecattool.abort import AlStatus
-from ecattool.errors import EcatToolError, StateChangeError, TargetError
+from ecattool.errors import EcatToolError, InputError, StateChangeError, TargetError
 from ecattool.esi.model import Device
 from ecattool.od.model import EcState
 from ecattool.sim.drive import Drive
@@ -33,7 +34,6 @@ from ecattool.sim.esc import Clock, Esc, EscApplication
 from ecattool.sim.esc import registers as R
 from ecattool.sim.esc.core import SM_DIR_READ, SM_DIR_WRITE, SM_MODE_BUFFERED, SM_MODE_MAILBOX
 from ecattool.sim.mailbox import MailboxServer
-
 
 _BY_CODE = {s.code: s for s in EcState}
 #: looked up once (every frame asks, for every slave)
@@ -529,7 +529,6 @@ def served_sii(device: Device) -> bytes:
     """The SII image ``ecattool sii build`` makes of ``device``; where the image does not fit the EEPROM size the
     ESI declares (a vendor's ByteSize too small for its own PDO categories), the served EEPROM is as large as
     the image needs (the next power of two)."""
-    from ecattool.errors import InputError
     from ecattool.sii.builder import assemble, build
 
     try:
@@ -570,7 +569,5 @@ def sii_image(drive: Drive, esi: str | Path | None = None, selector: str | None 
     from ecattool.sii.builder import build
 
     if esi is not None:
-        from ecattool import esi as esi_pkg
-
         return build(esi_pkg.load_device(esi, selector)).to_bytes()
     return build(drive.device).to_bytes()

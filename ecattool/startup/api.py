@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from ecattool.errors import InputError, Location, SelectionError
+from ecattool.errors import EncodeError, InputError, Location, SelectionError
 from ecattool.startup.config import SlaveConfig
 from ecattool.startup.formats import FORMATS, Format
 from ecattool.startup.model import StartupList
@@ -48,8 +48,6 @@ def export(config_or_list: SlaveConfig | StartupList | Sequence[SlaveConfig | St
     Nothing is lost silently: where ``fmt`` cannot carry part of the configuration (see :func:`losses`) this
     raises :class:`EncodeError` listing it, unless ``lossy`` accepts the losses; an output that would carry
     nothing at all is refused either way, never written empty."""
-    from ecattool.errors import EncodeError
-
     configs = as_configs(config_or_list)
     f = _format(fmt, "export")
     lost = losses(configs, f.name)

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from ecattool.errors import Location
+from ecattool.errors import Location, SelectionError
 from ecattool.esi.model import Device, Direction, Identity, Pdo, SyncManager
 from ecattool.findings import Finding, Severity
 from ecattool.startup.model import StartupCommand, StartupList
@@ -95,8 +95,6 @@ class SlaveConfig:
         """A slave configuration for ``device``: its identity and sync managers, the assigned PDOs of
         ``mapping`` (an :class:`ecattool.pdo.Mapping`) or else the device's default assignment (PDOs with an
         ``Sm``), and DC from the named ESI ``OpMode`` (its SYNC0 cycle unless ``dc_cycle_ns`` is given)."""
-        from ecattool.errors import SelectionError
-
         def copy(p: Any, direction: Direction) -> Pdo:
             return Pdo(direction, p.index, p.name, list(p.entries), sm=2 if direction is Direction.RX else 3)
 

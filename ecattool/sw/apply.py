@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ecattool.errors import SdoTimeout, TargetError
+from ecattool.od.model import EcState
 from ecattool.sw.image import Block, SwImage
 from ecattool.sw.plan import OBJ_CHECKSUM, OBJ_CHECKSUM_RANGE, OBJ_CONFIG, block_commands, reset_command
 from ecattool.target.base import SlaveTarget
@@ -72,8 +73,6 @@ def check_block(block: Block, target: SlaveTarget) -> BlockCheck:
 
 def ensure_mailbox(target: SlaveTarget) -> None:
     """SDOs need the mailbox: bring a slave that is in INIT (just powered on or reset) to PRE-OP."""
-    from ecattool.od.model import EcState
-
     if target.state() is EcState.INIT:
         target.request_state(EcState.PREOP)
 

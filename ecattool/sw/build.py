@@ -28,17 +28,25 @@ from typing import Any
 
 from ecattool.errors import InputError, Location
 from ecattool.od.numbers import parse_int
-from ecattool.sw.image import Block, SwImage, check_overlaps
-from ecattool.sw.layout import IDENT_START, IDENT_TEXT_WORDS, fix_integrity, identification_text_words, identification_words
+from ecattool.sw.foe import read_foe
+from ecattool.sw.image import Block, SwImage, check_overlaps, read
+from ecattool.sw.layout import (
+    IDENT_START,
+    IDENT_TEXT_WORDS,
+    cam_table_words,
+    fix_integrity,
+    identification_text_words,
+    identification_words,
+    setup_table,
+)
+from ecattool.sw.params import read_parameters
+from ecattool.sw.setup import patch
 
 _TOP_KEYS = {"base", "blocks", "setup", "identification", "final_blank_line"}
 
 
 def load_image(path: Path) -> SwImage:
     """A ``.sw`` text image, or a FoE binary image (``.bin``/``.efw``)."""
-    from ecattool.sw.foe import read_foe
-    from ecattool.sw.image import read
-
     return read_foe(path) if path.suffix.lower() in (".bin", ".efw") else read(path)
 
 
@@ -164,8 +172,6 @@ def build_from(data: Any, locate: Any, base_dir: Path, source: str, read: list[P
 
 
 def _cam_words(cam: Any, where: tuple[Any, ...], locate: Any, number: Any) -> tuple[int, ...]:
-    from ecattool.sw.layout import cam_table_words
-
     if not isinstance(cam, dict) or not isinstance(cam.get("points"), list):
         raise InputError("cam is a mapping with 'step' (1..128), 'points' (Y list) and optional 'master_start'",
                          locate(where))
@@ -179,12 +185,8 @@ def _cam_words(cam: Any, where: tuple[Any, ...], locate: Any, number: Any) -> tu
 
 
 def _apply_setup(image: SwImage, setup: Any, locate: Any, path_of: Any) -> SwImage:
-    from ecattool.sw.params import read_parameters
-    from ecattool.sw.setup import patch
-
     if not isinstance(setup, dict) or not isinstance(setup.get("values", {}), dict):
         raise InputError("setup is a mapping with 'parameters' (file) and 'values' (NAME: value)", locate(("setup",)))
-    from ecattool.sw.layout import setup_table
 
     try:
         setup_table(image)

@@ -16,7 +16,7 @@ from fractions import Fraction
 from typing import Any
 
 from ecattool.errors import InputError, Location
-from ecattool.od.numbers import parse_int
+from ecattool.od.numbers import parse_fraction, parse_int
 from ecattool.sw.image import SwImage
 from ecattool.sw.layout import SetupEntry, SetupTable, decode_section3, fix_integrity, setup_table
 from ecattool.sw.params import TYPE_WORDS, Parameter, ParameterTable
@@ -94,8 +94,6 @@ def encode(ptype: str, text: str | int, name: str, location: Location | None = N
             if not 0 <= raw <= 0xFFFF_FFFF:
                 raise InputError(f"{name}: raw FIXED value {s} does not fit 32 bits", location)
         else:
-            from ecattool.od.numbers import parse_fraction
-
             try:
                 exact = parse_fraction(s, location, f"{name} value")
             except InputError:

@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ecattool.errors import InputError
+from ecattool.od.numbers import parse_int
 from ecattool.sw.apply import BlockCheck, ensure_mailbox, verify
 from ecattool.sw.image import Block, SwImage
 from ecattool.sw.plan import OBJ_CONFIG, OBJ_READ, config_value
@@ -40,8 +41,6 @@ def read_words(target: SlaveTarget, start: int, count: int) -> tuple[int, ...]:
 
 def parse_range(text: str) -> tuple[int, int]:
     """``0x5638-0x5A37`` (inclusive word addresses) -> (start, end)."""
-    from ecattool.od.numbers import parse_int
-
     a, sep, b = text.partition("-")
     if not sep:
         raise InputError(f"range {text!r}: write START-END, e.g. 0x5638-0x5A37")

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ecattool.abort import AlStatus
+from ecattool.abort import AlStatus, al_status_text
 from ecattool.errors import StateChangeError
 from ecattool.od.model import EcState
 from ecattool.sim.drive.core import RX, TX
@@ -42,7 +42,6 @@ class StateMachine:
     def refuse(self, state: EcState, code: int, why: str) -> None:
         drive = self.drive
         drive._log("state_refused", previous=drive.esm.value, requested=state.value, al_status=code, reason=why)
-        from ecattool.abort import al_status_text
 
         # the reason goes with the error, so that commission's text, JSON and HTML reports say why
         raise StateChangeError(state.value, drive.esm.value, code, f"{al_status_text(code)} ({why})")

@@ -13,9 +13,11 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any, Literal
 
+from ecattool import profiles
 from ecattool.errors import TargetError
 from ecattool.esi.model import Device, Direction, Identity
-from ecattool.od.model import EcState, Entry
+from ecattool.od.model import RO, EcState, Entry
+from ecattool.od.types import lookup
 from ecattool.profiles.rules import FamilyRules
 from ecattool.sim import eeprom as ee
 from ecattool.sim.cia402 import Cia402, State
@@ -31,11 +33,10 @@ from ecattool.sim.drive.pdo import PdoConfig
 from ecattool.sim.drive.plant import Plant, PlantParams
 from ecattool.sim.drive.plant_step import counts_per_rev
 from ecattool.sim.drive.process_data import ProcessData
-from ecattool.sim.drive.supervision_state import Supervision
 from ecattool.sim.drive.sdo import SdoServer
+from ecattool.sim.drive.supervision_state import Supervision
 from ecattool.sim.faults import Faults
 from ecattool.sim.units import Units, units_for
-
 
 #: the torque limits of CiA-402 (per mille of the rated torque 6076h)
 _TORQUE_LIMITS = (0x6072, 0x60E0, 0x60E1)
@@ -59,9 +60,6 @@ def has_cia402(device: Device) -> bool:
 def _standard_entry(sub: int, bits: int, d: Direction) -> Entry:
     """A read-only entry of ``bits`` (BOOL for one bit, else BITn or the unsigned type of that size) mappable
     in direction ``d``."""
-    from ecattool.od.model import RO
-    from ecattool.od.types import lookup
-
     name = {1: "BOOL", 8: "USINT", 16: "UINT", 32: "UDINT", 64: "ULINT"}.get(bits, f"BIT{bits}")
     dt = lookup(name)
     return Entry(sub, f"standard object sub {sub}", dt, bits, name, pdo_mapping="R" if d is Direction.RX else "T",
@@ -192,7 +190,6 @@ class Drive:
     @classmethod
     def from_profile(cls, name: str, product: str | None = None, revision: str | int | None = None,
                      **kw: Any) -> "Drive":
-        from ecattool import profiles
         from ecattool.profiles.running import device_from_profile
 
         device = device_from_profile(name, product=product, revision=revision)

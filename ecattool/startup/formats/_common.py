@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 from ecattool.errors import EncodeError, InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo
+from ecattool.findings import Severity
 from ecattool.startup.config import SlaveConfig
-from ecattool.startup.model import TRANSITIONS, StartupCommand
+from ecattool.startup.model import TRANSITIONS, StartupCommand, is_pdo_programming
 
 #: unsigned type names by byte size, for commands that carry no type
 _UNSIGNED_BY_SIZE = {1: "USINT", 2: "UINT", 4: "UDINT", 8: "ULINT"}
@@ -333,8 +334,6 @@ def dc_losses(c: SlaveConfig, fmt: str, *, dc: bool = True, shift0: bool = True,
 
 def pdo_table_losses(c: SlaveConfig, fmt: str) -> list[str]:
     """PDO tables that no startup write programs (a ros2, lcec or ecmc source), in a format of startup writes."""
-    from ecattool.startup.model import is_pdo_programming
-
     if not c.has_pdo_info or any(is_pdo_programming(cmd.index) for cmd in c.commands):
         return []
     pdos = [f"0x{p.index:04X}" for p in (*c.rx_pdos, *c.tx_pdos)]
@@ -347,8 +346,6 @@ def pdo_table_losses(c: SlaveConfig, fmt: str) -> list[str]:
 def _programmed_pdos(c: SlaveConfig) -> tuple[dict[int, list[int]], dict[int, list[StartupCommand]]]:
     """What the startup writes leave in the PDO objects, replayed in order: object -> its sub-index values
     (mapping words for 1600h-1BFFh, PDO indices for 1C12h/1C13h), and the writes to each object."""
-    from ecattool.startup.model import is_pdo_programming
-
     subs: dict[int, dict[int, int]] = {}
     writes: dict[int, list[StartupCommand]] = {}
     for cmd in c.commands:
@@ -374,9 +371,6 @@ def find_contradictions(configs: list[SlaveConfig]) -> None:
     """Findings (notes, with the source line) for what one source says two ways: a PDO table whose entries or
     assignment differ from what the same source's startup writes program into that object, and PDO tables of
     SoE IDNs where CoE mapping objects go."""
-    from ecattool.findings import Severity
-    from ecattool.startup.model import is_pdo_programming
-
     for c in configs:
         pdos = [*c.rx_pdos, *c.tx_pdos]
         idns = [p for p in pdos if not is_pdo_programming(p.index)]

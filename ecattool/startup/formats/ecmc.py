@@ -25,9 +25,11 @@ from pathlib import Path
 
 from ecattool.errors import EncodeError, InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
-from ecattool.od.standard import standard_type
 from ecattool.findings import Severity
+from ecattool.od import types as dt
 from ecattool.od.numbers import parse_int
+from ecattool.od.standard import standard_type
+from ecattool.od.types import Kind, lookup
 from ecattool.startup.config import SlaveConfig
 from ecattool.startup.formats._common import (
     decode_text,
@@ -208,8 +210,6 @@ _INT_TYPES = {(8, False): "USINT", (16, False): "UINT", (32, False): "UDINT", (6
 
 def _signed(type_name: str | None) -> bool | None:
     """Whether an entry of ``type_name`` is a signed integer (None: unknown or not an integer)."""
-    from ecattool.od.types import Kind, lookup
-
     t = lookup(type_name) if type_name else None
     if t is None or t.kind not in (Kind.SIGNED, Kind.UNSIGNED):
         return None
@@ -335,8 +335,6 @@ class _Reader:
 
     def sdo_dt(self, args: list[str], loc: Location) -> None:
         """``Cfg.EcAddSdoDT(slave,index,subindex,value,dataType)``: a startup SDO of an ecmc data type."""
-        from ecattool.od import types as dt
-
         if len(args) != 5:
             raise InputError(f"Cfg.EcAddSdoDT takes (slave,index,subindex,value,dataType); got {len(args)} arguments",
                              loc)
@@ -384,8 +382,6 @@ class _Reader:
         index, sub = self.number(args[6], loc, "entry index"), self.number(args[7], loc, "entry sub")
         rest = args[9:]
         if typed:
-            from ecattool.od import types as dt
-
             coe = ECMC_TYPES.get(args[8].strip().upper())
             if coe is None:
                 raise InputError(f"Cfg.EcAddEntryDT: data type {args[8]!r} is not an ecmc type (B1..B4, U8..U64, "

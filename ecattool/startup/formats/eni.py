@@ -14,6 +14,7 @@ with several Transition elements becomes one command per transition.
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import Any
 
 from lxml import etree
@@ -448,8 +449,6 @@ def load_tree(tree: Any, source: str, name: str = "") -> list[SlaveConfig]:
 
 
 def load(data: bytes, source: str) -> list[SlaveConfig]:
-    from pathlib import Path
-
     from ecattool.xmlsafe import parse_xml
 
     return load_tree(parse_xml(data, source), source, Path(source).stem)

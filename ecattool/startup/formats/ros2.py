@@ -12,11 +12,13 @@ comments and PDO entry names.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 from ecattool.errors import EncodeError, InputError, Location
 from ecattool.esi.model import Direction, Identity, Pdo, PdoEntry
 from ecattool.od import types as dt
+from ecattool.od.numbers import parse_int
 from ecattool.od.standard import standard_type
 from ecattool.startup.config import SlaveConfig
 from ecattool.startup.formats._common import (
@@ -30,6 +32,7 @@ from ecattool.startup.formats._common import (
     one_shot_text,
     require_identity,
     soe_losses,
+    sync_plan,
 )
 from ecattool.startup.model import StartupCommand, StartupList, is_pdo_programming
 
@@ -195,8 +198,6 @@ def export(configs: list[SlaveConfig]) -> str:
 def _sm_section(c: SlaveConfig) -> list[dict[str, Any]]:
     """The driver's ``sm`` entries where the source assigns the PDOs to other sync managers than its default
     (SM2 rpdo, SM3 tpdo) or says how their watchdogs are set; nothing where the default holds."""
-    from ecattool.startup.formats._common import sync_plan
-
     plans = [p for p in sync_plan(c) if not p.mailbox and p.pdos]
     default = all(p.number == (2 if p.output else 3) and p.watchdog is None for p in plans)
     if default or len({p.output for p in plans}) != len(plans):  # the driver puts all rpdo (tpdo) on one SM
@@ -228,8 +229,6 @@ def _comment_at(lines: list[str], loc: Location) -> str:
 
 
 def _int(value: Any, loc: Location, what: str) -> int:
-    from ecattool.od.numbers import parse_int
-
     if isinstance(value, bool) or value is None:
         raise InputError(f"{what} must be a number, got {value!r}", loc)
     return parse_int(value if isinstance(value, int) else str(value), loc, what)
@@ -309,7 +308,6 @@ def load(data: bytes, source: str) -> list[SlaveConfig]:
     if not isinstance(top, dict):
         raise InputError("an ethercat_driver_ros2 slave file is a mapping (vendor_id, product_id, rpdo, …)",
                          doc.locate(()))
-    from pathlib import Path
 
     cfg = SlaveConfig(startup=StartupList(name=Path(source).stem), name=Path(source).stem, source=doc.locate(()))
     if "vendor_id" in top and "product_id" in top:
