@@ -128,7 +128,23 @@ def pytest_configure(config: pytest.Config) -> None:
 WIRE_RERUNS = 1
 
 
+#: the xdist groups that start first, in this order: with two workers each long group starts on a worker of its own
+#: at once (xdist's loadgroup hands out work in collection order), instead of the hostile slave's 2.5 minutes of
+#: bounded waits starting after everything else on the last free worker (a 2-core CI run is as long as its longest
+#: worker)
+GROUPS_FIRST = ("wire-hostile", "wire")
+
+
+def _group(item: pytest.Item) -> str | None:
+    marker = item.get_closest_marker("xdist_group")
+    if marker is None:
+        return None
+    return str(marker.args[0] if marker.args else marker.kwargs.get("name"))
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    rank = {name: i for i, name in enumerate(GROUPS_FIRST)}
+    items.sort(key=lambda item: rank.get(_group(item) or "", len(rank)))  # stable: the rest keep their order
     if not config.pluginmanager.hasplugin("rerunfailures"):
         return
     for item in items:

@@ -104,7 +104,7 @@ def test_open_bus_passes_the_projects_timeouts_to_the_master(monkeypatch: pytest
         return LiveBus(spec, [])
 
     monkeypatch.setattr(targets, "isolated_bus", isolated)
-    monkeypatch.setattr(bus_state, "guard", lambda ifname, reset: [object(), object()])  # two slaves found
+    monkeypatch.setattr(bus_state, "guard", lambda ifname, reset, sii=False: [object(), object()])  # two slaves found
     monkeypatch.setattr("ecattool.target.pysoem._import_pysoem", lambda: None)
     targets.open_bus("pysoem:eth9", [_ingenia()])
     (limits,) = seen
