@@ -39,8 +39,8 @@ class ModeParts:
 
     def snapshot(self) -> tuple[object, ...]:
         """The parts' state, for the quiet-cycle comparison of the process data."""
-        return (*self.vl.snapshot(), *self.pv.snapshot(), *self.torque.snapshot(), *self.ip.snapshot(),
-                *self.pp.snapshot())
+        return (self.vl.snapshot(), self.pv.snapshot(), self.torque.snapshot(), self.ip.snapshot(),
+                self.pp.snapshot())
 
     def mode_changed(self) -> None:
         """6060h was written: the interpolator starts afresh, the PV window timers too, the torque demand is the

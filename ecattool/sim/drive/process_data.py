@@ -203,15 +203,20 @@ class ProcessData:
         state are equal to that cycle's (tests/sim/test_sim_quiet_cycle.py runs both ways and compares)."""
         drive = self.drive
         cia = drive.cia
-        rx, tx = drive.layout[RX], drive.layout[TX]
+        layout = drive.layout
+        rx, tx = layout[RX], layout[TX]
         store = drive.objects.store
-        return (store, store.changes, cia, None if cia.move is None else object(), *vars(cia).values(),
+        entries = drive.objects.entries
+        log = drive.event_log
+        plant = drive.plant
+        # the parts' state read directly (attributes, no properties or per-part calls: every quiet cycle builds
+        # this); the CiA-402 model's attributes as a copy of its __dict__, compared by value as a tuple of them was
+        return (store, store.changes, cia, None if cia.move is None else object(), cia.__dict__.copy(),
                 *drive.motion.modes_snapshot(),
-                drive.units, drive.objects.entries, len(drive.objects.entries), rx, tx, tuple(rx.entries), tuple(tx.entries),
-                rx.bits, tx.bits,
+                drive.units, entries, len(entries), rx, tx, tuple(rx.entries), tuple(tx.entries), rx.bits, tx.bits,
                 drive.limit_active, drive.limit_switches, drive.homing_warning, drive.behaviour, drive.family,
-                drive.has_cia402, drive.homing_search_s, drive.record_events, drive.event_log.seq, len(drive.emergencies),
-                None if drive.plant is None else drive.plant.state(), drive.supervision.state())
+                drive.has_cia402, drive.homing_search_s, log.record_events, log.seq, len(log.emergencies),
+                None if plant is None else plant.state(), drive.supervision.state())
 
     def _pdo_write(self, index: int, sub: int, raw: bytes) -> bool:
         """Store one mapped output that changed; True when the object has a reaction to run once the image is
