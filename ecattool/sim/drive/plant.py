@@ -120,7 +120,7 @@ class Plant:
     (N·m)."""
 
     __slots__ = ("params", "counts_per_rev", "dt", "error", "velocity", "torque", "load_torque", "torque_limit",
-                 "speed_limit", "pending", "sampled", "version", "limits_key", "limits_mode", "samples_first", "_ramp_lag", "_fixed", "_phi", "_j", "_b", "_tc", "_vmax", "_decay", "_tau_gain",
+                 "speed_limit", "pending", "sampled", "version", "limits_key", "limits_mode", "samples_first", "_delay_reference", "_ramp_lag", "_fixed", "_phi", "_j", "_b", "_tc", "_vmax", "_decay", "_tau_gain",
                  "_limited")
 
     def __init__(self, params: PlantParams, counts_per_rev: float, dt: float) -> None:
@@ -163,6 +163,8 @@ class Plant:
         self._ramp_lag = 2 * zeta * (1 - p.velocity_feedforward) / wn
         #: the actual values are sampled before the reference (delay "sample")
         self.samples_first = p.delay == "sample"
+        #: the loop sees the demand one cycle late (delay "reference")
+        self._delay_reference = p.delay == "reference"
         #: a position-loop cycle that left the plant as it found it: (the demand step, error, velocity, pending,
         #: load torque, torque limit, speed limit) it started from (:meth:`follow_position`), else None
         self._fixed: tuple[float, ...] | None = None
@@ -205,29 +207,25 @@ class Plant:
             if self.samples_first:
                 self.sampled = (e0 - moved, v0)
             return
-        self._step_position(moved, reference_delay)
-        self._fixed = (moved, e0, v0, p0, self.load_torque, self.torque_limit, self.speed_limit, reference_delay) \
-            if e0 == self.error and v0 == self.velocity and p0 == self.pending else None
-
-    def _step_position(self, moved: float, reference_delay: bool) -> None:
-        p = self.params
-        loop_moved, y0 = moved, self.error  # what the loop's reference moved by, the loop's error
-        if p.delay == "reference" and reference_delay:
-            loop_moved, y0 = self.pending, self.error + self.pending
-            self.pending = moved
-        elif p.delay == "reference" and self.pending:
-            loop_moved, y0 = moved + self.pending, self.error + self.pending
-            self.pending = 0.0
-        elif p.delay == "sample":
-            self.sampled = (self.error - moved, self.velocity)  # the previous actual, against the new demand
+        # the loop's step, inline (every cycle of a position mode): what the loop's reference moved by, its error
+        loop_moved, y0 = moved, e0
+        if self._delay_reference:
+            if reference_delay:
+                loop_moved, y0 = p0, e0 + p0
+                self.pending = moved
+            elif p0:
+                loop_moved, y0 = moved + p0, e0 + p0
+                self.pending = 0.0
+        elif self.samples_first:
+            self.sampled = (e0 - moved, v0)  # the previous actual, against the new demand
         s = loop_moved / self.dt
         c = self._ramp_lag * s
-        v0 = self.velocity
         # in (z, w) = (error + c, velocity - s) the loop is autonomous over the cycle: one matrix step
         z0, w0 = y0 + c, v0 - s
         a, b, cc, d = self._phi
-        z1, w1 = a * z0 + b * w0, cc * z0 + d * w0
-        self._finish(v0, w1 + s, z1 - c - y0 + loop_moved, moved)
+        self._finish(v0, cc * z0 + d * w0 + s, a * z0 + b * w0 - c - y0 + loop_moved, moved)
+        self._fixed = (moved, e0, v0, p0, self.load_torque, self.torque_limit, self.speed_limit, reference_delay) \
+            if e0 == self.error and v0 == self.velocity and p0 == self.pending else None
 
     def follow_velocity(self, reference: float, moved: float) -> None:
         """One cycle in a velocity mode: the velocity loop towards ``reference`` increments/s; the demand position

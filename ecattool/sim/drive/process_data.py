@@ -181,7 +181,7 @@ class ProcessData:
                     raw = ((image >> offset) & ((1 << bits) - 1)).to_bytes((bits + 7) // 8, "little")
                 if stored(key) == raw:
                     continue  # unchanged: nothing to store and nothing to react to
-                if self._pdo_write(key[0], key[1], raw):
+                if self._pdo_write(key, raw):
                     reactions.append((key[0], key[1], raw))
         except ee.PowerLost:
             # the drive drops off the bus; it comes back in INIT with the EEPROM as far as it was written
@@ -218,24 +218,26 @@ class ProcessData:
                 drive.has_cia402, drive.homing_search_s, log.record_events, log.seq, len(log.emergencies),
                 None if plant is None else plant.state(), drive.supervision.state())
 
-    def _pdo_write(self, index: int, sub: int, raw: bytes) -> bool:
-        """Store one mapped output that changed; True when the object has a reaction to run once the image is
-        latched."""
+    def _pdo_write(self, key: tuple[int, int], raw: bytes) -> bool:
+        """Store one mapped output that changed (``key``: its index and sub-index); True when the object has a
+        reaction to run once the image is latched."""
         drive = self.drive
+        index = key[0]
         if index == 0x2065 or index == 0x2067:
             handler = drive._handlers_down.get(index)
             if handler is not None:
                 try:
-                    handler(sub, raw, int.from_bytes(raw, "little"))
+                    handler(key[1], raw, int.from_bytes(raw, "little"))
                 except SdoAbort:
                     return False
-        e = drive.objects.entries.get((index, sub))
+        objects = drive.objects
+        e = objects.entries.get(key)
         if e is not None and e.bit_size > 8 * len(raw):
             # a compact PDO maps the low bits of a larger object (EJ2521's 16-bit 7000h:12 of 32): they
             # replace the low bytes, the object keeps its high ones
-            old = drive.objects.store.get((index, sub), b"")
+            old = objects.store.get(key, b"")
             raw = raw + old[len(raw):(e.bit_size + 7) // 8].ljust((e.bit_size + 7) // 8 - len(raw), b"\x00")
-        drive.objects.store[(index, sub)] = raw
+        objects.store[key] = raw
         return index in drive._after_write
 
     def _pack_inputs(self) -> bytes:
