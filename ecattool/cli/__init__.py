@@ -28,7 +28,7 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "lint": ("ecattool.cli.lint", "lint", "Lint project files (for CI)."),
     "commission": ("ecattool.cli.commission", "commission", "Commission the drives of a project (simulator by default)."),
     "project": ("ecattool.cli.project", "project", "Project files: schema, new project skeletons."),
-    "bus": ("ecattool.cli.bus", "bus", "Look at a live bus: scan the slaves (read only)."),
+    "bus": ("ecattool.cli.bus", "bus", "Look at a live bus: scan the slaves (read only); hold it open for the other commands."),
     "sdo": ("ecattool.cli.sdo", "sdo", "Read and write a live slave's objects, typed by its dictionary."),
     "audit": ("ecattool.cli.audit", "audit", "Compare what the drives on a bus hold with a project (drift)."),
     "backup": ("ecattool.cli.backup", "backup", "Back up what the drives of a project hold (SII, dictionary, .sw)."),

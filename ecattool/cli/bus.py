@@ -2,24 +2,35 @@
 
 from __future__ import annotations
 
+import json
 import sys
+import time
+from functools import partial
 from typing import TYPE_CHECKING
 
 import click
 
 from ecattool.cli.common import console, hex32, json_option, print_json, table
-from ecattool.cli.online import library_option, load_library, open_live, target_option
+from ecattool.cli.online import library_option, load_library, open_live, reset_bus_given, target_option
 
 if TYPE_CHECKING:
+    from ecattool.online.held import Hold
     from ecattool.online.scan import ScannedSlave
+
+#: the longest and the default hold, seconds (ecattool.online.held.MAX_HOLD_S, DEFAULT_HOLD_S: not imported for
+#: every bus command; a test holds them equal)
+MAX_HOLD_S = 86400.0
+DEFAULT_HOLD_S = 3600.0
 
 
 @click.group(epilog="""\b
 Examples:
   ecattool bus scan --target pysoem:eth0 --library esi/
-  ecattool bus scan --target sim:hdt,technosoft-ipos --json""")
+  ecattool bus scan --target sim:hdt,technosoft-ipos --json
+  ecattool bus hold --target pysoem:eth0 --for 600 &
+  ecattool bus release --target pysoem:eth0""")
 def bus() -> None:
-    """Look at a live bus (read only)."""
+    """Look at a live bus (read only); hold it open for the other commands."""
 
 
 @bus.command(epilog="""\b
@@ -68,3 +79,68 @@ def _render_scan(target: str, rows: list[ScannedSlave]) -> None:
                   "" if r.al_status is None else f"0x{r.al_status:04X}", ",".join(r.protocols or []),
                   {True: "yes", False: "no", None: "?"}[r.dc], dev, "; ".join(notes))
     console().print(t)
+
+
+@bus.command(epilog="""\b
+Examples:
+  ecattool bus hold --target pysoem:eth0 --for 600 &
+  ecattool sdo read 0x6041:00 --target pysoem:eth0      (through the held master: no bus init)
+  ecattool bus release --target pysoem:eth0""")
+@target_option()
+@click.option("--for", "seconds", type=click.FloatRange(1, MAX_HOLD_S), default=DEFAULT_HOLD_S, show_default=True,
+              metavar="SECONDS", help="End the hold after this long at the latest (at most a day).")
+@json_option
+def hold(target: str, seconds: float, as_json: bool) -> None:
+    """Open the bus once and keep it open for the other ecattool commands, as IgH's master owns its bus.
+
+    Until the hold ends (--for, `ecattool bus release`, Ctrl-C or SIGTERM), every command that reads a live bus
+    with the same --target (sdo, bus scan, audit, backup, project new --from-bus, sii read/write) goes through this
+    master: no bus init, no slave reset, an `sdo read` in a fraction of the time. Commands that take the slaves
+    through INIT (commission, sw, scale explain --target) are refused meanwhile. One command is served at a time,
+    for this user and root only. When the hold ends each slave is put back in the state it was found in where
+    ecattool can, as every live-bus command does. Prints one line when the bus is held and one when it is
+    released (with --json, one JSON object each).
+    """
+    from ecattool.online.targets import hold_bus
+
+    done = hold_bus(target, seconds, reset_bus=reset_bus_given(), ready=partial(_say_held, as_json))
+    _say_released(done, as_json)
+
+
+def _say_held(as_json: bool, h: Hold) -> None:
+    if as_json:
+        click.echo(json.dumps({"held": h.name, "pid": h.pid, "slaves": h.slaves, "until": round(h.until, 3)}))
+    else:
+        click.echo(f"holding {h.name}: {h.slaves} slaves, pid {h.pid}, until "
+                   f"{time.strftime('%H:%M:%S', time.localtime(h.until))} (ecattool bus release --target {h.name} "
+                   "ends it)")
+    sys.stdout.flush()
+
+
+def _say_released(h: Hold, as_json: bool) -> None:
+    if as_json:
+        click.echo(json.dumps({"released": h.name, **h.to_json()}))
+        return
+    click.echo(f"released {h.name} ({h.ended}): {h.commands} commands, {h.requests} requests served")
+    for note in h.notes:
+        click.echo(f"ecattool: note: {note}", err=True)
+
+
+@bus.command(epilog="""\b
+Examples:
+  ecattool bus release --target pysoem:eth0
+  ecattool bus release --target kickcat:eth0 --json""")
+@click.option("--target", "target", required=True, metavar="TARGET",
+              help="The held master: pysoem:IF or kickcat:IF, as `bus hold` was given it.")
+@json_option
+def release(target: str, as_json: bool) -> None:
+    """End the hold `ecattool bus hold` keeps on a master: it puts the slaves back and closes its master first.
+    Exit status 1 when nothing holds it."""
+    from ecattool.online.targets import release_bus
+
+    done = release_bus(target)
+    if as_json:
+        print_json(done)
+    else:
+        click.echo(f"released {done['target']} (pid {done['pid']}): {done['commands']} commands, "
+                   f"{done['requests']} requests served")

@@ -36,6 +36,9 @@ class LiveBus:
     found: list[Any] = field(default_factory=list)
     #: whether the ``with`` block that used the bus ended with an exception (its error is what a user reads then)
     failed: bool = False
+    #: the child process a real master's slaves are served from (``ecattool.target.isolated.MasterProcess``,
+    #: what ``ecattool bus hold`` keeps); None for the simulator and for a bus read through a holder
+    master: Any = None
 
     def slave(self, position: int) -> LiveSlave:
         if not 0 <= position < len(self.slaves):

@@ -10,7 +10,7 @@ from typing import Any
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
 from ecattool.od.model import EcState
-from ecattool.online import bus_state
+from ecattool.online import bus_state, held
 from ecattool.online.bus_state import PutBack
 from ecattool.online.live import LiveBus
 from ecattool.target.base import LiveSlave, SlaveTarget, Target
@@ -31,7 +31,10 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
     project: ``ecattool.commission.runner.put_back`` with its slaves; :func:`bus_state.restore`). ``read_sii``:
     through KickCAT (whose binding reads no SII) each slave's SII image is read before the master opens, through
     its ESC's EEPROM interface (:func:`bus_state.with_sii`; in the bus's ``found``), for ``project new
-    --from-bus``: the model the SII names, the mailbox it has, its identity where it has no 1018h."""
+    --from-bus``: the model the SII names, the mailbox it has, its identity where it has no 1018h.
+
+    Where ``ecattool bus hold`` holds the master (:mod:`ecattool.online.held`), the bus is read through it: no bus
+    init, nothing reset, nothing to put back; ``found`` is what the holder found."""
     parsed = parse_target(spec)
     if parsed.kind == "sim":
         from ecattool.sim.slave import drive_for_device
@@ -41,6 +44,9 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
             raise SelectionError("target 'sim' without a project has no slaves: use sim:PROFILE,ESI… "
                                  "(e.g. sim:hdt,technosoft-ipos)")
         return sim_bus([drive_for_device(d) for d in devs], spec)
+    through = held.held_bus(held.hold_name(parsed.kind, parsed.interface), spec, bus_limits(devices))
+    if through is not None:
+        return through
     found = bus_state.guard(parsed.interface, reset_bus, sii=read_sii and parsed.kind == "kickcat")
     if parsed.kind == "kickcat" and put_back is not None:
         put_back = kickcat_stays_preop  # nothing written to a slave that cannot be taken further
@@ -60,6 +66,24 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
     bus_state.settle()  # the state read's socket, closed meanwhile, is not the master's child's to hold
     return _restoring(isolated_bus(spec, lambda: open_live(parsed.kind, parsed.interface, limits=limits), limits),
                       found, put_back)
+
+
+def hold_bus(spec: str, seconds: float, reset_bus: bool = False,
+             ready: Callable[[held.Hold], None] = lambda h: None) -> held.Hold:
+    """Hold the bus of a real master (``ecattool bus hold``, :func:`ecattool.online.held.hold`): opened as
+    :func:`open_bus` opens it (refused where a slave is in SAFE-OP or OP, unless ``reset_bus``; through KickCAT each
+    slave's SII read first), served to the other commands for ``seconds`` at the most, then put back as found."""
+    parsed = parse_target(spec)
+    name = held.hold_name(parsed.kind, parsed.interface)
+    return held.hold(name, lambda: open_bus(spec, reset_bus=reset_bus, read_sii=parsed.kind == "kickcat"),
+                     seconds, ready)
+
+
+def release_bus(spec: str) -> dict[str, Any]:
+    """End the hold on the master ``spec`` names (``ecattool bus release``, :func:`ecattool.online.held.release`);
+    the holder's summary (``target``, ``pid``, ``commands``, ``requests``, ``notes``)."""
+    parsed = parse_target(spec)
+    return held.release(held.hold_name(parsed.kind, parsed.interface))
 
 
 def kickcat_stays_preop(wanted: Sequence[tuple[Any, EcState]]) -> list[str]:
@@ -103,6 +127,8 @@ def open_guarded(spec: str, devices: Sequence[Device] = (), reset_bus: bool = Fa
     these commands take every slave through INIT too, and a running machine is never stopped by surprise."""
     parsed = parse_target(spec)
     if parsed.kind in MASTERS:
+        held.refuse_if_held(held.hold_name(parsed.kind, parsed.interface),
+                            "this command takes every slave through INIT with a master of its own")
         bus_state.guard(parsed.interface, reset_bus)
         bus_state.settle()
     return open_target(spec, devices)
@@ -129,7 +155,7 @@ def isolated_bus(spec: str, opener: Callable[[], LiveBus], limits: BusLimits | N
     """The live bus ``opener`` opens, served from a child process (:class:`~ecattool.target.isolated.MasterProcess`);
     ``limits``: how long it may take (the slaves' timeouts)."""
     master = MasterProcess(spec, opener, lambda bus: bus.slaves, limits=limits)
-    return LiveBus(spec, [RemoteSlave(master, p) for p in master.positions], closer=master.close)
+    return LiveBus(spec, [RemoteSlave(master, p) for p in master.positions], closer=master.close, master=master)
 
 
 def open_slave(spec: str, devices: Sequence[Device], position: int, reset_bus: bool = False, *,

@@ -32,7 +32,7 @@ import struct
 import sys
 import time
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, Protocol
 
 from ecattool.errors import EcatToolError, TargetError
 from ecattool.esi.model import Identity
@@ -218,7 +218,7 @@ class Child:
 
 
 # ------------------------------------------------------------------------------------------------ the child
-def _error_reply(exc: BaseException) -> tuple[Any, ...]:
+def error_reply(exc: BaseException) -> tuple[Any, ...]:
     if isinstance(exc, EcatToolError):
         return ("error", type(exc), exc.args, dict(exc.__dict__))
     return ("failed", f"{type(exc).__name__}: {exc}")
@@ -237,7 +237,7 @@ def _serve(conn: Channel, factory: Callable[[], Any], slaves_of: Callable[[Any],
         root = factory()
         slaves = list(slaves_of(root))
     except BaseException as exc:  # noqa: BLE001 - every failure goes back to the parent as one reply
-        conn.send(_error_reply(exc))
+        conn.send(error_reply(exc))
         return
     conn.send(("ok", [int(getattr(s, "position", i)) for i, s in enumerate(slaves)]))
     while True:
@@ -256,12 +256,12 @@ def _serve(conn: Channel, factory: Callable[[], Any], slaves_of: Callable[[Any],
             target = root if position is None else slaves[position]
             reply: tuple[Any, ...] = ("ok", getattr(target, method)(*args, **kwargs))
         except BaseException as exc:  # noqa: BLE001
-            reply = _error_reply(exc)
+            reply = error_reply(exc)
         conn.send(reply)
 
 
-def _rebuild(reply: tuple[Any, ...], what: str) -> Exception:
-    """The exception a child's error reply stands for."""
+def rebuild(reply: tuple[Any, ...], what: str) -> Exception:
+    """The exception an error reply (:func:`error_reply`: the child's, or a bus holder's) stands for."""
     if reply[0] == "error":
         cls, args, state = reply[1], reply[2], reply[3]
         exc: Exception = cls.__new__(cls)
@@ -307,7 +307,7 @@ class MasterProcess:
             raise self._dead
         if reply[0] == "ok":
             return reply[1]
-        raise _rebuild(reply, what)
+        raise rebuild(reply, what)
 
     def call(self, position: int | None, method: str, *args: Any, timeout_s: float = CALL_TIMEOUT_S,
              **kwargs: Any) -> Any:
@@ -323,6 +323,11 @@ class MasterProcess:
                                        f"{_signal_name(self._proc.exitcode)})")
             raise self._dead from None
         return self._answer(what, cap(timeout_s))
+
+    @property
+    def gone(self) -> bool:
+        """Whether the master is gone (crashed, hung or closed): every request raises :class:`MasterGone`."""
+        return self._dead is not None
 
     def _stop(self) -> None:
         if self._proc.is_alive():
@@ -344,11 +349,25 @@ class MasterProcess:
             self._dead = MasterGone(f"the master on {self.name} is closed")
 
 
-class RemoteSlave:
-    """A slave of a :class:`MasterProcess`: every method of the slave runs in the child (a
-    :class:`~ecattool.target.base.LiveSlave`: the core and every capability)."""
+class Master(Protocol):
+    """What a :class:`RemoteSlave` sends its requests through: a :class:`MasterProcess`, or the master a bus
+    holder keeps (``ecattool.online.held.HeldMaster``)."""
 
-    def __init__(self, master: MasterProcess, position: int) -> None:
+    name: str
+    limits: BusLimits
+    positions: list[int]
+
+    def call(self, position: int | None, method: str, *args: Any, timeout_s: float = CALL_TIMEOUT_S,
+             **kwargs: Any) -> Any: ...
+
+    def close(self) -> None: ...
+
+
+class RemoteSlave:
+    """A slave of a :class:`MasterProcess` (or of a held bus's master): every method of the slave runs in the
+    master's child (a :class:`~ecattool.target.base.LiveSlave`: the core and every capability)."""
+
+    def __init__(self, master: Master, position: int) -> None:
         self._master = master
         self.position = position
 
