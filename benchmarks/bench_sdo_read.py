@@ -5,7 +5,11 @@ a veth pair in a private network namespace that the script makes itself (never t
 * bare: ``python -c "import pysoem; m = pysoem.Master(); m.open(IF); m.config_init(); m.slaves[0].sdo_read(0x1018,
   1); m.close()"``;
 * ecattool: ``python -m ecattool sdo read 0x1018:01 --target pysoem:IF`` (the master in its child process,
-  ecattool.target.isolated; the bus state read before and restored after; the value typed by the CiA-301 table).
+  ecattool.target.isolated; the bus state read before and restored after; the value typed by the CiA-301 table);
+* ecattool through a held bus: the same command line on a second veth pair of the namespace (``HELD_IF``, the same
+  drive served behind it), whose master ``ecattool bus hold`` keeps open (ecattool.online.held): the read goes to
+  the holder, no bus init, no master library loaded; as IgH's ``ethercat upload`` reads through the master that
+  owns its bus.
 
 The two alternate (bare, ecattool, bare, …) so that a busy machine slows both alike; the figures are the median
 and the lower quartile wall time of a whole process, and their ratio, and the median CPU time of each (its own and
@@ -34,6 +38,8 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
 MASTER_IF, SLAVE_IF = "ecat0", "ecat1"
+#: the second veth pair: its master held by ``ecattool bus hold`` for the whole run
+HELD_IF, HELD_SLAVE_IF = "ecat2", "ecat3"
 BARE = ("import pysoem\nm = pysoem.Master()\nm.open({iface!r})\nassert m.config_init() > 0\n"
         "print(int.from_bytes(m.slaves[0].sdo_read(0x1018, 1), 'little'))\nm.close()\n")
 
@@ -67,24 +73,39 @@ def _timed(argv: list[str], where: str | None = None, name: str = "") -> tuple[f
     return took, done.stdout.strip()
 
 
-def inside(rounds: int, against: str | None = None) -> dict[str, Any]:
+def _started(argv: list[str], what: str) -> subprocess.Popen[str]:
+    """A process that says it is ready with a first line on its stdout (``sim serve``, ``bus hold``)."""
     import select
 
-    server = subprocess.Popen([sys.executable, "-m", "ecattool", "sim", "serve", "hdt", "--iface", SLAVE_IF],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT, env=ENV)
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT, env=ENV)
+    assert proc.stdout is not None
+    ready, _, _ = select.select([proc.stdout], [], [], 60)
+    if not ready or not proc.stdout.readline():
+        proc.kill()
+        raise SystemExit(f"{what} did not get ready: {proc.stderr.read()[-1000:] if proc.stderr else ''}")
+    return proc
+
+
+def inside(rounds: int, against: str | None = None) -> dict[str, Any]:
+    from ecattool.sim.bus import netns
+
+    subprocess.run(["sh", "-c", netns.setup_script(HELD_IF, HELD_SLAVE_IF).split(" && ", 1)[1]], check=True)
+    procs = [_started([sys.executable, "-m", "ecattool", "sim", "serve", "hdt", "--iface", SLAVE_IF], "the server")]
     try:
-        assert server.stdout is not None
-        ready, _, _ = select.select([server.stdout], [], [], 60)
-        if not ready or not server.stdout.readline():
-            raise SystemExit("the server did not get ready")
+        procs.append(_started([sys.executable, "-m", "ecattool", "sim", "serve", "hdt", "--iface", HELD_SLAVE_IF],
+                              "the second server"))
+        procs.append(_started([sys.executable, "-m", "ecattool", "bus", "hold", "--target", f"pysoem:{HELD_IF}",
+                               "--for", str(120 + 10 * rounds), "--json"], "the holder"))
+        held_argv = [sys.executable, "-m", "ecattool", "sdo", "read", "0x1018:01", "--target", f"pysoem:{HELD_IF}"]
         bare_argv = [sys.executable, "-c", BARE.format(iface=MASTER_IF)]
         tool_argv = [sys.executable, "-m", "ecattool", "sdo", "read", "0x1018:01", "--target", f"pysoem:{MASTER_IF}"]
         _timed(bare_argv)  # the link's first frames, the page cache: not measured
         _timed(tool_argv)
+        _timed(held_argv)
         if against:
             _timed(tool_argv, against)
         floor_argv = [sys.executable, "-c", "import click, pysoem"]
-        bare, tool, other, floor = [], [], [], []
+        bare, tool, other, floor, through = [], [], [], [], []
         outputs = set()
         for _ in range(rounds):
             t, out = _timed(bare_argv, name="bare")
@@ -94,25 +115,31 @@ def inside(rounds: int, against: str | None = None) -> dict[str, Any]:
             tool.append(t)
             outputs.add(("ecattool", out.split(" = ")[1].split(" ")[0] if " = " in out else out))
             floor.append(_timed(floor_argv, name="floor")[0])
+            t, out = _timed(held_argv, name="held")
+            through.append(t)
+            outputs.add(("held", out.split(" = ")[1].split(" ")[0] if " = " in out else out))
             if against:
                 t, out = _timed(tool_argv, against, name="against")
                 other.append(t)
                 outputs.add(("against", out.split(" = ")[1].split(" ")[0] if " = " in out else out))
     finally:
-        server.terminate()
-        server.wait(20)
+        for proc in reversed(procs):  # the holder first: it closes its master before its server goes
+            proc.terminate()
+            proc.wait(30)
 
     def fig(xs: list[float]) -> dict[str, float]:
         q = statistics.quantiles(xs, n=4)
         return {"median_s": round(statistics.median(xs), 4), "q1_s": round(q[0], 4), "min_s": round(min(xs), 4)}
 
-    b, e, f = fig(bare), fig(tool), fig(floor)
+    b, e, f, h = fig(bare), fig(tool), fig(floor), fig(through)
     cpu = {name: round(statistics.median(xs), 4) for name, xs in CPU.items()}
     result = {"rounds": rounds, "bare_pysoem": b, "ecattool_sdo_read": e,
               "ratio_median": round(e["median_s"] / b["median_s"], 2), "ratio_q1": round(e["q1_s"] / b["q1_s"], 2),
               "import_click_pysoem": f, "floor_ratio_median": round(f["median_s"] / b["median_s"], 2),
               "cpu_median_s": cpu, "cpu_ratio": round(cpu["ecattool"] / cpu["bare"], 2),
               "floor_cpu_ratio": round(cpu["floor"] / cpu["bare"], 2),
+              "held_sdo_read": h, "held_ratio_median": round(h["median_s"] / b["median_s"], 2),
+              "held_ratio_q1": round(h["q1_s"] / b["q1_s"], 2), "held_cpu_ratio": round(cpu["held"] / cpu["bare"], 2),
               "values": sorted(outputs), "loadavg": os.getloadavg()}
     if against:
         a = fig(other)
@@ -156,6 +183,10 @@ def main() -> None:
     print(f"bare pysoem script     median {b['median_s'] * 1000:7.1f} ms   lower quartile {b['q1_s'] * 1000:7.1f} ms")
     print(f"ecattool sdo read      median {e['median_s'] * 1000:7.1f} ms   lower quartile {e['q1_s'] * 1000:7.1f} ms")
     print(f"ratio                  median {result['ratio_median']:.2f}x      lower quartile {result['ratio_q1']:.2f}x")
+    h = result["held_sdo_read"]
+    print(f"through bus hold       median {h['median_s'] * 1000:7.1f} ms   lower quartile {h['q1_s'] * 1000:7.1f} ms   "
+          f"ratio {result['held_ratio_median']:.2f}x (lower quartiles {result['held_ratio_q1']:.2f}x, CPU "
+          f"{result['held_cpu_ratio']:.2f}x)")
     f, cpu = result["import_click_pysoem"], result["cpu_median_s"]
     print(f"import click, pysoem   median {f['median_s'] * 1000:7.1f} ms   ({result['floor_ratio_median']:.2f}x of the "
           "bare script: the floor of a click command line)")

@@ -25,7 +25,7 @@ from ecattool.project.machine import Machine
 from ecattool.project.slave import Slave
 from ecattool.startup.model import StartupCommand
 from ecattool.target.base import LiveSlave, entry_size
-from ecattool.target.isolated import MasterGone
+from ecattool.target.remote import MasterGone
 
 if TYPE_CHECKING:
     from ecattool.online.bus_state import Found

@@ -16,11 +16,13 @@ import socket
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Any
 
 from ecattool.errors import TargetError
 from ecattool.od.model import EcState
+from ecattool.online.found import RUNNING as RUNNING
+from ecattool.online.found import Found as Found
 from ecattool.sim.bus import raw
 from ecattool.sim.bus.frame import Cmd, Datagram, FrameError, make_frame, parse_frame
 from ecattool.target.base import Unsupported
@@ -39,39 +41,6 @@ DC_SYNC_CYCLES = 0x09A0
 #: slaves whose DC registers one frame reads (2 datagrams, 34 octets, each: 40 fit an Ethernet frame)
 DC_SLAVES_PER_FRAME = 40
 _SRC = b"\x02\x00\x00\x00\xec\x01"
-_STATES = {0x01: EcState.INIT, 0x02: EcState.PREOP, 0x03: EcState.BOOT, 0x04: EcState.SAFEOP, 0x08: EcState.OP}
-RUNNING = (EcState.SAFEOP, EcState.OP)
-
-
-@dataclass(frozen=True)
-class Found:
-    """A slave's AL state as found before the bus was reset (``state`` None: an AL status that names none), and
-    its AL status code (0x0134)."""
-
-    position: int
-    al_status: int
-    al_status_code: int = 0
-    #: the slave's DC activation as found (ESC 0x0980-0x0981: the ESI's AssignActivate word; 0: no SYNC
-    #: signal) and its SYNC0/SYNC1 cycle times (0x09A0, 0x09A4, ns); None where they were not read
-    assign_activate: int | None = None
-    sync0_cycle_ns: int | None = None
-    sync1_cycle_ns: int | None = None
-    #: the slave's SII image (from word 0 to the end of the category list), read through the ESC's EEPROM
-    #: interface before the master opened, where asked (:func:`read_states` ``sii``: KickCAT binds no SII access)
-    sii: bytes | None = field(default=None, repr=False)
-
-    @property
-    def error(self) -> bool:
-        """The AL status's error indication (bit 4): the slave refused a state change or left a state by itself."""
-        return bool(self.al_status & 0x10)
-
-    @property
-    def state(self) -> EcState | None:
-        return _STATES.get(self.al_status & 0x0F)
-
-    def __str__(self) -> str:
-        name = self.state.value if self.state is not None else f"AL status 0x{self.al_status:02X}"
-        return f"slave {self.position} ({name}{', error' if self.al_status & 0x10 else ''})"
 
 
 def _exchange(sock: socket.socket, frame: bytes, index: int, resent: list[bool] | None = None) -> bytes | None:

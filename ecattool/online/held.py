@@ -30,15 +30,14 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import SelectionError, TargetError
 from ecattool.online.live import LiveBus
-from ecattool.target.isolated import (
+from ecattool.target.remote import (
     CALL_TIMEOUT_S,
     Channel,
     MasterGone,
-    MasterProcess,
     RemoteSlave,
     cap,
     describe,
@@ -46,6 +45,9 @@ from ecattool.target.isolated import (
     rebuild,
 )
 from ecattool.target.timeouts import BusLimits
+
+if TYPE_CHECKING:
+    from ecattool.target.isolated import MasterProcess
 
 #: how long a command waits for the holder to take it (it serves one command at a time)
 HELLO_S = 10.0
@@ -56,7 +58,7 @@ RELEASE_S = 60.0
 #: the longest and the default hold (``bus hold --for``), in seconds
 MAX_HOLD_S = 24 * 3600.0
 DEFAULT_HOLD_S = 3600.0
-#: the requests a holder serves: a live slave's (``target.isolated.RemoteSlave``)
+#: the requests a holder serves: a live slave's (``target.remote.RemoteSlave``)
 REQUESTS = frozenset({"identity", "sdo_upload", "sdo_download", "state", "request_state", "al_status_code",
                       "sii_read", "sii_write", "sii_write_word", "sdo_info", "exchange", "configure_dc"})
 #: struct ucred of SO_PEERCRED: pid, uid, gid
@@ -253,8 +255,8 @@ def hold(name: str, opener: Callable[[], LiveBus], seconds: float,
     released: Channel | None = None
     try:
         bus = opener()
-        master = bus.master
-        if not isinstance(master, MasterProcess):
+        master: MasterProcess | None = bus.master
+        if master is None:
             bus.close()
             raise SelectionError(f"{name}: only a real master's bus can be held (pysoem:IF or kickcat:IF)")
         record = Hold(name, os.getpid(), len(bus.slaves), time.time() + seconds)

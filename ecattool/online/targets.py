@@ -5,18 +5,22 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import SelectionError
-from ecattool.esi.model import Device
 from ecattool.od.model import EcState
-from ecattool.online import bus_state, held
-from ecattool.online.bus_state import PutBack
+from ecattool.online import held
 from ecattool.online.live import LiveBus
 from ecattool.target.base import LiveSlave, SlaveTarget, Target
-from ecattool.target.isolated import MasterProcess, RemoteSlave
 from ecattool.target.opener import MASTERS, open_master, open_target, parse_target, slave_at
 from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, BusLimits, bus_limits
+
+if TYPE_CHECKING:
+    from ecattool.esi.model import Device
+    from ecattool.online.bus_state import Found, PutBack
+
+# the bus state read (its raw frames) and the master's child process are loaded by the functions that open a bus
+# with a master of their own: a command that reads through a held bus (ecattool.online.held) needs neither
 
 
 def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
@@ -47,6 +51,8 @@ def open_bus(spec: str, devices: Sequence[Device] = (), reset_bus: bool = False,
     through = held.held_bus(held.hold_name(parsed.kind, parsed.interface), spec, bus_limits(devices))
     if through is not None:
         return through
+    from ecattool.online import bus_state
+
     found = bus_state.guard(parsed.interface, reset_bus, sii=read_sii and parsed.kind == "kickcat")
     if parsed.kind == "kickcat" and put_back is not None:
         put_back = kickcat_stays_preop  # nothing written to a slave that cannot be taken further
@@ -129,14 +135,18 @@ def open_guarded(spec: str, devices: Sequence[Device] = (), reset_bus: bool = Fa
     if parsed.kind in MASTERS:
         held.refuse_if_held(held.hold_name(parsed.kind, parsed.interface),
                             "this command takes every slave through INIT with a master of its own")
+        from ecattool.online import bus_state
+
         bus_state.guard(parsed.interface, reset_bus)
         bus_state.settle()
     return open_target(spec, devices)
 
 
-def _restoring(bus: LiveBus, found: Sequence[Any], put_back: PutBack | None = None) -> LiveBus:
+def _restoring(bus: LiveBus, found: Sequence[Found], put_back: PutBack | None = None) -> LiveBus:
     """``bus``, closed with each slave put back in the state it was found in (bus_state.restore; SAFE-OP and OP
     through ``put_back``) first."""
+    from ecattool.online import bus_state
+
     close = bus.closer
     bus.found = list(found)
 
@@ -154,6 +164,9 @@ def _restoring(bus: LiveBus, found: Sequence[Any], put_back: PutBack | None = No
 def isolated_bus(spec: str, opener: Callable[[], LiveBus], limits: BusLimits | None = None) -> LiveBus:
     """The live bus ``opener`` opens, served from a child process (:class:`~ecattool.target.isolated.MasterProcess`);
     ``limits``: how long it may take (the slaves' timeouts)."""
+    from ecattool.target.isolated import MasterProcess
+    from ecattool.target.remote import RemoteSlave
+
     master = MasterProcess(spec, opener, lambda bus: bus.slaves, limits=limits)
     return LiveBus(spec, [RemoteSlave(master, p) for p in master.positions], closer=master.close, master=master)
 
