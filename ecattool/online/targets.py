@@ -13,6 +13,7 @@ from ecattool.online import held
 from ecattool.online.live import LiveBus
 from ecattool.target.base import LiveSlave, SlaveTarget, Target
 from ecattool.target.opener import MASTERS, open_master, open_target, parse_target, slave_at
+from ecattool.target.remote import RemoteSlave
 from ecattool.target.timeouts import KICKCAT_SII_S, SII_S, BusLimits, bus_limits
 
 if TYPE_CHECKING:
@@ -165,7 +166,6 @@ def isolated_bus(spec: str, opener: Callable[[], LiveBus], limits: BusLimits | N
     """The live bus ``opener`` opens, served from a child process (:class:`~ecattool.target.isolated.MasterProcess`);
     ``limits``: how long it may take (the slaves' timeouts)."""
     from ecattool.target.isolated import MasterProcess
-    from ecattool.target.remote import RemoteSlave
 
     master = MasterProcess(spec, opener, lambda bus: bus.slaves, limits=limits)
     return LiveBus(spec, [RemoteSlave(master, p) for p in master.positions], closer=master.close, master=master)
