@@ -754,6 +754,10 @@ BASE: dict[tuple[str, ...], tuple[object, ...]] = {
     ("sim", "show"): ("technosoft-ipos",),
     ("sim", "serve"): ("hdt", "--list"),  # --list: no interface is opened (tests never touch the host's network)
     ("scale", "si"): ("mm", "rpm"),
+    # never a real master here (tests never touch the host's network): a simulator is not held, exit 1; nothing
+    # holds a name of this test's own, exit 1
+    ("bus", "hold"): ("--target", "sim:hdt", "--for", "1"),
+    ("bus", "release"): ("--target", "pysoem:contract-nothing-holds-this"),
 }
 #: Odd values for every option that takes text or a number (not a file, not a choice: click checks those).
 ODD_VALUES = ("", "-1", "99999999999999999999999", "0x", "nonsense", "1:2:3", "\u00e9\u00ff", "6060:00=abc")

@@ -131,7 +131,7 @@ Examples:
   ecattool bus release --target pysoem:eth0
   ecattool bus release --target kickcat:eth0 --json""")
 @click.option("--target", "target", required=True, metavar="TARGET",
-              help="The held master: pysoem:IF or kickcat:IF, as `bus hold` was given it.")
+              help="The held master: pysoem:IF or kickcat:IF, as `bus hold` was given it (a sim:… target is never held).")
 @json_option
 def release(target: str, as_json: bool) -> None:
     """End the hold `ecattool bus hold` keeps on a master: it puts the slaves back and closes its master first.
