@@ -22,10 +22,8 @@ from __future__ import annotations
 
 import os
 import select
-import signal
 import socket
 import struct
-import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -118,7 +116,11 @@ class HeldMaster:
     def __init__(self, name: str, sock: socket.socket, limits: BusLimits | None = None) -> None:
         self.name = name
         self.limits = limits or BusLimits()
-        self.pid = _peer(sock)[0]
+        self.pid, uid = _peer(sock)
+        if not _allowed(uid):  # anyone may bind an abstract name: a reply is unpickled only from a trusted holder
+            sock.close()
+            raise TargetError(f"the socket that says it holds {name} (@ecattool/held/{name}, pid {self.pid}) belongs "
+                              f"to user {uid}, neither this user nor root: not used")
         self._conn = Channel(sock)
         self._dead: MasterGone | None = None
         hello = self._answer("", HELLO_S, busy=True)
@@ -225,6 +227,9 @@ def hold_name(kind: str, interface: str) -> str:
 @contextmanager
 def _terminated_as_interrupt() -> Iterator[None]:
     """SIGTERM ends a hold as Ctrl-C does (the slaves put back, the master closed), in the main thread."""
+    import signal  # the holder's alone: a command that reads through it loads neither
+    import threading
+
     if threading.current_thread() is not threading.main_thread():
         yield
         return
