@@ -89,7 +89,7 @@ def _started(argv: list[str], what: str) -> subprocess.Popen[str]:
 def inside(rounds: int, against: str | None = None) -> dict[str, Any]:
     from ecattool.sim.bus import netns
 
-    subprocess.run(["sh", "-c", netns.setup_script(HELD_IF, HELD_SLAVE_IF).split(" && ", 1)[1]], check=True)
+    subprocess.run(["sh", "-c", netns.pair_script(HELD_IF, HELD_SLAVE_IF)], check=True)  # in the namespace
     procs = [_started([sys.executable, "-m", "ecattool", "sim", "serve", "hdt", "--iface", SLAVE_IF], "the server")]
     try:
         procs.append(_started([sys.executable, "-m", "ecattool", "sim", "serve", "hdt", "--iface", HELD_SLAVE_IF],

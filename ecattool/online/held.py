@@ -311,7 +311,6 @@ def _serve(listener: socket.socket, bus: LiveBus, master: MasterProcess, record:
         if not _allowed(_peer(sock)[1]):
             conn.close()
             continue
-        record.commands += 1
         ended = _session(conn, master, hello, record, deadline)
         if ended == "release":
             record.ended = "released"
@@ -326,11 +325,13 @@ def _serve(listener: socket.socket, bus: LiveBus, master: MasterProcess, record:
 
 def _session(conn: Channel, master: MasterProcess, hello: tuple[str, Any], record: Hold, deadline: float) -> str:
     """Serve one command's requests until it hangs up ("done"), asks for the release ("release"), the master is
-    gone or the deadline passes."""
+    gone or the deadline passes. A command is counted once it sends a request (not one that only looked whether
+    the bus is held)."""
     try:
         conn.send(hello)
     except OSError:
         return "done"
+    first = True
     while (left := deadline - time.monotonic()) > 0 and not master.gone:
         try:
             request = conn.recv() if conn.poll(left) else None
@@ -342,6 +343,9 @@ def _session(conn: Channel, master: MasterProcess, hello: tuple[str, Any], recor
             return "release"
         reply = _answer(master, request)
         record.requests += 1
+        if first:
+            record.commands += 1
+            first = False
         try:
             conn.send(reply)
         except OSError:

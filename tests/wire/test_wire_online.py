@@ -50,6 +50,36 @@ def ok(step: dict[str, Any]) -> Any:
     return step["stdout"]
 
 
+def test_a_held_bus_serves_the_commands_and_is_put_back_as_found(result: dict[str, Any]) -> None:
+    """Issue 35 item 5 by IgH's way (one bus owner): ``ecattool bus hold`` keeps one SOEM master open; commands read
+    a known and an unknown drive through it, by index and by name, without a bus init of their own (what one writes
+    the next reads back); a command that resets the bus and a second hold are refused naming the holder; the
+    release puts every slave back in the state a raw read found it in before the hold."""
+    r = result["held"]
+    assert r["held"] is not None and r["held"]["held"] == "pysoem:ecat0" and r["held"]["slaves"] == 2, r
+    pid = r["held"]["pid"]
+    assert ok(r["read_index"])["value"] == 0x289  # HDT's vendor ID
+    assert ok(r["read_name"])["address"] == "0x6041:00"  # by name: the HDT family's dictionary
+    unknown, by_name = ok(r["unknown_index"]), ok(r["unknown_name"])
+    assert unknown["dictionary"] == by_name["dictionary"] == "sdo-info"  # its own SDO Information, through the holder
+    assert (by_name["address"], by_name["hex"]) == ("0x6040:00", unknown["hex"])
+    ok(r["write"])
+    assert ok(r["read_back"])["value"] == 4321
+    scan = r["scan"]  # exit status 1: no library or family knows the ETG.2001 sample
+    assert scan["returncode"] == 1 and [s["coe_identity"]["vendor_id"] for s in scan["stdout"]["slaves"]] == [
+        0x289, 0xE0000001], scan
+    for key in ("resets_refused", "second_hold"):
+        step = r[key]
+        assert step["returncode"] == 1 and len(step["stderr"].strip().splitlines()) == 1, step
+        assert "pysoem:ecat0 is held" in step["stderr"] and f"pid {pid}" in step["stderr"], step
+    release = ok(r["release"])
+    assert (release["target"], release["pid"], release["commands"]) == ("pysoem:ecat0", pid, 7)
+    holder = r["holder"]
+    assert holder["returncode"] == 0, holder
+    assert json.loads(holder["stdout"].splitlines()[-1])["ended"] == "released"
+    assert r["states_before"] is not None and r["states_after"] == r["states_before"]
+
+
 def test_scan_finds_the_four_samples_with_their_families(result: dict[str, Any]) -> None:
     for key in ("scan", "scan_kickcat"):
         slaves = ok(result["four"][key])["slaves"]

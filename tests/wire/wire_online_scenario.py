@@ -10,6 +10,7 @@ last of stderr. Every wait is bounded (each command has a timeout)."""
 from __future__ import annotations
 
 import json
+import select
 import subprocess
 import sys
 import time
@@ -107,6 +108,41 @@ def sdo_info() -> dict[str, Any]:
     return r
 
 
+def held(work: Path) -> dict[str, Any]:
+    """``ecattool bus hold`` (issue 35 item 5): one SOEM master kept open for the other commands, a known drive (HDT,
+    its family) and an unknown one (the ETG.2001 sample, typed by its own SDO Information) read by index and by
+    name through it; a command that resets the bus and a second hold refused; the release puts the slaves back in
+    the state they were found in (read with a raw frame before and after, never while the master holds the bus)."""
+    server, _ = start_server(["hdt", ETG2001])
+    r: dict[str, Any] = {"states_before": al_states()}
+    holder = subprocess.Popen([sys.executable, "-m", "ecattool", "bus", "hold", "--target", PYSOEM, "--for", "120",
+                               "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout is not None
+        ready, _, _ = select.select([holder.stdout], [], [], 60)
+        r["held"] = json.loads(holder.stdout.readline() or "null") if ready else None
+        r["read_index"] = ecattool("sdo", "read", "0x1018:01", "--target", PYSOEM, "--json")
+        r["read_name"] = ecattool("sdo", "read", "statusword", "--target", PYSOEM, "--json")
+        r["unknown_index"] = ecattool("sdo", "read", "0x6040:00", "--target", PYSOEM, "--slave", "1", "--json")
+        r["unknown_name"] = ecattool("sdo", "read", "ControlWord", "--target", PYSOEM, "--slave", "1", "--json")
+        r["write"] = ecattool("sdo", "write", "0x6081:00", "4321", "--target", PYSOEM)
+        r["read_back"] = ecattool("sdo", "read", "0x6081:00", "--target", PYSOEM, "--json")
+        r["scan"] = ecattool("bus", "scan", "--target", PYSOEM, "--json")
+        r["resets_refused"] = ecattool("sw", "upload", "--target", PYSOEM, "--range", "0x5638-0x5A37", "-o",
+                                       str(work / "held.sw"))
+        r["second_hold"] = ecattool("bus", "hold", "--target", PYSOEM, "--for", "5")
+        r["release"] = ecattool("bus", "release", "--target", PYSOEM, "--json")
+        out, err = holder.communicate(timeout=60)
+        r["holder"] = {"returncode": holder.returncode, "stdout": out, "stderr": err[-1500:]}
+        r["states_after"] = al_states()
+    finally:
+        if holder.poll() is None:
+            holder.kill()
+            holder.wait(10)
+        r["server"] = stop_server(server)
+    return r
+
+
 def technosoft(work: Path) -> dict[str, Any]:
     """The Technosoft sample project: commission, audit (nothing), three values changed, audit (exactly those),
     sw upload (equals the project's .sw), backup."""
@@ -199,5 +235,5 @@ def lost_frames(work: Path) -> dict[str, Any]:
 if __name__ == "__main__":
     master_priority()
     work = Path(sys.argv[1])
-    print(json.dumps({"four": four(work), "sdo_info": sdo_info(), "technosoft": technosoft(work),
+    print(json.dumps({"four": four(work), "sdo_info": sdo_info(), "held": held(work), "technosoft": technosoft(work),
                       "lost_frames": lost_frames(work), "install": install()}))

@@ -28,11 +28,16 @@ def _ip() -> str:
     return shutil.which("ip") or "/usr/sbin/ip"
 
 
+def pair_script(master_if: str = MASTER_IF, slave_if: str = SLAVE_IF) -> str:
+    """The shell commands that make a veth pair (in the namespace they run in) and bring both ends up."""
+    ip = _ip()
+    return (f"{ip} link add {master_if} type veth peer name {slave_if} && "
+            f"{ip} link set {master_if} up && {ip} link set {slave_if} up")
+
+
 def setup_script(master_if: str = MASTER_IF, slave_if: str = SLAVE_IF) -> str:
     """The shell commands that make the veth pair inside the namespace and bring both ends up."""
-    ip = _ip()
-    return (f"{ip} link set lo up && {ip} link add {master_if} type veth peer name {slave_if} && "
-            f"{ip} link set {master_if} up && {ip} link set {slave_if} up")
+    return f"{_ip()} link set lo up && {pair_script(master_if, slave_if)}"
 
 
 def command(argv: Sequence[str], master_if: str = MASTER_IF, slave_if: str = SLAVE_IF) -> list[str]:
