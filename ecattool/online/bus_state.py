@@ -16,7 +16,6 @@ import socket
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import replace
 from typing import Any
 
 from ecattool.errors import TargetError
@@ -165,9 +164,9 @@ def _with_dc(exchange: Exchange, found: list[Found]) -> list[Found]:
         for k, f in enumerate(part):
             act, cycles = frame.datagrams[2 * k], frame.datagrams[2 * k + 1]
             if act.wkc and cycles.wkc:
-                out[start + k] = replace(f, assign_activate=int.from_bytes(act.data[:2], "little"),
-                                         sync0_cycle_ns=int.from_bytes(cycles.data[:4], "little"),
-                                         sync1_cycle_ns=int.from_bytes(cycles.data[4:8], "little"))
+                out[start + k] = f.replace(assign_activate=int.from_bytes(act.data[:2], "little"),
+                                        sync0_cycle_ns=int.from_bytes(cycles.data[:4], "little"),
+                                        sync1_cycle_ns=int.from_bytes(cycles.data[4:8], "little"))
     return out
 
 
@@ -228,7 +227,7 @@ def with_sii(exchange: Exchange, found: list[Found]) -> list[Found]:
         try:
             exchange(make_frame([Datagram.make(Cmd.APWR, -f.position, EEPROM_CONFIG, b"\x00", index=0x56)],
                                 _SRC), 0x56)
-            out[k] = replace(f, sii=read_sii(sii_words(exchange, f.position)))
+            out[k] = f.replace(sii=read_sii(sii_words(exchange, f.position)))
         except TargetError:
             continue
     return out

@@ -5,7 +5,6 @@ are shown as they are."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import EcatToolError, InputError
@@ -14,23 +13,32 @@ from ecattool.od.model import RO, Entry, ObjectCode, ObjectDictionary, OdObject
 from ecattool.od.numbers import parse_int
 from ecattool.od.standard import CIA301_OBJECTS
 from ecattool.od.types import Kind, lookup
+from ecattool.record import Record
 
 if TYPE_CHECKING:
     from ecattool.online.library import Library, Match
 
 
-@dataclass
-class Typed:
+class Typed(Record):
     """A slave's dictionary and where it came from: ``device`` (given: ``--device``, or the project's), ``esi`` or
     ``eds`` (the library), ``family``, ``sdo-info`` (the slave's own), ``standard`` (one CiA-301 object,
     :func:`standard_typed`), or ``none``."""
 
+    __slots__ = ("dictionary", "source", "match", "device", "sdo_info_error")
     dictionary: ObjectDictionary
     source: str
-    match: Match | None = None
-    device: Device | None = None
+    match: Match | None
+    device: Device | None
     #: why the slave's SDO Information gave no dictionary, where it was asked and refused
-    sdo_info_error: str | None = None
+    sdo_info_error: str | None
+
+    def __init__(self, dictionary: ObjectDictionary, source: str, match: Match | None = None,
+                 device: Device | None = None, sdo_info_error: str | None = None) -> None:
+        self.dictionary = dictionary
+        self.source = source
+        self.match = match
+        self.device = device
+        self.sdo_info_error = sdo_info_error
 
     def entry(self, index: int, subindex: int) -> Entry | None:
         return self.dictionary.entry(index, subindex)

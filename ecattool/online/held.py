@@ -27,11 +27,11 @@ import struct
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from ecattool.errors import SelectionError, TargetError
 from ecattool.online.live import LiveBus
+from ecattool.record import Record
 from ecattool.target.remote import (
     CALL_TIMEOUT_S,
     Channel,
@@ -198,19 +198,30 @@ def release(name: str) -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------------------------------------ the holder
-@dataclass
-class Hold:
+class Hold(Record):
     """A hold as it went: the master ``name``, the slaves held, why it ended, the commands and requests served,
     and what putting the slaves back said (``notes``)."""
 
+    __slots__ = ("name", "pid", "slaves", "until", "ended", "commands", "requests", "notes")
     name: str
     pid: int
     slaves: int
     until: float
-    ended: str = ""
-    commands: int = 0
-    requests: int = 0
-    notes: list[str] = field(default_factory=list)
+    ended: str
+    commands: int
+    requests: int
+    notes: list[str]
+
+    def __init__(self, name: str, pid: int, slaves: int, until: float, ended: str = "", commands: int = 0,
+                 requests: int = 0, notes: list[str] | None = None) -> None:
+        self.name = name
+        self.pid = pid
+        self.slaves = slaves
+        self.until = until
+        self.ended = ended
+        self.commands = commands
+        self.requests = requests
+        self.notes = [] if notes is None else notes
 
     def to_json(self) -> dict[str, Any]:
         return {"target": self.name, "pid": self.pid, "slaves": self.slaves, "until": self.until,

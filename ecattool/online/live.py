@@ -10,35 +10,49 @@ from __future__ import annotations
 
 import weakref
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
 
 from ecattool.errors import InputError, TargetError
 from ecattool.esi.model import Device
+from ecattool.record import FrozenRecord, Record, set_field
 from ecattool.target.base import LiveSlave
 
 
-@dataclass
-class LiveBus:
+class LiveBus(Record):
     """The slaves of one target, in bus order. ``spec`` names the target (``sim``, ``pysoem:eth0``…)."""
 
+    __slots__ = ("spec", "slaves", "closer", "write_log", "devices", "notes", "found", "failed", "master")
     spec: str
     slaves: list[LiveSlave]
-    closer: Callable[[], None] | None = None
+    closer: Callable[[], None] | None
     #: the simulator's log of writes (SDO downloads, SII writes) since the bus was opened; None on a real master
-    write_log: list[str] | None = None
+    write_log: list[str] | None
     #: the devices a simulator bus was made of (its own dictionaries), by position
-    devices: list[Device] = field(default_factory=list)
+    devices: list[Device]
     #: what closing the bus did or could not do (a slave put back in OP, or found in OP and left in PRE-OP), one
     #: line each
-    notes: list[str] = field(default_factory=list)
+    notes: list[str]
     #: each slave's AL state as found before the master reset the bus (``bus_state.Found``; empty: not known)
-    found: list[Any] = field(default_factory=list)
+    found: list[Any]
     #: whether the ``with`` block that used the bus ended with an exception (its error is what a user reads then)
-    failed: bool = False
+    failed: bool
     #: the child process a real master's slaves are served from (``ecattool.target.isolated.MasterProcess``,
     #: what ``ecattool bus hold`` keeps); None for the simulator and for a bus read through a holder
-    master: Any = None
+    master: Any
+
+    def __init__(self, spec: str, slaves: list[LiveSlave], closer: Callable[[], None] | None = None,
+                 write_log: list[str] | None = None, devices: list[Device] | None = None,
+                 notes: list[str] | None = None, found: list[Any] | None = None, failed: bool = False,
+                 master: Any = None) -> None:
+        self.spec = spec
+        self.slaves = slaves
+        self.closer = closer
+        self.write_log = write_log
+        self.devices = [] if devices is None else devices
+        self.notes = [] if notes is None else notes
+        self.found = [] if found is None else found
+        self.failed = failed
+        self.master = master
 
     def slave(self, position: int) -> LiveSlave:
         if not 0 <= position < len(self.slaves):
@@ -63,14 +77,18 @@ class LiveBus:
 MBX_COE = 0x0004
 
 
-@dataclass(frozen=True)
-class SiiFacts:
+class SiiFacts(FrozenRecord):
     """What a slave's SII says about how to talk to it: its mailbox protocols (SII word 0x1C; 0 where its
     standard receive mailbox, word 0x19, has no size: the slave has no mailbox) and its name (the general
     category's); ``protocols`` None where the target gives no SII (KickCAT's binding)."""
 
+    __slots__ = ("protocols", "name")
     protocols: int | None
-    name: str = ""
+    name: str
+
+    def __init__(self, protocols: int | None, name: str = "") -> None:
+        set_field(self, "protocols", protocols)
+        set_field(self, "name", name)
 
     @property
     def coe(self) -> bool | None:

@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import json
-from dataclasses import dataclass
 from typing import Any
 
 from ecattool.abort import abort_text
@@ -12,6 +10,7 @@ from ecattool.errors import InputError, Location, SdoAbort, TargetError
 from ecattool.fileio import read_bytes
 from ecattool.od.model import EcState, Entry
 from ecattool.online.dictionary import Typed, decode, encode
+from ecattool.record import Record
 from ecattool.target.base import entry_size
 
 SNAPSHOT_FORMAT = "ecattool-dictionary-snapshot"
@@ -21,15 +20,27 @@ def address(index: int, subindex: int) -> str:
     return f"0x{index:04X}:{subindex:02X}"
 
 
-@dataclass
-class ReadValue:
+class ReadValue(Record):
+    """One object as read: its address, name and type, the bytes and their decoded value, or the abort code."""
+
+    __slots__ = ("index", "subindex", "name", "type_name", "data", "value", "abort")
     index: int
     subindex: int
     name: str
     type_name: str
     data: bytes | None
     value: Any
-    abort: int | None = None
+    abort: int | None
+
+    def __init__(self, index: int, subindex: int, name: str, type_name: str, data: bytes | None, value: Any,
+                 abort: int | None = None) -> None:
+        self.index = index
+        self.subindex = subindex
+        self.name = name
+        self.type_name = type_name
+        self.data = data
+        self.value = value
+        self.abort = abort
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"address": address(self.index, self.subindex), "name": self.name,
@@ -113,6 +124,8 @@ def dump(slave: Any, typed: Typed, spec: str) -> dict[str, Any]:
 
 
 def load_snapshot(path: str) -> dict[str, Any]:
+    import json  # here: reading one object (sdo read) needs no JSON reader
+
     try:
         data = json.loads(read_bytes(path))
     except (ValueError, UnicodeDecodeError) as exc:
@@ -125,14 +138,20 @@ def load_snapshot(path: str) -> dict[str, Any]:
     return data
 
 
-@dataclass
-class SnapshotDifference:
+class SnapshotDifference(Record):
     """One object whose value differs between two snapshots, or that only one of them has."""
 
+    __slots__ = ("address", "name", "a", "b")
     address: str
     name: str
     a: Any
     b: Any
+
+    def __init__(self, address: str, name: str, a: Any, b: Any) -> None:
+        self.address = address
+        self.name = name
+        self.a = a
+        self.b = b
 
     def to_json(self) -> dict[str, Any]:
         return {"address": self.address, "name": self.name, "a": self.a, "b": self.b}

@@ -19,12 +19,12 @@ closes it (``Target.close``).
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
 from types import ModuleType
 from typing import TYPE_CHECKING
 
 from ecattool.errors import SelectionError
 from ecattool.esi.model import Device
+from ecattool.record import FrozenRecord, set_field
 from ecattool.target.base import SlaveTarget, Target
 
 if TYPE_CHECKING:
@@ -38,15 +38,21 @@ SLAVE_TARGET_FORMS = "'sim', 'sim:PROFILE,ESI…' or 'pysoem:<interface>'"
 MASTERS = ("pysoem", "kickcat")
 
 
-@dataclass(frozen=True)
-class TargetSpec:
+class TargetSpec(FrozenRecord):
     """A target spec as read: ``kind`` ('sim', 'pysoem' or 'kickcat'), the network ``interface`` of a real
     master, the ``sources`` of a ``sim:`` spec (empty: the slaves the command has)."""
 
+    __slots__ = ("text", "kind", "interface", "sources")
     text: str
     kind: str
-    interface: str = ""
-    sources: tuple[str, ...] = ()
+    interface: str
+    sources: tuple[str, ...]
+
+    def __init__(self, text: str, kind: str, interface: str = "", sources: tuple[str, ...] = ()) -> None:
+        set_field(self, "text", text)
+        set_field(self, "kind", kind)
+        set_field(self, "interface", interface)
+        set_field(self, "sources", sources)
 
     @property
     def own_slaves(self) -> bool:

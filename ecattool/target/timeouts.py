@@ -25,8 +25,9 @@ From them, for a bus (the longest of its slaves' where several are known):
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
 from typing import Any
+
+from ecattool.record import FrozenRecord, set_field
 
 #: the ESI elements (``Device/Info/…``) and the defaults where a slave's ESI gives none, in milliseconds: Beckhoff's
 #: ESIs give 100/2000 for the mailbox (../shared/corpus/esi/beckhoff_EJ3xxx.xml:30-31), and 3000 ms for PRE-OP
@@ -58,18 +59,31 @@ DEFAULT_OPEN_SLAVES = 16
 MAX_MS = 60_000
 
 
-@dataclass(frozen=True)
-class SlaveTimeouts:
+class SlaveTimeouts(FrozenRecord):
     """One slave's timeouts in milliseconds (its ESI's, else the defaults of :data:`ELEMENTS`); ``known``: whether
     they came from an ESI."""
 
-    request_ms: int = ELEMENTS["request_ms"][1]
-    response_ms: int = ELEMENTS["response_ms"][1]
-    preop_ms: int = ELEMENTS["preop_ms"][1]
-    safeop_op_ms: int = ELEMENTS["safeop_op_ms"][1]
-    back_to_init_ms: int = ELEMENTS["back_to_init_ms"][1]
-    back_to_safeop_ms: int = ELEMENTS["back_to_safeop_ms"][1]
-    known: bool = False
+    __slots__ = ("request_ms", "response_ms", "preop_ms", "safeop_op_ms", "back_to_init_ms", "back_to_safeop_ms",
+                 "known")
+    request_ms: int
+    response_ms: int
+    preop_ms: int
+    safeop_op_ms: int
+    back_to_init_ms: int
+    back_to_safeop_ms: int
+    known: bool
+
+    def __init__(self, request_ms: int = ELEMENTS["request_ms"][1], response_ms: int = ELEMENTS["response_ms"][1],
+                 preop_ms: int = ELEMENTS["preop_ms"][1], safeop_op_ms: int = ELEMENTS["safeop_op_ms"][1],
+                 back_to_init_ms: int = ELEMENTS["back_to_init_ms"][1],
+                 back_to_safeop_ms: int = ELEMENTS["back_to_safeop_ms"][1], known: bool = False) -> None:
+        set_field(self, "request_ms", request_ms)
+        set_field(self, "response_ms", response_ms)
+        set_field(self, "preop_ms", preop_ms)
+        set_field(self, "safeop_op_ms", safeop_op_ms)
+        set_field(self, "back_to_init_ms", back_to_init_ms)
+        set_field(self, "back_to_safeop_ms", back_to_safeop_ms)
+        set_field(self, "known", known)
 
 
 def _ms(text: str | None) -> int | None:
@@ -94,15 +108,20 @@ def of_device(device: Any) -> SlaveTimeouts:
     return SlaveTimeouts(**values, known=bool(values))
 
 
-@dataclass(frozen=True)
-class BusLimits:
+class BusLimits(FrozenRecord):
     """What ecattool waits for on one bus (see the module text): seconds, from the slaves' timeouts."""
 
-    slaves: tuple[SlaveTimeouts, ...] = ()
+    __slots__ = ("slaves", "count", "sii_s")
+    slaves: tuple[SlaveTimeouts, ...]
     #: the number of slaves on the bus where known before it is opened
-    count: int | None = None
+    count: int | None
     #: what the master's bus init takes to read one slave's SII (SII_S for SOEM, KICKCAT_SII_S for KickCAT)
-    sii_s: float = SII_S
+    sii_s: float
+
+    def __init__(self, slaves: tuple[SlaveTimeouts, ...] = (), count: int | None = None, sii_s: float = SII_S) -> None:
+        set_field(self, "slaves", slaves)
+        set_field(self, "count", count)
+        set_field(self, "sii_s", sii_s)
 
     def longest(self, field: str) -> float:
         """The longest of the slaves' ``field`` (a :class:`SlaveTimeouts` field name), in seconds."""

@@ -221,8 +221,6 @@ def test_a_slave_running_sync1_gets_its_sync1_cycle_in_the_project(tmp_path: Pat
     """AssignActivate bit 10 (SYNC1 active) set in 0x0980: the SYNC1 cycle found in 0x09A4 is written as
     ``dc: sync1_cycle_ns`` (it was a comment only: the project format had no SYNC1, issue 35 item 2), reads back
     into the slave's DC and its exports, and the project lints clean. Without bit 10 no SYNC1 is written."""
-    from dataclasses import replace
-
     from ecattool.online.bus_state import Found
     from ecattool.project.machine import slave_config
 
@@ -237,7 +235,7 @@ def test_a_slave_running_sync1_gets_its_sync1_cycle_in_the_project(tmp_path: Pat
     (rd,) = result.slaves
     assert rd.dc is not None and (rd.dc.assign_activate, rd.dc.sync1_cycle_ns) == (0x0700, 250_000)
     assert slave_config(rd).dc_sync1_cycle_ns == 250_000
-    bus.found = [replace(bus.found[0], assign_activate=0x0300)]  # type: ignore[attr-defined]
+    bus.found = [bus.found[0].replace(assign_activate=0x0300)]  # type: ignore[attr-defined]
     assert "sync1_cycle_ns" not in project_from_bus(bus, None, out)  # type: ignore[arg-type]
 
 

@@ -98,3 +98,28 @@ def test_the_state_read_socket_is_bound_to_the_ethertype_not_made_with_it(monkey
     monkeypatch.setattr(socket_module, "socket", Recorder)
     raw.open_raw("ecat9")
     assert made == [("socket", socket_module.AF_PACKET, socket_module.SOCK_RAW, 0), ("bind", ("ecat9", 0x88A4))]
+
+
+def test_a_read_through_a_held_bus_imports_no_dataclasses() -> None:
+    """``sdo read 0x1018:01`` through a held bus (``ecattool bus hold``), the real command line in a fresh
+    interpreter: every record on its way (the target spec, the bus limits, the live bus, the states found, the
+    typed dictionary, the value read) is an ``ecattool.record`` class, so the ``dataclasses`` module (and the ~1 ms
+    each dataclass costs at import) is not loaded at all."""
+    from ecattool.online import held
+    from tests.online.test_held import _start
+
+    holding = _start()
+    try:
+        code = ("import runpy, sys\n"
+                f"sys.argv = ['ecattool', 'sdo', 'read', '0x1018:01', '--target', {holding.name!r}]\n"
+                "try:\n    runpy.run_module('ecattool', run_name='__main__', alter_sys=True)\n"
+                "except SystemExit as exc:\n    assert not exc.code, exc.code\n"
+                "print('dataclasses' in sys.modules, 'ecattool.online.held' in sys.modules)\n")
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=ROOT)
+    finally:
+        held.release(holding.name)
+        holding.wait()
+    assert done.returncode == 0, done.stderr
+    value, loaded = done.stdout.strip().splitlines()
+    assert value.startswith("0x1018:01 Vendor ID") and "= 649" in value, value  # read through the holder
+    assert loaded == "False True", loaded
