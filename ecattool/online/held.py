@@ -40,7 +40,7 @@ from ecattool.target.remote import (
     cap,
     describe,
     error_reply,
-    rebuild,
+    outcome,
 )
 from ecattool.target.timeouts import BusLimits
 
@@ -143,9 +143,7 @@ class HeldMaster:
             if busy:
                 raise self._gone(f"{who} is serving another command, {timeout_s:g} s already: try again when it ends")
             raise self._gone(f"{who} did not answer within {timeout_s:g} s {what}")
-        if reply[0] == "ok":
-            return reply[1]
-        raise rebuild(reply, what)
+        return outcome(reply, what)
 
     def call(self, position: int | None, method: str, *args: Any, timeout_s: float = CALL_TIMEOUT_S,
              **kwargs: Any) -> Any:

@@ -42,7 +42,7 @@ from ecattool.target.remote import (
     cap,
     describe,
     error_reply,
-    rebuild,
+    outcome,
 )
 from ecattool.target.timeouts import BusLimits
 
@@ -201,9 +201,7 @@ class MasterProcess:
             self._dead = MasterHung(f"the master did not answer within {timeout_s:g} s {what} ({self.name}; stopped; "
                                     f"{self.limits.describe()})")
             raise self._dead
-        if reply[0] == "ok":
-            return reply[1]
-        raise rebuild(reply, what)
+        return outcome(reply, what)
 
     def call(self, position: int | None, method: str, *args: Any, timeout_s: float = CALL_TIMEOUT_S,
              **kwargs: Any) -> Any:

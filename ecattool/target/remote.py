@@ -135,6 +135,13 @@ def rebuild(reply: tuple[Any, ...], what: str) -> Exception:
     return TargetError(f"the master failed {what}: {reply[1]}")
 
 
+def outcome(reply: tuple[Any, ...], what: str) -> Any:
+    """The value a reply carries (``("ok", value)``), or the exception it stands for raised (:func:`rebuild`)."""
+    if reply[0] == "ok":
+        return reply[1]
+    raise rebuild(reply, what)
+
+
 
 class Master(Protocol):
     """What a :class:`RemoteSlave` sends its requests through: a :class:`MasterProcess`, or the master a bus
