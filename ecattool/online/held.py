@@ -51,6 +51,8 @@ if TYPE_CHECKING:
 HELLO_S = 10.0
 #: what a request through the holder may take beyond its own time limit (which the holder applies to the master)
 HOP_S = 2.0
+#: how long the rest of a message may take once its first octets came (a peer stopped mid-message is let go)
+STALL_S = 10.0
 #: how long ``bus release`` waits for the holder to put the slaves back and close its master
 RELEASE_S = 60.0
 #: the longest and the default hold (``bus hold --for``), in seconds
@@ -77,6 +79,7 @@ def _peer(sock: socket.socket) -> tuple[int, int]:
 def _dial(name: str) -> socket.socket | None:
     """A connection to the holder of ``name``, or None where nothing holds it."""
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    sock.settimeout(STALL_S)
     try:
         sock.connect(address(name))
     except (ConnectionRefusedError, FileNotFoundError):
@@ -310,6 +313,7 @@ def _serve(listener: socket.socket, bus: LiveBus, master: MasterProcess, record:
         if not ready:
             break
         sock, _ = listener.accept()
+        sock.settimeout(STALL_S)  # a command stopped in the middle of a message never holds the holder past it
         conn = Channel(sock)
         if not _allowed(_peer(sock)[1]):
             conn.close()

@@ -191,6 +191,26 @@ def test_a_master_that_dies_ends_the_hold_and_the_command_is_told(holding: Holdi
     assert holding.wait().ended == "the master is gone"
 
 
+def test_a_command_stopped_in_the_middle_of_a_message_is_let_go(holding: Holding,
+                                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every wait of the holder is bounded: a peer that sends the start of a message and no more is dropped after
+    STALL_S, and the next command is served."""
+    import socket
+
+    monkeypatch.setattr(held, "STALL_S", 0.3)
+    stuck = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    stuck.connect(held.address(holding.name))
+    stuck.recv(1 << 16)  # the hello
+    stuck.sendall(b"\xff\x00")  # two of a length's four octets, then nothing
+    try:
+        bus = held.held_bus(holding.name, holding.name)  # waits for the holder to let the stuck one go
+        assert bus is not None
+        assert bus.slave(0).sdo_upload(0x1018, 1) == (0x289).to_bytes(4, "little")
+        bus.close()
+    finally:
+        stuck.close()
+
+
 def test_sigterm_ends_a_hold_as_ctrl_c_does() -> None:
     with pytest.raises(KeyboardInterrupt):
         with held._terminated_as_interrupt():
