@@ -270,7 +270,8 @@ class ObjectDictionary:
     def find(self, name: str) -> tuple[int, int] | None:
         """Find an object or entry by name: ``controlword``, ``Modes of operation``, ``1C12 …``.
 
-        The device's own names first; then the CiA 402-2 name of a standard VAR object the device has (a
+        The device's own names first (a record whose one value besides its sub-index 0 has the object's name is
+        found by that name, as its value); then the CiA 402-2 name of a standard VAR object the device has (a
         vendor may call 6040h "Axis A Control word"). A VAR object's name gives (index, 0); ``object
         name/entry name`` or ``object.entry`` addresses a sub-entry. Returns None when nothing matches.
         """
@@ -282,6 +283,12 @@ class ObjectDictionary:
                 key = normalize_name(obj.name)
                 if obj.object_code is ObjectCode.VAR or len(obj.entries) == 1:
                     names.setdefault(key, (obj.index, min(obj.entries) if obj.entries else 0))
+                elif obj.object_code is ObjectCode.RECORD and len(obj.entries) == 2 and 0 in obj.entries:
+                    # a record of one value named as its object: what a modular ESI's PDO entry makes of an object
+                    # its dictionary leaves out (ETG.2001 sample: 6041h:01 "StatusWord"); the name is the value
+                    (sub, entry), = ((k, e) for k, e in obj.entries.items() if k != 0)
+                    if normalize_name(entry.name) == key:
+                        names.setdefault(key, (obj.index, sub))
                 for e in obj.entries.values():
                     names.setdefault(key + "/" + normalize_name(e.name), (obj.index, e.subindex))
             self._names = names
