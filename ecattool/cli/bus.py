@@ -11,7 +11,14 @@ from typing import TYPE_CHECKING
 import click
 
 from ecattool.cli.common import console, hex32, json_option, print_json, table
-from ecattool.cli.online import library_option, load_library, open_live, reset_bus_given, target_option
+from ecattool.cli.online import (
+    library_option,
+    load_library,
+    open_live,
+    reset_bus_given,
+    reset_bus_option,
+    target_option,
+)
 
 if TYPE_CHECKING:
     from ecattool.online.held import Hold
@@ -86,7 +93,9 @@ Examples:
   ecattool bus hold --target pysoem:eth0 --for 600 &
   ecattool sdo read 0x6041:00 --target pysoem:eth0      (through the held master: no bus init)
   ecattool bus release --target pysoem:eth0""")
-@target_option()
+@click.option("--target", "target", required=True, metavar="TARGET",
+              help="The real master to hold: pysoem:IF or kickcat:IF (a sim:… target is never held).")
+@reset_bus_option
 @click.option("--for", "seconds", type=click.FloatRange(1, MAX_HOLD_S), default=DEFAULT_HOLD_S, show_default=True,
               metavar="SECONDS", help="End the hold after this long at the latest (at most a day).")
 @json_option
