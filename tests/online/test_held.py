@@ -169,12 +169,13 @@ def test_one_command_at_a_time_and_the_next_is_told_why_it_waits(holding: Holdin
                                                                  monkeypatch: pytest.MonkeyPatch) -> None:
     first = held.connect(holding.name)
     assert first is not None and first.positions == [0]
-    monkeypatch.setattr(held, "HELLO_S", 0.3)
-    with pytest.raises(MasterGone, match=rf"the holder of {holding.name} \(ecattool bus hold, pid {os.getpid()}\) "
-                                         r"is serving another command, 0.3 s already"):
+    with monkeypatch.context() as m, \
+            pytest.raises(MasterGone, match=rf"the holder of {holding.name} \(ecattool bus hold, pid "
+                                            rf"{os.getpid()}\) is serving another command, 0.3 s already"):
+        m.setattr(held, "HELLO_S", 0.3)
         held.connect(holding.name)
     first.close()
-    second = held.connect(holding.name)  # taken once the first hung up
+    second = held.connect(holding.name)  # taken once the first hung up (the usual wait, HELLO_S)
     assert second is not None
     second.close()
 
