@@ -19,15 +19,10 @@ from ecattool.cli.online import (
     reset_bus_option,
     target_option,
 )
+from ecattool.online.held import DEFAULT_HOLD_S, MAX_HOLD_S, Hold
 
 if TYPE_CHECKING:
-    from ecattool.online.held import Hold
     from ecattool.online.scan import ScannedSlave
-
-#: the longest and the default hold, seconds (ecattool.online.held.MAX_HOLD_S, DEFAULT_HOLD_S: not imported for
-#: every bus command; a test holds them equal)
-MAX_HOLD_S = 86400.0
-DEFAULT_HOLD_S = 3600.0
 
 
 @click.group(epilog="""\b

@@ -58,9 +58,9 @@ RELEASE_S = 60.0
 #: the longest and the default hold (``bus hold --for``), in seconds
 MAX_HOLD_S = 24 * 3600.0
 DEFAULT_HOLD_S = 3600.0
-#: the requests a holder serves: a live slave's (``target.remote.RemoteSlave``)
-REQUESTS = frozenset({"identity", "sdo_upload", "sdo_download", "state", "request_state", "al_status_code",
-                      "sii_read", "sii_write", "sii_write_word", "sdo_info", "exchange", "configure_dc"})
+#: the requests a holder serves: what a live slave answers through a master in another process (the public
+#: methods of ``target.remote.RemoteSlave``, the one list of them)
+REQUESTS = frozenset(n for n, v in vars(RemoteSlave).items() if callable(v) and not n.startswith("_"))
 #: struct ucred of SO_PEERCRED: pid, uid, gid
 _UCRED = struct.Struct("3i")
 
@@ -188,7 +188,8 @@ def held_bus(name: str, spec: str, limits: BusLimits | None = None) -> LiveBus |
 
 def release(name: str) -> dict[str, Any]:
     """End the hold on ``name`` (``bus release``): the holder puts the slaves back and closes its master first.
-    Returns its summary: ``pid``, ``served`` (requests), ``notes``."""
+    Returns its summary (:meth:`Hold.to_json`: ``target``, ``pid``, ``ended``, ``commands``, ``requests``,
+    ``notes`` …)."""
     master = connect(name)
     if master is None:
         raise TargetError(f"nothing holds {name} (ecattool bus hold --target {name} holds it)")
@@ -367,7 +368,5 @@ def _answer(master: MasterProcess, request: Any) -> tuple[Any, ...]:
         if method not in REQUESTS or position not in master.positions:
             return ("failed", f"{method!r} of slave {position!r} is not a request a held bus serves")
         return ("ok", master.call(position, method, *args, timeout_s=float(timeout_s), **kwargs))
-    except BaseException as exc:  # noqa: BLE001 - every failure goes back to the command as its reply
-        if isinstance(exc, KeyboardInterrupt):
-            raise
+    except Exception as exc:  # noqa: BLE001 - every failure goes back to the command as its reply (Ctrl-C ends the hold)
         return error_reply(exc)
