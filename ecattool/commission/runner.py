@@ -689,11 +689,21 @@ def put_back(drives: Sequence[Slave], wanted: Sequence[tuple[SlaveTarget, EcStat
     notes: list[str] = []
     runs: list[tuple[SlaveTarget, Slave, EcState, DriveReport]] = []
 
-    def failed(slave: SlaveTarget, state: EcState, step: Step, report: DriveReport | None = None) -> None:
+    def done(slave: SlaveTarget, state: EcState, phase: Callable[[], None], report: DriveReport | None = None) -> bool:
+        """``phase`` ran; or it failed, as commissioning's run of a drive takes a failure (:meth:`_DriveRun._guarded`:
+        a named step, or anything a target raised outside one), and the slave is left in PRE-OP with a note."""
+        try:
+            phase()
+            return True
+        except _Failed as exc:
+            step = exc.step
+        except EcatToolError as exc:
+            step = Step("commission", False, str(exc))
         notes.append(f"slave {slave.position} ({state.value}) was left in PRE-OP: putting it back failed at "
                      f"{step.name}: {step.detail}")
         if report is not None:
             _safe_stop(slave, None, report)
+        return False
 
     for slave, state in wanted:
         rd = by_position.get(slave.position)
@@ -702,30 +712,27 @@ def put_back(drives: Sequence[Slave], wanted: Sequence[tuple[SlaveTarget, EcStat
                          f"slave at position {slave.position}, ecattool cannot take it back to {state.value}")
             continue
         report = DriveReport(rd.drive.name, rd.position, rd.kind, trace=DriveTrace.for_drive(rd))
-        try:
+
+        def preop(slave: SlaveTarget = slave, rd: Slave = rd, report: DriveReport = report) -> None:
             _check_identity(slave, rd, report)
             _startup(slave, rd, _PREOP_TRANSITIONS, report)
             _dc(slave, rd, report)
-        except _Failed as exc:
-            failed(slave, state, exc.step)
-            continue
-        runs.append((slave, rd, state, report))
+
+        if done(slave, state, preop):
+            runs.append((slave, rd, state, report))
     ready = []
     for slave, rd, state, report in runs:  # every slave's PRE-OP writes are done: SAFE-OP, slave by slave
-        try:
+
+        def safeop(slave: SlaveTarget = slave, rd: Slave = rd, report: DriveReport = report) -> None:
             _goto(slave, EcState.SAFEOP, report)
             _startup(slave, rd, _SAFEOP_TRANSITIONS, report)
-        except _Failed as exc:
-            failed(slave, state, exc.step, report)
-            continue
-        ready.append((slave, state, report))
+
+        if done(slave, state, safeop, report):
+            ready.append((slave, state, report))
     in_op = []
     for slave, state, report in ready:  # OP last: the master's cycles on the way keep the others' watchdogs fed
         if state is EcState.OP:
-            try:
-                _goto(slave, EcState.OP, report)
-            except _Failed as exc:
-                failed(slave, state, exc.step, report)
+            if not done(slave, state, partial(_goto, slave, EcState.OP, report), report):
                 continue
             in_op.append(slave.position)
         notes.append(f"slave {slave.position} was put back in {state.value} as the project configures it")

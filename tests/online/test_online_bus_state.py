@@ -124,6 +124,33 @@ def test_a_slave_that_is_not_the_projects_device_is_not_configured() -> None:
                                                    "identity: wrong device"), notes
 
 
+class _Gone:
+    """A slave whose master went away: every request is a TargetError, outside any named step of the run too."""
+
+    def __init__(self, position: int) -> None:
+        self.position = position
+
+    def __getattr__(self, name: str) -> object:
+        def gone(*args: object, **kwargs: object) -> None:
+            raise TargetError("the master is gone")
+
+        return gone
+
+
+def test_a_slave_that_fails_outside_a_named_step_is_named_and_the_rest_still_put_back() -> None:
+    """As commissioning takes a failure (``_DriveRun._guarded``): an error a target raises outside a named step (the
+    identity read from the EEPROM after 1018h failed) leaves that slave in PRE-OP with a note, and the slaves after
+    it are still put back; it ended the put-back, and the INIT restores after it, with that error."""
+    from ecattool.commission.runner import put_back
+
+    machine, slaves = _powered_up("samples/controltechniques/project.yaml")
+    gone = _Gone(0)  # the same project slave for both: each is put back as the drive at position 0
+    notes = put_back(machine.slaves, [(gone, EcState.OP), (slaves[0], EcState.SAFEOP)])  # type: ignore[list-item]
+    assert slaves[0].state() is EcState.SAFEOP  # type: ignore[attr-defined]
+    assert notes == ["slave 0 (OP) was left in PRE-OP: putting it back failed at commission: the master is gone",
+                     "slave 0 was put back in SAFEOP as the project configures it"]
+
+
 #: every command that acts on slaves through a real master (they take every slave through INIT too), with the
 #: arguments after its --target
 ACTING = {
