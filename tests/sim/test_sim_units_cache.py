@@ -5,6 +5,9 @@ from __future__ import annotations
 
 from fractions import Fraction
 
+import pytest
+
+from ecattool.errors import SdoAbort
 from ecattool.od.model import EcState
 from ecattool.sim import Drive
 
@@ -53,3 +56,17 @@ def test_a_restored_store_is_a_new_version() -> None:
     v = d._store.version
     d._store[(0x6040, 0)] = b"\x06\x00"
     assert d._store.version == v
+
+
+def test_the_factors_follow_the_store_an_aborted_complete_access_puts_back() -> None:
+    """An aborted complete-access download puts the store of before back in place (sim/drive/sdo.py): the unit
+    factors' version is that store's from then on, so a factor written after it shows at once (they followed the
+    store of the last reset, whose version no later write moves)."""
+    import struct
+
+    d = Drive.from_esi("samples/esi/etg2001_cia402.xml")  # complete access on
+    d.request_state(EcState.PREOP)
+    mapping = d.sdo_upload(0x1A00, 0, complete_access=True)
+    with pytest.raises(SdoAbort):  # a read-only entry in the middle: the store of before is put back
+        d.sdo_download(0x1A00, 0, mapping[:2] + struct.pack("<I", 0x77770020) + mapping[6:], complete_access=True)
+    assert d.units.version() == d._store.version

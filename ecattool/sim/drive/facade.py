@@ -241,7 +241,7 @@ class Drive:
         self.homing_warning = False  # Technosoft statusword bit 7 (homing start ignored)
         self.units = units_for(self.behaviour.units, self._read_int, revision=d.revision,
                              has_210f=0x210F in d.dictionary, cycle_s=self.cycle_time())
-        self.units.version = lambda: store.version
+        self.units.version = lambda: self.objects.store.version  # the store in place (an aborted CA puts another)
         if not self.behaviour.mode_display_on_enable and (0x6061, 0) in entries:
             # 6061h shows the mode 6060h selects from power-on (HDT §4.02.2, CT Table 7.16: 6060h = 2 by
             # default, and that mode is the one the drive runs)
