@@ -69,27 +69,22 @@ class StateMachine:
         drive.family_part.esm_effects(current, state)
         drive._refresh_inputs()
 
-    def fall_to_safeop(self, code: int, why: str) -> None:
-        """The slave leaves OP by itself for SAFE-OP with AL status ``code`` (a running axis: as when OP is
-        left)."""
+    def fall_to_safeop(self, code: int, why: str, app_reacts: bool = True) -> None:
+        """The slave leaves OP by itself for SAFE-OP with AL status ``code`` (a running axis: as when OP is left,
+        unless ``app_reacts`` is False: the caller gives the application's reaction itself)."""
         drive = self.drive
         if drive.esm is not EcState.OP:
             return
         drive._log("state", previous="OP", state="SAFEOP", al_status=code, reason=why)
         drive.esm = EcState.SAFEOP
-        if drive.has_cia402:
+        if app_reacts and drive.has_cia402:
             drive._cia_moves(drive.cia.communication_lost(), "ESM left OP")
         drive.family_part.esm_effects(EcState.OP, EcState.SAFEOP)
 
     def watchdog(self) -> None:
         """The process data stops (cable pulled, SM watchdog): from OP the ESM drops to SAFE-OP, AL status 0x001B
         (the application's reaction is its own: :meth:`.injection.Injection.lose_communication`)."""
-        drive = self.drive
-        if drive.esm is EcState.OP:
-            drive._log("state", previous="OP", state="SAFEOP", al_status=AlStatus.SM_WATCHDOG,
-                       reason="sync manager watchdog")
-            drive.esm = EcState.SAFEOP
-            drive.family_part.esm_effects(EcState.OP, EcState.SAFEOP)
+        self.fall_to_safeop(AlStatus.SM_WATCHDOG, "sync manager watchdog", app_reacts=False)
 
     def dc_active(self) -> bool:
         return bool(self.dc[0])

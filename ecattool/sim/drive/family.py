@@ -69,7 +69,6 @@ class Family:
     def _ct_open_loop(self) -> bool:
         """Whether the host drive runs open loop: one without position control (no homing, 6060h = 6, in its
         modes: Commander SK, Affinity), decision "Control Techniques SAFE-OP -> OP parameters"."""
-        drive = self.drive
         return 6 not in self.rules.supported_modes
 
     def esm_effects(self, previous: EcState, state: EcState) -> None:

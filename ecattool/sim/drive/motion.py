@@ -146,7 +146,6 @@ class Motion:
         self._refresh_inputs()
 
     def _on_target_velocity(self, sub: int, value: int | None) -> None:
-        drive = self.drive
         self.modes.pv.armed = True
 
     def _check_mode(self, sub: int, data: bytes, value: int | None) -> bool:
@@ -176,8 +175,6 @@ class Motion:
     def step(self, cycles: int = 1) -> None:
         """Advance the motion model by ``cycles`` process-data cycles (see :meth:`cycle_time`)."""
         drive = self.drive
-        if not drive.has_cia402:
-            return
         dt = self.cycle_time()
         u = drive.units
         cia = drive.cia
@@ -362,8 +359,6 @@ class Motion:
         """Actual values from the state: 6041h, 6063h/6064h, 606Ch, 603Fh (``mode``: 6061h, where the caller
         has just read it)."""
         drive = self.drive
-        if not getattr(drive, "has_cia402", False):
-            return
         if mode is None:
             mode = self.mode()
         cia = drive.cia
