@@ -216,15 +216,28 @@ class ObjectStore:
     writes every other part makes through it (the drive binds :meth:`read_int`, :meth:`put`, :meth:`put_all` as its
     ``_read_int``, ``_put``, ``_put_all``). A power-on or a reset gives it a new store and dictionary."""
 
-    __slots__ = ("store", "entries", "_int_codecs", "_put_plan")
+    __slots__ = ("store", "entries", "_int_codecs", "_put_plan", "_cycle_cache")
 
     def __init__(self) -> None:
         self.store = Store()
+        #: :meth:`cycle` as made for one store at one version
+        self._cycle_cache: tuple[Store | None, int, Fraction, int] = (None, 0, Fraction(1, 1000), 1_000_000)
         self.entries: dict[tuple[int, int], Entry] = {}
         #: :meth:`read_int`'s :func:`_int_codec` per key, for one dictionary (and its length)
         self._int_codecs: tuple[dict[tuple[int, int], Entry] | None, int,
                                 dict[tuple[int, int], tuple[int, int] | None]] = (None, 0, {})
         self._put_plan: _PutPlan | None = None
+
+    def cycle(self) -> tuple[Fraction, int]:
+        """The process-data cycle (:func:`cycle_period`) in seconds and in whole nanoseconds (at least 1: what a
+        clock counting nanoseconds paces the cycles by), made again only for another store or version (60C2h is a
+        factor object: a write to it moves the version); ``sim serve`` asks every frame."""
+        store = self.store
+        cached = self._cycle_cache
+        if cached[0] is not store or cached[1] != store.version:
+            period = cycle_period(self.read_int)
+            cached = self._cycle_cache = (store, store.version, period, max(1, int(period * 1_000_000_000)))
+        return cached[2], cached[3]
 
     def read_int(self, index: int, sub: int) -> int | None:
         key = (index, sub)

@@ -431,12 +431,13 @@ class Drive:
 
     # CiA-402 and motion
     def cycle_time(self) -> Fraction:
-        """:meth:`.motion.Motion.cycle_time` (an I/O slave's: :meth:`.io_app.IoApplication.cycle_time`)."""
-        return self.motion.cycle_time() if self.io is None else self.io.cycle_time()
+        """The process-data cycle in seconds: 60C2h (sub1 × 10^sub2) where present, else 1 ms, for a drive and an
+        I/O slave alike (:meth:`.core.ObjectStore.cycle`)."""
+        return self.objects.cycle()[0]
 
     def cycle_ns(self) -> int:
-        """:meth:`.motion.Motion.cycle_ns`."""
-        return self.motion.cycle_ns() if self.io is None else self.io.cycle_ns()
+        """:meth:`cycle_time` in whole nanoseconds, at least 1 (what ``sim serve`` paces the slave by)."""
+        return self.objects.cycle()[1]
 
     def mode(self) -> int:
         """The mode the drive runs (6061h, else 6060h)."""

@@ -11,13 +11,12 @@ is stepped. The ESM (SM/FMMU checks, the watchdog) is the same part a drive has.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from ecattool.errors import TargetError
 from ecattool.esi.model import Direction
 from ecattool.od.types import Kind
-from ecattool.sim.drive.core import RX, TX, cycle_period
+from ecattool.sim.drive.core import RX, TX
 
 if TYPE_CHECKING:
     from ecattool.sim.drive.app import DriveApp
@@ -27,26 +26,10 @@ class IoApplication:
     """The application part of an I/O slave (a :class:`~ecattool.sim.drive.facade.Drive` whose dictionary has
     no 6040h/6041h holds it instead of the motion and fault parts)."""
 
-    __slots__ = ("drive", "_cycle_cache")
+    __slots__ = ("drive",)
 
     def __init__(self, drive: DriveApp) -> None:
         self.drive = drive
-        self._cycle_cache: tuple[int, Fraction, int] | None = None
-
-    def _cycle(self) -> tuple[int, Fraction, int]:
-        store = self.drive.objects.store
-        cached = self._cycle_cache
-        if cached is None or cached[0] != store.version:
-            cycle = cycle_period(self.drive._read_int)
-            cached = self._cycle_cache = (store.version, cycle, max(1, int(cycle * 1_000_000_000)))
-        return cached
-
-    def cycle_time(self) -> Fraction:
-        """The slave's cycle in seconds: 60C2h where it has one, else 1 ms (as a drive's)."""
-        return self._cycle()[1]
-
-    def cycle_ns(self) -> int:
-        return self._cycle()[2]
 
     def refresh(self, mode: int | None = None) -> None:
         """Nothing to refresh: no actual values are computed, the inputs are the objects as they are set."""

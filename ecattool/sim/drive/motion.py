@@ -13,7 +13,7 @@ from ecattool.sim.cia402 import CSP, CSV, HALT, HOMING, PP, PV, Homing, Profile,
 from ecattool.sim.drive import csp_options as csp
 from ecattool.sim.drive import halt_homing as hh
 from ecattool.sim.drive import polarity
-from ecattool.sim.drive.core import Store, cycle_period, sdo_abort
+from ecattool.sim.drive.core import sdo_abort
 from ecattool.sim.drive.plant_step import cycle as plant_cycle
 from ecattool.sim.drive.supervision import limit_stop, report_actual, supervise
 from ecattool.sim.drive.mode_parts import MOVED, PARTS, ModeParts
@@ -45,14 +45,13 @@ class Motion:
     the profile generators, the mode parts and the plant, and the actual values it reports. It reads the drive's
     shared state (``cia``, ``modes``, ``plant``, ``units``, the object store), which a reset renews."""
 
-    __slots__ = ("drive", "modes", "_cycle_cache", "_profile_cache", "_soft_cache", "_home_cache")
+    __slots__ = ("drive", "modes", "_profile_cache", "_soft_cache", "_home_cache")
 
     def __init__(self, drive: DriveApp) -> None:
         self.drive = drive
         #: the demand side of vl, PP set-points, PV windows, torque and interpolated position (:mod:`.mode_parts`);
         #: renewed with the application (:meth:`reset`)
         self.modes = ModeParts()
-        self._cycle_cache: tuple[int, Fraction, int] | None = None
         self._profile_cache: tuple[tuple[object, ...], Profile] | None = None
         #: the store's version and whether 607Dh limits at it (:attr:`_soft_limits`)
         self._soft_cache: tuple[int, bool] = (0, False)
@@ -66,26 +65,6 @@ class Motion:
     def modes_snapshot(self) -> tuple[object, ...]:
         """The mode parts' state, compared by value (the quiet-cycle skip of the process data part)."""
         return self.modes.snapshot()
-
-    def cycle_time(self) -> Fraction:
-        """The process-data cycle in seconds: 60C2h (sub1 × 10^sub2) where present, else 1 ms (computed once per
-        version of the store's factor objects, 60C2h among them)."""
-        return self._cycle(self.drive.objects.store)[1]
-
-    def cycle_ns(self) -> int:
-        """:meth:`cycle_time` in whole nanoseconds, at least 1 (what a clock counting nanoseconds paces the cycles
-        by; cached with it: converting the ``Fraction`` costs microseconds, and ``sim serve`` asks every frame)."""
-        return self._cycle(self.drive.objects.store)[2]
-
-    def _cycle(self, store: Store) -> tuple[int, Fraction, int]:
-        """(the store's version, the cycle in seconds, in nanoseconds), made again when the version changed."""
-        drive = self.drive
-        cached = self._cycle_cache
-        if cached is not None and cached[0] == store.version:
-            return cached
-        cycle = cycle_period(drive._read_int)
-        cached = self._cycle_cache = (store.version, cycle, max(1, int(cycle * 1_000_000_000)))
-        return cached
 
     def _cia_moves(self, moves: list[tuple[State, State]], why: str) -> None:
         drive = self.drive
@@ -173,9 +152,9 @@ class Motion:
         return drive._read_int(index, 0) or 0
 
     def step(self, cycles: int = 1) -> None:
-        """Advance the motion model by ``cycles`` process-data cycles (see :meth:`cycle_time`)."""
+        """Advance the motion model by ``cycles`` process-data cycles (see the drive's :meth:`cycle_time`)."""
         drive = self.drive
-        dt = self.cycle_time()
+        dt = drive.cycle_time()
         u = drive.units
         cia = drive.cia
         mode: int | None = None
