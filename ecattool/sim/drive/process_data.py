@@ -215,7 +215,7 @@ class ProcessData:
                 *drive.motion.modes_snapshot(),
                 drive.units, entries, len(entries), rx, tx, tuple(rx.entries), tuple(tx.entries), rx.bits, tx.bits,
                 drive.limit_active, drive.limit_switches, drive.homing_warning, drive.behaviour, drive.family,
-                drive.has_cia402, drive.homing_search_s, log.record_events, log.seq, len(log.emergencies),
+                drive.homing_search_s, log.record_events, log.seq, len(log.emergencies),
                 None if plant is None else plant.state(), drive.supervision.state())
 
     def _pdo_write(self, key: tuple[int, int], raw: bytes) -> bool:
