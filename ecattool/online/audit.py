@@ -19,6 +19,7 @@ from ecattool.esi.model import Identity
 from ecattool.findings import Finding, Severity
 from ecattool.od.model import EcState
 from ecattool.online.dictionary import decode
+from ecattool.online.found import RUNNING, Found
 from ecattool.online.live import LiveBus, describe_slave
 from ecattool.online.objects import address
 from ecattool.project.machine import Machine
@@ -28,7 +29,6 @@ from ecattool.target.base import LiveSlave, entry_size
 from ecattool.target.remote import MasterGone
 
 if TYPE_CHECKING:
-    from ecattool.online.bus_state import Found
     from ecattool.target.base import SlaveTarget
 
 
@@ -168,8 +168,6 @@ def state_drift(rd: Slave, found: Found) -> Drift | None:
     """A drive found (before the master reset the bus) in INIT or BOOT, or with the AL error indication: the project
     expects every drive at least in PRE-OP with its mailbox running and no error (commissioning takes it on). A
     drive in SAFE-OP with the watchdog's code 0x001B is one whose master stopped: not drift."""
-    from ecattool.online.bus_state import RUNNING
-
     state = found.state
     if state is EcState.PREOP or state in RUNNING:
         if not found.error or (state is EcState.SAFEOP and found.al_status_code == WATCHDOG_CODE):
@@ -245,7 +243,6 @@ def audit(machine: Machine, bus: LiveBus, sw_checksums: bool = False, allow_erro
     (:meth:`~ecattool.project.machine.Machine.refuse_errors`, as ``commission`` does)."""
     machine.refuse_errors("audit", allow_errors=allow_errors)
     report = AuditReport(machine.path, bus.spec)
-    found = {f.position: f for f in bus.found}
     for rd in machine.in_bus_order():
-        audit_drive(rd, bus.slave(rd.position), report, sw_checksums, found.get(rd.position))
+        audit_drive(rd, bus.slave(rd.position), report, sw_checksums, bus.found_at(rd.position))
     return report

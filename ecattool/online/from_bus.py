@@ -44,9 +44,9 @@ class DcFound:
 def dc_found(bus: LiveBus, slave: Any) -> DcFound | None:
     """The DC registers of ``slave`` as found: read with a raw frame before a real master reset the bus
     (``bus.found``), or the simulated drive's own (``dc_activation``); None where they could not be read."""
-    for f in bus.found:
-        if getattr(f, "position", None) == slave.position and getattr(f, "assign_activate", None) is not None:
-            return DcFound(int(f.assign_activate), int(f.sync0_cycle_ns or 0), int(f.sync1_cycle_ns or 0))
+    f = bus.found_at(slave.position)
+    if getattr(f, "assign_activate", None) is not None:
+        return DcFound(int(f.assign_activate), int(f.sync0_cycle_ns or 0), int(f.sync1_cycle_ns or 0))
     read = getattr(slave, "dc_activation", None)
     if callable(read):
         act, sync0, sync1 = read()
@@ -57,10 +57,8 @@ def dc_found(bus: LiveBus, slave: Any) -> DcFound | None:
 def sii_found(bus: LiveBus, slave: Any) -> bytes | None:
     """The SII image of ``slave`` read through its ESC before the master opened (``bus.found``: a master whose
     binding reads no SII, KickCAT's); None where none was read."""
-    for f in bus.found:
-        if getattr(f, "position", None) == slave.position and getattr(f, "sii", None):
-            return bytes(f.sii)
-    return None
+    image = getattr(bus.found_at(slave.position), "sii", None)
+    return bytes(image) if image else None
 
 
 def identify_named(slave: Any, library: Library | None, sii: bytes | None = None) -> tuple[Identity, Match | None]:

@@ -54,6 +54,11 @@ class LiveBus(Record):
         self.failed = failed
         self.master = master
 
+    def found_at(self, position: int) -> Any:
+        """The state as found (:attr:`found`: ``ecattool.online.found.Found``) of the slave at ``position``, or
+        None where it was not read."""
+        return next((f for f in self.found if getattr(f, "position", None) == position), None)
+
     def slave(self, position: int) -> LiveSlave:
         if not 0 <= position < len(self.slaves):
             raise InputError(f"no slave at position {position}: the bus on {self.spec} has {len(self.slaves)}")
